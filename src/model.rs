@@ -151,11 +151,7 @@ impl Polygon {
     pub fn area(&self) -> f64 {
         let ext = newell(&self.exterior);
         let n = ext.normalize_or_zero();
-        let holes: f64 = self
-            .interiors
-            .iter()
-            .map(|r| newell(r).dot(n).abs())
-            .sum();
+        let holes: f64 = self.interiors.iter().map(|r| newell(r).dot(n).abs()).sum();
         (ext.length() - holes).max(0.0) * 0.5
     }
 }
@@ -231,11 +227,12 @@ impl Bbox {
 
     /// `[minx, miny, minz, maxx, maxy, maxz]`, or `None` when empty.
     pub fn to_array(&self) -> Option<[f64; 6]> {
-        (!self.is_empty()).then(|| {
-            [
-                self.min.x, self.min.y, self.min.z, self.max.x, self.max.y, self.max.z,
-            ]
-        })
+        if self.is_empty() {
+            return None;
+        }
+        Some([
+            self.min.x, self.min.y, self.min.z, self.max.x, self.max.y, self.max.z,
+        ])
     }
 }
 
@@ -248,6 +245,8 @@ pub struct LodGeometry {
     pub property: String,
     /// Byte span of the property element in the source (start tag to end tag).
     pub span: Span,
+    /// Byte span of the property's content (between its start and end tags).
+    pub content: Span,
     /// Polygons (xlinks resolved, implicit geometry transformed).
     pub polygons: Vec<Polygon>,
 }
@@ -356,6 +355,8 @@ pub struct EnvelopeSite {
     pub srs_name: Option<String>,
     /// `srsDimension` of the envelope (2 or 3).
     pub dimension: u8,
+    /// Namespace prefix of the element with its colon (`"gml:"`), empty for a default namespace.
+    pub prefix: String,
     /// Index into [`CityModel::files`].
     pub file: usize,
 }
@@ -398,6 +399,8 @@ pub struct SourceFile {
     pub gzip: bool,
     /// Length of the decompressed document in bytes.
     pub len: u64,
+    /// Prefix (with colon) bound to the GML namespace in the document, e.g. `"gml:"`.
+    pub gml_prefix: String,
     /// Envelopes to recompute on write.
     pub envelopes: Vec<EnvelopeSite>,
     /// Number of `ImplicitGeometry` elements.
@@ -406,6 +409,9 @@ pub struct SourceFile {
     pub library_objects: Vec<String>,
     /// Number of city objects that are not buildings and carry no geometry.
     pub objects_without_geometry: usize,
+    /// Number of polygon elements (`Polygon`, `PolygonPatch`, `Triangle`, `Rectangle`) in the
+    /// document, each counted once however often it is referenced.
+    pub polygon_elements: usize,
 }
 
 /// A city model read from one or more CityGML documents.

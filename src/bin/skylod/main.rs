@@ -1,1 +1,57 @@
-fn main() {}
+//! `skylod`: the command-line front end. The library does the work; this binary owns the
+//! terminal, the exit codes (0 ok, 1 some inputs failed, 2 usage or fatal) and progress.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod cmd_convert;
+mod cmd_stats;
+
+/// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
+#[derive(Parser, Debug)]
+#[command(name = "skylod", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Count buildings, surfaces, installations, openings and polygons per file and in total.
+    Stats(cmd_stats::Args),
+    /// Read a CityGML file and write it back (identity of the pipeline; envelopes recomputed).
+    Convert(cmd_convert::Args),
+}
+
+/// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
+pub enum Outcome {
+    Ok,
+    SomeFailed,
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return match e.kind() {
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => {
+                    ExitCode::SUCCESS
+                }
+                _ => ExitCode::from(2),
+            };
+        }
+    };
+    let result = match cli.command {
+        Command::Stats(a) => cmd_stats::run(a),
+        Command::Convert(a) => cmd_convert::run(a),
+    };
+    match result {
+        Ok(Outcome::Ok) => ExitCode::SUCCESS,
+        Ok(Outcome::SomeFailed) => ExitCode::from(1),
+        Err(e) => {
+            eprintln!("skylod: error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}

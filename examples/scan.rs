@@ -1,0 +1,19 @@
+fn main() {
+    for p in std::env::args().skip(1) {
+        let t = std::time::Instant::now();
+        match skylod::citygml::read_file(std::path::Path::new(&p)) {
+            Ok(m) => {
+                let s = skylod::stats::Stats::of(&m);
+                println!(
+                    "{p}: {:?} {:.1}ms",
+                    serde_json::to_string(&s).unwrap(),
+                    t.elapsed().as_secs_f64() * 1e3
+                );
+                for w in m.warnings.iter().take(2) {
+                    println!("   W {w}");
+                }
+            }
+            Err(e) => println!("{p}: ERROR {e}"),
+        }
+    }
+}

@@ -1,0 +1,100 @@
+//! `skylod stats`.
+
+use crate::Outcome;
+use rayon::prelude::*;
+use skylod::citygml::read_file;
+use skylod::stats::Stats;
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// CityGML files (.gml, .xml, .gz).
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Also print every warning (file:line:column: message) on stderr.
+    #[arg(long, short)]
+    verbose: bool,
+}
+
+#[derive(serde::Serialize)]
+struct FileStats<'a> {
+    path: String,
+    #[serde(flatten)]
+    stats: &'a Stats,
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let results: Vec<_> = args
+        .inputs
+        .par_iter()
+        .map(|p| read_file(p).map(|m| (Stats::of(&m), m.warnings)))
+        .collect();
+    let mut ok = Vec::new();
+    let mut failed = false;
+    for (path, r) in args.inputs.iter().zip(results) {
+        match r {
+            Ok((s, warnings)) => {
+                if args.verbose {
+                    for w in &warnings {
+                        eprintln!("warning: {w}");
+                    }
+                }
+                ok.push((path, s));
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed = true;
+            }
+        }
+    }
+    let mut out = std::io::stdout().lock();
+    let total = Stats::total(ok.iter().map(|(_, s)| s));
+    if args.json {
+        let files: Vec<FileStats> = ok
+            .iter()
+            .map(|(p, s)| FileStats {
+                path: p.display().to_string(),
+                stats: s,
+            })
+            .collect();
+        let v = if args.inputs.len() == 1 && files.len() == 1 {
+            serde_json::to_value(&files[0])?
+        } else {
+            serde_json::json!({ "files": files, "total": total })
+        };
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+    } else {
+        for (p, s) in &ok {
+            writeln!(out, "{}", p.display())?;
+            print_table(&mut out, s)?;
+        }
+        if ok.len() > 1 {
+            writeln!(out, "total ({} files)", ok.len())?;
+            print_table(&mut out, &total)?;
+        }
+    }
+    Ok(if failed {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}
+
+fn print_table(out: &mut impl Write, s: &Stats) -> std::io::Result<()> {
+    let v = serde_json::to_value(s).unwrap_or_default();
+    if let Some(obj) = v.as_object() {
+        for (k, v) in obj {
+            let shown = match v {
+                serde_json::Value::String(s) => s.clone(),
+                serde_json::Value::Null => "-".into(),
+                other => other.to_string(),
+            };
+            writeln!(out, "  {k:<24} {shown}")?;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,170 @@
+//! Errors of the CityGML reader and writer.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// Where in a source document something happened.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Location {
+    /// Source file.
+    pub file: PathBuf,
+    /// 1-based line (0 when unknown).
+    pub line: u64,
+    /// 1-based column (0 when unknown).
+    pub column: u64,
+    /// `gml:id` of the nearest enclosing element that has one.
+    pub gml_id: Option<String>,
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if self.line > 0 {
+            write!(f, ":{}:{}", self.line, self.column)?;
+        }
+        if let Some(id) = &self.gml_id {
+            write!(f, " [gml:id {id}]")?;
+        }
+        Ok(())
+    }
+}
+
+/// Everything that can go wrong while reading a CityGML document.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// The file could not be opened or read.
+    #[error("{file}: cannot read: {source}", file = .file.display())]
+    Io {
+        /// File.
+        file: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The document is empty.
+    #[error("{}: empty document", .0.display())]
+    Empty(PathBuf),
+    /// Not well-formed XML (includes truncated documents and broken gzip streams).
+    #[error("{loc}: malformed XML: {message}")]
+    Xml {
+        /// Position.
+        loc: Location,
+        /// Parser message.
+        message: String,
+    },
+    /// Well-formed XML that is not CityGML (no CityGML namespace on the root).
+    #[error("{loc}: not a CityGML document: {message}")]
+    NotCityGml {
+        /// Position.
+        loc: Location,
+        /// Why.
+        message: String,
+    },
+    /// A coordinate that is not a finite number.
+    #[error("{loc}: bad coordinate {token:?}: not a finite number")]
+    Coordinate {
+        /// Position.
+        loc: Location,
+        /// The offending token (truncated).
+        token: String,
+    },
+    /// A coordinate list whose length does not fit the dimension.
+    #[error("{loc}: {count} coordinate values are not a multiple of srsDimension {dimension}")]
+    CoordinateCount {
+        /// Position.
+        loc: Location,
+        /// Number of values.
+        count: usize,
+        /// Dimension.
+        dimension: u8,
+    },
+    /// An `srsDimension` other than 2 or 3.
+    #[error("{loc}: unsupported srsDimension {value:?} (2 or 3 expected)")]
+    Dimension {
+        /// Position.
+        loc: Location,
+        /// Value found.
+        value: String,
+    },
+    /// An `xlink:href` to geometry that is not in the document.
+    #[error("{loc}: dangling xlink:href {href:?}")]
+    DanglingHref {
+        /// Position of the reference.
+        loc: Location,
+        /// The reference.
+        href: String,
+    },
+    /// Geometry references that refer to themselves.
+    #[error("{loc}: xlink:href cycle through {href:?}")]
+    HrefCycle {
+        /// Position of the reference.
+        loc: Location,
+        /// The reference.
+        href: String,
+    },
+    /// A resource limit protecting against hostile input was exceeded.
+    #[error("{loc}: {message}")]
+    Limit {
+        /// Position.
+        loc: Location,
+        /// What was exceeded.
+        message: String,
+    },
+}
+
+impl ReadError {
+    /// The file the error is about.
+    pub fn file(&self) -> &std::path::Path {
+        match self {
+            ReadError::Io { file, .. } | ReadError::Empty(file) => file,
+            ReadError::Xml { loc, .. }
+            | ReadError::NotCityGml { loc, .. }
+            | ReadError::Coordinate { loc, .. }
+            | ReadError::CoordinateCount { loc, .. }
+            | ReadError::Dimension { loc, .. }
+            | ReadError::DanglingHref { loc, .. }
+            | ReadError::HrefCycle { loc, .. }
+            | ReadError::Limit { loc, .. } => &loc.file,
+        }
+    }
+
+    /// Short machine-readable name of the error kind.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ReadError::Io { .. } => "io",
+            ReadError::Empty(_) => "empty",
+            ReadError::Xml { .. } => "xml",
+            ReadError::NotCityGml { .. } => "not_citygml",
+            ReadError::Coordinate { .. } => "coordinate",
+            ReadError::CoordinateCount { .. } => "coordinate_count",
+            ReadError::Dimension { .. } => "dimension",
+            ReadError::DanglingHref { .. } => "dangling_href",
+            ReadError::HrefCycle { .. } => "href_cycle",
+            ReadError::Limit { .. } => "limit",
+        }
+    }
+}
+
+/// Everything that can go wrong while writing.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// I/O on the output or on re-reading the source.
+    #[error("{file}: {source}", file = .file.display())]
+    Io {
+        /// File concerned.
+        file: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The output exists and overwriting was not allowed.
+    #[error("{}: output exists (use --overwrite)", .0.display())]
+    Exists(PathBuf),
+    /// The output would replace an input.
+    #[error("{}: output path is one of the inputs; refusing to overwrite an input", .0.display())]
+    IsInput(PathBuf),
+    /// The source changed between reading and writing.
+    #[error("{}: source changed while writing (length differs)", .0.display())]
+    SourceChanged(PathBuf),
+    /// Re-reading the source failed.
+    #[error(transparent)]
+    Read(#[from] ReadError),
+}

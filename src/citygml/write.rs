@@ -1,0 +1,392 @@
+//! Span-preserving CityGML writer.
+//!
+//! The output is the source document, streamed again from disk, with a sorted list of
+//! [`Edit`]s applied by byte span: whatever no edit touches is copied byte for byte (same
+//! version, namespaces, declarations, comments, ADE content). The writer adds one edit per
+//! `gml:Envelope` whose owner's geometry is known, recomputing it. Output goes to a temporary
+//! file beside the target, gzip-compressed when the name ends in `.gz`, then renamed into place.
+//!
+//! # Example
+//! ```
+//! use skylod::citygml::{read_file, write::{write_document, Edit, WriteOptions}};
+//! let dir = tempfile::tempdir().unwrap();
+//! let src = dir.path().join("in.gml");
+//! std::fs::write(&src, br#"<CityModel xmlns="http://www.opengis.net/citygml/2.0"
+//!  xmlns:gml="http://www.opengis.net/gml" xmlns:bldg="http://www.opengis.net/citygml/building/2.0">
+//!  <gml:boundedBy><gml:Envelope srsName="EPSG:25832"><gml:lowerCorner>0 0 0</gml:lowerCorner>
+//!  <gml:upperCorner>9 9 9</gml:upperCorner></gml:Envelope></gml:boundedBy>
+//!  <cityObjectMember><bldg:Building gml:id="b"><bldg:lod1Solid><gml:Solid><gml:exterior>
+//!  <gml:CompositeSurface><gml:surfaceMember><gml:Polygon><gml:exterior><gml:LinearRing>
+//!  <gml:posList>0 0 0 2 0 0 2 1 3 0 0 0</gml:posList></gml:LinearRing></gml:exterior>
+//!  </gml:Polygon></gml:surfaceMember></gml:CompositeSurface></gml:exterior></gml:Solid>
+//!  </bldg:lod1Solid></bldg:Building></cityObjectMember></CityModel>"#).unwrap();
+//! let model = read_file(&src).unwrap();
+//! let out = dir.path().join("out.gml");
+//! write_document(&model, 0, Vec::<Edit>::new(), &out, &WriteOptions::default()).unwrap();
+//! let text = std::fs::read_to_string(&out).unwrap();
+//! assert!(text.contains("<gml:upperCorner>2 1 3</gml:upperCorner>"));
+//! ```
+
+use super::error::WriteError;
+use super::source;
+use crate::model::{CityModel, EnvelopeSite, Polygon, Span};
+use std::fmt::Write as _;
+use std::io::{BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+/// Replace the bytes of `span` in the source with `replacement` (empty: delete).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Edit {
+    /// Byte span in the decompressed source.
+    pub span: Span,
+    /// New bytes.
+    pub replacement: Vec<u8>,
+}
+
+/// How to write.
+#[derive(Debug, Clone, Default)]
+pub struct WriteOptions {
+    /// Replace an existing output file.
+    pub overwrite: bool,
+    /// Paths that must never be written (the inputs).
+    pub protect: Vec<PathBuf>,
+    /// Keep the source's envelopes instead of recomputing them.
+    pub keep_envelopes: bool,
+}
+
+/// What was written.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WriteSummary {
+    /// Bytes written (before compression).
+    pub bytes: u64,
+    /// Edits applied (including envelopes).
+    pub edits: usize,
+}
+
+/// Write file `file` of `model` to `out`, applying `edits` (any order; overlapping edits: the
+/// outermost wins, edits inside it are dropped).
+pub fn write_document(
+    model: &CityModel,
+    file: usize,
+    mut edits: Vec<Edit>,
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<WriteSummary, WriteError> {
+    let Some(src) = model.files.get(file) else {
+        return Err(WriteError::Io {
+            file: out.to_path_buf(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "no such source file"),
+        });
+    };
+    check_target(out, opts, std::iter::once(src.path.as_path()))?;
+    if !opts.keep_envelopes {
+        for env in &src.envelopes {
+            if let Some(text) = envelope_xml(env) {
+                edits.push(Edit {
+                    span: env.span.clone(),
+                    replacement: text.into_bytes(),
+                });
+            }
+        }
+    }
+    let edits = normalise(edits);
+    let n_edits = edits.len();
+    let (mut reader, _) = source::open(&src.path)?;
+    let io_out = |source| WriteError::Io {
+        file: out.to_path_buf(),
+        source,
+    };
+    let io_src = |source| WriteError::Io {
+        file: src.path.clone(),
+        source,
+    };
+    let bytes = atomic_write(out, |w| {
+        let mut cursor = 0u64;
+        let mut written = 0u64;
+        for e in &edits {
+            if e.span.start < cursor || e.span.end > src.len {
+                continue;
+            }
+            written += copy(&mut reader, w, e.span.start - cursor, &src.path, out)?;
+            w.write_all(&e.replacement).map_err(io_out)?;
+            written += e.replacement.len() as u64;
+            let skip = e.span.end - e.span.start;
+            let skipped = std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink())
+                .map_err(io_src)?;
+            if skipped != skip {
+                return Err(WriteError::SourceChanged(src.path.clone()));
+            }
+            cursor = e.span.end;
+        }
+        written += copy(&mut reader, w, src.len - cursor, &src.path, out)?;
+        let mut rest = [0u8; 1];
+        if reader.read(&mut rest).map_err(io_src)? != 0 {
+            return Err(WriteError::SourceChanged(src.path.clone()));
+        }
+        Ok(written)
+    })?;
+    Ok(WriteSummary {
+        bytes,
+        edits: n_edits,
+    })
+}
+
+fn copy(
+    reader: &mut dyn Read,
+    w: &mut dyn Write,
+    len: u64,
+    src: &Path,
+    out: &Path,
+) -> Result<u64, WriteError> {
+    source::copy_exact(reader, w, len).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::UnexpectedEof {
+            WriteError::SourceChanged(src.to_path_buf())
+        } else {
+            WriteError::Io {
+                file: out.to_path_buf(),
+                source: e,
+            }
+        }
+    })
+}
+
+/// Sort edits and drop those nested in an earlier one.
+fn normalise(mut edits: Vec<Edit>) -> Vec<Edit> {
+    edits.sort_by(|a, b| {
+        a.span
+            .start
+            .cmp(&b.span.start)
+            .then(b.span.end.cmp(&a.span.end))
+    });
+    let mut out: Vec<Edit> = Vec::with_capacity(edits.len());
+    for e in edits {
+        if let Some(last) = out.last() {
+            if e.span.start < last.span.end {
+                continue;
+            }
+        }
+        out.push(e);
+    }
+    out
+}
+
+/// Refuse to write over an input, or over an existing file without `overwrite`.
+pub fn check_target<'a>(
+    out: &Path,
+    opts: &WriteOptions,
+    inputs: impl IntoIterator<Item = &'a Path>,
+) -> Result<(), WriteError> {
+    let canon_out = canonical_target(out);
+    let mut protected: Vec<&Path> = inputs.into_iter().collect();
+    protected.extend(opts.protect.iter().map(PathBuf::as_path));
+    for p in protected {
+        if let Ok(c) = p.canonicalize() {
+            if Some(&c) == canon_out.as_ref() {
+                return Err(WriteError::IsInput(out.to_path_buf()));
+            }
+        }
+    }
+    if out.exists() && !opts.overwrite {
+        return Err(WriteError::Exists(out.to_path_buf()));
+    }
+    Ok(())
+}
+
+fn canonical_target(out: &Path) -> Option<PathBuf> {
+    if let Ok(c) = out.canonicalize() {
+        return Some(c);
+    }
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = out.file_name()?;
+    parent.canonicalize().ok().map(|p| p.join(name))
+}
+
+/// Write through `f` into a temporary file beside `out`, gzip when `out` ends in `.gz`,
+/// then rename it into place. On any error the temporary file is removed.
+pub fn atomic_write<F>(out: &Path, f: F) -> Result<u64, WriteError>
+where
+    F: FnOnce(&mut dyn Write) -> Result<u64, WriteError>,
+{
+    let io = |source| WriteError::Io {
+        file: out.to_path_buf(),
+        source,
+    };
+    let dir = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let tmp = tempfile::Builder::new()
+        .prefix(".skylod-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(io)?;
+    let gz = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+    let file = tmp.as_file().try_clone().map_err(io)?;
+    let n = if gz {
+        let mut enc = flate2::write::GzEncoder::new(
+            BufWriter::with_capacity(256 * 1024, file),
+            flate2::Compression::default(),
+        );
+        let n = f(&mut enc)?;
+        let mut bw = enc.finish().map_err(io)?;
+        bw.flush().map_err(io)?;
+        n
+    } else {
+        let mut bw = BufWriter::with_capacity(256 * 1024, file);
+        let n = f(&mut bw)?;
+        bw.flush().map_err(io)?;
+        n
+    };
+    tmp.as_file().sync_all().map_err(io)?;
+    tmp.persist(out).map_err(|e| io(e.error))?;
+    Ok(n)
+}
+
+/// The recomputed envelope element, or `None` when its owner has no known geometry.
+pub fn envelope_xml(env: &EnvelopeSite) -> Option<String> {
+    let b = env.bbox.to_array()?;
+    let p = &env.prefix;
+    let mut s = String::with_capacity(200);
+    let _ = write!(s, "<{p}Envelope");
+    if let Some(srs) = &env.srs_name {
+        let _ = write!(s, " srsName=\"{}\"", escape_attr(srs));
+    }
+    let dims = if env.dimension == 2 { 2 } else { 3 };
+    let _ = write!(s, " srsDimension=\"{dims}\">");
+    let _ = write!(s, "<{p}lowerCorner>");
+    push_coords(&mut s, &b[0..dims]);
+    let _ = write!(s, "</{p}lowerCorner><{p}upperCorner>");
+    push_coords(&mut s, &b[3..3 + dims]);
+    let _ = write!(s, "</{p}upperCorner></{p}Envelope>");
+    Some(s)
+}
+
+fn push_coords(s: &mut String, v: &[f64]) {
+    for (i, x) in v.iter().enumerate() {
+        if i > 0 {
+            s.push(' ');
+        }
+        push_num(s, *x);
+    }
+}
+
+/// Shortest round-trip decimal of `x` (`-0` written as `0`).
+pub fn push_num(s: &mut String, x: f64) {
+    let x = if x == 0.0 { 0.0 } else { x };
+    let _ = write!(s, "{x}");
+}
+
+/// Escape `&`, `<`, `"` for an attribute value.
+pub fn escape_attr(v: &str) -> String {
+    v.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('"', "&quot;")
+}
+
+/// Writes GML geometry with deterministic ids.
+///
+/// ```
+/// use skylod::citygml::write::GmlWriter;
+/// use skylod::model::Polygon;
+/// use glam::DVec3;
+/// let w = GmlWriter { gml: "gml:".into(), ids: true };
+/// let p = Polygon::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y]);
+/// let mut s = String::new();
+/// w.multi_surface(&mut s, "m1", std::slice::from_ref(&p));
+/// assert!(s.starts_with("<gml:MultiSurface gml:id=\"m1\">"));
+/// assert!(s.contains("<gml:posList srsDimension=\"3\">0 0 0 1 0 0 0 1 0 0 0 0</gml:posList>"));
+/// ```
+#[derive(Debug, Clone)]
+pub struct GmlWriter {
+    /// GML prefix with colon.
+    pub gml: String,
+    /// Write `gml:id` on geometries (required by GML 3.2).
+    pub ids: bool,
+}
+
+impl GmlWriter {
+    /// `<gml:MultiSurface gml:id="{id}">` with one `surfaceMember` per polygon; polygon ids are
+    /// `{id}_{n}`.
+    pub fn multi_surface(&self, s: &mut String, id: &str, polys: &[Polygon]) {
+        let g = &self.gml;
+        if self.ids {
+            let _ = write!(s, "<{g}MultiSurface {g}id=\"{}\">", escape_attr(id));
+        } else {
+            let _ = write!(s, "<{g}MultiSurface>");
+        }
+        for (n, p) in polys.iter().enumerate() {
+            let _ = write!(s, "<{g}surfaceMember>");
+            self.polygon(s, &format!("{id}_{n}"), p);
+            let _ = write!(s, "</{g}surfaceMember>");
+        }
+        let _ = write!(s, "</{g}MultiSurface>");
+    }
+
+    /// One `gml:Polygon` with closed rings.
+    pub fn polygon(&self, s: &mut String, id: &str, p: &Polygon) {
+        let g = &self.gml;
+        if self.ids {
+            let _ = write!(s, "<{g}Polygon {g}id=\"{}\">", escape_attr(id));
+        } else {
+            let _ = write!(s, "<{g}Polygon>");
+        }
+        let _ = write!(s, "<{g}exterior>");
+        self.ring(s, &p.exterior);
+        let _ = write!(s, "</{g}exterior>");
+        for r in &p.interiors {
+            let _ = write!(s, "<{g}interior>");
+            self.ring(s, r);
+            let _ = write!(s, "</{g}interior>");
+        }
+        let _ = write!(s, "</{g}Polygon>");
+    }
+
+    fn ring(&self, s: &mut String, r: &[glam::DVec3]) {
+        let g = &self.gml;
+        let _ = write!(s, "<{g}LinearRing><{g}posList srsDimension=\"3\">");
+        for (i, q) in r.iter().chain(r.first()).enumerate() {
+            if i > 0 {
+                s.push(' ');
+            }
+            push_coords(s, &[q.x, q.y, q.z]);
+        }
+        let _ = write!(s, "</{g}posList></{g}LinearRing>");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn e(a: u64, b: u64) -> Edit {
+        Edit {
+            span: a..b,
+            replacement: vec![],
+        }
+    }
+
+    #[test]
+    fn nested_edits_dropped() {
+        let n = normalise(vec![e(10, 20), e(0, 5), e(12, 15), e(10, 30)]);
+        assert_eq!(
+            n.iter().map(|x| x.span.clone()).collect::<Vec<_>>(),
+            vec![0..5, 10..30]
+        );
+    }
+
+    #[test]
+    fn numbers() {
+        let mut s = String::new();
+        push_num(&mut s, -0.0);
+        s.push(' ');
+        push_num(&mut s, 678050.375);
+        s.push(' ');
+        push_num(&mut s, 0.1 + 0.2);
+        assert_eq!(s, "0 678050.375 0.30000000000000004");
+    }
+}
