@@ -29,11 +29,11 @@ use crate::model::{
     Asset, AssetKind, Bbox, Building, CityGmlVersion, CityModel, EnvelopeSite, LodGeometry,
     Polygon, SourceFile, Warning,
 };
+use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::name::ResolveResult;
 use quick_xml::NsReader;
-use std::collections::{HashMap, HashSet};
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
@@ -319,8 +319,8 @@ struct Parser {
     parts: Vec<Part>,
     hrefs: Vec<HrefRef>,
     implicits: Vec<Implicit>,
-    registry: HashMap<Box<str>, (u32, u32)>,
-    seen_ids: HashSet<Box<str>>,
+    /// Every gml:id seen; the range of geometry parts for ids of geometry elements.
+    registry: HashMap<Box<str>, Option<(u32, u32)>>,
     pending: Vec<PendingGeom>,
     polygon_elements: usize,
     // transient state
@@ -406,7 +406,6 @@ impl Parser {
             hrefs: Vec::new(),
             implicits: Vec::new(),
             registry: HashMap::new(),
-            seen_ids: HashSet::new(),
             pending: Vec::new(),
             polygon_elements: 0,
             capture: false,
@@ -425,9 +424,22 @@ impl Parser {
     }
 
     fn count_lines(&mut self, bytes: &[u8], content_start: u64) {
-        let mut it = memchr::memrchr(b'\n', bytes);
-        if let Some(last) = it.take() {
-            self.line += memchr::memchr_iter(b'\n', bytes).count() as u64;
+        let mut last = None;
+        if bytes.len() < 64 {
+            // short tokens: a plain loop beats the set-up cost of a SIMD search
+            for (i, &c) in bytes.iter().enumerate() {
+                if c == b'\n' {
+                    self.line += 1;
+                    last = Some(i);
+                }
+            }
+        } else {
+            for i in memchr::memchr_iter(b'\n', bytes) {
+                self.line += 1;
+                last = Some(i);
+            }
+        }
+        if let Some(last) = last {
             self.line_start = content_start + last as u64 + 1;
         }
     }
@@ -472,6 +484,9 @@ impl Parser {
 
     fn parse_attrs<R>(&mut self, reader: &NsReader<R>, e: &BytesStart) -> Result<Attrs, ReadError> {
         let mut a = Attrs::default();
+        if memchr::memchr(b'=', e.attributes_raw()).is_none() {
+            return Ok(a);
+        }
         for attr in e.attributes().with_checks(false) {
             let attr = match attr {
                 Ok(a) => a,
@@ -614,11 +629,16 @@ impl Parser {
         if let Some(id) = &attrs.id {
             if id.is_empty() || !(id.as_bytes()[0].is_ascii_alphabetic() || id.starts_with('_')) {
                 self.warn(format!(
-                    "gml:id {id:?} is not a valid xs:ID (must start with a letter or '_')"
+                    "gml:id \"{id}\" is not a valid xs:ID (must start with a letter or '_')"
                 ));
             }
-            if !self.seen_ids.insert(id.as_str().into()) {
-                self.warn(format!("duplicate gml:id {id:?}"));
+            match self.registry.entry(id.as_str().into()) {
+                std::collections::hash_map::Entry::Occupied(_) => {
+                    self.warn(format!("duplicate gml:id \"{id}\""));
+                }
+                std::collections::hash_map::Entry::Vacant(v) => {
+                    v.insert(None);
+                }
             }
         }
 
@@ -1158,9 +1178,11 @@ impl Parser {
             _ => {}
         }
         if let Some(start) = frame.register {
-            if let Some(id) = frame.id {
+            if let Some(id) = frame.id.as_deref() {
                 let end = self.parts.len() as u32;
-                self.registry.entry(id).or_insert((start, end));
+                if let Some(slot @ None) = self.registry.get_mut(id) {
+                    *slot = Some((start, end));
+                }
             }
         }
         if frame.flip {
@@ -1293,16 +1315,15 @@ impl Parser {
         if let Some(p) = self.poly.as_mut() {
             if exterior {
                 if valid {
-                    p.exterior = Some(ring.clone());
+                    p.exterior = Some(ring);
                 } else {
                     p.invalid = true;
                 }
             } else if valid {
-                p.interiors.push(ring.clone());
+                p.interiors.push(ring);
             }
         }
-        ring.clear();
-        self.ring = ring;
+        self.ring = Vec::with_capacity(16);
     }
 
     fn finish_polygon(&mut self) {
@@ -1539,7 +1560,7 @@ impl Parser {
                             ),
                         });
                     };
-                    let Some(&r) = self.registry.get(target) else {
+                    let Some(&Some(r)) = self.registry.get(target) else {
                         return Err(ReadError::DanglingHref {
                             loc: href.loc.clone(),
                             href: href.target.to_string(),
@@ -1604,8 +1625,8 @@ enum CoordError {
 
 fn parse_f64(tok: &[u8]) -> Result<f64, CoordError> {
     let bad = || CoordError::Token(String::from_utf8_lossy(&tok[..tok.len().min(40)]).into_owned());
-    let s = std::str::from_utf8(tok).map_err(|_| bad())?;
-    let v: f64 = s.parse().map_err(|_| bad())?;
+    // fast-float2 parses the same grammar as `str::parse::<f64>` (incl. "nan", "inf"), from bytes.
+    let v: f64 = fast_float2::parse(tok).map_err(|_| bad())?;
     if v.is_finite() {
         Ok(v)
     } else {
