@@ -132,3 +132,137 @@ pub fn all_boxes(model: &CityModel) -> Vec<RoughGeometry> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{AssetKind, LodGeometry};
+    use glam::DVec3;
+    use plane::tests::{lod3_wall, WallFrame};
+
+    fn asset(kind: AssetKind, geoms: Vec<(u8, Vec<Polygon>)>) -> Asset {
+        Asset {
+            kind,
+            id: Some(format!("{kind}")),
+            element: "X".into(),
+            building: Some(0),
+            parent: None,
+            span: 0..0,
+            line: 1,
+            function: None,
+            geometries: geoms
+                .into_iter()
+                .map(|(lod, polygons)| LodGeometry {
+                    lod,
+                    property: format!("lod{lod}MultiSurface"),
+                    span: 0..0,
+                    polygons,
+                })
+                .collect(),
+            file: 0,
+        }
+    }
+
+    #[test]
+    fn lod3_wall_asset_is_generalised() {
+        let f = WallFrame::new(DVec3::new(691_000.0, 5_334_000.0, 370.0), 12.0);
+        let wall = asset(AssetKind::Wall, vec![(3, lod3_wall(&f))]);
+        let r = rough_asset(&wall, &RoughOptions::default());
+        assert_eq!(r.lod, 3);
+        assert!(r.obb.is_none());
+        assert_eq!(r.polygons.len(), 1);
+        assert!((r.polygons[0].area() - 300.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn lod2_is_preferred_when_present() {
+        let f = WallFrame::new(DVec3::new(0.0, 0.0, 0.0), 0.0);
+        let mut lod2 = Polygon::new(f.quad(0.0, 20.0, 0.0, 15.0, 0.0));
+        lod2.id = Some("lod2-poly".into());
+        let wall = asset(
+            AssetKind::Wall,
+            vec![(3, lod3_wall(&f)), (2, vec![lod2.clone()])],
+        );
+        let r = rough_asset(&wall, &RoughOptions::default());
+        assert_eq!((r.lod, r.polygons.clone()), (2, vec![lod2]));
+        let opts = RoughOptions {
+            prefer_lod2: false,
+            ..RoughOptions::default()
+        };
+        let r = rough_asset(&wall, &opts);
+        assert_eq!(r.lod, 3);
+        assert_eq!(r.polygons.len(), 1);
+        assert_eq!(r.polygons[0].id, None);
+    }
+
+    #[test]
+    fn window_becomes_a_thin_box() {
+        // Frame (4 strips) and pane of a 1.2 x 1.5 window, 0.08 m deep, on a rotated wall.
+        let f = WallFrame::new(DVec3::new(691_000.0, 5_334_000.0, 370.0), 33.0);
+        let polys = vec![
+            Polygon::new(f.quad(0.0, 1.2, 0.0, 1.5, 0.0)),
+            Polygon::new(f.quad(0.0, 1.2, 0.0, 1.5, -0.08)),
+            Polygon::new(f.quad(0.1, 1.1, 0.1, 1.4, -0.04)),
+        ];
+        let win = asset(AssetKind::Window, vec![(3, polys.clone())]);
+        let r = rough_asset(&win, &RoughOptions::default());
+        let obb = r.obb.unwrap();
+        assert_eq!(r.polygons.len(), 6);
+        assert!((obb.volume() - 1.2 * 1.5 * 0.08).abs() < 1e-9);
+        assert!((obb.half.y - 0.04).abs() < 1e-9);
+        assert!(polys
+            .iter()
+            .flat_map(|p| p.points())
+            .all(|p| obb.contains(*p, 1e-6)));
+    }
+
+    #[test]
+    fn kinds_map_to_boxes_or_planes_and_model_order_is_kept() {
+        let f = WallFrame::new(DVec3::new(10.0, 20.0, 0.0), 0.0);
+        let roof = Polygon::new(vec![
+            DVec3::new(0.0, 0.0, 5.0),
+            DVec3::new(4.0, 0.0, 5.0),
+            DVec3::new(4.0, 4.0, 5.0),
+            DVec3::new(0.0, 4.0, 5.0),
+        ]);
+        let kinds = [
+            AssetKind::Roof,
+            AssetKind::Installation,
+            AssetKind::Door,
+            AssetKind::Body,
+            AssetKind::Other,
+            AssetKind::Ground,
+        ];
+        let mut model = CityModel::default();
+        for k in kinds {
+            model.assets.push(asset(k, vec![(2, vec![roof.clone()])]));
+        }
+        model
+            .assets
+            .push(asset(AssetKind::Wall, vec![(3, lod3_wall(&f))]));
+        model.assets.push(asset(AssetKind::Other, vec![]));
+        let rough = rough_model(&model, &RoughOptions::default());
+        assert_eq!(rough.len(), model.assets.len());
+        for (a, r) in model.assets.iter().zip(&rough) {
+            assert_eq!(*r, rough_asset(a, &RoughOptions::default()));
+            if a.geometries.is_empty() {
+                assert!(r.polygons.is_empty() && r.obb.is_none());
+            } else if a.kind.is_shell_surface() {
+                assert!(r.obb.is_none());
+                assert_eq!(r.polygons.len(), 1);
+            } else {
+                // A flat polygon becomes a thin box.
+                let obb = r.obb.unwrap();
+                assert_eq!(r.polygons.len(), 6);
+                assert!((obb.volume() - 16.0 * obb::MIN_THICKNESS).abs() < 1e-9);
+            }
+        }
+        let boxes = all_boxes(&model);
+        assert_eq!(boxes.len(), model.assets.len());
+        let wall_box = boxes[6].obb.unwrap();
+        // The wall's box spans the reveals' 0.2 m depth.
+        assert!((wall_box.volume() - 20.0 * 15.0 * 0.2).abs() < 1e-9);
+        assert_eq!(boxes[6].lod, 3);
+        assert!(boxes[7].obb.is_none());
+    }
+}

@@ -194,7 +194,7 @@ fn min_area_rect(hull: &[DVec2], lo: DVec3, hi: DVec3) -> (DVec2, [f64; 4]) {
     for w in hull.windows(2) {
         let e = w[1] - w[0];
         let len = e.length();
-        if !(len > 1e-12) {
+        if len <= 1e-12 || !len.is_finite() {
             continue;
         }
         let u = e / len;

@@ -141,7 +141,7 @@ fn prepare(polygons: &[Polygon], origin: DVec3) -> Vec<Item> {
             }
             let n = newell(&pts);
             let area = n.length() * 0.5;
-            if !(area > AREA_EPS) {
+            if area <= AREA_EPS || !area.is_finite() {
                 return None;
             }
             let centroid = pts.iter().sum::<DVec3>() / pts.len() as f64;
