@@ -94,11 +94,11 @@ pub fn rough_asset(asset: &Asset, opts: &RoughOptions) -> RoughGeometry {
         return RoughGeometry::default();
     };
     if asset.kind.is_shell_surface() {
-        let input: Vec<Polygon> = asset.polygons_at(lod).cloned().collect();
         let polygons = if lod == 2 && asset.max_lod().is_some_and(|m| m > 2) {
-            input // LoD2 alongside a higher LoD: already generalised
+            // LoD2 alongside a higher LoD: already generalised.
+            asset.polygons_at(lod).cloned().collect()
         } else {
-            plane::generalize(&input, opts.angle_deg, opts.thickness_m)
+            plane::generalize(asset.polygons_at(lod), opts.angle_deg, opts.thickness_m)
         };
         RoughGeometry {
             polygons,

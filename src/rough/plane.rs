@@ -49,15 +49,11 @@ const COLLINEAR_EPS: f64 = 1e-4;
 /// assert_eq!(out[0].exterior.len(), 4);
 /// assert!((out[0].area() - 40.0).abs() < 1e-9);
 /// ```
-pub fn generalize(polygons: &[Polygon], angle_deg: f64, thickness_m: f64) -> Vec<Polygon> {
-    let Some(origin) = polygons
-        .iter()
-        .flat_map(|p| p.exterior.iter())
-        .find(|p| p.is_finite())
-        .copied()
-    else {
-        return Vec::new();
-    };
+pub fn generalize<'a>(
+    polygons: impl IntoIterator<Item = &'a Polygon>,
+    angle_deg: f64,
+    thickness_m: f64,
+) -> Vec<Polygon> {
     let cos_a = angle_deg.to_radians().cos();
     let thick = if thickness_m.is_finite() {
         thickness_m.max(0.0)
@@ -65,7 +61,7 @@ pub fn generalize(polygons: &[Polygon], angle_deg: f64, thickness_m: f64) -> Vec
         0.0
     };
 
-    let items = prepare(polygons, origin);
+    let (items, origin) = prepare(polygons);
     let mut order: Vec<usize> = (0..items.len()).collect();
     order.sort_by(|&a, &b| items[b].area.total_cmp(&items[a].area).then(a.cmp(&b)));
 
@@ -126,33 +122,38 @@ struct Group {
     members: Vec<usize>,
 }
 
-fn prepare(polygons: &[Polygon], origin: DVec3) -> Vec<Item> {
-    polygons
-        .iter()
-        .filter_map(|p| {
-            let pts: Vec<DVec3> = p
-                .exterior
-                .iter()
-                .filter(|q| q.is_finite())
-                .map(|q| *q - origin)
-                .collect();
-            if pts.len() < 3 {
-                return None;
-            }
-            let n = newell(&pts);
-            let area = n.length() * 0.5;
-            if area <= AREA_EPS || !area.is_finite() {
-                return None;
-            }
-            let centroid = pts.iter().sum::<DVec3>() / pts.len() as f64;
-            Some(Item {
-                normal: n / (2.0 * area),
-                area,
-                centroid,
-                pts,
-            })
-        })
-        .collect()
+/// Usable polygons relative to a local origin (the first finite point met), and the origin.
+fn prepare<'a>(polygons: impl IntoIterator<Item = &'a Polygon>) -> (Vec<Item>, DVec3) {
+    let mut origin: Option<DVec3> = None;
+    let mut items = Vec::new();
+    for p in polygons {
+        let Some(o) = origin.or_else(|| p.exterior.iter().find(|q| q.is_finite()).copied()) else {
+            continue;
+        };
+        origin = Some(o);
+        let pts: Vec<DVec3> = p
+            .exterior
+            .iter()
+            .filter(|q| q.is_finite())
+            .map(|q| *q - o)
+            .collect();
+        if pts.len() < 3 {
+            continue;
+        }
+        let n = newell(&pts);
+        let area = n.length() * 0.5;
+        if area <= AREA_EPS || !area.is_finite() {
+            continue;
+        }
+        let centroid = pts.iter().sum::<DVec3>() / pts.len() as f64;
+        items.push(Item {
+            normal: n / (2.0 * area),
+            area,
+            centroid,
+            pts,
+        });
+    }
+    (items, origin.unwrap_or(DVec3::ZERO))
 }
 
 /// An orthonormal basis (u, v) of the plane with normal `n`, u x v = n; u horizontal
