@@ -39,8 +39,8 @@ impl Default for RoughOptions {
 /// The rough geometry of one asset.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RoughGeometry {
-    /// Polygons (open rings, no holes). Generated polygons have no id; LoD2 polygons used
-    /// unchanged keep theirs.
+    /// Polygons, rings open. Generated polygons (boxes, generalised planes) have no holes
+    /// and no id; LoD2 polygons used unchanged keep their holes and ids.
     pub polygons: Vec<Polygon>,
     /// The box, for assets replaced by their box (`None` for shell surfaces).
     pub obb: Option<Obb>,
@@ -120,14 +120,17 @@ pub fn rough_model(model: &CityModel, opts: &RoughOptions) -> Vec<RoughGeometry>
         .collect()
 }
 
-/// Every asset as the oriented box of its highest-LoD geometry, in asset order: the
-/// paper's "bounding box" model (Fig. 3(b)) used for comparisons.
+/// Every asset as the oriented box of its highest-LoD geometry (all properties of that
+/// LoD), in asset order: the paper's "bounding box" model (Fig. 3(b)) used for comparisons.
 pub fn all_boxes(model: &CityModel) -> Vec<RoughGeometry> {
     model
         .assets
         .par_iter()
         .map(|a| match a.max_lod() {
-            Some(lod) => RoughGeometry::boxed(Obb::of_polygons(a.detail_polygons()), lod),
+            Some(lod) => RoughGeometry::boxed(
+                Obb::of_points(a.polygons_at(lod).flat_map(|p| p.points())),
+                lod,
+            ),
             None => RoughGeometry::default(),
         })
         .collect()

@@ -256,18 +256,17 @@ fn flatten_group(g: &Group, items: &[Item], origin: DVec3, out: &mut Vec<Polygon
 
 /// Exterior rings of `polys` that are not inside another one's outline.
 fn drop_enclosed(polys: &[GeoPolygon<f64>]) -> Vec<Vec<DVec2>> {
-    use geo::Contains;
+    use geo::{Contains, InteriorPoint};
     polys
         .iter()
         .enumerate()
         .filter(|(i, p)| {
-            let Some(first) = p.exterior().0.first() else {
+            let Some(inside) = p.interior_point() else {
                 return false;
             };
-            !polys
-                .iter()
-                .enumerate()
-                .any(|(j, q)| j != *i && q.unsigned_area() > p.unsigned_area() && q.contains(first))
+            !polys.iter().enumerate().any(|(j, q)| {
+                j != *i && q.unsigned_area() > p.unsigned_area() && q.contains(&inside)
+            })
         })
         .map(|(_, p)| {
             p.exterior()
@@ -561,5 +560,38 @@ pub(crate) mod tests {
         simplify_ring(&mut r);
         assert_eq!(r.len(), 4, "{r:?}");
         assert!((signed_area_v(&r) - 2.0).abs() < 1e-12);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn random_coplanar_rectangles_stay_in_plane_and_cover(
+            rects in proptest::collection::vec((0.0f64..30.0, 0.0f64..20.0, 0.2f64..10.0, 0.2f64..8.0, -0.25f64..0.25), 1..25),
+            angle in 0.0f64..360.0,
+            ox in 3e5f64..8e5, oy in 5.0e6f64..6.0e6,
+        ) {
+            let f = WallFrame::new(DVec3::new(ox, oy, 300.0), angle);
+            let polys: Vec<Polygon> = rects
+                .iter()
+                .map(|&(a, h, w, t, d)| Polygon::new(f.quad(a, a + w, h, h + t, d)))
+                .collect();
+            let out = generalize(&polys, 5.0, 0.3);
+            proptest::prop_assert!(!out.is_empty() && out.len() <= polys.len());
+            let largest = polys.iter().map(Polygon::area).fold(0.0, f64::max);
+            let total_in: f64 = polys.iter().map(Polygon::area).sum();
+            let covered: f64 = out.iter().map(Polygon::area).sum();
+            proptest::prop_assert!(covered >= largest - 1e-6);
+            // Holes filled can add area, but never beyond the rectangles' bounding box.
+            let (a0, a1) = rects.iter().fold((f64::MAX, f64::MIN), |m, r| (m.0.min(r.0), m.1.max(r.0 + r.2)));
+            let (h0, h1) = rects.iter().fold((f64::MAX, f64::MIN), |m, r| (m.0.min(r.1), m.1.max(r.1 + r.3)));
+            proptest::prop_assert!(covered <= (a1 - a0) * (h1 - h0) + 1e-6);
+            proptest::prop_assert!(covered <= total_in + (a1 - a0) * (h1 - h0));
+            // All output lies on one plane parallel to the wall, within the depth range.
+            for p in &out {
+                proptest::prop_assert!(p.newell_normal().normalize().dot(f.n()) > 1.0 - 1e-9);
+                for q in &p.exterior {
+                    proptest::prop_assert!((*q - f.o).dot(f.n()).abs() <= 0.25 + 1e-6);
+                }
+            }
+        }
     }
 }
