@@ -7,4 +7,5 @@
 
 pub mod citygml;
 pub mod model;
+pub mod rough;
 pub mod stats;
