@@ -1,0 +1,1 @@
+//! Solar analysis beside the LoD pipeline: sun positions, sky view factor, sun hours.
