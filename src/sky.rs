@@ -380,7 +380,11 @@ impl Frame {
         let Some(n) = normal.try_normalize() else {
             return Frame::IDENTITY;
         };
-        let helper = if n.z.abs() < 0.999 { DVec3::Z } else { DVec3::Y };
+        let helper = if n.z.abs() < 0.999 {
+            DVec3::Z
+        } else {
+            DVec3::Y
+        };
         let x = helper.cross(n).normalize();
         let y = n.cross(x);
         Frame { x, y, z: n }

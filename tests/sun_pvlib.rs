@@ -43,10 +43,24 @@ fn times_for(i: usize) -> [DateTime<Utc>; 2] {
     let month2 = ((i + 5) % 12) as u32 + 1;
     let year = 2000 + 2 * i as i32;
     [
-        Utc.with_ymd_and_hms(year, month, 1 + 2 * i as u32, (3 + 5 * i as u32) % 24, 17, 42)
-            .unwrap(),
-        Utc.with_ymd_and_hms(year + 1, month2, 28 - i as u32, (11 + 7 * i as u32) % 24, 3, 9)
-            .unwrap(),
+        Utc.with_ymd_and_hms(
+            year,
+            month,
+            1 + 2 * i as u32,
+            (3 + 5 * i as u32) % 24,
+            17,
+            42,
+        )
+        .unwrap(),
+        Utc.with_ymd_and_hms(
+            year + 1,
+            month2,
+            28 - i as u32,
+            (11 + 7 * i as u32) % 24,
+            3,
+            9,
+        )
+        .unwrap(),
     ]
 }
 
@@ -128,5 +142,8 @@ fn sun_position_matches_pvlib_spa() {
         }
     }
     // The case set must exercise daytime (refraction) and night, both hemispheres.
-    assert!(day >= 8 && night >= 4 && south >= 8, "day {day} night {night}");
+    assert!(
+        day >= 8 && night >= 4 && south >= 8,
+        "day {day} night {night}"
+    );
 }

@@ -60,8 +60,14 @@ impl SiteTimeZone {
             let (h, m) = match digits.len() {
                 1 | 2 => (digits.parse::<i32>().map_err(|_| bad())?, 0),
                 4 => (
-                    digits.get(..2).and_then(|s| s.parse::<i32>().ok()).ok_or_else(bad)?,
-                    digits.get(2..).and_then(|s| s.parse::<i32>().ok()).ok_or_else(bad)?,
+                    digits
+                        .get(..2)
+                        .and_then(|s| s.parse::<i32>().ok())
+                        .ok_or_else(bad)?,
+                    digits
+                        .get(2..)
+                        .and_then(|s| s.parse::<i32>().ok())
+                        .ok_or_else(bad)?,
                 ),
                 _ => return Err(bad()),
             };
@@ -218,8 +224,8 @@ impl SunTable {
             .with_ymd_and_hms(year, 1, 1, 0, 0, 0)
             .single()
             .ok_or(SolarError::Year(year))?;
-        let end = NaiveDate::from_ymd_opt(year.saturating_add(1), 1, 1)
-            .ok_or(SolarError::Year(year))?;
+        let end =
+            NaiveDate::from_ymd_opt(year.saturating_add(1), 1, 1).ok_or(SolarError::Year(year))?;
         let minutes = (end - start.date_naive()).num_minutes();
         if step_minutes == 0 || step_minutes > 1440 {
             return Err(SolarError::Step(step_minutes));
@@ -350,7 +356,11 @@ mod tests {
             .unwrap();
         let p = sun_position(local.with_timezone(&Utc), &nrel_site()).unwrap();
         assert!((p.zenith_deg - 50.111622).abs() < 3e-4, "{}", p.zenith_deg);
-        assert!((p.azimuth_deg - 194.340241).abs() < 3e-4, "{}", p.azimuth_deg);
+        assert!(
+            (p.azimuth_deg - 194.340241).abs() < 3e-4,
+            "{}",
+            p.azimuth_deg
+        );
         let d = p.direction;
         assert!((d.length() - 1.0).abs() < 1e-12);
         assert!((d.z - p.zenith_deg.to_radians().cos()).abs() < 1e-12);
@@ -407,7 +417,9 @@ mod tests {
 
     #[test]
     fn year_table_shape_and_months() {
-        let site = Site::new(41.39, 2.17).with_time_zone("Europe/Madrid").unwrap();
+        let site = Site::new(41.39, 2.17)
+            .with_time_zone("Europe/Madrid")
+            .unwrap();
         let t = SunTable::year(2025, 60, &site).unwrap();
         assert_eq!(t.len(), 8760);
         assert_eq!(t.step_hours(), 1.0);

@@ -42,9 +42,7 @@ pub fn visible_steps<'a>(
     normal: Option<DVec3>,
     blocked: impl Fn(DVec3) -> bool + 'a,
 ) -> impl Iterator<Item = usize> + 'a {
-    let n = normal
-        .and_then(|n| n.try_normalize())
-        .unwrap_or(DVec3::Z);
+    let n = normal.and_then(|n| n.try_normalize()).unwrap_or(DVec3::Z);
     table
         .steps()
         .iter()
@@ -61,9 +59,7 @@ pub fn sun_hours(
     normal: Option<DVec3>,
     blocked: impl Fn(DVec3) -> bool,
 ) -> SunHours {
-    let n = normal
-        .and_then(|n| n.try_normalize())
-        .unwrap_or(DVec3::Z);
+    let n = normal.and_then(|n| n.try_normalize()).unwrap_or(DVec3::Z);
     let mut monthly_steps = [0usize; 12];
     let mut possible = 0usize;
     let mut counted = 0usize;
@@ -167,7 +163,10 @@ mod tests {
             let start = Utc.from_utc_datetime(&date.and_hms_opt(0, 0, 0).unwrap());
             let t = SunTable::range(start, 1440, 1, &site).unwrap();
             let h = sun_hours(&t, None, |_| false).hours;
-            assert!(h < conventional && conventional - h < 0.15, "{h} {conventional}");
+            assert!(
+                h < conventional && conventional - h < 0.15,
+                "{h} {conventional}"
+            );
         }
     }
 
@@ -183,7 +182,9 @@ mod tests {
 
     #[test]
     fn deep_canyon_sees_only_midday() {
-        let site = Site::new(BCN.0, BCN.1).with_time_zone("Europe/Madrid").unwrap();
+        let site = Site::new(BCN.0, BCN.1)
+            .with_time_zone("Europe/Madrid")
+            .unwrap();
         let table = SunTable::year(2025, 5, &site).unwrap();
         let open = sun_hours(&table, None, |_| false);
         let sh = sun_hours(&table, None, ns_canyon);
@@ -203,7 +204,10 @@ mod tests {
                 .unwrap();
             let noon = e.transits[0];
             let off = (mid - noon).num_seconds().abs();
-            assert!(off <= 40 * 60, "step {k} at {mid}: {off} s from noon {noon}");
+            assert!(
+                off <= 40 * 60,
+                "step {k} at {mid}: {off} s from noon {noon}"
+            );
             n += 1;
         }
         assert_eq!(n, sh.steps);

@@ -116,9 +116,7 @@ pub fn sky_view(
     bundles: &SkyBundles,
     blocked: impl Fn(DVec3, DVec3) -> bool,
 ) -> SkyView {
-    let n = normal
-        .and_then(|n| n.try_normalize())
-        .unwrap_or(DVec3::Z);
+    let n = normal.and_then(|n| n.try_normalize()).unwrap_or(DVec3::Z);
     let frame = Frame::from_normal(n);
     let mut rays = 0usize;
 
@@ -205,9 +203,8 @@ mod tests {
         let w = 10.0;
         for hw in [0.5, 1.0, 2.0] {
             let h = hw * w;
-            let canyon = |o: DVec3, d: DVec3| {
-                wall_hit(o, d, -w / 2.0, h) || wall_hit(o, d, w / 2.0, h)
-            };
+            let canyon =
+                |o: DVec3, d: DVec3| wall_hit(o, d, -w / 2.0, h) || wall_hit(o, d, w / 2.0, h);
             let v = sky_view(DVec3::ZERO, None, &b, canyon);
             let beta = (2.0 * h / w).atan();
             assert!((v.svf - beta.cos()).abs() < TOL, "H/W {hw}: {v:?}");
@@ -235,8 +232,7 @@ mod tests {
     fn canyon_wall_base_facing_across() {
         let b = bundles();
         let (w, h) = (12.0, 12.0);
-        let canyon =
-            |o: DVec3, d: DVec3| wall_hit(o, d, -w / 2.0, h) || wall_hit(o, d, w / 2.0, h);
+        let canyon = |o: DVec3, d: DVec3| wall_hit(o, d, -w / 2.0, h) || wall_hit(o, d, w / 2.0, h);
         let poi = DVec3::new(-w / 2.0, 0.0, 0.0);
         let v = sky_view(poi, Some(DVec3::X), &b, canyon);
         let expect = (1.0 - h / (h * h + w * w).sqrt()) / 2.0;
