@@ -1,5 +1,5 @@
 //! Solar analysis beside the LoD pipeline (paper 3, 5): sun positions ([`sun`]), sky view
-//! factor and sky exposure ([`svf`]) and sun hours ([`sun_hours`]).
+//! factor and sky exposure ([`mod@svf`]) and sun hours ([`mod@sun_hours`]).
 //!
 //! All three take the scene only through an occlusion predicate (`true` = blocked), so
 //! they work with any ray caster; parallelism over points of interest is the caller's.
