@@ -8,4 +8,6 @@
 pub mod citygml;
 pub mod model;
 pub mod rough;
+pub mod sky;
+pub mod solar;
 pub mod stats;

@@ -1,0 +1,463 @@
+//! Sun position (NREL SPA through the `solar-positioning` crate) and a precomputed table
+//! of sun directions for a calendar year.
+//!
+//! Positions are topocentric and apparent: SPA's atmospheric refraction correction is
+//! applied with the site's pressure and temperature (only while the geometric sun is above
+//! SPA's cut-off of -0.83337 degrees elevation, as SPA does). A step is "above the horizon"
+//! when the apparent zenith angle is below 90 degrees.
+//!
+//! # Example
+//! ```rust
+//! use chrono::{TimeZone, Utc};
+//! use skylod::solar::sun::{sun_position, Site};
+//! let site = Site::new(41.39, 2.17); // Barcelona
+//! let noon = Utc.with_ymd_and_hms(2025, 6, 21, 11, 50, 0).unwrap();
+//! let p = sun_position(noon, &site)?;
+//! assert!(p.zenith_deg > 17.0 && p.zenith_deg < 19.0);
+//! assert!(p.direction.y < 0.0); // the sun stands to the south at noon
+//! # Ok::<(), skylod::solar::SolarError>(())
+//! ```
+
+use super::SolarError;
+use chrono::{DateTime, Datelike, Duration, FixedOffset, NaiveDate, Offset, TimeZone, Utc};
+use glam::DVec3;
+use rayon::prelude::*;
+use solar_positioning::{Location, RefractionCorrection, SolarPositions};
+
+/// Time zone used to attribute steps to local months: an IANA zone (with daylight saving)
+/// or a fixed offset from UTC.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SiteTimeZone {
+    /// A fixed offset from UTC (`"UTC"`, `"+01:00"`, `"-0700"`, `"+05"`).
+    Fixed(FixedOffset),
+    /// A named IANA zone such as `"Europe/Madrid"`.
+    Named(chrono_tz::Tz),
+}
+
+impl SiteTimeZone {
+    /// Parses `"UTC"`, `"Z"`, `"GMT"`, a fixed offset `±HH`, `±HHMM`, `±HH:MM` (optionally
+    /// prefixed with `UTC`), or an IANA zone name.
+    ///
+    /// # Errors
+    /// [`SolarError::TimeZone`] if the text is none of these.
+    pub fn parse(text: &str) -> Result<Self, SolarError> {
+        let t = text.trim();
+        let bad = || SolarError::TimeZone(text.to_string());
+        let upper = t.to_ascii_uppercase();
+        if matches!(upper.as_str(), "UTC" | "Z" | "GMT") {
+            return Ok(SiteTimeZone::Fixed(Utc.fix()));
+        }
+        let offset = upper
+            .strip_prefix("UTC")
+            .or_else(|| upper.strip_prefix("GMT"))
+            .unwrap_or(&upper);
+        if let Some(rest) = offset.strip_prefix(['+', '-']) {
+            let sign = if offset.starts_with('-') { -1 } else { 1 };
+            let digits: String = rest.chars().filter(|c| *c != ':').collect();
+            if !digits.chars().all(|c| c.is_ascii_digit()) || rest.matches(':').count() > 1 {
+                return Err(bad());
+            }
+            let (h, m) = match digits.len() {
+                1 | 2 => (digits.parse::<i32>().map_err(|_| bad())?, 0),
+                4 => (
+                    digits
+                        .get(..2)
+                        .and_then(|s| s.parse::<i32>().ok())
+                        .ok_or_else(bad)?,
+                    digits
+                        .get(2..)
+                        .and_then(|s| s.parse::<i32>().ok())
+                        .ok_or_else(bad)?,
+                ),
+                _ => return Err(bad()),
+            };
+            if h > 14 || m > 59 {
+                return Err(bad());
+            }
+            let secs = sign * (h * 3600 + m * 60);
+            return FixedOffset::east_opt(secs)
+                .map(SiteTimeZone::Fixed)
+                .ok_or_else(bad);
+        }
+        t.parse::<chrono_tz::Tz>()
+            .map(SiteTimeZone::Named)
+            .map_err(|_| bad())
+    }
+
+    /// Local calendar month (1..=12) of a UTC instant.
+    pub fn local_month(&self, utc: DateTime<Utc>) -> u32 {
+        match self {
+            SiteTimeZone::Fixed(o) => utc.with_timezone(o).month(),
+            SiteTimeZone::Named(z) => utc.with_timezone(z).month(),
+        }
+    }
+}
+
+/// Observer site and atmosphere for SPA.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Site {
+    /// Geodetic latitude in degrees, north positive.
+    pub latitude: f64,
+    /// Longitude in degrees, east positive.
+    pub longitude: f64,
+    /// Elevation above sea level in metres (parallax only).
+    pub elevation_m: f64,
+    /// Annual mean local pressure in millibars (hPa), for refraction.
+    pub pressure_mbar: f64,
+    /// Annual mean local temperature in degrees Celsius, for refraction.
+    pub temperature_c: f64,
+    /// Delta T = TT - UT1 in seconds.
+    pub delta_t_s: f64,
+    /// Time zone used to attribute table steps to local months.
+    pub time_zone: SiteTimeZone,
+}
+
+impl Site {
+    /// A site at sea level with the standard atmosphere (1013.25 mbar, 15 C), delta T of
+    /// 69 s (its value in the early 2020s) and month attribution in UTC.
+    pub fn new(latitude: f64, longitude: f64) -> Site {
+        Site {
+            latitude,
+            longitude,
+            elevation_m: 0.0,
+            pressure_mbar: 1013.25,
+            temperature_c: 15.0,
+            delta_t_s: 69.0,
+            time_zone: SiteTimeZone::Fixed(Utc.fix()),
+        }
+    }
+
+    /// The same site with the time zone parsed by [`SiteTimeZone::parse`].
+    ///
+    /// # Errors
+    /// [`SolarError::TimeZone`] for an unknown zone or malformed offset.
+    pub fn with_time_zone(mut self, zone: &str) -> Result<Site, SolarError> {
+        self.time_zone = SiteTimeZone::parse(zone)?;
+        Ok(self)
+    }
+
+    fn location(&self) -> Location {
+        Location {
+            latitude: self.latitude,
+            longitude: self.longitude,
+        }
+    }
+}
+
+/// Apparent topocentric sun position.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SunPosition {
+    /// Topocentric zenith angle with refraction, degrees.
+    pub zenith_deg: f64,
+    /// Topocentric azimuth, degrees clockwise from north, in `[0, 360)`.
+    pub azimuth_deg: f64,
+    /// Unit vector towards the sun: x east, y north, z up.
+    pub direction: DVec3,
+}
+
+/// Unit direction (x east, y north, z up) of zenith angle and azimuth (clockwise from
+/// north), both in degrees.
+pub fn direction_from_angles(zenith_deg: f64, azimuth_deg: f64) -> DVec3 {
+    let (sz, cz) = zenith_deg.to_radians().sin_cos();
+    let (sa, ca) = azimuth_deg.to_radians().sin_cos();
+    DVec3::new(sz * sa, sz * ca, cz)
+}
+
+/// Sun position at a UTC instant for `site`, with SPA's refraction correction.
+///
+/// # Errors
+/// [`SolarError::Spa`] for invalid coordinates, atmosphere, elevation or a date outside
+/// SPA's range (years -2000..6000).
+pub fn sun_position(utc: DateTime<Utc>, site: &Site) -> Result<SunPosition, SolarError> {
+    let refraction = RefractionCorrection::new(site.pressure_mbar, site.temperature_c)?;
+    let p = SolarPositions::new().at(
+        &utc,
+        site.location(),
+        site.elevation_m,
+        site.delta_t_s,
+        Some(refraction),
+    )?;
+    Ok(SunPosition {
+        zenith_deg: p.zenith_angle(),
+        azimuth_deg: p.azimuth(),
+        direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
+    })
+}
+
+/// One time step of a [`SunTable`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SunStep {
+    /// Unit direction towards the sun at the middle of the step (x east, y north, z up).
+    pub direction: DVec3,
+    /// Whether the sun is above the horizon (apparent zenith < 90 degrees).
+    pub above_horizon: bool,
+    /// Local calendar month of the middle of the step, 0 = January .. 11 = December.
+    pub month: u8,
+}
+
+/// Sun directions for consecutive equal time steps, precomputed once.
+///
+/// Step `k` stands for the interval `[start + k*step, start + (k+1)*step)`; the sun is
+/// evaluated at the middle of the interval (midpoint rule), and the interval is attributed
+/// to the local month (site time zone) of that middle instant. For [`SunTable::year`] the
+/// steps cover a UTC calendar year, so with a non-UTC zone the first/last few hours of the
+/// table fall into the neighbouring local year and are counted in its month (January or
+/// December) — a year of steps always yields one full year of hours.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SunTable {
+    start: DateTime<Utc>,
+    step_minutes: u32,
+    steps: Vec<SunStep>,
+}
+
+impl SunTable {
+    /// All steps of the UTC calendar year `year` (35,040 steps at 15 minutes; 35,136 in a
+    /// leap year). When `step_minutes` does not divide the year, the remainder shorter than
+    /// one step at the end of the year is left out.
+    ///
+    /// # Errors
+    /// [`SolarError::Step`] for a step of 0 or more than 1440 minutes,
+    /// [`SolarError::Year`] for a year chrono cannot represent, [`SolarError::Spa`] for
+    /// invalid site parameters.
+    pub fn year(year: i32, step_minutes: u32, site: &Site) -> Result<SunTable, SolarError> {
+        let start = Utc
+            .with_ymd_and_hms(year, 1, 1, 0, 0, 0)
+            .single()
+            .ok_or(SolarError::Year(year))?;
+        let end =
+            NaiveDate::from_ymd_opt(year.saturating_add(1), 1, 1).ok_or(SolarError::Year(year))?;
+        let minutes = (end - start.date_naive()).num_minutes();
+        if step_minutes == 0 || step_minutes > 1440 {
+            return Err(SolarError::Step(step_minutes));
+        }
+        let steps = usize::try_from(minutes / i64::from(step_minutes)).unwrap_or(0);
+        SunTable::range(start, steps, step_minutes, site)
+    }
+
+    /// `steps` consecutive steps of `step_minutes` from `start` (computed in parallel;
+    /// the result does not depend on the thread count).
+    ///
+    /// # Errors
+    /// As [`SunTable::year`].
+    pub fn range(
+        start: DateTime<Utc>,
+        steps: usize,
+        step_minutes: u32,
+        site: &Site,
+    ) -> Result<SunTable, SolarError> {
+        if step_minutes == 0 || step_minutes > 1440 {
+            return Err(SolarError::Step(step_minutes));
+        }
+        let refraction = RefractionCorrection::new(site.pressure_mbar, site.temperature_c)?;
+        let spa = SolarPositions::new();
+        let location = site.location();
+        let step_s = i64::from(step_minutes) * 60;
+        let half = Duration::milliseconds(step_s * 500);
+        let steps: Vec<SunStep> = (0..steps)
+            .into_par_iter()
+            .map(|k| {
+                let offset = i64::try_from(k)
+                    .ok()
+                    .and_then(|k| k.checked_mul(step_s))
+                    .and_then(Duration::try_seconds)
+                    .ok_or(SolarError::Step(step_minutes))?;
+                let mid = start
+                    .checked_add_signed(offset)
+                    .and_then(|t| t.checked_add_signed(half))
+                    .ok_or(SolarError::Step(step_minutes))?;
+                let p = spa.at(
+                    &mid,
+                    location,
+                    site.elevation_m,
+                    site.delta_t_s,
+                    Some(refraction),
+                )?;
+                let month = site.time_zone.local_month(mid);
+                Ok(SunStep {
+                    direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
+                    above_horizon: p.zenith_angle() < 90.0,
+                    month: u8::try_from(month.saturating_sub(1)).unwrap_or(0).min(11),
+                })
+            })
+            .collect::<Result<_, SolarError>>()?;
+        Ok(SunTable {
+            start,
+            step_minutes,
+            steps,
+        })
+    }
+
+    /// The steps in time order.
+    pub fn steps(&self) -> &[SunStep] {
+        &self.steps
+    }
+
+    /// Number of steps.
+    pub fn len(&self) -> usize {
+        self.steps.len()
+    }
+
+    /// Whether the table has no steps.
+    pub fn is_empty(&self) -> bool {
+        self.steps.is_empty()
+    }
+
+    /// Step length in minutes.
+    pub fn step_minutes(&self) -> u32 {
+        self.step_minutes
+    }
+
+    /// Step length in hours.
+    pub fn step_hours(&self) -> f64 {
+        f64::from(self.step_minutes) / 60.0
+    }
+
+    /// Start of the first step (UTC).
+    pub fn start(&self) -> DateTime<Utc> {
+        self.start
+    }
+
+    /// Start of step `k` (UTC), or `None` past the representable range.
+    pub fn step_start(&self, k: usize) -> Option<DateTime<Utc>> {
+        let secs = i64::try_from(k)
+            .ok()?
+            .checked_mul(i64::from(self.step_minutes) * 60)?;
+        self.start.checked_add_signed(Duration::try_seconds(secs)?)
+    }
+
+    /// The instant at which step `k` was evaluated (its middle), or `None`.
+    pub fn step_mid(&self, k: usize) -> Option<DateTime<Utc>> {
+        self.step_start(k)?
+            .checked_add_signed(Duration::seconds(i64::from(self.step_minutes) * 30))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn nrel_site() -> Site {
+        Site {
+            latitude: 39.742476,
+            longitude: -105.1786,
+            elevation_m: 1830.14,
+            pressure_mbar: 820.0,
+            temperature_c: 11.0,
+            delta_t_s: 67.0,
+            time_zone: SiteTimeZone::parse("-07:00").unwrap(),
+        }
+    }
+
+    #[test]
+    fn nrel_reference_case() {
+        let local = FixedOffset::west_opt(7 * 3600)
+            .unwrap()
+            .with_ymd_and_hms(2003, 10, 17, 12, 30, 30)
+            .unwrap();
+        let p = sun_position(local.with_timezone(&Utc), &nrel_site()).unwrap();
+        assert!((p.zenith_deg - 50.111622).abs() < 3e-4, "{}", p.zenith_deg);
+        assert!(
+            (p.azimuth_deg - 194.340241).abs() < 3e-4,
+            "{}",
+            p.azimuth_deg
+        );
+        let d = p.direction;
+        assert!((d.length() - 1.0).abs() < 1e-12);
+        assert!((d.z - p.zenith_deg.to_radians().cos()).abs() < 1e-12);
+        // Azimuth 194 deg: south, slightly west.
+        assert!(d.y < 0.0 && d.x < 0.0);
+    }
+
+    #[test]
+    fn invalid_site_is_an_error() {
+        let t = Utc.with_ymd_and_hms(2020, 1, 1, 0, 0, 0).unwrap();
+        assert!(sun_position(t, &Site::new(95.0, 0.0)).is_err());
+        let mut s = Site::new(10.0, 0.0);
+        s.pressure_mbar = -1.0;
+        assert!(sun_position(t, &s).is_err());
+        assert!(SunTable::year(2020, 0, &Site::new(10.0, 0.0)).is_err());
+        assert!(SunTable::year(2020, 15, &Site::new(10.0, 200.0)).is_err());
+    }
+
+    #[test]
+    fn time_zone_parsing() {
+        let utc = SiteTimeZone::parse("UTC").unwrap();
+        assert_eq!(utc, SiteTimeZone::Fixed(FixedOffset::east_opt(0).unwrap()));
+        for (s, secs) in [
+            ("+01:00", 3600),
+            ("-07:00", -25200),
+            ("+0530", 19800),
+            ("UTC+02", 7200),
+            ("-3", -10800),
+        ] {
+            assert_eq!(
+                SiteTimeZone::parse(s).unwrap(),
+                SiteTimeZone::Fixed(FixedOffset::east_opt(secs).unwrap()),
+                "{s}"
+            );
+        }
+        assert!(matches!(
+            SiteTimeZone::parse("Europe/Madrid").unwrap(),
+            SiteTimeZone::Named(chrono_tz::Tz::Europe__Madrid)
+        ));
+        for bad in ["Mars/Olympus", "+25:00", "+1:2:3", "+01:61", "", "+abc"] {
+            assert!(SiteTimeZone::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn local_month_with_dst_zone() {
+        let z = SiteTimeZone::parse("Europe/Madrid").unwrap();
+        // 2025-05-31 22:30 UTC is 2025-06-01 00:30 CEST (UTC+2).
+        let t = Utc.with_ymd_and_hms(2025, 5, 31, 22, 30, 0).unwrap();
+        assert_eq!(z.local_month(t), 6);
+        let f = SiteTimeZone::parse("+01:00").unwrap();
+        assert_eq!(f.local_month(t), 5);
+    }
+
+    #[test]
+    fn year_table_shape_and_months() {
+        let site = Site::new(41.39, 2.17)
+            .with_time_zone("Europe/Madrid")
+            .unwrap();
+        let t = SunTable::year(2025, 60, &site).unwrap();
+        assert_eq!(t.len(), 8760);
+        assert_eq!(t.step_hours(), 1.0);
+        // 2025-01-01 00:30 UTC = 01:30 local: January. Last step 23:30 UTC Dec 31 =
+        // 00:30 Jan 1 2026 local: attributed to January.
+        assert_eq!(t.steps()[0].month, 0);
+        assert_eq!(t.steps()[t.len() - 1].month, 0);
+        assert_eq!(t.steps()[t.len() - 2].month, 11);
+        let mut per_month = [0usize; 12];
+        for s in t.steps() {
+            per_month[usize::from(s.month)] += 1;
+        }
+        // June: 30 days * 24 h; October has 25 local hours more (DST ends).
+        assert_eq!(per_month[5], 720);
+        assert_eq!(per_month[9], 31 * 24 + 1);
+        let above = t.steps().iter().filter(|s| s.above_horizon).count();
+        // Roughly half the hours of the year are daytime (a bit more with refraction).
+        assert!((4300..4600).contains(&above), "{above}");
+        // Each step agrees with a direct evaluation at its middle.
+        for k in [0, 1000, 4321, 8759] {
+            let p = sun_position(t.step_mid(k).unwrap(), &site).unwrap();
+            assert!((p.direction - t.steps()[k].direction).length() < 1e-12);
+            assert_eq!(p.zenith_deg < 90.0, t.steps()[k].above_horizon);
+        }
+        let y15 = SunTable::year(2025, 15, &Site::new(0.0, 0.0)).unwrap();
+        assert_eq!(y15.len(), 35_040);
+        assert_eq!(SunTable::year(2024, 15, &site).unwrap().len(), 35_136);
+    }
+
+    #[test]
+    fn table_is_deterministic_across_thread_counts() {
+        let site = Site::new(-33.9, 18.4);
+        let a = SunTable::year(2023, 180, &site).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let b = pool.install(|| SunTable::year(2023, 180, &site).unwrap());
+        assert_eq!(a, b);
+    }
+}
