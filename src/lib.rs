@@ -5,4 +5,6 @@
 //! It never prints and never panics on input.
 #![warn(missing_docs)]
 
+pub mod geom;
 pub mod model;
+pub mod trace;
