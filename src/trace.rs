@@ -357,7 +357,9 @@ impl Scene {
         if tmin > tmax {
             return None;
         }
-        let (o, d) = (Vec3A::from(o), Vec3A::from(d));
+        // `-0.0 + 0.0 == +0.0`: obvhs' CWBVH node test takes the octant from `d < 0` but
+        // the inverse from the sign bit, so a negative zero would lose whole subtrees.
+        let (o, d) = (Vec3A::from(o), Vec3A::from(d) + Vec3A::ZERO);
         Some((Ray::new(o, d, tmin, tmax), Watertight::new(o, d)))
     }
 
@@ -422,5 +424,389 @@ fn refine_t(tri: &Triangle, o: DVec3, d: DVec3, t32: f64) -> f64 {
         t
     } else {
         t32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    const UTM: DVec3 = DVec3::new(430_000.0, 4_581_000.0, 0.0);
+
+    /// Möller–Trumbore without the barycentric bounds: (t, margin) where margin is the
+    /// smallest barycentric coordinate (negative outside).
+    fn mt_unbounded(o: DVec3, d: DVec3, tri: &[DVec3; 3]) -> Option<(f64, f64)> {
+        let (a, b, c) = (tri[0] - o, tri[1] - o, tri[2] - o);
+        let (e1, e2) = (b - a, c - a);
+        let p = d.cross(e2);
+        let det = e1.dot(p);
+        if det == 0.0 {
+            return None;
+        }
+        let s = -a;
+        let u = s.dot(p) / det;
+        let q = s.cross(e1);
+        let v = d.dot(q) / det;
+        let t = e2.dot(q) / det;
+        Some((t, (1.0 - u - v).min(u).min(v)))
+    }
+
+    struct Brute {
+        /// Closest certain hit (t, index).
+        sure: Option<(f64, usize)>,
+        /// Closest possible hit t (within tolerance of an edge or of tmin/tmax).
+        possible: f64,
+        /// Number of distinct possible hits within 1e-3 of the closest certain one.
+        near_sure: usize,
+    }
+
+    const BARY_EPS: f64 = 1e-4;
+    const T_EPS: f64 = 1e-3;
+
+    fn brute(tris: &[[DVec3; 3]], o: DVec3, d: DVec3, tmin: f64, tmax: f64) -> Brute {
+        let mut sure: Option<(f64, usize)> = None;
+        let mut possible = f64::INFINITY;
+        let mut all = Vec::new();
+        for (i, tri) in tris.iter().enumerate() {
+            let Some((t, m)) = mt_unbounded(o, d, tri) else {
+                continue;
+            };
+            if m >= -BARY_EPS && t >= tmin - T_EPS && t <= tmax + T_EPS {
+                possible = possible.min(t);
+                all.push(t);
+                if m >= BARY_EPS
+                    && t >= tmin + T_EPS
+                    && t <= tmax - T_EPS
+                    && sure.is_none_or(|(s, _)| t < s)
+                {
+                    sure = Some((t, i));
+                }
+            }
+        }
+        let near_sure = sure.map_or(0, |(s, _)| {
+            all.iter().filter(|t| (*t - s).abs() <= T_EPS).count()
+        });
+        Brute {
+            sure,
+            possible,
+            near_sure,
+        }
+    }
+
+    fn random_scene(rng: &mut ChaCha8Rng, n: usize) -> Vec<[DVec3; 3]> {
+        (0..n)
+            .map(|_| {
+                let c = UTM
+                    + DVec3::new(
+                        rng.random_range(-100.0..100.0),
+                        rng.random_range(-100.0..100.0),
+                        rng.random_range(0.0..50.0),
+                    );
+                let mut v = || {
+                    c + DVec3::new(
+                        rng.random_range(-10.0..10.0),
+                        rng.random_range(-10.0..10.0),
+                        rng.random_range(-10.0..10.0),
+                    )
+                };
+                [v(), v(), v()]
+            })
+            .collect()
+    }
+
+    fn random_dir(rng: &mut ChaCha8Rng) -> DVec3 {
+        loop {
+            let v = DVec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            );
+            let l = v.length();
+            if l > 0.1 && l <= 1.0 {
+                return v / l;
+            }
+        }
+    }
+
+    /// Check `n_rays` random rays against brute force; returns the number of hits seen.
+    fn check_against_brute(seed: u64, n_tris: usize, n_rays: usize, layout: BvhLayout) -> usize {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let tris = random_scene(&mut rng, n_tris);
+        let mut b = SceneBuilder::new().with_layout(layout);
+        for (i, t) in tris.iter().enumerate() {
+            assert!(b.add_triangle(1000 + i as u32, *t));
+        }
+        let scene = b.build();
+        assert_eq!(scene.len(), tris.len());
+        let mut hits = 0;
+        for _ in 0..n_rays {
+            let o = UTM
+                + DVec3::new(
+                    rng.random_range(-150.0..150.0),
+                    rng.random_range(-150.0..150.0),
+                    rng.random_range(-10.0..70.0),
+                );
+            // Some axis-aligned rays, with the negative zeros that `-DVec3::Z` carries.
+            let axes = [
+                DVec3::X,
+                -DVec3::X,
+                DVec3::Y,
+                -DVec3::Y,
+                DVec3::Z,
+                -DVec3::Z,
+            ];
+            let d = if rng.random_bool(0.2) {
+                axes[rng.random_range(0..axes.len())]
+            } else {
+                random_dir(&mut rng)
+            };
+            let tmin = if rng.random_bool(0.5) {
+                0.0
+            } else {
+                rng.random_range(0.0..20.0)
+            };
+            let tmax = if rng.random_bool(0.5) {
+                f64::INFINITY
+            } else {
+                rng.random_range(20.0..300.0)
+            };
+            let bf = brute(&tris, o, d, tmin, tmax);
+            let occ = scene.occluded(o, d, tmin, tmax);
+            let fh = scene.first_hit(o, d, tmin, tmax);
+            assert_eq!(occ, fh.is_some(), "occluded and first_hit disagree");
+            if bf.sure.is_some() {
+                assert!(occ, "missed a certain hit {o:?} {d:?}");
+            }
+            if bf.possible.is_infinite() {
+                assert!(!occ, "hit where nothing can be hit");
+            }
+            if let Some(h) = fh {
+                hits += 1;
+                let sure_t = bf.sure.map_or(f64::INFINITY, |s| s.0);
+                assert!(
+                    h.t >= bf.possible - T_EPS && h.t <= sure_t + T_EPS,
+                    "t {} not in [{}, {}]",
+                    h.t,
+                    bf.possible,
+                    sure_t
+                );
+                // The reported triangle is really hit there.
+                let tri = &tris[h.triangle as usize];
+                let (t, m) = mt_unbounded(o, d, tri).unwrap();
+                assert!((t - h.t).abs() <= T_EPS && m >= -BARY_EPS);
+                assert_eq!(h.tag, 1000 + h.triangle);
+                if let Some((s, i)) = bf.sure {
+                    if bf.near_sure == 1 && (h.t - s).abs() <= T_EPS {
+                        assert_eq!(h.tag, 1000 + i as u32);
+                    }
+                    if bf.near_sure == 1 && bf.possible >= s - T_EPS {
+                        assert_eq!(h.tag, 1000 + i as u32, "wrong closest triangle");
+                    }
+                }
+            }
+        }
+        hits
+    }
+
+    #[test]
+    fn random_scene_matches_brute_force_cwbvh() {
+        let hits = check_against_brute(1, 400, 2000, BvhLayout::Cwbvh);
+        assert!(hits > 100, "too few hits to mean anything: {hits}");
+    }
+
+    #[test]
+    fn random_scene_matches_brute_force_bvh2() {
+        let hits = check_against_brute(2, 300, 1000, BvhLayout::Bvh2);
+        assert!(hits > 40, "too few hits to mean anything: {hits}");
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(12))]
+        #[test]
+        fn prop_random_scenes(seed in any::<u64>(), n in 1usize..200) {
+            check_against_brute(seed, n, 200, BvhLayout::Cwbvh);
+        }
+    }
+
+    /// The 12 triangles of an axis-aligned box, tagged per face (0..6: -x +x -y +y -z +z).
+    fn add_box(b: &mut SceneBuilder, min: DVec3, max: DVec3, tag0: u32) {
+        let c = |i: usize| {
+            DVec3::new(
+                if i & 1 == 0 { min.x } else { max.x },
+                if i & 2 == 0 { min.y } else { max.y },
+                if i & 4 == 0 { min.z } else { max.z },
+            )
+        };
+        let faces = [
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+        ];
+        for (f, q) in faces.iter().enumerate() {
+            let p = Polygon::new(q.iter().map(|&i| c(i)).collect());
+            assert_eq!(b.add_polygon(tag0 + f as u32, &p), 2);
+        }
+    }
+
+    #[test]
+    fn unit_box_in_front_of_origin() {
+        let o = UTM + DVec3::new(0.0, 0.0, 10.0);
+        let mut b = SceneBuilder::new();
+        add_box(
+            &mut b,
+            o + DVec3::new(2.0, -0.5, -0.5),
+            o + DVec3::new(3.0, 0.5, 0.5),
+            0,
+        );
+        let s = b.build();
+        assert_eq!(s.len(), 12);
+        let bb = s.bbox();
+        assert!((bb.min - (o + DVec3::new(2.0, -0.5, -0.5))).length() < 1e-9);
+        assert!((s.origin() - (o + DVec3::new(2.5, 0.0, 0.0))).length() < 1e-9);
+        let h = s.first_hit(o, DVec3::X, 0.0, f64::INFINITY).unwrap();
+        assert_eq!(h.tag, 0);
+        assert!((h.t - 2.0).abs() < 1e-6, "{}", h.t);
+        assert_eq!(s.tag(h.triangle), Some(0));
+        // Skip the front face with tmin: the back face (+x) is next.
+        let h = s.first_hit(o, DVec3::X, 2.5, f64::INFINITY).unwrap();
+        assert_eq!(h.tag, 1);
+        assert!((h.t - 3.0).abs() < 1e-6);
+        assert!(s.first_hit(o, -DVec3::X, 0.0, f64::INFINITY).is_none());
+        assert!(!s.occluded(o, DVec3::X, 0.0, 1.5));
+        assert!(s.occluded(o, DVec3::X, 0.0, 2.5));
+        assert!(!s.occluded(o, DVec3::Z, 0.0, f64::INFINITY));
+        assert!(!s.occluded(o, DVec3::X, 3.5, f64::INFINITY));
+        // From above: the top face.
+        let h = s
+            .first_hit(o + DVec3::new(2.5, 0.0, 5.0), -DVec3::Z, 0.0, 100.0)
+            .unwrap();
+        assert_eq!(h.tag, 5);
+        assert!((h.t - 4.5).abs() < 1e-6);
+        // Oblique ray through the box.
+        let d = DVec3::new(2.5, 0.2, 0.1).normalize();
+        let h = s.first_hit(o, d, 0.0, f64::INFINITY).unwrap();
+        assert_eq!(h.tag, 0);
+        assert!((h.t - 2.0 / d.x).abs() < 1e-6);
+    }
+
+    #[test]
+    fn empty_scene_and_invalid_rays() {
+        let s = SceneBuilder::new().build();
+        assert!(s.is_empty());
+        assert!(s.bbox().is_empty());
+        assert!(!s.occluded(UTM, DVec3::Z, 0.0, f64::INFINITY));
+        assert!(s.first_hit(UTM, DVec3::Z, 0.0, f64::INFINITY).is_none());
+        // Only degenerate input: still empty.
+        let mut b = SceneBuilder::new();
+        assert!(!b.add_triangle(0, [DVec3::ZERO, DVec3::X, DVec3::X * 2.0]));
+        assert!(!b.add_triangle(0, [DVec3::ZERO, DVec3::X, DVec3::splat(f64::NAN)]));
+        assert_eq!(
+            b.add_polygon(0, &Polygon::new(vec![DVec3::ZERO, DVec3::X])),
+            0
+        );
+        assert!(b.build().is_empty());
+        // Invalid rays on a real scene.
+        let mut b = SceneBuilder::new();
+        add_box(&mut b, UTM, UTM + DVec3::ONE, 0);
+        let s = b.build();
+        let o = UTM - DVec3::X;
+        assert!(s.occluded(
+            o + DVec3::splat(0.5) * DVec3::new(0.0, 1.0, 1.0),
+            DVec3::X,
+            0.0,
+            f64::INFINITY
+        ));
+        assert!(!s.occluded(o, DVec3::ZERO, 0.0, f64::INFINITY));
+        assert!(!s.occluded(o, DVec3::splat(f64::NAN), 0.0, f64::INFINITY));
+        assert!(s
+            .first_hit(DVec3::splat(f64::INFINITY), DVec3::X, 0.0, 1.0)
+            .is_none());
+        assert!(!s.occluded(o, DVec3::X, 5.0, 1.0));
+    }
+
+    #[test]
+    fn rays_through_shared_edges_and_vertices_do_not_slip() {
+        // A quad split along its diagonal, at UTM coordinates, plus a closed box.
+        let q = [
+            UTM + DVec3::new(10.0, 20.0, 30.0),
+            UTM + DVec3::new(17.3, 20.0, 30.0),
+            UTM + DVec3::new(17.3, 29.1, 30.0),
+            UTM + DVec3::new(10.0, 29.1, 30.0),
+        ];
+        let mut b = SceneBuilder::new();
+        assert_eq!(b.add_polygon(1, &Polygon::new(q.to_vec())), 2);
+        let s = b.build();
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        for i in 0..=1000 {
+            let f = i as f64 / 1000.0;
+            // Points on the diagonal, on the inner vertex pair and the centre.
+            let targets = [q[0].lerp(q[2], f), q[1].lerp(q[3], f)];
+            for target in targets {
+                let o = UTM
+                    + DVec3::new(
+                        rng.random_range(-50.0..50.0),
+                        rng.random_range(-50.0..50.0),
+                        rng.random_range(-20.0..20.0),
+                    );
+                let d = (target - o).normalize();
+                let dist = (target - o).length();
+                let inside_edge = f > 0.0 && f < 1.0;
+                if inside_edge {
+                    assert!(
+                        s.occluded(o, d, 0.0, dist + 1.0),
+                        "slipped through at f={f}"
+                    );
+                    let h = s.first_hit(o, d, 0.0, f64::INFINITY).unwrap();
+                    assert!((h.t - dist).abs() < 1e-3);
+                }
+            }
+        }
+        // Closed box: every ray from inside hits, including rays aimed at its vertices
+        // and edges, where four or six triangles meet.
+        let (lo, hi) = (
+            UTM + DVec3::new(-3.0, -4.0, 0.0),
+            UTM + DVec3::new(5.0, 6.5, 12.0),
+        );
+        let mut b = SceneBuilder::new();
+        add_box(&mut b, lo, hi, 0);
+        let s = b.build();
+        let inside = UTM + DVec3::new(0.3, 0.7, 4.1);
+        let mut aims = Vec::new();
+        for i in 0..8 {
+            let corner = DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            aims.push(corner);
+            aims.push((corner + inside) * 0.5);
+            aims.push(DVec3::new(corner.x, corner.y, (lo.z + hi.z) * 0.5));
+        }
+        for a in aims {
+            let d = (a - inside).normalize();
+            assert!(
+                s.occluded(inside, d, 0.0, f64::INFINITY),
+                "escaped towards {a:?}"
+            );
+        }
+        for _ in 0..20_000 {
+            let d = random_dir(&mut rng);
+            assert!(
+                s.first_hit(inside, d, 0.0, f64::INFINITY).is_some(),
+                "escaped along {d:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn scene_is_send_and_sync() {
+        fn assert_send_sync<T: Send + Sync>() {}
+        assert_send_sync::<Scene>();
     }
 }
