@@ -21,7 +21,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use skylod::geom::ray_triangle;
 use skylod::model::Polygon;
-use skylod::trace::{BvhLayout, Scene, SceneBuilder};
+use skylod::trace::{BuildQuality, BvhLayout, Scene, SceneBuilder};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -92,8 +92,16 @@ fn city(nx: usize, ny: usize, seed: u64) -> Vec<(u32, [DVec3; 3])> {
     out
 }
 
-fn build(tris: &[(u32, [DVec3; 3])], layout: BvhLayout) -> Scene {
-    let mut b = SceneBuilder::new().with_layout(layout);
+/// The default (CWBVH, fast build) and the fastest-building alternative.
+const CONFIGS: [(BvhLayout, BuildQuality); 2] = [
+    (BvhLayout::Cwbvh, BuildQuality::Fast),
+    (BvhLayout::Bvh2, BuildQuality::Fastest),
+];
+
+fn build(tris: &[(u32, [DVec3; 3])], (layout, quality): (BvhLayout, BuildQuality)) -> Scene {
+    let mut b = SceneBuilder::new()
+        .with_layout(layout)
+        .with_quality(quality);
     for (tag, t) in tris {
         b.add_triangle(*tag, *t);
     }
@@ -122,10 +130,13 @@ fn bench_trace(c: &mut Criterion) {
     let mut g = c.benchmark_group("build");
     g.sample_size(10);
     for (name, tris) in [("300k", &tris300), ("600k", &tris600)] {
-        for layout in [BvhLayout::Cwbvh, BvhLayout::Bvh2] {
+        for config in CONFIGS {
             g.bench_function(
-                BenchmarkId::new(format!("{layout:?}"), format!("{name}_{}", tris.len())),
-                |b| b.iter(|| black_box(build(tris, layout)).len()),
+                BenchmarkId::new(
+                    format!("{:?}_{:?}", config.0, config.1),
+                    format!("{name}_{}", tris.len()),
+                ),
+                |b| b.iter(|| black_box(build(tris, config)).len()),
             );
         }
     }
@@ -134,13 +145,13 @@ fn bench_trace(c: &mut Criterion) {
     let mut g = c.benchmark_group("rays10k");
     g.sample_size(10);
     g.throughput(Throughput::Elements(dirs.len() as u64));
-    for layout in [BvhLayout::Cwbvh, BvhLayout::Bvh2] {
-        let scene = build(&tris300, layout);
+    for config in CONFIGS {
+        let scene = build(&tris300, config);
         let hits = dirs
             .iter()
             .filter(|d| scene.occluded(poi, **d, 0.0, f64::INFINITY))
             .count();
-        let name = format!("{layout:?}_300k_blocked_{hits}");
+        let name = format!("{:?}_{:?}_300k_blocked_{hits}", config.0, config.1);
         g.bench_function(BenchmarkId::new("first_hit", &name), |b| {
             b.iter(|| {
                 dirs.iter()
