@@ -6,8 +6,10 @@
 #![warn(missing_docs)]
 
 pub mod citygml;
+pub mod geom;
 pub mod model;
 pub mod rough;
 pub mod sky;
 pub mod solar;
 pub mod stats;
+pub mod trace;
