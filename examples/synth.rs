@@ -12,7 +12,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some("city") => Preset::City,
         _ => Preset::Paper,
     };
-    let out = args.get(2).cloned().unwrap_or_else(|| "district.gml".into());
+    let out = args
+        .get(2)
+        .cloned()
+        .unwrap_or_else(|| "district.gml".into());
     let mut opts = preset.defaults();
     if let Some(s) = args.get(3) {
         opts.seed = s.parse()?;

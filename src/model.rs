@@ -151,11 +151,7 @@ impl Polygon {
     pub fn area(&self) -> f64 {
         let ext = newell(&self.exterior);
         let n = ext.normalize_or_zero();
-        let holes: f64 = self
-            .interiors
-            .iter()
-            .map(|r| newell(r).dot(n).abs())
-            .sum();
+        let holes: f64 = self.interiors.iter().map(|r| newell(r).dot(n).abs()).sum();
         (ext.length() - holes).max(0.0) * 0.5
     }
 }

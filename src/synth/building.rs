@@ -194,7 +194,11 @@ pub fn build(lot: &Lot, opts: &SynthOptions, g: &mut BuildingGeom) {
     let zr = z0 + g.storeys as f64 * STOREY;
     g.roof_z = zr;
     let rise = lot.depth * 0.5 * ROOF_PITCH_DEG.to_radians().tan();
-    g.top_z = if g.pitched { zr + rise } else { zr + style.parapet };
+    g.top_z = if g.pitched {
+        zr + rise
+    } else {
+        zr + style.parapet
+    };
     let f = lot.footprint();
 
     // walls: street (0), party (1), courtyard (2), party (3)
@@ -369,9 +373,11 @@ fn wall(
         g.mesh
             .poly(&[f0, f0 + d * bw, f0 + d * bw + up, f0 + up], n);
         let l0 = at(uc - bw * 0.5, fz);
-        g.mesh.poly(&[l0, l0 + n * 0.8, l0 + n * 0.8 + up, l0 + up], -d);
+        g.mesh
+            .poly(&[l0, l0 + n * 0.8, l0 + n * 0.8 + up, l0 + up], -d);
         let r0 = l0 + d * bw;
-        g.mesh.poly(&[r0, r0 + n * 0.8, r0 + n * 0.8 + up, r0 + up], d);
+        g.mesh
+            .poly(&[r0, r0 + n * 0.8, r0 + n * 0.8 + up, r0 + up], d);
         g.installations.push(Installation {
             kind: InstallationKind::Balcony,
             polys: s..g.mesh.poly_count(),
@@ -404,9 +410,7 @@ fn facade_rects(out: &mut Vec<Rect>, style: &Style, len: f64, storeys: u32, stre
             }
             let c = (j as f64 + 0.5) * bw;
             let (w, v0, v1, kind) = match (street, fl) {
-                (true, 0) if j == door_bay => {
-                    (1.4f64.min(bw - 0.6), 0.15, 2.6, OpeningKind::Door)
-                }
+                (true, 0) if j == door_bay => (1.4f64.min(bw - 0.6), 0.15, 2.6, OpeningKind::Door),
                 (true, 0) => ((ww * 1.4).min(bw - 0.6), 0.6, 2.6, OpeningKind::Window),
                 (true, _) => (ww, 0.5, 2.5, OpeningKind::Window),
                 (false, _) => (ww, 0.9, 2.3, OpeningKind::Window),
@@ -458,10 +462,8 @@ fn roof(g: &mut BuildingGeom, lot: &Lot, style: &Style, rise: f64, lod2: bool, l
     let m0 = v3((lot.o0 + lot.i0) * 0.5, zr + rise);
     let m1 = v3((lot.o1 + lot.i1) * 0.5, zr + rise);
     let gable = |g: &mut BuildingGeom| {
-        g.mesh
-            .poly(&[v3(lot.o0, zr), v3(lot.o1, zr), m1, m0], ns);
-        g.mesh
-            .poly(&[v3(lot.i1, zr), v3(lot.i0, zr), m0, m1], nc);
+        g.mesh.poly(&[v3(lot.o0, zr), v3(lot.o1, zr), m1, m0], ns);
+        g.mesh.poly(&[v3(lot.i1, zr), v3(lot.i0, zr), m0, m1], nc);
     };
     if lod2 {
         if g.pitched {
@@ -581,7 +583,12 @@ fn roof_installations(g: &mut BuildingGeom, lot: &Lot, rng: &mut ChaCha8Rng, ris
         return;
     }
     let gi = inset(&lot.footprint(), PARAPET_T);
-    let (l0, l1, r0, r1) = (fr.local(gi[0]), fr.local(gi[3]), fr.local(gi[1]), fr.local(gi[2]));
+    let (l0, l1, r0, r1) = (
+        fr.local(gi[0]),
+        fr.local(gi[3]),
+        fr.local(gi[1]),
+        fr.local(gi[2]),
+    );
     // items: (kind, su, st, variant)
     let mut items: [(InstallationKind, f64, f64, u8); 24] =
         [(InstallationKind::Chimney, 0.0, 0.0, 0); 24];
@@ -660,7 +667,8 @@ fn roof_installations(g: &mut BuildingGeom, lot: &Lot, rng: &mut ChaCha8Rng, ris
         let o = fr.world(uu, tt, zr);
         match kind {
             InstallationKind::StairTower => {
-                g.mesh.cuboid(o, au, at, DVec3::Z * rng.random_range(2.6..3.0));
+                g.mesh
+                    .cuboid(o, au, at, DVec3::Z * rng.random_range(2.6..3.0));
             }
             InstallationKind::WaterTank if var == 1 => {
                 let c = fr.world(uu + su * 0.5, tt + st * 0.5, zr);
@@ -687,10 +695,12 @@ fn roof_installations(g: &mut BuildingGeom, lot: &Lot, rng: &mut ChaCha8Rng, ris
                 g.mesh.cuboid(low0, s3 * w, high, pn);
             }
             InstallationKind::Chimney => {
-                g.mesh.cuboid(o, au, at, DVec3::Z * rng.random_range(1.2..2.0));
+                g.mesh
+                    .cuboid(o, au, at, DVec3::Z * rng.random_range(1.2..2.0));
             }
             InstallationKind::Antenna => {
-                g.mesh.cuboid(o, au, at, DVec3::Z * rng.random_range(3.0..7.0));
+                g.mesh
+                    .cuboid(o, au, at, DVec3::Z * rng.random_range(3.0..7.0));
             }
             InstallationKind::Balcony => {}
         }
@@ -698,5 +708,212 @@ fn roof_installations(g: &mut BuildingGeom, lot: &Lot, rng: &mut ChaCha8Rng, ris
             kind,
             polys: s..g.mesh.poly_count(),
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::newell;
+    use crate::synth::layout::block_lots;
+    use crate::synth::Preset;
+
+    /// Every building of a 2x2 Paper district, with its geometry.
+    fn each_building(seed: u64, mut f: impl FnMut(&BuildingGeom)) {
+        let mut opts = Preset::Paper.defaults();
+        opts.seed = seed;
+        opts.with_lod2 = true;
+        let mut lots = Vec::new();
+        let mut g = BuildingGeom::default();
+        for by in 0..2 {
+            for bx in 0..2 {
+                block_lots(seed, bx, by, &mut lots);
+                for lot in &lots {
+                    build(lot, &opts, &mut g);
+                    f(&g);
+                }
+            }
+        }
+    }
+
+    fn point_in_ring_xy(p: DVec2, ring: &[DVec3]) -> bool {
+        let mut inside = false;
+        let n = ring.len();
+        for i in 0..n {
+            let (a, b) = (ring[i], ring[(i + n - 1) % n]);
+            if (a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x {
+                inside = !inside;
+            }
+        }
+        inside
+    }
+
+    /// Height of the roof at `p` (lowest roof polygon above it), if any.
+    fn roof_height(g: &BuildingGeom, p: DVec2) -> Option<f64> {
+        let roof = g.surfaces.iter().find(|s| s.kind == SurfaceKind::Roof)?;
+        let mut best: Option<f64> = None;
+        for poly in roof.lod3.clone() {
+            let rings = g.mesh.rings_of(poly);
+            let ext = g.mesh.ring(rings.start);
+            let n = newell(ext).normalize();
+            if n.z < 0.1 || !point_in_ring_xy(p, ext) {
+                continue;
+            }
+            if rings
+                .clone()
+                .skip(1)
+                .any(|h| point_in_ring_xy(p, g.mesh.ring(h)))
+            {
+                continue;
+            }
+            let z = ext[0].z - (n.x * (p.x - ext[0].x) + n.y * (p.y - ext[0].y)) / n.z;
+            best = Some(best.map_or(z, |b: f64| b.min(z)));
+        }
+        best
+    }
+
+    #[test]
+    fn roof_installations_stand_on_the_roof() {
+        let mut checked = 0;
+        let mut kinds = std::collections::BTreeSet::new();
+        each_building(11, |g| {
+            for inst in g.installations.iter().filter(|i| i.kind.on_roof()) {
+                let pts: Vec<DVec3> = inst
+                    .polys
+                    .clone()
+                    .flat_map(|p| g.mesh.rings_of(p))
+                    .flat_map(|r| g.mesh.ring(r).iter().copied())
+                    .collect();
+                let zmin = pts.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+                let mut roof_min = f64::INFINITY;
+                for p in &pts {
+                    let h = roof_height(g, p.truncate());
+                    let h = h.unwrap_or_else(|| panic!("{:?} outside the roof at {p}", inst.kind));
+                    if (p.z - zmin).abs() < 1e-9 {
+                        roof_min = roof_min.min(h);
+                    }
+                }
+                assert!(
+                    (zmin - roof_min).abs() < 0.01,
+                    "{:?}: lowest z {zmin} vs roof {roof_min}",
+                    inst.kind
+                );
+                checked += 1;
+                kinds.insert(inst.kind);
+            }
+        });
+        assert!(checked > 300, "{checked}");
+        assert_eq!(kinds.len(), 5, "{kinds:?}");
+    }
+
+    #[test]
+    fn windows_lie_in_their_walls_with_matching_holes() {
+        let mut windows = 0;
+        each_building(5, |g| {
+            for s in g.surfaces.iter().filter(|s| s.kind == SurfaceKind::Wall) {
+                for oi in s.openings.clone() {
+                    let o = &g.openings[oi as usize];
+                    assert!(s.lod3.contains(&o.wall_poly));
+                    let rings = g.mesh.rings_of(o.wall_poly);
+                    assert!(rings.contains(&o.hole_ring));
+                    let ext = g.mesh.ring(rings.start);
+                    let n = newell(ext).normalize();
+                    assert!((n - o.normal).length() < 1e-9);
+                    let pane = g.mesh.ring(g.mesh.rings_of(o.polys.start).start);
+                    assert!(newell(pane).dot(n) > 0.0, "pane faces out");
+                    let u = n.cross(DVec3::Z).normalize();
+                    let (umin, umax, zmin, zmax) = ext.iter().fold(
+                        (
+                            f64::INFINITY,
+                            f64::NEG_INFINITY,
+                            f64::INFINITY,
+                            f64::NEG_INFINITY,
+                        ),
+                        |(a, b, c, d), p| {
+                            let pu = p.dot(u);
+                            (a.min(pu), b.max(pu), c.min(p.z), d.max(p.z))
+                        },
+                    );
+                    for p in pane {
+                        // behind the wall plane by the recess
+                        let dist = (*p - ext[0]).dot(n);
+                        assert!((dist + o.recess).abs() < 1e-9, "{dist}");
+                        let pu = p.dot(u);
+                        assert!(pu > umin && pu < umax && p.z > zmin && p.z < zmax);
+                    }
+                    // the hole is the pane pushed back onto the wall plane
+                    let hole = g.mesh.ring(o.hole_ring);
+                    assert_eq!(hole.len(), pane.len());
+                    for p in pane {
+                        let q = *p + n * o.recess;
+                        assert!(hole.iter().any(|h| (*h - q).length() < 1e-9));
+                    }
+                    assert!(newell(hole).dot(n) < 0.0, "hole is clockwise from outside");
+                    windows += 1;
+                }
+            }
+        });
+        assert!(windows > 1000, "{windows}");
+    }
+
+    #[test]
+    fn polygons_are_planar_and_shells_face_outward() {
+        each_building(3, |g| {
+            for p in 0..g.mesh.poly_count() {
+                let rings = g.mesh.rings_of(p);
+                let ext = g.mesh.ring(rings.start);
+                assert!(ext.len() >= 3);
+                let n = newell(ext);
+                assert!(n.length() > 1e-6, "degenerate polygon");
+                let n = n.normalize();
+                for r in rings {
+                    for q in g.mesh.ring(r) {
+                        assert!((*q - ext[0]).dot(n).abs() < 1e-6, "non-planar");
+                    }
+                }
+            }
+            let lot = g.lot.as_ref().unwrap();
+            let c = (lot.o0 + lot.o1 + lot.i0 + lot.i1) * 0.25;
+            for s in &g.surfaces {
+                for p in s.lod2.clone() {
+                    let ring = g.mesh.ring(g.mesh.rings_of(p).start);
+                    let n = newell(ring);
+                    let mid = ring.iter().copied().sum::<DVec3>() / ring.len() as f64;
+                    match s.kind {
+                        SurfaceKind::Ground => assert!(n.z < 0.0),
+                        SurfaceKind::Roof => assert!(n.z > 0.0),
+                        SurfaceKind::Wall => {
+                            assert!(n.truncate().dot(mid.truncate() - c) > 0.0)
+                        }
+                    }
+                }
+            }
+            // a LoD2 shell is closed: its vector area sums to zero
+            let mut sum = DVec3::ZERO;
+            for s in &g.surfaces {
+                for p in s.lod2.clone() {
+                    sum += newell(g.mesh.ring(g.mesh.rings_of(p).start));
+                }
+            }
+            assert!(sum.length() < 1e-6, "open shell {sum}");
+        });
+    }
+
+    #[test]
+    fn lod2_only_has_no_detail() {
+        let mut opts = Preset::Paper.defaults();
+        opts.lod = 2;
+        let mut lots = Vec::new();
+        block_lots(1, 0, 0, &mut lots);
+        let mut g = BuildingGeom::default();
+        build(&lots[0], &opts, &mut g);
+        assert!(g.openings.is_empty() && g.installations.is_empty());
+        assert!(g
+            .surfaces
+            .iter()
+            .all(|s| s.lod3.is_empty() && !s.lod2.is_empty()));
+        let lod2: usize = g.surfaces.iter().map(|s| s.lod2.len()).sum();
+        assert_eq!(g.mesh.poly_count() as usize, lod2);
+        assert_eq!(g.surfaces.len(), 6);
     }
 }

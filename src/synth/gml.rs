@@ -204,7 +204,14 @@ pub fn building(buf: &mut Vec<u8>, g: &BuildingGeom, sum: &mut SynthSummary) {
         buf.extend_from_slice(b"<bldg:function>");
         buf.extend_from_slice(inst.kind.code().as_bytes());
         buf.extend_from_slice(b"</bldg:function>\n");
-        multi_surface(buf, b"bldg:lod3Geometry", g, inst.polys.clone(), &mut ids, sum);
+        multi_surface(
+            buf,
+            b"bldg:lod3Geometry",
+            g,
+            inst.polys.clone(),
+            &mut ids,
+            sum,
+        );
         buf.extend_from_slice(b"</bldg:BuildingInstallation>\n</bldg:outerBuildingInstallation>\n");
         *sum.installations.entry(inst.kind).or_insert(0) += 1;
     }
@@ -226,8 +233,22 @@ pub fn building(buf: &mut Vec<u8>, g: &BuildingGeom, sum: &mut SynthSummary) {
         };
         buf.extend_from_slice(b"<bldg:boundedBy>\n");
         open_id(buf, tag, &ids, b"s", k as u64);
-        multi_surface(buf, b"bldg:lod2MultiSurface", g, s.lod2.clone(), &mut ids, sum);
-        multi_surface(buf, b"bldg:lod3MultiSurface", g, s.lod3.clone(), &mut ids, sum);
+        multi_surface(
+            buf,
+            b"bldg:lod2MultiSurface",
+            g,
+            s.lod2.clone(),
+            &mut ids,
+            sum,
+        );
+        multi_surface(
+            buf,
+            b"bldg:lod3MultiSurface",
+            g,
+            s.lod3.clone(),
+            &mut ids,
+            sum,
+        );
         for oi in s.openings.clone() {
             let Some(o) = g.openings.get(oi as usize) else {
                 continue;
@@ -244,7 +265,14 @@ pub fn building(buf: &mut Vec<u8>, g: &BuildingGeom, sum: &mut SynthSummary) {
             };
             buf.extend_from_slice(b"<bldg:opening>\n");
             open_id(buf, otag, &ids, b"o", oi as u64);
-            multi_surface(buf, b"bldg:lod3MultiSurface", g, o.polys.clone(), &mut ids, sum);
+            multi_surface(
+                buf,
+                b"bldg:lod3MultiSurface",
+                g,
+                o.polys.clone(),
+                &mut ids,
+                sum,
+            );
             buf.extend_from_slice(b"</");
             buf.extend_from_slice(otag);
             buf.extend_from_slice(b">\n</bldg:opening>\n");

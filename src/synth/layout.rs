@@ -80,7 +80,7 @@ impl Lot {
 
     /// Footprint area (m^2).
     pub fn area(&self) -> f64 {
-        let f = self.footprint();
+        let f = self.footprint().map(|p| p - self.o0);
         let mut a = 0.0;
         for k in 0..4 {
             let (p, q) = (f[k], f[(k + 1) % 4]);
@@ -169,7 +169,11 @@ pub fn block_lots(seed: u64, bx: u32, by: u32, out: &mut Vec<Lot>) {
         let total: f64 = w.iter().take(n).sum();
         let mut t = 0.0;
         for (j, wj) in w.iter().enumerate().take(n) {
-            let t1 = if j + 1 == n { len } else { t + wj / total * len };
+            let t1 = if j + 1 == n {
+                len
+            } else {
+                t + wj / total * len
+            };
             let o0 = p + d * t;
             let o1 = p + d * t1;
             let i0 = if j == 0 { b[e] } else { o0 + nin * depth };
@@ -228,7 +232,7 @@ mod tests {
                 let si = (l.i0 - l.i1).normalize();
                 assert!((so.perp_dot(si)).abs() < 1e-9);
                 // courtyard edge is `depth` behind the street edge
-                let dist = (l.i0 - l.o0).perp_dot(so);
+                let dist = so.perp_dot(l.i0 - l.o0);
                 assert!((dist - l.depth).abs() < 1e-6);
             }
         }
@@ -242,7 +246,7 @@ mod tests {
         let poly_area = |p: &[DVec2]| {
             let mut a = 0.0;
             for k in 0..p.len() {
-                let (u, v) = (p[k], p[(k + 1) % p.len()]);
+                let (u, v) = (p[k] - p[0], p[(k + 1) % p.len()] - p[0]);
                 a += u.perp_dot(v);
             }
             a * 0.5
@@ -255,7 +259,11 @@ mod tests {
         // inner octagon area via offset formula: A - P d + 8 tan(22.5) d^2
         let perim: f64 = (0..8).map(|k| (oct[(k + 1) % 8] - oct[k]).length()).sum();
         let inner = outer - perim * d + 8.0 * (std::f64::consts::PI / 8.0).tan() * d * d;
-        assert!((sum - (outer - inner)).abs() < 1e-6, "{sum} vs {}", outer - inner);
+        assert!(
+            (sum - (outer - inner)).abs() < 1e-6,
+            "{sum} vs {}",
+            outer - inner
+        );
     }
 
     #[test]

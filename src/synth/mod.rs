@@ -83,7 +83,7 @@ pub enum Preset {
     /// Three buildings around one street corner of each block (1 block by default), at most
     /// 5 storeys: a fixture small enough to commit (< 300 KB).
     Small,
-    /// Full blocks; default 7 x 6 blocks, about 300K polygons like the paper's district.
+    /// Full blocks; default 8 x 5 blocks, about 300K polygons like the paper's district.
     Paper,
     /// Full blocks; default 16 x 16 blocks, millions of polygons (streamed).
     City,
@@ -94,7 +94,7 @@ impl Preset {
     pub fn defaults(self) -> SynthOptions {
         let (bx, by) = match self {
             Preset::Small => (1, 1),
-            Preset::Paper => (7, 6),
+            Preset::Paper => (8, 5),
             Preset::City => (16, 16),
         };
         SynthOptions {
