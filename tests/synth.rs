@@ -238,3 +238,22 @@ fn committed_fixture_is_the_small_preset() {
     write_pois_csv(&pois(&o), &mut want).expect("csv");
     assert_eq!(csv, want);
 }
+
+#[test]
+fn poi_schema_describes_the_csv_header() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("schemas/pois.schema.json");
+    let text = std::fs::read_to_string(path).expect("schemas/pois.schema.json");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    assert_eq!(v["$schema"], "https://json-schema.org/draft/2020-12/schema");
+    let req: Vec<&str> = v["required"]
+        .as_array()
+        .expect("required")
+        .iter()
+        .filter_map(|x| x.as_str())
+        .collect();
+    assert_eq!(req.join(","), "id,x,y,z,nx,ny,nz");
+    assert!(v["description"]
+        .as_str()
+        .expect("description")
+        .contains("`id,x,y,z,nx,ny,nz`"));
+}
