@@ -12,4 +12,5 @@ pub mod rough;
 pub mod sky;
 pub mod solar;
 pub mod stats;
+pub mod synth;
 pub mod trace;
