@@ -82,7 +82,7 @@ pub fn input_lod(asset: &Asset, opts: &RoughOptions) -> Option<u8> {
 /// let chimney = Asset {
 ///     kind: AssetKind::Installation, id: None, element: "BuildingInstallation".into(),
 ///     building: None, parent: None, span: 0..0, line: 1, function: None, file: 0,
-///     geometries: vec![LodGeometry { lod: 3, property: "lod3Geometry".into(), span: 0..0,
+///     geometries: vec![LodGeometry { lod: 3, property: "lod3Geometry".into(), span: 0..0, content: 0..0,
 ///         polygons: vec![quad(10.0), quad(12.0)] }],
 /// };
 /// let r = rough_asset(&chimney, &RoughOptions::default());
