@@ -8,6 +8,7 @@
 pub mod citygml;
 pub mod geom;
 pub mod model;
+pub mod poi;
 pub mod rough;
 pub mod sky;
 pub mod solar;
