@@ -36,7 +36,9 @@ fn convert(input: &Path, out: &Path) -> Result<(), String> {
 /// Stats without the fields a conversion may legitimately change: none today; warnings are
 /// compared too (the output is the same document up to recomputed envelopes).
 fn stats(p: &Path) -> Result<Stats, String> {
-    read_file(p).map(|m| Stats::of(&m)).map_err(|e| e.to_string())
+    read_file(p)
+        .map(|m| Stats::of(&m))
+        .map_err(|e| e.to_string())
 }
 
 fn gunzip(p: &Path) -> Vec<u8> {
@@ -133,9 +135,15 @@ fn convert_every_file() {
             }
         }
         // The fixtures are hand-made to be valid: they must be among the valid inputs.
-        for c in done.iter().filter(|c| short(&c.input).starts_with("fixtures/")) {
+        for c in done
+            .iter()
+            .filter(|c| short(&c.input).starts_with("fixtures/"))
+        {
             if let Some(Err(e)) = valid_in.get(&c.input) {
-                problems.push(format!("{}: fixture is not XSD-valid:\n{e}", short(&c.input)));
+                problems.push(format!(
+                    "{}: fixture is not XSD-valid:\n{e}",
+                    short(&c.input)
+                ));
             }
         }
         eprintln!("{n_valid} of {} inputs are XSD-valid", done.len());

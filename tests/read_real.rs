@@ -64,7 +64,9 @@ fn compare_with_oracle(files: &[std::path::PathBuf]) {
     let mut mismatches = Vec::new();
     for f in files {
         let key = f.display().to_string();
-        let o = oracle.get(&key).unwrap_or_else(|| panic!("oracle has no {key}"));
+        let o = oracle
+            .get(&key)
+            .unwrap_or_else(|| panic!("oracle has no {key}"));
         let r = read_file(f);
         match (o.get("error").and_then(|e| e.as_str()), r) {
             (Some("not_citygml"), Err(ReadError::NotCityGml { .. })) => {}
@@ -143,7 +145,10 @@ fn key(ring: &[DVec3]) -> Vec<[i64; 3]> {
 }
 
 fn poly_key(p: &Polygon) -> (Vec<[i64; 3]>, Vec<Vec<[i64; 3]>>) {
-    (key(&p.exterior), p.interiors.iter().map(|r| key(r)).collect())
+    (
+        key(&p.exterior),
+        p.interiors.iter().map(|r| key(r)).collect(),
+    )
 }
 
 #[test]
@@ -208,8 +213,16 @@ fn fixture_openings_belong_to_their_walls() {
         let m = read_fixture(name);
         let (ws, _) = asset(&m, "WALL_S");
         let (we, _) = asset(&m, "WALL_E");
-        assert_eq!(asset(&m, "WINDOW_1").1.parent, Some(ws), "{name}: window parent");
-        assert_eq!(asset(&m, "DOOR_1").1.parent, Some(we), "{name}: door parent");
+        assert_eq!(
+            asset(&m, "WINDOW_1").1.parent,
+            Some(ws),
+            "{name}: window parent"
+        );
+        assert_eq!(
+            asset(&m, "DOOR_1").1.parent,
+            Some(we),
+            "{name}: door parent"
+        );
     }
 }
 
@@ -226,13 +239,20 @@ fn fixture_xlinks_resolved_including_forward_reference() {
             .filter(|g| g.lod == 3)
             .flat_map(|g| g.polygons.iter())
             .collect();
-        assert_eq!(solid.len(), 8, "{name}: lod3Solid members (7 hrefs + 1 inline)");
+        assert_eq!(
+            solid.len(),
+            8,
+            "{name}: lod3Solid members (7 hrefs + 1 inline)"
+        );
         // The GroundSurface's only polygon is a forward xlink to the solid's inline polygon.
         let ground = asset(&m, "GROUND_1").1.detail_polygons();
         assert_eq!(ground.len(), 1, "{name}");
         assert_eq!(ground[0].exterior.len(), 4, "{name}: ground ring (open)");
         assert!(
-            ground[0].exterior.iter().all(|p| (p.z - 500.0).abs() < 1e-9),
+            ground[0]
+                .exterior
+                .iter()
+                .all(|p| (p.z - 500.0).abs() < 1e-9),
             "{name}: ground at z=500"
         );
         // Solid polygons == the shell surface + opening polygons (as sets of rings).
@@ -245,7 +265,10 @@ fn fixture_xlinks_resolved_including_forward_reference() {
         let mut sol: Vec<_> = solid.iter().map(|p| poly_key(p)).collect();
         surf.sort();
         sol.sort();
-        assert_eq!(sol, surf, "{name}: solid polygons differ from surface polygons");
+        assert_eq!(
+            sol, surf,
+            "{name}: solid polygons differ from surface polygons"
+        );
     }
 }
 
@@ -259,7 +282,11 @@ fn fixture_window_hole_is_an_interior_ring() {
         let window = &asset(&m, "WINDOW_1").1.detail_polygons()[0];
         assert_eq!(key(&wall.interiors[0]), key(&window.exterior), "{name}");
         // 10 m x 6 m wall minus a 2 m x 1.5 m hole.
-        assert!((wall.area() - 57.0).abs() < 1e-6, "{name}: area {}", wall.area());
+        assert!(
+            (wall.area() - 57.0).abs() < 1e-6,
+            "{name}: area {}",
+            wall.area()
+        );
         let east = &asset(&m, "WALL_E").1.detail_polygons()[0];
         assert_eq!(east.exterior.len(), 8, "{name}: notched east wall");
         assert!(east.interiors.is_empty());
