@@ -342,3 +342,36 @@ fn fixture_flavours_agree() {
         assert_eq!(polys(n), first, "{n}");
     }
 }
+
+/// Nesting rules of the asset mapping (not XSD-checked, schema-lax on purpose): surfaces of
+/// installations, interior walls, doors of interior walls, interior installations, windows of
+/// constructive elements and bridge roofs are not building assets.
+#[test]
+fn nesting_rules() {
+    let dir = manifest_dir().join("tests/data");
+    let files = vec![
+        dir.join("nesting-citygml2.gml"),
+        dir.join("nesting-citygml3.gml"),
+    ];
+    compare_with_oracle(&files);
+    let expected = [
+        // buildings, parts, roofs, walls, closures, installations, windows, doors, polygons
+        (1, 1, 0, 1, 1, 1, 0, 0, 8),
+        (1, 0, 0, 1, 1, 2, 0, 0, 10),
+    ];
+    for (f, e) in files.iter().zip(expected) {
+        let s = Stats::of(&read_file(f).unwrap());
+        let got = (
+            s.buildings,
+            s.building_parts,
+            s.roof_surfaces,
+            s.wall_surfaces,
+            s.closure_surfaces,
+            s.installations,
+            s.windows,
+            s.doors,
+            s.polygons,
+        );
+        assert_eq!(got, e, "{}", short(f));
+    }
+}
