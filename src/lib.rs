@@ -10,6 +10,7 @@ pub mod geom;
 pub mod model;
 pub mod poi;
 pub mod rough;
+pub mod scene;
 pub mod sky;
 pub mod solar;
 pub mod stats;
