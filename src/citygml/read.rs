@@ -274,7 +274,6 @@ struct Frame {
 
 #[derive(Debug, Default)]
 struct PolyBuild {
-    id: Option<String>,
     exterior: Option<Vec<DVec3>>,
     interiors: Vec<Vec<DVec3>>,
     invalid: bool,
@@ -319,8 +318,12 @@ struct Parser {
     parts: Vec<Part>,
     hrefs: Vec<HrefRef>,
     implicits: Vec<Implicit>,
-    /// Every gml:id seen; the range of geometry parts for ids of geometry elements.
-    registry: HashMap<Box<str>, Option<(u32, u32)>>,
+    /// Range of geometry parts per gml:id of a geometry element.
+    registry: HashMap<Box<str>, (u32, u32)>,
+    /// 64-bit hashes of every gml:id seen, for duplicate detection without storing strings
+    /// (a false "duplicate" needs a 64-bit collision: negligible).
+    seen_ids: HashSet<u64>,
+    id_hasher: foldhash::fast::FixedState,
     pending: Vec<PendingGeom>,
     polygon_elements: usize,
     // transient state
@@ -406,6 +409,8 @@ impl Parser {
             hrefs: Vec::new(),
             implicits: Vec::new(),
             registry: HashMap::new(),
+            seen_ids: HashSet::new(),
+            id_hasher: foldhash::fast::FixedState::with_seed(0x5eed),
             pending: Vec::new(),
             polygon_elements: 0,
             capture: false,
@@ -632,13 +637,9 @@ impl Parser {
                     "gml:id \"{id}\" is not a valid xs:ID (must start with a letter or '_')"
                 ));
             }
-            match self.registry.entry(id.as_str().into()) {
-                std::collections::hash_map::Entry::Occupied(_) => {
-                    self.warn(format!("duplicate gml:id \"{id}\""));
-                }
-                std::collections::hash_map::Entry::Vacant(v) => {
-                    v.insert(None);
-                }
+            let h = std::hash::BuildHasher::hash_one(&self.id_hasher, id.as_str());
+            if !self.seen_ids.insert(h) {
+                self.warn(format!("duplicate gml:id \"{id}\""));
             }
         }
 
@@ -757,10 +758,7 @@ impl Parser {
         }
         if let Kind::Polygon = kind {
             self.polygon_elements += 1;
-            self.poly = Some(PolyBuild {
-                id: attrs.id.clone(),
-                ..Default::default()
-            });
+            self.poly = Some(PolyBuild::default());
         }
         self.stack.push(Frame {
             kind,
@@ -1089,7 +1087,7 @@ impl Parser {
     }
 
     fn end(&mut self, end: u64) -> Result<(), ReadError> {
-        let Some(frame) = self.stack.pop() else {
+        let Some(mut frame) = self.stack.pop() else {
             return Ok(());
         };
         if frame.dim.is_some() {
@@ -1105,7 +1103,17 @@ impl Parser {
                 self.in_ring = self.in_ring.saturating_sub(1);
                 self.finish_ring(exterior, &frame);
             }
-            Kind::Polygon => self.finish_polygon(),
+            Kind::Polygon => {
+                let id = frame.id.take();
+                let pushed = self.finish_polygon(id.as_deref().map(str::to_string));
+                let id = if frame.register.is_some() { id } else { None };
+                if let (Some(start), Some(id)) = (frame.register, id) {
+                    let end = self.parts.len() as u32;
+                    self.registry
+                        .entry(id)
+                        .or_insert((start, if pushed { end } else { start }));
+                }
+            }
             Kind::GeomProp { lod, start, owner } => {
                 let range = (start, self.parts.len() as u32);
                 if let Some(owner) = owner {
@@ -1178,11 +1186,9 @@ impl Parser {
             _ => {}
         }
         if let Some(start) = frame.register {
-            if let Some(id) = frame.id.as_deref() {
+            if let Some(id) = frame.id.take() {
                 let end = self.parts.len() as u32;
-                if let Some(slot @ None) = self.registry.get_mut(id) {
-                    *slot = Some((start, end));
-                }
+                self.registry.entry(id).or_insert((start, end));
             }
         }
         if frame.flip {
@@ -1326,14 +1332,17 @@ impl Parser {
         self.ring = Vec::with_capacity(16);
     }
 
-    fn finish_polygon(&mut self) {
-        let Some(p) = self.poly.take() else { return };
+    /// Push the polygon being built; false when it was dropped.
+    fn finish_polygon(&mut self, id: Option<String>) -> bool {
+        let Some(p) = self.poly.take() else {
+            return false;
+        };
         if p.invalid {
-            return;
+            return false;
         }
         let Some(mut exterior) = p.exterior else {
             self.warn("polygon without exterior ring dropped");
-            return;
+            return false;
         };
         let mut interiors = p.interiors;
         if self.flips % 2 == 1 {
@@ -1342,11 +1351,12 @@ impl Parser {
         }
         let idx = self.polys.len() as u32;
         self.polys.push(Polygon {
-            id: p.id,
+            id,
             exterior,
             interiors,
         });
         self.parts.push(Part::Poly(idx));
+        true
     }
 
     fn finish(mut self, len: u64, gzip: bool) -> Result<CityModel, ReadError> {
@@ -1361,18 +1371,29 @@ impl Parser {
                 message: "no element in a CityGML 1.0, 2.0 or 3.0 namespace".into(),
             });
         };
-        // resolve geometry
+        // resolve geometry: references first, then move or clone the polygons
         let pending = std::mem::take(&mut self.pending);
-        let mut out = Vec::new();
+        let mut refs: Vec<Vec<PolyRef>> = Vec::with_capacity(pending.len());
+        let mut uses = vec![0u32; self.polys.len()];
         for pg in &pending {
-            out.clear();
-            self.resolve(pg.range, false, 0, &mut out)?;
+            let mut out = Vec::new();
+            self.resolve(pg.range, false, 0, None, &mut out)?;
+            for r in &out {
+                if let Some(u) = uses.get_mut(r.poly as usize) {
+                    *u += 1;
+                }
+            }
+            refs.push(out);
+        }
+        let mut polys = std::mem::take(&mut self.polys);
+        for (pg, rs) in pending.iter().zip(&refs) {
+            let resolved = self.materialise(rs, &mut polys, &mut uses);
             let list = match pg.owner {
                 Owner::Asset(a) => self.assets.get_mut(a).map(|x| &mut x.geometries),
                 Owner::Building(b) => self.buildings.get_mut(b).map(|x| &mut x.geometries),
             };
             if let Some(g) = list.and_then(|l| l.get_mut(pg.index)) {
-                g.polygons = std::mem::take(&mut out);
+                g.polygons = resolved;
             }
         }
         // drop empty geometries (curves, points)
@@ -1523,26 +1544,26 @@ impl Parser {
         bb
     }
 
+    /// Collect the polygons a range of parts stands for (xlinks followed, implicit geometry
+    /// marked), as references into the polygon arena.
     fn resolve(
         &self,
         range: (u32, u32),
         reversed: bool,
         depth: usize,
-        out: &mut Vec<Polygon>,
+        implicit: Option<u32>,
+        out: &mut Vec<PolyRef>,
     ) -> Result<(), ReadError> {
         let mut i = range.0 as usize;
         let end = (range.1 as usize).min(self.parts.len());
         while i < end {
             match self.parts[i] {
                 Part::Poly(p) => {
-                    if let Some(poly) = self.polys.get(p as usize) {
-                        let mut poly = poly.clone();
-                        if reversed {
-                            poly.exterior.reverse();
-                            poly.interiors.iter_mut().for_each(|r| r.reverse());
-                        }
-                        out.push(poly);
-                    }
+                    out.push(PolyRef {
+                        poly: p,
+                        reversed,
+                        implicit,
+                    });
                     i += 1;
                 }
                 Part::Href(h) => {
@@ -1550,8 +1571,7 @@ impl Parser {
                         i += 1;
                         continue;
                     };
-                    let target = href.target.strip_prefix('#');
-                    let Some(target) = target else {
+                    let Some(target) = href.target.strip_prefix('#') else {
                         return Err(ReadError::DanglingHref {
                             loc: href.loc.clone(),
                             href: format!(
@@ -1560,7 +1580,7 @@ impl Parser {
                             ),
                         });
                     };
-                    let Some(&Some(r)) = self.registry.get(target) else {
+                    let Some(&r) = self.registry.get(target) else {
                         return Err(ReadError::DanglingHref {
                             loc: href.loc.clone(),
                             href: href.target.to_string(),
@@ -1572,38 +1592,71 @@ impl Parser {
                             href: href.target.to_string(),
                         });
                     }
-                    self.resolve(r, reversed ^ href.reversed, depth + 1, out)?;
+                    self.resolve(r, reversed ^ href.reversed, depth + 1, implicit, out)?;
                     i += 1;
                 }
                 Part::Implicit { idx, len } => {
                     let inner = (i as u32 + 1, (i as u32 + 1 + len).min(end as u32));
-                    let mut rel = Vec::new();
-                    self.resolve(inner, reversed, depth + 1, &mut rel)?;
-                    let imp = self.implicits.get(idx as usize);
-                    let m = imp.and_then(|x| x.matrix);
-                    let r = imp.and_then(|x| x.ref_point).unwrap_or(DVec3::ZERO);
-                    for mut p in rel {
-                        let tf = |q: &mut DVec3| {
-                            let v = match m {
-                                Some(m) => DVec3::new(
-                                    m[0] * q.x + m[1] * q.y + m[2] * q.z + m[3],
-                                    m[4] * q.x + m[5] * q.y + m[6] * q.z + m[7],
-                                    m[8] * q.x + m[9] * q.y + m[10] * q.z + m[11],
-                                ),
-                                None => *q,
-                            };
-                            *q = v + r;
-                        };
-                        p.exterior.iter_mut().for_each(tf);
-                        p.interiors.iter_mut().flatten().for_each(tf);
-                        out.push(p);
-                    }
+                    self.resolve(inner, reversed, depth + 1, Some(idx), out)?;
                     i = inner.1 as usize;
                 }
             }
         }
         Ok(())
     }
+
+    /// Turn references into polygons: a polygon used once is moved out of the arena, one used
+    /// several times is cloned (the last use moves it); implicit geometry is transformed.
+    fn materialise(
+        &self,
+        refs: &[PolyRef],
+        polys: &mut [Polygon],
+        uses: &mut [u32],
+    ) -> Vec<Polygon> {
+        let mut out = Vec::with_capacity(refs.len());
+        for r in refs {
+            let Some(slot) = polys.get_mut(r.poly as usize) else {
+                continue;
+            };
+            let mut p = if r.implicit.is_none() && uses[r.poly as usize] <= 1 {
+                std::mem::take(slot)
+            } else {
+                uses[r.poly as usize] -= 1;
+                slot.clone()
+            };
+            if r.reversed {
+                p.exterior.reverse();
+                p.interiors.iter_mut().for_each(|x| x.reverse());
+            }
+            if let Some(idx) = r.implicit {
+                let imp = self.implicits.get(idx as usize);
+                let m = imp.and_then(|x| x.matrix);
+                let rp = imp.and_then(|x| x.ref_point).unwrap_or(DVec3::ZERO);
+                let tf = |q: &mut DVec3| {
+                    let v = match m {
+                        Some(m) => DVec3::new(
+                            m[0] * q.x + m[1] * q.y + m[2] * q.z + m[3],
+                            m[4] * q.x + m[5] * q.y + m[6] * q.z + m[7],
+                            m[8] * q.x + m[9] * q.y + m[10] * q.z + m[11],
+                        ),
+                        None => *q,
+                    };
+                    *q = v + rp;
+                };
+                p.exterior.iter_mut().for_each(tf);
+                p.interiors.iter_mut().flatten().for_each(tf);
+            }
+            out.push(p);
+        }
+        out
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct PolyRef {
+    poly: u32,
+    reversed: bool,
+    implicit: Option<u32>,
 }
 
 /// `lodN...` property name -> N.

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 mod cmd_convert;
 mod cmd_stats;
+mod cmd_synth;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]
@@ -21,6 +22,8 @@ enum Command {
     Stats(cmd_stats::Args),
     /// Read a CityGML file and write it back (identity of the pipeline; envelopes recomputed).
     Convert(cmd_convert::Args),
+    /// Generate a procedural Barcelona-Eixample LoD3 district (CityGML 2.0) and facade POIs.
+    Synth(cmd_synth::Args),
 }
 
 /// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
@@ -45,6 +48,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Stats(a) => cmd_stats::run(a),
         Command::Convert(a) => cmd_convert::run(a),
+        Command::Synth(a) => cmd_synth::run(a),
     };
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,
