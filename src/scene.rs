@@ -61,6 +61,20 @@ pub fn rough_scene(rough: &[RoughGeometry]) -> Scene {
     )
 }
 
+/// The scene the selection traces: the rough model without the openings that their
+/// surface's rough plane closes ([`crate::select::traced`]).
+pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> Scene {
+    let traced = crate::select::traced(model);
+    scene_of(
+        rough
+            .iter()
+            .zip(traced)
+            .enumerate()
+            .filter(|(_, (_, t))| *t)
+            .flat_map(|(i, (r, _))| r.polygons.iter().map(move |p| (i as u32, p))),
+    )
+}
+
 /// The mixed-LoD model: level 2 full detail, level 1 rough, level 0 absent.
 pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
     scene_of(model.assets.iter().enumerate().flat_map(|(i, a)| {

@@ -40,6 +40,17 @@ pub struct Poi {
     pub normal: DVec3,
 }
 
+impl From<Poi> for crate::poi::Poi {
+    /// The generic POI of the analysis stages (with its normal).
+    fn from(p: Poi) -> Self {
+        crate::poi::Poi {
+            id: p.id,
+            position: p.position,
+            normal: Some(p.normal),
+        }
+    }
+}
+
 /// POIs of the district: in the central block, the central first-floor street window of
 /// every chamfer (corner) building, plus one such window mid-street on the south and east
 /// sides (every listed side lot when the preset limits the buildings per block).
