@@ -191,7 +191,7 @@ pub fn select(
     let dirs = partition.sample(opts.seed);
     let roof_asset = roof_assets(model, rough, opts.roof_tolerance_m);
 
-    let per_poi: Vec<(PoiSelection, Vec<(u32, u32)>, Vec<u32>)> = pois
+    let per_poi: Vec<OnePoi> = pois
         .par_iter()
         .map(|poi| select_one(poi, &dirs, scene, rough, &roof_asset, threshold))
         .collect();
@@ -237,7 +237,10 @@ pub fn select(
     })
 }
 
-/// Trace one POI: (summary, hits per asset sorted by asset, silhouette assets).
+/// What [`select_one`] finds: summary, hits per asset (sorted by asset), silhouette assets.
+type OnePoi = (PoiSelection, Vec<(u32, u32)>, Vec<u32>);
+
+/// Trace one POI.
 fn select_one(
     poi: &Poi,
     dirs: &[DVec3],
@@ -245,7 +248,7 @@ fn select_one(
     rough: &[RoughGeometry],
     roof_asset: &[bool],
     threshold: f64,
-) -> (PoiSelection, Vec<(u32, u32)>, Vec<u32>) {
+) -> OnePoi {
     let t0 = Instant::now();
     let origin = ray_origin(poi);
     let normal = poi.normal.and_then(|n| n.try_normalize());
