@@ -7,6 +7,7 @@
 
 pub mod citygml;
 pub mod geom;
+pub mod lod;
 pub mod model;
 pub mod poi;
 pub mod report;
