@@ -4,6 +4,7 @@
 //! All three take the scene only through an occlusion predicate (`true` = blocked), so
 //! they work with any ray caster; parallelism over points of interest is the caller's.
 
+pub mod fisheye;
 pub mod sun;
 pub mod sun_hours;
 pub mod svf;
@@ -11,6 +12,27 @@ pub mod svf;
 pub use sun::{sun_position, Site, SiteTimeZone, SunPosition, SunStep, SunTable};
 pub use sun_hours::{sun_hours, visible_steps, SunHours};
 pub use svf::{sky_view, SkyBundles, SkyView};
+
+use crate::poi::Poi;
+use crate::scene::{ray_origin, POI_OFFSET};
+use crate::trace::Scene;
+
+/// [`sky_view`] of a POI against a scene: rays start at [`ray_origin`] (moved
+/// [`POI_OFFSET`] along the normal) and ignore hits closer than [`POI_OFFSET`].
+pub fn poi_sky_view(scene: &Scene, poi: &Poi, bundles: &SkyBundles) -> SkyView {
+    sky_view(ray_origin(poi), poi.normal, bundles, |o, d| {
+        scene.occluded(o, d, POI_OFFSET, f64::INFINITY)
+    })
+}
+
+/// [`sun_hours`] of a POI against a scene, with the same ray origin and `tmin` as
+/// [`poi_sky_view`].
+pub fn poi_sun_hours(scene: &Scene, poi: &Poi, table: &SunTable) -> SunHours {
+    let origin = ray_origin(poi);
+    sun_hours(table, poi.normal, |d| {
+        scene.occluded(origin, d, POI_OFFSET, f64::INFINITY)
+    })
+}
 
 /// Errors of the solar analysis.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -5,8 +5,12 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod cmd_convert;
+mod cmd_fisheye;
 mod cmd_stats;
+mod cmd_sun_hours;
+mod cmd_svf;
 mod cmd_synth;
+mod solar_common;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]
@@ -24,6 +28,12 @@ enum Command {
     Convert(cmd_convert::Args),
     /// Generate a procedural Barcelona-Eixample LoD3 district (CityGML 2.0) and facade POIs.
     Synth(cmd_synth::Args),
+    /// Sky view factor and sky exposure of points of interest against the full model.
+    Svf(cmd_svf::Args),
+    /// Direct-sun hours per year and per month of points of interest.
+    SunHours(cmd_sun_hours::Args),
+    /// Fisheye picture (SVG) of the sky hemisphere seen from a point, with sun paths.
+    Fisheye(cmd_fisheye::Args),
 }
 
 /// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
@@ -49,6 +59,9 @@ fn main() -> ExitCode {
         Command::Stats(a) => cmd_stats::run(a),
         Command::Convert(a) => cmd_convert::run(a),
         Command::Synth(a) => cmd_synth::run(a),
+        Command::Svf(a) => cmd_svf::run(a),
+        Command::SunHours(a) => cmd_sun_hours::run(a),
+        Command::Fisheye(a) => cmd_fisheye::run(a),
     };
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,

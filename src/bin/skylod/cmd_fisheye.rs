@@ -1,0 +1,169 @@
+//! `skylod fisheye`.
+
+use crate::cmd_sun_hours::DEFAULT_YEAR;
+use crate::solar_common::{load, PoiArgs};
+use crate::Outcome;
+use anyhow::{bail, Context};
+use skylod::citygml::write::atomic_write;
+use skylod::model::AssetKind;
+use skylod::poi::Poi;
+use skylod::scene::{full_scene, ray_origin, POI_OFFSET};
+use skylod::sky::{SkyPartition, SkyVariant};
+use skylod::solar::fisheye::{
+    cell_shares, classify_cells, fisheye_svg, sun_paths, FisheyeOptions, Projection,
+};
+use skylod::solar::{poi_sky_view, Site, SkyBundles};
+use std::path::{Path, PathBuf};
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum ProjectionArg {
+    EqualArea,
+    Stereographic,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pois: PoiArgs,
+    /// Output SVG. With several POIs, one file per POI: `<stem>-<id>.svg`.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Cells of the equal solid-angle sky partition (one ray through each centre).
+    #[arg(long, default_value_t = 2_000)]
+    rays: usize,
+    /// Projection of the hemisphere.
+    #[arg(long, value_enum, default_value = "equal-area")]
+    projection: ProjectionArg,
+    /// Site latitude (degrees) for the sun paths; with --lon.
+    #[arg(long, allow_hyphen_values = true, requires = "lon")]
+    lat: Option<f64>,
+    /// Site longitude (degrees) for the sun paths; with --lat.
+    #[arg(long, allow_hyphen_values = true, requires = "lat")]
+    lon: Option<f64>,
+    /// Year of the sun paths.
+    #[arg(long, default_value_t = DEFAULT_YEAR)]
+    year: i32,
+}
+
+fn output_for(base: &Path, poi: &Poi, many: bool) -> PathBuf {
+    if !many {
+        return base.to_path_buf();
+    }
+    let stem = base
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "sky".into());
+    let id: String = poi
+        .id
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    base.with_file_name(format!("{stem}-{id}.svg"))
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let pois = args.pois.points()?;
+    let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
+    let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
+    let paths = match (args.lat, args.lon) {
+        (Some(lat), Some(lon)) => {
+            let (lat, lon) = crate::solar_common::lat_lon(Some(lat), Some(lon), "fisheye")?;
+            sun_paths(&Site::new(lat, lon), args.year)?
+        }
+        _ => Vec::new(),
+    };
+    let many = pois.len() > 1;
+    let outputs: Vec<PathBuf> = pois
+        .iter()
+        .map(|p| output_for(&args.output, p, many))
+        .collect();
+    for o in &outputs {
+        let co = o.canonicalize().ok();
+        if args
+            .pois
+            .inputs
+            .iter()
+            .any(|i| i == o || (co.is_some() && i.canonicalize().ok() == co))
+        {
+            bail!("{}: output path is one of the inputs", o.display());
+        }
+    }
+    let loaded = load(&args.pois.inputs);
+    if loaded.inputs.is_empty() {
+        return Ok(Outcome::SomeFailed);
+    }
+    let scene = full_scene(&loaded.model);
+    let kinds: Vec<AssetKind> = loaded.model.assets.iter().map(|a| a.kind).collect();
+    let projection = match args.projection {
+        ProjectionArg::EqualArea => Projection::EqualArea,
+        ProjectionArg::Stereographic => Projection::Stereographic,
+    };
+    for (poi, out) in pois.iter().zip(&outputs) {
+        let cells = classify_cells(&partition, &scene, ray_origin(poi), poi.normal, POI_OFFSET);
+        let view = poi_sky_view(&scene, poi, &bundles);
+        let p = poi.position;
+        let mut caption = vec![format!(
+            "POI ({:.2}, {:.2}, {:.2}){}",
+            p.x,
+            p.y,
+            p.z,
+            poi.normal
+                .map_or(", no normal (horizontal)".to_string(), |n| format!(
+                    ", normal ({:.2}, {:.2}, {:.2})",
+                    n.x, n.y, n.z
+                ))
+        )];
+        caption.push(format!(
+            "SVF {:.3}, sky exposure {:.3} ({} rays per bundle); input: {}",
+            view.svf,
+            view.sky_exposure,
+            bundles.len(),
+            loaded.inputs.join(", ")
+        ));
+        if let (Some(lat), Some(lon)) = (args.lat, args.lon) {
+            caption.push(format!("sun paths {} at lat {lat}, lon {lon}", args.year));
+        }
+        let opts = FisheyeOptions {
+            projection,
+            title: format!("Sky from {}", poi.id),
+            caption,
+            sun_paths: paths.clone(),
+            ..FisheyeOptions::default()
+        };
+        let doc = fisheye_svg(&partition, &cells, &kinds, None, &opts);
+        let text = doc.to_string();
+        atomic_write(out, |w| {
+            w.write_all(text.as_bytes())
+                .map_err(|source| skylod::citygml::WriteError::Io {
+                    file: out.clone(),
+                    source,
+                })?;
+            Ok(text.len() as u64)
+        })
+        .with_context(|| format!("writing {}", out.display()))?;
+        let sky = cell_shares(&cells, &kinds, None)
+            .into_iter()
+            .find(|s| s.0 == "sky")
+            .map_or(0.0, |s| s.1);
+        eprintln!(
+            "{}: {} -> {} ({} cells, {:.1} % sky, SVF {:.3})",
+            poi.id,
+            loaded.inputs.join(", "),
+            out.display(),
+            partition.len(),
+            sky * 100.0,
+            view.svf
+        );
+    }
+    Ok(if loaded.failed {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}

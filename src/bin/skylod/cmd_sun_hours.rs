@@ -1,0 +1,126 @@
+//! `skylod sun-hours`.
+
+use crate::solar_common::{arr, lat_lon, load, ms, out_err, polygons, PoiArgs};
+use crate::Outcome;
+use rayon::prelude::*;
+use serde_json::json;
+use skylod::scene::full_scene;
+use skylod::solar::{poi_sun_hours, Site, SunTable};
+use std::io::Write;
+use std::time::Instant;
+
+/// Default year of `--year`: a fixed year so that results are reproducible.
+pub const DEFAULT_YEAR: i32 = 2025;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pois: PoiArgs,
+    /// Site latitude in degrees (WGS84, north positive). Required.
+    #[arg(long, allow_hyphen_values = true)]
+    lat: Option<f64>,
+    /// Site longitude in degrees (WGS84, east positive). Required.
+    #[arg(long, allow_hyphen_values = true)]
+    lon: Option<f64>,
+    /// Calendar year (UTC) simulated.
+    #[arg(long, default_value_t = DEFAULT_YEAR)]
+    year: i32,
+    /// Time step in minutes (the sun is evaluated at the middle of each step).
+    #[arg(long, default_value_t = 15)]
+    step: u32,
+    /// Time zone for attributing steps to months: IANA name ("Europe/Madrid"), "UTC" or
+    /// a fixed offset ("+01:00").
+    #[arg(long, default_value = "UTC", allow_hyphen_values = true)]
+    timezone: String,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+const MONTHS: [&str; 12] = [
+    "Jan", "Feb", "Mar", "Apr", "May", "Jun", "Jul", "Aug", "Sep", "Oct", "Nov", "Dec",
+];
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let (lat, lon) = lat_lon(args.lat, args.lon, "sun-hours")?;
+    let pois = args.pois.points()?;
+    let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
+    let t = Instant::now();
+    let table = SunTable::year(args.year, args.step, &site)?;
+    let sun_ms = ms(t);
+    let loaded = load(&args.pois.inputs);
+    if loaded.inputs.is_empty() {
+        return Ok(Outcome::SomeFailed);
+    }
+    let t = Instant::now();
+    let scene = full_scene(&loaded.model);
+    let bvh_ms = ms(t);
+    let t = Instant::now();
+    let hours: Vec<_> = pois
+        .par_iter()
+        .map(|p| poi_sun_hours(&scene, p, &table))
+        .collect();
+    let trace_ms = ms(t);
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        let rows: Vec<_> = pois
+            .iter()
+            .zip(&hours)
+            .map(|(p, h)| {
+                json!({
+                    "id": p.id,
+                    "poi": arr(p.position),
+                    "normal": p.normal.map(arr),
+                    "sun_hours": h.hours,
+                    "monthly": h.monthly,
+                    "possible_hours": h.possible_hours,
+                })
+            })
+            .collect();
+        let doc = json!({
+            "pois": rows,
+            "lat": lat,
+            "lon": lon,
+            "year": args.year,
+            "step_minutes": args.step,
+            "timezone": args.timezone,
+            "steps": table.len(),
+            "inputs": loaded.inputs,
+            "polygons": polygons(&loaded.model),
+            "timings_ms": {"read": loaded.read_ms, "sun": sun_ms, "bvh": bvh_ms, "trace": trace_ms},
+        });
+        out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
+    } else {
+        let mut head = format!("{:<20} {:>9} {:>9}", "id", "sun_h", "possible");
+        for m in MONTHS {
+            head.push_str(&format!(" {m:>6}"));
+        }
+        out_err(writeln!(out, "{head}"))?;
+        for (p, h) in pois.iter().zip(&hours) {
+            let mut line = format!("{:<20} {:>9.2} {:>9.2}", p.id, h.hours, h.possible_hours);
+            for m in h.monthly {
+                line.push_str(&format!(" {m:>6.1}"));
+            }
+            out_err(writeln!(out, "{line}"))?;
+        }
+        eprintln!(
+            "{} POI(s); {} steps of {} min in {} at ({lat}, {lon}), months in {}; {} polygons from {} input(s); read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            pois.len(),
+            table.len(),
+            args.step,
+            args.year,
+            args.timezone,
+            polygons(&loaded.model),
+            loaded.inputs.len(),
+            loaded.read_ms,
+            sun_ms,
+            bvh_ms,
+            trace_ms
+        );
+    }
+    Ok(if loaded.failed {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}

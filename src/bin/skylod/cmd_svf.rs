@@ -1,0 +1,111 @@
+//! `skylod svf`.
+
+use crate::solar_common::{arr, load, ms, out_err, polygons, PoiArgs};
+use crate::Outcome;
+use rayon::prelude::*;
+use serde_json::json;
+use skylod::scene::full_scene;
+use skylod::solar::{poi_sky_view, SkyBundles};
+use std::io::Write;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pois: PoiArgs,
+    /// Rays per bundle (cells of each Beckers sky partition).
+    #[arg(long, default_value_t = 10_000)]
+    rays: usize,
+    /// Seed of the ray jitter inside each cell.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let pois = args.pois.points()?;
+    let bundles = SkyBundles::new(args.rays, args.seed)?;
+    let loaded = load(&args.pois.inputs);
+    if loaded.inputs.is_empty() {
+        return Ok(Outcome::SomeFailed);
+    }
+    let t = Instant::now();
+    let scene = full_scene(&loaded.model);
+    let bvh_ms = ms(t);
+    let t = Instant::now();
+    let views: Vec<_> = pois
+        .par_iter()
+        .map(|p| poi_sky_view(&scene, p, &bundles))
+        .collect();
+    let trace_ms = ms(t);
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        let rows: Vec<_> = pois
+            .iter()
+            .zip(&views)
+            .map(|(p, v)| {
+                json!({
+                    "id": p.id,
+                    "poi": arr(p.position),
+                    "normal": p.normal.map(arr),
+                    "svf": v.svf,
+                    "sky_exposure": v.sky_exposure,
+                    "rays": v.rays,
+                })
+            })
+            .collect();
+        let doc = json!({
+            "pois": rows,
+            "rays": args.rays,
+            "seed": args.seed,
+            "inputs": loaded.inputs,
+            "polygons": polygons(&loaded.model),
+            "timings_ms": {"read": loaded.read_ms, "bvh": bvh_ms, "trace": trace_ms},
+        });
+        out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
+    } else {
+        out_err(writeln!(
+            out,
+            "{:<20} {:>14} {:>14} {:>9} {:>8} {:>8} {:>8} {:>7} {:>12}",
+            "id", "x", "y", "z", "nx", "ny", "nz", "svf", "sky_exposure"
+        ))?;
+        for (p, v) in pois.iter().zip(&views) {
+            let n = p
+                .normal
+                .map_or(["-".to_string(), "-".into(), "-".into()], |n| {
+                    [n.x, n.y, n.z].map(|c| format!("{c:.3}"))
+                });
+            out_err(writeln!(
+                out,
+                "{:<20} {:>14.3} {:>14.3} {:>9.3} {:>8} {:>8} {:>8} {:>7.4} {:>12.4}",
+                p.id,
+                p.position.x,
+                p.position.y,
+                p.position.z,
+                n[0],
+                n[1],
+                n[2],
+                v.svf,
+                v.sky_exposure
+            ))?;
+        }
+        eprintln!(
+            "{} POI(s), {} rays per bundle, seed {}; {} polygons from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            pois.len(),
+            args.rays,
+            args.seed,
+            polygons(&loaded.model),
+            loaded.inputs.len(),
+            loaded.read_ms,
+            bvh_ms,
+            trace_ms
+        );
+    }
+    Ok(if loaded.failed {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}

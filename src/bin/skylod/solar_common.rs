@@ -1,0 +1,118 @@
+//! Shared by `svf`, `sun-hours` and `fisheye`: inputs merged into one model, POIs.
+
+use anyhow::{bail, Context};
+use rayon::prelude::*;
+use skylod::citygml::read_file;
+use skylod::model::CityModel;
+use skylod::poi::{parse_poi, read_pois_csv, Poi};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Inputs and points of interest.
+#[derive(clap::Args, Debug)]
+pub struct PoiArgs {
+    /// CityGML files (.gml, .xml, .gz); all are merged into one scene.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Point of interest X,Y,Z or X,Y,Z,NX,NY,NZ (model CRS; the normal is the outward
+    /// normal of the surface the point lies on). Repeatable.
+    #[arg(
+        long = "poi",
+        value_name = "X,Y,Z[,NX,NY,NZ]",
+        allow_hyphen_values = true
+    )]
+    pub poi: Vec<String>,
+    /// CSV file of POIs (header `id,x,y,z[,nx,ny,nz]`), read after the --poi points.
+    #[arg(long, value_name = "FILE.csv")]
+    pub pois: Option<PathBuf>,
+}
+
+impl PoiArgs {
+    /// The POIs in order (--poi first, then the CSV). No POI at all is a usage error.
+    pub fn points(&self) -> anyhow::Result<Vec<Poi>> {
+        let mut out = Vec::new();
+        for (i, t) in self.poi.iter().enumerate() {
+            out.push(parse_poi(t, i)?);
+        }
+        if let Some(f) = &self.pois {
+            out.extend(read_pois_csv(f)?);
+        }
+        if out.is_empty() {
+            bail!("no point of interest: give --poi X,Y,Z[,NX,NY,NZ] or --pois FILE.csv");
+        }
+        Ok(out)
+    }
+}
+
+/// The inputs that could be read, merged in input order.
+pub struct Loaded {
+    pub model: CityModel,
+    /// Paths read successfully.
+    pub inputs: Vec<String>,
+    /// Some input failed (reported on stderr).
+    pub failed: bool,
+    pub read_ms: f64,
+}
+
+/// Read every input in parallel and merge them; errors go to stderr.
+pub fn load(inputs: &[PathBuf]) -> Loaded {
+    let t = Instant::now();
+    let results: Vec<_> = inputs.par_iter().map(|p| read_file(p)).collect();
+    let mut model = CityModel::default();
+    let mut ok = Vec::new();
+    let mut failed = false;
+    for (p, r) in inputs.iter().zip(results) {
+        match r {
+            Ok(m) => {
+                model.merge(m);
+                ok.push(p.display().to_string());
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed = true;
+            }
+        }
+    }
+    Loaded {
+        model,
+        inputs: ok,
+        failed,
+        read_ms: ms(t),
+    }
+}
+
+/// Milliseconds since `t`, rounded to 0.1.
+pub fn ms(t: Instant) -> f64 {
+    (t.elapsed().as_secs_f64() * 1e4).round() / 10.0
+}
+
+/// Number of polygons at full detail.
+pub fn polygons(m: &CityModel) -> usize {
+    m.assets.iter().map(|a| a.detail_polygons().len()).sum()
+}
+
+/// A `[x, y, z]` array for JSON.
+pub fn arr(v: glam::DVec3) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+/// Parse `--lat`/`--lon`, or say that they are needed.
+pub fn lat_lon(lat: Option<f64>, lon: Option<f64>, cmd: &str) -> anyhow::Result<(f64, f64)> {
+    match (lat, lon) {
+        (Some(a), Some(o)) => {
+            if !(-90.0..=90.0).contains(&a) || !(-180.0..=180.0).contains(&o) {
+                bail!("--lat must be in -90..90 and --lon in -180..180 (got {a}, {o})");
+            }
+            Ok((a, o))
+        }
+        _ => bail!(
+            "{cmd} needs the site's --lat and --lon in degrees (WGS84); taking them from the \
+             input's CRS is not supported yet"
+        ),
+    }
+}
+
+/// Context helper for writing to stdout.
+pub fn out_err<T>(r: std::io::Result<T>) -> anyhow::Result<T> {
+    r.context("writing to stdout")
+}
