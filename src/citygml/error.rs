@@ -167,4 +167,7 @@ pub enum WriteError {
     /// Re-reading the source failed.
     #[error(transparent)]
     Read(#[from] ReadError),
+    /// The arguments do not fit the model (e.g. one level per asset expected).
+    #[error("invalid writer input: {0}")]
+    Invalid(String),
 }

@@ -150,12 +150,15 @@ fn copy(
     })
 }
 
-/// Sort edits and drop those nested in an earlier one.
+/// Sort edits and drop those nested in an earlier one. Zero-length edits (insertions) at the
+/// start or at the end of another edit are kept: an insertion sorts before an edit that starts
+/// at the same offset; insertions at the same offset keep their order.
 fn normalise(mut edits: Vec<Edit>) -> Vec<Edit> {
     edits.sort_by(|a, b| {
         a.span
             .start
             .cmp(&b.span.start)
+            .then((!a.span.is_empty()).cmp(&!b.span.is_empty()))
             .then(b.span.end.cmp(&a.span.end))
     });
     let mut out: Vec<Edit> = Vec::with_capacity(edits.len());
@@ -376,6 +379,34 @@ mod tests {
         assert_eq!(
             n.iter().map(|x| x.span.clone()).collect::<Vec<_>>(),
             vec![0..5, 10..30]
+        );
+    }
+
+    #[test]
+    fn insertions_beside_edits_kept() {
+        let ins = |a: u64, t: &str| Edit {
+            span: a..a,
+            replacement: t.as_bytes().to_vec(),
+        };
+        let n = normalise(vec![
+            e(10, 20),
+            ins(10, "a"),
+            ins(20, "b"),
+            ins(15, "x"),
+            ins(10, "c"),
+        ]);
+        let got: Vec<(u64, u64, Vec<u8>)> = n
+            .into_iter()
+            .map(|x| (x.span.start, x.span.end, x.replacement))
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                (10, 10, b"a".to_vec()),
+                (10, 10, b"c".to_vec()),
+                (10, 20, vec![]),
+                (20, 20, b"b".to_vec())
+            ]
         );
     }
 
