@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 mod cmd_convert;
 mod cmd_fisheye;
+mod cmd_lod;
 mod cmd_stats;
 mod cmd_sun_hours;
 mod cmd_svf;
@@ -28,6 +29,8 @@ enum Command {
     Convert(cmd_convert::Args),
     /// Generate a procedural Barcelona-Eixample LoD3 district (CityGML 2.0) and facade POIs.
     Synth(cmd_synth::Args),
+    /// Skyline-controlled mixed-LoD CityGML for a set of POIs (rough model, sky bundle, BVH, silhouette selection).
+    Lod(cmd_lod::Args),
     /// Sky view factor and sky exposure of points of interest against the full model.
     Svf(cmd_svf::Args),
     /// Direct-sun hours per year and per month of points of interest.
@@ -59,6 +62,7 @@ fn main() -> ExitCode {
         Command::Stats(a) => cmd_stats::run(a),
         Command::Convert(a) => cmd_convert::run(a),
         Command::Synth(a) => cmd_synth::run(a),
+        Command::Lod(a) => cmd_lod::run(a),
         Command::Svf(a) => cmd_svf::run(a),
         Command::SunHours(a) => cmd_sun_hours::run(a),
         Command::Fisheye(a) => cmd_fisheye::run(a),

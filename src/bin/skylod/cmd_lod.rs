@@ -1,0 +1,265 @@
+//! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs.
+
+use crate::solar_common::{load, ms, PoiArgs};
+use crate::Outcome;
+use anyhow::{bail, Context};
+use skylod::citygml::mixed::write_mixed;
+use skylod::citygml::write::{atomic_write, WriteOptions};
+use skylod::lod::{lod, LodOptions};
+use skylod::report::{Parameters, Report, Timings};
+use skylod::rough::RoughOptions;
+use skylod::select::SelectOptions;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pois: PoiArgs,
+    /// Output file (one input), or a directory that gets one file per input (created if
+    /// missing; several inputs need a directory). `.gz` compresses.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Rays per POI (cells of the equal-solid-angle hemisphere partition).
+    #[arg(long, default_value_t = 10_000)]
+    rays: usize,
+    /// Seed of the ray jitter inside each cell (same seed, same output).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Silhouette threshold in degrees (default: 1.5 x the cell's angular size).
+    #[arg(long, value_name = "DEG")]
+    threshold: Option<f64>,
+    /// How far (m) below the lowest roof edge an installation may start and still count as
+    /// standing on the roof.
+    #[arg(long, default_value_t = 0.5, value_name = "M")]
+    roof_tolerance: f64,
+    /// Rough model: largest angle (degrees) between normals of one plane.
+    #[arg(long, default_value_t = 5.0, value_name = "DEG")]
+    angle: f64,
+    /// Rough model: largest distance (m) of a polygon from its plane to be merged.
+    #[arg(long, default_value_t = 0.3, value_name = "M")]
+    thickness: f64,
+    /// Rough model: do not use an asset's LoD2 geometry when it also has a higher LoD.
+    #[arg(long)]
+    no_lod2: bool,
+    /// Write a JSON report (schemas/report.schema.json).
+    #[arg(long, value_name = "FILE.json")]
+    report: Option<PathBuf>,
+    /// Replace existing output files.
+    #[arg(long)]
+    overwrite: bool,
+}
+
+/// Output path per input: a file for one input (unless `out` is a directory), otherwise
+/// `out/<input file name>`.
+fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    if inputs.len() == 1 && !out.is_dir() {
+        return Ok(vec![out.to_path_buf()]);
+    }
+    if out.exists() && !out.is_dir() {
+        bail!(
+            "{} inputs need a directory for -o, and {} is a file",
+            inputs.len(),
+            out.display()
+        );
+    }
+    let mut seen = std::collections::HashSet::new();
+    let mut paths = Vec::with_capacity(inputs.len());
+    for i in inputs {
+        let Some(name) = i.file_name() else {
+            bail!("input {} has no file name", i.display());
+        };
+        if !seen.insert(name.to_os_string()) {
+            bail!(
+                "two inputs are named {}: their outputs in {} would collide",
+                name.to_string_lossy(),
+                out.display()
+            );
+        }
+        paths.push(out.join(name));
+    }
+    Ok(paths)
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let t_all = Instant::now();
+    let pois = args.pois.points()?;
+    let outputs = output_paths(&args.pois.inputs, &args.output)?;
+    if let Some(path) = &args.report {
+        check_report_target(path, &args)?;
+    }
+    let rough_opts = RoughOptions {
+        angle_deg: args.angle,
+        thickness_m: args.thickness,
+        prefer_lod2: !args.no_lod2,
+    };
+    let select_opts = SelectOptions {
+        rays: args.rays,
+        seed: args.seed,
+        threshold_deg: args.threshold,
+        roof_tolerance_m: args.roof_tolerance,
+    };
+    let loaded = load(&args.pois.inputs);
+    if loaded.inputs.is_empty() {
+        return Ok(Outcome::SomeFailed);
+    }
+    let mut failed = loaded.failed;
+    let model = loaded.model;
+    let result = lod(
+        &model,
+        &pois,
+        &LodOptions {
+            rough: rough_opts,
+            select: select_opts,
+        },
+    )?;
+
+    if outputs.len() > 1 || args.output.is_dir() {
+        std::fs::create_dir_all(&args.output)
+            .with_context(|| format!("creating {}", args.output.display()))?;
+    }
+    let wopts = WriteOptions {
+        overwrite: args.overwrite,
+        protect: args.pois.inputs.clone(),
+        keep_envelopes: false,
+    };
+    let t_write = Instant::now();
+    let mut written: Vec<Option<String>> = vec![None; model.files.len()];
+    for (f, src) in model.files.iter().enumerate() {
+        // Files of the model are the inputs that could be read, in input order.
+        let Some(k) = args.pois.inputs.iter().position(|p| p == &src.path) else {
+            continue;
+        };
+        let Some(out) = outputs.get(k) else { continue };
+        match write_mixed(
+            &model,
+            f,
+            &result.rough,
+            &result.selection.levels,
+            out,
+            &wopts,
+        ) {
+            Ok(s) => {
+                eprintln!(
+                    "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
+                    src.path.display(),
+                    out.display(),
+                    s.levels[0],
+                    s.levels[1],
+                    s.levels[2],
+                    s.polygons_in,
+                    s.polygons_out,
+                    s.buildings_dropped
+                );
+                if let Some(w) = written.get_mut(f) {
+                    *w = Some(out.display().to_string());
+                }
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed = true;
+            }
+        }
+    }
+    let write_ms = ms(t_write);
+
+    let timings = Timings {
+        read: loaded.read_ms,
+        rough: result.rough_s * 1e3,
+        bvh: result.bvh_s * 1e3,
+        select: result.select_s * 1e3,
+        write: write_ms,
+        total: ms(t_all),
+    };
+    let mut report = Report::new(
+        &model,
+        &result.rough,
+        &result.selection,
+        &pois,
+        Parameters::of(
+            &result.selection,
+            args.seed,
+            args.roof_tolerance,
+            &rough_opts,
+        ),
+        timings,
+    );
+    for (entry, out) in report.inputs.iter_mut().zip(written) {
+        entry.output = out;
+    }
+    let t = &report.totals;
+    eprintln!(
+        "{} POI(s), {} rays each: assets at level 0/1/2 = {}/{}/{}; polygons {} -> {} ({:.1}%); \
+         {} triangles traced; read {:.0} ms, rough {:.0} ms, bvh {:.0} ms, select {:.0} ms, write {:.0} ms",
+        pois.len(),
+        result.selection.rays,
+        t.levels[0],
+        t.levels[1],
+        t.levels[2],
+        t.polygons_in,
+        t.polygons_out,
+        100.0 * t.polygon_fraction,
+        result.triangles,
+        timings.read,
+        timings.rough,
+        timings.bvh,
+        timings.select,
+        timings.write
+    );
+    if let Some(path) = &args.report {
+        let json = serde_json::to_vec_pretty(&report)?;
+        atomic_write(path, |w| {
+            w.write_all(&json)
+                .and_then(|_| w.write_all(b"\n"))
+                .map_err(|e| skylod::citygml::WriteError::Io {
+                    file: path.clone(),
+                    source: e,
+                })?;
+            Ok(json.len() as u64 + 1)
+        })
+        .with_context(|| format!("writing report {}", path.display()))?;
+    }
+    Ok(if failed {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}
+
+fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {
+    let opts = WriteOptions {
+        overwrite: args.overwrite,
+        ..Default::default()
+    };
+    skylod::citygml::write::check_target(path, &opts, args.pois.inputs.iter().map(|p| p.as_path()))
+        .with_context(|| format!("report {}", path.display()))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn outputs_per_input() {
+        let one = output_paths(&[PathBuf::from("a/x.gml")], Path::new("o.gml")).unwrap();
+        assert_eq!(one, vec![PathBuf::from("o.gml")]);
+        let two = output_paths(
+            &[PathBuf::from("a/x.gml"), PathBuf::from("b/y.gml.gz")],
+            Path::new("outdir"),
+        )
+        .unwrap();
+        assert_eq!(
+            two,
+            vec![
+                PathBuf::from("outdir/x.gml"),
+                PathBuf::from("outdir/y.gml.gz")
+            ]
+        );
+        assert!(output_paths(
+            &[PathBuf::from("a/x.gml"), PathBuf::from("b/x.gml")],
+            Path::new("outdir")
+        )
+        .is_err());
+    }
+}
