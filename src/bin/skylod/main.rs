@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod cmd_convert;
+mod cmd_evaluate;
 mod cmd_fisheye;
 mod cmd_lod;
 mod cmd_stats;
@@ -31,6 +32,8 @@ enum Command {
     Synth(cmd_synth::Args),
     /// Skyline-controlled mixed-LoD CityGML for a set of POIs (rough model, sky bundle, BVH, silhouette selection).
     Lod(cmd_lod::Args),
+    /// SVF and sun hours on the full, the LoD and the all-boxes model per POI (paper Tables 1-2).
+    Evaluate(cmd_evaluate::Args),
     /// Sky view factor and sky exposure of points of interest against the full model.
     Svf(cmd_svf::Args),
     /// Direct-sun hours per year and per month of points of interest.
@@ -63,6 +66,7 @@ fn main() -> ExitCode {
         Command::Convert(a) => cmd_convert::run(a),
         Command::Synth(a) => cmd_synth::run(a),
         Command::Lod(a) => cmd_lod::run(a),
+        Command::Evaluate(a) => cmd_evaluate::run(a),
         Command::Svf(a) => cmd_svf::run(a),
         Command::SunHours(a) => cmd_sun_hours::run(a),
         Command::Fisheye(a) => cmd_fisheye::run(a),

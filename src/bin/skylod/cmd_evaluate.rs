@@ -1,0 +1,187 @@
+//! `skylod evaluate`: full vs LoD vs all-boxes model, the paper's Tables 1 and 2.
+
+use crate::cmd_sun_hours::DEFAULT_YEAR;
+use crate::solar_common::{lat_lon, load, ms, out_err, PoiArgs};
+use crate::Outcome;
+use skylod::evaluate::{evaluate, EvalOptions};
+use skylod::lod::LodOptions;
+use skylod::select::SelectOptions;
+use skylod::solar::{Site, SunTable};
+use std::io::Write;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pois: PoiArgs,
+    /// Site latitude in degrees (WGS84) for sun hours.
+    #[arg(long, allow_hyphen_values = true)]
+    lat: Option<f64>,
+    /// Site longitude in degrees (WGS84) for sun hours.
+    #[arg(long, allow_hyphen_values = true)]
+    lon: Option<f64>,
+    /// Skip sun hours (then --lat/--lon are not needed).
+    #[arg(long)]
+    no_sun: bool,
+    /// Calendar year (UTC) of the sun-hours simulation.
+    #[arg(long, default_value_t = DEFAULT_YEAR)]
+    year: i32,
+    /// Sun-hours time step in minutes.
+    #[arg(long, default_value_t = 15)]
+    step: u32,
+    /// Rays per POI of the selection bundle.
+    #[arg(long, default_value_t = 10_000)]
+    rays: usize,
+    /// Seed of the selection bundle.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Silhouette threshold in degrees (default: 1.5 x the cell size).
+    #[arg(long, value_name = "DEG")]
+    threshold: Option<f64>,
+    /// Rays of each SVF bundle (the same bundle for the three models).
+    #[arg(long, default_value_t = 20_000)]
+    svf_rays: usize,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+fn pct(x: Option<f64>) -> String {
+    match x {
+        Some(v) if v.is_finite() => format!("{:.2}%", 100.0 * v),
+        Some(_) => "inf".into(),
+        None => "-".into(),
+    }
+}
+
+fn hours(x: Option<f64>) -> String {
+    x.map_or("-".into(), |h| format!("{h:.1}"))
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let t_all = Instant::now();
+    let site = if args.no_sun {
+        None
+    } else {
+        let (lat, lon) = lat_lon(args.lat, args.lon, "evaluate (or give --no-sun)")?;
+        Some(Site::new(lat, lon))
+    };
+    let pois = args.pois.points()?;
+    let table = match &site {
+        Some(s) => Some(SunTable::year(args.year, args.step, s)?),
+        None => None,
+    };
+    let loaded = load(&args.pois.inputs);
+    if loaded.inputs.is_empty() {
+        return Ok(Outcome::SomeFailed);
+    }
+    let opts = EvalOptions {
+        lod: LodOptions {
+            select: SelectOptions {
+                rays: args.rays,
+                seed: args.seed,
+                threshold_deg: args.threshold,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+        svf_rays: args.svf_rays,
+        ..Default::default()
+    };
+    let e = evaluate(&loaded.model, &pois, &opts, table.as_ref())?;
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        let doc = serde_json::json!({
+            "inputs": loaded.inputs,
+            "rays": args.rays,
+            "svf_rays": args.svf_rays,
+            "seed": args.seed,
+            "sun": site.map(|s| serde_json::json!({
+                "lat": s.latitude, "lon": s.longitude, "year": args.year, "step_minutes": args.step
+            })),
+            "pois": e.pois,
+            "timings_ms": {
+                "read": loaded.read_ms,
+                "rough": e.rough_ms,
+                "selection_bvh": e.selection_bvh_ms,
+                "total": ms(t_all),
+            },
+        });
+        out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
+    } else {
+        out_err(writeln!(
+            out,
+            "{:<18} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            "poi",
+            "model",
+            "polygons",
+            "reduction",
+            "svf",
+            "svf err",
+            "sky exp",
+            "sun h",
+            "sun err",
+            "bvh ms",
+            "trace ms",
+            "select ms"
+        ))?;
+        for p in &e.pois {
+            for (name, m, svf_err, sun_err, sel) in [
+                (
+                    "full",
+                    &p.full,
+                    Some(0.0),
+                    p.full.sun_hours.map(|_| 0.0),
+                    None,
+                ),
+                (
+                    "lod",
+                    &p.lod,
+                    Some(p.lod_svf_error),
+                    p.lod_sun_error,
+                    Some(p.select_ms),
+                ),
+                (
+                    "boxes",
+                    &p.boxes,
+                    Some(p.boxes_svf_error),
+                    p.boxes_sun_error,
+                    None,
+                ),
+            ] {
+                let reduction = m.polygons as f64 / p.full.polygons.max(1) as f64;
+                out_err(writeln!(
+                    out,
+                    "{:<18} {:>7} {:>9} {:>8.2}% {:>9.4} {:>9} {:>9.4} {:>9} {:>9} {:>9.1} {:>9.1} {:>9}",
+                    p.id,
+                    name,
+                    m.polygons,
+                    100.0 * reduction,
+                    m.svf,
+                    pct(svf_err),
+                    m.sky_exposure,
+                    hours(m.sun_hours),
+                    pct(sun_err),
+                    m.bvh_ms,
+                    m.trace_ms,
+                    sel.map_or("-".into(), |s| format!("{s:.1}"))
+                ))?;
+            }
+        }
+        eprintln!(
+            "{} POI(s); selection {} rays, SVF {} rays; read {:.0} ms, rough {:.0} ms (shared), selection BVH {:.0} ms (shared), total {:.0} ms",
+            e.pois.len(),
+            args.rays,
+            args.svf_rays,
+            loaded.read_ms,
+            e.rough_ms,
+            e.selection_bvh_ms,
+            ms(t_all)
+        );
+    }
+    Ok(if loaded.failed {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}
