@@ -30,6 +30,10 @@
 //! LoD2 is used unchanged beside its LoD3) that property is kept verbatim too, ids included.
 //! A property given by reference (`<bldg:lod2MultiSurface xlink:href="#x"/>`) is rewritten as a
 //! property holding the rough geometry. If the rough geometry is empty the asset is kept verbatim.
+//! A property is never given *more* polygons than it holds: when the rough geometry has more
+//! polygons (the six faces of the box of a window that is a single quad, degenerate when the
+//! window is flat), the property is kept verbatim, as it is already as rough as it gets; its
+//! polygons lie inside the box the rough stage traced, so the selection stays conservative.
 //!
 //! New geometry gets deterministic `gml:id`s `skylod_<asset id or a<index>>_g<property>` with
 //! `_<n>` per polygon (and `_s` for a shell or composite surface), in the document's GML
@@ -449,16 +453,8 @@ fn scan(path: &Path) -> Result<Doc, WriteError> {
                     }
                 }
             }
-            Event::Text(t) => {
-                if capture != TextCapture::None {
-                    text.extend_from_slice(&t);
-                }
-            }
-            Event::CData(t) => {
-                if capture != TextCapture::None {
-                    text.extend_from_slice(&t);
-                }
-            }
+            Event::Text(t) if capture != TextCapture::None => text.extend_from_slice(&t),
+            Event::CData(t) if capture != TextCapture::None => text.extend_from_slice(&t),
             Event::Eof => break,
             _ => {}
         }
@@ -944,7 +940,7 @@ impl<'a> Plan<'a> {
                 continue;
             }
             let enc = encoding(&g.property);
-            if enc == Enc::Keep {
+            if enc == Enc::Keep || r.polygons.len() > g.polygons.len() {
                 continue;
             }
             let Some(n) = self.doc.node_at(g.span.start) else {
@@ -1090,7 +1086,10 @@ impl<'a> Plan<'a> {
                 NsKind::Gml => true,
                 NsKind::Core => CORE_LEADING.contains(&name.local.as_str()),
                 NsKind::App => name.local == "appearance",
-                NsKind::Gen => !name.upper,
+                // generic attributes, not the properties of a gen:GenericCityObject
+                NsKind::Gen => {
+                    name.local.ends_with("Attribute") || name.local == "genericAttributeSet"
+                }
                 _ => false,
             };
             if !leading {

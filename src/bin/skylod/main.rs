@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod cmd_convert;
+mod cmd_rough;
 mod cmd_stats;
 mod cmd_synth;
 
@@ -22,6 +23,8 @@ enum Command {
     Stats(cmd_stats::Args),
     /// Read a CityGML file and write it back (identity of the pipeline; envelopes recomputed).
     Convert(cmd_convert::Args),
+    /// Write the rough model (every asset generalised: planes, boxes) as CityGML.
+    Rough(cmd_rough::Args),
     /// Generate a procedural Barcelona-Eixample LoD3 district (CityGML 2.0) and facade POIs.
     Synth(cmd_synth::Args),
 }
@@ -48,6 +51,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Stats(a) => cmd_stats::run(a),
         Command::Convert(a) => cmd_convert::run(a),
+        Command::Rough(a) => cmd_rough::run(a),
         Command::Synth(a) => cmd_synth::run(a),
     };
     match result {
