@@ -108,7 +108,9 @@
 //!  xmlns:gml="http://www.opengis.net/gml" xmlns:bldg="http://www.opengis.net/citygml/building/2.0">
 //!  <cityObjectMember><bldg:Building gml:id="b"><bldg:boundedBy><bldg:RoofSurface gml:id="r">
 //!  <bldg:lod2MultiSurface><gml:MultiSurface><gml:surfaceMember><gml:Polygon><gml:exterior>
-//!  <gml:LinearRing><gml:posList>0 0 5 4 0 5 4 4 5 0 4 5 0 0 5</gml:posList></gml:LinearRing>
+//!  <gml:LinearRing><gml:posList>0 0 5 2 0 5 2 4 5 0 4 5 0 0 5</gml:posList></gml:LinearRing>
+//!  </gml:exterior></gml:Polygon></gml:surfaceMember><gml:surfaceMember><gml:Polygon><gml:exterior>
+//!  <gml:LinearRing><gml:posList>2 0 5 4 0 5 4 4 5 2 4 5 2 0 5</gml:posList></gml:LinearRing>
 //!  </gml:exterior></gml:Polygon></gml:surfaceMember></gml:MultiSurface></bldg:lod2MultiSurface>
 //!  </bldg:RoofSurface></bldg:boundedBy><bldg:boundedBy><bldg:WallSurface gml:id="w">
 //!  <bldg:lod2MultiSurface><gml:MultiSurface><gml:surfaceMember><gml:Polygon><gml:exterior>
@@ -121,6 +123,7 @@
 //! // roof rough (level 1), wall dropped (level 0)
 //! let s = write_mixed(&model, 0, &rough, &[1, 0], &out, &WriteOptions::default()).unwrap();
 //! assert_eq!(s.levels, [1, 1, 0]);
+//! assert_eq!((s.polygons_in, s.polygons_out), (3, 1)); // two roof halves merged, wall dropped
 //! let text = std::fs::read_to_string(&out).unwrap();
 //! assert!(!text.contains("WallSurface"));
 //! assert!(text.contains(r#"<gen:intAttribute xmlns:gen="http://www.opengis.net/citygml/generics/2.0" name="skylod_level"><gen:value>1</gen:value></gen:intAttribute>"#));
@@ -158,7 +161,9 @@ pub struct MixedSummary {
     pub polygons_out: usize,
     /// Buildings and building parts removed because nothing of them was kept.
     pub buildings_dropped: usize,
-    /// `xlink:href` references pruned because their target was removed or replaced.
+    /// `xlink:href` references found pointing into removed or replaced content (each one
+    /// pruned; references that vanish with a structure such a pruning removed, e.g. the other
+    /// faces of a broken `gml:Solid`, are not counted again).
     pub hrefs_pruned: usize,
     /// Appearance targets pruned.
     pub appearance_targets_pruned: usize,
