@@ -30,6 +30,10 @@
 //! LoD2 is used unchanged beside its LoD3) that property is kept verbatim too, ids included.
 //! A property given by reference (`<bldg:lod2MultiSurface xlink:href="#x"/>`) is rewritten as a
 //! property holding the rough geometry. If the rough geometry is empty the asset is kept verbatim.
+//! A property is never given *more* polygons than it holds: when the rough geometry has more
+//! polygons (the six faces of the box of a window that is a single quad, degenerate when the
+//! window is flat), the property is kept verbatim, as it is already as rough as it gets; its
+//! polygons lie inside the box the rough stage traced, so the selection stays conservative.
 //!
 //! New geometry gets deterministic `gml:id`s `skylod_<asset id or a<index>>_g<property>` with
 //! `_<n>` per polygon (and `_s` for a shell or composite surface), in the document's GML
@@ -104,7 +108,9 @@
 //!  xmlns:gml="http://www.opengis.net/gml" xmlns:bldg="http://www.opengis.net/citygml/building/2.0">
 //!  <cityObjectMember><bldg:Building gml:id="b"><bldg:boundedBy><bldg:RoofSurface gml:id="r">
 //!  <bldg:lod2MultiSurface><gml:MultiSurface><gml:surfaceMember><gml:Polygon><gml:exterior>
-//!  <gml:LinearRing><gml:posList>0 0 5 4 0 5 4 4 5 0 4 5 0 0 5</gml:posList></gml:LinearRing>
+//!  <gml:LinearRing><gml:posList>0 0 5 2 0 5 2 4 5 0 4 5 0 0 5</gml:posList></gml:LinearRing>
+//!  </gml:exterior></gml:Polygon></gml:surfaceMember><gml:surfaceMember><gml:Polygon><gml:exterior>
+//!  <gml:LinearRing><gml:posList>2 0 5 4 0 5 4 4 5 2 4 5 2 0 5</gml:posList></gml:LinearRing>
 //!  </gml:exterior></gml:Polygon></gml:surfaceMember></gml:MultiSurface></bldg:lod2MultiSurface>
 //!  </bldg:RoofSurface></bldg:boundedBy><bldg:boundedBy><bldg:WallSurface gml:id="w">
 //!  <bldg:lod2MultiSurface><gml:MultiSurface><gml:surfaceMember><gml:Polygon><gml:exterior>
@@ -117,6 +123,7 @@
 //! // roof rough (level 1), wall dropped (level 0)
 //! let s = write_mixed(&model, 0, &rough, &[1, 0], &out, &WriteOptions::default()).unwrap();
 //! assert_eq!(s.levels, [1, 1, 0]);
+//! assert_eq!((s.polygons_in, s.polygons_out), (3, 1)); // two roof halves merged, wall dropped
 //! let text = std::fs::read_to_string(&out).unwrap();
 //! assert!(!text.contains("WallSurface"));
 //! assert!(text.contains(r#"<gen:intAttribute xmlns:gen="http://www.opengis.net/citygml/generics/2.0" name="skylod_level"><gen:value>1</gen:value></gen:intAttribute>"#));
@@ -154,7 +161,9 @@ pub struct MixedSummary {
     pub polygons_out: usize,
     /// Buildings and building parts removed because nothing of them was kept.
     pub buildings_dropped: usize,
-    /// `xlink:href` references pruned because their target was removed or replaced.
+    /// `xlink:href` references found pointing into removed or replaced content (each one
+    /// pruned; references that vanish with a structure such a pruning removed, e.g. the other
+    /// faces of a broken `gml:Solid`, are not counted again).
     pub hrefs_pruned: usize,
     /// Appearance targets pruned.
     pub appearance_targets_pruned: usize,
@@ -449,16 +458,8 @@ fn scan(path: &Path) -> Result<Doc, WriteError> {
                     }
                 }
             }
-            Event::Text(t) => {
-                if capture != TextCapture::None {
-                    text.extend_from_slice(&t);
-                }
-            }
-            Event::CData(t) => {
-                if capture != TextCapture::None {
-                    text.extend_from_slice(&t);
-                }
-            }
+            Event::Text(t) if capture != TextCapture::None => text.extend_from_slice(&t),
+            Event::CData(t) if capture != TextCapture::None => text.extend_from_slice(&t),
             Event::Eof => break,
             _ => {}
         }
@@ -944,7 +945,7 @@ impl<'a> Plan<'a> {
                 continue;
             }
             let enc = encoding(&g.property);
-            if enc == Enc::Keep {
+            if enc == Enc::Keep || r.polygons.len() > g.polygons.len() {
                 continue;
             }
             let Some(n) = self.doc.node_at(g.span.start) else {
@@ -1090,7 +1091,10 @@ impl<'a> Plan<'a> {
                 NsKind::Gml => true,
                 NsKind::Core => CORE_LEADING.contains(&name.local.as_str()),
                 NsKind::App => name.local == "appearance",
-                NsKind::Gen => !name.upper,
+                // generic attributes, not the properties of a gen:GenericCityObject
+                NsKind::Gen => {
+                    name.local.ends_with("Attribute") || name.local == "genericAttributeSet"
+                }
                 _ => false,
             };
             if !leading {

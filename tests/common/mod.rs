@@ -251,3 +251,71 @@ pub fn oracle_counts(files: &[PathBuf]) -> Option<serde_json::Map<String, serde_
         _ => panic!("oracle output is not an object"),
     }
 }
+
+/// Local references of a CityGML document that do not resolve: every `xlink:href="#id"` and
+/// every appearance target (`<app:target>#id</app:target>`, `<app:target uri="#id">`) whose
+/// `id` is not the `gml:id` of an element of the same document. References to other documents
+/// (no leading `#`) are not checked. Reads `.gz` too. `Err` when the XML does not parse.
+pub fn unresolved_refs(path: &Path) -> Result<Vec<String>, String> {
+    use quick_xml::events::Event;
+    use quick_xml::name::ResolveResult;
+    let (reader, _) = skylod::citygml::source::open(path).map_err(|e| e.to_string())?;
+    let mut r = quick_xml::NsReader::from_reader(reader);
+    let mut buf = Vec::new();
+    let mut ids = std::collections::HashSet::new();
+    let mut refs: Vec<String> = Vec::new();
+    let mut in_target = false;
+    let mut text = String::new();
+    loop {
+        let ev = r.read_event_into(&mut buf).map_err(|e| e.to_string())?;
+        match &ev {
+            Event::Start(e) | Event::Empty(e) => {
+                let is_target = e.local_name().as_ref() == b"target"
+                    && matches!(r.resolve_element(e.name()).0,
+                        ResolveResult::Bound(n) if n.0.starts_with(b"http://www.opengis.net/citygml/appearance/"));
+                let mut had_uri = false;
+                for a in e.attributes().with_checks(false).flatten() {
+                    let v = a.unescape_value().map_err(|e| e.to_string())?.to_string();
+                    let local = a.key.local_name();
+                    let ns = match r.resolve_attribute(a.key).0 {
+                        ResolveResult::Bound(n) => n.0.to_vec(),
+                        _ => Vec::new(),
+                    };
+                    match local.as_ref() {
+                        b"id" if ns.starts_with(b"http://www.opengis.net/gml") => {
+                            ids.insert(v);
+                        }
+                        b"href" if ns == b"http://www.w3.org/1999/xlink" => refs.push(v),
+                        b"uri" if is_target && a.key.prefix().is_none() => {
+                            had_uri = true;
+                            refs.push(v)
+                        }
+                        _ => {}
+                    }
+                }
+                if is_target && !had_uri && matches!(ev, Event::Start(_)) {
+                    in_target = true;
+                    text.clear();
+                }
+            }
+            Event::Text(t) if in_target => {
+                text.push_str(&String::from_utf8_lossy(t));
+            }
+            Event::End(_) if in_target => {
+                in_target = false;
+                refs.push(text.trim().to_string());
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+        buf.clear();
+    }
+    Ok(refs
+        .into_iter()
+        .filter_map(|h| {
+            let h = h.trim().to_string();
+            let id = h.strip_prefix('#')?;
+            (!ids.contains(id)).then_some(h)
+        })
+        .collect())
+}

@@ -8,6 +8,7 @@ mod cmd_convert;
 mod cmd_evaluate;
 mod cmd_fisheye;
 mod cmd_lod;
+mod cmd_rough;
 mod cmd_stats;
 mod cmd_sun_hours;
 mod cmd_svf;
@@ -28,6 +29,8 @@ enum Command {
     Stats(cmd_stats::Args),
     /// Read a CityGML file and write it back (identity of the pipeline; envelopes recomputed).
     Convert(cmd_convert::Args),
+    /// Write the rough model (every asset generalised: planes, boxes) as CityGML.
+    Rough(cmd_rough::Args),
     /// Generate a procedural Barcelona-Eixample LoD3 district (CityGML 2.0) and facade POIs.
     Synth(cmd_synth::Args),
     /// Skyline-controlled mixed-LoD CityGML for a set of POIs (rough model, sky bundle, BVH, silhouette selection).
@@ -64,6 +67,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Stats(a) => cmd_stats::run(a),
         Command::Convert(a) => cmd_convert::run(a),
+        Command::Rough(a) => cmd_rough::run(a),
         Command::Synth(a) => cmd_synth::run(a),
         Command::Lod(a) => cmd_lod::run(a),
         Command::Evaluate(a) => cmd_evaluate::run(a),
