@@ -16,7 +16,8 @@
 //! assert!(json.contains("\"timings_ms\""));
 //! ```
 
-use crate::model::CityModel;
+use crate::citygml::mixed::level1_polygons;
+use crate::model::{Asset, CityModel};
 use crate::poi::Poi;
 use crate::rough::{RoughGeometry, RoughOptions};
 use crate::select::Selection;
@@ -174,11 +175,11 @@ pub struct Timings {
 }
 
 /// Polygons an asset has in the output at `level`: all of them at level 2 (copied
-/// verbatim), the rough polygons at level 1, none at level 0.
-pub fn polygons_out(polygons_in: usize, rough: Option<&RoughGeometry>, level: u8) -> usize {
+/// verbatim), what [`level1_polygons`] says at level 1, none at level 0.
+pub fn polygons_out(asset: &Asset, rough: Option<&RoughGeometry>, level: u8) -> usize {
     match level {
-        2 => polygons_in,
-        1 => rough.map_or(0, |r| r.polygons.len()),
+        2 => asset.polygon_count(),
+        1 => rough.map_or(asset.polygon_count(), |r| level1_polygons(asset, r)),
         _ => 0,
     }
 }
@@ -219,7 +220,7 @@ impl Report {
             .map(|(i, a)| {
                 let level = sel.levels.get(i).copied().unwrap_or(0);
                 let polygons_in = a.polygon_count();
-                let out = polygons_out(polygons_in, rough.get(i), level);
+                let out = polygons_out(a, rough.get(i), level);
                 totals.polygons_in += polygons_in;
                 totals.polygons_out += out;
                 if let Some(c) = totals.levels.get_mut(usize::from(level)) {

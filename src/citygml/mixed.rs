@@ -542,6 +542,52 @@ fn scan_attrs<R>(
 // The plan
 // ---------------------------------------------------------------------------------------------
 
+/// Whether the rough geometry of `asset` is its own geometry at the rough LoD (a shell
+/// surface whose LoD2 is used unchanged beside its LoD3): those properties stay verbatim.
+fn rough_is_own_geometry(asset: &Asset, r: &RoughGeometry) -> bool {
+    let same: Vec<&Polygon> = asset.polygons_at(r.lod).collect();
+    same.len() == r.polygons.len() && same.iter().zip(&r.polygons).all(|(x, y)| *x == y)
+}
+
+/// Whether level 1 replaces the content of the property `g` with the rough geometry `r`
+/// (see the module docs); otherwise the property is kept verbatim.
+fn replaced_at_level1(r: &RoughGeometry, g: &crate::model::LodGeometry, unchanged: bool) -> bool {
+    !(r.polygons.is_empty()
+        || g.lod < r.lod
+        || (g.lod == r.lod && unchanged)
+        || encoding(&g.property) == Enc::Keep
+        || r.polygons.len() > g.polygons.len())
+}
+
+/// Polygons `asset` has in the output at level 1 with rough geometry `r`: the rough
+/// polygons in every property they replace, the property's own polygons elsewhere.
+///
+/// ```
+/// use skylod::citygml::mixed::level1_polygons;
+/// use skylod::model::{Asset, AssetKind, LodGeometry};
+/// use skylod::rough::RoughGeometry;
+/// let a = Asset { kind: AssetKind::Wall, id: None, element: "WallSurface".into(), building: None,
+///     parent: None, span: 0..0, line: 1, function: None, file: 0,
+///     geometries: vec![LodGeometry { lod: 3, property: "lod3MultiSurface".into(),
+///         polygons: vec![Default::default(); 40], ..Default::default() }] };
+/// let r = RoughGeometry { polygons: vec![Default::default(); 2], obb: None, lod: 3 };
+/// assert_eq!(level1_polygons(&a, &r), 2);
+/// ```
+pub fn level1_polygons(asset: &Asset, r: &RoughGeometry) -> usize {
+    let unchanged = rough_is_own_geometry(asset, r);
+    asset
+        .geometries
+        .iter()
+        .map(|g| {
+            if replaced_at_level1(r, g, unchanged) {
+                r.polygons.len()
+            } else {
+                g.polygons.len()
+            }
+        })
+        .sum()
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Enc {
     MultiSurface,
@@ -932,22 +978,16 @@ impl<'a> Plan<'a> {
         if r.polygons.is_empty() {
             return;
         }
-        // The rough geometry is the property's own geometry: keep those properties.
-        let same: Vec<&Polygon> = asset.polygons_at(r.lod).collect();
-        let unchanged =
-            same.len() == r.polygons.len() && same.iter().zip(&r.polygons).all(|(x, y)| *x == y);
         let base = match &asset.id {
             Some(id) => format!("skylod_{id}"),
             None => format!("skylod_a{a}"),
         };
+        let unchanged = rough_is_own_geometry(asset, r);
         for (j, g) in asset.geometries.iter().enumerate() {
-            if g.lod < r.lod || (g.lod == r.lod && unchanged) {
+            if !replaced_at_level1(r, g, unchanged) {
                 continue;
             }
             let enc = encoding(&g.property);
-            if enc == Enc::Keep || r.polygons.len() > g.polygons.len() {
-                continue;
-            }
             let Some(n) = self.doc.node_at(g.span.start) else {
                 continue;
             };
