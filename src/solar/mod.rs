@@ -17,7 +17,7 @@ use crate::poi::Poi;
 use crate::scene::{ray_origin, POI_OFFSET};
 use crate::trace::Scene;
 
-/// [`sky_view`] of a POI against a scene: rays start at [`ray_origin`] (moved
+/// [`sky_view()`] of a POI against a scene: rays start at [`ray_origin`] (moved
 /// [`POI_OFFSET`] along the normal) and ignore hits closer than [`POI_OFFSET`].
 pub fn poi_sky_view(scene: &Scene, poi: &Poi, bundles: &SkyBundles) -> SkyView {
     sky_view(ray_origin(poi), poi.normal, bundles, |o, d| {
@@ -25,7 +25,7 @@ pub fn poi_sky_view(scene: &Scene, poi: &Poi, bundles: &SkyBundles) -> SkyView {
     })
 }
 
-/// [`sun_hours`] of a POI against a scene, with the same ray origin and `tmin` as
+/// [`sun_hours()`] of a POI against a scene, with the same ray origin and `tmin` as
 /// [`poi_sky_view`].
 pub fn poi_sun_hours(scene: &Scene, poi: &Poi, table: &SunTable) -> SunHours {
     let origin = ray_origin(poi);
