@@ -30,6 +30,7 @@
 
 use crate::sky::{Frame, SkyError, SkyPartition, SkyVariant};
 use glam::DVec3;
+use rayon::prelude::*;
 
 /// Constant mixed into the seed of the solid-angle bundle so that the two bundles are
 /// jittered independently.
@@ -114,31 +115,25 @@ pub fn sky_view(
     poi: DVec3,
     normal: Option<DVec3>,
     bundles: &SkyBundles,
-    blocked: impl Fn(DVec3, DVec3) -> bool,
+    blocked: impl Fn(DVec3, DVec3) -> bool + Sync,
 ) -> SkyView {
     let n = normal.and_then(|n| n.try_normalize()).unwrap_or(DVec3::Z);
     let frame = Frame::from_normal(n);
-    let mut rays = 0usize;
-
-    let mut sky = 0usize;
-    for &local in &bundles.projected_dirs {
+    // (rays cast, rays reaching the sky) over one bundle, in parallel chunks; counts are
+    // sums, so the result does not depend on the thread count.
+    let count = |dirs: &[DVec3], world: &(dyn Fn(DVec3) -> Option<DVec3> + Sync)| {
+        dirs.par_iter()
+            .with_min_len(1024)
+            .filter_map(|&d| world(d))
+            .map(|d| (1usize, usize::from(!blocked(poi, d))))
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+    };
+    let (rays_svf, sky) = count(&bundles.projected_dirs, &|local| {
         let d = frame.to_world(local);
-        if d.z > 0.0 {
-            rays += 1;
-            if !blocked(poi, d) {
-                sky += 1;
-            }
-        }
-    }
-    let mut exposed = 0usize;
-    for &d in &bundles.solid_dirs {
-        if n.dot(d) > 0.0 {
-            rays += 1;
-            if !blocked(poi, d) {
-                exposed += 1;
-            }
-        }
-    }
+        (d.z > 0.0).then_some(d)
+    });
+    let (rays_exp, exposed) = count(&bundles.solid_dirs, &|d| (n.dot(d) > 0.0).then_some(d));
+    let rays = rays_svf + rays_exp;
     let total = bundles.len().max(1) as f64;
     SkyView {
         svf: sky as f64 / total,
