@@ -484,3 +484,36 @@ fn appearance_targets_are_pruned() {
     };
     assert_eq!(n_targets(&out), n_targets(&input));
 }
+
+#[test]
+fn relation_to_a_dropped_object_is_removed() {
+    // CityGML 3.0 XLink example 4: walls ts_p_w_2 and ts_b2_p_w_4 relate to each other
+    // (core:relatedTo/CityObjectRelation/relatedTo). Dropping one must remove the other's
+    // relation whole: a CityObjectRelation without its relatedTo is schema-invalid.
+    let Some(data) = common::shared_data() else {
+        return;
+    };
+    let input =
+        data.join("ogc-citygml3-examples/XLink_examples/4_Cross-Top-Level-XLink/CityGML_3.gml");
+    let model = read_file(&input).unwrap();
+    let levels: Vec<u8> = model
+        .assets
+        .iter()
+        .map(|a| u8::from(a.id.as_deref() != Some("ts_b2_p_w_4")))
+        .collect();
+    assert!(levels.contains(&0), "the wall exists");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.gml");
+    mixed(&model, &levels, &out).unwrap();
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(!text.contains("gml:id=\"ts_b2_p_w_4\""));
+    assert!(!text.contains("href=\"#ts_b2_p_w_4\""));
+    assert!(
+        !text.contains("CityObjectRelation"),
+        "the dangling relation is gone"
+    );
+    assert!(common::unresolved_refs(&out).unwrap().is_empty());
+    if common::have_xmllint() {
+        common::xmllint_validate(&out, "3.0").unwrap_or_else(|e| panic!("{e}"));
+    }
+}

@@ -786,6 +786,8 @@ impl<'a> Plan<'a> {
             (NsKind::App, "TextureAssociation") => {
                 !self.has_living_child(p, |n| n.local == "target")
             }
+            // CityGML 3.0: a relation must name the object it relates to.
+            (_, "CityObjectRelation") => !self.has_living_child(p, |n| n.local == "relatedTo"),
             (NsKind::Gml, _) => !self.has_living_child(p, |_| true),
             _ if !name.upper => !self.has_living_child(p, |_| true),
             _ => false,
