@@ -403,3 +403,75 @@ fn usage_and_input_errors() {
     assert_ne!(o.status.code(), Some(0));
     assert_eq!(std::fs::read(&copy).unwrap(), before);
 }
+
+/// `skylod lod` on every shared file and fixture, with a POI at the middle of the model
+/// (1.5 m above its lowest point) and one outside a corner: XSD-valid output for valid input,
+/// no new unresolved references, a schema-valid report, never a crash.
+#[test]
+fn lod_on_every_file() {
+    let inputs: Vec<PathBuf> = common::all_inputs()
+        .into_iter()
+        .filter(|p| !p.ends_with("val3dity/csol1b.gml")) // plain GML, not CityGML
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let mut problems = Vec::new();
+    let mut pairs = Vec::new();
+    let mut reports = 0;
+    for (k, input) in inputs.iter().enumerate() {
+        let Ok(model) = read_file(input) else {
+            continue; // unreadable inputs are the bad-input tests' business
+        };
+        let Some([x0, y0, z0, x1, y1, _]) = model.bbox().to_array() else {
+            continue;
+        };
+        let mid = format!("{},{},{}", (x0 + x1) / 2.0, (y0 + y1) / 2.0, z0 + 1.5);
+        let corner = format!("{},{},{}", x0 - 5.0, y0 - 5.0, z0 + 1.5);
+        let name = input.file_name().unwrap().to_string_lossy().to_string();
+        let out = dir.path().join(format!("{k}-{name}"));
+        let rep = dir.path().join(format!("{k}.json"));
+        let o = lod(
+            &[
+                input.as_os_str(),
+                OsStr::new("--poi"),
+                OsStr::new(&mid),
+                OsStr::new("--poi"),
+                OsStr::new(&corner),
+                OsStr::new("--rays"),
+                OsStr::new("2000"),
+                OsStr::new("-o"),
+                out.as_os_str(),
+                OsStr::new("--report"),
+                rep.as_os_str(),
+            ],
+            None,
+        );
+        if !o.status.success() {
+            problems.push(format!(
+                "{}: exit {:?}: {}",
+                common::short(input),
+                o.status.code(),
+                String::from_utf8_lossy(&o.stderr)
+            ));
+            continue;
+        }
+        if k % 10 == 0 {
+            check_report_schema(&rep);
+            reports += 1;
+        }
+        common::check_refs(input, &out, &mut problems);
+        pairs.push((
+            input.clone(),
+            out,
+            model.files[0].version.as_str().to_string(),
+        ));
+    }
+    common::check_xsd(&pairs, &mut problems);
+    eprintln!("{} inputs, {} reports schema-checked", pairs.len(), reports);
+    assert!(pairs.len() > 50, "only {} inputs ran", pairs.len());
+    assert!(
+        problems.is_empty(),
+        "{} problem(s):\n{}",
+        problems.len(),
+        problems.join("\n")
+    );
+}

@@ -13,7 +13,7 @@ use skylod::citygml::write::WriteOptions;
 use skylod::model::{AssetKind, CityModel};
 use skylod::rough::{rough_model, RoughOptions};
 use skylod::stats::Stats;
-use std::collections::{BTreeMap, HashMap, HashSet};
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 fn inputs() -> Vec<PathBuf> {
@@ -21,65 +21,6 @@ fn inputs() -> Vec<PathBuf> {
         .into_iter()
         .filter(|p| !p.ends_with("val3dity/csol1b.gml")) // plain GML, not CityGML
         .collect()
-}
-
-fn threads() -> usize {
-    std::thread::available_parallelism()
-        .map(|n| n.get().min(2))
-        .unwrap_or(2)
-}
-
-/// XSD check of outputs whose input validates; problems appended.
-fn check_xsd(pairs: &[(PathBuf, PathBuf, String)], problems: &mut Vec<String>) {
-    if !have_xmllint() {
-        return;
-    }
-    let ins: Vec<(PathBuf, String)> = pairs
-        .iter()
-        .map(|(i, _, v)| (i.clone(), v.clone()))
-        .collect();
-    let valid_in = xmllint_validate_all(&ins, threads());
-    let outs: Vec<(PathBuf, String)> = pairs
-        .iter()
-        .filter(|(i, _, _)| matches!(valid_in.get(i), Some(Ok(()))))
-        .map(|(_, o, v)| (o.clone(), v.clone()))
-        .collect();
-    let valid_out = xmllint_validate_all(&outs, threads());
-    for (i, o, _) in pairs {
-        if let Some(Err(e)) = valid_out.get(o) {
-            problems.push(format!(
-                "{}: input validates, output does not:\n{e}",
-                short(i)
-            ));
-        }
-    }
-    eprintln!(
-        "{} of {} outputs checked against the XSD",
-        outs.len(),
-        pairs.len()
-    );
-}
-
-/// References: none unresolved in the output unless already unresolved in the input.
-fn check_refs(input: &Path, out: &Path, problems: &mut Vec<String>) {
-    let before: HashSet<String> = unresolved_refs(input)
-        .unwrap_or_default()
-        .into_iter()
-        .collect();
-    match unresolved_refs(out) {
-        Ok(after) => {
-            let new: Vec<&String> = after.iter().filter(|h| !before.contains(*h)).collect();
-            if !new.is_empty() {
-                problems.push(format!(
-                    "{}: {} unresolved reference(s) in the output, e.g. {:?}",
-                    short(input),
-                    new.len(),
-                    &new[..new.len().min(5)]
-                ));
-            }
-        }
-        Err(e) => problems.push(format!("{}: output does not parse: {e}", short(input))),
-    }
 }
 
 fn decompressed(p: &Path) -> Vec<u8> {
