@@ -476,6 +476,11 @@ pub fn fisheye_svg(
     // Cells: runs of equal colour within a ring become one sector.
     let mut counts: std::collections::BTreeMap<Key, usize> = Default::default();
     let mut cell_group = Group::new().set("id", "cells").set("fill-rule", "evenodd");
+    let mut outline = Group::new()
+        .set("id", "silhouette")
+        .set("fill", "none")
+        .set("stroke", "#111111")
+        .set("stroke-width", 1.0);
     for ring in partition.rings() {
         let k = ring.cells;
         let mut j = 0;
@@ -488,6 +493,10 @@ pub fn fisheye_svg(
             *counts.entry(kj).or_default() += e - j;
             let (phi0, phi1) = (TAU * j as f64 / k as f64, TAU * e as f64 / k as f64);
             let data = canvas.sector(ring.theta_min, ring.theta_max, phi0, phi1);
+            if kj == Key::Level(2) {
+                // Silhouette assets (kept in full detail) are outlined.
+                outline = outline.add(Path::new().set("d", data.clone()));
+            }
             cell_group = cell_group.add(
                 Path::new()
                     .set("d", data)
@@ -758,6 +767,7 @@ pub fn fisheye_svg(
         )
         .add(head)
         .add(cell_group)
+        .add(outline)
         .add(grid)
         .add(sun)
         .add(frame)

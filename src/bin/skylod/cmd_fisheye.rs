@@ -5,9 +5,11 @@ use crate::solar_common::{load, PoiArgs};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::write::atomic_write;
+use skylod::lod::{lod, LodOptions};
 use skylod::model::AssetKind;
 use skylod::poi::Poi;
 use skylod::scene::{full_scene, ray_origin, POI_OFFSET};
+use skylod::select::SelectOptions;
 use skylod::sky::{SkyPartition, SkyVariant};
 use skylod::solar::fisheye::{
     cell_shares, classify_cells, fisheye_svg, sun_paths, FisheyeOptions, Projection,
@@ -19,6 +21,15 @@ use std::path::{Path, PathBuf};
 enum ProjectionArg {
     EqualArea,
     Stereographic,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq)]
+enum ColourBy {
+    /// The level `skylod lod` gives the asset hit for this POI (0 dropped, 1 rough, 2 full
+    /// detail; level-2 assets, the silhouette, are outlined).
+    Level,
+    /// The kind of the asset hit (roof, wall, installation, ...).
+    Kind,
 }
 
 #[derive(clap::Args, Debug)]
@@ -43,6 +54,15 @@ pub struct Args {
     /// Year of the sun paths.
     #[arg(long, default_value_t = DEFAULT_YEAR)]
     year: i32,
+    /// What hit cells are coloured by.
+    #[arg(long, value_enum, default_value = "level")]
+    colour_by: ColourBy,
+    /// Rays of the selection bundle (with --colour-by level), as `skylod lod --rays`.
+    #[arg(long, default_value_t = 10_000)]
+    select_rays: usize,
+    /// Seed of the selection bundle, as `skylod lod --seed`.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 fn output_for(base: &Path, poi: &Poi, many: bool) -> PathBuf {
@@ -136,7 +156,25 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             sun_paths: paths.clone(),
             ..FisheyeOptions::default()
         };
-        let doc = fisheye_svg(&partition, &cells, &kinds, None, &opts);
+        let levels = match args.colour_by {
+            ColourBy::Kind => None,
+            ColourBy::Level => {
+                let lod_opts = LodOptions {
+                    select: SelectOptions {
+                        rays: args.select_rays,
+                        seed: args.seed,
+                        ..Default::default()
+                    },
+                    ..Default::default()
+                };
+                Some(
+                    lod(&loaded.model, std::slice::from_ref(poi), &lod_opts)?
+                        .selection
+                        .levels,
+                )
+            }
+        };
+        let doc = fisheye_svg(&partition, &cells, &kinds, levels.as_deref(), &opts);
         let text = doc.to_string();
         atomic_write(out, |w| {
             w.write_all(text.as_bytes())
@@ -147,7 +185,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             Ok(text.len() as u64)
         })
         .with_context(|| format!("writing {}", out.display()))?;
-        let sky = cell_shares(&cells, &kinds, None)
+        let sky = cell_shares(&cells, &kinds, levels.as_deref())
             .into_iter()
             .find(|s| s.0 == "sky")
             .map_or(0.0, |s| s.1);
