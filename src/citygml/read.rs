@@ -99,10 +99,8 @@ pub fn read_from<R: BufRead>(
     } else {
         0
     };
-    let mut reader = NsReader::from_reader(super::source::Limited::new(
-        reader,
-        opts.max_event_bytes,
-    ));
+    let mut reader =
+        NsReader::from_reader(super::source::Limited::new(reader, opts.max_event_bytes));
     reader.config_mut().trim_text(false);
     reader.config_mut().check_end_names = true;
     let mut buf = Vec::with_capacity(64 * 1024);
@@ -128,7 +126,7 @@ pub fn read_from<R: BufRead>(
                 }
                 saw_root = true;
                 let (res, _) = reader.resolve_element(e.name());
-                let uri = p.bound(&res, pos)?;
+                let uri = p.bound(&res);
                 p.content_start = reader.buffer_position() + base;
                 p.start(&reader, uri, &e, pos, false)?;
                 p.count_lines(&e, pos + 1);
@@ -139,7 +137,7 @@ pub fn read_from<R: BufRead>(
                 }
                 saw_root = true;
                 let (res, _) = reader.resolve_element(e.name());
-                let uri = p.bound(&res, pos)?;
+                let uri = p.bound(&res);
                 p.content_start = reader.buffer_position() + base;
                 p.start(&reader, uri, &e, pos, true)?;
                 p.count_lines(&e, pos + 1);
@@ -173,7 +171,9 @@ pub fn read_from<R: BufRead>(
             Event::PI(t) => p.count_lines(&t, pos + 2),
             Event::GeneralRef(r) => {
                 if p.stack.is_empty() {
-                    return Err(p.xml_error(pos, "entity reference outside the root element".into()));
+                    return Err(
+                        p.xml_error(pos, "entity reference outside the root element".into())
+                    );
                 }
                 if p.capture {
                     p.capture_ref(&r, pos)?;
@@ -359,6 +359,7 @@ struct Parser {
     dims: Vec<u8>,
     skip_depth: u32,
     ade_namespaces: HashSet<Vec<u8>>,
+    unknown_prefixes: HashSet<Vec<u8>>,
     relief_lod: u8,
 }
 
@@ -445,6 +446,7 @@ impl Parser {
             dims: Vec::new(),
             skip_depth: 0,
             ade_namespaces: HashSet::new(),
+            unknown_prefixes: HashSet::new(),
             relief_lod: 2,
         }
     }
@@ -497,26 +499,26 @@ impl Parser {
         }
     }
 
-    /// The namespace URI of a resolved element name; an unbound prefix is an error.
-    fn bound<'a>(
-        &self,
-        res: &'a ResolveResult<'a>,
-        pos: u64,
-    ) -> Result<Option<&'a [u8]>, ReadError> {
+    /// The namespace URI of a resolved element name. An undeclared prefix is not
+    /// namespace-well-formed, but real data has them (e.g. PLATEAU ADE elements): the element
+    /// is kept verbatim, not interpreted, with one warning per prefix.
+    fn bound<'a>(&mut self, res: &'a ResolveResult<'a>) -> Option<&'a [u8]> {
         match res {
-            ResolveResult::Bound(ns) => Ok(Some(ns.0)),
-            ResolveResult::Unbound => Ok(None),
-            ResolveResult::Unknown(prefix) => Err(self.unbound_prefix(prefix, pos)),
+            ResolveResult::Bound(ns) => Some(ns.0),
+            ResolveResult::Unbound => None,
+            ResolveResult::Unknown(prefix) => {
+                self.unbound_prefix(prefix);
+                None
+            }
         }
     }
 
-    fn unbound_prefix(&self, prefix: &[u8], pos: u64) -> ReadError {
-        ReadError::Xml {
-            loc: self.loc_at(pos),
-            message: format!(
-                "namespace prefix \"{}\" is not declared",
+    fn unbound_prefix(&mut self, prefix: &[u8]) {
+        if self.unknown_prefixes.insert(prefix.to_vec()) {
+            self.warn(format!(
+                "namespace prefix \"{}\" is not declared: its elements and attributes are kept verbatim, not interpreted",
                 String::from_utf8_lossy(&prefix[..prefix.len().min(40)])
-            ),
+            ));
         }
     }
 
@@ -589,6 +591,7 @@ impl Parser {
         if memchr::memchr(b'=', e.attributes_raw()).is_none() {
             return Ok(a);
         }
+        let mut bad_prefix = None;
         for attr in e.attributes().with_checks(false) {
             let attr = match attr {
                 Ok(a) => a,
@@ -612,8 +615,9 @@ impl Parser {
             match local {
                 b"id" => {
                     let (res, _) = reader.resolve_attribute(attr.key);
-                    if let ResolveResult::Unknown(prefix) = &res {
-                        return Err(self.unbound_prefix(prefix, self.event_pos));
+                    if let ResolveResult::Unknown(prefix) = res {
+                        bad_prefix = Some(prefix);
+                        continue;
                     }
                     if let ResolveResult::Bound(n) = res {
                         if ns::classify(n.0) == Ns::Gml {
@@ -623,8 +627,9 @@ impl Parser {
                 }
                 b"href" => {
                     let (res, _) = reader.resolve_attribute(attr.key);
-                    if let ResolveResult::Unknown(prefix) = &res {
-                        return Err(self.unbound_prefix(prefix, self.event_pos));
+                    if let ResolveResult::Unknown(prefix) = res {
+                        bad_prefix = Some(prefix);
+                        continue;
                     }
                     if let ResolveResult::Bound(n) = res {
                         if n.0 == ns::XLINK {
@@ -642,6 +647,9 @@ impl Parser {
                 b"decimal" if attr.key.prefix().is_none() => a.decimal = value()?.bytes().next(),
                 _ => {}
             }
+        }
+        if let Some(prefix) = bad_prefix {
+            self.unbound_prefix(&prefix);
         }
         Ok(a)
     }
@@ -1680,7 +1688,8 @@ impl Parser {
                     loc: loc.unwrap_or_else(|| self.loc_at(0)),
                     message: format!(
                         "xlink:href references expand to more than {} polygons and references",
-                        self.opts.max_href_work
+                        self.opts
+                            .max_href_work
                             .saturating_add(self.parts.len().saturating_mul(4))
                     ),
                 });
