@@ -104,7 +104,7 @@ mod tests {
 
     #[test]
     fn limited_refuses_after_limit_until_reset() {
-        let data = vec![b'x'; 100];
+        let data = [b'x'; 100];
         let mut r = Limited::new(&data[..], 10);
         let n = r.fill_buf().map(<[u8]>::len).unwrap_or(0);
         assert_eq!(n, 100);
