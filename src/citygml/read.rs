@@ -46,14 +46,19 @@ pub struct ReadOptions {
     pub max_event_bytes: usize,
     /// Maximum depth of chained `xlink:href` geometry references.
     pub max_href_depth: usize,
+    /// Maximum number of steps (polygons and references visited) spent resolving
+    /// `xlink:href` geometry references, on top of five per polygon element of the document;
+    /// protects against exponential reference trees ("billion laughs" built from xlinks).
+    pub max_href_work: usize,
 }
 
 impl Default for ReadOptions {
     fn default() -> Self {
         ReadOptions {
             max_depth: 4096,
-            max_event_bytes: 256 << 20,
+            max_event_bytes: 64 << 20,
             max_href_depth: 64,
+            max_href_work: 2_000_000,
         }
     }
 }
@@ -94,7 +99,8 @@ pub fn read_from<R: BufRead>(
     } else {
         0
     };
-    let mut reader = NsReader::from_reader(reader);
+    let mut reader =
+        NsReader::from_reader(super::source::Limited::new(reader, opts.max_event_bytes));
     reader.config_mut().trim_text(false);
     reader.config_mut().check_end_names = true;
     let mut buf = Vec::with_capacity(64 * 1024);
@@ -102,26 +108,36 @@ pub fn read_from<R: BufRead>(
     loop {
         let pos = reader.buffer_position() + base;
         p.event_pos = pos;
+        reader.get_mut().reset();
         let ev = match reader.read_event_into(&mut buf) {
             Ok(ev) => ev,
             Err(e) => {
+                if reader.get_mut().exceeded() {
+                    return Err(p.token_limit(pos));
+                }
                 let at = reader.error_position() + base;
                 return Err(p.xml_error(at, e.to_string()));
             }
         };
         match ev {
             Event::Start(e) => {
+                if p.stack.is_empty() && saw_root {
+                    return Err(p.xml_error(pos, "more than one root element".into()));
+                }
                 saw_root = true;
                 let (res, _) = reader.resolve_element(e.name());
-                let uri = bound(&res);
+                let uri = p.bound(&res);
                 p.content_start = reader.buffer_position() + base;
                 p.start(&reader, uri, &e, pos, false)?;
                 p.count_lines(&e, pos + 1);
             }
             Event::Empty(e) => {
+                if p.stack.is_empty() && saw_root {
+                    return Err(p.xml_error(pos, "more than one root element".into()));
+                }
                 saw_root = true;
                 let (res, _) = reader.resolve_element(e.name());
-                let uri = bound(&res);
+                let uri = p.bound(&res);
                 p.content_start = reader.buffer_position() + base;
                 p.start(&reader, uri, &e, pos, true)?;
                 p.count_lines(&e, pos + 1);
@@ -135,31 +151,39 @@ pub fn read_from<R: BufRead>(
             }
             Event::Text(t) => {
                 if p.capture {
-                    p.text.extend_from_slice(&t);
+                    p.capture_text(&t, pos)?;
+                } else if p.stack.is_empty() && !t.iter().all(u8::is_ascii_whitespace) {
+                    let what = if saw_root { "after" } else { "outside" };
+                    return Err(p.xml_error(pos, format!("text {what} the root element")));
                 }
                 p.count_lines(&t, pos);
             }
             Event::CData(t) => {
                 if p.capture {
-                    p.text.extend_from_slice(&t);
+                    p.capture_text(&t, pos)?;
+                } else if p.stack.is_empty() {
+                    return Err(p.xml_error(pos, "CDATA outside the root element".into()));
                 }
                 p.count_lines(&t, pos + 9);
             }
             Event::Comment(t) => p.count_lines(&t, pos + 4),
             Event::DocType(t) => p.count_lines(&t, pos + 9),
             Event::PI(t) => p.count_lines(&t, pos + 2),
-            Event::Decl(_) | Event::GeneralRef(_) => {}
+            Event::GeneralRef(r) => {
+                if p.stack.is_empty() {
+                    return Err(
+                        p.xml_error(pos, "entity reference outside the root element".into())
+                    );
+                }
+                if p.capture {
+                    p.capture_ref(&r, pos)?;
+                }
+            }
+            Event::Decl(_) => {}
             Event::Eof => break,
         }
         if buf.len() > p.opts.max_event_bytes {
-            return Err(ReadError::Limit {
-                loc: p.loc_at(pos),
-                message: format!(
-                    "one XML token of {} bytes exceeds the limit of {} bytes",
-                    buf.len(),
-                    p.opts.max_event_bytes
-                ),
-            });
+            return Err(p.token_limit(pos));
         }
         buf.clear();
     }
@@ -173,12 +197,9 @@ pub fn read_from<R: BufRead>(
     p.finish(len, gzip)
 }
 
-fn bound<'a>(res: &'a ResolveResult<'a>) -> Option<&'a [u8]> {
-    match res {
-        ResolveResult::Bound(ns) => Some(ns.0),
-        _ => None,
-    }
-}
+/// Largest accepted coordinate magnitude: far beyond any real CRS (geocentric coordinates are
+/// about 6.4e6 m) yet small enough that areas and cross products of coordinates stay finite.
+pub const MAX_COORDINATE: f64 = 1e12;
 
 /// One entry of the geometry arena.
 #[derive(Debug, Clone, Copy)]
@@ -338,6 +359,7 @@ struct Parser {
     dims: Vec<u8>,
     skip_depth: u32,
     ade_namespaces: HashSet<Vec<u8>>,
+    unknown_prefixes: HashSet<Vec<u8>>,
     relief_lod: u8,
 }
 
@@ -424,6 +446,7 @@ impl Parser {
             dims: Vec::new(),
             skip_depth: 0,
             ade_namespaces: HashSet::new(),
+            unknown_prefixes: HashSet::new(),
             relief_lod: 2,
         }
     }
@@ -476,6 +499,82 @@ impl Parser {
         }
     }
 
+    /// The namespace URI of a resolved element name. An undeclared prefix is not
+    /// namespace-well-formed, but real data has them (e.g. PLATEAU ADE elements): the element
+    /// is kept verbatim, not interpreted, with one warning per prefix.
+    fn bound<'a>(&mut self, res: &'a ResolveResult<'a>) -> Option<&'a [u8]> {
+        match res {
+            ResolveResult::Bound(ns) => Some(ns.0),
+            ResolveResult::Unbound => None,
+            ResolveResult::Unknown(prefix) => {
+                self.unbound_prefix(prefix);
+                None
+            }
+        }
+    }
+
+    fn unbound_prefix(&mut self, prefix: &[u8]) {
+        if self.unknown_prefixes.insert(prefix.to_vec()) {
+            self.warn(format!(
+                "namespace prefix \"{}\" is not declared: its elements and attributes are kept verbatim, not interpreted",
+                String::from_utf8_lossy(&prefix[..prefix.len().min(40)])
+            ));
+        }
+    }
+
+    fn token_limit(&self, pos: u64) -> ReadError {
+        ReadError::Limit {
+            loc: self.loc_at(pos),
+            message: format!(
+                "one XML token (tag, attribute value, text, comment or DOCTYPE) exceeds the limit of {} bytes",
+                self.opts.max_event_bytes
+            ),
+        }
+    }
+
+    /// Append captured character data (coordinates, codes), within the token size limit.
+    fn capture_text(&mut self, t: &[u8], pos: u64) -> Result<(), ReadError> {
+        if self.text.len() + t.len() > self.opts.max_event_bytes {
+            return Err(self.token_limit(pos));
+        }
+        self.text.extend_from_slice(t);
+        Ok(())
+    }
+
+    /// An entity or character reference inside captured text: the five predefined entities
+    /// and character references are resolved; DTD-declared entities are never expanded.
+    fn capture_ref(&mut self, r: &quick_xml::events::BytesRef, pos: u64) -> Result<(), ReadError> {
+        let predefined: Option<&[u8]> = match r.as_ref() {
+            b"lt" => Some(b"<"),
+            b"gt" => Some(b">"),
+            b"amp" => Some(b"&"),
+            b"apos" => Some(b"'"),
+            b"quot" => Some(b"\""),
+            _ => None,
+        };
+        if let Some(b) = predefined {
+            return self.capture_text(b, pos);
+        }
+        match r.resolve_char_ref() {
+            Ok(Some(c)) => {
+                let mut tmp = [0u8; 4];
+                let s = c.encode_utf8(&mut tmp);
+                self.capture_text(s.as_bytes(), pos)
+            }
+            Ok(None) => Err(ReadError::Xml {
+                loc: self.loc_at(pos),
+                message: format!(
+                    "entity reference &{};: entities declared in a DTD are not expanded",
+                    String::from_utf8_lossy(&r[..r.len().min(40)])
+                ),
+            }),
+            Err(e) => Err(ReadError::Xml {
+                loc: self.loc_at(pos),
+                message: format!("bad character reference: {e}"),
+            }),
+        }
+    }
+
     fn warn(&mut self, message: impl Into<String>) {
         let loc = self.loc();
         self.warnings.push(Warning {
@@ -492,6 +591,7 @@ impl Parser {
         if memchr::memchr(b'=', e.attributes_raw()).is_none() {
             return Ok(a);
         }
+        let mut bad_prefix = None;
         for attr in e.attributes().with_checks(false) {
             let attr = match attr {
                 Ok(a) => a,
@@ -515,6 +615,10 @@ impl Parser {
             match local {
                 b"id" => {
                     let (res, _) = reader.resolve_attribute(attr.key);
+                    if let ResolveResult::Unknown(prefix) = res {
+                        bad_prefix = Some(prefix);
+                        continue;
+                    }
                     if let ResolveResult::Bound(n) = res {
                         if ns::classify(n.0) == Ns::Gml {
                             a.id = Some(value()?);
@@ -523,6 +627,10 @@ impl Parser {
                 }
                 b"href" => {
                     let (res, _) = reader.resolve_attribute(attr.key);
+                    if let ResolveResult::Unknown(prefix) = res {
+                        bad_prefix = Some(prefix);
+                        continue;
+                    }
                     if let ResolveResult::Bound(n) = res {
                         if n.0 == ns::XLINK {
                             a.href = Some(value()?);
@@ -539,6 +647,9 @@ impl Parser {
                 b"decimal" if attr.key.prefix().is_none() => a.decimal = value()?.bytes().next(),
                 _ => {}
             }
+        }
+        if let Some(prefix) = bad_prefix {
+            self.unbound_prefix(&prefix);
         }
         Ok(a)
     }
@@ -1307,6 +1418,12 @@ impl Parser {
             ring.pop();
         }
         let valid = ring.len() >= 3;
+        if valid && zero_area(&ring) {
+            self.warn(format!(
+                "{} ring has zero area (collinear points or a ring folding back on itself)",
+                if exterior { "exterior" } else { "interior" }
+            ));
+        }
         if !valid {
             self.warn(format!(
                 "ring with {} distinct point(s), at least 3 needed: {}",
@@ -1375,9 +1492,13 @@ impl Parser {
         let pending = std::mem::take(&mut self.pending);
         let mut refs: Vec<Vec<PolyRef>> = Vec::with_capacity(pending.len());
         let mut uses = vec![0u32; self.polys.len()];
+        let mut budget = self
+            .opts
+            .max_href_work
+            .saturating_add(self.parts.len().saturating_mul(4));
         for pg in &pending {
             let mut out = Vec::new();
-            self.resolve(pg.range, false, 0, None, &mut out)?;
+            self.resolve(pg.range, false, 0, None, &mut out, &mut budget)?;
             for r in &out {
                 if let Some(u) = uses.get_mut(r.poly as usize) {
                     *u += 1;
@@ -1553,10 +1674,27 @@ impl Parser {
         depth: usize,
         implicit: Option<u32>,
         out: &mut Vec<PolyRef>,
+        budget: &mut usize,
     ) -> Result<(), ReadError> {
         let mut i = range.0 as usize;
         let end = (range.1 as usize).min(self.parts.len());
         while i < end {
+            if *budget == 0 {
+                let loc = match self.parts[i] {
+                    Part::Href(h) => self.hrefs.get(h as usize).map(|x| x.loc.clone()),
+                    _ => None,
+                };
+                return Err(ReadError::Limit {
+                    loc: loc.unwrap_or_else(|| self.loc_at(0)),
+                    message: format!(
+                        "xlink:href references expand to more than {} polygons and references",
+                        self.opts
+                            .max_href_work
+                            .saturating_add(self.parts.len().saturating_mul(4))
+                    ),
+                });
+            }
+            *budget -= 1;
             match self.parts[i] {
                 Part::Poly(p) => {
                     out.push(PolyRef {
@@ -1592,12 +1730,19 @@ impl Parser {
                             href: href.target.to_string(),
                         });
                     }
-                    self.resolve(r, reversed ^ href.reversed, depth + 1, implicit, out)?;
+                    self.resolve(
+                        r,
+                        reversed ^ href.reversed,
+                        depth + 1,
+                        implicit,
+                        out,
+                        budget,
+                    )?;
                     i += 1;
                 }
                 Part::Implicit { idx, len } => {
                     let inner = (i as u32 + 1, (i as u32 + 1 + len).min(end as u32));
-                    self.resolve(inner, reversed, depth + 1, Some(idx), out)?;
+                    self.resolve(inner, reversed, depth + 1, Some(idx), out, budget)?;
                     i = inner.1 as usize;
                 }
             }
@@ -1670,6 +1815,25 @@ fn is_lod_property(local: &[u8]) -> Option<u8> {
     None
 }
 
+/// True when a ring (at least 3 distinct points) encloses no area: its Newell normal,
+/// computed relative to the first point so that large offsets cancel, is negligible against
+/// the ring's extent.
+fn zero_area(ring: &[DVec3]) -> bool {
+    let Some(&o) = ring.first() else {
+        return true;
+    };
+    let mut n = DVec3::ZERO;
+    let mut extent2 = 0.0f64;
+    let mut prev = DVec3::ZERO;
+    for q in &ring[1..] {
+        let d = *q - o;
+        n += prev.cross(d);
+        extent2 = extent2.max(d.length_squared());
+        prev = d;
+    }
+    n.length() <= 1e-12 * extent2
+}
+
 #[derive(Debug)]
 enum CoordError {
     Token(String),
@@ -1680,7 +1844,7 @@ fn parse_f64(tok: &[u8]) -> Result<f64, CoordError> {
     let bad = || CoordError::Token(String::from_utf8_lossy(&tok[..tok.len().min(40)]).into_owned());
     // fast-float2 parses the same grammar as `str::parse::<f64>` (incl. "nan", "inf"), from bytes.
     let v: f64 = fast_float2::parse(tok).map_err(|_| bad())?;
-    if v.is_finite() {
+    if v.abs() <= MAX_COORDINATE {
         Ok(v)
     } else {
         Err(bad())

@@ -40,3 +40,78 @@ pub(crate) fn copy_exact<R: Read + ?Sized, W: std::io::Write + ?Sized>(
     }
     Ok(n)
 }
+
+/// A [`BufRead`] that refuses to hand out more than `limit` bytes between two calls of
+/// [`Limited::reset`]: the reader resets it before every XML event, so that one hostile token
+/// (a 100 MB attribute, an endless text node or comment) fails with a clear error after
+/// `limit` bytes instead of growing the event buffer without bound.
+pub(crate) struct Limited<R> {
+    inner: R,
+    used: usize,
+    limit: usize,
+    exceeded: bool,
+}
+
+impl<R> Limited<R> {
+    pub(crate) fn new(inner: R, limit: usize) -> Self {
+        Limited {
+            inner,
+            used: 0,
+            limit,
+            exceeded: false,
+        }
+    }
+
+    /// Start counting anew (called at the start of every XML event).
+    #[inline]
+    pub(crate) fn reset(&mut self) {
+        self.used = 0;
+    }
+
+    /// True once a read was refused because of the limit.
+    pub(crate) fn exceeded(&self) -> bool {
+        self.exceeded
+    }
+}
+
+impl<R: Read> Read for Limited<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.used = self.used.saturating_add(n);
+        Ok(n)
+    }
+}
+
+impl<R: BufRead> BufRead for Limited<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        if self.used > self.limit {
+            self.exceeded = true;
+            return Err(std::io::Error::other("XML token exceeds the size limit"));
+        }
+        self.inner.fill_buf()
+    }
+
+    #[inline]
+    fn consume(&mut self, amt: usize) {
+        self.used = self.used.saturating_add(amt);
+        self.inner.consume(amt);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn limited_refuses_after_limit_until_reset() {
+        let data = [b'x'; 100];
+        let mut r = Limited::new(&data[..], 10);
+        let n = r.fill_buf().map(<[u8]>::len).unwrap_or(0);
+        assert_eq!(n, 100);
+        r.consume(11);
+        assert!(r.fill_buf().is_err());
+        assert!(r.exceeded());
+        r.reset();
+        assert_eq!(r.fill_buf().map(<[u8]>::len).unwrap_or(0), 89);
+    }
+}

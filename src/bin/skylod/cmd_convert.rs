@@ -1,9 +1,8 @@
 //! `skylod convert`.
 
 use crate::Outcome;
-use anyhow::Context;
 use skylod::citygml::read_file;
-use skylod::citygml::write::{write_document, WriteOptions};
+use skylod::citygml::write::{check_target, write_document, WriteOptions};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -19,6 +18,16 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let opts = WriteOptions {
+        overwrite: args.overwrite,
+        protect: vec![args.input.clone()],
+        keep_envelopes: false,
+    };
+    // Refuse a bad target before spending time on the input.
+    if let Err(e) = check_target(&args.output, &opts, [args.input.as_path()]) {
+        eprintln!("error: {e}");
+        return Ok(Outcome::SomeFailed);
+    }
     let model = match read_file(&args.input) {
         Ok(m) => m,
         Err(e) => {
@@ -26,13 +35,15 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             return Ok(Outcome::SomeFailed);
         }
     };
-    let opts = WriteOptions {
-        overwrite: args.overwrite,
-        protect: vec![args.input.clone()],
-        keep_envelopes: false,
+    // A failed write (refused target, unwritable directory, disk full) fails this input like a
+    // read error: exit 1, and no output or temporary file is left behind.
+    let summary = match write_document(&model, 0, Vec::new(), &args.output, &opts) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: writing {}: {e}", args.output.display());
+            return Ok(Outcome::SomeFailed);
+        }
     };
-    let summary = write_document(&model, 0, Vec::new(), &args.output, &opts)
-        .with_context(|| format!("writing {}", args.output.display()))?;
     eprintln!(
         "{} -> {}: {} bytes, {} envelope(s) recomputed, {} warning(s)",
         args.input.display(),
