@@ -1,0 +1,140 @@
+//! Soak test (opt-in, `SKYLOD_SOAK=1`): the `lod` pipeline over a generated city of about
+//! 1 GB of CityGML with 1,000 POIs, memory sampled.
+//!
+//! The city (`skylod::synth`, `SKYLOD_SOAK_BLOCKS`, default `18x18` blocks, ~1 GB) is streamed
+//! to a temporary file, read, and the rough model and selection scene are built once. The
+//! 1,000 POIs (seeded random street-level points over the district) are then selected in 20
+//! batches of 50 while the resident set size is sampled after each batch: after the first
+//! batch (warm-up) it must not grow by more than 5 % + 16 MiB. Finally the combined levels
+//! are written as the mixed-LoD file.
+//!
+//! ```sh
+//! SKYLOD_SOAK=1 cargo test --release --test soak -- --nocapture
+//! SKYLOD_SOAK=1 SKYLOD_SOAK_BLOCKS=4x4 cargo test --release --test soak -- --nocapture  # quick
+//! ```
+
+use glam::DVec3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use skylod::citygml::mixed::write_mixed;
+use skylod::citygml::read_file;
+use skylod::citygml::write::WriteOptions;
+use skylod::poi::Poi;
+use skylod::rough::{rough_model, RoughOptions};
+use skylod::scene::selection_scene;
+use skylod::select::{select, SelectOptions};
+use skylod::synth::{generate, Preset};
+use std::io::BufWriter;
+use std::time::Instant;
+
+/// Resident set size of this process in bytes (Linux), 0 where unknown.
+fn rss() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmRSS:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
+}
+
+const MIB: f64 = 1024.0 * 1024.0;
+
+#[test]
+fn soak_lod_on_a_generated_city() {
+    if std::env::var("SKYLOD_SOAK").as_deref() != Ok("1") {
+        eprintln!("SKIP: soak test is opt-in (SKYLOD_SOAK=1; see tests/soak.rs)");
+        return;
+    }
+    let blocks = std::env::var("SKYLOD_SOAK_BLOCKS").unwrap_or_else(|_| "18x18".into());
+    let (bx, by) = blocks
+        .split_once('x')
+        .and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)))
+        .expect("SKYLOD_SOAK_BLOCKS as WxH");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("city.gml");
+    let mut opts = Preset::City.defaults();
+    opts.blocks_x = bx;
+    opts.blocks_y = by;
+    let t = Instant::now();
+    let file = std::fs::File::create(&path).unwrap();
+    let summary = generate(&opts, BufWriter::new(file)).unwrap();
+    let bytes = std::fs::metadata(&path).unwrap().len();
+    eprintln!(
+        "city {blocks}: {} buildings, {} polygons, {:.0} MiB in {:.1} s",
+        summary.buildings,
+        summary.polygons,
+        bytes as f64 / MIB,
+        t.elapsed().as_secs_f64()
+    );
+
+    let t = Instant::now();
+    let model = read_file(&path).unwrap();
+    eprintln!(
+        "read: {:.1} s, RSS {:.0} MiB",
+        t.elapsed().as_secs_f64(),
+        rss() as f64 / MIB
+    );
+    let rough = rough_model(&model, &RoughOptions::default());
+    let scene = selection_scene(&model, &rough);
+    let bbox = model.bbox();
+    eprintln!(
+        "rough + scene ({} triangles): RSS {:.0} MiB",
+        scene.len(),
+        rss() as f64 / MIB
+    );
+
+    let mut rng = ChaCha8Rng::seed_from_u64(1000);
+    let pois: Vec<Poi> = (0..1000)
+        .map(|i| Poi {
+            id: format!("p{i}"),
+            position: DVec3::new(
+                rng.random_range(bbox.min.x..bbox.max.x),
+                rng.random_range(bbox.min.y..bbox.max.y),
+                bbox.min.z + 1.5,
+            ),
+            normal: None,
+        })
+        .collect();
+    let sopts = SelectOptions::default();
+    let mut levels = vec![0u8; model.assets.len()];
+    let mut samples = Vec::new();
+    let t = Instant::now();
+    for batch in pois.chunks(50) {
+        let s = select(&model, &rough, &scene, batch, &sopts).unwrap();
+        for (l, x) in levels.iter_mut().zip(&s.levels) {
+            *l = (*l).max(*x);
+        }
+        samples.push(rss());
+    }
+    let per_poi = t.elapsed().as_secs_f64() * 1e3 / pois.len() as f64;
+    let mib: Vec<String> = samples
+        .iter()
+        .map(|b| format!("{:.0}", *b as f64 / MIB))
+        .collect();
+    eprintln!(
+        "selection: {per_poi:.1} ms per POI; RSS per batch (MiB): {}",
+        mib.join(" ")
+    );
+    let warm = samples[0];
+    let max_after = samples[1..].iter().copied().max().unwrap_or(warm);
+    assert!(
+        (max_after as f64) <= warm as f64 * 1.05 + 16.0 * MIB,
+        "memory grows after warm-up: {warm} -> {max_after} bytes"
+    );
+
+    let out = dir.path().join("city-lod.gml");
+    let t = Instant::now();
+    let s = write_mixed(&model, 0, &rough, &levels, &out, &WriteOptions::default()).unwrap();
+    eprintln!(
+        "write: {:.1} s, levels {:?}, polygons {} -> {}, RSS {:.0} MiB",
+        t.elapsed().as_secs_f64(),
+        s.levels,
+        s.polygons_in,
+        s.polygons_out,
+        rss() as f64 / MIB
+    );
+    assert!(s.polygons_out < s.polygons_in);
+}
