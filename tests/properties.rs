@@ -295,3 +295,87 @@ proptest! {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// lod levels under a UTM-sized translation of the scene and the POI
+
+use skylod::lod::{lod, LodOptions};
+use skylod::poi::Poi;
+use skylod::select::SelectOptions;
+use skylod::synth::boxes::{boxes_citygml, BoxBuilding};
+
+/// Half-metre grid values, so that every coordinate and its translate are exact in f64.
+fn half(lo: i32, hi: i32) -> impl Strategy<Value = f64> {
+    (lo..hi).prop_map(|v| f64::from(v) * 0.5)
+}
+
+fn box_building() -> impl Strategy<Value = ([f64; 2], [f64; 2], f64, Option<[f64; 2]>)> {
+    (
+        (half(-120, 120), half(-120, 120)),
+        (half(4, 40), half(4, 40)),
+        half(4, 80),
+        prop::option::of((half(1, 3), half(1, 6))),
+    )
+        .prop_map(|((x, y), (w, d), h, inst)| {
+            ([x, y], [x + w, y + d], h, inst.map(|(s, t)| [s, t]))
+        })
+}
+
+fn scene(spec: &[([f64; 2], [f64; 2], f64, Option<[f64; 2]>)]) -> Vec<BoxBuilding> {
+    spec.iter()
+        .enumerate()
+        .map(|(k, (min, max, h, inst))| BoxBuilding {
+            id: format!("B{k}"),
+            min: *min,
+            max: *max,
+            height: *h,
+            installations: inst
+                .iter()
+                .map(|[s, t]| {
+                    [
+                        min[0] + 0.5,
+                        min[1] + 0.5,
+                        *h,
+                        min[0] + 0.5 + s,
+                        min[1] + 0.5 + s,
+                        h + t,
+                    ]
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+fn levels_at(buildings: &[BoxBuilding], origin: [f64; 3], poi: [f64; 3]) -> Vec<u8> {
+    let xml = boxes_citygml(buildings, origin);
+    let model = read_bytes(xml.as_bytes(), "boxes.gml").unwrap();
+    let p = Poi {
+        id: "p".into(),
+        position: DVec3::new(origin[0] + poi[0], origin[1] + poi[1], origin[2] + poi[2]),
+        normal: None,
+    };
+    let opts = LodOptions {
+        select: SelectOptions {
+            rays: 2_000,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    lod(&model, &[p], &opts).unwrap().selection.levels
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    #[test]
+    fn levels_are_invariant_under_a_utm_translation(
+        spec in prop::collection::vec(box_building(), 1..5),
+        poi in (half(-150, 150), half(-150, 150), half(3, 20)),
+    ) {
+        let b = scene(&spec);
+        let p = [poi.0, poi.1, poi.2];
+        let near = levels_at(&b, [0.0, 0.0, 0.0], p);
+        let far = levels_at(&b, [431_000.0, 4_581_000.0, 120.0], p);
+        prop_assert_eq!(near, far);
+    }
+}

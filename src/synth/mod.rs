@@ -54,6 +54,7 @@
 //! assert!(summary.windows > 0 && summary.buildings == 3);
 //! ```
 
+pub mod boxes;
 pub mod building;
 pub mod gml;
 pub mod layout;
