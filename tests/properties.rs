@@ -309,7 +309,10 @@ fn half(lo: i32, hi: i32) -> impl Strategy<Value = f64> {
     (lo..hi).prop_map(|v| f64::from(v) * 0.5)
 }
 
-fn box_building() -> impl Strategy<Value = ([f64; 2], [f64; 2], f64, Option<[f64; 2]>)> {
+/// Footprint min, max, height, optional roof installation (side, height).
+type BoxSpec = ([f64; 2], [f64; 2], f64, Option<[f64; 2]>);
+
+fn box_building() -> impl Strategy<Value = BoxSpec> {
     (
         (half(-120, 120), half(-120, 120)),
         (half(4, 40), half(4, 40)),
@@ -321,7 +324,7 @@ fn box_building() -> impl Strategy<Value = ([f64; 2], [f64; 2], f64, Option<[f64
         })
 }
 
-fn scene(spec: &[([f64; 2], [f64; 2], f64, Option<[f64; 2]>)]) -> Vec<BoxBuilding> {
+fn scene(spec: &[BoxSpec]) -> Vec<BoxBuilding> {
     spec.iter()
         .enumerate()
         .map(|(k, (min, max, h, inst))| BoxBuilding {
