@@ -1,7 +1,7 @@
 //! `skylod evaluate`: full vs LoD vs all-boxes model, the paper's Tables 1 and 2.
 
 use crate::cmd_sun_hours::DEFAULT_YEAR;
-use crate::solar_common::{lat_lon, load, ms, out_err, PoiArgs};
+use crate::common::{lat_lon, load, ms, out_err, PoiArgs};
 use crate::Outcome;
 use skylod::evaluate::{evaluate, EvalOptions};
 use skylod::lod::LodOptions;

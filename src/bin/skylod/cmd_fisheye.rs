@@ -1,7 +1,7 @@
 //! `skylod fisheye`.
 
 use crate::cmd_sun_hours::DEFAULT_YEAR;
-use crate::solar_common::{load, PoiArgs};
+use crate::common::{load, PoiArgs};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::write::atomic_write;
@@ -93,7 +93,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
     let paths = match (args.lat, args.lon) {
         (Some(lat), Some(lon)) => {
-            let (lat, lon) = crate::solar_common::lat_lon(Some(lat), Some(lon), "fisheye")?;
+            let (lat, lon) = crate::common::lat_lon(Some(lat), Some(lon), "fisheye")?;
             sun_paths(&Site::new(lat, lon), args.year)?
         }
         _ => Vec::new(),

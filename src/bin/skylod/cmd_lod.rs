@@ -1,6 +1,6 @@
 //! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs.
 
-use crate::solar_common::{load, ms, PoiArgs};
+use crate::common::{load, ms, PoiArgs};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::mixed::write_mixed;

@@ -1,6 +1,6 @@
 //! `skylod sun-hours`.
 
-use crate::solar_common::{arr, lat_lon, load, ms, out_err, polygons, PoiArgs};
+use crate::common::{arr, lat_lon, load, ms, out_err, polygons, PoiArgs};
 use crate::Outcome;
 use rayon::prelude::*;
 use serde_json::json;

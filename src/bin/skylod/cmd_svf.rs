@@ -1,6 +1,6 @@
 //! `skylod svf`.
 
-use crate::solar_common::{arr, load, ms, out_err, polygons, PoiArgs};
+use crate::common::{arr, load, ms, out_err, polygons, PoiArgs};
 use crate::Outcome;
 use rayon::prelude::*;
 use serde_json::json;

@@ -13,7 +13,7 @@ mod cmd_stats;
 mod cmd_sun_hours;
 mod cmd_svf;
 mod cmd_synth;
-mod solar_common;
+mod common;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]

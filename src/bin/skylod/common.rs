@@ -1,4 +1,4 @@
-//! Shared by `svf`, `sun-hours` and `fisheye`: inputs merged into one model, POIs.
+//! Shared by the commands that trace POIs (`lod`, `evaluate`, `svf`, `sun-hours`, `fisheye`): inputs merged into one model, POIs.
 
 use anyhow::{bail, Context};
 use rayon::prelude::*;
