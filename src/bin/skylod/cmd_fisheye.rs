@@ -167,11 +167,19 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                     },
                     ..Default::default()
                 };
-                Some(
-                    lod(&loaded.model, std::slice::from_ref(poi), &lod_opts)?
-                        .selection
-                        .levels,
-                )
+                let mut levels = lod(&loaded.model, std::slice::from_ref(poi), &lod_opts)?
+                    .selection
+                    .levels;
+                // A window or door of a rough wall is closed by the wall's plane in the LoD
+                // model: show the cells it covers at the wall's level.
+                for (i, a) in loaded.model.assets.iter().enumerate() {
+                    if a.kind.is_opening() && levels.get(i) == Some(&0) {
+                        if let Some(p) = a.parent.and_then(|p| levels.get(p).copied()) {
+                            levels[i] = p;
+                        }
+                    }
+                }
+                Some(levels)
             }
         };
         let doc = fisheye_svg(&partition, &cells, &kinds, levels.as_deref(), &opts);
