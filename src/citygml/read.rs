@@ -451,23 +451,11 @@ impl Parser {
         }
     }
 
+    /// Advance the line counter over `bytes`, which start at file offset `content_start`.
+    #[inline]
     fn count_lines(&mut self, bytes: &[u8], content_start: u64) {
-        let mut last = None;
-        if bytes.len() < 64 {
-            // short tokens: a plain loop beats the set-up cost of a SIMD search
-            for (i, &c) in bytes.iter().enumerate() {
-                if c == b'\n' {
-                    self.line += 1;
-                    last = Some(i);
-                }
-            }
-        } else {
-            for i in memchr::memchr_iter(b'\n', bytes) {
-                self.line += 1;
-                last = Some(i);
-            }
-        }
-        if let Some(last) = last {
+        if let Some((n, last)) = newlines(bytes) {
+            self.line += n;
             self.line_start = content_start + last as u64 + 1;
         }
     }
@@ -727,26 +715,33 @@ impl Parser {
             });
         }
         let ns = uri.map(ns::classify).unwrap_or(Ns::None);
-        let qname = e.name();
-        self.cur_prefix.clear();
-        if let Some(p) = qname.prefix() {
-            self.cur_prefix
-                .push_str(&String::from_utf8_lossy(p.as_ref()));
-            self.cur_prefix.push(':');
-        }
-        if ns == Ns::Gml && self.gml_prefix.is_none() {
-            self.gml_prefix = Some(self.cur_prefix.clone());
-        }
         let local_name = e.local_name();
         let local = local_name.as_ref();
+        // the prefix text is only needed for the first GML element and for envelopes
+        if ns == Ns::Gml && (self.gml_prefix.is_none() || local == b"Envelope") {
+            self.cur_prefix.clear();
+            if let Some(p) = e.name().prefix() {
+                self.cur_prefix
+                    .push_str(&String::from_utf8_lossy(p.as_ref()));
+                self.cur_prefix.push(':');
+            }
+            if self.gml_prefix.is_none() {
+                self.gml_prefix = Some(self.cur_prefix.clone());
+            }
+        }
         let attrs = self.parse_attrs(reader, e)?;
 
         // ids: syntax and uniqueness
         if let Some(id) = &attrs.id {
             if id.is_empty() || !(id.as_bytes()[0].is_ascii_alphabetic() || id.starts_with('_')) {
-                self.warn(format!(
-                    "gml:id \"{id}\" is not a valid xs:ID (must start with a letter or '_')"
-                ));
+                // built by hand, not with format!: some exporters (Ingolstadt) give every
+                // element such an id, and this warning is then a visible part of reading time
+                const TAIL: &str = "\" is not a valid xs:ID (must start with a letter or '_')";
+                let mut msg = String::with_capacity(8 + id.len() + TAIL.len());
+                msg.push_str("gml:id \"");
+                msg.push_str(id);
+                msg.push_str(TAIL);
+                self.warn(msg);
             }
             let h = std::hash::BuildHasher::hash_one(&self.id_hasher, id.as_str());
             if !self.seen_ids.insert(h) {
@@ -1834,6 +1829,43 @@ fn zero_area(ring: &[DVec3]) -> bool {
     n.length() <= 1e-12 * extent2
 }
 
+/// Number of `\n` in `bytes` and the index of the last one; `None` when there is none.
+fn newlines(bytes: &[u8]) -> Option<(u64, usize)> {
+    if bytes.len() >= 32 {
+        // long tokens (coordinate lists, tags with attributes) rarely hold a newline: one SIMD
+        // search for the last, then a count before it
+        let last = memchr::memrchr(b'\n', bytes)?;
+        let n = memchr::memchr_iter(b'\n', &bytes[..last]).count() as u64;
+        return Some((n + 1, last));
+    }
+    // short tokens eight bytes at a time (SWAR), where a SIMD search does not pay
+    const LO7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
+    const NL: u64 = 0x0a0a_0a0a_0a0a_0a0a;
+    let mut count = 0u64;
+    let mut last = None;
+    let mut chunks = bytes.chunks_exact(8);
+    let mut base = 0usize;
+    for c in &mut chunks {
+        let mut w = [0u8; 8];
+        w.copy_from_slice(c);
+        let x = u64::from_le_bytes(w) ^ NL;
+        // exactly the zero bytes of x (no borrow between bytes) get their high bit set
+        let z = !(((x & LO7).wrapping_add(LO7)) | x | LO7);
+        if z != 0 {
+            count += u64::from(z.count_ones());
+            last = Some(base + (63 - z.leading_zeros() as usize) / 8);
+        }
+        base += 8;
+    }
+    for (i, &c) in chunks.remainder().iter().enumerate() {
+        if c == b'\n' {
+            count += 1;
+            last = Some(base + i);
+        }
+    }
+    last.map(|l| (count, l))
+}
+
 #[derive(Debug)]
 enum CoordError {
     Token(String),
@@ -1968,6 +2000,28 @@ fn parse_coordinates(text: &[u8], a: CoordAttrs, out: &mut Vec<DVec3>) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn newlines_match_a_plain_count() {
+        // every length up to 80, newlines (and bytes that could fool a SWAR test: 0x0b, 0x8a,
+        // 0x09) at every position
+        for len in 0..80usize {
+            for seed in 0..len.max(1) {
+                let v: Vec<u8> = (0..len)
+                    .map(|i| match (i * 7 + seed) % 5 {
+                        0 => b'\n',
+                        1 => 0x0b,
+                        2 => 0x8a,
+                        3 => 0x09,
+                        _ => b'a',
+                    })
+                    .collect();
+                let n = v.iter().filter(|&&c| c == b'\n').count() as u64;
+                let last = v.iter().rposition(|&c| c == b'\n');
+                assert_eq!(newlines(&v), last.map(|l| (n, l)), "{v:?}");
+            }
+        }
+    }
 
     #[test]
     fn lod_property_names() {
