@@ -8,7 +8,8 @@ use glam::DVec3;
 use serde::Serialize;
 use std::fmt;
 use std::ops::Range;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Byte span of an XML element in the (decompressed) source document.
 pub type Span = Range<u64>;
@@ -364,8 +365,8 @@ pub struct EnvelopeSite {
 /// A problem in the input that did not stop reading.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Warning {
-    /// Source file.
-    pub file: PathBuf,
+    /// Source file (shared by all warnings of a file).
+    pub file: Arc<Path>,
     /// 1-based line.
     pub line: u64,
     /// 1-based column.

@@ -36,6 +36,7 @@ use quick_xml::name::ResolveResult;
 use quick_xml::NsReader;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Limits that protect against hostile input.
 #[derive(Debug, Clone)]
@@ -314,6 +315,8 @@ enum EnvOwner {
 
 struct Parser {
     path: PathBuf,
+    /// The same path, shared by every warning.
+    shared_path: Arc<Path>,
     content_start: u64,
     gml_prefix: Option<String>,
     cur_prefix: String,
@@ -407,6 +410,7 @@ impl Parser {
     fn new(path: &Path, opts: ReadOptions) -> Self {
         Parser {
             path: path.to_path_buf(),
+            shared_path: Arc::from(path),
             content_start: 0,
             gml_prefix: None,
             cur_prefix: String::new(),
@@ -564,12 +568,12 @@ impl Parser {
     }
 
     fn warn(&mut self, message: impl Into<String>) {
-        let loc = self.loc();
+        // Warnings share one path (real files can have one per gml:id).
         self.warnings.push(Warning {
-            file: loc.file,
-            line: loc.line,
-            column: loc.column,
-            gml_id: loc.gml_id,
+            file: self.shared_path.clone(),
+            line: self.line,
+            column: self.event_pos.saturating_sub(self.line_start) + 1,
+            gml_id: self.nearest_id(),
             message: message.into(),
         });
     }
@@ -1600,7 +1604,7 @@ impl Parser {
         }
         if !has_root_env && self.root_is_model {
             self.warnings.push(Warning {
-                file: self.path.clone(),
+                file: self.shared_path.clone(),
                 line: 1,
                 column: 1,
                 gml_id: None,
