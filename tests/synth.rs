@@ -257,3 +257,45 @@ fn poi_schema_describes_the_csv_header() {
         .expect("description")
         .contains("`id,x,y,z,nx,ny,nz`"));
 }
+
+#[test]
+fn skylod_stats_agrees_with_the_generator() {
+    // `skylod synth` writes the district; `skylod stats --json` reads it back; both must agree
+    // with the generator's own summary.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("d.gml");
+    let o = Command::new(env!("CARGO_BIN_EXE_skylod"))
+        .args([
+            "synth",
+            "--preset",
+            "paper",
+            "--blocks",
+            "2x1",
+            "--with-lod2",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .expect("skylod synth");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, s) = gen(&opts(Preset::Paper, 2, 1, true));
+    let o = Command::new(env!("CARGO_BIN_EXE_skylod"))
+        .args(["stats", "--json"])
+        .arg(&out)
+        .output()
+        .expect("skylod stats");
+    assert!(o.status.success());
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let n = |k: &str| j[k].as_u64().unwrap_or(u64::MAX);
+    assert_eq!(n("buildings"), s.buildings);
+    assert_eq!(n("roof_surfaces"), s.roof_surfaces);
+    assert_eq!(n("wall_surfaces"), s.wall_surfaces);
+    assert_eq!(n("ground_surfaces"), s.ground_surfaces);
+    assert_eq!(n("windows"), s.windows);
+    assert_eq!(n("doors"), s.doors);
+    assert_eq!(n("installations"), s.installations_total());
+    assert_eq!(n("polygons"), s.polygons);
+    assert_eq!(n("warnings"), 0);
+    assert_eq!(j["lods"], serde_json::json!([2, 3]));
+    assert!(dir.path().join("d.pois.csv").is_file());
+}
