@@ -1,3 +1,6 @@
+//! Profiling helper: a raw quick_xml namespace-resolving scan of an uncompressed file, N times
+//! (the baseline of `benches/parse.rs`), for perf/callgrind next to `readloop`.
+//! `cargo run --release --example rawscan -- FILE.gml [N=20]`
 use quick_xml::events::Event;
 fn main() {
     let args: Vec<String> = std::env::args().collect();
