@@ -481,40 +481,12 @@ mod tests {
     use crate::model::{Asset, LodGeometry, Polygon};
     use crate::rough::{rough_model, RoughOptions};
 
+    /// The box's faces: top first, then bottom and the four sides.
     fn boxed(x0: f64, y0: f64, z0: f64, x1: f64, y1: f64, z1: f64) -> Vec<Polygon> {
-        let p = |x, y, z| DVec3::new(x, y, z);
-        vec![
-            Polygon::new(vec![
-                p(x0, y0, z1),
-                p(x1, y0, z1),
-                p(x1, y1, z1),
-                p(x0, y1, z1),
-            ]),
-            Polygon::new(vec![
-                p(x0, y0, z0),
-                p(x1, y0, z0),
-                p(x1, y0, z1),
-                p(x0, y0, z1),
-            ]),
-            Polygon::new(vec![
-                p(x1, y0, z0),
-                p(x1, y1, z0),
-                p(x1, y1, z1),
-                p(x1, y0, z1),
-            ]),
-            Polygon::new(vec![
-                p(x1, y1, z0),
-                p(x0, y1, z0),
-                p(x0, y1, z1),
-                p(x1, y1, z1),
-            ]),
-            Polygon::new(vec![
-                p(x0, y1, z0),
-                p(x0, y0, z0),
-                p(x0, y0, z1),
-                p(x0, y1, z1),
-            ]),
-        ]
+        crate::synth::boxes::box_faces([x0, y0, z0, x1, y1, z1])
+            .into_iter()
+            .map(|r| Polygon::new(r.into_iter().map(DVec3::from_array).collect()))
+            .collect()
     }
 
     fn asset(kind: AssetKind, id: &str, building: Option<usize>, polys: Vec<Polygon>) -> Asset {
@@ -555,11 +527,11 @@ mod tests {
         let mut m = CityModel::default();
         m.buildings.push(building());
         let all = boxed(20.0, -20.0, 0.0, 40.0, 20.0, 10.0);
-        let (roof, walls) = all.split_at(1);
+        // Faces: top (the roof), bottom (dropped), four walls.
+        let (roof, walls) = (all[..1].to_vec(), all[2..].to_vec());
+        m.assets.push(asset(AssetKind::Roof, "roof", Some(0), roof));
         m.assets
-            .push(asset(AssetKind::Roof, "roof", Some(0), roof.to_vec()));
-        m.assets
-            .push(asset(AssetKind::Wall, "walls", Some(0), walls.to_vec()));
+            .push(asset(AssetKind::Wall, "walls", Some(0), walls));
         // Far chimney: 1 m tall at the back edge, hidden below the sight line over the
         // near roof edge (slope 10/20 = 0.5 -> at x = 39 the line is at 19.5 m).
         m.assets.push(asset(
@@ -639,7 +611,7 @@ mod tests {
             .push(asset(AssetKind::Roof, "near", Some(0), vec![near]));
         m.assets
             .push(asset(AssetKind::Roof, "far", Some(0), vec![far]));
-        let walls = boxed(20.0, -20.0, 0.0, 40.0, 20.0, 10.0)[1..].to_vec();
+        let walls = boxed(20.0, -20.0, 0.0, 40.0, 20.0, 10.0)[2..].to_vec();
         m.assets
             .push(asset(AssetKind::Wall, "walls", Some(0), walls));
         let poi = Poi {

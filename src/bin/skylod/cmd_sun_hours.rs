@@ -1,10 +1,8 @@
 //! `skylod sun-hours`.
 
-use crate::common::{arr, lat_lon, load, ms, out_err, polygons, PoiArgs};
+use crate::common::{arr, lat_lon, load, ms, out_err, polygons, trace_full, PoiArgs};
 use crate::Outcome;
-use rayon::prelude::*;
 use serde_json::json;
-use skylod::scene::full_scene;
 use skylod::solar::{poi_sun_hours, Site, SunTable};
 use std::io::Write;
 use std::time::Instant;
@@ -52,15 +50,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let t = Instant::now();
-    let scene = full_scene(&loaded.model);
-    let bvh_ms = ms(t);
-    let t = Instant::now();
-    let hours: Vec<_> = pois
-        .par_iter()
-        .map(|p| poi_sun_hours(&scene, p, &table))
-        .collect();
-    let trace_ms = ms(t);
+    let (hours, bvh_ms, trace_ms) =
+        trace_full(&loaded.model, &pois, |s, p| poi_sun_hours(s, p, &table));
     let mut out = std::io::stdout().lock();
     if args.json {
         let rows: Vec<_> = pois

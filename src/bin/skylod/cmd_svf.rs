@@ -1,13 +1,10 @@
 //! `skylod svf`.
 
-use crate::common::{arr, load, ms, out_err, polygons, PoiArgs};
+use crate::common::{arr, load, out_err, polygons, trace_full, PoiArgs};
 use crate::Outcome;
-use rayon::prelude::*;
 use serde_json::json;
-use skylod::scene::full_scene;
 use skylod::solar::{poi_sky_view, SkyBundles};
 use std::io::Write;
-use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -31,15 +28,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let t = Instant::now();
-    let scene = full_scene(&loaded.model);
-    let bvh_ms = ms(t);
-    let t = Instant::now();
-    let views: Vec<_> = pois
-        .par_iter()
-        .map(|p| poi_sky_view(&scene, p, &bundles))
-        .collect();
-    let trace_ms = ms(t);
+    let (views, bvh_ms, trace_ms) =
+        trace_full(&loaded.model, &pois, |s, p| poi_sky_view(s, p, &bundles));
     let mut out = std::io::stdout().lock();
     if args.json {
         let rows: Vec<_> = pois

@@ -116,3 +116,18 @@ pub fn lat_lon(lat: Option<f64>, lon: Option<f64>, cmd: &str) -> anyhow::Result<
 pub fn out_err<T>(r: std::io::Result<T>) -> anyhow::Result<T> {
     r.context("writing to stdout")
 }
+
+/// One result per POI (in POI order) computed in parallel against the full-detail scene of
+/// `model`, with the milliseconds spent building the scene and tracing.
+pub fn trace_full<T: Send>(
+    model: &CityModel,
+    pois: &[Poi],
+    f: impl Fn(&skylod::trace::Scene, &Poi) -> T + Sync,
+) -> (Vec<T>, f64, f64) {
+    let t = Instant::now();
+    let scene = skylod::scene::full_scene(model);
+    let bvh_ms = ms(t);
+    let t = Instant::now();
+    let out = pois.par_iter().map(|p| f(&scene, p)).collect();
+    (out, bvh_ms, ms(t))
+}
