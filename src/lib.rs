@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod citygml;
+pub mod crs;
 pub mod evaluate;
 pub mod geom;
 pub mod lod;

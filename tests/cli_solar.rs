@@ -238,9 +238,8 @@ fn sun_hours_json_and_errors() {
     let ground = &pois[0];
     assert!(ground["sun_hours"].as_f64().unwrap() > 100.0);
 
-    // Missing --lat / --lon: usage error that names them.
+    // Only one of --lat / --lon: usage error that names both.
     for extra in [
-        vec![],
         vec![os("--lat"), os("41.39")],
         vec![os("--lon"), os("2.17")],
     ] {
@@ -250,6 +249,41 @@ fn sun_hours_json_and_errors() {
         assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
         assert!(stderr(&o).contains("--lat") && stderr(&o).contains("--lon"));
     }
+    // Neither: the site comes from the model's CRS (EPSG:25831, Barcelona) and gives the
+    // same hours as the explicit site within what a few hundred metres can change.
+    let mut a = base.to_vec();
+    a.extend([os("--step"), os("60"), os("--json")]);
+    let o = run_s(&a);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let auto = json(&o);
+    assert!(
+        (auto["lat"].as_f64().unwrap() - 41.377).abs() < 0.01,
+        "{}",
+        auto["lat"]
+    );
+    assert!(
+        (auto["lon"].as_f64().unwrap() - 2.162).abs() < 0.01,
+        "{}",
+        auto["lon"]
+    );
+    assert!(stderr(&o).contains("EPSG:25831"));
+    // A model without a CRS skylod converts: usage error naming --lat/--lon.
+    let dir = tempfile::tempdir().unwrap();
+    let nocrs = dir.path().join("nocrs.gml");
+    let boxes = skylod::synth::boxes::boxes_citygml(
+        &[skylod::synth::boxes::BoxBuilding {
+            id: "B".into(),
+            min: [0.0, 0.0],
+            max: [10.0, 10.0],
+            height: 10.0,
+            installations: vec![],
+        }],
+        [0.0, 0.0, 0.0],
+    );
+    std::fs::write(&nocrs, boxes).unwrap();
+    let o = run_s(&[os("sun-hours"), os(&nocrs), os("--poi"), os("20,20,1")]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--lat") && stderr(&o).contains("--lon"));
     // Bad time zone, bad step, latitude out of range: usage errors.
     for extra in [
         [os("--timezone"), os("Mars/Olympus")],

@@ -1,7 +1,7 @@
 //! `skylod evaluate`: full vs LoD vs all-boxes model, the paper's Tables 1 and 2.
 
 use crate::cmd_sun_hours::DEFAULT_YEAR;
-use crate::common::{lat_lon, load, ms, out_err, PoiArgs};
+use crate::common::{lat_lon, load, ms, out_err, site_lat_lon, PoiArgs};
 use crate::Outcome;
 use skylod::evaluate::{evaluate, EvalOptions};
 use skylod::lod::LodOptions;
@@ -14,10 +14,11 @@ use std::time::Instant;
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
-    /// Site latitude in degrees (WGS84) for sun hours.
+    /// Site latitude in degrees (WGS84) for sun hours. Default: the centre of the model, from
+    /// its CRS (UTM zones of WGS 84 and ETRS89).
     #[arg(long, allow_hyphen_values = true)]
     lat: Option<f64>,
-    /// Site longitude in degrees (WGS84) for sun hours.
+    /// Site longitude in degrees (WGS84) for sun hours. Default: as --lat.
     #[arg(long, allow_hyphen_values = true)]
     lon: Option<f64>,
     /// Skip sun hours (then --lat/--lon are not needed).
@@ -60,21 +61,29 @@ fn hours(x: Option<f64>) -> String {
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
-    let site = if args.no_sun {
-        None
-    } else {
-        let (lat, lon) = lat_lon(args.lat, args.lon, "evaluate (or give --no-sun)")?;
-        Some(Site::new(lat, lon))
-    };
+    if args.lat.is_some() != args.lon.is_some() {
+        lat_lon(args.lat, args.lon, "evaluate")?;
+    }
     let pois = args.pois.points()?;
-    let table = match &site {
-        Some(s) => Some(SunTable::year(args.year, args.step, s)?),
-        None => None,
-    };
     let loaded = load(&args.pois.inputs);
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let site = if args.no_sun {
+        None
+    } else {
+        let (lat, lon) = site_lat_lon(
+            args.lat,
+            args.lon,
+            &loaded.model,
+            "evaluate (or give --no-sun)",
+        )?;
+        Some(Site::new(lat, lon))
+    };
+    let table = match &site {
+        Some(s) => Some(SunTable::year(args.year, args.step, s)?),
+        None => None,
+    };
     let opts = EvalOptions {
         lod: LodOptions {
             select: SelectOptions {

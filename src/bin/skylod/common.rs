@@ -96,7 +96,7 @@ pub fn arr(v: glam::DVec3) -> [f64; 3] {
     [v.x, v.y, v.z]
 }
 
-/// Parse `--lat`/`--lon`, or say that they are needed.
+/// Check `--lat`/`--lon` given together, or say that they are needed.
 pub fn lat_lon(lat: Option<f64>, lon: Option<f64>, cmd: &str) -> anyhow::Result<(f64, f64)> {
     match (lat, lon) {
         (Some(a), Some(o)) => {
@@ -105,11 +105,35 @@ pub fn lat_lon(lat: Option<f64>, lon: Option<f64>, cmd: &str) -> anyhow::Result<
             }
             Ok((a, o))
         }
-        _ => bail!(
-            "{cmd} needs the site's --lat and --lon in degrees (WGS84); taking them from the \
-             input's CRS is not supported yet"
-        ),
+        _ => bail!("{cmd} needs both --lat and --lon of the site, in degrees (WGS84)"),
     }
+}
+
+/// The site for the sun position: `--lat`/`--lon` when given (both), otherwise the centre of
+/// the model converted from its CRS when that is a UTM CRS skylod knows ([`skylod::crs`]).
+pub fn site_lat_lon(
+    lat: Option<f64>,
+    lon: Option<f64>,
+    model: &CityModel,
+    cmd: &str,
+) -> anyhow::Result<(f64, f64)> {
+    if lat.is_some() || lon.is_some() {
+        return lat_lon(lat, lon, cmd);
+    }
+    let srs = model.files.iter().find_map(|f| f.srs_name.as_deref());
+    let bbox = model.bbox();
+    let centre = (!bbox.is_empty()).then(|| bbox.center());
+    if let (Some(srs), Some(c)) = (srs, centre) {
+        if let Some((a, o)) = skylod::crs::lat_lon(srs, c.x, c.y) {
+            eprintln!("{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}");
+            return Ok((a, o));
+        }
+    }
+    bail!(
+        "{cmd} needs the site's --lat and --lon (WGS84 degrees): the input's CRS ({}) is not one \
+         skylod converts (UTM zones of WGS 84 and ETRS89)",
+        srs.unwrap_or("none given")
+    )
 }
 
 /// Context helper for writing to stdout.
