@@ -54,9 +54,8 @@ fn epsg_codes(upper: &str) -> Vec<u32> {
                 .split(|c: char| !(c.is_ascii_digit() || matches!(c, ':' | '/' | '.')))
                 .next()?;
             token
-                .split(|c: char| !c.is_ascii_digit())
-                .filter(|d| !d.is_empty())
-                .last()?
+                .rsplit(|c: char| !c.is_ascii_digit())
+                .find(|d| !d.is_empty())?
                 .parse()
                 .ok()
         })
