@@ -1,7 +1,7 @@
 //! `skylod evaluate`: full vs LoD vs all-boxes model, the paper's Tables 1 and 2.
 
 use crate::cmd_sun_hours::DEFAULT_YEAR;
-use crate::common::{lat_lon, load, ms, out_err, site_lat_lon, PoiArgs};
+use crate::common::{load, ms, out_err, PoiArgs, SiteArgs};
 use crate::Outcome;
 use skylod::evaluate::{evaluate, EvalOptions};
 use skylod::lod::LodOptions;
@@ -14,13 +14,8 @@ use std::time::Instant;
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
-    /// Site latitude in degrees (WGS84) for sun hours. Default: the centre of the model, from
-    /// its CRS (UTM zones of WGS 84 and ETRS89).
-    #[arg(long, allow_hyphen_values = true)]
-    lat: Option<f64>,
-    /// Site longitude in degrees (WGS84) for sun hours. Default: as --lat.
-    #[arg(long, allow_hyphen_values = true)]
-    lon: Option<f64>,
+    #[command(flatten)]
+    site: SiteArgs,
     /// Skip sun hours (then --lat/--lon are not needed).
     #[arg(long)]
     no_sun: bool,
@@ -61,9 +56,7 @@ fn hours(x: Option<f64>) -> String {
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
-    if args.lat.is_some() != args.lon.is_some() {
-        lat_lon(args.lat, args.lon, "evaluate")?;
-    }
+    args.site.check("evaluate")?;
     let pois = args.pois.points()?;
     let loaded = load(&args.pois.inputs);
     if loaded.inputs.is_empty() {
@@ -72,12 +65,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let site = if args.no_sun {
         None
     } else {
-        let (lat, lon) = site_lat_lon(
-            args.lat,
-            args.lon,
-            &loaded.model,
-            "evaluate (or give --no-sun)",
-        )?;
+        let (lat, lon) = args
+            .site
+            .resolve(&loaded.model, "evaluate (or give --no-sun)")?;
         Some(Site::new(lat, lon))
     };
     let table = match &site {
@@ -188,9 +178,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             ms(t_all)
         );
     }
-    Ok(if loaded.failed {
-        Outcome::SomeFailed
-    } else {
-        Outcome::Ok
-    })
+    Ok(loaded.outcome())
 }

@@ -207,9 +207,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             view.svf
         );
     }
-    Ok(if loaded.failed {
-        Outcome::SomeFailed
-    } else {
-        Outcome::Ok
-    })
+    Ok(loaded.outcome())
 }

@@ -1,6 +1,6 @@
 //! `skylod sun-hours`.
 
-use crate::common::{arr, lat_lon, load, ms, out_err, polygons, site_lat_lon, trace_full, PoiArgs};
+use crate::common::{arr, load, ms, out_err, polygons, trace_full, PoiArgs, SiteArgs};
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{poi_sun_hours, Site, SunTable};
@@ -14,13 +14,8 @@ pub const DEFAULT_YEAR: i32 = 2025;
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
-    /// Site latitude in degrees (WGS84, north positive). Default: the centre of the model,
-    /// from its CRS (UTM zones of WGS 84 and ETRS89).
-    #[arg(long, allow_hyphen_values = true)]
-    lat: Option<f64>,
-    /// Site longitude in degrees (WGS84, east positive). Default: as --lat.
-    #[arg(long, allow_hyphen_values = true)]
-    lon: Option<f64>,
+    #[command(flatten)]
+    site: SiteArgs,
     /// Calendar year (UTC) simulated.
     #[arg(long, default_value_t = DEFAULT_YEAR)]
     year: i32,
@@ -41,15 +36,13 @@ const MONTHS: [&str; 12] = [
 ];
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
-    if args.lat.is_some() != args.lon.is_some() {
-        lat_lon(args.lat, args.lon, "sun-hours")?;
-    }
+    args.site.check("sun-hours")?;
     let pois = args.pois.points()?;
     let loaded = load(&args.pois.inputs);
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let (lat, lon) = site_lat_lon(args.lat, args.lon, &loaded.model, "sun-hours")?;
+    let (lat, lon) = args.site.resolve(&loaded.model, "sun-hours")?;
     let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
     let t = Instant::now();
     let table = SunTable::year(args.year, args.step, &site)?;
@@ -113,9 +106,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             trace_ms
         );
     }
-    Ok(if loaded.failed {
-        Outcome::SomeFailed
-    } else {
-        Outcome::Ok
-    })
+    Ok(loaded.outcome())
 }

@@ -93,9 +93,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             trace_ms
         );
     }
-    Ok(if loaded.failed {
-        Outcome::SomeFailed
-    } else {
-        Outcome::Ok
-    })
+    Ok(loaded.outcome())
 }

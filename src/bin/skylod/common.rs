@@ -1,5 +1,6 @@
 //! Shared by the commands that trace POIs (`lod`, `evaluate`, `svf`, `sun-hours`, `fisheye`): inputs merged into one model, POIs.
 
+use crate::Outcome;
 use anyhow::{bail, Context};
 use rayon::prelude::*;
 use skylod::citygml::read_file;
@@ -54,6 +55,17 @@ pub struct Loaded {
     pub read_ms: f64,
 }
 
+impl Loaded {
+    /// Exit outcome: some inputs failed, or all were read.
+    pub fn outcome(&self) -> Outcome {
+        if self.failed {
+            Outcome::SomeFailed
+        } else {
+            Outcome::Ok
+        }
+    }
+}
+
 /// Read every input in parallel and merge them; errors go to stderr.
 pub fn load(inputs: &[PathBuf]) -> Loaded {
     let t = Instant::now();
@@ -106,6 +118,33 @@ pub fn lat_lon(lat: Option<f64>, lon: Option<f64>, cmd: &str) -> anyhow::Result<
             Ok((a, o))
         }
         _ => bail!("{cmd} needs both --lat and --lon of the site, in degrees (WGS84)"),
+    }
+}
+
+/// The site of the sun position: `--lat`/`--lon`, both or neither (then from the model's CRS).
+#[derive(clap::Args, Debug)]
+pub struct SiteArgs {
+    /// Site latitude in degrees (WGS84, north positive). Default: the centre of the model,
+    /// from its CRS (UTM zones of WGS 84 and ETRS89).
+    #[arg(long, allow_hyphen_values = true)]
+    pub lat: Option<f64>,
+    /// Site longitude in degrees (WGS84, east positive). Default: as --lat.
+    #[arg(long, allow_hyphen_values = true)]
+    pub lon: Option<f64>,
+}
+
+impl SiteArgs {
+    /// Usage check before any input is read: both flags or neither.
+    pub fn check(&self, cmd: &str) -> anyhow::Result<()> {
+        if self.lat.is_some() != self.lon.is_some() {
+            lat_lon(self.lat, self.lon, cmd)?;
+        }
+        Ok(())
+    }
+
+    /// The site, from the flags or from `model` ([`site_lat_lon`]).
+    pub fn resolve(&self, model: &CityModel, cmd: &str) -> anyhow::Result<(f64, f64)> {
+        site_lat_lon(self.lat, self.lon, model, cmd)
     }
 }
 
