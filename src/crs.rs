@@ -45,7 +45,7 @@ pub fn utm_zone(srs_name: &str) -> Option<(u8, bool)> {
 
 /// The code after each `EPSG` authority in the name: the last number of the run of digits
 /// and separators that follows it (`EPSG::25832`, `EPSG/0/25832`, `EPSG:6.12:31466`).
-fn epsg_codes(upper: &str) -> Vec<u32> {
+pub fn epsg_codes(upper: &str) -> Vec<u32> {
     upper
         .split("EPSG")
         .skip(1)

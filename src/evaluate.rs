@@ -25,6 +25,7 @@
 //! assert!(p.lod.svf_rel_error(&p.full) < 0.05);
 //! ```
 
+use crate::checks::{poi_flags, PoiFlag};
 use crate::lod::LodOptions;
 use crate::model::CityModel;
 use crate::poi::Poi;
@@ -132,6 +133,8 @@ pub struct PoiEval {
     pub lod_sun_error: Option<f64>,
     /// Relative sun-hours error of the all-boxes model.
     pub boxes_sun_error: Option<f64>,
+    /// What makes this POI's figures suspect (inside a building, no sky), from the full model.
+    pub flags: Vec<PoiFlag>,
 }
 
 /// The whole evaluation.
@@ -227,8 +230,10 @@ pub fn evaluate(
         let f = figures(&full, full_polys, poi, &bundles, table, full_bvh);
         let l = figures(&lod_scene, lod_polys, poi, &bundles, table, lod_bvh);
         let b = figures(&boxes, boxes_polys, poi, &bundles, table, boxes_bvh);
+        let sky_rays = (f.sky_exposure == 0.0).then_some(0);
         out.push(PoiEval {
             id: poi.id.clone(),
+            flags: poi_flags(&full, model, poi, sky_rays),
             lod_svf_error: l.svf_rel_error(&f),
             boxes_svf_error: b.svf_rel_error(&f),
             lod_sun_error: l.sun_rel_error(&f),

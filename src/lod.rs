@@ -18,11 +18,13 @@
 //! assert!(l1 > 0 && l0 > 0);
 //! ```
 
+use crate::checks::{poi_flags, PoiFlag};
 use crate::model::CityModel;
 use crate::poi::Poi;
 use crate::rough::{rough_model, RoughGeometry, RoughOptions};
 use crate::scene::selection_scene;
 use crate::select::{select, SelectError, SelectOptions, Selection};
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// Options of the whole pipeline.
@@ -49,6 +51,8 @@ pub struct LodResult {
     pub select_s: f64,
     /// Triangles of the selection scene.
     pub triangles: usize,
+    /// Per POI, what makes its result suspect ([`poi_flags`] against the selection scene).
+    pub flags: Vec<Vec<PoiFlag>>,
 }
 
 /// Run rough, scene and selection for `pois` on `model`.
@@ -65,7 +69,13 @@ pub fn lod(model: &CityModel, pois: &[Poi], opts: &LodOptions) -> Result<LodResu
     let t = Instant::now();
     let selection = select(model, &rough, &scene, pois, &opts.select)?;
     let select_s = t.elapsed().as_secs_f64();
+    let flags = pois
+        .par_iter()
+        .zip(&selection.pois)
+        .map(|(p, s)| poi_flags(&scene, model, p, Some(s.sky_rays)))
+        .collect();
     Ok(LodResult {
+        flags,
         rough,
         selection,
         rough_s,

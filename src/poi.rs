@@ -28,6 +28,16 @@ pub enum PoiError {
         /// What is wrong.
         message: String,
     },
+    /// Two POIs share an id (outputs are keyed by it).
+    #[error("POI id {id:?} is given twice: at {first} and at {second}")]
+    DuplicateId {
+        /// The id.
+        id: String,
+        /// Where it is given first.
+        first: String,
+        /// Where it is given again.
+        second: String,
+    },
     /// The CSV file cannot be read.
     #[error("{}: {source}", .file.display())]
     Io {
@@ -103,85 +113,192 @@ pub fn parse_poi(text: &str, index: usize) -> Result<Poi, PoiError> {
     build(format!("poi-{}", index + 1), &v, &at)
 }
 
-/// Read a POI CSV file: a header naming at least `x,y,z` (and optionally `id`, `nx,ny,nz`,
-/// in any order), then one point per line. Empty lines and lines starting with `#` are skipped.
-pub fn read_pois_csv(path: &Path) -> Result<Vec<Poi>, PoiError> {
-    let text = std::fs::read_to_string(path).map_err(|source| PoiError::Io {
+/// A POI with the place it was given: `--poi …` or `file:line`, for messages.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Located {
+    /// The point.
+    pub poi: Poi,
+    /// Where it was given (`--poi 1,2,3` or `pois.csv:7`).
+    pub at: String,
+}
+
+/// Read a POI CSV file ([`parse_pois_csv`]).
+pub fn read_pois_csv(path: &Path) -> Result<Vec<Located>, PoiError> {
+    let bytes = std::fs::read(path).map_err(|source| PoiError::Io {
         file: path.to_path_buf(),
         source,
     })?;
-    parse_pois_csv(&text, &path.display().to_string())
+    parse_pois_csv(&bytes, &path.display().to_string())
 }
 
-/// [`read_pois_csv`] on text; `name` is used in messages.
-pub fn parse_pois_csv(text: &str, name: &str) -> Result<Vec<Poi>, PoiError> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-    let Some((hl, header)) = lines.next() else {
-        return Ok(Vec::new());
+/// Parse POI CSV text (`name` is used in messages) with the `csv` crate: a header naming at
+/// least `x,y,z` (and optionally `id`, `nx,ny,nz`) in any order and any case, then one
+/// point per record. A UTF-8 byte-order mark is skipped, fields may be quoted, lines starting
+/// with `#` and empty lines are skipped, surrounding spaces are trimmed. Without an `id`
+/// column the points are named `poi-1`, `poi-2`, … in file order. Errors name `name:line`.
+///
+/// ```
+/// let text = "\u{feff}# facade points\nZ,\"Id\",x,y\n12.5,\"w,1\",430000,4581000\n";
+/// let p = skylod::poi::parse_pois_csv(text.as_bytes(), "p.csv").unwrap();
+/// assert_eq!(p[0].poi.id, "w,1");
+/// assert_eq!(p[0].at, "p.csv:3");
+/// ```
+pub fn parse_pois_csv(bytes: &[u8], name: &str) -> Result<Vec<Located>, PoiError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    // `#` comment lines become blank lines of the same length: the csv crate's own comment
+    // support loses their bytes from its positions, and line numbers must stay right.
+    let mut text = bytes.to_vec();
+    let mut start = 0;
+    while start < text.len() {
+        let end = memchr::memchr(b'\n', &text[start..]).map_or(text.len(), |i| start + i);
+        let line = &mut text[start..end];
+        if line.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'#') {
+            line.fill(b' ');
+        }
+        start = end + 1;
+    }
+    let bytes = &text[..];
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(bytes);
+    let syntax = |line: u64, message: String| PoiError::Syntax {
+        at: format!("{name}:{line}"),
+        message,
     };
-    let cols: Vec<String> = header
-        .split(',')
-        .map(|c| c.trim().to_ascii_lowercase())
-        .collect();
-    let find = |n: &str| cols.iter().position(|c| c == n);
-    let (Some(x), Some(y), Some(z)) = (find("x"), find("y"), find("z")) else {
-        return Err(PoiError::Syntax {
-            at: format!("{name}:{}", hl + 1),
-            message: "header must name the columns x, y and z (and optionally id, nx, ny, nz)"
-                .into(),
-        });
+    let line_at = |pos: Option<&csv::Position>| {
+        let byte = pos.map_or(0, |p| p.byte() as usize).min(bytes.len());
+        1 + memchr::memchr_iter(b'\n', &bytes[..byte]).count() as u64
     };
-    let id = find("id");
-    let normal = match (find("nx"), find("ny"), find("nz")) {
-        (Some(a), Some(b), Some(c)) => Some([a, b, c]),
-        _ => None,
-    };
+    let mut cols: Option<(Vec<String>, u64)> = None;
     let mut out = Vec::new();
-    for (n, (ln, line)) in lines.enumerate() {
-        let at = format!("{name}:{}", ln + 1);
-        let fields: Vec<&str> = line.split(',').collect();
-        let get = |i: usize| {
-            fields.get(i).copied().ok_or_else(|| PoiError::Syntax {
-                at: at.clone(),
-                message: format!("expected {} columns, got {}", cols.len(), fields.len()),
-            })
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| syntax(line_at(e.position()), e.to_string()))?;
+        let line = line_at(rec.position());
+        if rec.iter().all(str::is_empty) {
+            continue;
+        }
+        let Some((cols, hl)) = &cols else {
+            cols = Some((rec.iter().map(|c| c.to_ascii_lowercase()).collect(), line));
+            continue;
         };
-        let mut vals = vec![get(x)?, get(y)?, get(z)?];
-        if let Some(nc) = normal {
-            let nv: Vec<&str> = nc.iter().map(|&i| get(i)).collect::<Result<_, _>>()?;
-            if nv.iter().any(|s| !s.trim().is_empty()) {
+        let find = |n: &str| cols.iter().position(|c| c == n);
+        let (Some(x), Some(y), Some(z)) = (find("x"), find("y"), find("z")) else {
+            return Err(syntax(
+                *hl,
+                "header must name the columns x, y and z (and optionally id, nx, ny, nz)".into(),
+            ));
+        };
+        let at = format!("{name}:{line}");
+        if rec.len() != cols.len() {
+            return Err(syntax(
+                line,
+                format!("expected {} columns, got {}", cols.len(), rec.len()),
+            ));
+        }
+        let get = |i: usize| rec.get(i).unwrap_or("");
+        let mut vals = vec![get(x), get(y), get(z)];
+        if let (Some(a), Some(b), Some(c)) = (find("nx"), find("ny"), find("nz")) {
+            let nv = [get(a), get(b), get(c)];
+            if nv.iter().any(|s| !s.is_empty()) {
                 vals.extend(nv);
             }
         }
         let v = numbers(&vals, &at)?;
-        let pid = match id {
-            Some(i) => get(i)?.trim().to_string(),
-            None => format!("poi-{}", n + 1),
+        let id = match find("id") {
+            Some(i) if !get(i).is_empty() => get(i).to_string(),
+            Some(_) => return Err(syntax(line, "empty id".into())),
+            None => format!("poi-{}", out.len() + 1),
         };
-        out.push(build(pid, &v, &at)?);
+        out.push(Located {
+            poi: build(id, &v, &at)?,
+            at,
+        });
+    }
+    if let Some((cols, hl)) = &cols {
+        if !["x", "y", "z"].iter().all(|n| cols.iter().any(|c| c == n)) {
+            return Err(syntax(
+                *hl,
+                "header must name the columns x, y and z (and optionally id, nx, ny, nz)".into(),
+            ));
+        }
     }
     Ok(out)
+}
+
+/// Refuse two POIs with the same id, naming the id and where each was given.
+///
+/// ```
+/// use skylod::poi::{check_unique_ids, parse_pois_csv};
+/// let p = parse_pois_csv(b"id,x,y,z\na,0,0,0\nb,1,0,0\na,2,0,0\n", "p.csv").unwrap();
+/// let e = check_unique_ids(&p).unwrap_err().to_string();
+/// assert!(e.contains("\"a\"") && e.contains("p.csv:2") && e.contains("p.csv:4"), "{e}");
+/// ```
+pub fn check_unique_ids(pois: &[Located]) -> Result<(), PoiError> {
+    let mut first: std::collections::HashMap<&str, &str> = std::collections::HashMap::new();
+    for p in pois {
+        if let Some(prev) = first.insert(&p.poi.id, &p.at) {
+            return Err(PoiError::DuplicateId {
+                id: p.poi.id.clone(),
+                first: prev.to_string(),
+                second: p.at.clone(),
+            });
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn parse(t: &str) -> Result<Vec<Located>, PoiError> {
+        parse_pois_csv(t.as_bytes(), "t.csv")
+    }
+
     #[test]
     fn csv_with_and_without_normals() {
-        let t = "id,x,y,z,nx,ny,nz\n# comment\nw1,1,2,3,0,0,1\nw2,4,5,6,,,\n";
-        let p = parse_pois_csv(t, "t.csv").unwrap();
+        let p = parse("id,x,y,z,nx,ny,nz\n# comment\nw1,1,2,3,0,0,1\nw2,4,5,6,,,\n").unwrap();
         assert_eq!(p.len(), 2);
-        assert_eq!(p[0].normal, Some(DVec3::Z));
-        assert_eq!(p[1].normal, None);
-        assert_eq!(p[1].id, "w2");
-        let e = parse_pois_csv("x,y,z\n1,2\n", "t.csv").unwrap_err();
+        assert_eq!(p[0].poi.normal, Some(DVec3::Z));
+        assert_eq!(p[1].poi.normal, None);
+        assert_eq!(p[1].poi.id, "w2");
+        assert_eq!(p[1].at, "t.csv:4");
+        let e = parse("x,y,z\n1,2\n").unwrap_err();
         assert!(e.to_string().starts_with("t.csv:2"), "{e}");
-        assert!(parse_pois_csv("a,b\n1,2\n", "t.csv").is_err());
+        assert!(parse("a,b\n1,2\n").is_err());
         assert!(parse_poi("1,2,NaN", 0).is_err());
         assert!(parse_poi("1,2,3,0,0,0", 0).is_err());
+    }
+
+    #[test]
+    fn bom_quotes_comments_and_column_order() {
+        let t = "\u{feff}# made by hand\n\n\"Z\" , id, X ,y\r\n3,\"a \"\"b\"\"\",1,2\r\n# skip\n6,c,4,5\n";
+        let p = parse(t).unwrap();
+        assert_eq!(p.len(), 2);
+        assert_eq!(p[0].poi.id, "a \"b\"");
+        assert_eq!(p[0].poi.position, DVec3::new(1.0, 2.0, 3.0));
+        assert_eq!(p[1].poi.position, DVec3::new(4.0, 5.0, 6.0));
+        assert_eq!(p[1].at, "t.csv:6");
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let e = parse("id,x,y,z\na,1,2,3\nb,1,two,3\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("t.csv:3:") && e.contains("\"two\""), "{e}");
+        let e = parse("id,x,y,z\n,1,2,3\n").unwrap_err().to_string();
+        assert!(e.starts_with("t.csv:2:") && e.contains("empty id"), "{e}");
+        let e = parse("id,x,y\n").unwrap_err().to_string();
+        assert!(e.starts_with("t.csv:1:"), "{e}");
+    }
+
+    #[test]
+    fn no_id_column_numbers_points() {
+        let p = parse("x,y,z\n1,2,3\n4,5,6\n").unwrap();
+        assert_eq!(p[1].poi.id, "poi-2");
+        assert!(check_unique_ids(&p).is_ok());
     }
 }

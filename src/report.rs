@@ -24,7 +24,7 @@ use crate::select::Selection;
 use serde::Serialize;
 
 /// Format version of the report (bumped on incompatible changes).
-pub const REPORT_VERSION: u32 = 1;
+pub const REPORT_VERSION: u32 = 2;
 
 /// The whole report.
 #[derive(Debug, Clone, Serialize)]
@@ -58,6 +58,8 @@ pub struct InputEntry {
     pub srs_name: Option<String>,
     /// Output written for it, if any.
     pub output: Option<String>,
+    /// Buildings and parts in the output written for it (0 when none was written).
+    pub buildings_out: usize,
 }
 
 /// Parameters of the run.
@@ -113,6 +115,9 @@ pub struct PoiEntry {
     pub silhouette_assets: usize,
     /// Time of this POI's selection (ms).
     pub ms: f64,
+    /// What makes this POI's result suspect ([`crate::checks::poi_flags`]); set by
+    /// [`Report::set_flags`].
+    pub flags: Vec<crate::checks::PoiFlag>,
 }
 
 /// One asset.
@@ -153,7 +158,8 @@ pub struct Totals {
     pub polygon_fraction: f64,
     /// Buildings and parts in the input.
     pub buildings_in: usize,
-    /// Buildings and parts with at least one kept asset or own geometry.
+    /// Buildings and parts in the outputs written, as the writer counted them (see
+    /// [`Report::record_output`]); 0 until outputs are recorded.
     pub buildings_out: usize,
 }
 
@@ -202,6 +208,7 @@ impl Report {
                 citygml_version: f.version.as_str().to_string(),
                 srs_name: f.srs_name.clone(),
                 output: None,
+                buildings_out: 0,
             })
             .collect();
         let mut totals = Totals {
@@ -209,10 +216,6 @@ impl Report {
             buildings_in: model.buildings.len(),
             ..Default::default()
         };
-        let mut building_kept = vec![false; model.buildings.len()];
-        for (b, kept) in model.buildings.iter().zip(building_kept.iter_mut()) {
-            *kept = b.geometries.iter().any(|g| !g.polygons.is_empty());
-        }
         let assets = model
             .assets
             .iter()
@@ -225,16 +228,6 @@ impl Report {
                 totals.polygons_out += out;
                 if let Some(c) = totals.levels.get_mut(usize::from(level)) {
                     *c += 1;
-                }
-                if level > 0 {
-                    // A kept asset keeps its building and every ancestor part.
-                    let mut b = a.building;
-                    while let Some(k) = b {
-                        if let Some(x) = building_kept.get_mut(k) {
-                            *x = true;
-                        }
-                        b = model.buildings.get(k).and_then(|x| x.parent);
-                    }
                 }
                 AssetEntry {
                     id: a.id.clone(),
@@ -252,7 +245,6 @@ impl Report {
                 }
             })
             .collect();
-        totals.buildings_out = building_kept.iter().filter(|k| **k).count();
         totals.polygon_fraction = if totals.polygons_in == 0 {
             0.0
         } else {
@@ -271,6 +263,7 @@ impl Report {
                 assets_hit: s.assets_hit,
                 silhouette_assets: s.silhouette_assets,
                 ms: s.seconds * 1e3,
+                flags: Vec::new(),
             })
             .collect();
         Report {
@@ -282,6 +275,31 @@ impl Report {
             assets,
             totals,
             timings_ms,
+        }
+    }
+
+    /// Set the flags of each POI (in POI order).
+    pub fn set_flags(&mut self, flags: &[Vec<crate::checks::PoiFlag>]) {
+        for (entry, f) in self.pois.iter_mut().zip(flags) {
+            entry.flags = f.clone();
+        }
+    }
+
+    /// Record the output written for input file `file`: its path and the buildings and parts
+    /// it holds (`buildings_in_file` minus those the writer dropped), so that
+    /// `totals.buildings_out` counts what the files hold, not what a rule guessed.
+    pub fn record_output(
+        &mut self,
+        file: usize,
+        path: String,
+        buildings_in_file: usize,
+        dropped: usize,
+    ) {
+        let n = buildings_in_file.saturating_sub(dropped);
+        if let Some(entry) = self.inputs.get_mut(file) {
+            self.totals.buildings_out = self.totals.buildings_out - entry.buildings_out + n;
+            entry.output = Some(path);
+            entry.buildings_out = n;
         }
     }
 }

@@ -4,7 +4,7 @@
 //! `fixtures/bad/make_bad.py`), asserting the exact [`ReadError`] variant or warning category,
 //! the location in the message (file, line:column, gml:id) and, for `skylod convert`, exit code 1
 //! with nothing (no output, no temporary file) left in the output directory. Hostile XML and
-//! big inputs are generated here; inputs over 100 MB only with `SKYLOD_BIG_TESTS=1`.
+//! big inputs are generated here; inputs over 100 MB only with `--ignored`.
 
 mod common;
 
@@ -63,11 +63,18 @@ fn vm_hwm_kib(pid: u32) -> u64 {
 
 /// Run the binary, killing it (and failing the test) after `secs` seconds: a hang is a bug.
 fn run_timeout(args: &[&std::ffi::OsStr], secs: u64) -> Run {
+    let mut cmd = Command::new(BIN);
+    cmd.args(args);
+    run_command(cmd, secs)
+}
+
+/// [`run_timeout`] for any command.
+fn run_command(mut cmd: Command, secs: u64) -> Run {
+    let args: Vec<_> = cmd.get_args().map(|a| a.to_os_string()).collect();
     let logs = tempfile::tempdir().unwrap();
     let out_path = logs.path().join("stdout");
     let err_path = logs.path().join("stderr");
-    let mut child = Command::new(BIN)
-        .args(args)
+    let mut child = cmd
         .stdin(Stdio::null())
         .stdout(std::fs::File::create(&out_path).unwrap())
         .stderr(std::fs::File::create(&err_path).unwrap())
@@ -715,24 +722,11 @@ fn coordinates_split_by_comments_count_towards_the_limit() {
     assert!(e.to_string().contains("[gml:id P1]"), "{e}");
 }
 
-fn big_tests() -> bool {
-    if std::env::var("SKYLOD_BIG_TESTS")
-        .map(|v| v == "1")
-        .unwrap_or(false)
-    {
-        true
-    } else {
-        eprintln!("SKIP: set SKYLOD_BIG_TESTS=1 to run tests with inputs over 100 MB");
-        false
-    }
-}
-
-/// Opt-in (`SKYLOD_BIG_TESTS=1`): a 100 MB attribute value with the default limits.
+/// Opt-in (`cargo test --test bad_input -- --ignored`): a 100 MB attribute value with the
+/// default limits.
 #[test]
+#[ignore = "writes a 100 MB input; run with --ignored"]
 fn huge_attribute_100mb() {
-    if !big_tests() {
-        return;
-    }
     let ok = std::fs::read_to_string(bad("ok.gml")).unwrap();
     let (a, b) = ok.split_at(ok.find("gml:id=\"R1\"").unwrap());
     let dir = tempfile::tempdir().unwrap();
@@ -818,6 +812,37 @@ fn long_single_line() {
 // ---------------------------------------------------------------------------------------------
 // file system
 
+/// Run the binary with `args` so that file permissions apply to it: directly when they
+/// already apply to this process, otherwise (root, CAP_DAC_OVERRIDE) as user `nobody` through
+/// util-linux `setpriv`. The binary is copied into `dir` (made world-readable) so that
+/// `nobody` can run it wherever the checkout lives. `None` when neither way works (then
+/// [`missing`] fails the test under `CI=true`).
+fn run_unprivileged(dir: &Path, args: &[&std::ffi::OsStr]) -> Option<Run> {
+    use std::os::unix::fs::PermissionsExt;
+    if permissions_enforced(dir) {
+        return Some(run_timeout(args, 60));
+    }
+    let setpriv_ok = Command::new("setpriv")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !setpriv_ok {
+        missing("setpriv (util-linux), to drop root privileges for a permission test");
+        return None;
+    }
+    std::fs::set_permissions(dir, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let bin = dir.join("skylod-bin");
+    std::fs::copy(BIN, &bin).unwrap();
+    std::fs::set_permissions(&bin, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let mut cmd = Command::new("setpriv");
+    cmd.args(["--reuid=65534", "--regid=65534", "--clear-groups", "--"])
+        .arg(&bin)
+        .args(args);
+    Some(run_command(cmd, 60))
+}
+
 /// True when permission bits are enforced for this process (not root / CAP_DAC_OVERRIDE).
 fn permissions_enforced(dir: &Path) -> bool {
     use std::os::unix::fs::PermissionsExt;
@@ -830,21 +855,38 @@ fn permissions_enforced(dir: &Path) -> bool {
     enforced
 }
 
+/// An input the user may not read: exit 1 with the reason, nothing written. As root the
+/// command runs as `nobody` ([`run_unprivileged`]), so the test runs everywhere.
 #[test]
 fn unreadable_input() {
     use std::os::unix::fs::PermissionsExt;
     let dir = tempfile::tempdir().unwrap();
-    if !permissions_enforced(dir.path()) {
-        eprintln!("SKIP unreadable_input: running with root privileges, chmod 000 does not prevent reading");
-        return;
-    }
     let input = dir.path().join("secret.gml");
     std::fs::copy(bad("ok.gml"), &input).unwrap();
     std::fs::set_permissions(&input, std::fs::Permissions::from_mode(0o000)).unwrap();
-    let e = read_err(&input);
-    assert!(matches!(e, ReadError::Io { .. }), "{e}");
-    assert!(e.to_string().contains("secret.gml: cannot read"), "{e}");
-    convert_fails(&input, &["secret.gml: cannot read"]);
+    if permissions_enforced(dir.path()) {
+        let e = read_err(&input);
+        assert!(matches!(e, ReadError::Io { .. }), "{e}");
+        assert!(e.to_string().contains("secret.gml: cannot read"), "{e}");
+    }
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    std::fs::set_permissions(&out_dir, std::fs::Permissions::from_mode(0o777)).unwrap();
+    let out = out_dir.join("out.gml");
+    let Some(r) = run_unprivileged(
+        dir.path(),
+        &[
+            "convert".as_ref(),
+            input.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ],
+    ) else {
+        return;
+    };
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(r.stderr.contains("secret.gml: cannot read"), "{}", r.stderr);
+    assert!(listing(&out_dir).is_empty(), "{:?}", listing(&out_dir));
 }
 
 /// The output directory cannot take files: read-only (skipped as root), and always the
@@ -876,25 +918,22 @@ fn output_directory_not_writable() {
     assert_eq!(listing(dir.path()), vec!["plain-file"]);
     assert_eq!(std::fs::read(&file).unwrap(), b"not a directory");
 
-    if !permissions_enforced(dir.path()) {
-        eprintln!(
-            "SKIP output_directory_not_writable (read-only part): running with root privileges"
-        );
-        return;
-    }
+    // Read-only directory: as root the command runs as `nobody` ([`run_unprivileged`]).
     let ro = dir.path().join("ro");
     std::fs::create_dir(&ro).unwrap();
     std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
     let out = ro.join("out.gml");
-    let r = run_timeout(
+    let Some(r) = run_unprivileged(
+        dir.path(),
         &[
             "convert".as_ref(),
             input.as_os_str(),
             "-o".as_ref(),
             out.as_os_str(),
         ],
-        60,
-    );
+    ) else {
+        return;
+    };
     std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     assert!(r.stderr.contains("ro/out.gml"), "{}", r.stderr);
@@ -953,7 +992,8 @@ fn existing_output_without_overwrite_is_refused() {
     assert_eq!(listing(dir.path()), vec!["out.gml"]);
 }
 
-/// Disk full, on a 64 KiB tmpfs (needs mount privileges: skipped with a reason otherwise).
+/// Disk full, on a 64 KiB tmpfs (needs mount privileges: fails under `CI=true` without them,
+/// skips with a reason otherwise).
 #[test]
 fn disk_full() {
     let dir = tempfile::tempdir().unwrap();
@@ -967,14 +1007,14 @@ fn disk_full() {
     match &mounted {
         Ok(o) if o.status.success() => {}
         Ok(o) => {
-            eprintln!(
-                "SKIP disk_full: cannot mount a tmpfs: {}",
+            missing(&format!(
+                "mount privileges for a 64 KiB tmpfs (disk_full): {}",
                 String::from_utf8_lossy(&o.stderr).trim()
-            );
+            ));
             return;
         }
         Err(e) => {
-            eprintln!("SKIP disk_full: cannot run mount: {e}");
+            missing(&format!("the mount command (disk_full): {e}"));
             return;
         }
     }

@@ -201,7 +201,13 @@ fn scene_end_to_end() {
         ],
         None,
     );
-    assert_eq!(o.status.code(), Some(1));
+    // Refused before any work: the inputs form one scene, so the whole run is refused.
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("output exists (use --overwrite)"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert_eq!(std::fs::read(&out).unwrap(), before);
 }
 
@@ -417,18 +423,66 @@ fn lod_on_every_file() {
     let mut problems = Vec::new();
     let mut pairs = Vec::new();
     let mut reports = 0;
+    let (mut unreadable, mut flat, mut empty) = (0, 0, 0);
     for (k, input) in inputs.iter().enumerate() {
-        let Ok(model) = read_file(input) else {
-            continue; // unreadable inputs are the bad-input tests' business
+        let name = input.file_name().unwrap().to_string_lossy().to_string();
+        let out = dir.path().join(format!("{k}-{name}"));
+        let rep = dir.path().join(format!("{k}.json"));
+        let model = match read_file(input) {
+            Ok(m) => m,
+            Err(e) => {
+                // An input the reader refuses: lod fails it (exit 1), names it, writes nothing.
+                unreadable += 1;
+                let o = lod(
+                    &[
+                        input.as_os_str(),
+                        OsStr::new("--poi"),
+                        OsStr::new("0,0,0"),
+                        OsStr::new("-o"),
+                        out.as_os_str(),
+                    ],
+                    None,
+                );
+                let err = String::from_utf8_lossy(&o.stderr);
+                if o.status.code() != Some(1) || !err.contains(&name) || out.exists() {
+                    problems.push(format!(
+                        "{}: unreadable ({e}) but lod gave exit {:?}: {err}",
+                        common::short(input),
+                        o.status.code()
+                    ));
+                }
+                continue;
+            }
         };
-        let Some([x0, y0, z0, x1, y1, _]) = model.bbox().to_array() else {
+        let Some([x0, y0, z0, x1, y1, z1]) = model.bbox().to_array() else {
+            empty += 1;
             continue;
         };
         let mid = format!("{},{},{}", (x0 + x1) / 2.0, (y0 + y1) / 2.0, z0 + 1.5);
         let corner = format!("{},{},{}", x0 - 5.0, y0 - 5.0, z0 + 1.5);
-        let name = input.file_name().unwrap().to_string_lossy().to_string();
-        let out = dir.path().join(format!("{k}-{name}"));
-        let rep = dir.path().join(format!("{k}.json"));
+        if z1 - z0 <= 1e-3 {
+            // No heights: refused before tracing (exit 2), nothing written.
+            flat += 1;
+            let o = lod(
+                &[
+                    input.as_os_str(),
+                    OsStr::new("--poi"),
+                    OsStr::new(&mid),
+                    OsStr::new("-o"),
+                    out.as_os_str(),
+                ],
+                None,
+            );
+            let err = String::from_utf8_lossy(&o.stderr);
+            if o.status.code() != Some(2) || !err.contains("no heights") || out.exists() {
+                problems.push(format!(
+                    "{}: flat model but lod gave exit {:?}: {err}",
+                    common::short(input),
+                    o.status.code()
+                ));
+            }
+            continue;
+        }
         let o = lod(
             &[
                 input.as_os_str(),
@@ -466,7 +520,11 @@ fn lod_on_every_file() {
         ));
     }
     common::check_xsd(&pairs, &mut problems);
-    eprintln!("{} inputs, {} reports schema-checked", pairs.len(), reports);
+    eprintln!(
+        "{} inputs, {} reports schema-checked; {unreadable} unreadable, {flat} flat and {empty} empty inputs refused",
+        pairs.len(),
+        reports
+    );
     assert!(pairs.len() > 50, "only {} inputs ran", pairs.len());
     assert!(
         problems.is_empty(),

@@ -173,12 +173,27 @@ fn normalise(mut edits: Vec<Edit>) -> Vec<Edit> {
     out
 }
 
-/// Refuse to write over an input, or over an existing file without `overwrite`.
+/// `-` as an output path: standard output (never a file named `-`).
+///
+/// ```
+/// use std::path::Path;
+/// assert!(skylod::citygml::write::is_stdout(Path::new("-")));
+/// assert!(!skylod::citygml::write::is_stdout(Path::new("./-")));
+/// ```
+pub fn is_stdout(out: &Path) -> bool {
+    out.as_os_str() == "-"
+}
+
+/// Refuse to write over an input, or over an existing file without `overwrite`. Standard
+/// output (`-`) is always a valid target.
 pub fn check_target<'a>(
     out: &Path,
     opts: &WriteOptions,
     inputs: impl IntoIterator<Item = &'a Path>,
 ) -> Result<(), WriteError> {
+    if is_stdout(out) {
+        return Ok(());
+    }
     let canon_out = canonical_target(out);
     let mut protected: Vec<&Path> = inputs.into_iter().collect();
     protected.extend(opts.protect.iter().map(PathBuf::as_path));
@@ -208,7 +223,11 @@ fn canonical_target(out: &Path) -> Option<PathBuf> {
 }
 
 /// Write through `f` into a temporary file beside `out`, gzip when `out` ends in `.gz`,
-/// then rename it into place. On any error the temporary file is removed.
+/// then rename it into place. On any error the temporary file is removed. The file is created
+/// with mode 0666 minus the process umask, as `open(2)` would create it.
+///
+/// `out` = `-` ([`is_stdout`]) streams to standard output instead (uncompressed; a closed
+/// pipe is an [`WriteError::Io`] of kind [`std::io::ErrorKind::BrokenPipe`]).
 pub fn atomic_write<F>(out: &Path, f: F) -> Result<u64, WriteError>
 where
     F: FnOnce(&mut dyn Write) -> Result<u64, WriteError>,
@@ -217,15 +236,27 @@ where
         file: out.to_path_buf(),
         source,
     };
+    if is_stdout(out) {
+        let stdout = std::io::stdout();
+        let mut bw = BufWriter::with_capacity(256 * 1024, stdout.lock());
+        let n = f(&mut bw)?;
+        bw.flush().map_err(io)?;
+        return Ok(n);
+    }
     let dir = out
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    let tmp = tempfile::Builder::new()
-        .prefix(".skylod-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(io)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".skylod-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        // Subject to the umask, like any file the user's tools create (tempfile's 0600 is
+        // right for secrets, wrong for a city model others in the group must read).
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder.tempfile_in(dir).map_err(io)?;
     let gz = out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"));

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 pub struct Args {
     /// CityGML file (.gml, .xml, .gz).
     input: PathBuf,
-    /// Output file (.gz to compress).
+    /// Output file (.gz to compress; `-` for standard output).
     #[arg(short, long)]
     output: PathBuf,
     /// Replace an existing output file.

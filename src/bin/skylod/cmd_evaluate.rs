@@ -1,7 +1,7 @@
 //! `skylod evaluate`: full vs LoD vs all-boxes model, the paper's Tables 1 and 2.
 
 use crate::cmd_sun_hours::DEFAULT_YEAR;
-use crate::common::{load, ms, out_err, PoiArgs, SiteArgs};
+use crate::common::{ms, out_err, warn_flags, PoiArgs, SiteArgs};
 use crate::Outcome;
 use skylod::evaluate::{evaluate, EvalOptions};
 use skylod::lod::LodOptions;
@@ -58,7 +58,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
     args.site.check("evaluate")?;
     let pois = args.pois.points()?;
-    let loaded = load(&args.pois.inputs);
+    let loaded = args.pois.load_checked(&pois)?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
@@ -88,6 +88,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         ..Default::default()
     };
     let e = evaluate(&loaded.model, &pois, &opts, table.as_ref())?;
+    let flags: Vec<_> = e.pois.iter().map(|p| p.flags.clone()).collect();
+    warn_flags(&pois, &flags);
     let mut out = std::io::stdout().lock();
     if args.json {
         let doc = serde_json::json!({

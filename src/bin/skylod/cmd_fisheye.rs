@@ -1,10 +1,10 @@
 //! `skylod fisheye`.
 
 use crate::cmd_sun_hours::DEFAULT_YEAR;
-use crate::common::{load, PoiArgs};
+use crate::common::PoiArgs;
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::citygml::write::atomic_write;
+use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
 use skylod::lod::{lod, LodOptions};
 use skylod::model::AssetKind;
 use skylod::poi::Poi;
@@ -36,9 +36,13 @@ enum ColourBy {
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
-    /// Output SVG. With several POIs, one file per POI: `<stem>-<id>.svg`.
+    /// Output SVG (`-` for standard output, one POI only). With several POIs, one file per
+    /// POI: `<stem>-<id>.svg`.
     #[arg(short, long)]
     output: PathBuf,
+    /// Replace existing output files.
+    #[arg(long)]
+    overwrite: bool,
     /// Cells of the equal solid-angle sky partition (one ray through each centre).
     #[arg(long, default_value_t = 2_000)]
     rays: usize,
@@ -103,18 +107,22 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         .iter()
         .map(|p| output_for(&args.output, p, many))
         .collect();
-    for o in &outputs {
-        let co = o.canonicalize().ok();
-        if args
-            .pois
-            .inputs
-            .iter()
-            .any(|i| i == o || (co.is_some() && i.canonicalize().ok() == co))
-        {
-            bail!("{}: output path is one of the inputs", o.display());
-        }
+    if many && is_stdout(&args.output) {
+        bail!(
+            "{} POIs give one picture each: -o - (standard output) takes one POI",
+            pois.len()
+        );
     }
-    let loaded = load(&args.pois.inputs);
+    // Every target is checked before any work: never over an input, never over an existing
+    // file without --overwrite.
+    let wopts = WriteOptions {
+        overwrite: args.overwrite,
+        ..Default::default()
+    };
+    for o in &outputs {
+        check_target(o, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+    }
+    let loaded = args.pois.load_checked(&pois)?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
@@ -127,6 +135,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     for (poi, out) in pois.iter().zip(&outputs) {
         let cells = classify_cells(&partition, &scene, ray_origin(poi), poi.normal, POI_OFFSET);
         let view = poi_sky_view(&scene, poi, &bundles);
+        let flags = skylod::checks::poi_flags(
+            &scene,
+            &loaded.model,
+            poi,
+            (view.sky_exposure == 0.0).then_some(0),
+        );
+        crate::common::warn_flags(std::slice::from_ref(poi), std::slice::from_ref(&flags));
         let p = poi.position;
         let mut caption = vec![format!(
             "POI ({:.2}, {:.2}, {:.2}){}",

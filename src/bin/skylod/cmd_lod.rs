@@ -1,10 +1,10 @@
 //! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs.
 
-use crate::common::{load, ms, PoiArgs};
+use crate::common::{ms, non_negative, positive, warn_flags, PoiArgs};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::mixed::write_mixed;
-use skylod::citygml::write::{atomic_write, WriteOptions};
+use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
 use skylod::lod::{lod, LodOptions};
 use skylod::report::{Parameters, Report, Timings};
 use skylod::rough::RoughOptions;
@@ -16,8 +16,8 @@ use std::time::Instant;
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
-    /// Output file (one input), or a directory that gets one file per input (created if
-    /// missing; several inputs need a directory). `.gz` compresses.
+    /// Output file (one input; `-` for standard output), or a directory that gets one file
+    /// per input (created if missing; several inputs need a directory). `.gz` compresses.
     #[arg(short, long)]
     output: PathBuf,
     /// Rays per POI (cells of the equal-solid-angle hemisphere partition).
@@ -27,22 +27,22 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Silhouette threshold in degrees (default: 1.5 x the cell's angular size).
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", value_parser = positive, allow_hyphen_values = true)]
     threshold: Option<f64>,
     /// How far (m) below the lowest roof edge an installation may start and still count as
     /// standing on the roof.
-    #[arg(long, default_value_t = 0.5, value_name = "M")]
+    #[arg(long, default_value_t = 0.5, value_name = "M", value_parser = non_negative, allow_hyphen_values = true)]
     roof_tolerance: f64,
     /// Rough model: largest angle (degrees) between normals of one plane.
-    #[arg(long, default_value_t = 5.0, value_name = "DEG")]
+    #[arg(long, default_value_t = 5.0, value_name = "DEG", value_parser = non_negative, allow_hyphen_values = true)]
     angle: f64,
     /// Rough model: largest distance (m) of a polygon from its plane to be merged.
-    #[arg(long, default_value_t = 0.3, value_name = "M")]
+    #[arg(long, default_value_t = 0.3, value_name = "M", value_parser = non_negative, allow_hyphen_values = true)]
     thickness: f64,
     /// Rough model: do not use an asset's LoD2 geometry when it also has a higher LoD.
     #[arg(long)]
     no_lod2: bool,
-    /// Write a JSON report (schemas/report.schema.json).
+    /// Write a JSON report (schemas/report.schema.json; `-` for standard output).
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
     /// Replace existing output files.
@@ -55,6 +55,12 @@ pub struct Args {
 fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> {
     if inputs.len() == 1 && !out.is_dir() {
         return Ok(vec![out.to_path_buf()]);
+    }
+    if is_stdout(out) {
+        bail!(
+            "{} inputs cannot be written to standard output: one document per input needs -o DIR",
+            inputs.len()
+        );
     }
     if out.exists() && !out.is_dir() {
         bail!(
@@ -85,7 +91,20 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
     let pois = args.pois.points()?;
     let outputs = output_paths(&args.pois.inputs, &args.output)?;
+    // Every target is checked before any work: a refusal after minutes of reading and
+    // tracing helps nobody.
+    let wopts = WriteOptions {
+        overwrite: args.overwrite,
+        protect: args.pois.inputs.clone(),
+        keep_envelopes: false,
+    };
+    for out in &outputs {
+        check_target(out, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+    }
     if let Some(path) = &args.report {
+        if is_stdout(path) && is_stdout(&args.output) {
+            bail!("the model and the report cannot both go to standard output");
+        }
         check_report_target(path, &args)?;
     }
     let rough_opts = RoughOptions {
@@ -99,7 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         threshold_deg: args.threshold,
         roof_tolerance_m: args.roof_tolerance,
     };
-    let loaded = load(&args.pois.inputs);
+    let loaded = args.pois.load_checked(&pois)?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
@@ -113,18 +132,14 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             select: select_opts,
         },
     )?;
+    warn_flags(&pois, &result.flags);
 
     if outputs.len() > 1 || args.output.is_dir() {
         std::fs::create_dir_all(&args.output)
             .with_context(|| format!("creating {}", args.output.display()))?;
     }
-    let wopts = WriteOptions {
-        overwrite: args.overwrite,
-        protect: args.pois.inputs.clone(),
-        keep_envelopes: false,
-    };
     let t_write = Instant::now();
-    let mut written: Vec<Option<String>> = vec![None; model.files.len()];
+    let mut written: Vec<Option<(String, usize)>> = vec![None; model.files.len()];
     for (f, src) in model.files.iter().enumerate() {
         // Files of the model are the inputs that could be read, in input order.
         let Some(k) = args.pois.inputs.iter().position(|p| p == &src.path) else {
@@ -152,7 +167,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                     s.buildings_dropped
                 );
                 if let Some(w) = written.get_mut(f) {
-                    *w = Some(out.display().to_string());
+                    *w = Some((out.display().to_string(), s.buildings_dropped));
                 }
             }
             Err(e) => {
@@ -184,8 +199,12 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         ),
         timings,
     );
-    for (entry, out) in report.inputs.iter_mut().zip(written) {
-        entry.output = out;
+    report.set_flags(&result.flags);
+    for (f, w) in written.into_iter().enumerate() {
+        if let Some((path, dropped)) = w {
+            let in_file = model.buildings.iter().filter(|b| b.file == f).count();
+            report.record_output(f, path, in_file, dropped);
+        }
     }
     let t = &report.totals;
     eprintln!(

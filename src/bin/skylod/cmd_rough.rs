@@ -4,7 +4,7 @@ use crate::Outcome;
 use anyhow::bail;
 use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
-use skylod::citygml::write::WriteOptions;
+use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
 use skylod::rough::{rough_model, RoughOptions};
 use std::path::{Path, PathBuf};
 
@@ -13,7 +13,7 @@ pub struct Args {
     /// CityGML files (.gml, .xml, .gz).
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
-    /// Output file for one input (.gz to compress); a directory for several inputs
+    /// Output file for one input (.gz to compress; `-` for standard output); a directory for several inputs
     /// (created if missing; one output per input, with the input's file name).
     #[arg(short, long)]
     output: PathBuf,
@@ -52,6 +52,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         }
         vec![(args.inputs[0].clone(), args.output.clone())]
     } else {
+        if is_stdout(&args.output) {
+            bail!("several inputs cannot be written to standard output: give -o DIR");
+        }
         if args.output.exists() && !args.output.is_dir() {
             bail!(
                 "{}: with several inputs, -o must be a directory",
@@ -72,8 +75,6 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             }
             v.push((i.clone(), args.output.join(name)));
         }
-        std::fs::create_dir_all(&args.output)
-            .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.output.display()))?;
         v
     };
     let wopts = WriteOptions {
@@ -81,8 +82,24 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         protect: args.inputs.clone(),
         keep_envelopes: false,
     };
+    // Every target is checked before any work: an input whose output is refused fails
+    // (exit 1) without being read; the others are done.
     let mut failed = 0usize;
+    let mut todo = Vec::with_capacity(targets.len());
     for (input, out) in &targets {
+        match check_target(out, &wopts, args.inputs.iter().map(PathBuf::as_path)) {
+            Ok(()) => todo.push((input, out)),
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed += 1;
+            }
+        }
+    }
+    if args.inputs.len() > 1 {
+        std::fs::create_dir_all(&args.output)
+            .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.output.display()))?;
+    }
+    for (input, out) in todo {
         if let Err(e) = one(input, out, &opts, &wopts) {
             eprintln!("error: {e}");
             failed += 1;

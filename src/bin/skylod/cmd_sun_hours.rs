@@ -1,6 +1,6 @@
 //! `skylod sun-hours`.
 
-use crate::common::{arr, load, ms, out_err, polygons, trace_full, PoiArgs, SiteArgs};
+use crate::common::{arr, ms, out_err, polygons, trace_full, PoiArgs, SiteArgs};
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{poi_sun_hours, Site, SunTable};
@@ -38,7 +38,7 @@ const MONTHS: [&str; 12] = [
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     args.site.check("sun-hours")?;
     let pois = args.pois.points()?;
-    let loaded = load(&args.pois.inputs);
+    let loaded = args.pois.load_checked(&pois)?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
@@ -47,14 +47,20 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t = Instant::now();
     let table = SunTable::year(args.year, args.step, &site)?;
     let sun_ms = ms(t);
-    let (hours, bvh_ms, trace_ms) =
-        trace_full(&loaded.model, &pois, |s, p| poi_sun_hours(s, p, &table));
+    let traced = trace_full(
+        &loaded.model,
+        &pois,
+        |s, p| poi_sun_hours(s, p, &table),
+        |_| None,
+    );
+    let (hours, bvh_ms, trace_ms) = (&traced.results, traced.bvh_ms, traced.trace_ms);
     let mut out = std::io::stdout().lock();
     if args.json {
         let rows: Vec<_> = pois
             .iter()
-            .zip(&hours)
-            .map(|(p, h)| {
+            .zip(hours)
+            .zip(&traced.flags)
+            .map(|((p, h), flags)| {
                 json!({
                     "id": p.id,
                     "poi": arr(p.position),
@@ -62,6 +68,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                     "sun_hours": h.hours,
                     "monthly": h.monthly,
                     "possible_hours": h.possible_hours,
+                    "flags": flags,
                 })
             })
             .collect();
@@ -84,7 +91,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             head.push_str(&format!(" {m:>6}"));
         }
         out_err(writeln!(out, "{head}"))?;
-        for (p, h) in pois.iter().zip(&hours) {
+        for (p, h) in pois.iter().zip(hours) {
             let mut line = format!("{:<20} {:>9.2} {:>9.2}", p.id, h.hours, h.possible_hours);
             for m in h.monthly {
                 line.push_str(&format!(" {m:>6.1}"));

@@ -1,6 +1,6 @@
 //! `skylod svf`.
 
-use crate::common::{arr, load, out_err, polygons, trace_full, PoiArgs};
+use crate::common::{arr, out_err, polygons, trace_full, PoiArgs};
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{poi_sky_view, SkyBundles};
@@ -24,18 +24,24 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let pois = args.pois.points()?;
     let bundles = SkyBundles::new(args.rays, args.seed)?;
-    let loaded = load(&args.pois.inputs);
+    let loaded = args.pois.load_checked(&pois)?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let (views, bvh_ms, trace_ms) =
-        trace_full(&loaded.model, &pois, |s, p| poi_sky_view(s, p, &bundles));
+    let traced = trace_full(
+        &loaded.model,
+        &pois,
+        |s, p| poi_sky_view(s, p, &bundles),
+        |v| (v.sky_exposure == 0.0).then_some(0),
+    );
+    let (views, bvh_ms, trace_ms) = (&traced.results, traced.bvh_ms, traced.trace_ms);
     let mut out = std::io::stdout().lock();
     if args.json {
         let rows: Vec<_> = pois
             .iter()
-            .zip(&views)
-            .map(|(p, v)| {
+            .zip(views)
+            .zip(&traced.flags)
+            .map(|((p, v), flags)| {
                 json!({
                     "id": p.id,
                     "poi": arr(p.position),
@@ -43,6 +49,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                     "svf": v.svf,
                     "sky_exposure": v.sky_exposure,
                     "rays": v.rays,
+                    "flags": flags,
                 })
             })
             .collect();
@@ -61,7 +68,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             "{:<20} {:>14} {:>14} {:>9} {:>8} {:>8} {:>8} {:>7} {:>12}",
             "id", "x", "y", "z", "nx", "ny", "nz", "svf", "sky_exposure"
         ))?;
-        for (p, v) in pois.iter().zip(&views) {
+        for (p, v) in pois.iter().zip(views) {
             let n = p
                 .normal
                 .map_or(["-".to_string(), "-".into(), "-".into()], |n| {

@@ -3,9 +3,10 @@
 use crate::Outcome;
 use anyhow::{bail, Context};
 use rayon::prelude::*;
+use skylod::checks::{self, PoiFlag, DEFAULT_POI_MARGIN};
 use skylod::citygml::read_file;
 use skylod::model::CityModel;
-use skylod::poi::{parse_poi, read_pois_csv, Poi};
+use skylod::poi::{check_unique_ids, parse_poi, read_pois_csv, Located, Poi};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -23,17 +24,53 @@ pub struct PoiArgs {
         allow_hyphen_values = true
     )]
     pub poi: Vec<String>,
-    /// CSV file of POIs (header `id,x,y,z[,nx,ny,nz]`), read after the --poi points.
+    /// CSV file of POIs (header `id,x,y,z[,nx,ny,nz]`, columns in any order; quoted
+    /// fields, a UTF-8 BOM and `#` comment lines are fine), read after the --poi points.
     #[arg(long, value_name = "FILE.csv")]
     pub pois: Option<PathBuf>,
+    /// Refuse POIs farther than this (m) outside the scene's bounding box: they are almost
+    /// always in another CRS or have x and y swapped.
+    #[arg(long, value_name = "M", default_value_t = DEFAULT_POI_MARGIN, value_parser = non_negative)]
+    pub poi_margin: f64,
+    /// Merge inputs whose srsName denote different CRSs into one scene anyway (only when
+    /// the names differ but the coordinates really are in one CRS).
+    #[arg(long)]
+    pub allow_mixed_crs: bool,
+}
+
+/// A clap value parser: a finite number ≥ 0.
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number >= 0, got {s}"))
+    }
+}
+
+/// A clap value parser: a finite number > 0.
+pub fn positive(s: &str) -> Result<f64, String> {
+    let v = non_negative(s)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be > 0, got {s}"))
+    }
 }
 
 impl PoiArgs {
-    /// The POIs in order (--poi first, then the CSV). No POI at all is a usage error.
+    /// The POIs in order (--poi first, then the CSV). No POI at all, or two with the same
+    /// id, is a usage error.
     pub fn points(&self) -> anyhow::Result<Vec<Poi>> {
         let mut out = Vec::new();
         for (i, t) in self.poi.iter().enumerate() {
-            out.push(parse_poi(t, i)?);
+            out.push(Located {
+                poi: parse_poi(t, i)?,
+                at: format!("--poi {t}"),
+            });
         }
         if let Some(f) = &self.pois {
             out.extend(read_pois_csv(f)?);
@@ -41,7 +78,24 @@ impl PoiArgs {
         if out.is_empty() {
             bail!("no point of interest: give --poi X,Y,Z[,NX,NY,NZ] or --pois FILE.csv");
         }
-        Ok(out)
+        check_unique_ids(&out)?;
+        Ok(out.into_iter().map(|l| l.poi).collect())
+    }
+
+    /// Read the inputs ([`load`]) and refuse a scene that would give a confidently wrong
+    /// answer for `pois` (`skylod::checks`): inputs in different CRSs (unless
+    /// --allow-mixed-crs), a model without heights, POIs far outside the scene.
+    pub fn load_checked(&self, pois: &[Poi]) -> anyhow::Result<Loaded> {
+        let loaded = load(&self.inputs);
+        if loaded.inputs.is_empty() {
+            return Ok(loaded);
+        }
+        if !self.allow_mixed_crs {
+            checks::check_same_crs(&loaded.model)?;
+        }
+        checks::check_heights(&loaded.model)?;
+        checks::check_pois_near(&loaded.model.bbox(), pois, self.poi_margin)?;
+        Ok(loaded)
     }
 }
 
@@ -180,17 +234,54 @@ pub fn out_err<T>(r: std::io::Result<T>) -> anyhow::Result<T> {
     r.context("writing to stdout")
 }
 
+/// Results of [`trace_full`].
+pub struct Traced<T> {
+    /// One result per POI, in POI order.
+    pub results: Vec<T>,
+    /// The trust flags of each POI ([`checks::poi_flags`]).
+    pub flags: Vec<Vec<PoiFlag>>,
+    /// Milliseconds building the scene.
+    pub bvh_ms: f64,
+    /// Milliseconds tracing.
+    pub trace_ms: f64,
+}
+
 /// One result per POI (in POI order) computed in parallel against the full-detail scene of
-/// `model`, with the milliseconds spent building the scene and tracing.
+/// `model`, with each POI's flags (`sky_rays` of a result, when it knows them, adds the
+/// no-sky flag) and the milliseconds spent building the scene and tracing. Flags are
+/// printed as warnings on stderr.
 pub fn trace_full<T: Send>(
     model: &CityModel,
     pois: &[Poi],
     f: impl Fn(&skylod::trace::Scene, &Poi) -> T + Sync,
-) -> (Vec<T>, f64, f64) {
+    sky_rays: impl Fn(&T) -> Option<usize> + Sync,
+) -> Traced<T> {
     let t = Instant::now();
     let scene = skylod::scene::full_scene(model);
     let bvh_ms = ms(t);
     let t = Instant::now();
-    let out = pois.par_iter().map(|p| f(&scene, p)).collect();
-    (out, bvh_ms, ms(t))
+    let (results, flags): (Vec<T>, Vec<Vec<PoiFlag>>) = pois
+        .par_iter()
+        .map(|p| {
+            let r = f(&scene, p);
+            let flags = checks::poi_flags(&scene, model, p, sky_rays(&r));
+            (r, flags)
+        })
+        .unzip();
+    warn_flags(pois, &flags);
+    Traced {
+        results,
+        flags,
+        bvh_ms,
+        trace_ms: ms(t),
+    }
+}
+
+/// Print each POI's flags as a warning on stderr.
+pub fn warn_flags(pois: &[Poi], flags: &[Vec<PoiFlag>]) {
+    for (p, fl) in pois.iter().zip(flags) {
+        for f in fl {
+            eprintln!("warning: {}", f.message(p));
+        }
+    }
 }

@@ -78,9 +78,62 @@ fn main() -> ExitCode {
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,
         Ok(Outcome::SomeFailed) => ExitCode::from(1),
+        // The reader of our standard output went away (`skylod stats … | head`): nothing
+        // is wrong with the work, so end quietly and successfully, as ripgrep does.
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("skylod: error: {e:#}");
+            eprintln!("skylod: error: {}", message(&e));
             ExitCode::from(2)
         }
+    }
+}
+
+/// Whether an I/O error somewhere in the chain is a closed pipe.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// The error and its causes joined by ": ", each thing said once: a cause whose text the
+/// message already holds (library errors quote their source) is not repeated.
+fn message(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if text.is_empty() || out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn causes_said_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
+        let e = anyhow::Error::new(skylod::poi::PoiError::Io {
+            file: "nope.csv".into(),
+            source: io,
+        })
+        .context("reading POIs");
+        assert_eq!(message(&e), "reading POIs: nope.csv: No such file");
+    }
+
+    #[test]
+    fn broken_pipe_found_in_chain() {
+        let io = std::io::Error::new(std::io::ErrorKind::BrokenPipe, "pipe");
+        let e = anyhow::Error::new(io).context("writing to stdout");
+        assert!(is_broken_pipe(&e));
+        let e = anyhow::anyhow!("other");
+        assert!(!is_broken_pipe(&e));
     }
 }

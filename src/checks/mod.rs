@@ -1,0 +1,54 @@
+//! Trust checks: inputs that would give a confidently wrong answer are refused before any
+//! tracing, or flagged in every output (`../shared/DESIGN.md`, "Trust: no confident wrong
+//! answer"). One check per file:
+//!
+//! - [`extent::check_pois_near`]: a POI far outside the scene (a wrong CRS, swapped axes);
+//! - [`heights::check_heights`]: a model without heights (2D footprints) cannot be traced;
+//! - [`same_crs::check_same_crs`]: inputs in different CRSs are not merged into one scene;
+//! - [`enclosure::poi_flags`]: a POI inside a closed building, or with every ray blocked.
+//!
+//! The refusals are [`TrustError`]s; the flags are data ([`PoiFlag`]) that the commands
+//! print as warnings and write into their JSON outputs.
+
+pub mod enclosure;
+pub mod extent;
+pub mod heights;
+pub mod same_crs;
+
+pub use enclosure::{poi_flags, PoiFlag};
+pub use extent::{check_pois_near, DEFAULT_POI_MARGIN};
+pub use heights::check_heights;
+pub use same_crs::check_same_crs;
+
+/// An input that would give a confidently wrong answer.
+#[derive(Debug, thiserror::Error)]
+pub enum TrustError {
+    /// POIs lie farther than the margin outside the scene's bounding box.
+    #[error("{message}")]
+    PoiOutside {
+        /// The full explanation: which POIs, how far, and what to try.
+        message: String,
+    },
+    /// The model has no heights.
+    #[error(
+        "{files}: the model has no heights ({reason}); tracing a flat model would give \
+         SVF 1 and full sun everywhere. Use a model with 3D geometry (stats and convert \
+         still read this one)"
+    )]
+    NoHeights {
+        /// The files concerned, comma separated.
+        files: String,
+        /// `srsDimension="2"` or `every height is Z`.
+        reason: String,
+    },
+    /// Inputs in different CRSs.
+    #[error(
+        "the inputs are in different CRSs and would be merged into one scene: {listing}. \
+         Reproject them to one CRS first, or give --allow-mixed-crs if the names differ but \
+         the CRS is the same"
+    )]
+    MixedCrs {
+        /// `file (srs)` per CRS, `; ` separated.
+        listing: String,
+    },
+}
