@@ -410,6 +410,33 @@ fn usage_and_input_errors() {
     assert_eq!(std::fs::read(&copy).unwrap(), before);
 }
 
+/// `Building` and `BuildingPart` elements (any prefix) in a written CityGML file.
+fn buildings_in_output(path: &Path) -> u64 {
+    let raw = std::fs::read(path).unwrap_or_default();
+    let text = if raw.starts_with(&[0x1f, 0x8b]) {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut flate2::read::MultiGzDecoder::new(&raw[..]), &mut s)
+            .unwrap();
+        s
+    } else {
+        String::from_utf8_lossy(&raw).into_owned()
+    };
+    let mut n = 0;
+    for (i, _) in text.match_indices("Building") {
+        let before = text[..i].rfind('<').map(|lt| &text[lt + 1..i]);
+        // A start tag: `<Building`, `<bldg:Building` (no `/`, no space in the prefix).
+        let is_start = before.is_some_and(|p| {
+            !p.contains(['/', ' ', '>', '\n']) && (p.is_empty() || p.ends_with(':'))
+        });
+        let rest = &text[i + "Building".len()..];
+        let rest = rest.strip_prefix("Part").unwrap_or(rest);
+        if is_start && rest.starts_with([' ', '>', '\n', '\t', '\r']) {
+            n += 1;
+        }
+    }
+    n
+}
+
 /// `skylod lod` on every shared file and fixture, with a POI at the middle of the model
 /// (1.5 m above its lowest point) and one outside a corner: XSD-valid output for valid input,
 /// no new unresolved references, a schema-valid report, never a crash.
@@ -511,6 +538,17 @@ fn lod_on_every_file() {
         if k % 10 == 0 {
             check_report_schema(&rep);
             reports += 1;
+        }
+        // The report counts the buildings and parts the file holds.
+        let held = buildings_in_output(&out);
+        let said = report(&rep)["totals"]["buildings_out"]
+            .as_u64()
+            .unwrap_or(u64::MAX);
+        if held != said {
+            problems.push(format!(
+                "{}: the report says {said} buildings out, the file holds {held}",
+                common::short(input)
+            ));
         }
         common::check_refs(input, &out, &mut problems);
         pairs.push((

@@ -1,31 +1,36 @@
 //! Inputs in different CRSs must not be merged into one scene: tiles in EPSG:25832 and in
 //! EPSG:4326 would be traced side by side thousands of kilometres apart (or on top of each
-//! other), silently. Names that spell the same EPSG code differently (`EPSG:25832`,
-//! `urn:ogc:def:crs:EPSG::25832`, `http://www.opengis.net/def/crs/EPSG/0/25832`) agree; a
-//! file without `srsName` agrees with anything (nothing is known about it).
+//! other), silently. CRSs are compared by their horizontal part: names that spell the same
+//! EPSG code differently (`EPSG:25832`, `urn:ogc:def:crs:EPSG::25832`,
+//! `http://www.opengis.net/def/crs/EPSG/0/25832`, the compound
+//! `urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783`, the AdV `urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH`)
+//! agree; a vertical datum stated in one name and not in another does not make them differ
+//! (heights differ by centimetres to a metre between such datums, far below what moves a
+//! skyline). A file without `srsName` agrees with anything (nothing is known about it).
 //!
 //! # Example
 //! ```
 //! use skylod::checks::same_crs::same_crs;
 //! assert!(same_crs("EPSG:25832", "urn:ogc:def:crs:EPSG::25832"));
+//! assert!(same_crs("urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH", "urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"));
 //! assert!(!same_crs("EPSG:25832", "EPSG:25833"));
 //! ```
 
 use super::TrustError;
 use crate::model::CityModel;
 
-/// The key two names are compared by: their EPSG codes when they carry any, otherwise the
-/// trimmed name.
+/// The key two names are compared by: the EPSG code of the horizontal CRS when the name
+/// carries one (an AdV `ETRS89_UTMzz` name is EPSG:258zz), otherwise the trimmed name.
 fn key(name: &str) -> String {
-    let codes = crate::crs::epsg_codes(&name.to_ascii_uppercase());
-    if codes.is_empty() {
-        name.trim().to_string()
-    } else {
-        codes
-            .iter()
-            .map(u32::to_string)
-            .collect::<Vec<_>>()
-            .join("+")
+    let upper = name.to_ascii_uppercase();
+    if upper.contains("ETRS89_UTM") {
+        if let Some((zone, true)) = crate::crs::utm_zone(name) {
+            return format!("EPSG:{}", 25800 + u32::from(zone));
+        }
+    }
+    match crate::crs::epsg_codes(&upper).first() {
+        Some(code) => format!("EPSG:{code}"),
+        None => name.trim().to_string(),
     }
 }
 
@@ -55,4 +60,41 @@ pub fn check_same_crs(model: &CityModel) -> Result<(), TrustError> {
         .collect::<Vec<_>>()
         .join("; ");
     Err(TrustError::MixedCrs { listing })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::same_crs;
+
+    #[test]
+    fn spellings_of_one_crs_agree() {
+        let names = [
+            "EPSG:25832",
+            "urn:ogc:def:crs:EPSG::25832",
+            "http://www.opengis.net/def/crs/EPSG/0/25832",
+            "urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783",
+            "urn:ogc:def:crs:EPSG:25832, crs:EPSG:5783",
+            "urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH",
+            "urn:adv:crs:ETRS89_UTM32*DE_DHHN2016_NH",
+        ];
+        for a in names {
+            for b in names {
+                assert!(same_crs(a, b), "{a} vs {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn different_crs_differ() {
+        assert!(!same_crs(
+            "EPSG:25832",
+            "http://www.opengis.net/def/crs/EPSG/0/6697"
+        ));
+        assert!(!same_crs(
+            "urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH",
+            "urn:adv:crs:ETRS89_UTM33*DE_DHHN92_NH"
+        ));
+        assert!(!same_crs("#local-CRS-1", "EPSG:25832"));
+        assert!(same_crs("#local-CRS-1", " #local-CRS-1 "));
+    }
 }

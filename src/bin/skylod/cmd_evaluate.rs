@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Silhouette threshold in degrees (default: 1.5 x the cell size).
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", value_parser = crate::common::positive, allow_hyphen_values = true)]
     threshold: Option<f64>,
     /// Rays of each SVF bundle (the same bundle for the three models).
     #[arg(long, default_value_t = 20_000)]

@@ -30,7 +30,7 @@ pub struct PoiArgs {
     pub pois: Option<PathBuf>,
     /// Refuse POIs farther than this (m) outside the scene's bounding box: they are almost
     /// always in another CRS or have x and y swapped.
-    #[arg(long, value_name = "M", default_value_t = DEFAULT_POI_MARGIN, value_parser = non_negative)]
+    #[arg(long, value_name = "M", default_value_t = DEFAULT_POI_MARGIN, value_parser = non_negative, allow_hyphen_values = true)]
     pub poi_margin: f64,
     /// Merge inputs whose srsName denote different CRSs into one scene anyway (only when
     /// the names differ but the coordinates really are in one CRS).
@@ -53,11 +53,14 @@ pub fn non_negative(s: &str) -> Result<f64, String> {
 
 /// A clap value parser: a finite number > 0.
 pub fn positive(s: &str) -> Result<f64, String> {
-    let v = non_negative(s)?;
-    if v > 0.0 {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number"))?;
+    if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
-        Err(format!("must be > 0, got {s}"))
+        Err(format!("must be a finite number > 0, got {s}"))
     }
 }
 
