@@ -571,3 +571,56 @@ fn lod_on_every_file() {
         problems.join("\n")
     );
 }
+
+/// The README's first command, run as written (outputs redirected to a temporary
+/// directory): it prints what the README shows, timings aside, and keeps a level-2 asset.
+#[test]
+fn readme_first_command_prints_what_the_readme_shows() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let section = &readme[readme.find("## The two commands").expect("section")..];
+    let block = |from: usize, fence: &str| {
+        let start = section[from..].find(fence).unwrap() + from + fence.len();
+        let end = section[start..].find("```").unwrap() + start;
+        (section[start..end].to_string(), end + 3)
+    };
+    let (command, after) = block(0, "```sh\n");
+    let (printed, _) = block(after, "```\n");
+    let command = command.replace("\\\n", " ");
+    let words: Vec<&str> = command.split_whitespace().collect();
+    assert_eq!(
+        &words[..4],
+        ["cargo", "run", "--release", "--"],
+        "{command}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let args: Vec<String> = words[4..]
+        .iter()
+        .map(|w| match *w {
+            "small-lod.gml" | "small-report.json" => dir.path().join(w).display().to_string(),
+            _ => w.to_string(),
+        })
+        .collect();
+    let o = Command::new(common::BIN)
+        .args(&args)
+        .current_dir(root)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).replace(&format!("{}/", dir.path().display()), "");
+    assert!(o.status.success(), "{err}");
+    let untimed = |t: &str| -> Vec<String> {
+        t.lines()
+            .map(|l| l.split("; read ").next().unwrap_or(l).to_string())
+            .collect()
+    };
+    assert_eq!(
+        untimed(&err),
+        untimed(&printed),
+        "README shows:\n{printed}\nthe run printed:\n{err}"
+    );
+    let r = report(&dir.path().join("small-report.json"));
+    assert!(
+        r["totals"]["levels"][2].as_u64().unwrap() > 0,
+        "no level-2 asset"
+    );
+}
