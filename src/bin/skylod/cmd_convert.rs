@@ -40,7 +40,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let summary = match write_document(&model, 0, Vec::new(), &args.output, &opts) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("error: writing {}: {e}", args.output.display());
+            eprintln!("error: {e}");
             return Ok(Outcome::SomeFailed);
         }
     };

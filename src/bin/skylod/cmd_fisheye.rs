@@ -207,7 +207,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 })?;
             Ok(text.len() as u64)
         })
-        .with_context(|| format!("writing {}", out.display()))?;
+        .context("writing the picture")?;
         let sky = cell_shares(&cells, &kinds, levels.as_deref())
             .into_iter()
             .find(|s| s.0 == "sky")

@@ -236,7 +236,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 })?;
             Ok(json.len() as u64 + 1)
         })
-        .with_context(|| format!("writing report {}", path.display()))?;
+        .context("writing the report")?;
     }
     Ok(if failed {
         Outcome::SomeFailed
@@ -251,7 +251,7 @@ fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {
         ..Default::default()
     };
     skylod::citygml::write::check_target(path, &opts, args.pois.inputs.iter().map(|p| p.as_path()))
-        .with_context(|| format!("report {}", path.display()))?;
+        .context("the report")?;
     Ok(())
 }
 
