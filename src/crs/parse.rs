@@ -379,7 +379,9 @@ mod tests {
 
     fn describe(c: &Crs) -> String {
         let k = match c.kind {
-            CrsKind::Projected { metres_per_unit } if metres_per_unit == 1.0 => "m".to_string(),
+            CrsKind::Projected {
+                metres_per_unit: 1.0,
+            } => "m".to_string(),
             CrsKind::Projected { metres_per_unit } if metres_per_unit == US_SURVEY_FOOT => {
                 "ftUS".to_string()
             }

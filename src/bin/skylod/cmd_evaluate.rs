@@ -2,6 +2,7 @@
 
 use crate::cmd_sun_hours::DEFAULT_YEAR;
 use crate::common::{load, ms, out_err, PoiArgs, SiteArgs};
+use crate::frames::frame;
 use crate::Outcome;
 use skylod::evaluate::{evaluate, EvalOptions};
 use skylod::lod::LodOptions;
@@ -58,16 +59,17 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
     args.site.check("evaluate")?;
     let pois = args.pois.points()?;
-    let loaded = load(&args.pois.inputs);
+    let mut loaded = load(&args.pois.inputs);
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let framed = frame(&mut loaded.model, &args.pois.crs, pois, "evaluate")?;
     let site = if args.no_sun {
         None
     } else {
         let (lat, lon) = args
             .site
-            .resolve(&loaded.model, "evaluate (or give --no-sun)")?;
+            .resolve(framed.source, "evaluate (or give --no-sun)")?;
         Some(Site::new(lat, lon))
     };
     let table = match &site {
@@ -87,7 +89,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         svf_rays: args.svf_rays,
         ..Default::default()
     };
-    let e = evaluate(&loaded.model, &pois, &opts, table.as_ref())?;
+    let e = evaluate(&framed.model, &framed.local_pois, &opts, table.as_ref())?;
     let mut out = std::io::stdout().lock();
     if args.json {
         let doc = serde_json::json!({

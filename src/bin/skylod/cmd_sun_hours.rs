@@ -1,6 +1,7 @@
 //! `skylod sun-hours`.
 
 use crate::common::{arr, load, ms, out_err, polygons, trace_full, PoiArgs, SiteArgs};
+use crate::frames::frame;
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{poi_sun_hours, Site, SunTable};
@@ -38,17 +39,20 @@ const MONTHS: [&str; 12] = [
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     args.site.check("sun-hours")?;
     let pois = args.pois.points()?;
-    let loaded = load(&args.pois.inputs);
+    let mut loaded = load(&args.pois.inputs);
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let (lat, lon) = args.site.resolve(&loaded.model, "sun-hours")?;
+    let framed = frame(&mut loaded.model, &args.pois.crs, pois, "sun-hours")?;
+    let (lat, lon) = args.site.resolve(framed.source, "sun-hours")?;
     let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
     let t = Instant::now();
     let table = SunTable::year(args.year, args.step, &site)?;
     let sun_ms = ms(t);
-    let (hours, bvh_ms, trace_ms) =
-        trace_full(&loaded.model, &pois, |s, p| poi_sun_hours(s, p, &table));
+    let (hours, bvh_ms, trace_ms) = trace_full(&framed.model, &framed.local_pois, |s, p| {
+        poi_sun_hours(s, p, &table)
+    });
+    let pois = &framed.pois;
     let mut out = std::io::stdout().lock();
     if args.json {
         let rows: Vec<_> = pois
@@ -74,7 +78,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             "timezone": args.timezone,
             "steps": table.len(),
             "inputs": loaded.inputs,
-            "polygons": polygons(&loaded.model),
+            "polygons": polygons(framed.source),
             "timings_ms": {"read": loaded.read_ms, "sun": sun_ms, "bvh": bvh_ms, "trace": trace_ms},
         });
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
@@ -98,7 +102,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             args.step,
             args.year,
             args.timezone,
-            polygons(&loaded.model),
+            polygons(framed.source),
             loaded.inputs.len(),
             loaded.read_ms,
             sun_ms,

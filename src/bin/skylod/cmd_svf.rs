@@ -1,6 +1,7 @@
 //! `skylod svf`.
 
 use crate::common::{arr, load, out_err, polygons, trace_full, PoiArgs};
+use crate::frames::frame;
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{poi_sky_view, SkyBundles};
@@ -24,12 +25,15 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let pois = args.pois.points()?;
     let bundles = SkyBundles::new(args.rays, args.seed)?;
-    let loaded = load(&args.pois.inputs);
+    let mut loaded = load(&args.pois.inputs);
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let (views, bvh_ms, trace_ms) =
-        trace_full(&loaded.model, &pois, |s, p| poi_sky_view(s, p, &bundles));
+    let framed = frame(&mut loaded.model, &args.pois.crs, pois, "svf")?;
+    let (views, bvh_ms, trace_ms) = trace_full(&framed.model, &framed.local_pois, |s, p| {
+        poi_sky_view(s, p, &bundles)
+    });
+    let pois = &framed.pois;
     let mut out = std::io::stdout().lock();
     if args.json {
         let rows: Vec<_> = pois
@@ -51,7 +55,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             "rays": args.rays,
             "seed": args.seed,
             "inputs": loaded.inputs,
-            "polygons": polygons(&loaded.model),
+            "polygons": polygons(framed.source),
             "timings_ms": {"read": loaded.read_ms, "bvh": bvh_ms, "trace": trace_ms},
         });
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
@@ -86,7 +90,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             pois.len(),
             args.rays,
             args.seed,
-            polygons(&loaded.model),
+            polygons(framed.source),
             loaded.inputs.len(),
             loaded.read_ms,
             bvh_ms,

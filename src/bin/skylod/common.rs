@@ -26,6 +26,9 @@ pub struct PoiArgs {
     /// CSV file of POIs (header `id,x,y,z[,nx,ny,nz]`), read after the --poi points.
     #[arg(long, value_name = "FILE.csv")]
     pub pois: Option<PathBuf>,
+    /// `--source-crs`, `--poi-crs`: applied by `crate::frames::frame` after reading.
+    #[command(flatten)]
+    pub crs: crate::frames::CrsArgs,
 }
 
 impl PoiArgs {
