@@ -128,7 +128,7 @@ pub fn lat_lon(lat: Option<f64>, lon: Option<f64>, cmd: &str) -> anyhow::Result<
 #[derive(clap::Args, Debug)]
 pub struct SiteArgs {
     /// Site latitude in degrees (WGS84, north positive). Default: the centre of the model,
-    /// from its CRS (UTM zones of WGS 84 and ETRS89).
+    /// from its CRS (geographic, or UTM zones of WGS 84, ETRS89, JGD2011, NAD83, GDA).
     #[arg(long, allow_hyphen_values = true)]
     pub lat: Option<f64>,
     /// Site longitude in degrees (WGS84, east positive). Default: as --lat.
@@ -173,7 +173,7 @@ pub fn site_lat_lon(
     }
     bail!(
         "{cmd} needs the site's --lat and --lon (WGS84 degrees): the input's CRS ({}) is not one \
-         skylod converts (UTM zones of WGS 84 and ETRS89)",
+         skylod converts (geographic, or UTM zones of WGS 84, ETRS89, JGD2011, NAD83, GDA)",
         srs.unwrap_or("none given")
     )
 }
