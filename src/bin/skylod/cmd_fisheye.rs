@@ -157,8 +157,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         );
         let view = poi_sky_view(&scene, local, &bundles);
         let p = poi.position;
+        let dp = if crate::frames::decimals(&framed.crs) == 8 {
+            8
+        } else {
+            2
+        };
         let mut caption = vec![format!(
-            "POI ({:.2}, {:.2}, {:.2}){}",
+            "POI ({:.dp$}, {:.dp$}, {:.2}){}",
             p.x,
             p.y,
             p.z,

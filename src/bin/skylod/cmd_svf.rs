@@ -1,7 +1,7 @@
 //! `skylod svf`.
 
 use crate::common::{arr, load, out_err, polygons, trace_full, PoiArgs};
-use crate::frames::frame;
+use crate::frames::{decimals, frame};
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{poi_sky_view, SkyBundles};
@@ -65,6 +65,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             "{:<20} {:>14} {:>14} {:>9} {:>8} {:>8} {:>8} {:>7} {:>12}",
             "id", "x", "y", "z", "nx", "ny", "nz", "svf", "sky_exposure"
         ))?;
+        let dp = decimals(&framed.crs);
         for (p, v) in pois.iter().zip(&views) {
             let n = p
                 .normal
@@ -73,7 +74,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 });
             out_err(writeln!(
                 out,
-                "{:<20} {:>14.3} {:>14.3} {:>9.3} {:>8} {:>8} {:>8} {:>7.4} {:>12.4}",
+                "{:<20} {:>14.dp$} {:>14.dp$} {:>9.3} {:>8} {:>8} {:>8} {:>7.4} {:>12.4}",
                 p.id,
                 p.position.x,
                 p.position.y,
@@ -82,7 +83,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 n[1],
                 n[2],
                 v.svf,
-                v.sky_exposure
+                v.sky_exposure,
+                dp = dp
             ))?;
         }
         eprintln!(

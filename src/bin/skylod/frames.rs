@@ -20,6 +20,15 @@ pub fn parse_crs(s: &str) -> Result<Crs, String> {
     Ok(c)
 }
 
+/// Decimals for printing plan coordinates of `crs`: 8 for degrees (~1 mm), 3 otherwise.
+pub fn decimals(crs: &Crs) -> usize {
+    if matches!(crs.kind, CrsKind::Geographic { .. }) {
+        8
+    } else {
+        3
+    }
+}
+
 /// `--source-crs`, for every command that reads.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct SourceCrsArgs {
