@@ -405,8 +405,10 @@ fn feet_model_same_svf() {
         let p = write(&format!("{name}.pois.csv"), &scaled_pois(&pois, ft, v));
         let (feet, pos, err) = svf_of(&model, &p, &[]);
         assert!(err.contains("feet to metres"), "{err}");
+        eprintln!("{name} ({srs}): metres {metres:?}, feet {feet:?}");
         for (i, (a, b)) in metres.iter().zip(&feet).enumerate() {
-            assert!((a - b).abs() < 2e-3, "{name} POI {i}: metres {a}, feet {b}");
+            // A ray or four of 4,000 may flip on f32 rounding of other coordinates.
+            assert!((a - b).abs() < 1e-3, "{name} POI {i}: metres {a}, feet {b}");
         }
         // Reports keep the input's coordinates (feet).
         assert!(pos[0][0] > 1.4e6, "{:?}", pos[0]);
@@ -418,6 +420,7 @@ fn feet_model_same_svf() {
                 .zip(&wrong)
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
+            eprintln!("{name} traced as one unit: {wrong:?}");
             assert!(worst > 0.02, "unit mix-up not visible: {worst}");
         }
     }
