@@ -13,6 +13,7 @@ mod common;
 
 use common::{fixture, manifest_dir, missing, run, shared_data};
 use serde_json::Value;
+use std::f64::consts::FRAC_1_SQRT_2;
 use std::ffi::OsStr;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -204,7 +205,14 @@ fn latlon_poi_equals_model_poi() {
     let g = fixture("synth-small.gml").display().to_string();
     let model = [
         [430009.950, 4581032.381, 16.6, -1.0, 0.0, 0.0],
-        [430017.465, 4581017.465, 16.6, -0.707107, -0.707107, 0.0],
+        [
+            430017.465,
+            4581017.465,
+            16.6,
+            -FRAC_1_SQRT_2,
+            -FRAC_1_SQRT_2,
+            0.0,
+        ],
         [430032.407, 4581009.950, 16.6, 0.0, -1.0, 0.0],
     ];
     let ll = pyproj(
