@@ -22,7 +22,8 @@
 //! use skylod::crs::{Builtin, Crs, PointTransform};
 //! // A point in WGS 84 (lat, lon) into a UTM 31N model.
 //! let p = Builtin.position(&Crs::epsg(4326), &Crs::epsg(25831), DVec3::new(41.39, 2.17, 20.0)).unwrap();
-//! assert!((p.x - 430_736.0).abs() < 5.0 && (p.y - 4_582_464.0).abs() < 5.0 && p.z == 20.0);
+//! // pyproj: (430608.497, 4582384.561).
+//! assert!((p.x - 430_608.497).abs() < 0.01 && (p.y - 4_582_384.561).abs() < 0.01 && p.z == 20.0);
 //! ```
 
 use super::frame::LocalFrame;

@@ -26,7 +26,7 @@
 //! let (frame, warning) = LocalFrame::new(&crs, &bbox);
 //! assert!(warning.is_none());
 //! let p = frame.to_local(DVec3::new(35.541, 139.777, 11.0)); // 0.001 deg north of the centre
-//! assert!((p.y - 110.94).abs() < 0.01 && p.x.abs() < 1e-6);
+//! assert!((p.y - 110.95).abs() < 0.01 && p.x.abs() < 1e-6);
 //! let back = frame.to_source(p);
 //! assert!((back - DVec3::new(35.541, 139.777, 11.0)).abs().max_element() < 1e-9);
 //! ```

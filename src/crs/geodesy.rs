@@ -8,10 +8,10 @@
 //! use glam::DVec3;
 //! use skylod::crs::{geodesy::Enu, Ellipsoid};
 //! let enu = Enu::new(Ellipsoid::GRS80, 35.54_f64.to_radians(), 139.777_f64.to_radians(), 10.0);
-//! // 0.001 degree of latitude north of the origin is ~111 m north, and a little lower
-//! // (the Earth curves away: ~1 mm at this distance).
+//! // 0.001 degree of latitude north of the origin is 110.95 m north (pyproj's geodesic:
+//! // 110.9505 m), and a little lower (the Earth curves away: ~1 mm at this distance).
 //! let p = enu.to_local(35.541_f64.to_radians(), 139.777_f64.to_radians(), 10.0);
-//! assert!((p.y - 110.94).abs() < 0.01 && p.x.abs() < 1e-6 && p.z < 0.0 && p.z > -0.01);
+//! assert!((p.y - 110.95).abs() < 0.01 && p.x.abs() < 1e-6 && p.z < 0.0 && p.z > -0.01);
 //! let (lat, lon, h) = enu.to_geodetic(p);
 //! assert!((lat.to_degrees() - 35.541).abs() < 1e-12 && (h - 10.0).abs() < 1e-6);
 //! # let _ = lon;
