@@ -410,6 +410,80 @@ mod tests {
         assert!((f.normal_to_source(n) - DVec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-12);
     }
 
+    /// A roof with LoD2 and LoD3 (rough = its LoD2, unchanged) and an installation (rough =
+    /// a generated box), in degrees: back in the source CRS, the LoD2 polygons are the ones
+    /// read, bit for bit, and the box lies where the installation is.
+    #[test]
+    fn rough_back_to_source() {
+        use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
+        use crate::rough::{rough_model, RoughOptions};
+        let (lat, lon) = (35.54, 139.777);
+        let d = 1e-4; // ~10 m
+        let quad = |z: f64, s: f64| {
+            Polygon::new(vec![
+                DVec3::new(lat, lon, z),
+                DVec3::new(lat, lon + s, z),
+                DVec3::new(lat + s, lon + s, z + 0.1),
+                DVec3::new(lat + s, lon, z + 0.1),
+            ])
+        };
+        let asset = |kind, geometries| Asset {
+            kind,
+            id: None,
+            element: "x".into(),
+            building: None,
+            parent: None,
+            span: 0..0,
+            line: 1,
+            function: None,
+            file: 0,
+            geometries,
+        };
+        let mut m = CityModel::default();
+        m.assets.push(asset(
+            AssetKind::Roof,
+            vec![
+                LodGeometry {
+                    lod: 2,
+                    polygons: vec![quad(10.0, d)],
+                    ..Default::default()
+                },
+                LodGeometry {
+                    lod: 3,
+                    polygons: vec![quad(10.0, d / 2.0), quad(10.05, d / 2.0)],
+                    ..Default::default()
+                },
+            ],
+        ));
+        let cube: Vec<Polygon> = [10.0, 12.0].iter().map(|&z| quad(z, d / 10.0)).collect();
+        m.assets.push(asset(
+            AssetKind::Installation,
+            vec![LodGeometry {
+                lod: 3,
+                polygons: cube,
+                ..Default::default()
+            }],
+        ));
+        let (f, _) = LocalFrame::new(&Crs::parse("EPSG:6697"), &m.bbox());
+        let local = f.model_to_local(&m);
+        let rough = rough_model(&local, &RoughOptions::default());
+        let back = f.rough_to_source(&local, &m, &rough);
+        assert_eq!(back[0].lod, 2);
+        assert_eq!(back[0].polygons, m.assets[0].geometries[0].polygons);
+        assert!(!back[1].polygons.is_empty() && back[1].obb.is_none());
+        let b = Bbox::of_points(back[1].polygons.iter().flat_map(|p| p.points()));
+        let src = m.assets[1].bbox();
+        assert!(
+            (b.min - src.min).abs().max_element() < 1e-5,
+            "{b:?} {src:?}"
+        );
+        assert!((b.max - src.max).abs().max_element() < 0.2, "{b:?} {src:?}");
+        // Degrees, not metres, and rounded to 1e-10 degree.
+        let q = back[1].polygons[0].exterior[0];
+        assert!((q.x - lat).abs() < 1e-3 && (q.y - lon).abs() < 1e-3);
+        assert_eq!((q.x * 1e10).round() / 1e10, q.x);
+    }
+
     #[test]
     fn enu_axes_follow_the_crs_order() {
         let b = bbox([35.538, 139.775, 2.0], [35.542, 139.779, 20.0]);
