@@ -356,7 +356,8 @@ fn fisheye_writes_svg() {
     // Only the output in the directory (no temporary file left behind).
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 
-    // Several POIs: one file per POI; stereographic; no sun paths without --lat/--lon.
+    // Several POIs: one file per POI; stereographic; without --lat/--lon the sun paths are
+    // drawn for the site of the model's CRS (EPSG:25831), as sun-hours does.
     let p = pois_csv();
     let o = run_s(&[
         os("fisheye"),
@@ -374,8 +375,13 @@ fn fisheye_writes_svg() {
     for id in csv_ids() {
         let f = dir.path().join(format!("sky-{id}.svg"));
         let s = std::fs::read_to_string(&f).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
-        assert!(s.contains("stereographic") && !s.contains("12h"));
+        assert!(s.contains("stereographic") && s.contains("12h"));
     }
+    assert!(
+        stderr(&o).contains("site lat 41.3"),
+        "site from the CRS: {}",
+        stderr(&o)
+    );
 
     // Unreadable input: exit 1 and no picture; --lat without --lon: exit 2.
     let out2 = dir.path().join("none.svg");

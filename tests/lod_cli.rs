@@ -486,7 +486,13 @@ fn lod_on_every_file() {
             continue;
         };
         let mid = format!("{},{},{}", (x0 + x1) / 2.0, (y0 + y1) / 2.0, z0 + 1.5);
-        let corner = format!("{},{},{}", x0 - 5.0, y0 - 5.0, z0 + 1.5);
+        // 5 m beyond the corner, in the model's units (about 5e-5 degrees in a geographic CRS).
+        let srs = model.files[0].srs_name.as_deref().unwrap_or("");
+        let step = match skylod::crs::Crs::parse(srs).kind {
+            skylod::crs::CrsKind::Geographic { .. } => 5e-5,
+            _ => 5.0,
+        };
+        let corner = format!("{},{},{}", x0 - step, y0 - step, z0 + 1.5);
         if z1 - z0 <= 1e-3 {
             // No heights: refused before tracing (exit 2), nothing written.
             flat += 1;

@@ -36,37 +36,54 @@ fn distance(b: &Bbox, p: DVec3) -> f64 {
 /// Refuse POIs farther than `margin` from the scene's box, naming each (up to five) with its
 /// distance and a hint: swapped axes when swapping x and y brings it inside, `--poi-crs
 /// EPSG:4326` when it looks like degrees. An empty scene accepts everything (nothing to trace).
+/// For a scene and POIs in a metric CRS; see [`check_pois_near_in_frame`] otherwise.
 pub fn check_pois_near(scene: &Bbox, pois: &[Poi], margin: f64) -> Result<(), TrustError> {
+    check_pois_near_in_frame(scene, pois, scene, pois, margin)
+}
+
+/// [`check_pois_near`] for a scene traced in a local metric frame: distances from `local`
+/// POIs to the `scene` box (both in the frame, metres), while the message shows the POIs and
+/// the box as the user gave them (`shown`, `shown_scene`: the model's CRS, e.g. degrees).
+pub fn check_pois_near_in_frame(
+    scene: &Bbox,
+    local: &[Poi],
+    shown_scene: &Bbox,
+    shown: &[Poi],
+    margin: f64,
+) -> Result<(), TrustError> {
     if scene.is_empty() {
         return Ok(());
     }
-    let far: Vec<(&Poi, f64)> = pois
+    let far: Vec<(&Poi, &Poi, f64)> = local
         .iter()
-        .map(|p| (p, distance(scene, p.position)))
-        .filter(|(_, d)| *d > margin)
+        .zip(shown)
+        .map(|(l, s)| (l, s, distance(scene, l.position)))
+        .filter(|(_, _, d)| *d > margin)
         .collect();
     if far.is_empty() {
         return Ok(());
     }
+    let b = shown_scene;
     let mut message = format!(
         "{} of {} POI(s) lie more than {margin} m outside the scene (x {:.1}..{:.1}, y {:.1}..{:.1}, z {:.1}..{:.1}):",
         far.len(),
-        pois.len(),
-        scene.min.x,
-        scene.max.x,
-        scene.min.y,
-        scene.max.y,
-        scene.min.z,
-        scene.max.z
+        local.len(),
+        b.min.x,
+        b.max.x,
+        b.min.y,
+        b.max.y,
+        b.min.z,
+        b.max.z
     );
-    for (p, d) in far.iter().take(5) {
+    for (l, p, d) in far.iter().take(5) {
         let q = p.position;
         let _ = write!(
             message,
             " {} at ({}, {}, {}) is {:.0} m away",
             p.id, q.x, q.y, q.z, d
         );
-        let swapped = DVec3::new(q.y, q.x, q.z);
+        let l = l.position;
+        let swapped = DVec3::new(l.y, l.x, l.z);
         if distance(scene, swapped) <= margin {
             message.push_str(" (x and y look swapped);");
         } else if q.x.abs() <= 180.0 && q.y.abs() <= 180.0 {

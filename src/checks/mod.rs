@@ -16,7 +16,7 @@ pub mod heights;
 pub mod same_crs;
 
 pub use enclosure::{poi_flags, PoiFlag};
-pub use extent::{check_pois_near, DEFAULT_POI_MARGIN};
+pub use extent::{check_pois_near, check_pois_near_in_frame, DEFAULT_POI_MARGIN};
 pub use heights::check_heights;
 pub use same_crs::check_same_crs;
 

@@ -17,18 +17,14 @@
 //! ```
 
 use super::TrustError;
+use crate::crs::Crs;
 use crate::model::CityModel;
 
 /// The key two names are compared by: the EPSG code of the horizontal CRS when the name
-/// carries one (an AdV `ETRS89_UTMzz` name is EPSG:258zz), otherwise the trimmed name.
+/// carries one ([`Crs::parse`]: an AdV `ETRS89_UTMzz` name is EPSG:258zz), otherwise the
+/// trimmed name.
 fn key(name: &str) -> String {
-    let upper = name.to_ascii_uppercase();
-    if upper.contains("ETRS89_UTM") {
-        if let Some((zone, true)) = crate::crs::utm_zone(name) {
-            return format!("EPSG:{}", 25800 + u32::from(zone));
-        }
-    }
-    match crate::crs::epsg_codes(&upper).first() {
+    match Crs::parse(name).epsg {
         Some(code) => format!("EPSG:{code}"),
         None => name.trim().to_string(),
     }

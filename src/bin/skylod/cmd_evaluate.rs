@@ -58,16 +58,19 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
     args.site.check("evaluate")?;
     let pois = args.pois.points()?;
-    let loaded = args.pois.load_checked(&pois)?;
+    let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let framed = args
+        .pois
+        .frame_checked(&mut loaded.model, pois, "evaluate")?;
     let site = if args.no_sun {
         None
     } else {
         let (lat, lon) = args
             .site
-            .resolve(&loaded.model, "evaluate (or give --no-sun)")?;
+            .resolve(framed.source, "evaluate (or give --no-sun)")?;
         Some(Site::new(lat, lon))
     };
     let table = match &site {
@@ -87,9 +90,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         svf_rays: args.svf_rays,
         ..Default::default()
     };
-    let e = evaluate(&loaded.model, &pois, &opts, table.as_ref())?;
+    let e = evaluate(&framed.model, &framed.local_pois, &opts, table.as_ref())?;
     let flags: Vec<_> = e.pois.iter().map(|p| p.flags.clone()).collect();
-    warn_flags(&pois, &flags);
+    warn_flags(&framed.pois, &flags);
     let mut out = std::io::stdout().lock();
     if args.json {
         let doc = serde_json::json!({

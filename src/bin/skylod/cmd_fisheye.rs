@@ -49,7 +49,8 @@ pub struct Args {
     /// Projection of the hemisphere.
     #[arg(long, value_enum, default_value = "equal-area")]
     projection: ProjectionArg,
-    /// Site latitude (degrees) for the sun paths; with --lon.
+    /// Site latitude (degrees) for the sun paths; with --lon. Default: the centre of the
+    /// model from its CRS (as sun-hours); no sun paths when the CRS cannot be converted.
     #[arg(long, allow_hyphen_values = true, requires = "lon")]
     lat: Option<f64>,
     /// Site longitude (degrees) for the sun paths; with --lat.
@@ -95,13 +96,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
-    let paths = match (args.lat, args.lon) {
-        (Some(lat), Some(lon)) => {
-            let (lat, lon) = crate::common::lat_lon(Some(lat), Some(lon), "fisheye")?;
-            sun_paths(&Site::new(lat, lon), args.year)?
-        }
-        _ => Vec::new(),
-    };
+    if let (Some(lat), Some(lon)) = (args.lat, args.lon) {
+        crate::common::lat_lon(Some(lat), Some(lon), "fisheye")?;
+    }
     let many = pois.len() > 1;
     let outputs: Vec<PathBuf> = pois
         .iter()
@@ -122,29 +119,67 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     for o in &outputs {
         check_target(o, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
     }
-    let loaded = args.pois.load_checked(&pois)?;
+    let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let scene = full_scene(&loaded.model);
-    let kinds: Vec<AssetKind> = loaded.model.assets.iter().map(|a| a.kind).collect();
+    let framed = args
+        .pois
+        .frame_checked(&mut loaded.model, pois, "fisheye")?;
+    let site = match (args.lat, args.lon) {
+        (Some(lat), Some(lon)) => Some((lat, lon)),
+        _ => {
+            let bbox = framed.source.bbox();
+            let site = (!bbox.is_empty())
+                .then(|| skylod::crs::site_lat_lon(&framed.crs, bbox.center()))
+                .flatten();
+            match site {
+                Some((a, o)) => eprintln!(
+                    "fisheye: site lat {a:.5}, lon {o:.5}: the centre of the model in {}",
+                    framed.crs
+                ),
+                None => eprintln!(
+                    "fisheye: no sun paths: the CRS ({}) is not one skylod converts; give --lat/--lon",
+                    framed.crs
+                ),
+            }
+            site
+        }
+    };
+    let paths = match site {
+        Some((lat, lon)) => sun_paths(&Site::new(lat, lon), args.year)?,
+        None => Vec::new(),
+    };
+    let scene = full_scene(&framed.model);
+    let kinds: Vec<AssetKind> = framed.model.assets.iter().map(|a| a.kind).collect();
     let projection = match args.projection {
         ProjectionArg::EqualArea => Projection::EqualArea,
         ProjectionArg::Stereographic => Projection::Stereographic,
     };
-    for (poi, out) in pois.iter().zip(&outputs) {
-        let cells = classify_cells(&partition, &scene, ray_origin(poi), poi.normal, POI_OFFSET);
-        let view = poi_sky_view(&scene, poi, &bundles);
+    for ((poi, local), out) in framed.pois.iter().zip(&framed.local_pois).zip(&outputs) {
+        let cells = classify_cells(
+            &partition,
+            &scene,
+            ray_origin(local),
+            local.normal,
+            POI_OFFSET,
+        );
+        let view = poi_sky_view(&scene, local, &bundles);
         let flags = skylod::checks::poi_flags(
             &scene,
-            &loaded.model,
-            poi,
+            &framed.model,
+            local,
             (view.sky_exposure == 0.0).then_some(0),
         );
         crate::common::warn_flags(std::slice::from_ref(poi), std::slice::from_ref(&flags));
         let p = poi.position;
+        let dp = if crate::frames::decimals(&framed.crs) == 8 {
+            8
+        } else {
+            2
+        };
         let mut caption = vec![format!(
-            "POI ({:.2}, {:.2}, {:.2}){}",
+            "POI ({:.dp$}, {:.dp$}, {:.2}){}",
             p.x,
             p.y,
             p.z,
@@ -161,7 +196,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             bundles.len(),
             loaded.inputs.join(", ")
         ));
-        if let (Some(lat), Some(lon)) = (args.lat, args.lon) {
+        if let Some((lat, lon)) = site {
             caption.push(format!("sun paths {} at lat {lat}, lon {lon}", args.year));
         }
         let opts = FisheyeOptions {
@@ -182,12 +217,12 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                     },
                     ..Default::default()
                 };
-                let mut levels = lod(&loaded.model, std::slice::from_ref(poi), &lod_opts)?
+                let mut levels = lod(&framed.model, std::slice::from_ref(local), &lod_opts)?
                     .selection
                     .levels;
                 // A window or door of a rough wall is closed by the wall's plane in the LoD
                 // model: show the cells it covers at the wall's level.
-                for (i, a) in loaded.model.assets.iter().enumerate() {
+                for (i, a) in framed.model.assets.iter().enumerate() {
                     if a.kind.is_opening() && levels.get(i) == Some(&0) {
                         if let Some(p) = a.parent.and_then(|p| levels.get(p).copied()) {
                             levels[i] = p;

@@ -118,21 +118,27 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         threshold_deg: args.threshold,
         roof_tolerance_m: args.roof_tolerance,
     };
-    let loaded = args.pois.load_checked(&pois)?;
+    let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
     let mut failed = loaded.failed;
-    let model = loaded.model;
+    let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
     let result = lod(
-        &model,
-        &pois,
+        &framed.model,
+        &framed.local_pois,
         &LodOptions {
             rough: rough_opts,
             select: select_opts,
         },
     )?;
-    warn_flags(&pois, &result.flags);
+    warn_flags(&framed.pois, &result.flags);
+    // Written geometry and the report are in the input's CRS.
+    let model = framed.source;
+    let pois = &framed.pois;
+    let rough = framed
+        .frame
+        .rough_to_source(&framed.model, model, &result.rough);
 
     if outputs.len() > 1 || args.output.is_dir() {
         std::fs::create_dir_all(&args.output)
@@ -146,14 +152,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             continue;
         };
         let Some(out) = outputs.get(k) else { continue };
-        match write_mixed(
-            &model,
-            f,
-            &result.rough,
-            &result.selection.levels,
-            out,
-            &wopts,
-        ) {
+        match write_mixed(model, f, &rough, &result.selection.levels, out, &wopts) {
             Ok(s) => {
                 eprintln!(
                     "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
@@ -187,10 +186,10 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         total: ms(t_all),
     };
     let mut report = Report::new(
-        &model,
-        &result.rough,
+        model,
+        &rough,
         &result.selection,
-        &pois,
+        pois,
         Parameters::of(
             &result.selection,
             args.seed,

@@ -1,10 +1,12 @@
 //! `skylod rough`: the rough model (every asset at level 1) written as CityGML.
 
+use crate::frames::SourceCrsArgs;
 use crate::Outcome;
 use anyhow::bail;
 use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
 use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
+use skylod::crs::{model_crs, LocalFrame};
 use skylod::rough::{rough_model, RoughOptions};
 use std::path::{Path, PathBuf};
 
@@ -29,6 +31,8 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     overwrite: bool,
+    #[command(flatten)]
+    crs: SourceCrsArgs,
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
@@ -100,7 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.output.display()))?;
     }
     for (input, out) in todo {
-        if let Err(e) = one(input, out, &opts, &wopts) {
+        if let Err(e) = one(input, out, &opts, &wopts, &args.crs) {
             eprintln!("error: {e}");
             failed += 1;
         }
@@ -113,9 +117,23 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     }
 }
 
-fn one(input: &Path, out: &Path, opts: &RoughOptions, wopts: &WriteOptions) -> anyhow::Result<()> {
-    let model = read_file(input)?;
-    let rough = rough_model(&model, opts);
+fn one(
+    input: &Path,
+    out: &Path,
+    opts: &RoughOptions,
+    wopts: &WriteOptions,
+    crs: &SourceCrsArgs,
+) -> anyhow::Result<()> {
+    let mut model = read_file(input)?;
+    crs.apply(&mut model);
+    // Generalise in metres (thickness, angles), write in the input's CRS.
+    let (frame, warning) =
+        LocalFrame::new(&model_crs(&model, crs.source_crs.as_ref()), &model.bbox());
+    if let Some(w) = warning {
+        eprintln!("rough: warning: {}: {w}", input.display());
+    }
+    let local = frame.model_to_local(&model);
+    let rough = frame.rough_to_source(&local, &model, &rough_model(&local, opts));
     let levels = vec![1u8; model.assets.len()];
     let s = write_mixed(&model, 0, &rough, &levels, out, wopts)?;
     let pct = if s.polygons_in > 0 {

@@ -1,5 +1,6 @@
 //! `skylod stats`.
 
+use crate::frames::SourceCrsArgs;
 use crate::Outcome;
 use rayon::prelude::*;
 use skylod::citygml::read_file;
@@ -18,6 +19,8 @@ pub struct Args {
     /// Also print every warning (file:line:column: message) on stderr.
     #[arg(long, short)]
     verbose: bool,
+    #[command(flatten)]
+    crs: SourceCrsArgs,
 }
 
 #[derive(serde::Serialize)]
@@ -31,7 +34,12 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let results: Vec<_> = args
         .inputs
         .par_iter()
-        .map(|p| read_file(p).map(|m| (Stats::of(&m), m.warnings)))
+        .map(|p| {
+            read_file(p).map(|mut m| {
+                args.crs.apply(&mut m);
+                (Stats::of(&m), m.warnings)
+            })
+        })
         .collect();
     let mut ok = Vec::new();
     let mut failed = false;

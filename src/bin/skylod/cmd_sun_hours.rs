@@ -38,22 +38,26 @@ const MONTHS: [&str; 12] = [
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     args.site.check("sun-hours")?;
     let pois = args.pois.points()?;
-    let loaded = args.pois.load_checked(&pois)?;
+    let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let (lat, lon) = args.site.resolve(&loaded.model, "sun-hours")?;
+    let framed = args
+        .pois
+        .frame_checked(&mut loaded.model, pois, "sun-hours")?;
+    let (lat, lon) = args.site.resolve(framed.source, "sun-hours")?;
     let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
     let t = Instant::now();
     let table = SunTable::year(args.year, args.step, &site)?;
     let sun_ms = ms(t);
     let traced = trace_full(
-        &loaded.model,
-        &pois,
+        &framed.model,
+        &framed.local_pois,
         |s, p| poi_sun_hours(s, p, &table),
         |_| None,
     );
     let (hours, bvh_ms, trace_ms) = (&traced.results, traced.bvh_ms, traced.trace_ms);
+    let pois = &framed.pois;
     let mut out = std::io::stdout().lock();
     if args.json {
         let rows: Vec<_> = pois
@@ -81,7 +85,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             "timezone": args.timezone,
             "steps": table.len(),
             "inputs": loaded.inputs,
-            "polygons": polygons(&loaded.model),
+            "polygons": polygons(framed.source),
             "timings_ms": {"read": loaded.read_ms, "sun": sun_ms, "bvh": bvh_ms, "trace": trace_ms},
         });
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
@@ -105,7 +109,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             args.step,
             args.year,
             args.timezone,
-            polygons(&loaded.model),
+            polygons(framed.source),
             loaded.inputs.len(),
             loaded.read_ms,
             sun_ms,

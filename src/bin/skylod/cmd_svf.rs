@@ -1,6 +1,7 @@
 //! `skylod svf`.
 
 use crate::common::{arr, out_err, polygons, trace_full, PoiArgs};
+use crate::frames::decimals;
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{poi_sky_view, SkyBundles};
@@ -24,17 +25,19 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let pois = args.pois.points()?;
     let bundles = SkyBundles::new(args.rays, args.seed)?;
-    let loaded = args.pois.load_checked(&pois)?;
+    let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let framed = args.pois.frame_checked(&mut loaded.model, pois, "svf")?;
     let traced = trace_full(
-        &loaded.model,
-        &pois,
+        &framed.model,
+        &framed.local_pois,
         |s, p| poi_sky_view(s, p, &bundles),
         |v| (v.sky_exposure == 0.0).then_some(0),
     );
     let (views, bvh_ms, trace_ms) = (&traced.results, traced.bvh_ms, traced.trace_ms);
+    let pois = &framed.pois;
     let mut out = std::io::stdout().lock();
     if args.json {
         let rows: Vec<_> = pois
@@ -58,7 +61,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             "rays": args.rays,
             "seed": args.seed,
             "inputs": loaded.inputs,
-            "polygons": polygons(&loaded.model),
+            "polygons": polygons(framed.source),
             "timings_ms": {"read": loaded.read_ms, "bvh": bvh_ms, "trace": trace_ms},
         });
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
@@ -68,6 +71,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             "{:<20} {:>14} {:>14} {:>9} {:>8} {:>8} {:>8} {:>7} {:>12}",
             "id", "x", "y", "z", "nx", "ny", "nz", "svf", "sky_exposure"
         ))?;
+        let dp = decimals(&framed.crs);
         for (p, v) in pois.iter().zip(views) {
             let n = p
                 .normal
@@ -76,7 +80,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 });
             out_err(writeln!(
                 out,
-                "{:<20} {:>14.3} {:>14.3} {:>9.3} {:>8} {:>8} {:>8} {:>7.4} {:>12.4}",
+                "{:<20} {:>14.dp$} {:>14.dp$} {:>9.3} {:>8} {:>8} {:>8} {:>7.4} {:>12.4}",
                 p.id,
                 p.position.x,
                 p.position.y,
@@ -85,7 +89,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 n[1],
                 n[2],
                 v.svf,
-                v.sky_exposure
+                v.sky_exposure,
+                dp = dp
             ))?;
         }
         eprintln!(
@@ -93,7 +98,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             pois.len(),
             args.rays,
             args.seed,
-            polygons(&loaded.model),
+            polygons(framed.source),
             loaded.inputs.len(),
             loaded.read_ms,
             bvh_ms,

@@ -1,5 +1,6 @@
 //! Shared by the commands that trace POIs (`lod`, `evaluate`, `svf`, `sun-hours`, `fisheye`): inputs merged into one model, POIs.
 
+use crate::frames::{frame, Framed};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use rayon::prelude::*;
@@ -36,6 +37,9 @@ pub struct PoiArgs {
     /// the names differ but the coordinates really are in one CRS).
     #[arg(long)]
     pub allow_mixed_crs: bool,
+    /// `--source-crs`, `--poi-crs`: applied by `crate::frames::frame` after reading.
+    #[command(flatten)]
+    pub crs: crate::frames::CrsArgs,
 }
 
 /// A clap value parser: a finite number ≥ 0.
@@ -85,10 +89,10 @@ impl PoiArgs {
         Ok(out.into_iter().map(|l| l.poi).collect())
     }
 
-    /// Read the inputs ([`load`]) and refuse a scene that would give a confidently wrong
-    /// answer for `pois` (`skylod::checks`): inputs in different CRSs (unless
-    /// --allow-mixed-crs), a model without heights, POIs far outside the scene.
-    pub fn load_checked(&self, pois: &[Poi]) -> anyhow::Result<Loaded> {
+    /// Read the inputs ([`load`]) and refuse a model that would give a confidently wrong
+    /// answer whatever the POIs (`skylod::checks`): inputs in different CRSs (unless
+    /// --allow-mixed-crs), a model without heights.
+    pub fn load_checked(&self) -> anyhow::Result<Loaded> {
         let loaded = load(&self.inputs);
         if loaded.inputs.is_empty() {
             return Ok(loaded);
@@ -97,8 +101,26 @@ impl PoiArgs {
             checks::check_same_crs(&loaded.model)?;
         }
         checks::check_heights(&loaded.model)?;
-        checks::check_pois_near(&loaded.model.bbox(), pois, self.poi_margin)?;
         Ok(loaded)
+    }
+
+    /// Bring the model and `pois` into the local metric frame ([`frame`]: `--source-crs`,
+    /// `--poi-crs`) and refuse POIs farther than `--poi-margin` metres outside the scene.
+    pub fn frame_checked<'a>(
+        &self,
+        model: &'a mut CityModel,
+        pois: Vec<Poi>,
+        cmd: &str,
+    ) -> anyhow::Result<Framed<'a>> {
+        let framed = frame(model, &self.crs, pois, cmd)?;
+        checks::check_pois_near_in_frame(
+            &framed.model.bbox(),
+            &framed.local_pois,
+            &framed.source.bbox(),
+            &framed.pois,
+            self.poi_margin,
+        )?;
+        Ok(framed)
     }
 }
 
@@ -182,7 +204,7 @@ pub fn lat_lon(lat: Option<f64>, lon: Option<f64>, cmd: &str) -> anyhow::Result<
 #[derive(clap::Args, Debug)]
 pub struct SiteArgs {
     /// Site latitude in degrees (WGS84, north positive). Default: the centre of the model,
-    /// from its CRS (UTM zones of WGS 84 and ETRS89).
+    /// from its CRS (geographic, or UTM zones of WGS 84, ETRS89, JGD2011, NAD83, GDA).
     #[arg(long, allow_hyphen_values = true)]
     pub lat: Option<f64>,
     /// Site longitude in degrees (WGS84, east positive). Default: as --lat.
@@ -227,7 +249,7 @@ pub fn site_lat_lon(
     }
     bail!(
         "{cmd} needs the site's --lat and --lon (WGS84 degrees): the input's CRS ({}) is not one \
-         skylod converts (UTM zones of WGS 84 and ETRS89)",
+         skylod converts (geographic, or UTM zones of WGS 84, ETRS89, JGD2011, NAD83, GDA)",
         srs.unwrap_or("none given")
     )
 }
