@@ -420,6 +420,14 @@ fn dash_is_standard_output_never_a_file() {
         .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).starts_with("<svg"));
+    // synth streams the district to standard output (the POI CSV only where asked).
+    let o = Command::new(BIN)
+        .args(["synth", "--preset", "small", "-o", "-"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(o.stdout, std::fs::read(fixture("synth-small.gml")).unwrap());
     assert_eq!(listing(dir.path()), vec!["file.gml"]);
 }
 

@@ -2,7 +2,7 @@
 
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::citygml::write::{atomic_write, check_target, WriteOptions};
+use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
 use skylod::citygml::WriteError;
 use skylod::synth::{generate, pois, write_pois_csv, Preset, SynthOptions};
 use std::path::{Path, PathBuf};
@@ -20,9 +20,14 @@ enum PresetArg {
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Output CityGML 2.0 file (.gz to compress). POIs go beside it as `<name>.pois.csv`.
+    /// Output CityGML 2.0 file (.gz to compress; `-` for standard output). POIs go beside
+    /// it as `<name>.pois.csv` unless --pois-output says where.
     #[arg(short, long)]
     output: PathBuf,
+    /// Where to write the POI CSV (default: beside the output; with `-o -`, none unless
+    /// given).
+    #[arg(long, value_name = "FILE.csv")]
+    pois_output: Option<PathBuf>,
     /// Size preset.
     #[arg(long, value_enum, default_value = "paper")]
     preset: PresetArg,
@@ -79,9 +84,18 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         overwrite: args.overwrite,
         ..Default::default()
     };
-    let csv = pois_path(&args.output);
+    let csv = match &args.pois_output {
+        Some(p) => Some(p.clone()),
+        None if is_stdout(&args.output) => None,
+        None => Some(pois_path(&args.output)),
+    };
+    if csv.as_deref().is_some_and(is_stdout) && is_stdout(&args.output) {
+        bail!("the model and the POIs cannot both go to standard output");
+    }
     check_target(&args.output, &wopts, std::iter::empty())?;
-    check_target(&csv, &wopts, std::iter::empty())?;
+    if let Some(csv) = &csv {
+        check_target(csv, &wopts, std::iter::empty())?;
+    }
     let t = Instant::now();
     let mut summary = None;
     atomic_write(&args.output, |w| {
@@ -94,13 +108,15 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         Ok(n)
     })?;
     let points = pois(&opts);
-    atomic_write(&csv, |w| {
-        write_pois_csv(&points, w).map_err(|e| WriteError::Io {
-            file: csv.clone(),
-            source: std::io::Error::other(e.to_string()),
+    if let Some(csv) = &csv {
+        atomic_write(csv, |w| {
+            write_pois_csv(&points, w).map_err(|e| WriteError::Io {
+                file: csv.clone(),
+                source: std::io::Error::other(e.to_string()),
+            })?;
+            Ok(0)
         })?;
-        Ok(0)
-    })?;
+    }
     let dt = t.elapsed().as_secs_f64();
     if let Some(s) = summary {
         eprintln!(
@@ -113,7 +129,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             s.bytes as f64 / 1e6,
             dt,
             points.len(),
-            csv.display()
+            csv.as_ref()
+                .map_or("not written (give --pois-output)".into(), |c| c.display().to_string())
         );
     }
     Ok(Outcome::Ok)
