@@ -413,6 +413,9 @@ pub struct SourceFile {
     /// Number of polygon elements (`Polygon`, `PolygonPatch`, `Triangle`, `Rectangle`) in the
     /// document, each counted once however often it is referenced.
     pub polygon_elements: usize,
+    /// Elements per CityGML feature or object type (local name: `WallSurface`,
+    /// `BuildingInstallation`, `Room`, `Appearance`, …), wherever they nest.
+    pub features: std::collections::BTreeMap<String, usize>,
 }
 
 /// A city model read from one or more CityGML documents.

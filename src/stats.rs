@@ -2,7 +2,7 @@
 
 use crate::model::{AssetKind, Bbox, CityModel};
 use serde::Serialize;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
 /// Counts of one model (one file or several merged).
 #[derive(Debug, Clone, PartialEq, Serialize, Default)]
@@ -51,6 +51,10 @@ pub struct Stats {
     pub warnings: usize,
     /// `[minx, miny, minz, maxx, maxy, maxz]` of all asset geometry.
     pub bbox: Option<[f64; 6]>,
+    /// Elements per CityGML feature or object type, wherever they nest (the surfaces of an
+    /// installation, the openings of interior walls, rooms, appearances…), as citygml-tools
+    /// counts them: compare these with the file.
+    pub features: BTreeMap<String, usize>,
 }
 
 impl Stats {
@@ -98,6 +102,11 @@ impl Stats {
         s.bbox = model.bbox().to_array();
         s.citygml_version = common(model.files.iter().map(|f| Some(f.version.to_string())));
         s.srs_name = common(model.files.iter().map(|f| f.srs_name.clone()));
+        for f in &model.files {
+            for (k, n) in &f.features {
+                *s.features.entry(k.clone()).or_default() += n;
+            }
+        }
         s
     }
 
@@ -131,6 +140,9 @@ impl Stats {
             if let Some(b) = s.bbox {
                 bbox.add(glam::DVec3::new(b[0], b[1], b[2]));
                 bbox.add(glam::DVec3::new(b[3], b[4], b[5]));
+            }
+            for (k, n) in &s.features {
+                *t.features.entry(k.clone()).or_default() += n;
             }
             versions.push(s.citygml_version.clone());
             srs.push(s.srs_name.clone());

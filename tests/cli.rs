@@ -173,8 +173,19 @@ const KEYS: [&str; 17] = [
 fn stats_json_one_input() {
     let o = run(&[os("stats"), os("--json"), fixture_os()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let doc: Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    // One shape whatever the number of inputs: {"files":[...],"total":{...}}.
+    assert_eq!(doc["files"].as_array().map(Vec::len), Some(1), "{doc}");
+    let v = doc["files"][0].clone();
+    assert_eq!(v["path"].as_str(), fixture_os().to_str());
+    let mut total = doc["total"].clone();
+    let mut file = v.clone();
+    file.as_object_mut().unwrap().remove("path");
+    total.as_object_mut().unwrap().remove("path");
+    assert_eq!(file, total, "one file: the total is the file");
     let obj = v.as_object().expect("an object");
+    assert_eq!(v["features"]["WallSurface"], 4);
+    assert_eq!(v["features"]["CityModel"], 1);
     for k in KEYS {
         assert!(obj.contains_key(k), "missing key {k} in {v}");
     }

@@ -459,7 +459,7 @@ fn plateau_lod_output_in_input_crs() {
         let o = run(&[os("stats"), os("--json"), p.as_os_str()]);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         let v: Value = serde_json::from_slice(&o.stdout).unwrap();
-        v["bbox"]
+        v["total"]["bbox"]
             .as_array()
             .unwrap()
             .iter()

@@ -286,6 +286,7 @@ fn skylod_stats_agrees_with_the_generator() {
         .expect("skylod stats");
     assert!(o.status.success());
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let j = &j["files"][0];
     let n = |k: &str| j[k].as_u64().unwrap_or(u64::MAX);
     assert_eq!(n("buildings"), s.buildings);
     assert_eq!(n("roof_surfaces"), s.roof_surfaces);

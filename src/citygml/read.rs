@@ -350,6 +350,9 @@ struct Parser {
     id_hasher: foldhash::fast::FixedState,
     pending: Vec<PendingGeom>,
     polygon_elements: usize,
+    /// Start tags per CityGML feature/object type (UpperCamelCase local names in CityGML
+    /// namespaces), wherever they nest: a few dozen distinct names, searched linearly.
+    feature_counts: Vec<(Box<[u8]>, usize)>,
     // transient state
     capture: bool,
     capture_kind: Capture,
@@ -439,6 +442,7 @@ impl Parser {
             id_hasher: foldhash::fast::FixedState::with_seed(0x5eed),
             pending: Vec::new(),
             polygon_elements: 0,
+            feature_counts: Vec::new(),
             capture: false,
             capture_kind: Capture::None,
             capture_attrs: CoordAttrs::default(),
@@ -756,6 +760,12 @@ impl Parser {
         if let Ns::CityGml(_, v) = ns {
             if self.version.is_none() {
                 self.version = Some(v);
+            }
+            if local.first().is_some_and(u8::is_ascii_uppercase) {
+                match self.feature_counts.iter_mut().find(|(n, _)| **n == *local) {
+                    Some((_, c)) => *c += 1,
+                    None => self.feature_counts.push((local.into(), 1)),
+                }
             }
         }
         if ns == Ns::Foreign {
@@ -1623,6 +1633,11 @@ impl Parser {
             library_objects: std::mem::take(&mut self.library_objects),
             objects_without_geometry: self.objects_without_geometry,
             polygon_elements: self.polygon_elements,
+            features: self
+                .feature_counts
+                .iter()
+                .map(|(name, n)| (String::from_utf8_lossy(name).into_owned(), *n))
+                .collect(),
         };
         Ok(CityModel {
             files: vec![file],

@@ -143,6 +143,9 @@ def count_source(path, data):
         "doors": 0,
         "polygons": 0,
         "implicit_geometries": 0,
+        # Every element of a CityGML namespace whose local name is UpperCamelCase (a feature
+        # or object type), wherever it nests.
+        "features": {},
     }
     opener = gzip.open if path.endswith(".gz") else open
     # Stack of roles of the open elements (None for plain elements).
@@ -162,6 +165,8 @@ def count_source(path, data):
             cm = citygml_module(uri)
             if cm is not None and not versions:
                 versions.append(cm[1])
+            if cm is not None and local[:1].isupper():
+                c["features"][local] = c["features"].get(local, 0) + 1
             if uri in GML and local in POLYGONS:
                 c["polygons"] += 1
             if cm is not None and cm[0] == "" and local == "ImplicitGeometry":

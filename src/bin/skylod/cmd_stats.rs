@@ -69,11 +69,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 stats: s,
             })
             .collect();
-        let v = if args.inputs.len() == 1 && files.len() == 1 {
-            serde_json::to_value(&files[0])?
-        } else {
-            serde_json::json!({ "files": files, "total": total })
-        };
+        // One shape whatever the number of inputs: a pipeline never has to test for it.
+        let v = serde_json::json!({ "files": files, "total": total });
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
     } else {
         for (p, s) in &ok {
@@ -96,6 +93,13 @@ fn print_table(out: &mut impl Write, s: &Stats) -> std::io::Result<()> {
     let v = serde_json::to_value(s).unwrap_or_default();
     if let Some(obj) = v.as_object() {
         for (k, v) in obj {
+            if let serde_json::Value::Object(types) = v {
+                writeln!(out, "  {k}")?;
+                for (t, n) in types {
+                    writeln!(out, "    {t:<22} {n}")?;
+                }
+                continue;
+            }
             let shown = match v {
                 serde_json::Value::String(s) => s.clone(),
                 serde_json::Value::Null => "-".into(),
