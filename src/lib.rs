@@ -10,6 +10,7 @@ pub mod citygml;
 pub mod crs;
 pub mod evaluate;
 pub mod geom;
+pub mod inputs;
 pub mod lod;
 pub mod model;
 pub mod poi;

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML file (.gml, .xml, .gz).
+    /// CityGML file (.gml, .xml, .gz; gzip is recognised by content), or - for standard input.
     input: PathBuf,
     /// Output file (.gz to compress; `-` for standard output).
     #[arg(short, long)]
@@ -17,7 +17,18 @@ pub struct Args {
     overwrite: bool,
 }
 
-pub fn run(args: Args) -> anyhow::Result<Outcome> {
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    // `-` (standard input) is spooled to a file: the writer re-reads its source.
+    let mut inputs = vec![args.input.clone()];
+    let _spool = crate::common::expand_inputs(&mut inputs)?;
+    match inputs.as_slice() {
+        [one] => args.input = one.clone(),
+        _ => anyhow::bail!(
+            "{}: convert takes one input file ({} found)",
+            args.input.display(),
+            inputs.len()
+        ),
+    }
     let opts = WriteOptions {
         overwrite: args.overwrite,
         protect: vec![args.input.clone()],

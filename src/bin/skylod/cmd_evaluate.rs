@@ -54,7 +54,8 @@ fn hours(x: Option<f64>) -> String {
     x.map_or("-".into(), |h| format!("{h:.1}"))
 }
 
-pub fn run(args: Args) -> anyhow::Result<Outcome> {
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let t_all = Instant::now();
     args.site.check("evaluate")?;
     let pois = args.pois.points()?;

@@ -92,7 +92,8 @@ fn output_for(base: &Path, poi: &Poi, many: bool) -> PathBuf {
     base.with_file_name(format!("{stem}-{id}.svg"))
 }
 
-pub fn run(args: Args) -> anyhow::Result<Outcome> {
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;

@@ -87,7 +87,8 @@ fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> 
     Ok(paths)
 }
 
-pub fn run(args: Args) -> anyhow::Result<Outcome> {
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let t_all = Instant::now();
     let pois = args.pois.points()?;
     let outputs = output_paths(&args.pois.inputs, &args.output)?;

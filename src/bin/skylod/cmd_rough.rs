@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML files (.gml, .xml, .gz).
+    /// CityGML files (.gml, .xml, .gz), directories (searched recursively), glob patterns
+    /// ('tiles/**/*.gml', quoted), or - for standard input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// Output file for one input (.gz to compress; `-` for standard output); a directory for several inputs
@@ -35,7 +36,8 @@ pub struct Args {
     crs: SourceCrsArgs,
 }
 
-pub fn run(args: Args) -> anyhow::Result<Outcome> {
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let _spool = crate::common::expand_inputs(&mut args.inputs)?;
     if !(args.angle.is_finite() && (0.0..=90.0).contains(&args.angle)) {
         bail!("--angle must be between 0 and 90 degrees");
     }

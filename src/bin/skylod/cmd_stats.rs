@@ -10,7 +10,9 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML files (.gml, .xml, .gz).
+    /// CityGML files (.gml, .xml, .gz; gzip is recognised by content), directories
+    /// (searched recursively), glob patterns ('tiles/**/*.gml', quoted), or - for standard
+    /// input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// Print JSON instead of a table.
@@ -30,7 +32,8 @@ struct FileStats<'a> {
     stats: &'a Stats,
 }
 
-pub fn run(args: Args) -> anyhow::Result<Outcome> {
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let _spool = crate::common::expand_inputs(&mut args.inputs)?;
     let results: Vec<_> = args
         .inputs
         .par_iter()

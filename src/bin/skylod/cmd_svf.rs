@@ -22,7 +22,8 @@ pub struct Args {
     json: bool,
 }
 
-pub fn run(args: Args) -> anyhow::Result<Outcome> {
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let pois = args.pois.points()?;
     let bundles = SkyBundles::new(args.rays, args.seed)?;
     let mut loaded = args.pois.load_checked()?;

@@ -14,7 +14,9 @@ use std::time::Instant;
 /// Inputs and points of interest.
 #[derive(clap::Args, Debug)]
 pub struct PoiArgs {
-    /// CityGML files (.gml, .xml, .gz); all are merged into one scene.
+    /// CityGML files (.gml, .xml, .gz; gzip is recognised by content), directories (searched
+    /// recursively), glob patterns ('tiles/**/*.gml', quoted), or - for standard input; all
+    /// are merged into one scene.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
     /// Point of interest X,Y,Z or X,Y,Z,NX,NY,NZ (model CRS; the normal is the outward
@@ -122,6 +124,38 @@ impl PoiArgs {
         )?;
         Ok(framed)
     }
+}
+
+/// Standard input spooled to a temporary file (removed when this is dropped): the writer
+/// re-reads its source, and a pipe can be read only once.
+pub struct Spool(#[allow(dead_code)] Option<tempfile::TempDir>);
+
+/// Expand the input arguments in place ([`skylod::inputs::expand`]: files, directories,
+/// glob patterns, `-`), spooling standard input to a temporary file. Keep the returned
+/// [`Spool`] alive while the inputs are read and written.
+pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
+    let expanded = skylod::inputs::expand(inputs)?;
+    let mut spool = None;
+    let mut out = Vec::with_capacity(expanded.len());
+    for i in expanded {
+        if i.path.as_os_str() == "-" {
+            if spool.is_some() {
+                bail!("standard input (-) can be read only once");
+            }
+            let dir = tempfile::Builder::new().prefix("skylod-stdin-").tempdir()?;
+            let path = dir.path().join("stdin");
+            let mut f = std::fs::File::create(&path)
+                .with_context(|| format!("spooling standard input to {}", path.display()))?;
+            std::io::copy(&mut std::io::stdin().lock(), &mut f)
+                .context("reading standard input")?;
+            out.push(path);
+            spool = Some(dir);
+        } else {
+            out.push(i.path);
+        }
+    }
+    *inputs = out;
+    Ok(Spool(spool))
 }
 
 /// The inputs that could be read, merged in input order.

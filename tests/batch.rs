@@ -1,0 +1,124 @@
+//! Batch inputs as users give them: directories, glob patterns expanded by skylod, and `-`
+//! (standard input, gzip recognised by content), on the shared Ingolstadt street.
+
+mod common;
+
+use common::*;
+use serde_json::Value;
+use std::ffi::OsStr;
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+
+fn os<S: AsRef<OsStr> + ?Sized>(s: &S) -> &OsStr {
+    s.as_ref()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+fn stats(args: &[&OsStr]) -> Value {
+    let mut a = vec![os("stats"), os("--json")];
+    a.extend_from_slice(args);
+    let o = run(&a);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+fn ingolstadt() -> Option<PathBuf> {
+    let d = shared_data()?.join("ingolstadt-lod3");
+    if d.is_dir() {
+        Some(d)
+    } else {
+        missing(&d.display().to_string());
+        None
+    }
+}
+
+/// Run the binary with `input` on its standard input.
+fn piped(args: &[&OsStr], input: &[u8]) -> Output {
+    let mut child = Command::new(BIN)
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let data = input.to_vec();
+    let writer = std::thread::spawn(move || {
+        let _ = stdin.write_all(&data);
+    });
+    let o = child.wait_with_output().unwrap();
+    writer.join().unwrap();
+    o
+}
+
+#[test]
+fn directory_and_glob_give_the_files_they_hold() {
+    let Some(dir) = ingolstadt() else {
+        return;
+    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.to_string_lossy().ends_with(".xml.gz"))
+        .collect();
+    files.sort();
+    let listed = stats(&files.iter().map(|p| p.as_os_str()).collect::<Vec<_>>());
+    let by_dir = stats(&[dir.as_os_str()]);
+    let pattern = dir.join("*.xml.gz");
+    let by_glob = stats(&[pattern.as_os_str()]);
+    assert_eq!(by_dir["files"].as_array().unwrap().len(), files.len());
+    assert_eq!(by_dir["total"], listed["total"]);
+    assert_eq!(by_glob["total"], listed["total"]);
+    // The files come in path order, whatever the directory order.
+    let paths: Vec<&str> = by_dir["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["path"].as_str().unwrap())
+        .collect();
+    let mut sorted = paths.clone();
+    sorted.sort();
+    assert_eq!(paths, sorted);
+    // A pattern that matches nothing is a usage error naming it.
+    let none = dir.join("*.citygml");
+    let o = run(&[os("stats"), none.as_os_str()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no CityGML file"), "{}", stderr(&o));
+}
+
+#[test]
+fn standard_input_in_standard_output_out_is_byte_identical_to_files() {
+    let Some(dir) = ingolstadt() else {
+        return;
+    };
+    let gz = dir.join("4018215.xml.gz");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out.gml");
+    let o = run(&[os("convert"), gz.as_os_str(), os("-o"), out.as_os_str()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let want = std::fs::read(&out).unwrap();
+    // gzip on standard input is recognised by its magic bytes.
+    let o = piped(
+        &[os("convert"), os("-"), os("-o"), os("-")],
+        &std::fs::read(&gz).unwrap(),
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        o.stdout == want,
+        "stdin -> stdout differs from file -> file"
+    );
+    // Plain XML on standard input, into stats.
+    let o = piped(&[os("stats"), os("--json"), os("-")], &want);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let file = stats(&[out.as_os_str()]);
+    assert_eq!(v["total"]["features"], file["total"]["features"]);
+    assert_eq!(
+        v["total"]["asset_polygons"],
+        file["total"]["asset_polygons"]
+    );
+}
