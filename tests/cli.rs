@@ -339,3 +339,53 @@ fn convert_never_modifies_the_input() {
         );
     }
 }
+
+/// Completion scripts are valid for their shell (bash parses its own), and the manual page
+/// names every command.
+#[test]
+fn completions_and_man_page() {
+    let o = run(&[os("completions"), os("bash")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let script = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(
+        script.contains("skylod") && script.contains("--poi-margin"),
+        "{script}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("skylod.bash");
+    std::fs::write(&path, &script).unwrap();
+    match std::process::Command::new("bash")
+        .arg("-n")
+        .arg(&path)
+        .output()
+    {
+        Ok(b) => assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr)),
+        Err(_) => common::missing("bash"),
+    }
+    for shell in ["zsh", "fish"] {
+        let o = run(&[os("completions"), os(shell)]);
+        assert_eq!(o.status.code(), Some(0), "{shell}");
+        assert!(!o.stdout.is_empty());
+    }
+    let o = run(&[os("completions"), os("tcsh-9")]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = run(&[os("man")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let page = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        page.starts_with(".ie") || page.contains(".TH skylod"),
+        "{page}"
+    );
+    for c in [
+        "stats",
+        "convert",
+        "rough",
+        "lod",
+        "evaluate",
+        "svf",
+        "sun\\-hours",
+        "fisheye",
+    ] {
+        assert!(page.contains(c), "man page lacks {c}");
+    }
+}

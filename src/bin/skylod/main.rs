@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod cmd_completions;
 mod cmd_convert;
 mod cmd_evaluate;
 mod cmd_fisheye;
@@ -44,6 +45,10 @@ enum Command {
     SunHours(cmd_sun_hours::Args),
     /// Fisheye picture (SVG) of the sky hemisphere seen from a point, with sun paths.
     Fisheye(cmd_fisheye::Args),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
+    Completions(cmd_completions::CompletionArgs),
+    /// Print the manual page (roff; `skylod man | man -l -`).
+    Man(cmd_completions::ManArgs),
 }
 
 /// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
@@ -75,6 +80,8 @@ fn main() -> ExitCode {
         Command::Svf(a) => cmd_svf::run(a),
         Command::SunHours(a) => cmd_sun_hours::run(a),
         Command::Fisheye(a) => cmd_fisheye::run(a),
+        Command::Completions(a) => cmd_completions::completions(a),
+        Command::Man(a) => cmd_completions::man(a),
     };
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,
