@@ -8,6 +8,7 @@
 pub mod citygml;
 pub mod crs;
 pub mod evaluate;
+pub mod export;
 pub mod geom;
 pub mod lod;
 pub mod model;

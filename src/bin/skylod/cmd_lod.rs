@@ -5,6 +5,7 @@ use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::write::{atomic_write, WriteOptions};
+use skylod::export::{Content, Format};
 use skylod::lod::{lod, LodOptions};
 use skylod::report::{Parameters, Report, Timings};
 use skylod::rough::RoughOptions;
@@ -17,9 +18,14 @@ pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
     /// Output file (one input), or a directory that gets one file per input (created if
-    /// missing; several inputs need a directory). `.gz` compresses.
+    /// missing; several inputs need a directory). `.gz` compresses. The format follows the
+    /// name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl CityJSONSeq.
     #[arg(short, long)]
     output: PathBuf,
+    /// Output format when the output's name does not tell it (in a directory: the format of
+    /// every output, named after its input with the format's ending).
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
+    format: Option<Format>,
     /// Rays per POI (cells of the equal-solid-angle hemisphere partition).
     #[arg(long, default_value_t = 10_000)]
     rays: usize,
@@ -84,7 +90,15 @@ fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
     let pois = args.pois.points()?;
-    let outputs = output_paths(&args.pois.inputs, &args.output)?;
+    let format = crate::export::resolve(args.pois.inputs.len(), &args.output, args.format)?;
+    let mut outputs = output_paths(&args.pois.inputs, &args.output)?;
+    if format != Format::CityGml && (outputs.len() > 1 || args.output.is_dir()) {
+        for (o, i) in outputs.iter_mut().zip(&args.pois.inputs) {
+            if let Some(p) = crate::export::in_dir(&args.output, i, format) {
+                *o = p;
+            }
+        }
+    }
     if let Some(path) = &args.report {
         check_report_target(path, &args)?;
     }
@@ -131,6 +145,24 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             continue;
         };
         let Some(out) = outputs.get(k) else { continue };
+        if format != Format::CityGml {
+            let content = Content::Levels {
+                rough: &result.rough,
+                levels: &result.selection.levels,
+            };
+            match crate::export::write(format, &model, f, content, out, &wopts) {
+                Ok(()) => {
+                    if let Some(w) = written.get_mut(f) {
+                        *w = Some(out.display().to_string());
+                    }
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    failed = true;
+                }
+            }
+            continue;
+        }
         match write_mixed(
             &model,
             f,

@@ -5,6 +5,7 @@ use anyhow::bail;
 use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
+use skylod::export::{Content, Format};
 use skylod::rough::{rough_model, RoughOptions};
 use std::path::{Path, PathBuf};
 
@@ -14,9 +15,14 @@ pub struct Args {
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// Output file for one input (.gz to compress); a directory for several inputs
-    /// (created if missing; one output per input, with the input's file name).
+    /// (created if missing; one output per input, with the input's file name). The format
+    /// follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl CityJSONSeq.
     #[arg(short, long)]
     output: PathBuf,
+    /// Output format when the output's name does not tell it (in a directory: the format of
+    /// every output, named after its input with the format's ending).
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
+    format: Option<Format>,
     /// Largest angle (degrees) between the normals of polygons merged into one plane.
     #[arg(long, default_value_t = RoughOptions::default().angle_deg)]
     angle: f64,
@@ -38,6 +44,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     if !(args.thickness.is_finite() && args.thickness >= 0.0) {
         bail!("--thickness must be a non-negative number of metres");
     }
+    let format = crate::export::resolve(args.inputs.len(), &args.output, args.format)?;
     let opts = RoughOptions {
         angle_deg: args.angle,
         thickness_m: args.thickness,
@@ -61,16 +68,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         let mut seen = std::collections::HashSet::new();
         let mut v = Vec::new();
         for i in &args.inputs {
-            let Some(name) = i.file_name() else {
+            let Some(out) = crate::export::in_dir(&args.output, i, format) else {
                 bail!("{}: not a file name", i.display());
             };
-            if !seen.insert(name.to_os_string()) {
-                bail!(
-                    "two inputs are named {}: their outputs would collide",
-                    Path::new(name).display()
-                );
+            if !seen.insert(out.clone()) {
+                bail!("two inputs would both be written to {}", out.display());
             }
-            v.push((i.clone(), args.output.join(name)));
+            v.push((i.clone(), out));
         }
         std::fs::create_dir_all(&args.output)
             .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.output.display()))?;
@@ -83,7 +87,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     };
     let mut failed = 0usize;
     for (input, out) in &targets {
-        if let Err(e) = one(input, out, &opts, &wopts) {
+        if let Err(e) = one(input, out, format, &opts, &wopts) {
             eprintln!("error: {e}");
             failed += 1;
         }
@@ -96,10 +100,23 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     }
 }
 
-fn one(input: &Path, out: &Path, opts: &RoughOptions, wopts: &WriteOptions) -> anyhow::Result<()> {
+fn one(
+    input: &Path,
+    out: &Path,
+    format: Format,
+    opts: &RoughOptions,
+    wopts: &WriteOptions,
+) -> anyhow::Result<()> {
     let model = read_file(input)?;
     let rough = rough_model(&model, opts);
     let levels = vec![1u8; model.assets.len()];
+    if format != Format::CityGml {
+        let content = Content::Levels {
+            rough: &rough,
+            levels: &levels,
+        };
+        return crate::export::write(format, &model, 0, content, out, wopts);
+    }
     let s = write_mixed(&model, 0, &rough, &levels, out, wopts)?;
     let pct = if s.polygons_in > 0 {
         100.0 * s.polygons_out as f64 / s.polygons_in as f64

@@ -14,6 +14,7 @@ mod cmd_sun_hours;
 mod cmd_svf;
 mod cmd_synth;
 mod common;
+mod export;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]
