@@ -35,7 +35,8 @@
 //! let s = write_obj(&m, 0, Content::Full, &mut out).unwrap();
 //! let text = String::from_utf8(out).unwrap();
 //! assert!(text.starts_with("# origin 430005 4581005 20\n"));
-//! assert!(text.contains("o r1\nusemtl roof_l2\nv -5 -5 0\n"));
+//! assert!(text.contains("o r1\nusemtl roof_l2\nv "));
+//! assert!(text.contains("\nv -5 -5 0\n") && text.contains("\nv 5 5 0\n"));
 //! assert_eq!((s.objects, s.triangles, s.vertices), (1, 2, 4));
 //! ```
 
