@@ -1,6 +1,7 @@
 //! Output format from the output's name (DESIGN.md "Batch, streams and scale"): `.gml`/`.xml`
-//! (+`.gz`) CityGML, `.obj` OBJ, `.city.json` CityJSON 2.0, `.city.jsonl` CityJSONSeq. Any
-//! other name is refused unless the format is named explicitly (`--format`).
+//! (+`.gz`; also `.citygml`, as some datasets are named) CityGML, `.obj` OBJ, `.city.json`
+//! CityJSON 2.0, `.city.jsonl` CityJSONSeq. Any other name is refused unless the format is
+//! named explicitly (`--format`).
 //!
 //! # Example
 //! ```
@@ -21,7 +22,7 @@ use std::str::FromStr;
 /// A format skylod writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Format {
-    /// CityGML, same version as the input (`.gml`, `.xml`, `.gz` compresses).
+    /// CityGML, same version as the input (`.gml`, `.xml`, `.citygml`; `.gz` compresses).
     CityGml,
     /// Wavefront OBJ, triangles (`.obj`).
     Obj,
@@ -72,7 +73,14 @@ impl Format {
     /// ending is none of the known ones.
     pub fn from_path(path: &Path) -> Option<Format> {
         let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
-        let citygml = [".gml", ".xml", ".gml.gz", ".xml.gz"];
+        let citygml = [
+            ".gml",
+            ".xml",
+            ".citygml",
+            ".gml.gz",
+            ".xml.gz",
+            ".citygml.gz",
+        ];
         if citygml.iter().any(|e| name.ends_with(e)) {
             Some(Format::CityGml)
         } else if name.ends_with(".obj") {
@@ -99,16 +107,24 @@ impl Format {
 
     /// Output file name for an input named `input_name` written in this format into an output
     /// directory: the input's name for CityGML, otherwise the input's name with its CityGML
-    /// ending (`.gml`, `.xml`, `.gml.gz`, `.xml.gz`, `.citygml`) replaced by [`Format::extension`].
+    /// ending (`.gml`, `.xml`, `.citygml`, each with or without `.gz`) replaced by [`Format::extension`].
     pub fn output_name(self, input_name: &str) -> String {
         if self == Format::CityGml {
             return input_name.to_string();
         }
         let lower = input_name.to_ascii_lowercase();
-        let stem_len = [".gml.gz", ".xml.gz", ".gml", ".xml", ".citygml", ".gz"]
-            .iter()
-            .find(|e| lower.ends_with(*e))
-            .map_or(input_name.len(), |e| input_name.len() - e.len());
+        let stem_len = [
+            ".gml.gz",
+            ".xml.gz",
+            ".citygml.gz",
+            ".gml",
+            ".xml",
+            ".citygml",
+            ".gz",
+        ]
+        .iter()
+        .find(|e| lower.ends_with(*e))
+        .map_or(input_name.len(), |e| input_name.len() - e.len());
         format!("{}{}", &input_name[..stem_len], self.extension())
     }
 }
@@ -147,6 +163,7 @@ mod tests {
             ("a.City.JSONL", Some(Format::CityJsonSeq)),
             ("a.json", None),
             ("a.jsonl", None),
+            ("a.citygml", Some(Format::CityGml)),
             ("a.gz", None),
             ("a.obj.gz", None),
             ("a", None),

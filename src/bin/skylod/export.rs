@@ -12,10 +12,10 @@ pub fn parse_format(s: &str) -> Result<Format, String> {
 }
 
 /// The format of the outputs, decided before any work: an output directory (or several inputs)
-/// takes `explicit` or CityGML; an output file takes `explicit` or the format its name asks for,
-/// and is refused (usage error) when it names none.
+/// and `-` (standard output) take `explicit` or CityGML; an output file takes `explicit` or the
+/// format its name asks for, and is refused (usage error) when it names none.
 pub fn resolve(n_inputs: usize, out: &Path, explicit: Option<Format>) -> anyhow::Result<Format> {
-    if n_inputs > 1 || out.is_dir() {
+    if n_inputs > 1 || out.is_dir() || out == Path::new("-") {
         return Ok(explicit.unwrap_or(Format::CityGml));
     }
     Ok(Format::resolve(out, explicit)?)
