@@ -24,7 +24,7 @@
 //!   longitude in a geographic CRS such as PLATEAU's EPSG:6697), translate = the lower corner of the written
 //!   geometry, whole metres down; `metadata.referenceSystem` from the `srsName`
 //!   (`https://www.opengis.net/def/crs/EPSG/0/<code>`, the horizontal code of a compound
-//!   CRS, AdV `ETRS89_UTM<zone>` names as EPSG:258<zone>), `metadata.geographicalExtent`.
+//!   CRS, AdV `ETRS89_UTM<zone>` names as `EPSG:258<zone>`), `metadata.geographicalExtent`.
 //! * Levels ([`Content::Levels`]): what the mixed CityGML output holds
 //!   ([`crate::citygml::mixed`]): level 2 every LoD of the asset, level 1 the rough geometry in
 //!   the LoDs it replaces ([`crate::citygml::mixed::level1_geometries`]), level 0 nothing. Every

@@ -1,7 +1,7 @@
 //! Interchange with the tools that come next (DESIGN.md "Interchange"): the model, the rough
 //! model or the mixed-LoD model written as OBJ ([`obj`]) for daylight tools, or as CityJSON 2.0
 //! and CityJSONSeq ([`cityjson`]) for the CityJSON tools. The format follows the output's name
-//! ([`format`]). CityGML itself is written by [`crate::citygml::write`] and
+//! ([`mod@format`]). CityGML itself is written by [`crate::citygml::write`] and
 //! [`crate::citygml::mixed`].
 //!
 //! What each asset contributes is decided once: [`Content::Full`] (`convert`) writes every asset

@@ -9,7 +9,7 @@
 //! * one `usemtl` per semantic class and level: `roof_l2`, `wall_l1`, `installation_l1`,
 //!   `window_l2`, ... (the kinds of [`crate::model::AssetKind::as_str`]); `convert` writes full
 //!   detail as level 2;
-//! * triangles only ([`crate::geom::triangulate`]), oriented like the polygon's exterior ring;
+//! * triangles only ([`crate::geom::triangulate()`]), oriented like the polygon's exterior ring;
 //!   Z up, metres, no normals and no material library (the material names are the classes).
 //!
 //! What an asset contributes is [`crate::scene::level_polygons`], the definition the traced
