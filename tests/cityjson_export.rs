@@ -493,3 +493,66 @@ fn format_from_the_name() {
     assert!(outdir.join("a.city.jsonl").is_file());
     assert!(outdir.join("b.city.jsonl").is_file());
 }
+
+/// `lod` on the whole Ingolstadt street (53 tiles, one scene) at six facade POIs, one
+/// CityJSONSeq per tile: every file valid, and the levels written over all files (level 2
+/// roofs and installations in full detail among them) are the report's.
+#[test]
+fn lod_ingolstadt_tiles_levels() {
+    let Some(cjval) = cjval() else { return };
+    if !have_cjio() {
+        return;
+    }
+    let Some(data) = shared_data() else { return };
+    let tiles = citygml_files(&data.join("ingolstadt-lod3"));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lod");
+    let report = dir.path().join("report.json");
+    let mut args: Vec<String> = vec!["lod".into()];
+    args.extend(tiles.iter().map(|p| p.display().to_string()));
+    for poi in [
+        "678095,5403890,418,0,-1,0",
+        "678184.488,5403910.026,421.429,0.3969,-0.9178,0",
+        "678146.706,5403898.825,421.289,0.2584,-0.9660,0",
+        "678086.159,5403875.438,421.434,0.9321,0.3623,0",
+        "678150.193,5403776.433,419.363,-0.8357,-0.5492,0",
+        "678111.129,5403764.510,420.585,-0.8520,-0.5236,0",
+    ] {
+        args.extend(["--poi".into(), poi.into()]);
+    }
+    args.extend([
+        "-o".into(),
+        out.display().to_string(),
+        "--format".into(),
+        "cityjsonseq".into(),
+        "--report".into(),
+        report.display().to_string(),
+    ]);
+    let a: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = cli(&a);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let want = [0, 1, 2].map(|k| r["totals"]["levels"][k].as_u64().unwrap() as usize);
+    assert!(want[2] > 0 && want[1] > 0, "levels {want:?}");
+    let outs: Vec<PathBuf> = tiles
+        .iter()
+        .map(|t| {
+            out.join(Format::CityJsonSeq.output_name(&t.file_name().unwrap().to_string_lossy()))
+        })
+        .collect();
+    let mut problems = Vec::new();
+    for o in &outs {
+        if let Err(e) = validate(&cjval, o) {
+            problems.push(format!("{}: {e}", o.display()));
+        }
+    }
+    let counts = cjio_counts(&outs);
+    let mut got = [0usize; 3];
+    for c in counts.values() {
+        for (k, g) in got.iter_mut().enumerate() {
+            *g += n(&c["levels"], &k.to_string());
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    assert_eq!(got, [0, want[1], want[2]]);
+}
