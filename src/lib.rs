@@ -9,6 +9,7 @@ pub mod checks;
 pub mod citygml;
 pub mod crs;
 pub mod evaluate;
+pub mod export;
 pub mod geom;
 pub mod inputs;
 pub mod lod;

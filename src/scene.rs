@@ -21,7 +21,7 @@
 //! assert!((hit.t - 5.0).abs() < 1e-6);
 //! ```
 
-use crate::model::{CityModel, Polygon};
+use crate::model::{Asset, CityModel, Polygon};
 use crate::poi::Poi;
 use crate::rough::RoughGeometry;
 use crate::trace::{Scene, SceneBuilder};
@@ -78,13 +78,26 @@ pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> Scene {
 /// The mixed-LoD model: level 2 full detail, level 1 rough, level 0 absent.
 pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
     scene_of(model.assets.iter().enumerate().flat_map(|(i, a)| {
-        let polys: &[Polygon] = match levels.get(i).copied().unwrap_or(0) {
-            2 => a.detail_polygons(),
-            1 => rough.get(i).map(|r| r.polygons.as_slice()).unwrap_or(&[]),
-            _ => &[],
-        };
-        polys.iter().map(move |p| (i as u32, p))
+        let level = levels.get(i).copied().unwrap_or(0);
+        level_polygons(a, rough.get(i), level)
+            .iter()
+            .map(move |p| (i as u32, p))
     }))
+}
+
+/// What an asset contributes to the mixed-LoD model at `level`: its full detail (highest LoD)
+/// at level 2 (and above), its rough geometry at level 1, nothing at level 0. The traced LoD
+/// scene ([`mixed_scene`]) and the OBJ export ([`crate::export::obj`]) both take it from here.
+pub fn level_polygons<'a>(
+    asset: &'a Asset,
+    rough: Option<&'a RoughGeometry>,
+    level: u8,
+) -> &'a [Polygon] {
+    match level {
+        0 => &[],
+        1 => rough.map(|r| r.polygons.as_slice()).unwrap_or(&[]),
+        _ => asset.detail_polygons(),
+    }
 }
 
 /// Ray origin for a POI: moved [`POI_OFFSET`] along its normal when it has one.

@@ -462,6 +462,8 @@ fn existing_outputs_are_refused_before_any_work() {
     let missing_input = dir.path().join("not-there.gml");
     let existing = dir.path().join("exists.svg");
     std::fs::write(&existing, "keep").unwrap();
+    let existing_gml = dir.path().join("exists.gml");
+    std::fs::write(&existing_gml, "keep").unwrap();
     let report = dir.path().join("report.json");
     std::fs::write(&report, "keep").unwrap();
     let lod_out = dir.path().join("lod.gml");
@@ -480,7 +482,7 @@ fn existing_outputs_are_refused_before_any_work() {
             os("--poi"),
             os("0,0,0"),
             os("-o"),
-            existing.as_os_str(),
+            existing_gml.as_os_str(),
         ],
         vec![
             os("lod"),
@@ -504,6 +506,7 @@ fn existing_outputs_are_refused_before_any_work() {
     }
     assert_eq!(std::fs::read_to_string(&existing).unwrap(), "keep");
     assert_eq!(std::fs::read_to_string(&report).unwrap(), "keep");
+    assert_eq!(std::fs::read_to_string(&existing_gml).unwrap(), "keep");
     assert!(!lod_out.exists());
     // With --overwrite the fisheye replaces it.
     let scene = fixture("synth-small.gml");

@@ -137,7 +137,7 @@ use super::ns::{self, Module, Ns};
 use super::source;
 use super::write::WriteOptions;
 use super::write::{check_target, envelope_xml, escape_attr, write_document, Edit, GmlWriter};
-use crate::model::{Asset, AssetKind, Bbox, CityGmlVersion, CityModel, Polygon};
+use crate::model::{Asset, AssetKind, Bbox, CityGmlVersion, CityModel, LodGeometry, Polygon};
 use crate::rough::RoughGeometry;
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use quick_xml::events::{BytesStart, Event};
@@ -551,7 +551,7 @@ fn rough_is_own_geometry(asset: &Asset, r: &RoughGeometry) -> bool {
 
 /// Whether level 1 replaces the content of the property `g` with the rough geometry `r`
 /// (see the module docs); otherwise the property is kept verbatim.
-fn replaced_at_level1(r: &RoughGeometry, g: &crate::model::LodGeometry, unchanged: bool) -> bool {
+fn replaced_at_level1(r: &RoughGeometry, g: &LodGeometry, unchanged: bool) -> bool {
     !(r.polygons.is_empty()
         || g.lod < r.lod
         || (g.lod == r.lod && unchanged)
@@ -574,18 +574,25 @@ fn replaced_at_level1(r: &RoughGeometry, g: &crate::model::LodGeometry, unchange
 /// assert_eq!(level1_polygons(&a, &r), 2);
 /// ```
 pub fn level1_polygons(asset: &Asset, r: &RoughGeometry) -> usize {
+    level1_geometries(asset, r).map(|(_, p, _)| p.len()).sum()
+}
+
+/// The geometry `asset` has in the output at level 1 with rough geometry `r`, per LoD property
+/// in document order: the property, the polygons it holds in the output (the rough polygons
+/// where they replace it, its own elsewhere) and whether they were replaced. Other writers
+/// (CityJSON) take the level-1 content from here so that every format holds the same model.
+pub fn level1_geometries<'a>(
+    asset: &'a Asset,
+    r: &'a RoughGeometry,
+) -> impl Iterator<Item = (&'a LodGeometry, &'a [Polygon], bool)> + 'a {
     let unchanged = rough_is_own_geometry(asset, r);
-    asset
-        .geometries
-        .iter()
-        .map(|g| {
-            if replaced_at_level1(r, g, unchanged) {
-                r.polygons.len()
-            } else {
-                g.polygons.len()
-            }
-        })
-        .sum()
+    asset.geometries.iter().map(move |g| {
+        if replaced_at_level1(r, g, unchanged) {
+            (g, r.polygons.as_slice(), true)
+        } else {
+            (g, g.polygons.as_slice(), false)
+        }
+    })
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -3,15 +3,20 @@
 use crate::Outcome;
 use skylod::citygml::read_file;
 use skylod::citygml::write::{check_target, write_document, WriteOptions};
+use skylod::export::{Content, Format};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// CityGML file (.gml, .xml, .gz; gzip is recognised by content), or - for standard input.
     input: PathBuf,
-    /// Output file (.gz to compress; `-` for standard output).
+    /// Output file (`-` for standard output): .gml/.xml (.gz to compress) CityGML, .obj OBJ,
+    /// .city.json CityJSON 2.0, .city.jsonl CityJSONSeq.
     #[arg(short, long)]
     output: PathBuf,
+    /// Output format when the output's name does not tell it.
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
+    format: Option<Format>,
     /// Replace an existing output file.
     #[arg(long)]
     overwrite: bool,
@@ -29,6 +34,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             inputs.len()
         ),
     }
+    let format = crate::export::resolve(1, &args.output, args.format)?;
     let opts = WriteOptions {
         overwrite: args.overwrite,
         protect: vec![args.input.clone()],
@@ -46,6 +52,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             return Ok(Outcome::SomeFailed);
         }
     };
+    if format != Format::CityGml {
+        return match crate::export::write(format, &model, 0, Content::Full, &args.output, &opts) {
+            Ok(()) => Ok(Outcome::Ok),
+            Err(e) => {
+                eprintln!("error: writing {}: {e}", args.output.display());
+                Ok(Outcome::SomeFailed)
+            }
+        };
+    }
     // A failed write (refused target, unwritable directory, disk full) fails this input like a
     // read error: exit 1, and no output or temporary file is left behind.
     let summary = match write_document(&model, 0, Vec::new(), &args.output, &opts) {

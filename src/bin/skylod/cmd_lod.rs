@@ -5,6 +5,7 @@ use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
+use skylod::export::{Content, Format};
 use skylod::lod::{lod, LodOptions};
 use skylod::report::{Parameters, Report, Timings};
 use skylod::rough::RoughOptions;
@@ -17,9 +18,15 @@ pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
     /// Output file (one input; `-` for standard output), or a directory that gets one file
-    /// per input (created if missing; several inputs need a directory). `.gz` compresses.
+    /// per input (created if missing; several inputs need a directory). `.gz` compresses. The
+    /// format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl
+    /// CityJSONSeq.
     #[arg(short, long)]
     output: PathBuf,
+    /// Output format when the output's name does not tell it (in a directory: the format of
+    /// every output, named after its input with the format's ending).
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
+    format: Option<Format>,
     /// Rays per POI (cells of the equal-solid-angle hemisphere partition).
     #[arg(long, default_value_t = 10_000)]
     rays: usize,
@@ -91,7 +98,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let t_all = Instant::now();
     let pois = args.pois.points()?;
-    let outputs = output_paths(&args.pois.inputs, &args.output)?;
+    let format = crate::export::resolve(args.pois.inputs.len(), &args.output, args.format)?;
+    let mut outputs = output_paths(&args.pois.inputs, &args.output)?;
+    if format != Format::CityGml && (outputs.len() > 1 || args.output.is_dir()) {
+        for (o, i) in outputs.iter_mut().zip(&args.pois.inputs) {
+            if let Some(p) = crate::export::in_dir(&args.output, i, format) {
+                *o = p;
+            }
+        }
+    }
     // Every target is checked before any work: a refusal after minutes of reading and
     // tracing helps nobody.
     let wopts = WriteOptions {
@@ -153,6 +168,26 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             continue;
         };
         let Some(out) = outputs.get(k) else { continue };
+        if format != Format::CityGml {
+            let content = Content::Levels {
+                rough: &rough,
+                levels: &result.selection.levels,
+            };
+            match crate::export::write(format, model, f, content, out, &wopts) {
+                Ok(()) => {
+                    if let Some(w) = written.get_mut(f) {
+                        let dropped =
+                            buildings_without_kept_assets(model, f, &result.selection.levels);
+                        *w = Some((out.display().to_string(), dropped));
+                    }
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    failed = true;
+                }
+            }
+            continue;
+        }
         match write_mixed(model, f, &rough, &result.selection.levels, out, &wopts) {
             Ok(s) => {
                 eprintln!(
@@ -243,6 +278,39 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     } else {
         Outcome::Ok
     })
+}
+
+/// Buildings and parts of file `f` that keep no asset (through any part below them): what
+/// the OBJ and CityJSON writers leave out.
+fn buildings_without_kept_assets(
+    model: &skylod::model::CityModel,
+    f: usize,
+    levels: &[u8],
+) -> usize {
+    let mut kept = vec![false; model.buildings.len()];
+    for (a, l) in model.assets.iter().zip(levels) {
+        if *l == 0 {
+            continue;
+        }
+        let mut b = a.building;
+        let mut steps = 0;
+        while let Some(k) = b {
+            if let Some(x) = kept.get_mut(k) {
+                *x = true;
+            }
+            b = model.buildings.get(k).and_then(|x| x.parent);
+            steps += 1;
+            if steps > model.buildings.len() {
+                break;
+            }
+        }
+    }
+    model
+        .buildings
+        .iter()
+        .zip(&kept)
+        .filter(|(b, k)| b.file == f && !**k)
+        .count()
 }
 
 fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {

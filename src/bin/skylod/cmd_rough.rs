@@ -7,6 +7,7 @@ use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
 use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
 use skylod::crs::{model_crs, LocalFrame};
+use skylod::export::{Content, Format};
 use skylod::rough::{rough_model, RoughOptions};
 use std::path::{Path, PathBuf};
 
@@ -16,10 +17,16 @@ pub struct Args {
     /// ('tiles/**/*.gml', quoted), or - for standard input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
-    /// Output file for one input (.gz to compress; `-` for standard output); a directory for several inputs
-    /// (created if missing; one output per input, with the input's file name).
+    /// Output file for one input (.gz to compress; `-` for standard output); a directory for
+    /// several inputs (created if missing; one output per input, with the input's file name).
+    /// The format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON,
+    /// .city.jsonl CityJSONSeq.
     #[arg(short, long)]
     output: PathBuf,
+    /// Output format when the output's name does not tell it (in a directory: the format of
+    /// every output, named after its input with the format's ending).
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
+    format: Option<Format>,
     /// Largest angle (degrees) between the normals of polygons merged into one plane.
     #[arg(long, default_value_t = RoughOptions::default().angle_deg)]
     angle: f64,
@@ -44,6 +51,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if !(args.thickness.is_finite() && args.thickness >= 0.0) {
         bail!("--thickness must be a non-negative number of metres");
     }
+    let format = crate::export::resolve(args.inputs.len(), &args.output, args.format)?;
     let opts = RoughOptions {
         angle_deg: args.angle,
         thickness_m: args.thickness,
@@ -70,16 +78,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         let mut seen = std::collections::HashSet::new();
         let mut v = Vec::new();
         for i in &args.inputs {
-            let Some(name) = i.file_name() else {
+            let Some(out) = crate::export::in_dir(&args.output, i, format) else {
                 bail!("{}: not a file name", i.display());
             };
-            if !seen.insert(name.to_os_string()) {
-                bail!(
-                    "two inputs are named {}: their outputs would collide",
-                    Path::new(name).display()
-                );
+            if !seen.insert(out.clone()) {
+                bail!("two inputs would both be written to {}", out.display());
             }
-            v.push((i.clone(), args.output.join(name)));
+            v.push((i.clone(), out));
         }
         v
     };
@@ -106,7 +111,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.output.display()))?;
     }
     for (input, out) in todo {
-        if let Err(e) = one(input, out, &opts, &wopts, &args.crs) {
+        if let Err(e) = one(input, out, format, &opts, &wopts, &args.crs) {
             eprintln!("error: {e}");
             failed += 1;
         }
@@ -122,6 +127,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
 fn one(
     input: &Path,
     out: &Path,
+    format: Format,
     opts: &RoughOptions,
     wopts: &WriteOptions,
     crs: &SourceCrsArgs,
@@ -137,6 +143,13 @@ fn one(
     let local = frame.model_to_local(&model);
     let rough = frame.rough_to_source(&local, &model, &rough_model(&local, opts));
     let levels = vec![1u8; model.assets.len()];
+    if format != Format::CityGml {
+        let content = Content::Levels {
+            rough: &rough,
+            levels: &levels,
+        };
+        return crate::export::write(format, &model, 0, content, out, wopts);
+    }
     let s = write_mixed(&model, 0, &rough, &levels, out, wopts)?;
     let pct = if s.polygons_in > 0 {
         100.0 * s.polygons_out as f64 / s.polygons_in as f64

@@ -15,6 +15,7 @@ mod cmd_sun_hours;
 mod cmd_svf;
 mod cmd_synth;
 mod common;
+mod export;
 mod frames;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.

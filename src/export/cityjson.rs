@@ -1,0 +1,855 @@
+//! CityJSON 2.0 (`.city.json`) and CityJSONSeq (`.city.jsonl`) for the CityJSON tools (cjio,
+//! cjval, 3DBAG's tyler, DuckDB readers).
+//!
+//! # Mapping
+//!
+//! * `Building` and `BuildingPart` become city objects of those types (`parents`/`children`
+//!   linked); outer `BuildingInstallation`s become `BuildingInstallation` children of their
+//!   building or part. Other city objects keep their CityGML type where CityJSON 2.0 has it
+//!   (`SolitaryVegetationObject`, `PlantCover`, `CityFurniture`, `LandUse`, `WaterBody`, `Bridge`,
+//!   `Tunnel`, `Road`, `Railway`, `TransportSquare`, `Waterway`, `TINRelief`,
+//!   `OtherConstruction`, `GenericCityObject`) and are `GenericCityObject`s otherwise (with
+//!   the CityGML element name as the attribute `citygml_type`).
+//! * Thematic surfaces are semantic surfaces of their building's geometry (`RoofSurface`,
+//!   `WallSurface`, `GroundSurface`, `ClosureSurface`, `OuterCeilingSurface`,
+//!   `OuterFloorSurface`); openings are the semantic surfaces `Window` and `Door` with their
+//!   wall or roof as `parent` (CityJSON 2.0 has no opening city objects). One semantic object
+//!   per CityGML surface and geometry, so every polygon of a surface points to the same one.
+//! * One `MultiSurface` per city object and LoD (`"lod": "2"`, ...; rings open, holes kept).
+//!   CityJSON has no LoD 4: the exterior geometry of CityGML LoD4 is written as `"3"`, in a
+//!   geometry of its own. A building's own geometry (e.g. an `lod1Solid` beside LoD2 surfaces)
+//!   is written at the LoDs its surfaces do not cover; where they cover it, it would only
+//!   repeat their polygons.
+//! * `transform`: scale 0.001 (millimetres; 1e-8 degrees, about a millimetre, for latitude and
+//!   longitude in a geographic CRS such as PLATEAU's EPSG:6697), translate = the lower corner of the written
+//!   geometry, whole metres down; `metadata.referenceSystem` from the `srsName`
+//!   (`https://www.opengis.net/def/crs/EPSG/0/<code>`, the horizontal code of a compound
+//!   CRS, AdV `ETRS89_UTM<zone>` names as `EPSG:258<zone>`), `metadata.geographicalExtent`.
+//! * Levels ([`Content::Levels`]): what the mixed CityGML output holds
+//!   ([`crate::citygml::mixed`]): level 2 every LoD of the asset, level 1 the rough geometry in
+//!   the LoDs it replaces ([`crate::citygml::mixed::level1_geometries`]), level 0 nothing. Every
+//!   written surface, opening, installation or other object carries `skylod_level` (an
+//!   attribute, or a property of the semantic object); a building left with nothing is
+//!   dropped. [`Content::Full`] writes every building, also one without geometry.
+//!
+//! # Streaming
+//!
+//! City objects are written one building at a time. CityJSONSeq writes one line per building
+//! (its parts and installations included) or other city object, each with its own vertices,
+//! so memory follows the largest building. CityJSON keeps only the shared vertex list (integers)
+//! until the end of the document.
+//!
+//! # Example
+//! ```
+//! use skylod::export::{cityjson::write_cityjsonseq, Content};
+//! use skylod::synth::{generate, Preset};
+//! let mut xml = Vec::new();
+//! generate(&Preset::Small.defaults(), &mut xml).unwrap();
+//! let model = skylod::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let mut out = Vec::new();
+//! let s = write_cityjsonseq(&model, 0, Content::Full, &mut out).unwrap();
+//! let text = String::from_utf8(out).unwrap();
+//! let header: serde_json::Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+//! assert_eq!(header["version"], "2.0");
+//! assert_eq!(text.lines().count(), 1 + s.features);
+//! ```
+
+use super::{asset_name, Content, ExportSummary};
+use crate::citygml::mixed::level1_geometries;
+use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon};
+use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
+use glam::DVec3;
+use serde_json::{json, Map, Value};
+use std::collections::BTreeMap;
+use std::io::{self, Write};
+
+/// Scale of the integer vertices: millimetres.
+const SCALE: f64 = 0.001;
+
+/// Scale of latitude and longitude in a geographic CRS: 1e-8 degrees, about a millimetre.
+const SCALE_DEGREES: f64 = 1e-8;
+
+/// EPSG codes of the geographic (latitude/longitude) CRSs city models use: WGS 84 (4326, 4979),
+/// ETRS89 (4258, 4937), JGD2000/JGD2011 (4612, 6668, 6697), NAD83 (4269), GDA94/GDA2020 (4283,
+/// 7844), CGCS2000 (4490), RGF93 (4171).
+const GEOGRAPHIC: &[u32] = &[
+    4326, 4979, 4258, 4937, 4612, 6668, 6697, 4269, 4283, 7844, 4490, 4171,
+];
+
+/// Write file `file` of `model` as one CityJSON 2.0 document.
+///
+/// # Errors
+/// I/O errors of `w`.
+pub fn write_cityjson(
+    model: &CityModel,
+    file: usize,
+    content: Content<'_>,
+    w: &mut dyn Write,
+) -> io::Result<ExportSummary> {
+    let plan = Plan::new(model, file, content);
+    let mut s = ExportSummary::default();
+    let mut verts = Vertices::new(plan.translate, plan.scale);
+    let mut head = plan.header();
+    head.remove("vertices");
+    head.remove("CityObjects");
+    let head = serde_json::to_string(&Value::Object(head)).map_err(io::Error::other)?;
+    // `{...header` without its closing brace, then the city objects, then the vertices.
+    w.write_all(&head.as_bytes()[..head.len() - 1])?;
+    w.write_all(b",\"CityObjects\":{")?;
+    let mut first = true;
+    for f in &plan.features {
+        for (id, obj) in plan.objects(*f, &mut verts, &mut s) {
+            if !first {
+                w.write_all(b",")?;
+            }
+            first = false;
+            serde_json::to_writer(&mut *w, &id)?;
+            w.write_all(b":")?;
+            serde_json::to_writer(&mut *w, &obj)?;
+        }
+    }
+    w.write_all(b"},\"vertices\":[")?;
+    write_vertices(w, &verts.list)?;
+    w.write_all(b"]}\n")?;
+    s.vertices = verts.list.len();
+    Ok(s)
+}
+
+/// Write file `file` of `model` as CityJSONSeq: the CityJSON header object on the first line,
+/// then one `CityJSONFeature` per building (with its parts and installations) or other city
+/// object.
+///
+/// # Errors
+/// I/O errors of `w`.
+pub fn write_cityjsonseq(
+    model: &CityModel,
+    file: usize,
+    content: Content<'_>,
+    w: &mut dyn Write,
+) -> io::Result<ExportSummary> {
+    let plan = Plan::new(model, file, content);
+    let mut s = ExportSummary::default();
+    serde_json::to_writer(&mut *w, &Value::Object(plan.header()))?;
+    w.write_all(b"\n")?;
+    let mut verts = Vertices::new(plan.translate, plan.scale);
+    for f in &plan.features {
+        verts.clear();
+        let objs = plan.objects(*f, &mut verts, &mut s);
+        if objs.is_empty() {
+            continue;
+        }
+        let id = plan.feature_id(*f);
+        w.write_all(b"{\"type\":\"CityJSONFeature\",\"id\":")?;
+        serde_json::to_writer(&mut *w, &id)?;
+        w.write_all(b",\"CityObjects\":{")?;
+        for (k, (oid, obj)) in objs.iter().enumerate() {
+            if k > 0 {
+                w.write_all(b",")?;
+            }
+            serde_json::to_writer(&mut *w, oid)?;
+            w.write_all(b":")?;
+            serde_json::to_writer(&mut *w, obj)?;
+        }
+        w.write_all(b"},\"vertices\":[")?;
+        write_vertices(w, &verts.list)?;
+        w.write_all(b"]}\n")?;
+        s.vertices += verts.list.len();
+        s.features += 1;
+    }
+    Ok(s)
+}
+
+fn write_vertices(w: &mut dyn Write, list: &[[i64; 3]]) -> io::Result<()> {
+    let mut buf = String::with_capacity(64);
+    for (k, v) in list.iter().enumerate() {
+        buf.clear();
+        if k > 0 {
+            buf.push(',');
+        }
+        use std::fmt::Write as _;
+        let _ = write!(buf, "[{},{},{}]", v[0], v[1], v[2]);
+        w.write_all(buf.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// The `https://www.opengis.net/def/crs/EPSG/0/<code>` form of an `srsName`, when it names an
+/// EPSG code (the first one of a compound CRS) or an AdV `ETRS89_UTM<zone>` CRS.
+///
+/// ```
+/// use skylod::export::cityjson::reference_system;
+/// let want = Some("https://www.opengis.net/def/crs/EPSG/0/25832".to_string());
+/// assert_eq!(reference_system("urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"), want);
+/// assert_eq!(reference_system("urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH"), want);
+/// assert_eq!(reference_system("http://www.opengis.net/def/crs/EPSG/0/25832"), want);
+/// assert_eq!(reference_system("#local-CRS-1"), None);
+/// ```
+pub fn reference_system(srs_name: &str) -> Option<String> {
+    epsg_code(srs_name).map(|c| format!("https://www.opengis.net/def/crs/EPSG/0/{c}"))
+}
+
+/// The EPSG code of an `srsName` (see [`reference_system`]).
+fn epsg_code(srs_name: &str) -> Option<u32> {
+    let upper = srs_name.to_ascii_uppercase();
+    let code = if let Some(i) = upper.find("ETRS89_UTM") {
+        let zone: String = upper[i + "ETRS89_UTM".len()..]
+            .chars()
+            .take_while(char::is_ascii_digit)
+            .collect();
+        zone.parse::<u32>()
+            .ok()
+            .filter(|z| (28..=38).contains(z))
+            .map(|z| 25800 + z)
+    } else {
+        upper.split("EPSG").nth(1).and_then(|rest| {
+            let token = rest
+                .split(|c: char| !(c.is_ascii_digit() || matches!(c, ':' | '/' | '.')))
+                .next()?;
+            token
+                .rsplit(|c: char| !c.is_ascii_digit())
+                .find(|d| !d.is_empty())?
+                .parse::<u32>()
+                .ok()
+        })
+    }?;
+    Some(code)
+}
+
+/// Scale per axis for a CRS: millimetres, or about a millimetre in degrees for the horizontal
+/// axes of a geographic CRS.
+fn scale_for(srs_name: Option<&str>) -> DVec3 {
+    match srs_name.and_then(epsg_code) {
+        Some(c) if GEOGRAPHIC.contains(&c) => DVec3::new(SCALE_DEGREES, SCALE_DEGREES, SCALE),
+        _ => DVec3::splat(SCALE),
+    }
+}
+
+/// Integer vertices (millimetres from `translate`), each distinct one stored once.
+struct Vertices {
+    translate: DVec3,
+    scale: DVec3,
+    map: HashMap<[i64; 3], u32>,
+    list: Vec<[i64; 3]>,
+}
+
+impl Vertices {
+    fn new(translate: DVec3, scale: DVec3) -> Self {
+        Vertices {
+            translate,
+            scale,
+            map: HashMap::new(),
+            list: Vec::new(),
+        }
+    }
+
+    fn clear(&mut self) {
+        self.map.clear();
+        self.list.clear();
+    }
+
+    fn index(&mut self, p: DVec3) -> u32 {
+        let q = ((p - self.translate) / self.scale).round();
+        let key = [q.x as i64, q.y as i64, q.z as i64];
+        let n = self.list.len() as u32;
+        let k = *self.map.entry(key).or_insert(n);
+        if k == n {
+            self.list.push(key);
+        }
+        k
+    }
+
+    /// Indices of a ring, consecutive duplicates (after rounding) removed; `None` below 3.
+    fn ring(&mut self, ring: &[DVec3]) -> Option<Vec<u32>> {
+        let mut v: Vec<u32> = Vec::with_capacity(ring.len());
+        for p in ring {
+            if !p.is_finite() {
+                continue;
+            }
+            let k = self.index(*p);
+            if v.last() != Some(&k) {
+                v.push(k);
+            }
+        }
+        while v.len() > 1 && v.first() == v.last() {
+            v.pop();
+        }
+        (v.len() >= 3).then_some(v)
+    }
+}
+
+/// One MultiSurface being built: boundaries, semantic objects, one value per surface.
+#[derive(Default)]
+struct Geom {
+    boundaries: Vec<Vec<Vec<u32>>>,
+    values: Vec<Option<usize>>,
+    surfaces: Vec<Map<String, Value>>,
+    /// Semantic object of an asset in this geometry.
+    of_asset: HashMap<usize, usize>,
+}
+
+impl Geom {
+    fn add(&mut self, verts: &mut Vertices, polys: &[Polygon], sem: Option<usize>) -> usize {
+        let mut n = 0;
+        for p in polys {
+            let Some(ext) = verts.ring(&p.exterior) else {
+                continue;
+            };
+            let mut rings = vec![ext];
+            rings.extend(p.interiors.iter().filter_map(|r| verts.ring(r)));
+            self.boundaries.push(rings);
+            self.values.push(sem);
+            n += 1;
+        }
+        n
+    }
+
+    /// The semantic object of asset `i` (a thematic surface or an opening) in this geometry,
+    /// made on first use with its parent's (an opening's wall or roof) linked both ways; the
+    /// parent's is made too when the parent has no polygons of its own here.
+    fn semantic(&mut self, model: &CityModel, content: Content<'_>, i: usize) -> Option<usize> {
+        if let Some(k) = self.of_asset.get(&i) {
+            return Some(*k);
+        }
+        let a = model.assets.get(i)?;
+        let ty = semantic_type(a.kind)?;
+        let parent = a
+            .parent
+            .filter(|&p| p != i)
+            .and_then(|p| self.semantic(model, content, p));
+        let mut m = Map::new();
+        m.insert("type".into(), ty.into());
+        if content.has_levels() {
+            m.insert("skylod_level".into(), content.level(i).into());
+        }
+        let k = self.surfaces.len();
+        if let Some(p) = parent {
+            m.insert("parent".into(), p.into());
+            if let Some(Value::Array(c)) = self
+                .surfaces
+                .get_mut(p)
+                .map(|ps| ps.entry("children").or_insert_with(|| json!([])))
+            {
+                c.push(k.into());
+            }
+        }
+        self.surfaces.push(m);
+        self.of_asset.insert(i, k);
+        Some(k)
+    }
+
+    fn to_json(&self, lod: u8, kind: &str) -> Value {
+        let mut g = Map::new();
+        g.insert("type".into(), kind.into());
+        g.insert("lod".into(), lod.min(3).to_string().into());
+        g.insert("boundaries".into(), json!(self.boundaries));
+        if !self.surfaces.is_empty() {
+            g.insert(
+                "semantics".into(),
+                json!({"surfaces": self.surfaces, "values": self.values}),
+            );
+        }
+        Value::Object(g)
+    }
+}
+
+/// A line of CityJSONSeq: a root building with its parts and installations, or one other
+/// city object.
+#[derive(Debug, Clone, Copy)]
+enum Feature {
+    Building(usize),
+    Standalone(usize),
+}
+
+/// What to write for one file: ids, kept objects, transform.
+struct Plan<'a> {
+    model: &'a CityModel,
+    file: usize,
+    content: Content<'a>,
+    /// Ids per building (index into `model.buildings`) of this file.
+    building_ids: HashMap<usize, String>,
+    /// Ids per installation or standalone asset.
+    asset_ids: HashMap<usize, String>,
+    /// Parts (index) of each building or part.
+    parts: HashMap<usize, Vec<usize>>,
+    /// Buildings written.
+    kept: HashSet<usize>,
+    features: Vec<Feature>,
+    translate: DVec3,
+    scale: DVec3,
+    bbox: Bbox,
+}
+
+impl<'a> Plan<'a> {
+    fn new(model: &'a CityModel, file: usize, content: Content<'a>) -> Self {
+        let mut plan = Plan {
+            model,
+            file,
+            content,
+            building_ids: HashMap::new(),
+            asset_ids: HashMap::new(),
+            parts: HashMap::new(),
+            kept: HashSet::new(),
+            features: Vec::new(),
+            translate: DVec3::ZERO,
+            scale: scale_for(model.files.get(file).and_then(|f| f.srs_name.as_deref())),
+            bbox: Bbox::EMPTY,
+        };
+        let mut used: HashSet<String> = HashSet::new();
+        let mut unique = |cand: String| {
+            let mut id = cand.clone();
+            let mut k = 2;
+            while !used.insert(id.clone()) {
+                id = format!("{cand}_{k}");
+                k += 1;
+            }
+            id
+        };
+        for (b, bd) in model.buildings.iter().enumerate() {
+            if bd.file != file {
+                continue;
+            }
+            let cand = bd.id.clone().unwrap_or_else(|| format!("building_{b}"));
+            plan.building_ids.insert(b, unique(cand));
+            if let Some(p) = bd.parent {
+                plan.parts.entry(p).or_default().push(b);
+            }
+        }
+        for (i, a) in model.assets.iter().enumerate() {
+            if a.file != file || !standalone_or_installation(a) {
+                continue;
+            }
+            plan.asset_ids.insert(i, unique(asset_name(model, i)));
+        }
+        // Bounding box of what is written, and the buildings kept.
+        let mut bbox = Bbox::EMPTY;
+        for (i, a) in model.assets.iter().enumerate() {
+            if a.file != file {
+                continue;
+            }
+            for (_, polys) in asset_lods(a, i, content) {
+                for p in polys {
+                    for q in p.points() {
+                        bbox.add(*q);
+                    }
+                }
+            }
+        }
+        for (b, bd) in model.buildings.iter().enumerate() {
+            if bd.file == file {
+                for (_, g) in plan.own_geometries(b) {
+                    for p in g {
+                        for q in p.points() {
+                            bbox.add(*q);
+                        }
+                    }
+                }
+            }
+        }
+        plan.bbox = bbox;
+        if !bbox.is_empty() {
+            plan.translate = bbox.min.floor();
+        }
+        for (b, bd) in model.buildings.iter().enumerate() {
+            if bd.file == file && bd.parent.is_none() {
+                plan.mark_kept(b);
+                plan.features.push(Feature::Building(b));
+            }
+        }
+        for (i, a) in model.assets.iter().enumerate() {
+            if a.file == file && a.building.is_none() {
+                plan.features.push(Feature::Standalone(i));
+            }
+        }
+        plan
+    }
+
+    /// Mark `b` and its parts kept when they hold something; returns whether `b` is kept.
+    fn mark_kept(&mut self, b: usize) -> bool {
+        let parts = self.parts.get(&b).cloned().unwrap_or_default();
+        let mut keep = matches!(self.content, Content::Full);
+        for p in parts {
+            keep |= self.mark_kept(p);
+        }
+        if let Some(bd) = self.model.buildings.get(b) {
+            keep |= !self.own_geometries(b).is_empty();
+            keep |= bd.assets.iter().any(|&i| {
+                self.model
+                    .assets
+                    .get(i)
+                    .is_some_and(|a| !asset_lods(a, i, self.content).is_empty())
+            });
+        }
+        if keep {
+            self.kept.insert(b);
+        }
+        keep
+    }
+
+    /// The building's own geometry written: its LoD properties at LoDs none of its assets has.
+    fn own_geometries(&self, b: usize) -> Vec<(u8, &'a [Polygon])> {
+        let model = self.model;
+        let Some(bd) = model.buildings.get(b) else {
+            return Vec::new();
+        };
+        let covered: HashSet<u8> = bd
+            .assets
+            .iter()
+            .filter_map(|&i| model.assets.get(i))
+            .flat_map(|a| a.geometries.iter().map(|g| g.lod))
+            .collect();
+        bd.geometries
+            .iter()
+            .filter(|g| !covered.contains(&g.lod) && !g.polygons.is_empty())
+            .map(|g| (g.lod, g.polygons.as_slice()))
+            .collect()
+    }
+
+    fn header(&self) -> Map<String, Value> {
+        let mut meta = Map::new();
+        if let Some(rs) = self
+            .model
+            .files
+            .get(self.file)
+            .and_then(|f| f.srs_name.as_deref())
+            .and_then(reference_system)
+        {
+            meta.insert("referenceSystem".into(), rs.into());
+        }
+        if let Some(b) = self.bbox.to_array() {
+            meta.insert("geographicalExtent".into(), json!(b));
+        }
+        let t = self.translate;
+        let mut h = Map::new();
+        h.insert("type".into(), "CityJSON".into());
+        h.insert("version".into(), "2.0".into());
+        h.insert(
+            "transform".into(),
+            json!({"scale": self.scale.to_array(), "translate": [t.x, t.y, t.z]}),
+        );
+        h.insert("metadata".into(), Value::Object(meta));
+        h.insert("CityObjects".into(), json!({}));
+        h.insert("vertices".into(), json!([]));
+        h
+    }
+
+    fn feature_id(&self, f: Feature) -> String {
+        match f {
+            Feature::Building(b) => self.building_ids.get(&b).cloned(),
+            Feature::Standalone(i) => self.asset_ids.get(&i).cloned(),
+        }
+        .unwrap_or_default()
+    }
+
+    /// The city objects of a feature, their vertices added to `verts`.
+    fn objects(
+        &self,
+        f: Feature,
+        verts: &mut Vertices,
+        s: &mut ExportSummary,
+    ) -> Vec<(String, Value)> {
+        let mut out = Vec::new();
+        match f {
+            Feature::Building(b) => {
+                if self.kept.contains(&b) {
+                    self.building(b, verts, s, &mut out);
+                }
+            }
+            Feature::Standalone(i) => {
+                if let Some(o) = self.standalone(i, verts, s) {
+                    out.push(o);
+                }
+            }
+        }
+        s.objects += out.len();
+        out
+    }
+
+    fn building(
+        &self,
+        b: usize,
+        verts: &mut Vertices,
+        s: &mut ExportSummary,
+        out: &mut Vec<(String, Value)>,
+    ) {
+        let model = self.model;
+        let Some(bd) = model.buildings.get(b) else {
+            return;
+        };
+        let id = self.building_ids.get(&b).cloned().unwrap_or_default();
+        let mut geoms: BTreeMap<u8, Geom> = BTreeMap::new();
+        let mut attributes = Map::new();
+        let mut children: Vec<String> = Vec::new();
+        let mut installations: Vec<usize> = Vec::new();
+        // Surfaces first, then openings (their parent's semantic object must exist).
+        let assets: Vec<usize> = bd
+            .assets
+            .iter()
+            .copied()
+            .filter(|&i| model.assets.get(i).is_some_and(|a| !a.kind.is_opening()))
+            .chain(
+                bd.assets
+                    .iter()
+                    .copied()
+                    .filter(|&i| model.assets.get(i).is_some_and(|a| a.kind.is_opening())),
+            )
+            .collect();
+        for i in assets {
+            let Some(a) = model.assets.get(i) else {
+                continue;
+            };
+            if a.kind == AssetKind::Installation {
+                installations.push(i);
+                continue;
+            }
+            let level = self.content.level(i);
+            let lods = asset_lods(a, i, self.content);
+            if lods.is_empty() {
+                continue;
+            }
+            if a.kind == AssetKind::Body && self.content.has_levels() {
+                attributes.insert("skylod_level".into(), level.into());
+            }
+            for (lod, polys) in lods {
+                let g = geoms.entry(lod).or_default();
+                let sem = g.semantic(model, self.content, i);
+                s.polygons += g.add(verts, polys, sem);
+            }
+        }
+        for (lod, polys) in self.own_geometries(b) {
+            // Own geometry at a LoD of its own: a geometry apart from the surfaces'.
+            let g = geoms.entry(lod).or_default();
+            s.polygons += g.add(verts, polys, None);
+        }
+        for p in self.parts.get(&b).into_iter().flatten() {
+            if self.kept.contains(p) {
+                if let Some(pid) = self.building_ids.get(p) {
+                    children.push(pid.clone());
+                }
+            }
+        }
+        let mut inst_objs = Vec::new();
+        for i in installations {
+            if let Some(o) = self.installation(i, &id, verts, s) {
+                children.push(o.0.clone());
+                inst_objs.push(o);
+            }
+        }
+        let mut obj = Map::new();
+        obj.insert(
+            "type".into(),
+            if bd.is_part {
+                "BuildingPart"
+            } else {
+                "Building"
+            }
+            .into(),
+        );
+        if !attributes.is_empty() {
+            obj.insert("attributes".into(), Value::Object(attributes));
+        }
+        let geometry: Vec<Value> = geoms
+            .iter()
+            .filter(|(_, g)| !g.boundaries.is_empty())
+            .map(|(lod, g)| g.to_json(*lod, "MultiSurface"))
+            .collect();
+        if !geometry.is_empty() {
+            obj.insert("geometry".into(), Value::Array(geometry));
+        }
+        if let Some(parent) = bd.parent.and_then(|p| self.building_ids.get(&p)) {
+            obj.insert("parents".into(), json!([parent]));
+        }
+        if !children.is_empty() {
+            obj.insert("children".into(), json!(children));
+        }
+        out.push((id, Value::Object(obj)));
+        out.append(&mut inst_objs);
+        for p in self.parts.get(&b).into_iter().flatten() {
+            if self.kept.contains(p) {
+                self.building(*p, verts, s, out);
+            }
+        }
+    }
+
+    fn installation(
+        &self,
+        i: usize,
+        parent: &str,
+        verts: &mut Vertices,
+        s: &mut ExportSummary,
+    ) -> Option<(String, Value)> {
+        let a = self.model.assets.get(i)?;
+        let mut obj = self.simple_object(i, a, "BuildingInstallation", "MultiSurface", verts, s)?;
+        obj.1["parents"] = json!([parent]);
+        if let Some(f) = &a.function {
+            obj.1["attributes"]["function"] = f.as_str().into();
+        }
+        Some(obj)
+    }
+
+    fn standalone(
+        &self,
+        i: usize,
+        verts: &mut Vertices,
+        s: &mut ExportSummary,
+    ) -> Option<(String, Value)> {
+        let a = self.model.assets.get(i)?;
+        let known = [
+            "SolitaryVegetationObject",
+            "PlantCover",
+            "CityFurniture",
+            "LandUse",
+            "WaterBody",
+            "Bridge",
+            "Tunnel",
+            "Road",
+            "Railway",
+            "TransportSquare",
+            "Waterway",
+            "TINRelief",
+            "OtherConstruction",
+            "GenericCityObject",
+        ];
+        let ty = if a.kind == AssetKind::Other {
+            known.iter().copied().find(|k| *k == a.element)
+        } else {
+            None
+        };
+        let geom = if ty == Some("TINRelief") {
+            "CompositeSurface"
+        } else {
+            "MultiSurface"
+        };
+        let mut obj =
+            self.simple_object(i, a, ty.unwrap_or("GenericCityObject"), geom, verts, s)?;
+        if ty.is_none() {
+            obj.1["attributes"]["citygml_type"] = a.element.as_str().into();
+        }
+        Some(obj)
+    }
+
+    /// A city object of one asset: its geometry per LoD, `skylod_level`; `None` when nothing
+    /// of it is written.
+    fn simple_object(
+        &self,
+        i: usize,
+        a: &Asset,
+        ty: &str,
+        geom: &str,
+        verts: &mut Vertices,
+        s: &mut ExportSummary,
+    ) -> Option<(String, Value)> {
+        let lods = asset_lods(a, i, self.content);
+        let mut geoms: BTreeMap<u8, Geom> = BTreeMap::new();
+        for (lod, polys) in lods {
+            s.polygons += geoms.entry(lod).or_default().add(verts, polys, None);
+        }
+        let geometry: Vec<Value> = geoms
+            .iter()
+            .filter(|(_, g)| !g.boundaries.is_empty())
+            .map(|(lod, g)| g.to_json(*lod, geom))
+            .collect();
+        if geometry.is_empty() && self.content.has_levels() {
+            return None;
+        }
+        let mut obj = json!({"type": ty, "attributes": {}});
+        if !geometry.is_empty() {
+            obj["geometry"] = Value::Array(geometry);
+        }
+        if self.content.has_levels() {
+            obj["attributes"]["skylod_level"] = self.content.level(i).into();
+        }
+        let id = self.asset_ids.get(&i).cloned().unwrap_or_default();
+        Some((id, obj))
+    }
+}
+
+/// Installations and assets outside any building are city objects of their own.
+fn standalone_or_installation(a: &Asset) -> bool {
+    a.building.is_none() || a.kind == AssetKind::Installation
+}
+
+/// CityJSON semantic surface type of a thematic surface or opening.
+fn semantic_type(kind: AssetKind) -> Option<&'static str> {
+    Some(match kind {
+        AssetKind::Roof => "RoofSurface",
+        AssetKind::Wall => "WallSurface",
+        AssetKind::Ground => "GroundSurface",
+        AssetKind::Closure => "ClosureSurface",
+        AssetKind::OuterCeiling => "OuterCeilingSurface",
+        AssetKind::OuterFloor => "OuterFloorSurface",
+        AssetKind::Window => "Window",
+        AssetKind::Door => "Door",
+        AssetKind::Installation | AssetKind::Body | AssetKind::Other => return None,
+    })
+}
+
+/// The polygons asset `i` has in the output, per LoD (ascending; several properties of one
+/// LoD together): see the module docs.
+fn asset_lods<'a>(a: &'a Asset, i: usize, content: Content<'a>) -> Vec<(u8, &'a [Polygon])> {
+    let mut out: Vec<(u8, &'a [Polygon])> = Vec::new();
+    match content.level(i) {
+        0 => {}
+        1 => {
+            let Some(r) = content.rough(i) else {
+                return out;
+            };
+            let mut rough_at: HashSet<u8> = HashSet::new();
+            for (g, polys, replaced) in level1_geometries(a, r) {
+                if replaced && !rough_at.insert(g.lod) {
+                    continue;
+                }
+                out.push((g.lod, polys));
+            }
+        }
+        _ => out.extend(a.geometries.iter().map(|g| (g.lod, g.polygons.as_slice()))),
+    }
+    out.retain(|(_, p)| !p.is_empty());
+    out.sort_by_key(|(l, _)| *l);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rings_drop_duplicates_after_rounding() {
+        let mut v = Vertices::new(DVec3::new(100.0, 200.0, 0.0), DVec3::splat(SCALE));
+        let r = v
+            .ring(&[
+                DVec3::new(100.0, 200.0, 0.0),
+                DVec3::new(100.0002, 200.0, 0.0),
+                DVec3::new(101.0, 200.0, 0.0),
+                DVec3::new(101.0, 201.0, 0.0),
+                DVec3::new(100.0, 200.0001, 0.0),
+            ])
+            .unwrap();
+        assert_eq!(r, vec![0, 1, 2]);
+        assert_eq!(v.list[2], [1000, 1000, 0]);
+        assert!(v
+            .ring(&[DVec3::ZERO, DVec3::X * 1e-5, DVec3::Y * 1e-5])
+            .is_none());
+    }
+
+    #[test]
+    fn reference_systems() {
+        let t = [
+            ("EPSG:25831", Some(25831)),
+            ("urn:ogc:def:crs:EPSG::6697", Some(6697)),
+            (
+                "urn:ogc:def:crs,crs:EPSG:6.12:31466,crs:EPSG:6.12:5783",
+                Some(31466),
+            ),
+            ("urn:adv:crs:ETRS89_UTM33*DE_DHHN2016_NH", Some(25833)),
+            ("urn:adv:crs:DE_DHDN_3GK4*DE_DHHN92_NH", None),
+            ("", None),
+        ];
+        for (srs, code) in t {
+            assert_eq!(
+                reference_system(srs),
+                code.map(|c| format!("https://www.opengis.net/def/crs/EPSG/0/{c}")),
+                "{srs}"
+            );
+        }
+    }
+}

@@ -1,0 +1,201 @@
+//! Interchange with the tools that come next (DESIGN.md "Interchange"): the model, the rough
+//! model or the mixed-LoD model written as OBJ ([`obj`]) for daylight tools, or as CityJSON 2.0
+//! and CityJSONSeq ([`cityjson`]) for the CityJSON tools. The format follows the output's name
+//! ([`mod@format`]). CityGML itself is written by [`crate::citygml::write`] and
+//! [`crate::citygml::mixed`].
+//!
+//! What each asset contributes is decided once: [`Content::Full`] (`convert`) writes every asset
+//! at full detail; [`Content::Levels`] (`rough`, `lod`) writes level 2 at full detail, level 1
+//! with its rough geometry and drops level 0, as the traced LoD scene
+//! ([`crate::scene::mixed_scene`], for OBJ) and the mixed CityGML writer
+//! ([`crate::citygml::mixed::level1_geometries`], for CityJSON's per-LoD geometry) do.
+//!
+//! # Example
+//! ```
+//! use skylod::export::{write, Content, Format};
+//! use skylod::synth::{generate, Preset};
+//! let dir = tempfile::tempdir().unwrap();
+//! let gml = dir.path().join("small.gml");
+//! let mut xml = Vec::new();
+//! generate(&Preset::Small.defaults(), &mut xml).unwrap();
+//! std::fs::write(&gml, &xml).unwrap();
+//! let model = skylod::citygml::read_file(&gml).unwrap();
+//! let out = dir.path().join("small.obj");
+//! let s = write(Format::Obj, &model, 0, Content::Full, &out, &Default::default()).unwrap();
+//! let text = std::fs::read_to_string(&out).unwrap();
+//! assert!(text.starts_with("# origin "));
+//! assert_eq!(s.objects, model.assets.len());
+//! ```
+
+pub mod cityjson;
+pub mod format;
+pub mod obj;
+
+pub use format::{Format, UnknownFormat};
+
+use crate::citygml::write::WriteOptions;
+use crate::citygml::WriteError;
+use crate::model::{Asset, CityModel};
+use crate::rough::RoughGeometry;
+use std::io::Write;
+use std::path::Path;
+
+/// What the export holds per asset.
+#[derive(Debug, Clone, Copy)]
+pub enum Content<'a> {
+    /// Every asset with all its geometry (`convert`); no `skylod_level`.
+    Full,
+    /// Every asset at its level (`rough`: all 1; `lod`: the selection): 2 full detail, 1 rough
+    /// geometry, 0 absent; `rough[i]` and `levels[i]` belong to asset `i`.
+    Levels {
+        /// Rough geometry per asset.
+        rough: &'a [RoughGeometry],
+        /// Level per asset (above 2 counts as 2).
+        levels: &'a [u8],
+    },
+}
+
+impl<'a> Content<'a> {
+    /// Level of asset `i`: 2 for [`Content::Full`].
+    pub fn level(&self, i: usize) -> u8 {
+        match self {
+            Content::Full => 2,
+            Content::Levels { levels, .. } => levels.get(i).copied().unwrap_or(0).min(2),
+        }
+    }
+
+    /// Rough geometry of asset `i`, if any.
+    pub fn rough(&self, i: usize) -> Option<&'a RoughGeometry> {
+        match self {
+            Content::Full => None,
+            Content::Levels { rough, .. } => rough.get(i),
+        }
+    }
+
+    /// True when levels are written as `skylod_level`.
+    pub fn has_levels(&self) -> bool {
+        matches!(self, Content::Levels { .. })
+    }
+
+    fn check(&self, model: &CityModel) -> Result<(), WriteError> {
+        if let Content::Levels { rough, levels } = self {
+            if rough.len() != model.assets.len() || levels.len() != model.assets.len() {
+                return Err(WriteError::Invalid(format!(
+                    "{} assets, {} levels and {} rough geometries: one of each per asset expected",
+                    model.assets.len(),
+                    levels.len(),
+                    rough.len()
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What an export wrote.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct ExportSummary {
+    /// Bytes written (before compression).
+    pub bytes: u64,
+    /// OBJ objects (`o`), or CityJSON city objects.
+    pub objects: usize,
+    /// Polygons written (OBJ: polygons triangulated; CityJSON: surfaces).
+    pub polygons: usize,
+    /// Triangles (OBJ only).
+    pub triangles: usize,
+    /// Vertices written.
+    pub vertices: usize,
+    /// CityJSONSeq features (lines after the header).
+    pub features: usize,
+}
+
+/// Write file `file` of `model` to `out` in `format` (OBJ, CityJSON or CityJSONSeq), atomically
+/// (temporary file + rename), refusing to write over an input or, without `overwrite`, over an
+/// existing file.
+///
+/// # Errors
+/// [`WriteError`] for a refused target, I/O errors, mismatched `content` lengths, or
+/// [`Format::CityGml`] (written by [`crate::citygml::write`] and [`crate::citygml::mixed`]).
+pub fn write(
+    format: Format,
+    model: &CityModel,
+    file: usize,
+    content: Content<'_>,
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<ExportSummary, WriteError> {
+    content.check(model)?;
+    let Some(src) = model.files.get(file) else {
+        return Err(WriteError::Invalid(format!("no source file {file}")));
+    };
+    crate::citygml::write::check_target(out, opts, std::iter::once(src.path.as_path()))?;
+    let mut summary = ExportSummary::default();
+    let io = |e| WriteError::Io {
+        file: out.to_path_buf(),
+        source: e,
+    };
+    let bytes = crate::citygml::write::atomic_write(out, |w| {
+        let mut cw = Counting { inner: w, n: 0 };
+        match format {
+            Format::Obj => summary = obj::write_obj(model, file, content, &mut cw).map_err(io)?,
+            Format::CityJson => {
+                summary = cityjson::write_cityjson(model, file, content, &mut cw).map_err(io)?
+            }
+            Format::CityJsonSeq => {
+                summary = cityjson::write_cityjsonseq(model, file, content, &mut cw).map_err(io)?
+            }
+            Format::CityGml => {
+                return Err(WriteError::Invalid(
+                    "CityGML is written by citygml::write / citygml::mixed".into(),
+                ))
+            }
+        }
+        Ok(cw.n)
+    })?;
+    summary.bytes = bytes;
+    Ok(summary)
+}
+
+/// A writer that counts the bytes through it.
+struct Counting<'a> {
+    inner: &'a mut dyn Write,
+    n: u64,
+}
+
+impl Write for Counting<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let k = self.inner.write(buf)?;
+        self.n += k as u64;
+        Ok(k)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Name of asset `i` in an export: its `gml:id`, else its building's id and its index among
+/// the building's assets (`B1_3`), else `asset_<i>`.
+pub fn asset_name(model: &CityModel, i: usize) -> String {
+    let Some(a) = model.assets.get(i) else {
+        return format!("asset_{i}");
+    };
+    if let Some(id) = &a.id {
+        return id.clone();
+    }
+    if let Some(b) = a.building.and_then(|b| model.buildings.get(b)) {
+        if let Some(bid) = &b.id {
+            let k = b.assets.iter().position(|&x| x == i).unwrap_or(i);
+            return format!("{bid}_{k}");
+        }
+    }
+    format!("asset_{i}")
+}
+
+/// Assets of file `file`, with their indices.
+fn assets_of(model: &CityModel, file: usize) -> impl Iterator<Item = (usize, &Asset)> {
+    model
+        .assets
+        .iter()
+        .enumerate()
+        .filter(move |(_, a)| a.file == file)
+}

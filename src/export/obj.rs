@@ -1,0 +1,251 @@
+//! Wavefront OBJ for daylight tools (Radiance `obj2rad`, Ladybug/Honeybee, Rhino), by the
+//! conventions of DESIGN.md "Interchange":
+//!
+//! * the first line is `# origin X Y Z`: a point in the model's CRS (the centre of the file's
+//!   geometry, rounded to whole metres); every vertex is written relative to it, so a reader in
+//!   single precision keeps centimetres on a UTM model;
+//! * one `o` per asset, named by its `gml:id` (or its building's id and its index,
+//!   [`super::asset_name`]);
+//! * one `usemtl` per semantic class and level: `roof_l2`, `wall_l1`, `installation_l1`,
+//!   `window_l2`, ... (the kinds of [`crate::model::AssetKind::as_str`]); `convert` writes full
+//!   detail as level 2;
+//! * triangles only ([`crate::geom::triangulate()`]), oriented like the polygon's exterior ring;
+//!   Z up, metres, no normals and no material library (the material names are the classes).
+//!
+//! What an asset contributes is [`crate::scene::level_polygons`], the definition the traced
+//! LoD scene uses ([`crate::scene::mixed_scene`]): level 2 its highest LoD, level 1 its rough
+//! geometry, level 0 nothing. Vertices are shared within an object.
+//!
+//! # Example
+//! ```
+//! use glam::DVec3;
+//! use skylod::export::{obj::write_obj, Content};
+//! use skylod::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
+//! let mut m = CityModel::default();
+//! let quad = Polygon::new(vec![
+//!     DVec3::new(430000.0, 4581000.0, 20.0), DVec3::new(430010.0, 4581000.0, 20.0),
+//!     DVec3::new(430010.0, 4581010.0, 20.0), DVec3::new(430000.0, 4581010.0, 20.0),
+//! ]);
+//! m.assets.push(Asset {
+//!     kind: AssetKind::Roof, id: Some("r1".into()), element: "RoofSurface".into(), building: None,
+//!     parent: None, span: 0..0, line: 1, function: None, file: 0,
+//!     geometries: vec![LodGeometry { lod: 2, polygons: vec![quad], ..Default::default() }],
+//! });
+//! let mut out = Vec::new();
+//! let s = write_obj(&m, 0, Content::Full, &mut out).unwrap();
+//! let text = String::from_utf8(out).unwrap();
+//! assert!(text.starts_with("# origin 430005 4581005 20\n"));
+//! assert!(text.contains("o r1\nusemtl roof_l2\nv "));
+//! assert!(text.contains("\nv -5 -5 0\n") && text.contains("\nv 5 5 0\n"));
+//! assert_eq!((s.objects, s.triangles, s.vertices), (1, 2, 4));
+//! ```
+
+use super::{asset_name, assets_of, Content, ExportSummary};
+use crate::geom::triangulate;
+use crate::model::{Bbox, CityModel};
+use crate::scene::level_polygons;
+use foldhash::{HashMap, HashMapExt};
+use glam::DVec3;
+use std::io::{self, Write};
+
+/// Write the assets of file `file` of `model` as OBJ to `w` (see the module docs).
+///
+/// # Errors
+/// I/O errors of `w`.
+pub fn write_obj(
+    model: &CityModel,
+    file: usize,
+    content: Content<'_>,
+    w: &mut dyn Write,
+) -> io::Result<ExportSummary> {
+    let mut bbox = Bbox::EMPTY;
+    for (i, a) in assets_of(model, file) {
+        for p in level_polygons(a, content.rough(i), content.level(i)) {
+            for q in p.points() {
+                bbox.add(*q);
+            }
+        }
+    }
+    let origin = if bbox.is_empty() {
+        DVec3::ZERO
+    } else {
+        bbox.center().round()
+    };
+    writeln!(w, "# origin {} {} {}", origin.x, origin.y, origin.z)?;
+    let src = model.files.get(file);
+    writeln!(
+        w,
+        "# skylod {} OBJ of {}; CRS {}; metres, Z up, vertices relative to the origin",
+        env!("CARGO_PKG_VERSION"),
+        src.map_or_else(String::new, |f| f.path.display().to_string()),
+        src.and_then(|f| f.srs_name.as_deref()).unwrap_or("unknown"),
+    )?;
+    let mut s = ExportSummary::default();
+    let mut tris: Vec<[DVec3; 3]> = Vec::new();
+    let mut index: HashMap<[u64; 3], usize> = HashMap::new();
+    let mut faces: Vec<[usize; 3]> = Vec::new();
+    let mut line = String::with_capacity(96);
+    for (i, a) in assets_of(model, file) {
+        let level = content.level(i);
+        let polys = level_polygons(a, content.rough(i), level);
+        tris.clear();
+        for p in polys {
+            triangulate(p, &mut tris);
+        }
+        if tris.is_empty() {
+            continue;
+        }
+        let name: String = asset_name(model, i)
+            .chars()
+            .map(|c| if c.is_whitespace() { '_' } else { c })
+            .collect();
+        writeln!(w, "o {name}\nusemtl {}_l{level}", a.kind.as_str())?;
+        index.clear();
+        faces.clear();
+        let first = s.vertices + 1;
+        for t in &tris {
+            let mut f = [0usize; 3];
+            for (k, v) in t.iter().enumerate() {
+                let key = [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+                let n = index.len();
+                let id = *index.entry(key).or_insert(n);
+                if id == n {
+                    line.clear();
+                    line.push('v');
+                    for c in (*v - origin).to_array() {
+                        line.push(' ');
+                        push_coord(&mut line, c);
+                    }
+                    line.push('\n');
+                    w.write_all(line.as_bytes())?;
+                }
+                f[k] = id;
+            }
+            faces.push(f);
+        }
+        for f in &faces {
+            line.clear();
+            line.push('f');
+            for k in f {
+                line.push(' ');
+                line.push_str(&(first + k).to_string());
+            }
+            line.push('\n');
+            w.write_all(line.as_bytes())?;
+        }
+        s.vertices += index.len();
+        s.objects += 1;
+        s.polygons += polys.len();
+        s.triangles += tris.len();
+    }
+    Ok(s)
+}
+
+/// A coordinate with 0.1 mm resolution, without trailing zeros (`-5`, `12.25`).
+fn push_coord(s: &mut String, x: f64) {
+    let mut t = format!("{x:.4}");
+    if t.contains('.') {
+        while t.ends_with('0') {
+            t.pop();
+        }
+        if t.ends_with('.') {
+            t.pop();
+        }
+    }
+    if t == "-0" {
+        t = "0".into();
+    }
+    s.push_str(&t);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
+    use crate::rough::RoughGeometry;
+
+    fn asset(kind: AssetKind, id: Option<&str>, z: f64) -> Asset {
+        let sq = Polygon::new(vec![
+            DVec3::new(0.0, 0.0, z),
+            DVec3::new(2.0, 0.0, z),
+            DVec3::new(2.0, 2.0, z),
+            DVec3::new(0.0, 2.0, z),
+        ]);
+        Asset {
+            kind,
+            id: id.map(Into::into),
+            element: "X".into(),
+            building: None,
+            parent: None,
+            span: 0..0,
+            line: 1,
+            function: None,
+            file: 0,
+            geometries: vec![LodGeometry {
+                lod: 3,
+                polygons: vec![sq],
+                ..Default::default()
+            }],
+        }
+    }
+
+    #[test]
+    fn coords() {
+        let mut s = String::new();
+        for x in [0.0, -0.00001, 1.5, -2.25, 100.0, 0.12345] {
+            push_coord(&mut s, x);
+            s.push(' ');
+        }
+        assert_eq!(s, "0 0 1.5 -2.25 100 0.1235 ");
+    }
+
+    #[test]
+    fn levels_pick_geometry_and_material() {
+        let mut m = CityModel::default();
+        m.assets.push(asset(AssetKind::Roof, Some("r"), 10.0));
+        m.assets.push(asset(AssetKind::Installation, None, 11.0));
+        m.assets.push(asset(AssetKind::Wall, Some("w"), 12.0));
+        let tri = Polygon::new(vec![
+            DVec3::new(0.0, 0.0, 11.0),
+            DVec3::new(1.0, 0.0, 11.0),
+            DVec3::new(0.0, 1.0, 11.0),
+        ]);
+        let rough = vec![
+            RoughGeometry::default(),
+            RoughGeometry {
+                polygons: vec![tri],
+                obb: None,
+                lod: 3,
+            },
+            RoughGeometry::default(),
+        ];
+        let levels = [2, 1, 0];
+        let mut out = Vec::new();
+        let s = write_obj(
+            &m,
+            0,
+            Content::Levels {
+                rough: &rough,
+                levels: &levels,
+            },
+            &mut out,
+        )
+        .unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.contains("o r\nusemtl roof_l2\n"), "{text}");
+        assert!(
+            text.contains("o asset_1\nusemtl installation_l1\n"),
+            "{text}"
+        );
+        assert!(!text.contains("o w\n"), "{text}");
+        assert_eq!((s.objects, s.triangles, s.vertices), (2, 3, 7));
+        // Faces index the vertices written so far (1-based, global).
+        let nv = text.lines().filter(|l| l.starts_with("v ")).count();
+        for l in text.lines().filter(|l| l.starts_with("f ")) {
+            for k in l[2..].split(' ') {
+                let k: usize = k.parse().unwrap();
+                assert!(k >= 1 && k <= nv);
+            }
+        }
+    }
+}
