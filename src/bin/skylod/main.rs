@@ -7,6 +7,7 @@ use std::process::ExitCode;
 mod cmd_convert;
 mod cmd_evaluate;
 mod cmd_fisheye;
+mod cmd_horizon;
 mod cmd_lod;
 mod cmd_rough;
 mod cmd_stats;
@@ -43,6 +44,8 @@ enum Command {
     SunHours(cmd_sun_hours::Args),
     /// Fisheye picture (SVG) of the sky hemisphere seen from a point, with sun paths.
     Fisheye(cmd_fisheye::Args),
+    /// Horizon profile (skyline elevation per azimuth) of points, as CSV or JSON (PVGIS/pvlib).
+    Horizon(cmd_horizon::Args),
 }
 
 /// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
@@ -74,6 +77,7 @@ fn main() -> ExitCode {
         Command::Svf(a) => cmd_svf::run(a),
         Command::SunHours(a) => cmd_sun_hours::run(a),
         Command::Fisheye(a) => cmd_fisheye::run(a),
+        Command::Horizon(a) => cmd_horizon::run(a),
     };
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,
