@@ -43,39 +43,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         thickness_m: args.thickness,
         prefer_lod2: !args.no_lod2,
     };
-    let targets: Vec<(PathBuf, PathBuf)> = if args.inputs.len() == 1 {
-        if args.output.is_dir() {
-            bail!(
-                "{}: is a directory; with one input, -o names the output file",
-                args.output.display()
-            );
-        }
-        vec![(args.inputs[0].clone(), args.output.clone())]
-    } else {
-        if args.output.exists() && !args.output.is_dir() {
-            bail!(
-                "{}: with several inputs, -o must be a directory",
-                args.output.display()
-            );
-        }
-        let mut seen = std::collections::HashSet::new();
-        let mut v = Vec::new();
-        for i in &args.inputs {
-            let Some(name) = i.file_name() else {
-                bail!("{}: not a file name", i.display());
-            };
-            if !seen.insert(name.to_os_string()) {
-                bail!(
-                    "two inputs are named {}: their outputs would collide",
-                    Path::new(name).display()
-                );
-            }
-            v.push((i.clone(), args.output.join(name)));
-        }
-        std::fs::create_dir_all(&args.output)
-            .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.output.display()))?;
-        v
-    };
+    let targets = crate::common::outputs_per_input(&args.inputs, &args.output)?;
     let wopts = WriteOptions {
         overwrite: args.overwrite,
         protect: args.inputs.clone(),

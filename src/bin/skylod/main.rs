@@ -9,6 +9,7 @@ mod cmd_evaluate;
 mod cmd_fisheye;
 mod cmd_horizon;
 mod cmd_lod;
+mod cmd_reproject;
 mod cmd_rough;
 mod cmd_stats;
 mod cmd_sun_hours;
@@ -46,6 +47,8 @@ enum Command {
     Fisheye(cmd_fisheye::Args),
     /// Horizon profile (skyline elevation per azimuth) of points, as CSV or JSON (PVGIS/pvlib).
     Horizon(cmd_horizon::Args),
+    /// Transform every coordinate into another CRS through PROJ (needs the cargo feature `proj`).
+    Reproject(cmd_reproject::Args),
 }
 
 /// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
@@ -78,6 +81,7 @@ fn main() -> ExitCode {
         Command::SunHours(a) => cmd_sun_hours::run(a),
         Command::Fisheye(a) => cmd_fisheye::run(a),
         Command::Horizon(a) => cmd_horizon::run(a),
+        Command::Reproject(a) => cmd_reproject::run(a),
     };
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,
