@@ -77,7 +77,7 @@ struct Case {
     xsd: Option<&'static str>,
 }
 
-const CASES: [Case; 4] = [
+const CASES: [Case; 5] = [
     // Ingolstadt LoD3 (WGS 84 / UTM 32N) to latitude/longitude: 1e-9 deg is 0.1 mm.
     Case {
         file: "ingolstadt-lod3/4018106.xml.gz",
@@ -105,6 +105,15 @@ const CASES: [Case; 4] = [
         tol: 1e-3,
         srs: "urn:ogc:def:crs,crs:EPSG::6691,crs:EPSG::6695",
         xsd: None,
+    },
+    // The OGC example building (ETRS89 / UTM 32N + DHHN92, LoD3) to WGS 84.
+    Case {
+        file: "ogc-citygml2-examples/building/Building_LOD3-EPSG25832.gml",
+        source: "EPSG:25832",
+        target: "EPSG:4326",
+        tol: 1e-9,
+        srs: "urn:ogc:def:crs,crs:EPSG::4326,crs:EPSG::5783",
+        xsd: Some("2.0"),
     },
     // CityGML 3.0 (GML 3.2) FZK-Haus into the neighbouring zone, UTM 33N.
     Case {
@@ -285,4 +294,82 @@ fn usage_errors() {
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(stderr(&o).contains("warning"), "{}", stderr(&o));
+}
+
+/// The numbers of the first element named `tag` (any prefix) in `text`.
+fn numbers_of(text: &str, tag: &str) -> Vec<f64> {
+    let open = text.find(tag).expect(tag);
+    let start = open + text[open..].find('>').unwrap() + 1;
+    let end = start + text[start..].find('<').unwrap();
+    text[start..end]
+        .split_whitespace()
+        .map(|t| t.parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn implicit_geometry_follows_pyproj() {
+    let Some(data) = shared_data() else { return };
+    if !pyproj_available() {
+        return;
+    }
+    // Two implicit geometries (a template and an xlink to it) in DHDN / Gauss-Kruger + DHHN92,
+    // written easting first.
+    let input = data.join("ogc-citygml2-examples/spec-examples/GenericCityObjects.xml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.gml");
+    reproject(&input, &out, "EPSG:25832", None);
+    let (a, b) = (
+        std::fs::read_to_string(&input).unwrap(),
+        std::fs::read_to_string(&out).unwrap(),
+    );
+    // The implicit geometry with a matrix, and its reference point (which follows it).
+    let after = |t: &str| t[t.find("transformationMatrix").unwrap()..].to_string();
+    let (a, b) = (after(&a), after(&b));
+    let r = numbers_of(a.split("referencePoint").nth(1).unwrap(), "pos");
+    let m = numbers_of(&a, "transformationMatrix");
+    let r2 = numbers_of(b.split("referencePoint").nth(1).unwrap(), "pos");
+    let m2 = numbers_of(&b, "transformationMatrix");
+    // pyproj, easting first: the reference point r and the template origin r + d.
+    let code = format!(
+        "from pyproj import Transformer\n\
+         t = Transformer.from_crs('EPSG:31466', 'EPSG:25832', always_xy=True)\n\
+         print(*t.transform({x}, {y}), *t.transform({x} + {dx}, {y} + {dy}))",
+        x = r[0],
+        y = r[1],
+        dx = m[3],
+        dy = m[7]
+    );
+    let o = Command::new("python3")
+        .args(["-c", &code])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Vec<f64> = String::from_utf8_lossy(&o.stdout)
+        .split_whitespace()
+        .map(|t| t.parse().unwrap())
+        .collect();
+    assert!(
+        (r2[0] - v[0]).abs() < 1e-3 && (r2[1] - v[1]).abs() < 1e-3,
+        "{r2:?} vs {v:?}"
+    );
+    assert_eq!(r2[2], r[2], "height kept");
+    let (dx, dy) = (v[2] - v[0], v[3] - v[1]);
+    assert!(
+        (m2[3] - dx).abs() < 1e-3 && (m2[7] - dy).abs() < 1e-3,
+        "{m2:?}: {dx} {dy}"
+    );
+    assert!(
+        (m2[3] - m[3]).abs() > 1e-6,
+        "the translation changed (grid convergence)"
+    );
+    // The linear part and the template stay.
+    for i in [0, 1, 2, 4, 5, 6, 8, 9, 10, 11, 12, 13, 14, 15] {
+        assert_eq!(m2[i], m[i], "matrix element {i}");
+    }
+    let whole = std::fs::read_to_string(&out).unwrap();
+    assert!(whole.contains("urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"));
+    if have_xmllint() {
+        xmllint_validate(&out, "2.0").unwrap();
+    }
 }
