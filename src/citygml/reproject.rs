@@ -18,7 +18,12 @@
 //!   template's origin lands where the transform sends it. The matrix's linear part and the
 //!   template geometry (`relativeGMLGeometry` / `relativeGeometry`, left untouched) stay in
 //!   the template's own units: for a geographic target this is reported as a warning.
-//! * Every `srsName` attribute gets the target's name.
+//! * Every `srsName` attribute gets the target's name; a document that names no CRS gets it
+//!   on its first envelope.
+//! * A coordinate element holding anything but text (a comment, an entity reference) is an
+//!   error, never left in the old CRS; what is not a coordinate list but depends on the CRS
+//!   (a grid's `offsetVector`, a georeferenced texture's `orientation`) is left as it is with a
+//!   warning.
 //! * Every `gml:Envelope` is recomputed from the transformed coordinates inside its owner (the
 //!   element whose `boundedBy` holds it) and the geometry its owner references by
 //!   `xlink:href="#id"` (resolved at the end, forward references included), and written as
@@ -426,10 +431,19 @@ impl Scanner<'_, '_> {
         if gml && local == b"coord" && !empty && !in_template {
             self.coord = Some((depth, [None, None, None], [0..0, 0..0, 0..0]));
         }
-        if gml && (local == b"offsetVector" || local == b"origin") {
+        if gml && local == b"offsetVector" {
             self.warn(
                 "grid",
-                "a gml grid (origin/offsetVector) was left as it is".into(),
+                "a gml grid's origin was transformed, its offsetVectors were left as they are"
+                    .into(),
+            );
+        }
+        if matches!(kind, Ns::CityGml(Module::Appearance, _)) && local == b"GeoreferencedTexture" {
+            self.warn(
+                "texture",
+                "georeferenced textures: the reference point was transformed, the orientation \
+                 was left as it is"
+                    .into(),
             );
         }
         let carrier = match (gml, core, local.as_slice()) {
@@ -481,13 +495,16 @@ impl Scanner<'_, '_> {
         self.stack.pop();
         if let Some(c) = self.capture.take() {
             if c.broken {
-                self.warn(
-                    "mixed",
-                    "a coordinate element holding child elements was left as it is".into(),
-                );
-            } else {
-                self.finish_capture(c, pos)?;
+                // Never leave coordinates in the old CRS under the new srsName.
+                return Err(xml_err(
+                    self.path,
+                    c.start,
+                    "a coordinate element holding elements, comments or entity references \
+                     cannot be rewritten"
+                        .into(),
+                ));
             }
+            self.finish_capture(c, pos)?;
         }
         if let Some((i, d)) = self.env_open {
             if d == depth {
@@ -795,7 +812,9 @@ impl Scanner<'_, '_> {
 
     fn envelope_edits(&mut self) {
         let mut edits = Vec::new();
-        for env in &self.envs {
+        // A document that named no CRS at all names the new one on its first envelope.
+        let unnamed = self.summary.source_srs_names.is_empty();
+        for (k, env) in self.envs.iter().enumerate() {
             let mut b = env.bbox;
             let mut seen = HashSet::new();
             self.resolve(&env.refs, &mut seen, &mut b);
@@ -805,7 +824,7 @@ impl Scanner<'_, '_> {
             let site = EnvelopeSite {
                 span: env.span.clone(),
                 bbox: b,
-                srs_name: env.srs.then(|| self.target_srs.to_string()),
+                srs_name: (env.srs || (unnamed && k == 0)).then(|| self.target_srs.to_string()),
                 dimension: env.dim,
                 prefix: env.prefix.clone(),
                 file: 0,
@@ -1034,6 +1053,25 @@ mod tests {
     }
 
     #[test]
+    fn a_document_without_crs_gets_the_target_on_its_first_envelope() {
+        let dir = tempfile::tempdir().unwrap();
+        let src = dir.path().join("in.gml");
+        let body = r#"<core:cityObjectMember><gen:GenericCityObject gml:id="g">
+<gen:lod1Geometry><gml:Point><gml:pos>1 2 3</gml:pos></gml:Point></gen:lod1Geometry>
+</gen:GenericCityObject></core:cityObjectMember>"#;
+        std::fs::write(
+            &src,
+            doc(body).replace(r#" srsName="urn:ogc:def:crs:EPSG::1""#, ""),
+        )
+        .unwrap();
+        let out = dir.path().join("out.gml");
+        let s = rewrite_file(&src, &out, &swap, "EPSG:2", &WriteOptions::default()).unwrap();
+        assert!(s.source_srs_names.is_empty());
+        let text = std::fs::read_to_string(&out).unwrap();
+        assert!(text.contains(r#"<gml:Envelope srsName="EPSG:2" srsDimension="3"><gml:lowerCorner>102 101 3</gml:lowerCorner>"#), "{text}");
+    }
+
+    #[test]
     fn bad_numbers_and_transform_errors_are_reported() {
         let dir = tempfile::tempdir().unwrap();
         let src = dir.path().join("in.gml");
@@ -1046,5 +1084,9 @@ mod tests {
         std::fs::write(&src, doc("<gml:pos>1 2 3 4</gml:pos>")).unwrap();
         let e = rewrite_file(&src, &out, &swap, "EPSG:2", &WriteOptions::default()).unwrap_err();
         assert!(e.to_string().contains("4 numbers"), "{e}");
+        std::fs::write(&src, doc("<gml:pos>1 2<!-- z: --> 3</gml:pos>")).unwrap();
+        let e = rewrite_file(&src, &out, &swap, "EPSG:2", &WriteOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("cannot be rewritten"), "{e}");
+        assert!(!out.exists());
     }
 }
