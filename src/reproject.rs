@@ -263,6 +263,15 @@ mod with_proj {
             if target.vertical.is_none() && ti.vertical.is_none() && ti.axes == 2 {
                 target.vertical = source_vertical;
             }
+            let target_vertical = target.vertical.or(ti.vertical);
+            if let (Some(sv), Some(tv)) = (source_vertical, target_vertical) {
+                if sv != tv {
+                    warnings.push(format!(
+                        "heights are kept as they are: values in EPSG:{sv} are written as \
+                         EPSG:{tv} (no geoid grids in this build)"
+                    ));
+                }
+            }
             if ti.axes == 3 && ti.geographic && target.vertical.is_none() {
                 warnings.push(format!(
                     "heights are kept as they are: EPSG:{} has ellipsoidal heights, and {} \
@@ -414,6 +423,13 @@ mod with_proj {
             .unwrap();
             assert_eq!(r.target.vertical, None);
             assert_eq!(r.warnings.len(), 1);
+            // A compound target with another vertical datum: heights kept, and said so.
+            let j = Reprojector::new(
+                CrsName::parse("EPSG:25832+5783").unwrap(),
+                CrsName::parse("EPSG:25832+7837").unwrap(),
+            )
+            .unwrap();
+            assert!(j.warnings[0].contains("EPSG:5783"), "{:?}", j.warnings);
         }
     }
 }
