@@ -16,6 +16,7 @@ pub mod lod;
 pub mod model;
 pub mod poi;
 pub mod report;
+pub mod reproject;
 pub mod rough;
 pub mod scene;
 pub mod select;

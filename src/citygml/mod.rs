@@ -4,6 +4,7 @@ pub mod error;
 pub mod mixed;
 pub mod ns;
 pub mod read;
+pub mod reproject;
 pub mod source;
 pub mod write;
 

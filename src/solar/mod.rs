@@ -1,14 +1,17 @@
 //! Solar analysis beside the LoD pipeline (paper 3, 5): sun positions ([`sun`]), sky view
-//! factor and sky exposure ([`mod@svf`]) and sun hours ([`mod@sun_hours`]).
+//! factor and sky exposure ([`mod@svf`]), sun hours ([`mod@sun_hours`]) and horizon profiles
+//! ([`horizon`]).
 //!
 //! All three take the scene only through an occlusion predicate (`true` = blocked), so
 //! they work with any ray caster; parallelism over points of interest is the caller's.
 
 pub mod fisheye;
+pub mod horizon;
 pub mod sun;
 pub mod sun_hours;
 pub mod svf;
 
+pub use horizon::{horizon_profile, HorizonOptions, HorizonProfile};
 pub use sun::{sun_position, Site, SiteTimeZone, SunPosition, SunStep, SunTable};
 pub use sun_hours::{sun_hours, visible_steps, SunHours};
 pub use svf::{sky_view, SkyBundles, SkyView};
@@ -34,6 +37,19 @@ pub fn poi_sun_hours(scene: &Scene, poi: &Poi, table: &SunTable) -> SunHours {
     })
 }
 
+/// [`horizon_profile()`] of a POI against a scene, with the same ray origin and `tmin` as
+/// [`poi_sky_view`]; with a normal, the POI's own surface plane is part of the horizon.
+pub fn poi_horizon(
+    scene: &Scene,
+    poi: &Poi,
+    opts: &HorizonOptions,
+) -> Result<HorizonProfile, SolarError> {
+    let origin = ray_origin(poi);
+    horizon_profile(opts, poi.normal, |d| {
+        scene.occluded(origin, d, POI_OFFSET, f64::INFINITY)
+    })
+}
+
 /// Errors of the solar analysis.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolarError {
@@ -46,6 +62,9 @@ pub enum SolarError {
     /// Step length outside 1..=1440 minutes, or a step beyond the representable time range.
     #[error("invalid time step of {0} minutes")]
     Step(u32),
+    /// Horizon sampling options out of range.
+    #[error("invalid horizon options: {0}")]
+    Horizon(String),
     /// A year the calendar cannot represent.
     #[error("invalid year {0}")]
     Year(i32),

@@ -344,3 +344,45 @@ pub fn warn_flags(pois: &[Poi], flags: &[Vec<PoiFlag>]) {
         }
     }
 }
+
+/// Output path per input for `reproject` (one document per input): one input writes the
+/// file `output`; several write `output/<input name>` (the directory is created; two inputs
+/// of the same name are refused).
+#[cfg_attr(not(feature = "proj"), allow(dead_code))]
+pub fn outputs_per_input(
+    inputs: &[PathBuf],
+    output: &std::path::Path,
+) -> anyhow::Result<Vec<(PathBuf, PathBuf)>> {
+    if inputs.len() == 1 {
+        if output.is_dir() {
+            bail!(
+                "{}: is a directory; with one input, -o names the output file",
+                output.display()
+            );
+        }
+        return Ok(vec![(inputs[0].clone(), output.to_path_buf())]);
+    }
+    if output.exists() && !output.is_dir() {
+        bail!(
+            "{}: with several inputs, -o must be a directory",
+            output.display()
+        );
+    }
+    let mut seen = std::collections::HashSet::new();
+    let mut v = Vec::new();
+    for i in inputs {
+        let Some(name) = i.file_name() else {
+            bail!("{}: not a file name", i.display());
+        };
+        if !seen.insert(name.to_os_string()) {
+            bail!(
+                "two inputs are named {}: their outputs would collide",
+                std::path::Path::new(name).display()
+            );
+        }
+        v.push((i.clone(), output.join(name)));
+    }
+    std::fs::create_dir_all(output)
+        .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
+    Ok(v)
+}

@@ -8,7 +8,9 @@ mod cmd_completions;
 mod cmd_convert;
 mod cmd_evaluate;
 mod cmd_fisheye;
+mod cmd_horizon;
 mod cmd_lod;
+mod cmd_reproject;
 mod cmd_rough;
 mod cmd_stats;
 mod cmd_sun_hours;
@@ -50,6 +52,10 @@ enum Command {
     Completions(cmd_completions::CompletionArgs),
     /// Print the manual page (roff; `skylod man | man -l -`).
     Man(cmd_completions::ManArgs),
+    /// Horizon profile (skyline elevation per azimuth) of points, as CSV or JSON (PVGIS/pvlib).
+    Horizon(cmd_horizon::Args),
+    /// Transform every coordinate into another CRS through PROJ (needs the cargo feature `proj`).
+    Reproject(cmd_reproject::Args),
 }
 
 /// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
@@ -83,6 +89,8 @@ fn main() -> ExitCode {
         Command::Fisheye(a) => cmd_fisheye::run(a),
         Command::Completions(a) => cmd_completions::completions(a),
         Command::Man(a) => cmd_completions::man(a),
+        Command::Horizon(a) => cmd_horizon::run(a),
+        Command::Reproject(a) => cmd_reproject::run(a),
     };
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,

@@ -1,0 +1,179 @@
+//! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
+
+use crate::common::{arr, out_err, polygons, trace_full, PoiArgs};
+use crate::Outcome;
+use anyhow::Context;
+use serde_json::json;
+use skylod::citygml::write::{atomic_write, check_target, WriteOptions};
+use skylod::poi::Poi;
+use skylod::solar::{poi_horizon, HorizonOptions, HorizonProfile};
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pois: PoiArgs,
+    /// Azimuth step in degrees (0.01..=90); azimuths 0, step, 2 step, ... below 360.
+    #[arg(long, default_value_t = 1.0)]
+    step: f64,
+    /// Output file (CSV `id,azimuth,elevation`, or JSON with --json); default: stdout.
+    #[arg(short, long, value_name = "FILE")]
+    output: Option<PathBuf>,
+    /// JSON `{"pois":[{"id","poi","azimuth":[...],"elevation":[...]}],...}` instead of CSV.
+    #[arg(long)]
+    json: bool,
+    /// Replace an existing output file.
+    #[arg(long)]
+    overwrite: bool,
+}
+
+/// Degrees as written: three decimals (the profile is resolved to 0.01°), no trailing zeros.
+fn deg(x: f64) -> f64 {
+    let r = (x * 1000.0).round() / 1000.0;
+    if r == 0.0 {
+        0.0
+    } else {
+        r
+    }
+}
+
+fn csv(pois: &[Poi], profiles: &[HorizonProfile]) -> String {
+    let mut s = String::from("id,azimuth,elevation\n");
+    for (p, h) in pois.iter().zip(profiles) {
+        let id = if p.id.contains([',', '"', '\n', '\r']) {
+            format!("\"{}\"", p.id.replace('"', "\"\""))
+        } else {
+            p.id.clone()
+        };
+        for (a, e) in h.azimuth.iter().zip(&h.elevation) {
+            s.push_str(&format!("{id},{},{}\n", deg(*a), deg(*e)));
+        }
+    }
+    s
+}
+
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
+    let opts = HorizonOptions::default().with_step(args.step);
+    opts.validate().context("--step")?;
+    let pois = args.pois.points()?;
+    if let Some(out) = &args.output {
+        let w = WriteOptions {
+            overwrite: args.overwrite,
+            ..Default::default()
+        };
+        check_target(out, &w, args.pois.inputs.iter().map(|p| p.as_path()))
+            .with_context(|| format!("output {}", out.display()))?;
+    }
+    let mut loaded = args.pois.load_checked()?;
+    if loaded.inputs.is_empty() {
+        return Ok(Outcome::SomeFailed);
+    }
+    // Traced in the local metric frame (y = north): azimuths are from north there.
+    let framed = args
+        .pois
+        .frame_checked(&mut loaded.model, pois, "horizon")?;
+    let traced = trace_full(
+        &framed.model,
+        &framed.local_pois,
+        |s, p| poi_horizon(s, p, &opts),
+        |_| None,
+    );
+    let (bvh_ms, trace_ms) = (traced.bvh_ms, traced.trace_ms);
+    let flags = traced.flags;
+    let profiles = traced.results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let pois = &framed.pois;
+    let text = if args.json {
+        let rows: Vec<_> = pois
+            .iter()
+            .zip(&profiles)
+            .zip(&flags)
+            .map(|((p, h), flags)| {
+                json!({
+                    "id": p.id,
+                    "poi": arr(p.position),
+                    "normal": p.normal.map(arr),
+                    "azimuth": h.azimuth.iter().map(|a| deg(*a)).collect::<Vec<_>>(),
+                    "elevation": h.elevation.iter().map(|e| deg(*e)).collect::<Vec<_>>(),
+                    "flags": flags,
+                })
+            })
+            .collect();
+        let doc = json!({
+            "pois": rows,
+            "step_deg": args.step,
+            "tolerance_deg": opts.tolerance_deg,
+            "inputs": loaded.inputs,
+            "polygons": polygons(framed.source),
+            "timings_ms": {"read": loaded.read_ms, "bvh": bvh_ms, "trace": trace_ms},
+        });
+        serde_json::to_string_pretty(&doc)? + "\n"
+    } else {
+        csv(pois, &profiles)
+    };
+    match &args.output {
+        Some(out) => {
+            atomic_write(out, |w| {
+                w.write_all(text.as_bytes())
+                    .map_err(|source| skylod::citygml::WriteError::Io {
+                        file: out.clone(),
+                        source,
+                    })?;
+                Ok(text.len() as u64)
+            })
+            .with_context(|| format!("writing {}", out.display()))?;
+        }
+        None => out_err(std::io::stdout().lock().write_all(text.as_bytes()))?,
+    }
+    for (p, h) in pois.iter().zip(&profiles) {
+        let (mut max, mut at) = (0.0, 0.0);
+        for (a, e) in h.azimuth.iter().zip(&h.elevation) {
+            if *e > max {
+                (max, at) = (*e, *a);
+            }
+        }
+        let mean = h.elevation.iter().sum::<f64>() / h.elevation.len().max(1) as f64;
+        eprintln!(
+            "{}: mean elevation {mean:.2}°, highest {max:.2}° at azimuth {at}°",
+            p.id
+        );
+    }
+    eprintln!(
+        "{} POI(s), {} azimuths each (step {}°); {} polygons from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+        pois.len(),
+        opts.azimuths().len(),
+        args.step,
+        polygons(framed.source),
+        loaded.inputs.len(),
+        loaded.read_ms,
+        bvh_ms,
+        trace_ms
+    );
+    Ok(loaded.outcome())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_rows_and_quoting() {
+        // Built by the parser, not as literals: the struct may gain fields.
+        let mut pois = vec![
+            skylod::poi::parse_poi("0,0,0", 0).unwrap(),
+            skylod::poi::parse_poi("0,0,0", 1).unwrap(),
+        ];
+        pois[0].id = "a".into();
+        pois[1].id = "b,c".into();
+        let h = HorizonProfile {
+            azimuth: vec![0.0, 180.0],
+            elevation: vec![12.34567, 0.0],
+        };
+        let s = csv(&pois, &[h.clone(), h]);
+        assert_eq!(
+            s,
+            "id,azimuth,elevation\na,0,12.346\na,180,0\n\"b,c\",0,12.346\n\"b,c\",180,0\n"
+        );
+    }
+}

@@ -1,0 +1,94 @@
+//! `skylod reproject`: every coordinate of CityGML documents into another CRS through PROJ
+//! (citygml-tools' option names `-t` / `-s`). Needs the cargo feature `proj`; a build without
+//! it knows the command and refuses it with a usage error naming the feature.
+
+use crate::Outcome;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// CityGML files (.gml, .xml, .gz).
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// Target CRS: EPSG:n, EPSG:h+v (compound), or an OGC URN. A 2-D target keeps the
+    /// source's vertical CRS (heights are never changed).
+    #[arg(short = 't', long = "target-crs", value_name = "CRS")]
+    target: String,
+    /// Source CRS, overriding the documents' srsName.
+    #[arg(short = 's', long = "source-crs", value_name = "CRS")]
+    source: Option<String>,
+    /// Output file for one input (.gz to compress); a directory for several inputs
+    /// (created if missing; one output per input, with the input's file name).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Replace existing output files.
+    #[arg(long)]
+    overwrite: bool,
+}
+
+#[cfg(not(feature = "proj"))]
+pub fn run(_args: Args) -> anyhow::Result<Outcome> {
+    anyhow::bail!(
+        "reproject needs PROJ: this skylod was built without the cargo feature `proj`; \
+         build it with `cargo build --release --features proj` (bundled PROJ; needs cmake, \
+         sqlite3 and libsqlite3-dev)"
+    )
+}
+
+#[cfg(feature = "proj")]
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    use anyhow::Context;
+    let _spool = crate::common::expand_inputs(&mut args.inputs)?;
+    use skylod::citygml::write::WriteOptions;
+    use skylod::reproject::{reproject_file, CrsName, ReprojectError};
+
+    let parse = |flag: &str, text: &str| {
+        CrsName::parse(text)
+            .ok_or_else(|| ReprojectError::UnknownCrs(text.to_string()))
+            .with_context(|| flag.to_string())
+    };
+    let target = parse("-t", &args.target)?;
+    let source = args.source.as_deref().map(|s| parse("-s", s)).transpose()?;
+    // Both CRSs known to PROJ before any file is touched (usage error otherwise).
+    skylod::reproject::crs_info(target.horizontal).context("-t")?;
+    if let Some(s) = source {
+        skylod::reproject::crs_info(s.horizontal).context("-s")?;
+    }
+    let targets = crate::common::outputs_per_input(&args.inputs, &args.output)?;
+    let wopts = WriteOptions {
+        overwrite: args.overwrite,
+        protect: args.inputs.clone(),
+        keep_envelopes: true,
+    };
+    let mut failed = 0usize;
+    for (input, out) in &targets {
+        match reproject_file(input, out, source, target, &wopts) {
+            Ok(s) => {
+                eprintln!(
+                    "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
+                    input.display(),
+                    out.display(),
+                    s.source,
+                    s.target,
+                    s.rewrite.points,
+                    s.rewrite.elements,
+                    s.rewrite.envelopes,
+                    s.rewrite.srs_names
+                );
+                for w in &s.rewrite.warnings {
+                    eprintln!("warning: {}: {w}", input.display());
+                }
+            }
+            Err(e) => {
+                eprintln!("error: {}: {e}", input.display());
+                failed += 1;
+            }
+        }
+    }
+    if failed > 0 {
+        eprintln!("{failed} of {} input(s) failed", targets.len());
+        Ok(Outcome::SomeFailed)
+    } else {
+        Ok(Outcome::Ok)
+    }
+}
