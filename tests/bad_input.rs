@@ -836,11 +836,20 @@ fn run_unprivileged(dir: &Path, args: &[&std::ffi::OsStr]) -> Option<Run> {
     let bin = dir.join("skylod-bin");
     std::fs::copy(BIN, &bin).unwrap();
     std::fs::set_permissions(&bin, std::fs::Permissions::from_mode(0o755)).unwrap();
-    let mut cmd = Command::new("setpriv");
-    cmd.args(["--reuid=65534", "--regid=65534", "--clear-groups", "--"])
-        .arg(&bin)
-        .args(args);
-    Some(run_command(cmd, 60))
+    // A fork by another test thread may still hold the copy open for writing ("Text file
+    // busy", exit 126 before skylod runs): try again until the copy is free.
+    for _ in 0..50 {
+        let mut cmd = Command::new("setpriv");
+        cmd.args(["--reuid=65534", "--regid=65534", "--clear-groups", "--"])
+            .arg(&bin)
+            .args(args);
+        let r = run_command(cmd, 60);
+        if !(r.code == Some(126) && r.stderr.contains("Text file busy")) {
+            return Some(r);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    panic!("{} stayed busy for 5 s", bin.display());
 }
 
 /// True when permission bits are enforced for this process (not root / CAP_DAC_OVERRIDE).
