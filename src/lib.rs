@@ -10,6 +10,7 @@ pub mod citygml;
 pub mod crs;
 pub mod evaluate;
 pub mod geom;
+pub mod level;
 pub mod lod;
 pub mod model;
 pub mod poi;

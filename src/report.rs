@@ -16,7 +16,6 @@
 //! assert!(json.contains("\"timings_ms\""));
 //! ```
 
-use crate::citygml::mixed::level1_polygons;
 use crate::model::{Asset, CityModel};
 use crate::poi::Poi;
 use crate::rough::{RoughGeometry, RoughOptions};
@@ -180,14 +179,9 @@ pub struct Timings {
     pub total: f64,
 }
 
-/// Polygons an asset has in the output at `level`: all of them at level 2 (copied
-/// verbatim), what [`level1_polygons`] says at level 1, none at level 0.
+/// Polygons an asset has in the output at `level` ([`crate::level::polygon_count`]).
 pub fn polygons_out(asset: &Asset, rough: Option<&RoughGeometry>, level: u8) -> usize {
-    match level {
-        2 => asset.polygon_count(),
-        1 => rough.map_or(asset.polygon_count(), |r| level1_polygons(asset, r)),
-        _ => 0,
-    }
+    crate::level::polygon_count(asset, rough, level)
 }
 
 impl Report {

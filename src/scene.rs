@@ -22,14 +22,8 @@
 //! ```
 
 use crate::model::{CityModel, Polygon};
-use crate::poi::Poi;
 use crate::rough::RoughGeometry;
 use crate::trace::{Scene, SceneBuilder};
-use glam::DVec3;
-
-/// Distance (m) a ray origin is moved along the POI's normal, and the `tmin` used, so that
-/// rays do not hit the surface the POI lies on.
-pub const POI_OFFSET: f64 = 0.01;
 
 /// A scene of the given polygons, each tagged with its asset index.
 pub fn scene_of<'a>(polys: impl IntoIterator<Item = (u32, &'a Polygon)>) -> Scene {
@@ -62,9 +56,9 @@ pub fn rough_scene(rough: &[RoughGeometry]) -> Scene {
 }
 
 /// The scene the selection traces: the rough model without the openings that their
-/// surface's rough plane closes ([`crate::select::traced`]).
+/// surface's rough plane closes ([`crate::level::selection_traced`]).
 pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> Scene {
-    let traced = crate::select::traced(model);
+    let traced = crate::level::selection_traced(model);
     scene_of(
         rough
             .iter()
@@ -75,22 +69,13 @@ pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> Scene {
     )
 }
 
-/// The mixed-LoD model: level 2 full detail, level 1 rough, level 0 absent.
+/// The mixed-LoD model as `lod` writes it: each asset's [`crate::level::traced`] polygons
+/// at its level (level 0 absent).
 pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
     scene_of(model.assets.iter().enumerate().flat_map(|(i, a)| {
-        let polys: &[Polygon] = match levels.get(i).copied().unwrap_or(0) {
-            2 => a.detail_polygons(),
-            1 => rough.get(i).map(|r| r.polygons.as_slice()).unwrap_or(&[]),
-            _ => &[],
-        };
-        polys.iter().map(move |p| (i as u32, p))
+        let level = levels.get(i).copied().unwrap_or(0);
+        crate::level::traced(a, rough.get(i), level)
+            .iter()
+            .map(move |p| (i as u32, p))
     }))
-}
-
-/// Ray origin for a POI: moved [`POI_OFFSET`] along its normal when it has one.
-pub fn ray_origin(poi: &Poi) -> DVec3 {
-    match poi.normal {
-        Some(n) => poi.position + n * POI_OFFSET,
-        None => poi.position,
-    }
 }
