@@ -5,6 +5,7 @@
 //! It never prints and never panics on input.
 #![warn(missing_docs)]
 
+pub mod bound;
 pub mod checks;
 pub mod citygml;
 pub mod crs;

@@ -44,6 +44,10 @@ pub struct Report {
     pub totals: Totals,
     /// Wall-clock milliseconds per stage.
     pub timings_ms: Timings,
+    /// The error bound check and its promotions (`--max-svf-error`,
+    /// `--max-sun-hours-error`), when asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bound: Option<crate::bound::BoundReport>,
 }
 
 /// One input file.
@@ -269,6 +273,7 @@ impl Report {
             assets,
             totals,
             timings_ms,
+            bound: None,
         }
     }
 

@@ -48,6 +48,8 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     overwrite: bool,
+    #[command(flatten)]
+    bound: crate::bound_args::BoundArgs,
 }
 
 /// Output path per input: a file for one input (unless `out` is a directory), otherwise
@@ -89,6 +91,7 @@ fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> 
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
+    args.bound.check()?;
     let pois = args.pois.points()?;
     let outputs = output_paths(&args.pois.inputs, &args.output)?;
     // Every target is checked before any work: a refusal after minutes of reading and
@@ -124,7 +127,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     }
     let mut failed = loaded.failed;
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
-    let result = lod(
+    let mut result = lod(
         &framed.model,
         &framed.local_pois,
         &LodOptions {
@@ -133,6 +136,34 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         },
     )?;
     warn_flags(&framed.pois, &result.flags);
+    let mut bound_report = None;
+    if args.bound.active() {
+        let t = Instant::now();
+        let (levels, b) = args.bound.run(
+            framed.source,
+            &framed.model,
+            &result.rough,
+            &result.selection.levels,
+            &framed.local_pois,
+            args.seed,
+        )?;
+        eprintln!(
+            "error bound: {} promotion(s) in {} round(s), largest SVF error {:.3}%, {:.0} ms",
+            b.promotions.len(),
+            b.rounds,
+            100.0 * b.pois.iter().map(|p| p.svf_error).fold(0.0, f64::max),
+            ms(t)
+        );
+        if !b.met {
+            eprintln!(
+                "error: the error bound cannot be met at these POIs (nothing written):\n{}",
+                crate::bound_args::failing_lines(&b)
+            );
+            return Ok(Outcome::SomeFailed);
+        }
+        result.selection.levels = levels;
+        bound_report = Some(b);
+    }
     // Written geometry and the report are in the input's CRS.
     let model = framed.source;
     let pois = &framed.pois;
@@ -199,6 +230,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         timings,
     );
     report.set_flags(&result.flags);
+    report.bound = bound_report;
     for (f, w) in written.into_iter().enumerate() {
         if let Some((path, dropped)) = w {
             let in_file = model.buildings.iter().filter(|b| b.file == f).count();

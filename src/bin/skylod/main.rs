@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod bound_args;
 mod cmd_convert;
 mod cmd_evaluate;
 mod cmd_fisheye;
