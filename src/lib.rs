@@ -15,6 +15,7 @@ pub mod level;
 pub mod lod;
 pub mod model;
 pub mod poi;
+pub mod region;
 pub mod report;
 pub mod rough;
 pub mod scene;

@@ -101,13 +101,12 @@ fn run_lod(inputs: &[PathBuf], pois: &[Poi], dir: &Path, extra: &[&str]) -> (Vec
         "skylod lod {extra:?} failed: {}",
         String::from_utf8_lossy(&o.stderr)
     );
-    eprintln!(
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-            .lines()
-            .last()
-            .unwrap_or("")
-    );
+    for line in String::from_utf8_lossy(&o.stderr)
+        .lines()
+        .filter(|l| l.contains("POI(s)") || l.starts_with("error bound"))
+    {
+        eprintln!("{line}");
+    }
     common::check_json_schema("report.schema.json", &rep);
     let report: Value = serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
     if out.is_file() {

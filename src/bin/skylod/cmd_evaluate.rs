@@ -15,6 +15,8 @@ pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
     #[command(flatten)]
+    region: crate::region_args::RegionArgs,
+    #[command(flatten)]
     site: SiteArgs,
     /// Skip sun hours (then --lat/--lon are not needed).
     #[arg(long)]
@@ -57,11 +59,12 @@ fn hours(x: Option<f64>) -> String {
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
     args.site.check("evaluate")?;
-    let pois = args.pois.points()?;
+    let pois = args.region.points(&args.pois)?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let pois = args.region.extend(pois, &loaded.model)?;
     let framed = args
         .pois
         .frame_checked(&mut loaded.model, pois, "evaluate")?;

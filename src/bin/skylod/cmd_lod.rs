@@ -16,6 +16,8 @@ use std::time::Instant;
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
+    #[command(flatten)]
+    region: crate::region_args::RegionArgs,
     /// Output file (one input; `-` for standard output), or a directory that gets one file
     /// per input (created if missing; several inputs need a directory). `.gz` compresses.
     #[arg(short, long)]
@@ -92,7 +94,7 @@ fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
     args.bound.check()?;
-    let pois = args.pois.points()?;
+    let pois = args.region.points(&args.pois)?;
     let outputs = output_paths(&args.pois.inputs, &args.output)?;
     // Every target is checked before any work: a refusal after minutes of reading and
     // tracing helps nobody.
@@ -125,6 +127,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let pois = args.region.extend(pois, &loaded.model)?;
     let mut failed = loaded.failed;
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
     let mut result = lod(

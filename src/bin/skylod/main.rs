@@ -16,6 +16,7 @@ mod cmd_svf;
 mod cmd_synth;
 mod common;
 mod frames;
+mod region_args;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]
@@ -118,6 +119,12 @@ fn message(e: &anyhow::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn arguments_are_consistent() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+    }
 
     #[test]
     fn causes_said_once() {
