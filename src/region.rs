@@ -11,8 +11,9 @@
 //!   as WKT (`POLYGON((x y, ...), (hole ...))`), for a street or a square; free points (no
 //!   normal).
 //!
-//! Not done here: points that fall inside another solid (an installation standing in front of
-//! the wall) are kept; `lod` and `svf` flag them (`inside_solid`).
+//! Facade points that fall inside a closed solid (the neighbour behind a party wall) are
+//! dropped: a 128-direction sphere probe ([`crate::checks::poi_flags`]) against the buildings
+//! near the facade. A facade with no point left is an error.
 //!
 //! # Example
 //! ```
@@ -38,9 +39,12 @@
 //! assert_eq!(street.len(), 20);
 //! ```
 
-use crate::model::{AssetKind, CityModel, Polygon};
+use crate::checks::{poi_flags, PoiFlag};
+use crate::model::{AssetKind, Bbox, CityModel, Polygon};
 use crate::poi::Poi;
+use crate::scene::scene_of;
 use glam::{DVec2, DVec3};
+use std::collections::HashSet;
 
 /// Errors of the region samplers.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -188,10 +192,49 @@ pub fn facade_pois(
             }
         }
     }
+    let mut out = outside_solids(model, out);
     if out.is_empty() {
         return Err(RegionError::Empty(id.to_string()));
     }
+    for (k, p) in out.iter_mut().enumerate() {
+        p.id = format!("{id}:{k}");
+    }
     Ok(out)
+}
+
+/// `pois` without those inside a closed solid of the buildings near them (every building
+/// with an asset within 2 m of the points' box, whole).
+fn outside_solids(model: &CityModel, pois: Vec<Poi>) -> Vec<Poi> {
+    let mut bb = Bbox::of_points(pois.iter().map(|p| &p.position));
+    if bb.is_empty() {
+        return pois;
+    }
+    bb.min -= DVec3::splat(2.0);
+    bb.max += DVec3::splat(2.0);
+    let overlaps =
+        |a: &Bbox| !a.is_empty() && a.min.cmple(bb.max).all() && a.max.cmpge(bb.min).all();
+    let root = |a: &crate::model::Asset| a.building.map(|b| model.root_building(b));
+    let near: HashSet<usize> = model
+        .assets
+        .iter()
+        .filter(|a| overlaps(&a.bbox()))
+        .filter_map(root)
+        .collect();
+    let scene = scene_of(
+        model
+            .assets
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| root(a).is_some_and(|b| near.contains(&b)))
+            .flat_map(|(i, a)| a.detail_polygons().iter().map(move |p| (i as u32, p))),
+    );
+    pois.into_iter()
+        .filter(|p| {
+            !poi_flags(&scene, model, p, None)
+                .iter()
+                .any(|f| matches!(f, PoiFlag::InsideBuilding { .. }))
+        })
+        .collect()
 }
 
 /// Parse `POLYGON((x y, ...), (x y, ...))` (extra coordinates ignored): exterior and holes.
