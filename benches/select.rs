@@ -10,8 +10,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use skylod::citygml::read::read_bytes;
+use skylod::poi::POI_OFFSET;
 use skylod::rough::{rough_model, RoughOptions};
-use skylod::scene::{full_scene, ray_origin, rough_scene, selection_scene, POI_OFFSET};
+use skylod::scene::{full_scene, rough_scene, selection_scene};
 use skylod::select::{select, SelectOptions};
 use skylod::sky::{SkyPartition, SkyVariant};
 use skylod::synth::{generate, pois, Preset};
@@ -67,7 +68,7 @@ fn bench(c: &mut Criterion) {
     let sopts = SelectOptions::default();
     let part = SkyPartition::new(sopts.rays, SkyVariant::EqualSolidAngle).unwrap();
     let dirs = part.sample(sopts.seed);
-    let origin = ray_origin(&poi);
+    let origin = poi.ray_origin();
     let mut g = c.benchmark_group("select_10k");
     g.sample_size(20).measurement_time(Duration::from_secs(8));
     g.bench_function("trace_only (baseline)", |b| {

@@ -117,7 +117,7 @@ fn district(c: &mut Criterion) {
     g.bench_function("svf_only_100k_rays_per_poi", |b| {
         b.iter(|| {
             let p = black_box(poi());
-            let o = skylod::scene::ray_origin(p);
+            let o = p.ray_origin();
             let f = skylod::sky::Frame::from_normal(p.normal.unwrap_or(DVec3::Z));
             bundles
                 .projected_dirs()

@@ -195,7 +195,7 @@ pub fn evaluate(
     let t = Instant::now();
     let full = full_scene(model);
     let full_bvh = ms(t);
-    let full_polys: usize = model.assets.iter().map(|a| a.detail_polygons().len()).sum();
+    let full_polys = model.polygon_count();
     let t = Instant::now();
     let boxes_geo = all_boxes(model);
     let boxes = rough_scene(&boxes_geo);
@@ -216,17 +216,7 @@ pub fn evaluate(
         let t = Instant::now();
         let lod_scene = mixed_scene(model, &rough, &sel.levels);
         let lod_bvh = ms(t);
-        let lod_polys: usize = model
-            .assets
-            .iter()
-            .zip(&rough)
-            .zip(&sel.levels)
-            .map(|((a, r), l)| match l {
-                2 => a.detail_polygons().len(),
-                1 => r.polygons.len(),
-                _ => 0,
-            })
-            .sum();
+        let lod_polys = crate::level::model_polygon_count(model, &rough, &sel.levels);
         let f = figures(&full, full_polys, poi, &bundles, table, full_bvh);
         let l = figures(&lod_scene, lod_polys, poi, &bundles, table, lod_bvh);
         let b = figures(&boxes, boxes_polys, poi, &bundles, table, boxes_bvh);

@@ -5,6 +5,7 @@
 //! It never prints and never panics on input.
 #![warn(missing_docs)]
 
+pub mod bound;
 pub mod checks;
 pub mod citygml;
 pub mod crs;
@@ -12,9 +13,11 @@ pub mod evaluate;
 pub mod export;
 pub mod geom;
 pub mod inputs;
+pub mod level;
 pub mod lod;
 pub mod model;
 pub mod poi;
+pub mod region;
 pub mod report;
 pub mod reproject;
 pub mod rough;

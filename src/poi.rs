@@ -17,6 +17,20 @@ pub struct Poi {
     pub normal: Option<DVec3>,
 }
 
+/// Distance (m) a ray origin is moved along the POI's normal, and the `tmin` used, so that
+/// rays do not hit the surface the POI lies on.
+pub const POI_OFFSET: f64 = 0.01;
+
+impl Poi {
+    /// Where its rays start: moved [`POI_OFFSET`] along its normal when it has one.
+    pub fn ray_origin(&self) -> DVec3 {
+        match self.normal {
+            Some(n) => self.position + n * POI_OFFSET,
+            None => self.position,
+        }
+    }
+}
+
 /// Errors reading POIs.
 #[derive(Debug, thiserror::Error)]
 pub enum PoiError {

@@ -16,7 +16,6 @@
 //! assert!(json.contains("\"timings_ms\""));
 //! ```
 
-use crate::citygml::mixed::level1_polygons;
 use crate::model::{Asset, CityModel};
 use crate::poi::Poi;
 use crate::rough::{RoughGeometry, RoughOptions};
@@ -45,6 +44,10 @@ pub struct Report {
     pub totals: Totals,
     /// Wall-clock milliseconds per stage.
     pub timings_ms: Timings,
+    /// The error bound check and its promotions (`--max-svf-error`,
+    /// `--max-sun-hours-error`), when asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bound: Option<crate::bound::BoundReport>,
 }
 
 /// One input file.
@@ -180,14 +183,9 @@ pub struct Timings {
     pub total: f64,
 }
 
-/// Polygons an asset has in the output at `level`: all of them at level 2 (copied
-/// verbatim), what [`level1_polygons`] says at level 1, none at level 0.
+/// Polygons an asset has in the output at `level` ([`crate::level::polygon_count`]).
 pub fn polygons_out(asset: &Asset, rough: Option<&RoughGeometry>, level: u8) -> usize {
-    match level {
-        2 => asset.polygon_count(),
-        1 => rough.map_or(asset.polygon_count(), |r| level1_polygons(asset, r)),
-        _ => 0,
-    }
+    crate::level::polygon_count(asset, rough, level)
 }
 
 impl Report {
@@ -275,6 +273,7 @@ impl Report {
             assets,
             totals,
             timings_ms,
+            bound: None,
         }
     }
 

@@ -21,15 +21,9 @@
 //! assert!((hit.t - 5.0).abs() < 1e-6);
 //! ```
 
-use crate::model::{Asset, CityModel, Polygon};
-use crate::poi::Poi;
+use crate::model::{CityModel, Polygon};
 use crate::rough::RoughGeometry;
 use crate::trace::{Scene, SceneBuilder};
-use glam::DVec3;
-
-/// Distance (m) a ray origin is moved along the POI's normal, and the `tmin` used, so that
-/// rays do not hit the surface the POI lies on.
-pub const POI_OFFSET: f64 = 0.01;
 
 /// A scene of the given polygons, each tagged with its asset index.
 pub fn scene_of<'a>(polys: impl IntoIterator<Item = (u32, &'a Polygon)>) -> Scene {
@@ -62,9 +56,9 @@ pub fn rough_scene(rough: &[RoughGeometry]) -> Scene {
 }
 
 /// The scene the selection traces: the rough model without the openings that their
-/// surface's rough plane closes ([`crate::select::traced`]).
+/// surface's rough plane closes ([`crate::level::selection_traced`]).
 pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> Scene {
-    let traced = crate::select::traced(model);
+    let traced = crate::level::selection_traced(model);
     scene_of(
         rough
             .iter()
@@ -75,35 +69,13 @@ pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> Scene {
     )
 }
 
-/// The mixed-LoD model: level 2 full detail, level 1 rough, level 0 absent.
+/// The mixed-LoD model as `lod` writes it: each asset's [`crate::level::traced`] polygons
+/// at its level (level 0 absent).
 pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
     scene_of(model.assets.iter().enumerate().flat_map(|(i, a)| {
         let level = levels.get(i).copied().unwrap_or(0);
-        level_polygons(a, rough.get(i), level)
+        crate::level::traced(a, rough.get(i), level)
             .iter()
             .map(move |p| (i as u32, p))
     }))
-}
-
-/// What an asset contributes to the mixed-LoD model at `level`: its full detail (highest LoD)
-/// at level 2 (and above), its rough geometry at level 1, nothing at level 0. The traced LoD
-/// scene ([`mixed_scene`]) and the OBJ export ([`crate::export::obj`]) both take it from here.
-pub fn level_polygons<'a>(
-    asset: &'a Asset,
-    rough: Option<&'a RoughGeometry>,
-    level: u8,
-) -> &'a [Polygon] {
-    match level {
-        0 => &[],
-        1 => rough.map(|r| r.polygons.as_slice()).unwrap_or(&[]),
-        _ => asset.detail_polygons(),
-    }
-}
-
-/// Ray origin for a POI: moved [`POI_OFFSET`] along its normal when it has one.
-pub fn ray_origin(poi: &Poi) -> DVec3 {
-    match poi.normal {
-        Some(n) => poi.position + n * POI_OFFSET,
-        None => poi.position,
-    }
 }

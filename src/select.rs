@@ -52,9 +52,8 @@
 //! ```
 
 use crate::model::{AssetKind, CityModel};
-use crate::poi::Poi;
+use crate::poi::{Poi, POI_OFFSET};
 use crate::rough::RoughGeometry;
-use crate::scene::{ray_origin, POI_OFFSET};
 use crate::sky::{SkyError, SkyPartition, SkyVariant};
 use crate::trace::Scene;
 use foldhash::{HashMap, HashMapExt};
@@ -250,7 +249,7 @@ fn select_one(
     threshold: f64,
 ) -> OnePoi {
     let t0 = Instant::now();
-    let origin = ray_origin(poi);
+    let origin = poi.ray_origin();
     let normal = poi.normal.and_then(|n| n.try_normalize());
     let cast: Vec<DVec3> = dirs
         .iter()
@@ -298,22 +297,6 @@ fn select_one(
         seconds: t0.elapsed().as_secs_f64(),
     };
     (info, hits, silhouette)
-}
-
-/// Whether each asset takes part in the tracing scene: every asset with geometry except
-/// openings (windows, doors) of a shell surface, whose holes the surface's rough plane
-/// closes (paper 4.3), so that they neither hide their wall nor cost triangles.
-pub fn traced(model: &CityModel) -> Vec<bool> {
-    model
-        .assets
-        .iter()
-        .map(|a| {
-            !(a.kind.is_opening()
-                && a.parent
-                    .and_then(|p| model.assets.get(p))
-                    .is_some_and(|p| p.kind.is_shell_surface()))
-        })
-        .collect()
 }
 
 /// Which assets are roof assets (see the module docs).

@@ -25,7 +25,7 @@
 use chrono::{DateTime, Datelike, Timelike, Utc};
 use glam::DVec3;
 use skylod::poi::Poi;
-use skylod::scene::POI_OFFSET;
+use skylod::poi::POI_OFFSET;
 use skylod::solar::{poi_sky_view, poi_sun_hours, visible_steps, Site, SkyBundles, SunTable};
 use skylod::trace::{Scene, SceneBuilder};
 use std::f64::consts::{FRAC_PI_2, PI};

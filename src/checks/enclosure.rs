@@ -27,7 +27,7 @@
 
 use crate::model::CityModel;
 use crate::poi::Poi;
-use crate::scene::{ray_origin, POI_OFFSET};
+use crate::poi::POI_OFFSET;
 use crate::trace::Scene;
 use glam::DVec3;
 use serde::Serialize;
@@ -115,7 +115,7 @@ pub fn poi_flags(
     poi: &Poi,
     sky_rays: Option<usize>,
 ) -> Vec<PoiFlag> {
-    let origin = ray_origin(poi);
+    let origin = poi.ray_origin();
     let mut counts: Vec<(Owner, usize)> = Vec::new();
     let mut enclosed = !scene.is_empty();
     for dir in fibonacci_sphere(PROBE_RAYS) {

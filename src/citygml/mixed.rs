@@ -14,7 +14,8 @@
 //!
 //! # Rules and decisions
 //!
-//! **Level 1.** Let `L` be the LoD of the rough geometry (`rough.lod`, the LoD its input was
+//! **Level 1.** Which property gets what is decided by [`crate::level::properties`], the one
+//! definition the report, the traced LoD scene and `evaluate` share. Let `L` be the LoD of the rough geometry (`rough.lod`, the LoD its input was
 //! taken from). Every polygonal LoD property of the asset at LoD `L` *and above* gets the rough
 //! geometry: a property left at a higher LoD with its full detail would make the asset full
 //! detail for a tool reading that LoD. Properties *below* `L` are kept verbatim (they are
@@ -137,7 +138,7 @@ use super::ns::{self, Module, Ns};
 use super::source;
 use super::write::WriteOptions;
 use super::write::{check_target, envelope_xml, escape_attr, write_document, Edit, GmlWriter};
-use crate::model::{Asset, AssetKind, Bbox, CityGmlVersion, CityModel, LodGeometry, Polygon};
+use crate::model::{Asset, AssetKind, Bbox, CityGmlVersion, CityModel, Polygon};
 use crate::rough::RoughGeometry;
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use quick_xml::events::{BytesStart, Event};
@@ -542,59 +543,6 @@ fn scan_attrs<R>(
 // The plan
 // ---------------------------------------------------------------------------------------------
 
-/// Whether the rough geometry of `asset` is its own geometry at the rough LoD (a shell
-/// surface whose LoD2 is used unchanged beside its LoD3): those properties stay verbatim.
-fn rough_is_own_geometry(asset: &Asset, r: &RoughGeometry) -> bool {
-    let same: Vec<&Polygon> = asset.polygons_at(r.lod).collect();
-    same.len() == r.polygons.len() && same.iter().zip(&r.polygons).all(|(x, y)| *x == y)
-}
-
-/// Whether level 1 replaces the content of the property `g` with the rough geometry `r`
-/// (see the module docs); otherwise the property is kept verbatim.
-fn replaced_at_level1(r: &RoughGeometry, g: &LodGeometry, unchanged: bool) -> bool {
-    !(r.polygons.is_empty()
-        || g.lod < r.lod
-        || (g.lod == r.lod && unchanged)
-        || encoding(&g.property) == Enc::Keep
-        || r.polygons.len() > g.polygons.len())
-}
-
-/// Polygons `asset` has in the output at level 1 with rough geometry `r`: the rough
-/// polygons in every property they replace, the property's own polygons elsewhere.
-///
-/// ```
-/// use skylod::citygml::mixed::level1_polygons;
-/// use skylod::model::{Asset, AssetKind, LodGeometry};
-/// use skylod::rough::RoughGeometry;
-/// let a = Asset { kind: AssetKind::Wall, id: None, element: "WallSurface".into(), building: None,
-///     parent: None, span: 0..0, line: 1, function: None, file: 0,
-///     geometries: vec![LodGeometry { lod: 3, property: "lod3MultiSurface".into(),
-///         polygons: vec![Default::default(); 40], ..Default::default() }] };
-/// let r = RoughGeometry { polygons: vec![Default::default(); 2], obb: None, lod: 3 };
-/// assert_eq!(level1_polygons(&a, &r), 2);
-/// ```
-pub fn level1_polygons(asset: &Asset, r: &RoughGeometry) -> usize {
-    level1_geometries(asset, r).map(|(_, p, _)| p.len()).sum()
-}
-
-/// The geometry `asset` has in the output at level 1 with rough geometry `r`, per LoD property
-/// in document order: the property, the polygons it holds in the output (the rough polygons
-/// where they replace it, its own elsewhere) and whether they were replaced. Other writers
-/// (CityJSON) take the level-1 content from here so that every format holds the same model.
-pub fn level1_geometries<'a>(
-    asset: &'a Asset,
-    r: &'a RoughGeometry,
-) -> impl Iterator<Item = (&'a LodGeometry, &'a [Polygon], bool)> + 'a {
-    let unchanged = rough_is_own_geometry(asset, r);
-    asset.geometries.iter().map(move |g| {
-        if replaced_at_level1(r, g, unchanged) {
-            (g, r.polygons.as_slice(), true)
-        } else {
-            (g, g.polygons.as_slice(), false)
-        }
-    })
-}
-
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Enc {
     MultiSurface,
@@ -991,11 +939,14 @@ impl<'a> Plan<'a> {
             Some(id) => format!("skylod_{id}"),
             None => format!("skylod_a{a}"),
         };
-        let unchanged = rough_is_own_geometry(asset, r);
-        for (j, g) in asset.geometries.iter().enumerate() {
-            if !replaced_at_level1(r, g, unchanged) {
+        for (j, out) in crate::level::properties(asset, Some(r), 1)
+            .iter()
+            .enumerate()
+        {
+            if !out.rough {
                 continue;
             }
+            let g = out.geometry;
             let enc = encoding(&g.property);
             let Some(n) = self.doc.node_at(g.span.start) else {
                 continue;

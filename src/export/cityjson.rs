@@ -27,7 +27,7 @@
 //!   CRS, AdV `ETRS89_UTM<zone>` names as `EPSG:258<zone>`), `metadata.geographicalExtent`.
 //! * Levels ([`Content::Levels`]): what the mixed CityGML output holds
 //!   ([`crate::citygml::mixed`]): level 2 every LoD of the asset, level 1 the rough geometry in
-//!   the LoDs it replaces ([`crate::citygml::mixed::level1_geometries`]), level 0 nothing. Every
+//!   the LoDs it replaces ([`crate::level::properties`]), level 0 nothing. Every
 //!   written surface, opening, installation or other object carries `skylod_level` (an
 //!   attribute, or a property of the semantic object); a building left with nothing is
 //!   dropped. [`Content::Full`] writes every building, also one without geometry.
@@ -55,7 +55,6 @@
 //! ```
 
 use super::{asset_name, Content, ExportSummary};
-use crate::citygml::mixed::level1_geometries;
 use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon};
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;
@@ -794,7 +793,8 @@ fn asset_lods<'a>(a: &'a Asset, i: usize, content: Content<'a>) -> Vec<(u8, &'a 
                 return out;
             };
             let mut rough_at: HashSet<u8> = HashSet::new();
-            for (g, polys, replaced) in level1_geometries(a, r) {
+            for p in crate::level::properties(a, Some(r), 1) {
+                let (g, polys, replaced) = (p.geometry, p.polygons, p.rough);
                 if replaced && !rough_at.insert(g.lod) {
                     continue;
                 }

@@ -8,7 +8,7 @@
 //! at full detail; [`Content::Levels`] (`rough`, `lod`) writes level 2 at full detail, level 1
 //! with its rough geometry and drops level 0, as the traced LoD scene
 //! ([`crate::scene::mixed_scene`], for OBJ) and the mixed CityGML writer
-//! ([`crate::citygml::mixed::level1_geometries`], for CityJSON's per-LoD geometry) do.
+//! ([`crate::level::properties`], for CityJSON's per-LoD geometry) do.
 //!
 //! # Example
 //! ```

@@ -12,7 +12,7 @@
 //! * triangles only ([`crate::geom::triangulate()`]), oriented like the polygon's exterior ring;
 //!   Z up, metres, no normals and no material library (the material names are the classes).
 //!
-//! What an asset contributes is [`crate::scene::level_polygons`], the definition the traced
+//! What an asset contributes is [`crate::level::traced`], the definition the traced
 //! LoD scene uses ([`crate::scene::mixed_scene`]): level 2 its highest LoD, level 1 its rough
 //! geometry, level 0 nothing. Vertices are shared within an object.
 //!
@@ -42,8 +42,8 @@
 
 use super::{asset_name, assets_of, Content, ExportSummary};
 use crate::geom::triangulate;
+use crate::level::traced as level_polygons;
 use crate::model::{Bbox, CityModel};
-use crate::scene::level_polygons;
 use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
 use std::io::{self, Write};

@@ -17,13 +17,13 @@ pub use sun_hours::{sun_hours, visible_steps, SunHours};
 pub use svf::{sky_view, SkyBundles, SkyView};
 
 use crate::poi::Poi;
-use crate::scene::{ray_origin, POI_OFFSET};
+use crate::poi::POI_OFFSET;
 use crate::trace::Scene;
 
-/// [`sky_view()`] of a POI against a scene: rays start at [`ray_origin`] (moved
+/// [`sky_view()`] of a POI against a scene: rays start at [`Poi::ray_origin`] (moved
 /// [`POI_OFFSET`] along the normal) and ignore hits closer than [`POI_OFFSET`].
 pub fn poi_sky_view(scene: &Scene, poi: &Poi, bundles: &SkyBundles) -> SkyView {
-    sky_view(ray_origin(poi), poi.normal, bundles, |o, d| {
+    sky_view(poi.ray_origin(), poi.normal, bundles, |o, d| {
         scene.occluded(o, d, POI_OFFSET, f64::INFINITY)
     })
 }
@@ -31,7 +31,7 @@ pub fn poi_sky_view(scene: &Scene, poi: &Poi, bundles: &SkyBundles) -> SkyView {
 /// [`sun_hours()`] of a POI against a scene, with the same ray origin and `tmin` as
 /// [`poi_sky_view`].
 pub fn poi_sun_hours(scene: &Scene, poi: &Poi, table: &SunTable) -> SunHours {
-    let origin = ray_origin(poi);
+    let origin = poi.ray_origin();
     sun_hours(table, poi.normal, |d| {
         scene.occluded(origin, d, POI_OFFSET, f64::INFINITY)
     })
@@ -44,7 +44,7 @@ pub fn poi_horizon(
     poi: &Poi,
     opts: &HorizonOptions,
 ) -> Result<HorizonProfile, SolarError> {
-    let origin = ray_origin(poi);
+    let origin = poi.ray_origin();
     horizon_profile(opts, poi.normal, |d| {
         scene.occluded(origin, d, POI_OFFSET, f64::INFINITY)
     })

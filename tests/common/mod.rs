@@ -383,3 +383,35 @@ pub fn check_refs(input: &Path, out: &Path, problems: &mut Vec<String>) {
         Err(e) => problems.push(format!("{}: output does not parse: {e}", short(input))),
     }
 }
+
+/// Validate a JSON document against a schema of `schemas/` with Python's `jsonschema` (an
+/// independent validator; skip/fail rule when it is missing).
+#[allow(dead_code)]
+pub fn check_json_schema(schema: &str, doc: &Path) {
+    let schema = manifest_dir().join("schemas").join(schema);
+    let script = "import json,sys,jsonschema\n\
+        s=json.load(open(sys.argv[1])); d=json.load(open(sys.argv[2]))\n\
+        jsonschema.Draft202012Validator.check_schema(s)\n\
+        jsonschema.Draft202012Validator(s).validate(d)\n";
+    let has = Command::new("python3")
+        .args(["-c", "import jsonschema"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has {
+        missing("python3 with jsonschema (pip install jsonschema)");
+        return;
+    }
+    let o = Command::new("python3")
+        .args(["-c", script])
+        .arg(&schema)
+        .arg(doc)
+        .output()
+        .expect("python3");
+    assert!(
+        o.status.success(),
+        "{} does not follow {}: {}",
+        doc.display(),
+        schema.display(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

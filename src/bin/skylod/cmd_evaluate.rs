@@ -15,6 +15,8 @@ pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
     #[command(flatten)]
+    region: crate::region_args::RegionArgs,
+    #[command(flatten)]
     site: SiteArgs,
     /// Skip sun hours (then --lat/--lon are not needed).
     #[arg(long)]
@@ -58,11 +60,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let t_all = Instant::now();
     args.site.check("evaluate")?;
-    let pois = args.pois.points()?;
+    let pois = args.region.points(&args.pois)?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let pois = args.region.extend(pois, &loaded.model)?;
     let framed = args
         .pois
         .frame_checked(&mut loaded.model, pois, "evaluate")?;

@@ -8,7 +8,8 @@ use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions
 use skylod::lod::{lod, LodOptions};
 use skylod::model::AssetKind;
 use skylod::poi::Poi;
-use skylod::scene::{full_scene, ray_origin, POI_OFFSET};
+use skylod::poi::POI_OFFSET;
+use skylod::scene::full_scene;
 use skylod::select::SelectOptions;
 use skylod::sky::{SkyPartition, SkyVariant};
 use skylod::solar::fisheye::{
@@ -161,7 +162,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         let cells = classify_cells(
             &partition,
             &scene,
-            ray_origin(local),
+            local.ray_origin(),
             local.normal,
             POI_OFFSET,
         );

@@ -17,6 +17,8 @@ use std::time::Instant;
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
+    #[command(flatten)]
+    region: crate::region_args::RegionArgs,
     /// Output file (one input; `-` for standard output), or a directory that gets one file
     /// per input (created if missing; several inputs need a directory). `.gz` compresses. The
     /// format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl
@@ -55,6 +57,8 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     overwrite: bool,
+    #[command(flatten)]
+    bound: crate::bound_args::BoundArgs,
 }
 
 /// Output path per input: a file for one input (unless `out` is a directory), otherwise
@@ -97,7 +101,8 @@ fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let t_all = Instant::now();
-    let pois = args.pois.points()?;
+    args.bound.check()?;
+    let pois = args.region.points(&args.pois)?;
     let format = crate::export::resolve(args.pois.inputs.len(), &args.output, args.format)?;
     let mut outputs = output_paths(&args.pois.inputs, &args.output)?;
     if format != Format::CityGml && (outputs.len() > 1 || args.output.is_dir()) {
@@ -138,9 +143,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let pois = args.region.extend(pois, &loaded.model)?;
     let mut failed = loaded.failed;
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
-    let result = lod(
+    let mut result = lod(
         &framed.model,
         &framed.local_pois,
         &LodOptions {
@@ -149,6 +155,34 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         },
     )?;
     warn_flags(&framed.pois, &result.flags);
+    let mut bound_report = None;
+    if args.bound.active() {
+        let t = Instant::now();
+        let (levels, b) = args.bound.run(
+            framed.source,
+            &framed.model,
+            &result.rough,
+            &result.selection.levels,
+            &framed.local_pois,
+            args.seed,
+        )?;
+        eprintln!(
+            "error bound: {} promotion(s) in {} round(s), largest SVF error {:.3}%, {:.0} ms",
+            b.promotions.len(),
+            b.rounds,
+            100.0 * b.pois.iter().map(|p| p.svf_error).fold(0.0, f64::max),
+            ms(t)
+        );
+        if !b.met {
+            eprintln!(
+                "error: the error bound cannot be met at these POIs (nothing written):\n{}",
+                crate::bound_args::failing_lines(&b)
+            );
+            return Ok(Outcome::SomeFailed);
+        }
+        result.selection.levels = levels;
+        bound_report = Some(b);
+    }
     // Written geometry and the report are in the input's CRS.
     let model = framed.source;
     let pois = &framed.pois;
@@ -235,6 +269,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         timings,
     );
     report.set_flags(&result.flags);
+    report.bound = bound_report;
     for (f, w) in written.into_iter().enumerate() {
         if let Some((path, dropped)) = w {
             let in_file = model.buildings.iter().filter(|b| b.file == f).count();

@@ -11,6 +11,8 @@ use std::io::Write;
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
+    #[command(flatten)]
+    region: crate::region_args::RegionArgs,
     /// Rays per bundle (cells of each Beckers sky partition).
     #[arg(long, default_value_t = 10_000)]
     rays: usize,
@@ -24,12 +26,13 @@ pub struct Args {
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
-    let pois = args.pois.points()?;
+    let pois = args.region.points(&args.pois)?;
     let bundles = SkyBundles::new(args.rays, args.seed)?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let pois = args.region.extend(pois, &loaded.model)?;
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "svf")?;
     let traced = trace_full(
         &framed.model,

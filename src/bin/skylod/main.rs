@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod bound_args;
 mod cmd_completions;
 mod cmd_convert;
 mod cmd_evaluate;
@@ -19,6 +20,7 @@ mod cmd_synth;
 mod common;
 mod export;
 mod frames;
+mod region_args;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]
@@ -133,6 +135,12 @@ fn message(e: &anyhow::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn arguments_are_consistent() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+    }
 
     #[test]
     fn causes_said_once() {

@@ -1,0 +1,98 @@
+//! `--max-svf-error` / `--max-sun-hours-error` of `skylod lod`: the error-bounded LoD
+//! ([`skylod::bound`]) run between the selection and the writing.
+
+use crate::cmd_sun_hours::DEFAULT_YEAR;
+use crate::common::{non_negative, SiteArgs};
+use skylod::bound::{bound, BoundOptions, BoundReport};
+use skylod::model::CityModel;
+use skylod::poi::Poi;
+use skylod::rough::RoughGeometry;
+use skylod::solar::{Site, SunTable};
+
+#[derive(clap::Args, Debug)]
+pub struct BoundArgs {
+    /// Largest relative SVF error allowed at any POI (e.g. 0.01): after the selection, the LoD
+    /// model is traced against the full model with the same rays and assets are promoted
+    /// (0 -> 1, 1 -> 2) until every POI holds; exit 1 naming the POIs when it cannot.
+    #[arg(long, value_name = "E", value_parser = non_negative, allow_hyphen_values = true)]
+    max_svf_error: Option<f64>,
+    /// Largest relative error of yearly sun hours allowed at any POI (as --max-svf-error; the
+    /// site comes from --lat/--lon or the model's CRS).
+    #[arg(long, value_name = "E", value_parser = non_negative, allow_hyphen_values = true)]
+    max_sun_hours_error: Option<f64>,
+    /// Rays of the SVF bundle of the bound check.
+    #[arg(long, default_value_t = 20_000, value_name = "N")]
+    bound_rays: usize,
+    #[command(flatten)]
+    site: SiteArgs,
+    /// Calendar year (UTC) of the sun-hours bound.
+    #[arg(long, default_value_t = DEFAULT_YEAR)]
+    year: i32,
+    /// Time step (minutes) of the sun-hours bound.
+    #[arg(long, default_value_t = 15)]
+    step: u32,
+}
+
+impl BoundArgs {
+    /// Whether a bound was asked for.
+    pub fn active(&self) -> bool {
+        self.max_svf_error.is_some() || self.max_sun_hours_error.is_some()
+    }
+
+    /// Usage checks before any input is read.
+    pub fn check(&self) -> anyhow::Result<()> {
+        self.site.check("lod")
+    }
+
+    /// Run the bound on the traced (local-frame) model; `source` gives the site. Returns the
+    /// promoted levels and the report section; an error naming the POIs when the bound
+    /// cannot be met.
+    pub fn run(
+        &self,
+        source: &CityModel,
+        model: &CityModel,
+        rough: &[RoughGeometry],
+        levels: &[u8],
+        pois: &[Poi],
+        seed: u64,
+    ) -> anyhow::Result<(Vec<u8>, BoundReport)> {
+        let table = match self.max_sun_hours_error {
+            Some(_) => {
+                let (lat, lon) = self.site.resolve(source, "lod --max-sun-hours-error")?;
+                Some(SunTable::year(self.year, self.step, &Site::new(lat, lon))?)
+            }
+            None => None,
+        };
+        let opts = BoundOptions {
+            max_svf_error: self.max_svf_error,
+            max_sun_error: self.max_sun_hours_error,
+            svf_rays: self.bound_rays,
+            svf_seed: seed,
+            ..Default::default()
+        };
+        let b = bound(model, rough, levels, pois, &opts, table.as_ref())?;
+        let report = BoundReport::new(&b, &opts);
+        Ok((b.levels, report))
+    }
+}
+
+/// One line per POI over the bound, for the error message.
+pub fn failing_lines(r: &BoundReport) -> String {
+    r.pois
+        .iter()
+        .filter(|p| !p.holds)
+        .map(|p| {
+            let sun = p.sun_hours_error.map_or(String::new(), |e| {
+                format!(", sun hours error {:.2}%", 100.0 * e)
+            });
+            format!(
+                "  {}: SVF {:.4} (full {:.4}), error {:.2}%{sun}",
+                p.id,
+                p.svf_lod,
+                p.svf_full,
+                100.0 * p.svf_error
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}

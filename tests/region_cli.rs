@@ -1,0 +1,112 @@
+//! Region POIs on the command line: `--facade ID` and `--region WKT --height Z` with
+//! `--spacing`, on `svf` and `lod` (the same arguments serve `sun-hours` and `evaluate`).
+
+mod common;
+
+use serde_json::Value;
+use skylod::citygml::read_file;
+use skylod::region::facade_pois;
+use std::ffi::OsStr;
+use std::path::Path;
+
+fn synth_small(dir: &Path) -> std::path::PathBuf {
+    let gml = dir.join("small.gml");
+    let o = common::run(&[
+        OsStr::new("synth"),
+        OsStr::new("--preset"),
+        OsStr::new("small"),
+        OsStr::new("-o"),
+        gml.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    gml
+}
+
+const REGION: &str =
+    "POLYGON((430000 4581000, 430010 4581000, 430010 4581010, 430000 4581010, 430000 4581000))";
+
+#[test]
+fn facade_and_region_pois() {
+    let dir = tempfile::tempdir().unwrap();
+    let gml = synth_small(dir.path());
+    let model = read_file(&gml).unwrap();
+    let expected = facade_pois(&model, "B0_0_0_s0", 2.0, 0.05).unwrap();
+    assert!(expected.len() > 10, "{} POIs", expected.len());
+
+    let o = common::run(&[
+        OsStr::new("svf"),
+        gml.as_os_str(),
+        OsStr::new("--facade"),
+        OsStr::new("B0_0_0_s0"),
+        OsStr::new("--spacing"),
+        OsStr::new("2"),
+        OsStr::new("--json"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let pois = v["pois"].as_array().unwrap();
+    assert_eq!(pois.len(), expected.len());
+    for (p, e) in pois.iter().zip(&expected) {
+        assert_eq!(p["id"].as_str(), Some(e.id.as_str()));
+        let svf = p["svf"].as_f64().unwrap();
+        // a vertical wall sees at most half the sky
+        assert!(p["normal"].is_array() && (0.0..=0.51).contains(&svf), "{p}");
+    }
+
+    // lod: a building's walls and a street grid in one model
+    let out = dir.path().join("out.gml");
+    let rep = dir.path().join("r.json");
+    let o = common::run(&[
+        OsStr::new("lod"),
+        gml.as_os_str(),
+        OsStr::new("--facade"),
+        OsStr::new("B0_0_0"),
+        OsStr::new("--region"),
+        OsStr::new(REGION),
+        OsStr::new("--height"),
+        OsStr::new("1.5"),
+        OsStr::new("--spacing"),
+        OsStr::new("2"),
+        OsStr::new("-o"),
+        out.as_os_str(),
+        OsStr::new("--report"),
+        rep.as_os_str(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    // party walls: no facade point may be left inside the neighbour
+    assert!(!err.contains("inside a closed solid"), "{err}");
+    common::check_json_schema("report.schema.json", &rep);
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
+    let walls = facade_pois(&model, "B0_0_0", 2.0, 0.05).unwrap().len();
+    let n = r["pois"].as_array().unwrap().len();
+    assert_eq!(n, walls + 25, "building walls + 5 x 5 street grid");
+    assert!(walls > expected.len());
+}
+
+#[test]
+fn region_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let gml = synth_small(dir.path());
+    for (args, code, says) in [
+        (vec!["--facade", "no-such-id"], 2, "no-such-id"),
+        (vec!["--region", REGION], 2, "--height"),
+        (
+            vec!["--region", "POLYGON((0 0, 1 0))", "--height", "1"],
+            2,
+            "WKT",
+        ),
+        (
+            vec!["--facade", "B0_0_0_s0", "--spacing", "0"],
+            2,
+            "spacing",
+        ),
+    ] {
+        let mut a: Vec<&OsStr> = vec![OsStr::new("svf"), gml.as_os_str()];
+        a.extend(args.iter().map(OsStr::new));
+        let o = common::run(&a);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+}
