@@ -27,6 +27,7 @@ use super::parse::Crs;
 use crate::reproject::{CrsName, Reprojector};
 use glam::DVec3;
 use std::cell::RefCell;
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 
 /// [`Builtin`] first, then PROJ (module docs).
@@ -47,14 +48,12 @@ fn through_proj(from: CrsName, to: CrsName, p: DVec3) -> Result<DVec3, CrsError>
     };
     CACHE.with(|cache| {
         let mut cache = cache.borrow_mut();
-        let key = (from.horizontal, to.horizontal);
-        if !cache.contains_key(&key) {
-            let r = Reprojector::new(from, to).map_err(|e| err(e.to_string()))?;
-            cache.insert(key, r);
-        }
-        let r = cache
-            .get(&key)
-            .ok_or_else(|| err("transformation not cached".into()))?;
+        let r = match cache.entry((from.horizontal, to.horizontal)) {
+            Entry::Occupied(e) => e.into_mut(),
+            Entry::Vacant(e) => {
+                e.insert(Reprojector::new(from, to).map_err(|e| err(e.to_string()))?)
+            }
+        };
         let mut pts = [p];
         r.transform(&mut pts).map_err(err)?;
         Ok(pts[0])
