@@ -90,6 +90,15 @@ impl CrsName {
         })
     }
 
+    /// The EPSG codes of a parsed [`Crs`](crate::crs::Crs) (`None` for one without a code,
+    /// such as OGC:CRS84): the two parsers of `srsName` agree on the codes.
+    pub fn from_crs(crs: &crate::crs::Crs) -> Option<CrsName> {
+        Some(CrsName {
+            horizontal: crs.epsg?,
+            vertical: crs.vertical_epsg,
+        })
+    }
+
     /// The OGC URN of this CRS (compound when it has a vertical part).
     pub fn urn(&self) -> String {
         match self.vertical {

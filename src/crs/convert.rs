@@ -1,7 +1,8 @@
 //! Points from one CRS to another: POIs given with `--poi-crs`, and the sun's site.
 //!
 //! [`PointTransform`] is the hook: [`Builtin`] is the pure-Rust implementation of the default
-//! build; a PROJ-backed implementation (feature `proj`) can implement the same trait.
+//! build; with feature `proj`, `ProjTransform` tries it first and
+//! falls back to PROJ. [`build_transform`] gives the build's best one, [`site_lat_lon`] uses it.
 //!
 //! [`Builtin`] converts between
 //! * geographic CRSs on GRS 1980 / WGS 84 (WGS 84, ETRS89, JGD2000/2011, NAD83, GDA, ...):
@@ -52,6 +53,16 @@ pub enum CrsError {
         x: f64,
         /// Second coordinate.
         y: f64,
+    },
+    /// PROJ could not convert between the two CRSs (feature `proj`).
+    #[error("cannot convert from {from} to {to}: {message}")]
+    Proj {
+        /// Source CRS.
+        from: String,
+        /// Target CRS.
+        to: String,
+        /// PROJ's message.
+        message: String,
     },
     /// A CRS argument that names no CRS skylod knows.
     #[error("{0:?} is not a CRS skylod knows (give EPSG:n)")]
@@ -203,10 +214,33 @@ impl PointTransform for Builtin {
     }
 }
 
-/// Site latitude and longitude (degrees) of the point `p` of a model in `crs`, when the
-/// default build can convert it (geographic on GRS 1980/WGS 84, their UTM zones).
+/// The most capable [`PointTransform`] of this build: [`Builtin`] in the default build,
+/// `ProjTransform` (builtin first, then PROJ) with feature `proj`.
+#[cfg(not(feature = "proj"))]
+pub fn build_transform() -> Builtin {
+    Builtin
+}
+
+/// The most capable [`PointTransform`] of this build: [`Builtin`] in the default build,
+/// `ProjTransform` (builtin first, then PROJ) with feature `proj`.
+#[cfg(feature = "proj")]
+pub fn build_transform() -> super::ProjTransform {
+    super::ProjTransform
+}
+
+/// Site latitude and longitude (degrees) of the point `p` of a model in `crs`, when this
+/// build can convert it: geographic on GRS 1980/WGS 84 and their UTM zones in the default
+/// build, and with feature `proj` any CRS PROJ converts to WGS 84 (EPSG:4326).
 pub fn site_lat_lon(crs: &Crs, p: DVec3) -> Option<(f64, f64)> {
-    let (lat, lon) = to_lat_lon(crs, p).ok()?;
+    let (lat, lon) = match to_lat_lon(crs, p) {
+        Ok(ll) => ll,
+        #[cfg(feature = "proj")]
+        Err(CrsError::NotConvertible { .. }) => {
+            let q = build_transform().position(crs, &Crs::epsg(4326), p).ok()?;
+            (q.x, q.y)
+        }
+        Err(_) => return None,
+    };
     let lon = if lon > 180.0 { lon - 360.0 } else { lon };
     Some((lat, lon))
 }
@@ -289,7 +323,8 @@ mod tests {
     fn sites() {
         let (lat, lon) = site_lat_lon(&Crs::epsg(6697), DVec3::new(35.54, 139.777, 0.0)).unwrap();
         assert_eq!((lat, lon), (35.54, 139.777));
-        assert!(site_lat_lon(&Crs::epsg(2263), DVec3::new(987_654.0, 212_345.0, 0.0)).is_none());
+        let ny = site_lat_lon(&Crs::epsg(2263), DVec3::new(987_654.0, 212_345.0, 0.0));
+        assert_eq!(ny.is_none(), cfg!(not(feature = "proj")), "{ny:?}");
         // EPSG:3044 is ETRS89 / UTM zone 32N (N-E), not 30N.
         assert_eq!(utm_zone(3044), Some((32, true, 0.0)));
         assert_eq!(utm_zone(3049), Some((37, true, 0.0)));

@@ -6,7 +6,8 @@
 //!   (identity for projected metres, a scale for feet, ellipsoidal ENU for degrees).
 //! * [`geodesy`]: geodetic ⇄ ECEF ⇄ ENU on an ellipsoid (pure Rust, no PROJ).
 //! * [`convert`]: [`PointTransform`], points between CRSs (POIs in `--poi-crs`, the sun's
-//!   site); [`Builtin`] is the default build's, a PROJ one can slot in.
+//!   site); [`Builtin`] is the default build's, [`build_transform`] the build's best.
+//! * `proj_transform` (feature `proj`): `ProjTransform`, [`Builtin`] first, then PROJ.
 //! * [`feet`]: the EPSG projected CRSs in US survey feet and international feet.
 //! * [`site`]: site latitude/longitude from a CRS name for the sun.
 //!
@@ -29,11 +30,15 @@ pub mod feet;
 pub mod frame;
 pub mod geodesy;
 pub mod parse;
+#[cfg(feature = "proj")]
+pub mod proj_transform;
 pub mod site;
 
-pub use convert::{site_lat_lon, Builtin, CrsError, PointTransform};
+pub use convert::{build_transform, site_lat_lon, Builtin, CrsError, PointTransform};
 pub use frame::{FrameWarning, LocalFrame};
 pub use parse::{Crs, CrsKind, Ellipsoid};
+#[cfg(feature = "proj")]
+pub use proj_transform::ProjTransform;
 pub use site::{lat_lon, utm_zone};
 
 /// The CRS of a model: `override_crs` (`--source-crs`) when given, otherwise the first

@@ -1,5 +1,6 @@
-//! Site latitude/longitude from a model's CRS for the sun position, without PROJ
-//! (see [`super::convert`] for what converts): geographic CRSs on GRS 1980/WGS 84 directly,
+//! Site latitude/longitude from a model's CRS for the sun position (see [`super::convert`]
+//! for what converts; with feature `proj`, any CRS PROJ converts to WGS 84 as well). Without
+//! PROJ: geographic CRSs on GRS 1980/WGS 84 directly,
 //! the UTM CRSs of WGS 84, ETRS89, JGD2000/2011, NAD83 and GDA through the `utm` crate
 //! (the datums differ by a metre or two at most, far below what a sun position needs).
 //!
@@ -92,7 +93,17 @@ mod tests {
         // Geographic: the point itself (latitude first for EPSG:4326).
         assert_eq!(lat_lon("EPSG:4326", 48.0, 11.0), Some((48.0, 11.0)));
         assert_eq!(lat_lon("EPSG:4326", 480000.0, 11.0), None);
-        // Feet: not without PROJ.
-        assert_eq!(lat_lon("EPSG:2263", 987654.0, 212345.0), None);
+        // Feet: not without PROJ; with it, New York (Long Island State Plane, US feet).
+        let ny = lat_lon("EPSG:2263", 987654.0, 212345.0);
+        #[cfg(not(feature = "proj"))]
+        assert_eq!(ny, None);
+        #[cfg(feature = "proj")]
+        {
+            let (lat, lon) = ny.unwrap();
+            assert!(
+                (lat - 40.75).abs() < 0.05 && (lon + 73.98).abs() < 0.05,
+                "{lat} {lon}"
+            );
+        }
     }
 }

@@ -3,7 +3,7 @@
 //! reports and outputs stay in the input's CRS.
 
 use anyhow::{bail, Context};
-use skylod::crs::{model_crs, Builtin, Crs, CrsKind, LocalFrame, PointTransform};
+use skylod::crs::{build_transform, model_crs, Crs, CrsKind, LocalFrame, PointTransform};
 use skylod::model::CityModel;
 use skylod::poi::Poi;
 use std::borrow::Cow;
@@ -57,7 +57,8 @@ pub struct CrsArgs {
     #[command(flatten)]
     pub source: SourceCrsArgs,
     /// CRS of --poi and --pois when it is not the model's: EPSG:4326 (WGS 84), or any
-    /// geographic CRS on GRS 1980/WGS 84, or a UTM CRS (EPSG:326xx, 258xx, ...). Axis order
+    /// geographic CRS on GRS 1980/WGS 84, or a UTM CRS (EPSG:326xx, 258xx, ...); any EPSG CRS
+    /// PROJ knows, to a model in any, in a build with the `proj` feature. Axis order
     /// as EPSG defines it: EPSG:4326 is LAT,LON,HEIGHT (as pyproj without always_xy), the
     /// normal NX,NY,NZ is along the same axes (north, east, up); OGC:CRS84 is LON,LAT. The
     /// height is in the model's vertical datum (passed through); no datum shift between
@@ -119,7 +120,7 @@ pub fn frame<'a>(
             if !crs.is_known() {
                 bail!("--poi-crs {pc}: the model's CRS ({crs}) is not known, so POIs cannot be converted to it (give --source-crs)");
             }
-            Builtin
+            build_transform()
                 .pois(pc, &crs, &pois)
                 .with_context(|| format!("--poi-crs {pc}"))?
         }
