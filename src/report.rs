@@ -118,6 +118,8 @@ pub struct PoiEntry {
     pub silhouette_assets: usize,
     /// Time of this POI's selection (ms).
     pub ms: f64,
+    /// Polygons of this POI's own LoD model (its levels alone, before any error bound).
+    pub polygons_own: usize,
     /// What makes this POI's result suspect ([`crate::checks::poi_flags`]); set by
     /// [`Report::set_flags`].
     pub flags: Vec<crate::checks::PoiFlag>,
@@ -161,6 +163,13 @@ pub struct Totals {
     pub polygon_fraction: f64,
     /// Buildings and parts in the input.
     pub buildings_in: usize,
+    /// The largest of the POIs' own LoD models (polygons): one model for all POIs (a
+    /// region) costs `polygons_out` instead of one model per POI.
+    pub single_poi_polygons_max: usize,
+    /// The mean of the POIs' own LoD models (polygons).
+    pub single_poi_polygons_mean: f64,
+    /// `polygons_out / single_poi_polygons_max` (0 when no POI kept anything).
+    pub region_over_single_poi: f64,
     /// Buildings and parts in the outputs written, as the writer counted them (see
     /// [`Report::record_output`]); 0 until outputs are recorded.
     pub buildings_out: usize,
@@ -248,6 +257,17 @@ impl Report {
         } else {
             totals.polygons_out as f64 / totals.polygons_in as f64
         };
+        totals.single_poi_polygons_max = sel.pois.iter().map(|p| p.polygons).max().unwrap_or(0);
+        totals.single_poi_polygons_mean = if sel.pois.is_empty() {
+            0.0
+        } else {
+            sel.pois.iter().map(|p| p.polygons as f64).sum::<f64>() / sel.pois.len() as f64
+        };
+        totals.region_over_single_poi = if totals.single_poi_polygons_max == 0 {
+            0.0
+        } else {
+            totals.polygons_out as f64 / totals.single_poi_polygons_max as f64
+        };
         let pois = sel
             .pois
             .iter()
@@ -261,6 +281,7 @@ impl Report {
                 assets_hit: s.assets_hit,
                 silhouette_assets: s.silhouette_assets,
                 ms: s.seconds * 1e3,
+                polygons_own: s.polygons,
                 flags: Vec::new(),
             })
             .collect();

@@ -123,6 +123,9 @@ pub struct PoiSelection {
     pub silhouette_assets: usize,
     /// Wall-clock time of this POI (tracing + silhouette), seconds.
     pub seconds: f64,
+    /// Polygons of this POI's own LoD model (its levels alone, as `lod` with only this POI
+    /// would write them; [`crate::level::polygon_count`]): what a region model is compared with.
+    pub polygons: usize,
 }
 
 /// Result of [`select`].
@@ -198,7 +201,8 @@ pub fn select(
     let mut levels = vec![0u8; n_assets];
     let mut hits = vec![0u64; n_assets];
     let mut out_pois = Vec::with_capacity(per_poi.len());
-    for (info, poi_hits, silhouette) in per_poi {
+    for (mut info, poi_hits, silhouette) in per_poi {
+        info.polygons = own_polygons(model, rough, &poi_hits, &silhouette);
         for (a, h) in poi_hits {
             let a = a as usize;
             if let (Some(x), Some(l)) = (hits.get_mut(a), levels.get_mut(a)) {
@@ -234,6 +238,34 @@ pub fn select(
         threshold_deg: threshold.to_degrees(),
         rays: dirs.len(),
     })
+}
+
+/// Polygons of one POI's own LoD model: hit assets at level 1, silhouette assets (and the
+/// openings of silhouette surfaces) at level 2, as [`select`] combines them.
+fn own_polygons(
+    model: &CityModel,
+    rough: &[RoughGeometry],
+    hits: &[(u32, u32)],
+    silhouette: &[u32],
+) -> usize {
+    let mut levels: HashMap<usize, u8> = hits.iter().map(|&(a, _)| (a as usize, 1)).collect();
+    for &a in silhouette {
+        levels.insert(a as usize, 2);
+    }
+    if !silhouette.is_empty() {
+        for (i, a) in model.assets.iter().enumerate() {
+            if a.kind.is_opening() && a.parent.is_some_and(|p| levels.get(&p) == Some(&2)) {
+                levels.insert(i, 2);
+            }
+        }
+    }
+    levels
+        .iter()
+        .filter_map(|(&i, &l)| {
+            let a = model.assets.get(i)?;
+            Some(crate::level::polygon_count(a, rough.get(i), l))
+        })
+        .sum()
 }
 
 /// What [`select_one`] finds: summary, hits per asset (sorted by asset), silhouette assets.
@@ -295,6 +327,7 @@ fn select_one(
         assets_hit: hits.len(),
         silhouette_assets: silhouette.len(),
         seconds: t0.elapsed().as_secs_f64(),
+        polygons: 0,
     };
     (info, hits, silhouette)
 }

@@ -82,6 +82,55 @@ fn facade_and_region_pois() {
     let n = r["pois"].as_array().unwrap().len();
     assert_eq!(n, walls + 25, "building walls + 5 x 5 street grid");
     assert!(walls > expected.len());
+
+    // What the region model costs against single-POI models: every POI's own model is part
+    // of the region model, and the largest one is what `lod` writes for that POI alone.
+    let t = &r["totals"];
+    let out_polys = t["polygons_out"].as_u64().unwrap();
+    let own: Vec<u64> = r["pois"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["polygons_own"].as_u64().unwrap())
+        .collect();
+    let max = *own.iter().max().unwrap();
+    assert_eq!(t["single_poi_polygons_max"].as_u64(), Some(max));
+    assert!(
+        own.iter().all(|&o| o <= out_polys),
+        "{own:?} vs {out_polys}"
+    );
+    assert!(t["region_over_single_poi"].as_f64().unwrap() >= 1.0);
+    assert!(err.contains("region: one model of"), "{err}");
+    let k = own.iter().position(|&o| o == max).unwrap();
+    let p = &r["pois"][k];
+    let coords: Vec<String> = p["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .chain(p["normal"].as_array().into_iter().flatten())
+        .map(|c| format!("{}", c.as_f64().unwrap()))
+        .collect();
+    let one = dir.path().join("one.gml");
+    let rep1 = dir.path().join("one.json");
+    let o = common::run(&[
+        OsStr::new("lod"),
+        gml.as_os_str(),
+        OsStr::new("--poi"),
+        OsStr::new(&coords.join(",")),
+        OsStr::new("-o"),
+        one.as_os_str(),
+        OsStr::new("--report"),
+        rep1.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r1: Value = serde_json::from_str(&std::fs::read_to_string(&rep1).unwrap()).unwrap();
+    assert_eq!(
+        r1["totals"]["polygons_out"].as_u64(),
+        Some(max),
+        "{}",
+        r1["totals"]
+    );
+    assert_eq!(r1["pois"][0]["polygons_own"].as_u64(), Some(max));
 }
 
 #[test]
@@ -108,5 +157,41 @@ fn region_errors() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
         assert!(err.contains(says), "{args:?}: {err}");
+    }
+}
+
+/// `horizon` takes the same region arguments: one profile per facade point.
+#[test]
+fn horizon_over_a_facade() {
+    let dir = tempfile::tempdir().unwrap();
+    let gml = synth_small(dir.path());
+    let model = read_file(&gml).unwrap();
+    let expected = facade_pois(&model, "B0_0_0_s0", 2.0, 0.05).unwrap();
+    let o = common::run(&[
+        OsStr::new("horizon"),
+        gml.as_os_str(),
+        OsStr::new("--facade"),
+        OsStr::new("B0_0_0_s0"),
+        OsStr::new("--spacing"),
+        OsStr::new("2"),
+        OsStr::new("--step"),
+        OsStr::new("10"),
+        OsStr::new("--json"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let pois = v["pois"].as_array().unwrap();
+    assert_eq!(pois.len(), expected.len());
+    for (p, e) in pois.iter().zip(&expected) {
+        assert_eq!(p["id"].as_str(), Some(e.id.as_str()));
+        assert_eq!(p["azimuth"].as_array().map(Vec::len), Some(36));
+        // Behind its own wall a facade point sees no sky: 90 degrees there.
+        let el: Vec<f64> = p["elevation"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert!(el.iter().any(|&x| (x - 90.0).abs() < 1e-6), "{el:?}");
     }
 }

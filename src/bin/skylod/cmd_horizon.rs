@@ -14,6 +14,8 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
+    #[command(flatten)]
+    region: crate::region_args::RegionArgs,
     /// Azimuth step in degrees (0.01..=90); azimuths 0, step, 2 step, ... below 360.
     #[arg(long, default_value_t = 1.0)]
     step: f64,
@@ -57,7 +59,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let opts = HorizonOptions::default().with_step(args.step);
     opts.validate().context("--step")?;
-    let pois = args.pois.points()?;
+    let pois = args.region.points(&args.pois)?;
     if let Some(out) = &args.output {
         let w = WriteOptions {
             overwrite: args.overwrite,
@@ -70,6 +72,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
+    let pois = args.region.extend(pois, &loaded.model)?;
     // Traced in the local metric frame (y = north): azimuths are from north there.
     let framed = args
         .pois

@@ -295,6 +295,17 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         timings.select,
         timings.write
     );
+    if args.region.active() {
+        eprintln!(
+            "region: one model of {} polygons for {} POIs; their own models hold {:.0} on average, \
+             {} at most ({:.2}x)",
+            t.polygons_out,
+            pois.len(),
+            t.single_poi_polygons_mean,
+            t.single_poi_polygons_max,
+            t.region_over_single_poi
+        );
+    }
     if let Some(path) = &args.report {
         let json = serde_json::to_vec_pretty(&report)?;
         atomic_write(path, |w| {

@@ -31,7 +31,8 @@ pub struct RegionArgs {
 }
 
 impl RegionArgs {
-    fn active(&self) -> bool {
+    /// Whether `--facade` or `--region` is given.
+    pub fn active(&self) -> bool {
         !self.facade.is_empty() || self.region.is_some()
     }
 
