@@ -183,6 +183,7 @@ mod tests {
             file: 0,
             geometries: vec![LodGeometry {
                 lod: 3,
+                property: "lod3MultiSurface".into(),
                 polygons: vec![sq],
                 ..Default::default()
             }],
