@@ -122,3 +122,75 @@ fn standard_input_in_standard_output_out_is_byte_identical_to_files() {
         file["total"]["asset_polygons"]
     );
 }
+
+/// `rough` over a directory: the same bytes whatever `--jobs`; a broken file among them is
+/// reported and the others are done (exit 1), and a closing line sums it up.
+#[test]
+fn rough_over_a_directory_any_jobs_and_a_broken_file() {
+    let Some(dir) = ingolstadt() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let tiles = tmp.path().join("tiles");
+    std::fs::create_dir(&tiles).unwrap();
+    let mut names: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.to_string_lossy().ends_with(".xml.gz"))
+        .collect();
+    names.sort();
+    for p in names.iter().take(8) {
+        std::fs::copy(p, tiles.join(p.file_name().unwrap())).unwrap();
+    }
+    let run_jobs = |jobs: &str, out: &std::path::Path| {
+        let o = run(&[
+            os("rough"),
+            tiles.as_os_str(),
+            os("-o"),
+            out.as_os_str(),
+            os("--jobs"),
+            os(jobs),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.contains("rough: 8 file(s) ok, 0 failed"), "{err}");
+        let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(out)
+            .unwrap()
+            .map(|e| {
+                let p = e.unwrap().path();
+                (
+                    p.file_name().unwrap().to_string_lossy().to_string(),
+                    std::fs::read(&p).unwrap(),
+                )
+            })
+            .collect();
+        files.sort();
+        files
+    };
+    let one = run_jobs("1", &tmp.path().join("one"));
+    let two = run_jobs("2", &tmp.path().join("two"));
+    assert_eq!(one.len(), 8);
+    assert!(one == two, "--jobs 1 and --jobs 2 differ");
+
+    // A broken tile among them.
+    std::fs::write(tiles.join("broken.gml"), "<CityModel><unclosed>").unwrap();
+    let out = tmp.path().join("three");
+    let o = run(&[os("rough"), tiles.as_os_str(), os("-o"), out.as_os_str()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("broken.gml"), "{err}");
+    assert!(err.contains("rough: 8 file(s) ok, 1 failed"), "{err}");
+    assert_eq!(
+        std::fs::read_dir(&out).unwrap().count(),
+        8,
+        "the others are written, nothing for the broken one"
+    );
+    // stats: the same closing line.
+    let o = run(&[os("stats"), tiles.as_os_str()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("stats: 8 file(s) ok, 1 failed"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -116,7 +116,19 @@ fn missing_and_broken_inputs_exit_1_others_still_reported() {
         let lines: Vec<&str> = err.lines().filter(|l| l.contains(&name)).collect();
         assert_eq!(lines.len(), 1, "{name}: expected one line in\n{err}");
     }
-    assert_eq!(err.lines().count(), 3, "exactly three error lines:\n{err}");
+    assert_eq!(
+        err.lines().filter(|l| l.starts_with("error: ")).count(),
+        3,
+        "exactly three error lines:\n{err}"
+    );
+    // The batch ends with one closing line.
+    assert_eq!(err.lines().count(), 4, "{err}");
+    assert!(
+        err.lines()
+            .last()
+            .is_some_and(|l| l.starts_with("stats: 2 file(s) ok, 3 failed, 0 warning(s)")),
+        "{err}"
+    );
     // Malformed XML: line:column.
     let mline = err
         .lines()

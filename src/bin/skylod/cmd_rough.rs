@@ -3,6 +3,7 @@
 use crate::frames::SourceCrsArgs;
 use crate::Outcome;
 use anyhow::bail;
+use rayon::prelude::*;
 use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
 use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
@@ -41,9 +42,12 @@ pub struct Args {
     overwrite: bool,
     #[command(flatten)]
     crs: SourceCrsArgs,
+    #[command(flatten)]
+    jobs: crate::common::JobsArgs,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let t0 = std::time::Instant::now();
     let _spool = crate::common::expand_inputs(&mut args.inputs)?;
     if !(args.angle.is_finite() && (0.0..=90.0).contains(&args.angle)) {
         bail!("--angle must be between 0 and 90 degrees");
@@ -110,18 +114,53 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         std::fs::create_dir_all(&args.output)
             .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.output.display()))?;
     }
-    for (input, out) in todo {
-        if let Err(e) = one(input, out, format, &opts, &wopts, &args.crs) {
-            eprintln!("error: {e}");
-            failed += 1;
+    // Files in parallel (--jobs); messages in input order, whatever finished first.
+    let results: Vec<anyhow::Result<Done>> = args.jobs.install(|| {
+        todo.par_iter()
+            .map(|(input, out)| one(input, out, format, &opts, &wopts, &args.crs))
+            .collect()
+    })?;
+    let (mut ok, mut warnings, mut polys) = (0, 0, (0, 0));
+    for r in results {
+        match r {
+            Ok(d) => {
+                if let Some(line) = d.line {
+                    eprintln!("{line}");
+                }
+                ok += 1;
+                warnings += d.warnings;
+                polys.0 += d.polygons.0;
+                polys.1 += d.polygons.1;
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed += 1;
+            }
         }
     }
-    if failed > 0 {
-        eprintln!("{failed} of {} input(s) failed", targets.len());
-        Ok(Outcome::SomeFailed)
+    eprintln!(
+        "{}",
+        crate::common::summary_line(
+            "rough",
+            ok,
+            failed,
+            warnings,
+            (format == Format::CityGml).then_some(polys),
+            t0
+        )
+    );
+    Ok(if failed > 0 {
+        Outcome::SomeFailed
     } else {
-        Ok(Outcome::Ok)
-    }
+        Outcome::Ok
+    })
+}
+
+/// What one input gave: its summary line (printed in input order), warnings, polygons in/out.
+struct Done {
+    line: Option<String>,
+    warnings: usize,
+    polygons: (usize, usize),
 }
 
 fn one(
@@ -131,7 +170,7 @@ fn one(
     opts: &RoughOptions,
     wopts: &WriteOptions,
     crs: &SourceCrsArgs,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<Done> {
     let mut model = read_file(input)?;
     crs.apply(&mut model);
     // Generalise in metres (thickness, angles), write in the input's CRS.
@@ -148,7 +187,12 @@ fn one(
             rough: &rough,
             levels: &levels,
         };
-        return crate::export::write(format, &model, 0, content, out, wopts);
+        crate::export::write(format, &model, 0, content, out, wopts)?;
+        return Ok(Done {
+            line: None,
+            warnings: model.warnings.len(),
+            polygons: (0, 0),
+        });
     }
     let s = write_mixed(&model, 0, &rough, &levels, out, wopts)?;
     let pct = if s.polygons_in > 0 {
@@ -156,7 +200,7 @@ fn one(
     } else {
         100.0
     };
-    eprintln!(
+    let line = format!(
         "{} -> {}: {} assets, polygons {} -> {} ({pct:.1}%), {} href(s) and {} appearance target(s) pruned",
         input.display(),
         out.display(),
@@ -166,5 +210,9 @@ fn one(
         s.hrefs_pruned,
         s.appearance_targets_pruned,
     );
-    Ok(())
+    Ok(Done {
+        line: Some(line),
+        warnings: model.warnings.len(),
+        polygons: (s.polygons_in, s.polygons_out),
+    })
 }

@@ -23,6 +23,8 @@ pub struct Args {
     verbose: bool,
     #[command(flatten)]
     crs: SourceCrsArgs,
+    #[command(flatten)]
+    jobs: crate::common::JobsArgs,
 }
 
 #[derive(serde::Serialize)]
@@ -33,17 +35,19 @@ struct FileStats<'a> {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let t0 = std::time::Instant::now();
     let _spool = crate::common::expand_inputs(&mut args.inputs)?;
-    let results: Vec<_> = args
-        .inputs
-        .par_iter()
-        .map(|p| {
-            read_file(p).map(|mut m| {
-                args.crs.apply(&mut m);
-                (Stats::of(&m), m.warnings)
+    let results: Vec<_> = args.jobs.install(|| {
+        args.inputs
+            .par_iter()
+            .map(|p| {
+                read_file(p).map(|mut m| {
+                    args.crs.apply(&mut m);
+                    (Stats::of(&m), m.warnings)
+                })
             })
-        })
-        .collect();
+            .collect()
+    })?;
     let mut ok = Vec::new();
     let mut failed = false;
     for (path, r) in args.inputs.iter().zip(results) {
@@ -62,8 +66,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
         }
     }
-    let mut out = std::io::stdout().lock();
     let total = Stats::total(ok.iter().map(|(_, s)| s));
+    if args.inputs.len() > 1 {
+        let n_failed = args.inputs.len() - ok.len();
+        eprintln!(
+            "{}",
+            crate::common::summary_line("stats", ok.len(), n_failed, total.warnings, None, t0)
+        );
+    }
+    let mut out = std::io::stdout().lock();
     if args.json {
         let files: Vec<FileStats> = ok
             .iter()

@@ -44,6 +44,45 @@ pub struct PoiArgs {
     pub crs: crate::frames::CrsArgs,
 }
 
+/// `--jobs`: how many input files are worked on at once.
+#[derive(clap::Args, Debug, Clone, Copy, Default)]
+pub struct JobsArgs {
+    /// Input files worked on at once (default: one per core). The outputs are the same
+    /// whatever the number.
+    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub jobs: Option<u16>,
+}
+
+impl JobsArgs {
+    /// Run `f` in a thread pool of `--jobs` threads (rayon's global pool without it).
+    pub fn install<T: Send>(&self, f: impl FnOnce() -> T + Send) -> anyhow::Result<T> {
+        match self.jobs {
+            None => Ok(f()),
+            Some(n) => Ok(rayon::ThreadPoolBuilder::new()
+                .num_threads(usize::from(n))
+                .build()
+                .context("starting the worker threads")?
+                .install(f)),
+        }
+    }
+}
+
+/// The closing line of a batch: files ok / failed, warnings, polygons in / out, wall time.
+pub fn summary_line(
+    cmd: &str,
+    ok: usize,
+    failed: usize,
+    warnings: usize,
+    polygons: Option<(usize, usize)>,
+    t: Instant,
+) -> String {
+    let polys = polygons.map_or(String::new(), |(i, o)| format!(", polygons {i} -> {o}"));
+    format!(
+        "{cmd}: {ok} file(s) ok, {failed} failed, {warnings} warning(s){polys}, {:.2} s",
+        t.elapsed().as_secs_f64()
+    )
+}
+
 /// A clap value parser: a finite number ≥ 0.
 pub fn non_negative(s: &str) -> Result<f64, String> {
     let v: f64 = s
