@@ -88,18 +88,7 @@ pub fn read_from<R: BufRead>(
     opts: &ReadOptions,
 ) -> Result<CityModel, ReadError> {
     let mut p = Parser::new(path, opts.clone());
-    // A UTF-8 byte order mark is skipped here so that every recorded position is a true
-    // offset in the file (quick-xml would skip it without counting it).
-    let head = reader.fill_buf().map_err(|source| ReadError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
-    let base: u64 = if head.starts_with(&[0xEF, 0xBB, 0xBF]) {
-        reader.consume(3);
-        3
-    } else {
-        0
-    };
+    let base = super::source::skip_bom(&mut reader, path)?;
     let mut reader =
         NsReader::from_reader(super::source::Limited::new(reader, opts.max_event_bytes));
     reader.config_mut().trim_text(false);

@@ -850,16 +850,7 @@ pub fn rewrite_edits(
     target_srs: &str,
 ) -> Result<(Vec<Edit>, RewriteSummary), WriteError> {
     let (mut reader, _) = source::open(path)?;
-    let head = reader.fill_buf().map_err(|source| ReadError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
-    let base: u64 = if head.starts_with(&[0xEF, 0xBB, 0xBF]) {
-        reader.consume(3);
-        3
-    } else {
-        0
-    };
+    let base = source::skip_bom(&mut reader, path)?;
     let mut reader = NsReader::from_reader(reader);
     reader.config_mut().trim_text(false);
     reader.config_mut().check_end_names = true;

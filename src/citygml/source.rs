@@ -25,6 +25,22 @@ pub fn open(path: &Path) -> Result<(Box<dyn BufRead + Send>, bool), ReadError> {
     }
 }
 
+/// Skip a UTF-8 byte-order mark at the start of `reader`, so that every position recorded
+/// after it is a true offset in the document (quick-xml would skip it without counting it).
+/// Returns the offset the reader now stands at: 3 after a mark, 0 otherwise.
+pub(crate) fn skip_bom<R: BufRead + ?Sized>(reader: &mut R, path: &Path) -> Result<u64, ReadError> {
+    let head = reader.fill_buf().map_err(|source| ReadError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    if head.starts_with(&[0xEF, 0xBB, 0xBF]) {
+        reader.consume(3);
+        Ok(3)
+    } else {
+        Ok(0)
+    }
+}
+
 /// Copy `len` bytes starting at the current position of `src` into `out`.
 pub(crate) fn copy_exact<R: Read + ?Sized, W: std::io::Write + ?Sized>(
     src: &mut R,
