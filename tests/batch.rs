@@ -10,14 +10,6 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
 
-fn os<S: AsRef<OsStr> + ?Sized>(s: &S) -> &OsStr {
-    s.as_ref()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
-}
-
 fn stats(args: &[&OsStr]) -> Value {
     let mut a = vec![os("stats"), os("--json")];
     a.extend_from_slice(args);

@@ -9,19 +9,6 @@ use std::ffi::OsStr;
 use std::path::PathBuf;
 use std::process::Output;
 
-fn os<S: AsRef<OsStr> + ?Sized>(s: &S) -> &OsStr {
-    s.as_ref()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
-}
-
-fn json(o: &Output) -> Value {
-    serde_json::from_slice(&o.stdout)
-        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {}", stderr(o)))
-}
-
 fn gml() -> PathBuf {
     fixture("synth-small.gml")
 }

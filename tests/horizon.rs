@@ -18,14 +18,6 @@ const LENGTH: f64 = 400.0;
 /// Depth (east-west) of each canyon building.
 const DEPTH: f64 = 15.0;
 
-fn os<S: AsRef<OsStr> + ?Sized>(s: &S) -> &OsStr {
-    s.as_ref()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
-}
-
 fn json_out(o: &Output) -> Value {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(o));
     serde_json::from_slice(&o.stdout)

@@ -33,33 +33,9 @@ fn ok(o: &Output) {
     );
 }
 
-/// Validate a report against the JSON schema with Python's `jsonschema` (an independent
-/// validator; skip/fail rule when it is missing).
+/// Validate a report against `schemas/report.schema.json` (Python's `jsonschema`).
 fn check_report_schema(report: &Path) {
-    let schema = common::manifest_dir().join("schemas/report.schema.json");
-    let script = "import json,sys,jsonschema\n\
-        s=json.load(open(sys.argv[1])); d=json.load(open(sys.argv[2]))\n\
-        jsonschema.Draft202012Validator.check_schema(s)\n\
-        jsonschema.Draft202012Validator(s).validate(d)\n";
-    let has = Command::new("python3")
-        .args(["-c", "import jsonschema"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has {
-        common::missing("python3 with jsonschema (pip install jsonschema)");
-        return;
-    }
-    let o = Command::new("python3")
-        .args(["-c", script])
-        .arg(&schema)
-        .arg(report)
-        .output()
-        .expect("python3");
-    assert!(
-        o.status.success(),
-        "report does not follow the schema: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    common::check_json_schema("report.schema.json", report);
 }
 
 fn report(path: &Path) -> Value {
