@@ -1,8 +1,7 @@
 //! `--max-svf-error` / `--max-sun-hours-error` of `skylod lod`: the error-bounded LoD
 //! ([`skylod::bound`]) run between the selection and the writing.
 
-use crate::cmd_sun_hours::DEFAULT_YEAR;
-use crate::common::{non_negative, SiteArgs};
+use crate::common::{non_negative, SiteArgs, SunArgs};
 use skylod::bound::{bound, BoundOptions, BoundReport};
 use skylod::model::CityModel;
 use skylod::poi::Poi;
@@ -25,12 +24,9 @@ pub struct BoundArgs {
     bound_rays: usize,
     #[command(flatten)]
     site: SiteArgs,
-    /// Calendar year (UTC) of the sun-hours bound.
-    #[arg(long, default_value_t = DEFAULT_YEAR)]
-    year: i32,
-    /// Time step (minutes) of the sun-hours bound.
-    #[arg(long, default_value_t = 15)]
-    step: u32,
+    /// `--year`, `--step` of the sun-hours bound.
+    #[command(flatten)]
+    sun: SunArgs,
 }
 
 impl BoundArgs {
@@ -59,7 +55,11 @@ impl BoundArgs {
         let table = match self.max_sun_hours_error {
             Some(_) => {
                 let (lat, lon) = self.site.resolve(source, "lod --max-sun-hours-error")?;
-                Some(SunTable::year(self.year, self.step, &Site::new(lat, lon))?)
+                Some(SunTable::year(
+                    self.sun.year,
+                    self.sun.step,
+                    &Site::new(lat, lon),
+                )?)
             }
             None => None,
         };

@@ -1,11 +1,9 @@
 //! `skylod evaluate`: full vs LoD vs all-boxes model, the paper's Tables 1 and 2.
 
-use crate::cmd_sun_hours::DEFAULT_YEAR;
-use crate::common::{ms, out_err, warn_flags, PoiArgs, SiteArgs};
+use crate::common::{ms, out_err, warn_flags, PoiArgs, RoughArgs, SelectArgs, SiteArgs, SunArgs};
 use crate::Outcome;
 use skylod::evaluate::{evaluate, EvalOptions};
 use skylod::lod::LodOptions;
-use skylod::select::SelectOptions;
 use skylod::solar::{Site, SunTable};
 use std::io::Write;
 use std::time::Instant;
@@ -21,21 +19,12 @@ pub struct Args {
     /// Skip sun hours (then --lat/--lon are not needed).
     #[arg(long)]
     no_sun: bool,
-    /// Calendar year (UTC) of the sun-hours simulation.
-    #[arg(long, default_value_t = DEFAULT_YEAR)]
-    year: i32,
-    /// Sun-hours time step in minutes.
-    #[arg(long, default_value_t = 15)]
-    step: u32,
-    /// Rays per POI of the selection bundle.
-    #[arg(long, default_value_t = 10_000)]
-    rays: usize,
-    /// Seed of the selection bundle.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Silhouette threshold in degrees (default: 1.5 x the cell size).
-    #[arg(long, value_name = "DEG", value_parser = crate::common::positive, allow_hyphen_values = true)]
-    threshold: Option<f64>,
+    #[command(flatten)]
+    sun: SunArgs,
+    #[command(flatten)]
+    select: SelectArgs,
+    #[command(flatten)]
+    rough: RoughArgs,
     /// Rays of each SVF bundle (the same bundle for the three models).
     #[arg(long, default_value_t = 20_000)]
     svf_rays: usize,
@@ -60,6 +49,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let t_all = Instant::now();
     args.site.check("evaluate")?;
+    let rough_opts = args.rough.options()?;
     let pois = args.region.points(&args.pois)?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
@@ -78,18 +68,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         Some(Site::new(lat, lon))
     };
     let table = match &site {
-        Some(s) => Some(SunTable::year(args.year, args.step, s)?),
+        Some(s) => Some(SunTable::year(args.sun.year, args.sun.step, s)?),
         None => None,
     };
     let opts = EvalOptions {
         lod: LodOptions {
-            select: SelectOptions {
-                rays: args.rays,
-                seed: args.seed,
-                threshold_deg: args.threshold,
-                ..Default::default()
-            },
-            ..Default::default()
+            rough: rough_opts,
+            select: args.select.options(),
         },
         svf_rays: args.svf_rays,
         ..Default::default()
@@ -101,11 +86,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if args.json {
         let doc = serde_json::json!({
             "inputs": loaded.inputs,
-            "rays": args.rays,
+            "rays": args.select.rays,
             "svf_rays": args.svf_rays,
-            "seed": args.seed,
+            "seed": args.select.seed,
             "sun": site.map(|s| serde_json::json!({
-                "lat": s.latitude, "lon": s.longitude, "year": args.year, "step_minutes": args.step
+                "lat": s.latitude, "lon": s.longitude, "year": args.sun.year, "step_minutes": args.sun.step
             })),
             "pois": e.pois,
             "timings_ms": {
@@ -179,7 +164,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         eprintln!(
             "{} POI(s); selection {} rays, SVF {} rays; read {:.0} ms, rough {:.0} ms (shared), selection BVH {:.0} ms (shared), total {:.0} ms",
             e.pois.len(),
-            args.rays,
+            args.select.rays,
             args.svf_rays,
             loaded.read_ms,
             e.rough_ms,

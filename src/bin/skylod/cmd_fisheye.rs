@@ -1,7 +1,6 @@
 //! `skylod fisheye`.
 
-use crate::cmd_sun_hours::DEFAULT_YEAR;
-use crate::common::PoiArgs;
+use crate::common::{PoiArgs, RoughArgs, SilhouetteArgs, SiteArgs, DEFAULT_YEAR};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
@@ -10,7 +9,6 @@ use skylod::model::AssetKind;
 use skylod::poi::Poi;
 use skylod::poi::POI_OFFSET;
 use skylod::scene::full_scene;
-use skylod::select::SelectOptions;
 use skylod::sky::{SkyPartition, SkyVariant};
 use skylod::solar::fisheye::{
     cell_shares, classify_cells, fisheye_svg, sun_paths, FisheyeOptions, Projection,
@@ -50,13 +48,10 @@ pub struct Args {
     /// Projection of the hemisphere.
     #[arg(long, value_enum, default_value = "equal-area")]
     projection: ProjectionArg,
-    /// Site latitude (degrees) for the sun paths; with --lon. Default: the centre of the
-    /// model from its CRS (as sun-hours); no sun paths when the CRS cannot be converted.
-    #[arg(long, allow_hyphen_values = true, requires = "lon")]
-    lat: Option<f64>,
-    /// Site longitude (degrees) for the sun paths; with --lat.
-    #[arg(long, allow_hyphen_values = true, requires = "lat")]
-    lon: Option<f64>,
+    /// `--lat`/`--lon` of the sun paths (default: the centre of the model from its CRS, as
+    /// sun-hours; no sun paths when the CRS cannot be converted).
+    #[command(flatten)]
+    site: SiteArgs,
     /// Year of the sun paths.
     #[arg(long, default_value_t = DEFAULT_YEAR)]
     year: i32,
@@ -69,6 +64,12 @@ pub struct Args {
     /// Seed of the selection bundle, as `skylod lod --seed`.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// `--threshold`, `--roof-tolerance` of the selection, as `skylod lod`.
+    #[command(flatten)]
+    silhouette: SilhouetteArgs,
+    /// The rough model of the selection, as `skylod lod`.
+    #[command(flatten)]
+    rough: RoughArgs,
 }
 
 fn output_for(base: &Path, poi: &Poi, many: bool) -> PathBuf {
@@ -98,9 +99,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
-    if let (Some(lat), Some(lon)) = (args.lat, args.lon) {
+    args.site.check("fisheye")?;
+    if let Some((lat, lon)) = args.site.given() {
         crate::common::lat_lon(Some(lat), Some(lon), "fisheye")?;
     }
+    let lod_opts = LodOptions {
+        rough: args.rough.options()?,
+        select: args.silhouette.options(args.select_rays, args.seed),
+    };
     let many = pois.len() > 1;
     let outputs: Vec<PathBuf> = pois
         .iter()
@@ -128,8 +134,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let framed = args
         .pois
         .frame_checked(&mut loaded.model, pois, "fisheye")?;
-    let site = match (args.lat, args.lon) {
-        (Some(lat), Some(lon)) => Some((lat, lon)),
+    let site = match args.site.given() {
+        Some(s) => Some(s),
         _ => {
             let bbox = framed.source.bbox();
             let site = (!bbox.is_empty())
@@ -211,14 +217,6 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         let levels = match args.colour_by {
             ColourBy::Kind => None,
             ColourBy::Level => {
-                let lod_opts = LodOptions {
-                    select: SelectOptions {
-                        rays: args.select_rays,
-                        seed: args.seed,
-                        ..Default::default()
-                    },
-                    ..Default::default()
-                };
                 let mut levels = lod(&framed.model, std::slice::from_ref(local), &lod_opts)?
                     .selection
                     .levels;

@@ -1,6 +1,6 @@
 //! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs.
 
-use crate::common::{ms, non_negative, positive, warn_flags, PoiArgs};
+use crate::common::{ms, warn_flags, OutputArgs, PoiArgs, RoughArgs, SelectArgs};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::mixed::write_mixed;
@@ -8,8 +8,6 @@ use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions
 use skylod::export::{Content, Format};
 use skylod::lod::{lod, LodOptions};
 use skylod::report::{Parameters, Report, Timings};
-use skylod::rough::RoughOptions;
-use skylod::select::SelectOptions;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -19,44 +17,15 @@ pub struct Args {
     pois: PoiArgs,
     #[command(flatten)]
     region: crate::region_args::RegionArgs,
-    /// Output file (one input; `-` for standard output), or a directory that gets one file
-    /// per input (created if missing; several inputs need a directory). `.gz` compresses. The
-    /// format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl
-    /// CityJSONSeq.
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Output format when the output's name does not tell it (in a directory: the format of
-    /// every output, named after its input with the format's ending).
-    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
-    format: Option<Format>,
-    /// Rays per POI (cells of the equal-solid-angle hemisphere partition).
-    #[arg(long, default_value_t = 10_000)]
-    rays: usize,
-    /// Seed of the ray jitter inside each cell (same seed, same output).
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Silhouette threshold in degrees (default: 1.5 x the cell's angular size).
-    #[arg(long, value_name = "DEG", value_parser = positive, allow_hyphen_values = true)]
-    threshold: Option<f64>,
-    /// How far (m) below the lowest roof edge an installation may start and still count as
-    /// standing on the roof.
-    #[arg(long, default_value_t = 0.5, value_name = "M", value_parser = non_negative, allow_hyphen_values = true)]
-    roof_tolerance: f64,
-    /// Rough model: largest angle (degrees) between normals of one plane.
-    #[arg(long, default_value_t = 5.0, value_name = "DEG", value_parser = non_negative, allow_hyphen_values = true)]
-    angle: f64,
-    /// Rough model: largest distance (m) of a polygon from its plane to be merged.
-    #[arg(long, default_value_t = 0.3, value_name = "M", value_parser = non_negative, allow_hyphen_values = true)]
-    thickness: f64,
-    /// Rough model: do not use an asset's LoD2 geometry when it also has a higher LoD.
-    #[arg(long)]
-    no_lod2: bool,
+    #[command(flatten)]
+    out: OutputArgs,
+    #[command(flatten)]
+    select: SelectArgs,
+    #[command(flatten)]
+    rough: RoughArgs,
     /// Write a JSON report (schemas/report.schema.json; `-` for standard output).
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
-    /// Replace existing output files.
-    #[arg(long)]
-    overwrite: bool,
     #[command(flatten)]
     bound: crate::bound_args::BoundArgs,
 }
@@ -103,11 +72,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
     args.bound.check()?;
     let pois = args.region.points(&args.pois)?;
-    let format = crate::export::resolve(args.pois.inputs.len(), &args.output, args.format)?;
-    let mut outputs = output_paths(&args.pois.inputs, &args.output)?;
-    if format != Format::CityGml && (outputs.len() > 1 || args.output.is_dir()) {
+    let format = crate::export::resolve(args.pois.inputs.len(), &args.out.output, args.out.format)?;
+    let mut outputs = output_paths(&args.pois.inputs, &args.out.output)?;
+    if format != Format::CityGml && (outputs.len() > 1 || args.out.output.is_dir()) {
         for (o, i) in outputs.iter_mut().zip(&args.pois.inputs) {
-            if let Some(p) = crate::export::in_dir(&args.output, i, format) {
+            if let Some(p) = crate::export::in_dir(&args.out.output, i, format) {
                 *o = p;
             }
         }
@@ -115,7 +84,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // Every target is checked before any work: a refusal after minutes of reading and
     // tracing helps nobody.
     let wopts = WriteOptions {
-        overwrite: args.overwrite,
+        overwrite: args.out.overwrite,
         protect: args.pois.inputs.clone(),
         keep_envelopes: false,
     };
@@ -123,22 +92,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         check_target(out, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
     }
     if let Some(path) = &args.report {
-        if is_stdout(path) && is_stdout(&args.output) {
+        if is_stdout(path) && is_stdout(&args.out.output) {
             bail!("the model and the report cannot both go to standard output");
         }
         check_report_target(path, &args)?;
     }
-    let rough_opts = RoughOptions {
-        angle_deg: args.angle,
-        thickness_m: args.thickness,
-        prefer_lod2: !args.no_lod2,
-    };
-    let select_opts = SelectOptions {
-        rays: args.rays,
-        seed: args.seed,
-        threshold_deg: args.threshold,
-        roof_tolerance_m: args.roof_tolerance,
-    };
+    let rough_opts = args.rough.options()?;
+    let select_opts = args.select.options();
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
@@ -164,7 +124,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             &result.rough,
             &result.selection.levels,
             &framed.local_pois,
-            args.seed,
+            args.select.seed,
         )?;
         eprintln!(
             "error bound: {} promotion(s) in {} round(s), largest SVF error {:.3}%, {:.0} ms",
@@ -190,9 +150,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         .frame
         .rough_to_source(&framed.model, model, &result.rough);
 
-    if outputs.len() > 1 || args.output.is_dir() {
-        std::fs::create_dir_all(&args.output)
-            .with_context(|| format!("creating {}", args.output.display()))?;
+    if outputs.len() > 1 || args.out.output.is_dir() {
+        std::fs::create_dir_all(&args.out.output)
+            .with_context(|| format!("creating {}", args.out.output.display()))?;
     }
     let t_write = Instant::now();
     let mut written: Vec<Option<(String, usize)>> = vec![None; model.files.len()];
@@ -262,8 +222,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         pois,
         Parameters::of(
             &result.selection,
-            args.seed,
-            args.roof_tolerance,
+            args.select.seed,
+            args.select.silhouette.roof_tolerance,
             &rough_opts,
         ),
         timings,
@@ -361,7 +321,7 @@ fn buildings_without_kept_assets(
 
 fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {
     let opts = WriteOptions {
-        overwrite: args.overwrite,
+        overwrite: args.out.overwrite,
         ..Default::default()
     };
     skylod::citygml::write::check_target(path, &opts, args.pois.inputs.iter().map(|p| p.as_path()))

@@ -18,28 +18,10 @@ pub struct Args {
     /// ('tiles/**/*.gml', quoted), or - for standard input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
-    /// Output file for one input (.gz to compress; `-` for standard output); a directory for
-    /// several inputs (created if missing; one output per input, with the input's file name).
-    /// The format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON,
-    /// .city.jsonl CityJSONSeq.
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Output format when the output's name does not tell it (in a directory: the format of
-    /// every output, named after its input with the format's ending).
-    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
-    format: Option<Format>,
-    /// Largest angle (degrees) between the normals of polygons merged into one plane.
-    #[arg(long, default_value_t = RoughOptions::default().angle_deg)]
-    angle: f64,
-    /// Largest distance (m) of a polygon from its plane to be merged or absorbed.
-    #[arg(long, default_value_t = RoughOptions::default().thickness_m)]
-    thickness: f64,
-    /// Do not use an asset's LoD2 geometry in place of its higher LoD.
-    #[arg(long)]
-    no_lod2: bool,
-    /// Replace existing output files.
-    #[arg(long)]
-    overwrite: bool,
+    #[command(flatten)]
+    out: crate::common::OutputArgs,
+    #[command(flatten)]
+    rough: crate::common::RoughArgs,
     #[command(flatten)]
     crs: SourceCrsArgs,
     #[command(flatten)]
@@ -49,40 +31,30 @@ pub struct Args {
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t0 = std::time::Instant::now();
     let _spool = crate::common::expand_inputs(&mut args.inputs)?;
-    if !(args.angle.is_finite() && (0.0..=90.0).contains(&args.angle)) {
-        bail!("--angle must be between 0 and 90 degrees");
-    }
-    if !(args.thickness.is_finite() && args.thickness >= 0.0) {
-        bail!("--thickness must be a non-negative number of metres");
-    }
-    let format = crate::export::resolve(args.inputs.len(), &args.output, args.format)?;
-    let opts = RoughOptions {
-        angle_deg: args.angle,
-        thickness_m: args.thickness,
-        prefer_lod2: !args.no_lod2,
-    };
+    let format = crate::export::resolve(args.inputs.len(), &args.out.output, args.out.format)?;
+    let opts = args.rough.options()?;
     let targets: Vec<(PathBuf, PathBuf)> = if args.inputs.len() == 1 {
-        if args.output.is_dir() {
+        if args.out.output.is_dir() {
             bail!(
                 "{}: is a directory; with one input, -o names the output file",
-                args.output.display()
+                args.out.output.display()
             );
         }
-        vec![(args.inputs[0].clone(), args.output.clone())]
+        vec![(args.inputs[0].clone(), args.out.output.clone())]
     } else {
-        if is_stdout(&args.output) {
+        if is_stdout(&args.out.output) {
             bail!("several inputs cannot be written to standard output: give -o DIR");
         }
-        if args.output.exists() && !args.output.is_dir() {
+        if args.out.output.exists() && !args.out.output.is_dir() {
             bail!(
                 "{}: with several inputs, -o must be a directory",
-                args.output.display()
+                args.out.output.display()
             );
         }
         let mut seen = std::collections::HashSet::new();
         let mut v = Vec::new();
         for i in &args.inputs {
-            let Some(out) = crate::export::in_dir(&args.output, i, format) else {
+            let Some(out) = crate::export::in_dir(&args.out.output, i, format) else {
                 bail!("{}: not a file name", i.display());
             };
             if !seen.insert(out.clone()) {
@@ -93,7 +65,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         v
     };
     let wopts = WriteOptions {
-        overwrite: args.overwrite,
+        overwrite: args.out.overwrite,
         protect: args.inputs.clone(),
         keep_envelopes: false,
     };
@@ -111,8 +83,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if args.inputs.len() > 1 {
-        std::fs::create_dir_all(&args.output)
-            .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.output.display()))?;
+        std::fs::create_dir_all(&args.out.output)
+            .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.out.output.display()))?;
     }
     // Files in parallel (--jobs); messages in input order, whatever finished first.
     let results: Vec<anyhow::Result<Done>> = args.jobs.install(|| {

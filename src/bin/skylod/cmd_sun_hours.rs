@@ -1,14 +1,11 @@
 //! `skylod sun-hours`.
 
-use crate::common::{arr, ms, out_err, polygons, trace_full, PoiArgs, SiteArgs};
+use crate::common::{arr, ms, out_err, polygons, trace_full, PoiArgs, SiteArgs, SunArgs};
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{poi_sun_hours, Site, SunTable};
 use std::io::Write;
 use std::time::Instant;
-
-/// Default year of `--year`: a fixed year so that results are reproducible.
-pub const DEFAULT_YEAR: i32 = 2025;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -18,12 +15,8 @@ pub struct Args {
     region: crate::region_args::RegionArgs,
     #[command(flatten)]
     site: SiteArgs,
-    /// Calendar year (UTC) simulated.
-    #[arg(long, default_value_t = DEFAULT_YEAR)]
-    year: i32,
-    /// Time step in minutes (the sun is evaluated at the middle of each step).
-    #[arg(long, default_value_t = 15)]
-    step: u32,
+    #[command(flatten)]
+    sun: SunArgs,
     /// Time zone for attributing steps to months: IANA name ("Europe/Madrid"), "UTC" or
     /// a fixed offset ("+01:00").
     #[arg(long, default_value = "UTC", allow_hyphen_values = true)]
@@ -52,7 +45,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (lat, lon) = args.site.resolve(framed.source, "sun-hours")?;
     let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
     let t = Instant::now();
-    let table = SunTable::year(args.year, args.step, &site)?;
+    let table = SunTable::year(args.sun.year, args.sun.step, &site)?;
     let sun_ms = ms(t);
     let traced = trace_full(
         &framed.model,
@@ -84,8 +77,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             "pois": rows,
             "lat": lat,
             "lon": lon,
-            "year": args.year,
-            "step_minutes": args.step,
+            "year": args.sun.year,
+            "step_minutes": args.sun.step,
             "timezone": args.timezone,
             "steps": table.len(),
             "inputs": loaded.inputs,
@@ -110,8 +103,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             "{} POI(s); {} steps of {} min in {} at ({lat}, {lon}), months in {}; {} polygons from {} input(s); read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),
             table.len(),
-            args.step,
-            args.year,
+            args.sun.step,
+            args.sun.year,
             args.timezone,
             polygons(framed.source),
             loaded.inputs.len(),

@@ -1,4 +1,6 @@
-//! Shared by the commands that trace POIs (`lod`, `evaluate`, `svf`, `sun-hours`, `fisheye`): inputs merged into one model, POIs.
+//! Shared by the commands: inputs merged into one model, POIs, and the argument groups
+//! (rough model, selection, site, sun, output) flattened into each command so that the
+//! commands cannot drift apart.
 
 use crate::frames::{frame, Framed};
 use crate::Outcome;
@@ -6,10 +8,16 @@ use anyhow::{bail, Context};
 use rayon::prelude::*;
 use skylod::checks::{self, PoiFlag, DEFAULT_POI_MARGIN};
 use skylod::citygml::read_file;
+use skylod::export::Format;
 use skylod::model::CityModel;
 use skylod::poi::{check_unique_ids, parse_poi, read_pois_csv, Located, Poi};
+use skylod::rough::RoughOptions;
+use skylod::select::SelectOptions;
 use std::path::PathBuf;
 use std::time::Instant;
+
+/// Default year of `--year`: a fixed year so that results are reproducible.
+pub const DEFAULT_YEAR: i32 = 2025;
 
 /// Inputs and points of interest.
 #[derive(clap::Args, Debug)]
@@ -286,6 +294,11 @@ pub struct SiteArgs {
 }
 
 impl SiteArgs {
+    /// Both flags, when given.
+    pub fn given(&self) -> Option<(f64, f64)> {
+        self.lat.zip(self.lon)
+    }
+
     /// Usage check before any input is read: both flags or neither.
     pub fn check(&self, cmd: &str) -> anyhow::Result<()> {
         if self.lat.is_some() != self.lon.is_some() {
@@ -424,4 +437,108 @@ pub fn outputs_per_input(
     std::fs::create_dir_all(output)
         .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
     Ok(v)
+}
+
+/// Rough-model options, the same on every command that builds the rough model (`lod`,
+/// `evaluate`, `rough`, `fisheye`), so that the commands cannot drift apart.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct RoughArgs {
+    /// Rough model: largest angle (degrees, 0 to 90) between the normals of polygons merged
+    /// into one plane.
+    #[arg(long, default_value_t = RoughOptions::default().angle_deg, value_name = "DEG", value_parser = non_negative, allow_hyphen_values = true)]
+    pub angle: f64,
+    /// Rough model: largest distance (m) of a polygon from its plane to be merged or absorbed.
+    #[arg(long, default_value_t = RoughOptions::default().thickness_m, value_name = "M", value_parser = non_negative, allow_hyphen_values = true)]
+    pub thickness: f64,
+    /// Rough model: do not use an asset's LoD2 geometry in place of its higher LoD.
+    #[arg(long)]
+    pub no_lod2: bool,
+}
+
+impl RoughArgs {
+    /// The library's options; an angle over 90 degrees is a usage error.
+    pub fn options(&self) -> anyhow::Result<RoughOptions> {
+        if self.angle > 90.0 {
+            bail!("--angle must be between 0 and 90 degrees");
+        }
+        Ok(RoughOptions {
+            angle_deg: self.angle,
+            thickness_m: self.thickness,
+            prefer_lod2: !self.no_lod2,
+        })
+    }
+}
+
+/// The silhouette test of the selection (`lod`, `evaluate`, `fisheye --colour-by level`).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct SilhouetteArgs {
+    /// Silhouette threshold in degrees (default: 1.5 x the cell's angular size).
+    #[arg(long, value_name = "DEG", value_parser = positive, allow_hyphen_values = true)]
+    pub threshold: Option<f64>,
+    /// How far (m) below the lowest roof edge an installation may start and still count as
+    /// standing on the roof.
+    #[arg(long, default_value_t = SelectOptions::default().roof_tolerance_m, value_name = "M", value_parser = non_negative, allow_hyphen_values = true)]
+    pub roof_tolerance: f64,
+}
+
+/// The selection bundle and silhouette test (`lod`, `evaluate`).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct SelectArgs {
+    /// Rays per POI of the selection bundle (cells of the equal-solid-angle hemisphere
+    /// partition).
+    #[arg(long, default_value_t = SelectOptions::default().rays)]
+    pub rays: usize,
+    /// Seed of the ray jitter inside each cell (same seed, same output).
+    #[arg(long, default_value_t = SelectOptions::default().seed)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub silhouette: SilhouetteArgs,
+}
+
+impl SelectArgs {
+    /// The library's options.
+    pub fn options(&self) -> SelectOptions {
+        self.silhouette.options(self.rays, self.seed)
+    }
+}
+
+impl SilhouetteArgs {
+    /// The library's options with this bundle.
+    pub fn options(&self, rays: usize, seed: u64) -> SelectOptions {
+        SelectOptions {
+            rays,
+            seed,
+            threshold_deg: self.threshold,
+            roof_tolerance_m: self.roof_tolerance,
+        }
+    }
+}
+
+/// The simulated year of the sun (`sun-hours`, `evaluate`, `lod --max-sun-hours-error`).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct SunArgs {
+    /// Calendar year (UTC) simulated.
+    #[arg(long, default_value_t = DEFAULT_YEAR)]
+    pub year: i32,
+    /// Time step in minutes (the sun is evaluated at the middle of each step).
+    #[arg(long, default_value_t = 15)]
+    pub step: u32,
+}
+
+/// Where a command writes its model (`lod`, `rough`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct OutputArgs {
+    /// Output file for one input (.gz to compress; `-` for standard output); a directory for
+    /// several inputs (created if missing; one output per input, with the input's file name).
+    /// The format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON,
+    /// .city.jsonl CityJSONSeq.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output format when the output's name does not tell it (in a directory: the format of
+    /// every output, named after its input with the format's ending).
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
+    pub format: Option<Format>,
+    /// Replace existing output files.
+    #[arg(long)]
+    pub overwrite: bool,
 }
