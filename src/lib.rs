@@ -17,6 +17,7 @@ pub mod level;
 pub mod lod;
 pub mod model;
 pub mod poi;
+pub mod progress;
 pub mod region;
 pub mod report;
 pub mod reproject;

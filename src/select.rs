@@ -106,6 +106,9 @@ pub enum SelectError {
     /// A POI with a non-finite position or normal.
     #[error("POI {0}: position or normal is not finite")]
     Poi(String),
+    /// The caller asked to stop ([`crate::progress::Progress::is_cancelled`]).
+    #[error(transparent)]
+    Cancelled(#[from] crate::progress::Cancelled),
 }
 
 /// What one POI saw.
@@ -172,6 +175,25 @@ pub fn select(
     pois: &[Poi],
     opts: &SelectOptions,
 ) -> Result<Selection, SelectError> {
+    select_with(model, rough, scene, pois, opts, &crate::progress::Silent)
+}
+
+/// [`select`] reporting each POI done to `progress` ([`Stage::Select`]) and stopping with
+/// [`SelectError::Cancelled`] when it asks to.
+///
+/// # Errors
+/// As [`select`], and [`SelectError::Cancelled`].
+///
+/// [`Stage::Select`]: crate::progress::Stage::Select
+pub fn select_with(
+    model: &CityModel,
+    rough: &[RoughGeometry],
+    scene: &Scene,
+    pois: &[Poi],
+    opts: &SelectOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<Selection, SelectError> {
+    use crate::progress::{check, Stage};
     let n_assets = model.assets.len();
     if rough.len() != n_assets {
         return Err(SelectError::RoughMismatch {
@@ -195,8 +217,13 @@ pub fn select(
 
     let per_poi: Vec<OnePoi> = pois
         .par_iter()
-        .map(|poi| select_one(poi, &dirs, scene, rough, &roof_asset, threshold))
-        .collect();
+        .map(|poi| {
+            check(progress, Stage::Select)?;
+            let one = select_one(poi, &dirs, scene, rough, &roof_asset, threshold);
+            progress.advance(Stage::Select, 1, 0, None);
+            Ok(one)
+        })
+        .collect::<Result<_, crate::progress::Cancelled>>()?;
 
     let mut levels = vec![0u8; n_assets];
     let mut hits = vec![0u64; n_assets];
