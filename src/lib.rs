@@ -16,6 +16,7 @@ pub mod inputs;
 pub mod level;
 pub mod lod;
 pub mod model;
+pub mod pipeline;
 pub mod poi;
 pub mod progress;
 pub mod region;

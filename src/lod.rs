@@ -21,9 +21,10 @@
 use crate::checks::{poi_flags, PoiFlag};
 use crate::model::CityModel;
 use crate::poi::Poi;
+use crate::progress::{check, stage, Progress, Stage};
 use crate::rough::{rough_model, RoughGeometry, RoughOptions};
 use crate::scene::selection_scene;
-use crate::select::{select, SelectError, SelectOptions, Selection};
+use crate::select::{select_with, SelectError, SelectOptions, Selection};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -58,16 +59,41 @@ pub struct LodResult {
 /// Run rough, scene and selection for `pois` on `model`.
 ///
 /// # Errors
-/// As [`select`].
+/// As [`crate::select::select`].
 pub fn lod(model: &CityModel, pois: &[Poi], opts: &LodOptions) -> Result<LodResult, SelectError> {
+    lod_with(model, pois, opts, &crate::progress::Silent)
+}
+
+/// [`lod`] reporting its stages to `progress` ([`Stage::Rough`], [`Stage::Bvh`],
+/// [`Stage::Select`] per POI) and stopping with [`SelectError::Cancelled`] when it asks to.
+///
+/// # Errors
+/// As [`crate::select::select`], and [`SelectError::Cancelled`].
+pub fn lod_with(
+    model: &CityModel,
+    pois: &[Poi],
+    opts: &LodOptions,
+    progress: &dyn Progress,
+) -> Result<LodResult, SelectError> {
+    let n = model.assets.len() as u64;
+    check(progress, Stage::Rough)?;
     let t = Instant::now();
-    let rough = rough_model(model, &opts.rough);
+    let rough = stage(progress, Stage::Rough, n, 0, || {
+        let r = rough_model(model, &opts.rough);
+        progress.advance(Stage::Rough, n, 0, None);
+        r
+    });
     let rough_s = t.elapsed().as_secs_f64();
+    check(progress, Stage::Bvh)?;
     let t = Instant::now();
-    let scene = selection_scene(model, &rough);
+    let scene = stage(progress, Stage::Bvh, 1, 0, || {
+        selection_scene(model, &rough)
+    });
     let bvh_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let selection = select(model, &rough, &scene, pois, &opts.select)?;
+    let selection = stage(progress, Stage::Select, pois.len() as u64, 0, || {
+        select_with(model, &rough, &scene, pois, &opts.select, progress)
+    })?;
     let select_s = t.elapsed().as_secs_f64();
     let flags = pois
         .par_iter()

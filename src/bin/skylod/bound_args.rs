@@ -2,10 +2,9 @@
 //! ([`skylod::bound`]) run between the selection and the writing.
 
 use crate::common::{non_negative, SiteArgs, SunArgs};
-use skylod::bound::{bound, BoundOptions, BoundReport};
+use skylod::bound::{BoundOptions, BoundReport};
 use skylod::model::CityModel;
-use skylod::poi::Poi;
-use skylod::rough::RoughGeometry;
+use skylod::pipeline::BoundSpec;
 use skylod::solar::{Site, SunTable};
 
 #[derive(clap::Args, Debug)]
@@ -40,19 +39,13 @@ impl BoundArgs {
         self.site.check("lod")
     }
 
-    /// Run the bound on the traced (local-frame) model; `source` gives the site. Returns the
-    /// promoted levels and the report section; an error naming the POIs when the bound
-    /// cannot be met.
-    pub fn run(
-        &self,
-        source: &CityModel,
-        model: &CityModel,
-        rough: &[RoughGeometry],
-        levels: &[u8],
-        pois: &[Poi],
-        seed: u64,
-    ) -> anyhow::Result<(Vec<u8>, BoundReport)> {
-        let table = match self.max_sun_hours_error {
+    /// The bound to run after the selection ([`skylod::pipeline::levels`]), if one was
+    /// asked for; `source` (the model as read) gives the sun's site.
+    pub fn spec(&self, source: &CityModel, seed: u64) -> anyhow::Result<Option<BoundSpec>> {
+        if !self.active() {
+            return Ok(None);
+        }
+        let sun = match self.max_sun_hours_error {
             Some(_) => {
                 let (lat, lon) = self.site.resolve(source, "lod --max-sun-hours-error")?;
                 Some(SunTable::year(
@@ -63,16 +56,14 @@ impl BoundArgs {
             }
             None => None,
         };
-        let opts = BoundOptions {
+        let options = BoundOptions {
             max_svf_error: self.max_svf_error,
             max_sun_error: self.max_sun_hours_error,
             svf_rays: self.bound_rays,
             svf_seed: seed,
             ..Default::default()
         };
-        let b = bound(model, rough, levels, pois, &opts, table.as_ref())?;
-        let report = BoundReport::new(&b, &opts);
-        Ok((b.levels, report))
+        Ok(Some(BoundSpec { options, sun }))
     }
 }
 

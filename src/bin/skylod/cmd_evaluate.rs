@@ -79,7 +79,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         svf_rays: args.svf_rays,
         ..Default::default()
     };
-    let e = evaluate(&framed.model, &framed.local_pois, &opts, table.as_ref())?;
+    // One stage without a count: a spinner on a terminal, so the step is never silent.
+    let e = skylod::progress::stage(
+        &crate::log::reporter(),
+        skylod::progress::Stage::Trace,
+        1,
+        0,
+        || evaluate(&framed.model, &framed.local_pois, &opts, table.as_ref()),
+    )?;
     let flags: Vec<_> = e.pois.iter().map(|p| p.flags.clone()).collect();
     warn_flags(&framed.pois, &flags);
     let mut out = std::io::stdout().lock();
@@ -161,7 +168,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 ))?;
             }
         }
-        eprintln!(
+        crate::log::summary!(
             "{} POI(s); selection {} rays, SVF {} rays; read {:.0} ms, rough {:.0} ms (shared), selection BVH {:.0} ms (shared), total {:.0} ms",
             e.pois.len(),
             args.select.rays,

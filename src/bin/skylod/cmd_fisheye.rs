@@ -8,6 +8,7 @@ use skylod::lod::{lod, LodOptions};
 use skylod::model::AssetKind;
 use skylod::poi::Poi;
 use skylod::poi::POI_OFFSET;
+use skylod::progress::{Progress, Stage};
 use skylod::scene::full_scene;
 use skylod::sky::{SkyPartition, SkyVariant};
 use skylod::solar::fisheye::{
@@ -142,11 +143,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 .then(|| skylod::crs::site_lat_lon(&framed.crs, bbox.center()))
                 .flatten();
             match site {
-                Some((a, o)) => eprintln!(
+                Some((a, o)) => crate::log::summary!(
                     "fisheye: site lat {a:.5}, lon {o:.5}: the centre of the model in {}",
                     framed.crs
                 ),
-                None => eprintln!(
+                None => crate::log::summary!(
                     "fisheye: no sun paths: the CRS ({}) is not one skylod converts; give --lat/--lon",
                     framed.crs
                 ),
@@ -164,6 +165,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         ProjectionArg::EqualArea => Projection::EqualArea,
         ProjectionArg::Stereographic => Projection::Stereographic,
     };
+    let progress = crate::log::reporter();
+    progress.start(Stage::Trace, outputs.len() as u64, 0);
     for ((poi, local), out) in framed.pois.iter().zip(&framed.local_pois).zip(&outputs) {
         let cells = classify_cells(
             &partition,
@@ -247,7 +250,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             .into_iter()
             .find(|s| s.0 == "sky")
             .map_or(0.0, |s| s.1);
-        eprintln!(
+        crate::log::summary!(
             "{}: {} -> {} ({} cells, {:.1} % sky, SVF {:.3})",
             poi.id,
             loaded.inputs.join(", "),
@@ -256,6 +259,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             sky * 100.0,
             view.svf
         );
+        progress.advance(Stage::Trace, 1, 0, Some(&out.display().to_string()));
     }
+    progress.finish(Stage::Trace);
     Ok(loaded.outcome())
 }

@@ -137,12 +137,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
         }
         let mean = h.elevation.iter().sum::<f64>() / h.elevation.len().max(1) as f64;
-        eprintln!(
+        crate::log::summary!(
             "{}: mean elevation {mean:.2}°, highest {max:.2}° at azimuth {at}°",
             p.id
         );
     }
-    eprintln!(
+    crate::log::summary!(
         "{} POI(s), {} azimuths each (step {}°); {} polygons from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
         pois.len(),
         opts.azimuths().len(),

@@ -1,12 +1,13 @@
 //! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs.
 
 use crate::common::{ms, warn_flags, OutputArgs, PoiArgs, RoughArgs, SelectArgs};
+use crate::log::{error, summary};
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
-use skylod::export::{Content, Format};
-use skylod::lod::{lod, LodOptions};
+use skylod::export::Format;
+use skylod::lod::LodOptions;
+use skylod::pipeline::{levels, write_all, LevelsOptions};
 use skylod::report::{Parameters, Report, Timings};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -106,103 +107,80 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let pois = args.region.extend(pois, &loaded.model)?;
     let mut failed = loaded.failed;
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
-    let mut result = lod(
-        &framed.model,
-        &framed.local_pois,
-        &LodOptions {
+    let opts = LevelsOptions {
+        lod: LodOptions {
             rough: rough_opts,
             select: select_opts,
         },
-    )?;
-    warn_flags(&framed.pois, &result.flags);
-    let mut bound_report = None;
-    if args.bound.active() {
-        let t = Instant::now();
-        let (levels, b) = args.bound.run(
-            framed.source,
-            &framed.model,
-            &result.rough,
-            &result.selection.levels,
-            &framed.local_pois,
-            args.select.seed,
-        )?;
-        eprintln!(
+        bound: args.bound.spec(framed.source, args.select.seed)?,
+    };
+    let progress = crate::log::reporter();
+    let lv = levels(&framed, &opts, &progress)?;
+    warn_flags(&framed.pois, &lv.lod.flags);
+    if let Some(b) = &lv.bound {
+        summary!(
             "error bound: {} promotion(s) in {} round(s), largest SVF error {:.3}%, {:.0} ms",
             b.promotions.len(),
             b.rounds,
             100.0 * b.pois.iter().map(|p| p.svf_error).fold(0.0, f64::max),
-            ms(t)
+            lv.bound_s * 1e3
         );
         if !b.met {
-            eprintln!(
-                "error: the error bound cannot be met at these POIs (nothing written):\n{}",
-                crate::bound_args::failing_lines(&b)
+            error!(
+                "the error bound cannot be met at these POIs (nothing written):\n{}",
+                crate::bound_args::failing_lines(b)
             );
             return Ok(Outcome::SomeFailed);
         }
-        result.selection.levels = levels;
-        bound_report = Some(b);
     }
+    let result = &lv.lod;
     // Written geometry and the report are in the input's CRS.
     let model = framed.source;
     let pois = &framed.pois;
-    let rough = framed
-        .frame
-        .rough_to_source(&framed.model, model, &result.rough);
+    let rough = &lv.rough_source;
 
     if outputs.len() > 1 || args.out.output.is_dir() {
         std::fs::create_dir_all(&args.out.output)
             .with_context(|| format!("creating {}", args.out.output.display()))?;
     }
+    // Files of the model are the inputs that could be read, in input order.
+    let targets: Vec<(usize, PathBuf)> = model
+        .files
+        .iter()
+        .enumerate()
+        .filter_map(|(f, src)| {
+            let k = args.pois.inputs.iter().position(|p| p == &src.path)?;
+            Some((f, outputs.get(k)?.clone()))
+        })
+        .collect();
     let t_write = Instant::now();
+    let results = write_all(model, &targets, &lv, format, &wopts, &progress)?;
     let mut written: Vec<Option<(String, usize)>> = vec![None; model.files.len()];
-    for (f, src) in model.files.iter().enumerate() {
-        // Files of the model are the inputs that could be read, in input order.
-        let Some(k) = args.pois.inputs.iter().position(|p| p == &src.path) else {
-            continue;
-        };
-        let Some(out) = outputs.get(k) else { continue };
-        if format != Format::CityGml {
-            let content = Content::Levels {
-                rough: &rough,
-                levels: &result.selection.levels,
-            };
-            match crate::export::write(format, model, f, content, out, &wopts) {
-                Ok(()) => {
-                    if let Some(w) = written.get_mut(f) {
-                        let dropped =
-                            buildings_without_kept_assets(model, f, &result.selection.levels);
-                        *w = Some((out.display().to_string(), dropped));
-                    }
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    failed = true;
-                }
-            }
-            continue;
-        }
-        match write_mixed(model, f, &rough, &result.selection.levels, out, &wopts) {
-            Ok(s) => {
-                eprintln!(
-                    "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
-                    src.path.display(),
-                    out.display(),
-                    s.levels[0],
-                    s.levels[1],
-                    s.levels[2],
-                    s.polygons_in,
-                    s.polygons_out,
-                    s.buildings_dropped
-                );
-                if let Some(w) = written.get_mut(f) {
-                    *w = Some((out.display().to_string(), s.buildings_dropped));
-                }
-            }
+    for ((f, out), r) in targets.iter().zip(results) {
+        let s = match r {
+            Ok(s) => s,
             Err(e) => {
-                eprintln!("error: {e}");
+                error!("{e}");
                 failed = true;
+                continue;
             }
+        };
+        match &s.export {
+            Some(e) => summary!("{}", crate::export::describe(format, model, *f, e, out)),
+            None => summary!(
+                "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
+                model.files[*f].path.display(),
+                out.display(),
+                s.levels[0],
+                s.levels[1],
+                s.levels[2],
+                s.polygons_in,
+                s.polygons_out,
+                s.buildings_dropped
+            ),
+        }
+        if let Some(w) = written.get_mut(*f) {
+            *w = Some((out.display().to_string(), s.buildings_dropped));
         }
     }
     let write_ms = ms(t_write);
@@ -217,7 +195,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     let mut report = Report::new(
         model,
-        &rough,
+        rough,
         &result.selection,
         pois,
         Parameters::of(
@@ -229,7 +207,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         timings,
     );
     report.set_flags(&result.flags);
-    report.bound = bound_report;
+    report.bound = lv.bound.clone();
     for (f, w) in written.into_iter().enumerate() {
         if let Some((path, dropped)) = w {
             let in_file = model.buildings.iter().filter(|b| b.file == f).count();
@@ -237,7 +215,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     let t = &report.totals;
-    eprintln!(
+    summary!(
         "{} POI(s), {} rays each: assets at level 0/1/2 = {}/{}/{}; polygons {} -> {} ({:.1}%); \
          {} triangles traced; read {:.0} ms, rough {:.0} ms, bvh {:.0} ms, select {:.0} ms, write {:.0} ms",
         pois.len(),
@@ -256,7 +234,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         timings.write
     );
     if args.region.active() {
-        eprintln!(
+        summary!(
             "region: one model of {} polygons for {} POIs; their own models hold {:.0} on average, \
              {} at most ({:.2}x)",
             t.polygons_out,
@@ -284,39 +262,6 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     } else {
         Outcome::Ok
     })
-}
-
-/// Buildings and parts of file `f` that keep no asset (through any part below them): what
-/// the OBJ and CityJSON writers leave out.
-fn buildings_without_kept_assets(
-    model: &skylod::model::CityModel,
-    f: usize,
-    levels: &[u8],
-) -> usize {
-    let mut kept = vec![false; model.buildings.len()];
-    for (a, l) in model.assets.iter().zip(levels) {
-        if *l == 0 {
-            continue;
-        }
-        let mut b = a.building;
-        let mut steps = 0;
-        while let Some(k) = b {
-            if let Some(x) = kept.get_mut(k) {
-                *x = true;
-            }
-            b = model.buildings.get(k).and_then(|x| x.parent);
-            steps += 1;
-            if steps > model.buildings.len() {
-                break;
-            }
-        }
-    }
-    model
-        .buildings
-        .iter()
-        .zip(&kept)
-        .filter(|(b, k)| b.file == f && !**k)
-        .count()
 }
 
 fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {

@@ -64,7 +64,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     for (input, out) in &targets {
         match reproject_file(input, out, source, target, &wopts) {
             Ok(s) => {
-                eprintln!(
+                crate::log::summary!(
                     "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
                     input.display(),
                     out.display(),
@@ -76,17 +76,17 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                     s.rewrite.srs_names
                 );
                 for w in &s.rewrite.warnings {
-                    eprintln!("warning: {}: {w}", input.display());
+                    crate::log::warning!("warning: {}: {w}", input.display());
                 }
             }
             Err(e) => {
-                eprintln!("error: {}: {e}", input.display());
+                crate::log::error!("{}: {e}", input.display());
                 failed += 1;
             }
         }
     }
     if failed > 0 {
-        eprintln!("{failed} of {} input(s) failed", targets.len());
+        crate::log::summary!("{failed} of {} input(s) failed", targets.len());
         Ok(Outcome::SomeFailed)
     } else {
         Ok(Outcome::Ok)

@@ -77,7 +77,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         match check_target(out, &wopts, args.inputs.iter().map(PathBuf::as_path)) {
             Ok(()) => todo.push((input, out)),
             Err(e) => {
-                eprintln!("error: {e}");
+                crate::log::error!("{e}");
                 failed += 1;
             }
         }
@@ -97,7 +97,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         match r {
             Ok(d) => {
                 if let Some(line) = d.line {
-                    eprintln!("{line}");
+                    crate::log::summary!("{line}");
                 }
                 ok += 1;
                 warnings += d.warnings;
@@ -105,12 +105,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 polys.1 += d.polygons.1;
             }
             Err(e) => {
-                eprintln!("error: {e}");
+                crate::log::error!("{e}");
                 failed += 1;
             }
         }
     }
-    eprintln!(
+    crate::log::summary!(
         "{}",
         crate::common::summary_line(
             "rough",
@@ -149,7 +149,7 @@ fn one(
     let (frame, warning) =
         LocalFrame::new(&model_crs(&model, crs.source_crs.as_ref()), &model.bbox());
     if let Some(w) = warning {
-        eprintln!("rough: warning: {}: {w}", input.display());
+        crate::log::warning!("rough: warning: {}: {w}", input.display());
     }
     let local = frame.model_to_local(&model);
     let rough = frame.rough_to_source(&local, &model, &rough_model(&local, opts));

@@ -55,13 +55,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             Ok((s, warnings)) => {
                 if args.verbose {
                     for w in &warnings {
-                        eprintln!("warning: {w}");
+                        crate::log::warning!("warning: {w}");
                     }
                 }
                 ok.push((path, s));
             }
             Err(e) => {
-                eprintln!("error: {e}");
+                crate::log::error!("{e}");
                 failed = true;
             }
         }
@@ -69,7 +69,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let total = Stats::total(ok.iter().map(|(_, s)| s));
     if args.inputs.len() > 1 {
         let n_failed = args.inputs.len() - ok.len();
-        eprintln!(
+        crate::log::summary!(
             "{}",
             crate::common::summary_line("stats", ok.len(), n_failed, total.warnings, None, t0)
         );

@@ -99,7 +99,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
             out_err(writeln!(out, "{line}"))?;
         }
-        eprintln!(
+        crate::log::summary!(
             "{} POI(s); {} steps of {} min in {} at ({lat}, {lon}), months in {}; {} polygons from {} input(s); read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),
             table.len(),

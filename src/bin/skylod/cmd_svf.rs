@@ -97,7 +97,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 dp = dp
             ))?;
         }
-        eprintln!(
+        crate::log::summary!(
             "{} POI(s), {} rays per bundle, seed {}; {} polygons from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),
             args.rays,

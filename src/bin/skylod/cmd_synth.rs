@@ -119,7 +119,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     }
     let dt = t.elapsed().as_secs_f64();
     if let Some(s) = summary {
-        eprintln!(
+        crate::log::summary!(
             "{}: {} buildings, {} polygons, {} windows, {} installations, {:.1} MB in {:.2} s; {} POIs -> {}",
             args.output.display(),
             s.buildings,

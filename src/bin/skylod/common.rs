@@ -3,14 +3,15 @@
 //! commands cannot drift apart.
 
 use crate::frames::{frame, Framed};
+use crate::log::{error, summary, warning};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use rayon::prelude::*;
 use skylod::checks::{self, PoiFlag, DEFAULT_POI_MARGIN};
-use skylod::citygml::read_file;
 use skylod::export::Format;
 use skylod::model::CityModel;
 use skylod::poi::{check_unique_ids, parse_poi, read_pois_csv, Located, Poi};
+use skylod::progress::{stage, Progress, Stage};
 use skylod::rough::RoughOptions;
 use skylod::select::SelectOptions;
 use std::path::PathBuf;
@@ -142,14 +143,8 @@ impl PoiArgs {
     /// answer whatever the POIs (`skylod::checks`): inputs in different CRSs (unless
     /// --allow-mixed-crs), a model without heights.
     pub fn load_checked(&self) -> anyhow::Result<Loaded> {
-        let loaded = load(&self.inputs);
-        if loaded.inputs.is_empty() {
-            return Ok(loaded);
-        }
-        if !self.allow_mixed_crs {
-            checks::check_same_crs(&loaded.model)?;
-        }
-        checks::check_heights(&loaded.model)?;
+        let loaded = load(&self.inputs)?;
+        loaded.check(self.allow_mixed_crs)?;
         Ok(loaded)
     }
 
@@ -161,15 +156,7 @@ impl PoiArgs {
         pois: Vec<Poi>,
         cmd: &str,
     ) -> anyhow::Result<Framed<'a>> {
-        let framed = frame(model, &self.crs, pois, cmd)?;
-        checks::check_pois_near_in_frame(
-            &framed.model.bbox(),
-            &framed.local_pois,
-            &framed.source.bbox(),
-            &framed.pois,
-            self.poi_margin,
-        )?;
-        Ok(framed)
+        frame(model, &self.crs, pois, self.poi_margin, cmd)
     }
 }
 
@@ -205,7 +192,7 @@ pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
     Ok(Spool(spool))
 }
 
-/// The inputs that could be read, merged in input order.
+/// The inputs that could be read, merged in input order ([`skylod::pipeline::Inputs`]).
 pub struct Loaded {
     pub model: CityModel,
     /// Paths read successfully.
@@ -213,6 +200,16 @@ pub struct Loaded {
     /// Some input failed (reported on stderr).
     pub failed: bool,
     pub read_ms: f64,
+}
+
+impl Loaded {
+    /// [`skylod::pipeline::Inputs::check`].
+    pub fn check(&self, allow_mixed_crs: bool) -> anyhow::Result<()> {
+        if !self.inputs.is_empty() {
+            skylod::pipeline::check_model(&self.model, allow_mixed_crs)?;
+        }
+        Ok(())
+    }
 }
 
 impl Loaded {
@@ -226,31 +223,19 @@ impl Loaded {
     }
 }
 
-/// Read every input in parallel and merge them; errors go to stderr.
-pub fn load(inputs: &[PathBuf]) -> Loaded {
-    let t = Instant::now();
-    let results: Vec<_> = inputs.par_iter().map(|p| read_file(p)).collect();
-    let mut model = CityModel::default();
-    let mut ok = Vec::new();
-    let mut failed = false;
-    for (p, r) in inputs.iter().zip(results) {
-        match r {
-            Ok(m) => {
-                model.merge(m);
-                ok.push(p.display().to_string());
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                failed = true;
-            }
-        }
+/// Read every input in parallel and merge them ([`skylod::pipeline::read_inputs`], with
+/// progress); errors go to stderr.
+pub fn load(inputs: &[PathBuf]) -> anyhow::Result<Loaded> {
+    let r = skylod::pipeline::read_inputs(inputs, &crate::log::reporter())?;
+    for e in &r.failures {
+        error!("{e}");
     }
-    Loaded {
-        model,
-        inputs: ok,
-        failed,
-        read_ms: ms(t),
-    }
+    Ok(Loaded {
+        model: r.model,
+        inputs: r.read.iter().map(|p| p.display().to_string()).collect(),
+        failed: !r.failures.is_empty(),
+        read_ms: (r.read_s * 1e4).round() / 10.0,
+    })
 }
 
 /// Milliseconds since `t`, rounded to 0.1.
@@ -329,7 +314,7 @@ pub fn site_lat_lon(
     let centre = (!bbox.is_empty()).then(|| bbox.center());
     if let (Some(srs), Some(c)) = (srs, centre) {
         if let Some((a, o)) = skylod::crs::lat_lon(srs, c.x, c.y) {
-            eprintln!("{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}");
+            summary!("{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}");
             return Ok((a, o));
         }
     }
@@ -367,18 +352,24 @@ pub fn trace_full<T: Send>(
     f: impl Fn(&skylod::trace::Scene, &Poi) -> T + Sync,
     sky_rays: impl Fn(&T) -> Option<usize> + Sync,
 ) -> Traced<T> {
+    let progress = crate::log::reporter();
     let t = Instant::now();
-    let scene = skylod::scene::full_scene(model);
+    let scene = stage(&progress, Stage::Bvh, 1, 0, || {
+        skylod::scene::full_scene(model)
+    });
     let bvh_ms = ms(t);
     let t = Instant::now();
-    let (results, flags): (Vec<T>, Vec<Vec<PoiFlag>>) = pois
-        .par_iter()
-        .map(|p| {
-            let r = f(&scene, p);
-            let flags = checks::poi_flags(&scene, model, p, sky_rays(&r));
-            (r, flags)
-        })
-        .unzip();
+    let (results, flags): (Vec<T>, Vec<Vec<PoiFlag>>) =
+        stage(&progress, Stage::Trace, pois.len() as u64, 0, || {
+            pois.par_iter()
+                .map(|p| {
+                    let r = f(&scene, p);
+                    let flags = checks::poi_flags(&scene, model, p, sky_rays(&r));
+                    progress.advance(Stage::Trace, 1, 0, None);
+                    (r, flags)
+                })
+                .unzip()
+        });
     warn_flags(pois, &flags);
     Traced {
         results,
@@ -392,7 +383,7 @@ pub fn trace_full<T: Send>(
 pub fn warn_flags(pois: &[Poi], flags: &[Vec<PoiFlag>]) {
     for (p, fl) in pois.iter().zip(flags) {
         for f in fl {
-            eprintln!("warning: {}", f.message(p));
+            warning!("warning: {}", f.message(p));
         }
     }
 }

@@ -38,6 +38,18 @@ pub fn write(
     wopts: &WriteOptions,
 ) -> anyhow::Result<()> {
     let s = skylod::export::write(format, model, file, content, out, wopts)?;
+    crate::log::summary!("{}", describe(format, model, file, &s, out));
+    Ok(())
+}
+
+/// The summary line of an OBJ / CityJSON / CityJSONSeq output.
+pub fn describe(
+    format: Format,
+    model: &CityModel,
+    file: usize,
+    s: &skylod::export::ExportSummary,
+    out: &Path,
+) -> String {
     let input = model
         .files
         .get(file)
@@ -57,10 +69,9 @@ pub fn write(
             s.objects, s.polygons, s.vertices
         ),
     };
-    eprintln!(
+    format!(
         "{input} -> {} ({format}): {what}, {} bytes",
         out.display(),
         s.bytes
-    );
-    Ok(())
+    )
 }

@@ -2,11 +2,11 @@
 //! ([`skylod::crs::LocalFrame`]): the model and the POIs are brought into it after reading,
 //! reports and outputs stay in the input's CRS.
 
-use anyhow::{bail, Context};
-use skylod::crs::{build_transform, model_crs, Crs, CrsKind, LocalFrame, PointTransform};
+use crate::log::{summary, warning};
+use skylod::crs::{Crs, CrsKind};
 use skylod::model::CityModel;
+use skylod::pipeline::FrameOptions;
 use skylod::poi::Poi;
-use std::borrow::Cow;
 
 /// Parse a CRS flag: any `srsName` spelling (`EPSG:n`, `urn:ogc:def:crs:EPSG::n`,
 /// `http://www.opengis.net/def/crs/EPSG/0/n`, compound, AdV, `OGC:CRS84`) that names a code.
@@ -67,75 +67,30 @@ pub struct CrsArgs {
     pub poi_crs: Option<Crs>,
 }
 
-/// The model and POIs in the local metric frame, with what reports need.
-pub struct Framed<'a> {
-    /// The model as read (CRS of the input): what outputs are written from.
-    pub source: &'a CityModel,
-    /// The model in the local frame: what is traced.
-    pub model: Cow<'a, CityModel>,
-    /// The model's CRS.
-    pub crs: Crs,
-    /// The frame.
-    pub frame: LocalFrame,
-    /// POIs in the model's CRS (for reports).
-    pub pois: Vec<Poi>,
-    /// POIs in the local frame (for tracing).
-    pub local_pois: Vec<Poi>,
-}
+pub use skylod::pipeline::Framed;
 
-/// Apply `--source-crs`, choose the frame (warnings on stderr, prefixed by `cmd`), convert
-/// the POIs from `--poi-crs` to the model's CRS and everything into the frame.
+/// [`skylod::pipeline::frame`] with the flags: `--source-crs`, `--poi-crs`, `margin` (m)
+/// for POIs outside the scene; its warnings on stderr, prefixed by `cmd`.
 pub fn frame<'a>(
     model: &'a mut CityModel,
     args: &CrsArgs,
     pois: Vec<Poi>,
+    margin: f64,
     cmd: &str,
 ) -> anyhow::Result<Framed<'a>> {
-    args.source.apply(model);
-    let source: &'a CityModel = model;
-    let crs = model_crs(source, args.source.source_crs.as_ref());
-    let others: Vec<String> = source
-        .files
-        .iter()
-        .filter_map(|f| f.srs_name.as_deref())
-        .map(Crs::parse)
-        .filter(|c| !c.compatible(&crs))
-        .map(|c| c.to_string())
-        .collect();
-    if !others.is_empty() {
-        eprintln!(
-            "{cmd}: warning: inputs name other CRSs than {crs} ({}); all are traced as {crs}",
-            others.join(", ")
-        );
-    }
-    let (frame, warning) = LocalFrame::new(&crs, &source.bbox());
-    if let Some(w) = warning {
-        eprintln!("{cmd}: warning: {w}");
-    }
-    if !frame.is_identity() {
-        eprintln!("{cmd}: {crs}: tracing in {}", frame.describe());
-    }
-    let pois = match &args.poi_crs {
-        Some(pc) => {
-            if !crs.is_known() {
-                bail!("--poi-crs {pc}: the model's CRS ({crs}) is not known, so POIs cannot be converted to it (give --source-crs)");
-            }
-            build_transform()
-                .pois(pc, &crs, &pois)
-                .with_context(|| format!("--poi-crs {pc}"))?
-        }
-        None => pois,
+    let opts = FrameOptions {
+        source_crs: args.source.source_crs.clone(),
+        poi_crs: args.poi_crs.clone(),
+        poi_margin: margin,
     };
-    let local_pois = pois.iter().map(|p| frame.poi_to_local(p)).collect();
-    let model = frame.model_to_local(source);
-    Ok(Framed {
-        source,
-        model,
-        crs,
-        frame,
-        pois,
-        local_pois,
-    })
+    let framed = skylod::pipeline::frame(model, pois, &opts)?;
+    for w in &framed.warnings {
+        warning!("{cmd}: warning: {w}");
+    }
+    if let Some(n) = &framed.note {
+        summary!("{cmd}: {n}");
+    }
+    Ok(framed)
 }
 
 #[cfg(test)]

@@ -20,6 +20,7 @@ mod cmd_synth;
 mod common;
 mod export;
 mod frames;
+mod log;
 mod region_args;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
@@ -28,6 +29,9 @@ mod region_args;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// `--quiet`, `--log-level` (global: after any subcommand too).
+    #[command(flatten)]
+    log: log::LogArgs,
 }
 
 #[derive(Subcommand, Debug)]
@@ -79,6 +83,7 @@ fn main() -> ExitCode {
             };
         }
     };
+    log::init(&cli.log);
     let result = match cli.command {
         Command::Stats(a) => cmd_stats::run(a),
         Command::Convert(a) => cmd_convert::run(a),
@@ -101,7 +106,10 @@ fn main() -> ExitCode {
         // is wrong with the work, so end quietly and successfully, as ripgrep does.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("skylod: error: {}", message(&e));
+            log::line(
+                log::Level::Error,
+                &format!("skylod: error: {}", message(&e)),
+            );
             ExitCode::from(2)
         }
     }

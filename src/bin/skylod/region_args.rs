@@ -66,7 +66,7 @@ impl RegionArgs {
             );
         }
         if self.active() {
-            eprintln!("{} POI(s) in all", pois.len());
+            crate::log::summary!("{} POI(s) in all", pois.len());
         }
         Ok(pois)
     }

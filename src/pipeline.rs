@@ -1,0 +1,584 @@
+//! The path every tracing command takes, as a library API: **inputs → scene → levels →
+//! outputs**, with progress and cancellation through a [`Progress`].
+//!
+//! 1. [`read_inputs`]: files read in parallel and merged into one model (occluders of a
+//!    neighbouring tile count); a file that cannot be read is reported, the others are used.
+//!    [`Inputs::check`] refuses a model that would give a confidently wrong answer whatever
+//!    the POIs (mixed CRSs, no heights).
+//! 2. [`frame`]: the model and the POIs in the local metric frame the tracing works in
+//!    (ENU for degrees, metres for feet; `source_crs`, `poi_crs`), POIs far outside the scene
+//!    refused.
+//! 3. [`levels`]: rough model → selection scene (BVH) → selection, then the error bound when
+//!    one is asked for; the rough geometry is brought back to the input's CRS for writing.
+//! 4. [`write_levels`]: each input file written with its assets at their levels (mixed-LoD
+//!    CityGML, OBJ, CityJSON), atomically.
+//!
+//! `skylod lod` is these four calls plus messages; `evaluate`, `svf`, `sun-hours` and
+//! `fisheye` share steps 1 and 2. Nothing here prints: warnings are returned
+//! ([`Framed::warnings`]), progress goes to the [`Progress`].
+//!
+//! # Example
+//! ```
+//! use skylod::pipeline::{frame, levels, read_inputs, write_levels, FrameOptions, LevelsOptions};
+//! use skylod::progress::Silent;
+//! use skylod::export::Format;
+//! use std::path::PathBuf;
+//! let input = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml");
+//! let mut inputs = read_inputs(&[input], &Silent).unwrap();
+//! inputs.check(false).unwrap();
+//! let b = inputs.model.bbox();
+//! let poi = skylod::poi::Poi { id: "street".into(), position: b.center(), normal: None };
+//! let framed = frame(&mut inputs.model, vec![poi], &FrameOptions::default()).unwrap();
+//! let lv = levels(&framed, &LevelsOptions::default(), &Silent).unwrap();
+//! let dir = tempfile::tempdir().unwrap();
+//! let out = dir.path().join("lod.gml");
+//! let written = write_levels(framed.source, 0, &lv, &out, Format::CityGml, &Default::default()).unwrap();
+//! assert!(written.polygons_out <= written.polygons_in);
+//! assert!(out.exists());
+//! ```
+
+use crate::bound::{bound, BoundError, BoundOptions, BoundReport};
+use crate::checks::{self, TrustError};
+use crate::citygml::mixed::write_mixed;
+use crate::citygml::write::WriteOptions;
+use crate::citygml::{read_file, ReadError, WriteError};
+use crate::crs::{build_transform, model_crs, Crs, CrsError, LocalFrame, PointTransform};
+use crate::export::{Content, Format};
+use crate::lod::{lod_with, LodOptions, LodResult};
+use crate::model::CityModel;
+use crate::poi::Poi;
+use crate::progress::{check, Cancelled, Progress, Stage};
+use crate::rough::RoughGeometry;
+use crate::select::SelectError;
+use crate::solar::SunTable;
+use rayon::prelude::*;
+use std::borrow::Cow;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Errors of the pipeline that stop it (a file that cannot be read does not: see
+/// [`Inputs::failures`]).
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    /// The model or the POIs would give a confidently wrong answer.
+    #[error(transparent)]
+    Trust(#[from] TrustError),
+    /// The POIs could not be converted from their CRS to the model's.
+    #[error("--poi-crs {from}: {source}")]
+    PoiCrs {
+        /// The POIs' CRS.
+        from: String,
+        /// Why.
+        source: CrsError,
+    },
+    /// The POIs are in another CRS but the model's is not known.
+    #[error("--poi-crs {from}: the model's CRS ({model}) is not known, so POIs cannot be converted to it (give --source-crs)")]
+    UnknownModelCrs {
+        /// The POIs' CRS.
+        from: String,
+        /// The model's CRS as named.
+        model: String,
+    },
+    /// The selection failed (or was cancelled).
+    #[error(transparent)]
+    Select(#[from] SelectError),
+    /// The error bound could not be computed.
+    #[error(transparent)]
+    Bound(#[from] BoundError),
+    /// The caller asked to stop.
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
+}
+
+/// The inputs that could be read, merged in input order.
+#[derive(Debug, Default)]
+pub struct Inputs {
+    /// All inputs read, merged ([`CityModel::merge`]): `model.files[k]` is `read[k]`.
+    pub model: CityModel,
+    /// Paths read successfully, in input order.
+    pub read: Vec<PathBuf>,
+    /// Inputs that could not be read (file, line:column, reason), in input order.
+    pub failures: Vec<ReadError>,
+    /// Seconds spent reading.
+    pub read_s: f64,
+}
+
+impl Inputs {
+    /// Refuse a model that would give a confidently wrong answer whatever the POIs: inputs
+    /// whose CRSs differ (unless `allow_mixed_crs`), a model without heights. Nothing read
+    /// passes.
+    ///
+    /// # Errors
+    /// [`TrustError`].
+    pub fn check(&self, allow_mixed_crs: bool) -> Result<(), TrustError> {
+        if self.read.is_empty() {
+            return Ok(());
+        }
+        check_model(&self.model, allow_mixed_crs)
+    }
+}
+
+/// The checks of [`Inputs::check`] on a model.
+///
+/// # Errors
+/// [`TrustError`].
+pub fn check_model(model: &CityModel, allow_mixed_crs: bool) -> Result<(), TrustError> {
+    if !allow_mixed_crs {
+        checks::check_same_crs(model)?;
+    }
+    checks::check_heights(model)
+}
+
+/// Read `paths` in parallel ([`Stage::Read`]: files and bytes) and merge them in input
+/// order. A file that cannot be read goes to [`Inputs::failures`].
+///
+/// # Errors
+/// [`Cancelled`] when `progress` asks to stop (before a file is started).
+pub fn read_inputs(paths: &[PathBuf], progress: &dyn Progress) -> Result<Inputs, Cancelled> {
+    let t = Instant::now();
+    let sizes: Vec<u64> = paths
+        .iter()
+        .map(|p| std::fs::metadata(p).map_or(0, |m| m.len()))
+        .collect();
+    progress.start(Stage::Read, paths.len() as u64, sizes.iter().sum());
+    let results: Result<Vec<_>, Cancelled> = paths
+        .par_iter()
+        .zip(&sizes)
+        .map(|(p, size)| {
+            check(progress, Stage::Read)?;
+            let r = read_file(p);
+            progress.advance(Stage::Read, 1, *size, Some(&p.display().to_string()));
+            Ok(r)
+        })
+        .collect();
+    progress.finish(Stage::Read);
+    let mut inputs = Inputs::default();
+    for (p, r) in paths.iter().zip(results?) {
+        match r {
+            Ok(m) => {
+                inputs.model.merge(m);
+                inputs.read.push(p.clone());
+            }
+            Err(e) => inputs.failures.push(e),
+        }
+    }
+    inputs.read_s = t.elapsed().as_secs_f64();
+    Ok(inputs)
+}
+
+/// How the model and the POIs are brought into the tracing frame ([`frame`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameOptions {
+    /// CRS of the inputs instead of their `srsName` (written into the model's files, so
+    /// reports and the sun's site see it).
+    pub source_crs: Option<Crs>,
+    /// CRS of the POIs when it is not the model's.
+    pub poi_crs: Option<Crs>,
+    /// POIs farther than this (m) outside the scene's bounding box are refused.
+    pub poi_margin: f64,
+}
+
+impl Default for FrameOptions {
+    fn default() -> Self {
+        FrameOptions {
+            source_crs: None,
+            poi_crs: None,
+            poi_margin: checks::DEFAULT_POI_MARGIN,
+        }
+    }
+}
+
+/// The model and POIs in the local metric frame, with what reports need.
+#[derive(Debug)]
+pub struct Framed<'a> {
+    /// The model as read (CRS of the input): what outputs are written from.
+    pub source: &'a CityModel,
+    /// The model in the local frame: what is traced.
+    pub model: Cow<'a, CityModel>,
+    /// The model's CRS.
+    pub crs: Crs,
+    /// The frame.
+    pub frame: LocalFrame,
+    /// POIs in the model's CRS (for reports).
+    pub pois: Vec<Poi>,
+    /// POIs in the local frame (for tracing).
+    pub local_pois: Vec<Poi>,
+    /// What the caller should tell the user (other CRSs named by the inputs, the frame
+    /// chosen, its accuracy).
+    pub warnings: Vec<String>,
+    /// A note on the frame when it is not the identity ("tracing in ...").
+    pub note: Option<String>,
+}
+
+/// Apply `source_crs`, choose the frame, convert `pois` from `poi_crs` to the model's CRS
+/// and everything into the frame; refuse POIs farther than `poi_margin` outside the scene.
+///
+/// # Errors
+/// [`PipelineError::PoiCrs`], [`PipelineError::UnknownModelCrs`], [`PipelineError::Trust`].
+pub fn frame<'a>(
+    model: &'a mut CityModel,
+    pois: Vec<Poi>,
+    opts: &FrameOptions,
+) -> Result<Framed<'a>, PipelineError> {
+    if let Some(c) = &opts.source_crs {
+        for f in &mut model.files {
+            f.srs_name = Some(c.name.clone());
+        }
+    }
+    let source: &'a CityModel = model;
+    let crs = model_crs(source, opts.source_crs.as_ref());
+    let mut warnings = Vec::new();
+    let others: Vec<String> = source
+        .files
+        .iter()
+        .filter_map(|f| f.srs_name.as_deref())
+        .map(Crs::parse)
+        .filter(|c| !c.compatible(&crs))
+        .map(|c| c.to_string())
+        .collect();
+    if !others.is_empty() {
+        warnings.push(format!(
+            "inputs name other CRSs than {crs} ({}); all are traced as {crs}",
+            others.join(", ")
+        ));
+    }
+    let (frame, warning) = LocalFrame::new(&crs, &source.bbox());
+    warnings.extend(warning.map(|w| w.to_string()));
+    let note = (!frame.is_identity()).then(|| format!("{crs}: tracing in {}", frame.describe()));
+    let pois = match &opts.poi_crs {
+        Some(pc) => {
+            if !crs.is_known() {
+                return Err(PipelineError::UnknownModelCrs {
+                    from: pc.to_string(),
+                    model: crs.to_string(),
+                });
+            }
+            build_transform()
+                .pois(pc, &crs, &pois)
+                .map_err(|source| PipelineError::PoiCrs {
+                    from: pc.to_string(),
+                    source,
+                })?
+        }
+        None => pois,
+    };
+    let local_pois: Vec<Poi> = pois.iter().map(|p| frame.poi_to_local(p)).collect();
+    let local = frame.model_to_local(source);
+    checks::check_pois_near_in_frame(
+        &local.bbox(),
+        &local_pois,
+        &source.bbox(),
+        &pois,
+        opts.poi_margin,
+    )?;
+    Ok(Framed {
+        source,
+        model: local,
+        crs,
+        frame,
+        pois,
+        local_pois,
+        warnings,
+        note,
+    })
+}
+
+/// The error bound of [`levels`]: options and, for a sun-hours bound, the sun table.
+#[derive(Debug, Clone)]
+pub struct BoundSpec {
+    /// Bound options (SVF and sun-hours errors allowed, rays).
+    pub options: BoundOptions,
+    /// The sun positions of the sun-hours bound.
+    pub sun: Option<SunTable>,
+}
+
+/// Options of [`levels`].
+#[derive(Debug, Clone, Default)]
+pub struct LevelsOptions {
+    /// Rough model and selection.
+    pub lod: LodOptions,
+    /// An error bound to meet by promoting assets, if any.
+    pub bound: Option<BoundSpec>,
+}
+
+/// The levels chosen, and what writing them needs.
+#[derive(Debug, Clone)]
+pub struct Levels {
+    /// Rough model (local frame), selection and timings; after a bound, its levels are the
+    /// promoted ones.
+    pub lod: LodResult,
+    /// The rough geometry in the input's CRS: what is written.
+    pub rough_source: Vec<RoughGeometry>,
+    /// The bound's report, when one was asked for (`met` says whether it holds; when it
+    /// does not, nothing should be written).
+    pub bound: Option<BoundReport>,
+    /// Seconds of the bound check.
+    pub bound_s: f64,
+}
+
+impl Levels {
+    /// The level of each asset.
+    pub fn levels(&self) -> &[u8] {
+        &self.lod.selection.levels
+    }
+
+    /// Whether the bound holds (true without a bound).
+    pub fn bound_met(&self) -> bool {
+        self.bound.as_ref().is_none_or(|b| b.met)
+    }
+}
+
+/// Rough model ([`Stage::Rough`]) → selection scene ([`Stage::Bvh`]) → selection
+/// ([`Stage::Select`], per POI, cancellable) → error bound ([`Stage::Trace`]) when asked.
+///
+/// # Errors
+/// [`PipelineError::Select`], [`PipelineError::Bound`], [`PipelineError::Cancelled`].
+pub fn levels(
+    framed: &Framed<'_>,
+    opts: &LevelsOptions,
+    progress: &dyn Progress,
+) -> Result<Levels, PipelineError> {
+    let model: &CityModel = &framed.model;
+    let pois = &framed.local_pois;
+    let mut lod = lod_with(model, pois, &opts.lod, progress)?;
+    let mut bound_report = None;
+    let t = Instant::now();
+    if let Some(spec) = &opts.bound {
+        check(progress, Stage::Trace)?;
+        let b = crate::progress::stage(progress, Stage::Trace, pois.len() as u64, 0, || {
+            bound(
+                model,
+                &lod.rough,
+                &lod.selection.levels,
+                pois,
+                &spec.options,
+                spec.sun.as_ref(),
+            )
+        })?;
+        bound_report = Some(BoundReport::new(&b, &spec.options));
+        lod.selection.levels = b.levels;
+    }
+    let bound_s = t.elapsed().as_secs_f64();
+    let rough_source = framed
+        .frame
+        .rough_to_source(model, framed.source, &lod.rough);
+    Ok(Levels {
+        lod,
+        rough_source,
+        bound: bound_report,
+        bound_s,
+    })
+}
+
+/// What [`write_levels`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Written {
+    /// Bytes written (before compression).
+    pub bytes: u64,
+    /// Assets of the file per level (CityGML only; zeros for other formats).
+    pub levels: [usize; 3],
+    /// Asset polygons of the file in the input (CityGML only).
+    pub polygons_in: usize,
+    /// Asset polygons written (CityGML only).
+    pub polygons_out: usize,
+    /// Buildings and building parts left out because nothing of them was kept.
+    pub buildings_dropped: usize,
+    /// What the OBJ / CityJSON writer wrote (formats other than CityGML).
+    pub export: Option<crate::export::ExportSummary>,
+}
+
+/// Write file `file` of `model` (as read, [`Framed::source`]) to `out` in `format` with
+/// every asset at its level.
+///
+/// # Errors
+/// [`WriteError`] (the target is checked first; nothing partial is left behind).
+pub fn write_levels(
+    model: &CityModel,
+    file: usize,
+    levels: &Levels,
+    out: &Path,
+    format: Format,
+    wopts: &WriteOptions,
+) -> Result<Written, WriteError> {
+    if format == Format::CityGml {
+        let s = write_mixed(
+            model,
+            file,
+            &levels.rough_source,
+            levels.levels(),
+            out,
+            wopts,
+        )?;
+        return Ok(Written {
+            bytes: s.bytes,
+            levels: s.levels,
+            polygons_in: s.polygons_in,
+            polygons_out: s.polygons_out,
+            buildings_dropped: s.buildings_dropped,
+            export: None,
+        });
+    }
+    let content = Content::Levels {
+        rough: &levels.rough_source,
+        levels: levels.levels(),
+    };
+    let s = crate::export::write(format, model, file, content, out, wopts)?;
+    Ok(Written {
+        bytes: s.bytes,
+        buildings_dropped: buildings_without_kept_assets(model, file, levels.levels()),
+        export: Some(s),
+        ..Written::default()
+    })
+}
+
+/// [`write_levels`] for each `(file, output)` pair in turn ([`Stage::Write`], cancellable
+/// between files); one result per pair, in order.
+///
+/// # Errors
+/// [`Cancelled`] when `progress` asks to stop (files already written stay).
+pub fn write_all(
+    model: &CityModel,
+    targets: &[(usize, PathBuf)],
+    levels: &Levels,
+    format: Format,
+    wopts: &WriteOptions,
+    progress: &dyn Progress,
+) -> Result<Vec<Result<Written, WriteError>>, Cancelled> {
+    progress.start(Stage::Write, targets.len() as u64, 0);
+    let mut out = Vec::with_capacity(targets.len());
+    for (f, path) in targets {
+        if let Err(e) = check(progress, Stage::Write) {
+            progress.finish(Stage::Write);
+            return Err(e);
+        }
+        out.push(write_levels(model, *f, levels, path, format, wopts));
+        progress.advance(Stage::Write, 1, 0, Some(&path.display().to_string()));
+    }
+    progress.finish(Stage::Write);
+    Ok(out)
+}
+
+/// Buildings and parts of file `f` that keep no asset (through any part below them): what
+/// the OBJ and CityJSON writers leave out.
+pub fn buildings_without_kept_assets(model: &CityModel, f: usize, levels: &[u8]) -> usize {
+    let mut kept = vec![false; model.buildings.len()];
+    for (a, l) in model.assets.iter().zip(levels) {
+        if *l == 0 {
+            continue;
+        }
+        let mut b = a.building;
+        let mut steps = 0;
+        while let Some(k) = b {
+            if let Some(x) = kept.get_mut(k) {
+                *x = true;
+            }
+            b = model.buildings.get(k).and_then(|x| x.parent);
+            steps += 1;
+            if steps > model.buildings.len() {
+                break;
+            }
+        }
+    }
+    model
+        .buildings
+        .iter()
+        .zip(&kept)
+        .filter(|(b, k)| b.file == f && !**k)
+        .count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+    fn fixture() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml")
+    }
+
+    /// Counts POIs selected; cancels after `stop_after` of them.
+    struct Stopper {
+        selected: AtomicU64,
+        stop_after: u64,
+        stopped: AtomicBool,
+    }
+
+    impl Progress for Stopper {
+        fn advance(&self, stage: Stage, items: u64, _: u64, _: Option<&str>) {
+            if stage == Stage::Select
+                && self.selected.fetch_add(items, Ordering::SeqCst) + items >= self.stop_after
+            {
+                self.stopped.store(true, Ordering::SeqCst);
+            }
+        }
+        fn is_cancelled(&self) -> bool {
+            self.stopped.load(Ordering::SeqCst)
+        }
+    }
+
+    fn grid_pois(model: &CityModel, n: usize) -> Vec<Poi> {
+        let b = model.bbox();
+        let c = b.center();
+        (0..n)
+            .map(|i| Poi {
+                id: format!("p{i}"),
+                position: glam::DVec3::new(c.x + i as f64 * 0.1, c.y, b.min.z + 1.5),
+                normal: None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn selection_stops_when_cancelled() {
+        let mut inputs = read_inputs(&[fixture()], &crate::progress::Silent).unwrap();
+        assert!(inputs.failures.is_empty());
+        let pois = grid_pois(&inputs.model, 64);
+        let framed = frame(&mut inputs.model, pois, &FrameOptions::default()).unwrap();
+        let opts = LevelsOptions {
+            lod: LodOptions {
+                select: crate::select::SelectOptions {
+                    rays: 500,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            bound: None,
+        };
+        let stop = Stopper {
+            selected: AtomicU64::new(0),
+            stop_after: 2,
+            stopped: AtomicBool::new(false),
+        };
+        let r = levels(&framed, &opts, &stop);
+        assert!(
+            matches!(
+                r,
+                Err(PipelineError::Select(SelectError::Cancelled(Cancelled {
+                    stage: Stage::Select
+                })))
+            ),
+            "{r:?}"
+        );
+        // Without cancellation the same call selects every POI.
+        let all = Stopper {
+            stop_after: u64::MAX,
+            ..stop
+        };
+        all.stopped.store(false, Ordering::SeqCst);
+        all.selected.store(0, Ordering::SeqCst);
+        let lv = levels(&framed, &opts, &all).unwrap();
+        assert_eq!(all.selected.load(Ordering::SeqCst), 64);
+        assert_eq!(lv.lod.selection.pois.len(), 64);
+    }
+
+    #[test]
+    fn unreadable_input_is_a_failure_not_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let bad = dir.path().join("bad.gml");
+        std::fs::write(&bad, "<CityModel").unwrap();
+        let inputs = read_inputs(&[fixture(), bad.clone()], &crate::progress::Silent).unwrap();
+        assert_eq!(inputs.read, vec![fixture()]);
+        assert_eq!(inputs.failures.len(), 1);
+        assert!(inputs.failures[0].to_string().contains("bad.gml"));
+    }
+}
