@@ -571,6 +571,63 @@ mod tests {
         assert_eq!(lv.lod.selection.pois.len(), 64);
     }
 
+    /// Sums what each stage was told and what it got.
+    #[derive(Default)]
+    struct Tally(std::sync::Mutex<Vec<(Stage, &'static str, u64, u64)>>);
+
+    impl Progress for Tally {
+        fn start(&self, stage: Stage, items: u64, bytes: u64) {
+            self.0.lock().unwrap().push((stage, "start", items, bytes));
+        }
+        fn advance(&self, stage: Stage, items: u64, bytes: u64, _: Option<&str>) {
+            self.0
+                .lock()
+                .unwrap()
+                .push((stage, "advance", items, bytes));
+        }
+    }
+
+    impl Tally {
+        fn sum(&self, stage: Stage, what: &str) -> (u64, u64) {
+            self.0
+                .lock()
+                .unwrap()
+                .iter()
+                .filter(|e| e.0 == stage && e.1 == what)
+                .fold((0, 0), |a, e| (a.0 + e.2, a.1 + e.3))
+        }
+    }
+
+    #[test]
+    fn every_stage_advances_as_far_as_it_announced() {
+        let tally = Tally::default();
+        let size = std::fs::metadata(fixture()).unwrap().len();
+        let mut inputs = read_inputs(&[fixture()], &tally).unwrap();
+        assert_eq!(tally.sum(Stage::Read, "start"), (1, size));
+        assert_eq!(tally.sum(Stage::Read, "advance"), (1, size));
+        let pois = grid_pois(&inputs.model, 5);
+        let framed = frame(&mut inputs.model, pois, &FrameOptions::default()).unwrap();
+        let lv = levels(&framed, &LevelsOptions::default(), &tally).unwrap();
+        assert_eq!(tally.sum(Stage::Select, "start").0, 5);
+        assert_eq!(tally.sum(Stage::Select, "advance").0, 5);
+        let n = framed.source.assets.len() as u64;
+        assert_eq!(tally.sum(Stage::Rough, "advance").0, n);
+        let dir = tempfile::tempdir().unwrap();
+        let targets = vec![(0, dir.path().join("a.gml")), (0, dir.path().join("b.gml"))];
+        let w = write_all(
+            framed.source,
+            &targets,
+            &lv,
+            Format::CityGml,
+            &WriteOptions::default(),
+            &tally,
+        )
+        .unwrap();
+        assert!(w.iter().all(Result::is_ok));
+        assert_eq!(tally.sum(Stage::Write, "start").0, 2);
+        assert_eq!(tally.sum(Stage::Write, "advance").0, 2);
+    }
+
     #[test]
     fn unreadable_input_is_a_failure_not_an_error() {
         let dir = tempfile::tempdir().unwrap();
