@@ -215,10 +215,18 @@ mod tests {
         ]);
         let e3 = Encoder::new(CityGmlVersion::V3_0, "gml:");
         let s = e3.geometry(Enc::Solid, "i", std::slice::from_ref(&square));
-        assert!(s.starts_with("<gml:Solid gml:id=\"i\"><gml:exterior><gml:Shell gml:id=\"i_s\">"), "{s}");
+        assert!(
+            s.starts_with("<gml:Solid gml:id=\"i\"><gml:exterior><gml:Shell gml:id=\"i_s\">"),
+            "{s}"
+        );
         assert!(s.contains("gml:id=\"i_0\""));
         let e2 = Encoder::new(CityGmlVersion::V2_0, "");
         let s = e2.geometry(Enc::MultiSurface, "i", &[square]);
-        assert!(s.starts_with("<gml:MultiSurface xmlns:gml=\"http://www.opengis.net/gml\" gml:id=\"i\">"), "{s}");
+        assert!(
+            s.starts_with(
+                "<gml:MultiSurface xmlns:gml=\"http://www.opengis.net/gml\" gml:id=\"i\">"
+            ),
+            "{s}"
+        );
     }
 }

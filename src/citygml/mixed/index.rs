@@ -311,7 +311,6 @@ impl<R: BufRead> BufRead for PushBack<R> {
                 self.front.clear();
                 self.at = 0;
             }
-
         } else {
             self.inner.consume(amt);
         }
@@ -325,10 +324,8 @@ type Source = PushBack<Limited<Box<dyn BufRead + Send>>>;
 pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc, WriteError> {
     let (mut reader, _) = source::open(path)?;
     let base = source::skip_bom(&mut reader, path)?;
-    let mut reader = NsReader::from_reader(PushBack::new(Limited::new(
-        reader,
-        opts.max_event_bytes,
-    )));
+    let mut reader =
+        NsReader::from_reader(PushBack::new(Limited::new(reader, opts.max_event_bytes)));
     reader.config_mut().trim_text(false);
     reader.config_mut().check_end_names = true;
     let mut doc = Doc::default();
@@ -432,9 +429,9 @@ pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc
                         let len = s.end.saturating_sub(content_start);
                         let n = skip_content(&mut reader, idx, len, opts, &mut content, &mut doc)
                             .map_err(|source| WriteError::Io {
-                                file: path.to_path_buf(),
-                                source,
-                            })?;
+                            file: path.to_path_buf(),
+                            source,
+                        })?;
                         if n > 0 {
                             skipped += n;
                             doc.skipped.0 += 1;
@@ -578,11 +575,7 @@ fn trim_ws(mut s: &[u8]) -> &[u8] {
 /// `c` holds a comment, CDATA section, processing instruction, DOCTYPE or namespace
 /// declaration, or is not well-formed enough to tell (the caller then parses it instead and
 /// forgets the ids handed out).
-fn gml_ids(
-    c: &[u8],
-    is_gml: impl FnMut(&[u8]) -> bool,
-    id: impl FnMut(&[u8]),
-) -> bool {
+fn gml_ids(c: &[u8], is_gml: impl FnMut(&[u8]) -> bool, id: impl FnMut(&[u8])) -> bool {
     gml_ids_in(c, is_gml, id).is_some()
 }
 
@@ -702,4 +695,163 @@ fn scan_attrs<R>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ids_of(c: &str) -> Option<Vec<String>> {
+        let mut v = Vec::new();
+        let ok = gml_ids(
+            c.as_bytes(),
+            |p| p == b"gml" || p == b"g",
+            |id| v.push(String::from_utf8_lossy(id).into_owned()),
+        );
+        ok.then_some(v)
+    }
+
+    #[test]
+    fn id_scan_table() {
+        let some = |v: &[&str]| Some(v.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+        let table: &[(&str, Option<Vec<String>>)] = &[
+            ("", some(&[])),
+            ("text only 1 2 3", some(&[])),
+            (r#"<a gml:id="x"/><b g:id='y'>t</b>"#, some(&["x", "y"])),
+            // spaces around '=', other attributes first, '>' and '=' inside values
+            (
+                "<a\n  srsDimension=\"3\" v=\"a>b=c\"  gml:id = \"x\" ></a>",
+                some(&["x"]),
+            ),
+            // unprefixed, other prefix, text that looks like an attribute
+            (
+                r#"<a id="u" xlink:id="v">gml:id="w"</a><e gml:id="z"/>"#,
+                some(&["z"]),
+            ),
+            // escaped value
+            (r#"<a gml:id="a&amp;b"/>"#, some(&["a&b"])),
+            // what the scan cannot judge: the caller parses instead
+            (r#"<!-- <a gml:id="x"/> -->"#, None),
+            (r#"<![CDATA[<a gml:id="x"/>]]>"#, None),
+            (r#"<?pi x?>"#, None),
+            (r#"<a xmlns:gml="urn:other" gml:id="x"/>"#, None),
+            (r#"<a xmlns="urn:other"/>"#, None),
+            (r#"<a gml:id="x"#, None),
+            (r#"<a gml:id=x/>"#, None),
+        ];
+        for (c, want) in table {
+            assert_eq!(&ids_of(c), want, "{c}");
+        }
+    }
+
+    #[test]
+    fn id_table_finds_the_first_node_and_forgets() {
+        let mut t = IdTable::default();
+        t.push(b"a", 7);
+        t.push(b"b", 3);
+        t.push(b"a", 5);
+        let n = t.len();
+        t.push(b"c", 9);
+        t.truncate(n);
+        t.finish();
+        assert_eq!(t.get("a"), Some(5));
+        assert_eq!(t.get("b"), Some(3));
+        assert_eq!(t.get("c"), None);
+        assert_eq!(t.get(""), None);
+    }
+
+    #[test]
+    fn push_back_comes_first() {
+        let mut r = PushBack::new(&b"world"[..]);
+        let mut two = [0u8; 2];
+        r.read_exact(&mut two).unwrap();
+        r.push_back(b"hello ");
+        r.push_back(b">");
+        let mut s = String::new();
+        r.read_to_string(&mut s).unwrap();
+        assert_eq!(s, ">hello rld");
+    }
+
+    const DOC: &str = r##"<?xml version="1.0"?>
+<CityModel xmlns="http://www.opengis.net/citygml/2.0" xmlns:gml="http://www.opengis.net/gml" xmlns:xlink="http://www.w3.org/1999/xlink">
+<cityObjectMember><A gml:id="a"><b><c gml:id="c1"/><c gml:id="c2" xlink:href="#q"/></b></A></cityObjectMember>
+<cityObjectMember><B gml:id="b"><!-- note --><c gml:id="c3"/></B></cityObjectMember>
+<cityObjectMember><C gml:id="cc"><c xmlns:gml="urn:not-gml" gml:id="c4"/><c gml:id="c1"/></C></cityObjectMember>
+</CityModel>
+"##;
+
+    fn span_of(doc: &str, tag: &str) -> Span {
+        let start = doc.find(&format!("<{tag} ")).unwrap() as u64;
+        let end = (doc.find(&format!("</{tag}>")).unwrap() + tag.len() + 3) as u64;
+        start..end
+    }
+
+    #[test]
+    fn skipping_keeps_ids_and_spans() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.gml");
+        std::fs::write(&path, DOC).unwrap();
+        let opts = ReadOptions::default();
+        let full = scan(&path, &[], &opts).unwrap();
+        let skip = [span_of(DOC, "A"), span_of(DOC, "B"), span_of(DOC, "C")];
+        let fast = scan(&path, &skip, &opts).unwrap();
+        // A skipped; B (comment) and C (namespace declaration) parsed
+        assert_eq!(
+            fast.skipped,
+            (
+                1,
+                (DOC.find("</A>").unwrap() - DOC.find("<b>").unwrap()) as u64
+            )
+        );
+        assert_eq!(fast.nodes.len(), full.nodes.len() - 3);
+        let a = fast.node_at(skip[0].start).unwrap();
+        assert_eq!(fast.nodes[a as usize].end, skip[0].end);
+        assert_eq!(fast.nodes[a as usize].last_desc, a);
+        for id in ["a", "c1", "c2", "b", "c3", "cc"] {
+            let (f, s) = (full.id_node(id).unwrap(), fast.id_node(id).unwrap());
+            assert_eq!(
+                full.nodes[f as usize].start >= skip[0].end,
+                fast.nodes[s as usize].start >= skip[0].end,
+                "{id}"
+            );
+        }
+        // c1 repeats: the first one (inside A) wins
+        assert_eq!(fast.id_node("c1"), Some(a));
+        assert!(!fast.has_id("c4") && !full.has_id("c4"));
+        // the reference inside skipped content is not recorded
+        assert_eq!(full.refs.len(), 1);
+        assert!(fast.refs.is_empty());
+        // every node after the skipped one has the same span
+        let tail = |d: &Doc| {
+            d.nodes
+                .iter()
+                .filter(|n| n.start >= skip[0].end)
+                .map(|n| (n.start, n.end, n.content_start))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(tail(&full), tail(&fast));
+    }
+
+    #[test]
+    fn token_limit_and_depth_apply() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.gml");
+        std::fs::write(&path, DOC).unwrap();
+        let big = dir.path().join("big.gml");
+        let text = "1 ".repeat(1 << 20);
+        std::fs::write(&big, DOC.replace("<!-- note -->", &text)).unwrap();
+        let tight = ReadOptions {
+            max_event_bytes: 512 << 10,
+            ..ReadOptions::default()
+        };
+        assert!(scan(&big, &[], &ReadOptions::default()).is_ok());
+        let e = scan(&big, &[], &tight).unwrap_err().to_string();
+        assert!(e.contains("exceeds the limit of 524288 bytes"), "{e}");
+        let shallow = ReadOptions {
+            max_depth: 2,
+            ..ReadOptions::default()
+        };
+        let e = scan(&path, &[], &shallow).unwrap_err().to_string();
+        assert!(e.contains("nested deeper than 2"), "{e}");
+    }
 }

@@ -142,12 +142,11 @@ mod plan;
 
 use super::error::WriteError;
 use super::read::ReadOptions;
-use super::write::{check_target, write_document, WriteOptions};
+use super::write::{check_target, write_document, Edit, WriteOptions};
 use crate::model::CityModel;
 use crate::rough::RoughGeometry;
 use plan::Plan;
 use std::path::Path;
-
 
 /// What [`write_mixed`] wrote.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -196,20 +195,37 @@ pub fn write_mixed(
         return Err(WriteError::Invalid(format!("no source file {file}")));
     };
     check_target(out, opts, std::iter::once(src.path.as_path()))?;
-    let containers = plan::containers(model, file, levels);
-    let skip = plan::skip_spans(model, file, levels, &containers);
-    let doc = index::scan(&src.path, &skip, &ReadOptions::default())?;
-    let mut plan = Plan::new(model, file, rough, levels, containers, &doc);
-    plan.run(opts.keep_envelopes);
-    let edits = plan.edits();
+    let (edits, mut summary) = plan_file(model, file, rough, levels, opts.keep_envelopes, true)?;
     let wopts = WriteOptions {
         keep_envelopes: true,
         ..opts.clone()
     };
     let w = write_document(model, file, edits, out, &wopts)?;
-    let mut summary = plan.summary;
     summary.bytes = w.bytes;
     Ok(summary)
+}
+
+/// The edits that write `file` at `levels`, and what they do. `skip`: do not parse the
+/// content of elements that go whole (false only to check that skipping changes nothing).
+fn plan_file(
+    model: &CityModel,
+    file: usize,
+    rough: &[RoughGeometry],
+    levels: &[u8],
+    keep_envelopes: bool,
+    skip: bool,
+) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
+    let src = &model.files[file];
+    let containers = plan::containers(model, file, levels);
+    let spans = if skip {
+        plan::skip_spans(model, file, levels, &containers)
+    } else {
+        Vec::new()
+    };
+    let doc = index::scan(&src.path, &spans, &ReadOptions::default())?;
+    let mut plan = Plan::new(model, file, rough, levels, containers, &doc);
+    plan.run(keep_envelopes);
+    Ok((plan.edits(), plan.summary))
 }
 
 #[cfg(test)]
@@ -367,6 +383,90 @@ mod tests {
         let xml = house().replace("gml:id=\"b2\"", "gml:id=\"skylod_r1_g0\"");
         let (text, _) = run(&xml, &[1, 2, 2]);
         assert!(text.contains("gml:id=\"skylod_r1_g0_1\""), "{text}");
+    }
+
+    /// Level patterns for the skip check: all dropped, a mix, one building kept.
+    fn patterns(model: &CityModel) -> Vec<(&'static str, Vec<u8>)> {
+        let n = model.assets.len();
+        let all0 = vec![0u8; n];
+        let mix: Vec<u8> = (0..n)
+            .map(|i| match i % 7 {
+                0 => 2,
+                3 | 5 => 1,
+                _ => 0,
+            })
+            .collect();
+        let b = model.assets.iter().filter_map(|a| a.building).max();
+        let one: Vec<u8> = model
+            .assets
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                if a.building.is_some() && a.building == b {
+                    1 + (i % 2) as u8
+                } else {
+                    0
+                }
+            })
+            .collect();
+        vec![("all 0", all0), ("mix", mix), ("one building", one)]
+    }
+
+    fn citygml_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+        let Ok(rd) = std::fs::read_dir(dir) else {
+            return;
+        };
+        let mut entries: Vec<_> = rd.flatten().map(|e| e.path()).collect();
+        entries.sort();
+        for p in entries {
+            if p.is_dir() {
+                citygml_files(&p, out);
+            } else if p
+                .extension()
+                .is_some_and(|e| e == "gml" || e == "xml" || e == "gz")
+            {
+                out.push(p);
+            }
+        }
+    }
+
+    /// Skipping the content of what goes whole changes no edit and no count, on every real
+    /// file and the nesting fixtures, for several level patterns; and it does skip.
+    #[test]
+    fn skipping_changes_nothing() {
+        let data = Path::new("../shared/data");
+        let mut files = Vec::new();
+        if data.is_dir() {
+            citygml_files(data, &mut files);
+        } else if std::env::var("CI").as_deref() == Ok("true") {
+            panic!("../shared/data missing under CI=true");
+        } else {
+            println!("SKIP: ../shared/data missing; fixtures only");
+        }
+        citygml_files(Path::new("tests/data"), &mut files);
+        citygml_files(Path::new("fixtures"), &mut files);
+        let (mut checked, mut skipped_bytes) = (0, 0u64);
+        for f in &files {
+            let Ok(model) = read_file(f) else { continue };
+            if model.files.is_empty() || model.assets.is_empty() {
+                continue;
+            }
+            let rough = rough_model(&model, &RoughOptions::default());
+            for (what, levels) in patterns(&model) {
+                let full = plan_file(&model, 0, &rough, &levels, false, false).unwrap();
+                let fast = plan_file(&model, 0, &rough, &levels, false, true).unwrap();
+                assert_eq!(full.1, fast.1, "{}: {what}: summaries differ", f.display());
+                assert!(full.0 == fast.0, "{}: {what}: edits differ", f.display());
+                let containers = plan::containers(&model, 0, &levels);
+                let spans = plan::skip_spans(&model, 0, &levels, &containers);
+                let doc =
+                    index::scan(&model.files[0].path, &spans, &ReadOptions::default()).unwrap();
+                skipped_bytes += doc.skipped.1;
+                checked += 1;
+            }
+        }
+        assert!(checked >= 3, "only {checked} files checked");
+        assert!(skipped_bytes > 0, "nothing was skipped");
     }
 
     #[test]

@@ -38,7 +38,6 @@ const CORE_LEADING: &[&str] = &[
     "genericAttribute",
 ];
 
-
 struct Replacement {
     node: u32,
     /// Content span of the property in the source.
@@ -632,7 +631,6 @@ struct Written {
     polygons: usize,
     asset: bool,
 }
-
 
 /// Per asset: a level-0 asset of `file` with a kept asset below it (through
 /// [`Asset::parent`], at most 64 levels down), kept as a container without geometry.
