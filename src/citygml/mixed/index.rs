@@ -584,54 +584,63 @@ fn gml_ids_in(
     mut is_gml: impl FnMut(&[u8]) -> bool,
     mut id: impl FnMut(&[u8]),
 ) -> Option<()> {
+    // A comment, CDATA section, processing instruction or DOCTYPE (`<` cannot stand in text
+    // or attribute values, so `<!` and `<?` start one of them), or a namespace declaration.
+    let mut marks = memchr::memchr2_iter(b'!', b'?', c);
+    if marks.any(|p| p > 0 && c[p - 1] == b'<') || memchr::memmem::find(c, b"xmlns").is_some() {
+        return None;
+    }
+    // Only tags holding an `=` can hold an id: find each `=`, then the tag around it.
     let mut i = 0;
-    while let Some(lt) = memchr::memchr(b'<', &c[i..]) {
-        let t = i + lt + 1;
-        match c.get(t) {
-            Some(b'/') => {
-                i = t;
-                continue;
-            }
-            Some(b'!' | b'?') | None => return None,
-            Some(_) => {}
+    while let Some(eq) = memchr::memchr(b'=', &c[i..]) {
+        let eq = i + eq;
+        match memchr::memrchr(b'<', &c[i..eq]).map(|lt| i + lt) {
+            // in text, or in text after an end tag
+            None => i = eq + 1,
+            Some(lt) if c.get(lt + 1) == Some(&b'/') => i = eq + 1,
+            Some(lt) => i = start_tag_ids(c, lt, &mut is_gml, &mut id)?.max(eq + 1),
         }
-        let mut j = t;
-        while j < c.len() && !is_ws(c[j]) && c[j] != b'>' && c[j] != b'/' {
-            j += 1;
-        }
-        loop {
-            let rest = c.get(j..)?;
-            let k = memchr::memchr2(b'=', b'>', rest)?;
-            if rest[k] == b'>' {
-                j += k + 1;
-                break;
-            }
-            let name = trim_ws(&rest[..k]);
-            let mut v = j + k + 1;
-            while c.get(v).is_some_and(|&b| is_ws(b)) {
-                v += 1;
-            }
-            let quote = *c.get(v).filter(|&&q| q == b'"' || q == b'\'')?;
-            let e = v + 1 + memchr::memchr(quote, &c[v + 1..])?;
-            let value = &c[v + 1..e];
-            if name == b"xmlns" || name.starts_with(b"xmlns:") {
-                return None;
-            }
-            if let Some(colon) = memchr::memchr(b':', name) {
-                if &name[colon + 1..] == b"id" && is_gml(&name[..colon]) {
-                    let v = std::str::from_utf8(value).ok()?;
-                    if memchr::memchr(b'&', value).is_some() {
-                        id(quick_xml::escape::unescape(v).ok()?.as_bytes());
-                    } else {
-                        id(value);
-                    }
-                }
-            }
-            j = e + 1;
-        }
-        i = j;
     }
     Some(())
+}
+
+/// The ids of the start tag at `c[lt]` (see [`gml_ids`]); returns the index after its `>`.
+fn start_tag_ids(
+    c: &[u8],
+    lt: usize,
+    is_gml: &mut impl FnMut(&[u8]) -> bool,
+    id: &mut impl FnMut(&[u8]),
+) -> Option<usize> {
+    let mut j = lt + 1;
+    while j < c.len() && !is_ws(c[j]) && c[j] != b'>' && c[j] != b'/' {
+        j += 1;
+    }
+    loop {
+        let rest = c.get(j..)?;
+        let k = memchr::memchr2(b'=', b'>', rest)?;
+        if rest[k] == b'>' {
+            return Some(j + k + 1);
+        }
+        let name = trim_ws(&rest[..k]);
+        let mut v = j + k + 1;
+        while c.get(v).is_some_and(|&b| is_ws(b)) {
+            v += 1;
+        }
+        let quote = *c.get(v).filter(|&&q| q == b'"' || q == b'\'')?;
+        let e = v + 1 + memchr::memchr(quote, &c[v + 1..])?;
+        let value = &c[v + 1..e];
+        if let Some(colon) = memchr::memchr(b':', name) {
+            if &name[colon + 1..] == b"id" && is_gml(&name[..colon]) {
+                let v = std::str::from_utf8(value).ok()?;
+                if memchr::memchr(b'&', value).is_some() {
+                    id(quick_xml::escape::unescape(v).ok()?.as_bytes());
+                } else {
+                    id(value);
+                }
+            }
+        }
+        j = e + 1;
+    }
 }
 
 fn scan_attrs<R>(
@@ -728,6 +737,12 @@ mod tests {
                 r#"<a id="u" xlink:id="v">gml:id="w"</a><e gml:id="z"/>"#,
                 some(&["z"]),
             ),
+            // '=' in text before, between and after tags; '?' and '!' in values
+            (
+                r#"a=b <x gml:id="1">c=d</x><y/>e=f<z k="v" gml:id="2"/>=<w/>"#,
+                some(&["1", "2"]),
+            ),
+            (r#"<a v="x?y!z" gml:id="q"/>"#, some(&["q"])),
             // escaped value
             (r#"<a gml:id="a&amp;b"/>"#, some(&["a&b"])),
             // what the scan cannot judge: the caller parses instead
