@@ -163,7 +163,7 @@ pub(super) struct IdTable {
 impl IdTable {
     fn hash(id: &[u8]) -> u64 {
         use std::hash::BuildHasher;
-        foldhash::fast::FixedState::with_seed(0x5c71_10d).hash_one(id)
+        foldhash::fast::FixedState::with_seed(0x05c7_110d).hash_one(id)
     }
 
     fn push(&mut self, id: &[u8], node: u32) {
