@@ -78,11 +78,9 @@ pub(super) struct Doc {
     /// Elements in document order (start-tag order).
     pub(super) nodes: Vec<Node>,
     pub(super) names: Vec<Name>,
-    /// `gml:id` -> element (the first one when an id repeats) of parsed content; see
-    /// [`Doc::id_node`], which also looks in `skipped_ids`.
-    pub(super) ids: HashMap<Box<str>, u32>,
-    /// `gml:id`s inside skipped content, each mapped to the skipped element.
-    pub(super) skipped_ids: IdTable,
+    /// Every `gml:id` with its element; an id inside skipped content maps to the skipped
+    /// element. See [`Doc::id_node`].
+    pub(super) ids: IdTable,
     /// (node, kind, reference) in document order.
     pub(super) refs: Vec<(u32, RefKind, Box<str>)>,
     /// `name` attribute (2.0 generic attributes) or `gen:name` text (3.0), per node.
@@ -99,15 +97,12 @@ impl Doc {
     /// The element holding `gml:id` `id`: the first in document order when the id repeats
     /// (node indices follow document order, and skipped content has no nodes of its own).
     pub(super) fn id_node(&self, id: &str) -> Option<u32> {
-        match (self.ids.get(id).copied(), self.skipped_ids.get(id)) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        self.ids.get(id)
     }
 
     /// Does the document hold `gml:id` `id`?
     pub(super) fn has_id(&self, id: &str) -> bool {
-        self.ids.contains_key(id) || self.skipped_ids.get(id).is_some()
+        self.ids.get(id).is_some()
     }
 
     /// The element starting at byte `start`.
@@ -151,8 +146,9 @@ impl Doc {
     }
 }
 
-/// Ids of skipped content: their bytes in one arena, found by hash (a sorted table, so that
-/// hundreds of thousands of ids cost no allocation each).
+/// `gml:id`s: their bytes in one arena, found by hash (a sorted table, so that hundreds of
+/// thousands of ids cost no allocation each). An id that repeats maps to its smallest node,
+/// the first in document order.
 #[derive(Debug, Default)]
 pub(super) struct IdTable {
     bytes: Vec<u8>,
@@ -481,7 +477,7 @@ pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc
             "unexpected end of document".into(),
         ));
     }
-    doc.skipped_ids.finish();
+    doc.ids.finish();
     Ok(doc)
 }
 
@@ -505,8 +501,8 @@ fn skip_content(
     src.inner.reset();
     src.by_ref().take(len).read_to_end(content)?;
     let end_tag = memchr::memrchr(b'<', content).filter(|&k| content.get(k + 1) == Some(&b'/'));
-    let before = doc.skipped_ids.len();
-    let table = &mut doc.skipped_ids;
+    let before = doc.ids.len();
+    let table = &mut doc.ids;
     let skipped = match end_tag {
         Some(k) if content.len() as u64 == len => {
             let mut gml = PrefixCache::default();
@@ -520,7 +516,7 @@ fn skip_content(
         _ => None,
     };
     let Some(k) = skipped else {
-        doc.skipped_ids.truncate(before);
+        doc.ids.truncate(before);
         reader.get_mut().push_back(content);
         return Ok(0);
     };
@@ -684,7 +680,10 @@ fn scan_attrs<R>(
                 };
                 match (lname.as_ref(), ns::classify(n.0)) {
                     (b"id", Ns::Gml) => {
-                        doc.ids.entry(value()?.into()).or_insert(idx);
+                        let v = attr.unescape_value().map_err(|err| {
+                            xml_err(path, 0, format!("bad attribute value: {err}"))
+                        })?;
+                        doc.ids.push(v.as_bytes(), idx);
                     }
                     (b"href", Ns::Xlink) => {
                         doc.refs
