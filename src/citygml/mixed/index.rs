@@ -154,6 +154,10 @@ pub(super) struct IdTable {
     bytes: Vec<u8>,
     /// (hash, start in `bytes`, length, node); sorted by hash once the scan is done.
     entries: Vec<(u64, usize, u32, u32)>,
+    /// After [`IdTable::finish`]: the first entry of each range of hashes with the same top
+    /// `bits` bits (one more at the end), so that a lookup reads about one entry.
+    dir: Vec<u32>,
+    bits: u32,
 }
 
 impl IdTable {
@@ -179,15 +183,36 @@ impl IdTable {
 
     fn finish(&mut self) {
         self.entries.sort_unstable();
+        self.bits = (self.entries.len().max(1).ilog2() + 1).min(24);
+        let buckets = 1usize << self.bits;
+        self.dir = Vec::with_capacity(buckets + 1);
+        let mut e = 0;
+        for b in 0..buckets {
+            while self.entries.get(e).is_some_and(|x| self.bucket(x.0) < b) {
+                e += 1;
+            }
+            self.dir.push(e as u32);
+        }
+        self.dir.push(self.entries.len() as u32);
+    }
+
+    fn bucket(&self, h: u64) -> usize {
+        (h >> (64 - self.bits)) as usize
     }
 
     /// Smallest node holding `id`.
     pub(super) fn get(&self, id: &str) -> Option<u32> {
         let h = Self::hash(id.as_bytes());
-        let lo = self.entries.partition_point(|e| e.0 < h);
-        self.entries[lo..]
+        let entries = if self.dir.is_empty() {
+            &self.entries[..] // before finish: all of them
+        } else {
+            let b = self.bucket(h);
+            let (lo, hi) = (self.dir[b] as usize, self.dir[b + 1] as usize);
+            &self.entries[lo..hi]
+        };
+        entries
             .iter()
-            .take_while(|e| e.0 == h)
+            .filter(|e| e.0 == h)
             .filter(|e| self.bytes.get(e.1..e.1 + e.2 as usize) == Some(id.as_bytes()))
             .map(|e| e.3)
             .min()
@@ -767,11 +792,19 @@ mod tests {
         let n = t.len();
         t.push(b"c", 9);
         t.truncate(n);
+        assert_eq!(t.get("a"), Some(5), "before finish");
         t.finish();
         assert_eq!(t.get("a"), Some(5));
         assert_eq!(t.get("b"), Some(3));
         assert_eq!(t.get("c"), None);
         assert_eq!(t.get(""), None);
+        let mut big = IdTable::default();
+        for i in 0..5000u32 {
+            big.push(format!("id{i}").as_bytes(), i);
+        }
+        big.finish();
+        assert!((0..5000u32).all(|i| big.get(&format!("id{i}")) == Some(i)));
+        assert_eq!(big.get("id5000"), None);
     }
 
     #[test]

@@ -488,12 +488,26 @@ impl<'a> Plan<'a> {
         }
     }
 
-    fn polygon_alive(&self, p: &Polygon) -> bool {
+    /// Per node, [`Plan::is_dead`] as things stand, in one pass (parents come first).
+    fn dead_nodes(&self) -> Vec<bool> {
+        let n = self.doc.nodes.len();
+        // `gone[i]`: node i or an ancestor removed or replaced
+        let mut gone = vec![false; n];
+        let mut dead = vec![false; n];
+        for i in 0..n {
+            let above = self.doc.parent(i as u32).is_some_and(|p| gone[p as usize]);
+            dead[i] = self.removed[i] || above;
+            gone[i] = dead[i] || self.replaced[i];
+        }
+        dead
+    }
+
+    fn polygon_alive(&self, p: &Polygon, dead: &[bool]) -> bool {
         match &p.id {
             Some(id) => self
                 .doc
                 .id_node(id.as_str())
-                .is_none_or(|n| !self.is_dead(n)),
+                .is_none_or(|n| !dead[n as usize]),
             None => true,
         }
     }
@@ -501,6 +515,7 @@ impl<'a> Plan<'a> {
     /// Geometry properties actually written, with their boxes and polygon counts.
     fn written(&self) -> Vec<Written> {
         let m = self.model;
+        let dead = self.dead_nodes();
         let mut out = Vec::new();
         let mut replaced: HashMap<u32, usize> = HashMap::new();
         for (i, r) in self.replacements.iter().enumerate() {
@@ -538,14 +553,14 @@ impl<'a> Plan<'a> {
                 let Some(n) = self.doc.node_at(g.span.start) else {
                     continue;
                 };
-                if self.is_dead(n) {
+                if dead[n as usize] {
                     continue;
                 }
                 match replaced.get(&n) {
                     Some(&i) => push(n, &mut self.replacements[i].polygons.iter(), asset),
                     None => push(
                         n,
-                        &mut g.polygons.iter().filter(|p| self.polygon_alive(p)),
+                        &mut g.polygons.iter().filter(|p| self.polygon_alive(p, &dead)),
                         asset,
                     ),
                 }
