@@ -9,9 +9,12 @@
 //! `gml:id`s it holds (a kept `xlink:href` or appearance target pointing at one of them is
 //! pruned, and a fresh id must not meet one). References inside dropped content are never
 //! looked at (they are dead before the first pruning round), so they need not be found.
-//! The scan is a tag tokenizer, exact for well-formed XML; content holding a comment, CDATA
+//! The scan looks at each `=` and tokenizes the start tag around it (`<` cannot stand in text
+//! or attribute values), exact for well-formed XML; content holding a comment, CDATA
 //! section, processing instruction or namespace declaration is parsed as usual instead (the
-//! namespace scope of its ids would change), as is content larger than half the token limit.
+//! namespace scope of its ids could change), as is content larger than half the token limit
+//! or not ending with the element's own end tag. Ids go to an arena table ([`IdTable`]): no
+//! allocation per id; an id that repeats maps to its first element, as in a full parse.
 //!
 //! The pass shares the reader's set-up: namespace classification ([`crate::citygml::ns`]),
 //! the byte-order-mark handling and the per-token size limit and nesting depth of
@@ -525,7 +528,18 @@ fn skip_content(
     let src = reader.get_mut();
     src.inner.reset();
     src.by_ref().take(len).read_to_end(content)?;
-    let end_tag = memchr::memrchr(b'<', content).filter(|&k| content.get(k + 1) == Some(&b'/'));
+    // the element's own end tag, `</qname` then space or `>`
+    let qname = doc.names[doc.nodes[idx as usize].name as usize]
+        .qname
+        .as_bytes();
+    let end_tag = memchr::memrchr(b'<', content).filter(|&k| {
+        let tag = &content[k..];
+        tag.get(1) == Some(&b'/')
+            && tag.get(2..2 + qname.len()) == Some(qname)
+            && tag
+                .get(2 + qname.len())
+                .is_some_and(|&b| b == b'>' || is_ws(b))
+    });
     let before = doc.ids.len();
     let table = &mut doc.ids;
     let skipped = match end_tag {
@@ -877,6 +891,11 @@ mod tests {
                 .collect::<Vec<_>>()
         };
         assert_eq!(tail(&full), tail(&fast));
+        // a span that does not end with the element's own end tag is parsed, not skipped
+        let wrong = skip[0].start..skip[0].end + "</cityObjectMember>".len() as u64;
+        let w = scan(&path, std::slice::from_ref(&wrong), &opts).unwrap();
+        assert_eq!(w.skipped, (0, 0));
+        assert_eq!(w.nodes.len(), full.nodes.len());
     }
 
     #[test]
