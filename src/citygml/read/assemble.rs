@@ -2,7 +2,7 @@
 //! envelopes, the source file's record.
 
 use super::state::{EnvOwner, Owner, Parser};
-use super::xlink::PolyRef;
+use super::xlink::{PolyRef, Walk};
 use crate::citygml::error::{Location, ReadError};
 use crate::model::{Asset, AssetKind, Bbox, CityModel, SourceFile, Warning};
 
@@ -23,13 +23,17 @@ impl Parser {
         let pending = std::mem::take(&mut self.pending);
         let mut refs: Vec<Vec<PolyRef>> = Vec::with_capacity(pending.len());
         let mut uses = vec![0u32; self.polys.len()];
-        let mut budget = self
-            .opts
-            .max_href_work
-            .saturating_add(self.parts.len().saturating_mul(4));
+        let wanted = self.href_targets();
+        let mut walk = Walk {
+            index: self.registry.index(&wanted),
+            budget: self
+                .opts
+                .max_href_work
+                .saturating_add(self.parts.len().saturating_mul(4)),
+        };
         for pg in &pending {
             let mut out = Vec::new();
-            self.resolve(pg.range, false, 0, None, &mut out, &mut budget)?;
+            self.resolve(pg.range, false, 0, None, &mut out, &mut walk)?;
             for r in &out {
                 if let Some(u) = uses.get_mut(r.poly as usize) {
                     *u += 1;

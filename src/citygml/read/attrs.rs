@@ -6,6 +6,7 @@ use crate::citygml::ns::{self, Ns};
 use quick_xml::events::BytesStart;
 use quick_xml::name::ResolveResult;
 use quick_xml::NsReader;
+use std::borrow::Cow;
 
 impl Parser {
     /// The namespace URI of a resolved element name. An undeclared prefix is not
@@ -31,11 +32,13 @@ impl Parser {
         }
     }
 
-    pub(super) fn parse_attrs<R>(
+    /// The attributes the reader needs, borrowed from the tag (copied only when they hold
+    /// entity references).
+    pub(super) fn parse_attrs<'e, R>(
         &mut self,
         reader: &NsReader<R>,
-        e: &BytesStart,
-    ) -> Result<Attrs, ReadError> {
+        e: &'e BytesStart,
+    ) -> Result<Attrs<'e>, ReadError> {
         let mut a = Attrs::default();
         if memchr::memchr(b'=', e.attributes_raw()).is_none() {
             return Ok(a);
@@ -53,13 +56,11 @@ impl Parser {
             };
             let local = attr.key.local_name();
             let local = local.as_ref();
-            let value = || -> Result<String, ReadError> {
-                attr.unescape_value()
-                    .map(|v| v.into_owned())
-                    .map_err(|err| ReadError::Xml {
-                        loc: self.loc(),
-                        message: format!("bad attribute value: {err}"),
-                    })
+            let value = || -> Result<Cow<'e, str>, ReadError> {
+                attr.unescape_value().map_err(|err| ReadError::Xml {
+                    loc: self.loc(),
+                    message: format!("bad attribute value: {err}"),
+                })
             };
             match local {
                 b"id" => {

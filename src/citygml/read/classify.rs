@@ -79,7 +79,7 @@ impl Parser {
                     self.envelopes.push(EnvelopeSite {
                         span: pos..pos,
                         bbox: Bbox::EMPTY,
-                        srs_name: attrs.srs_name.clone(),
+                        srs_name: attrs.srs_name.as_deref().map(str::to_string),
                         dimension: match attrs.srs_dimension.as_deref().map(str::trim) {
                             Some("2") => 2,
                             _ => 3,
@@ -90,7 +90,7 @@ impl Parser {
                     self.env_owners.push(o);
                     if matches!(owner, Some(Kind::Root)) {
                         if let Some(s) = &attrs.srs_name {
-                            self.srs_name = Some(s.clone());
+                            self.srs_name = Some(s.to_string());
                         }
                     }
                     return Ok(Kind::Envelope(idx));

@@ -155,10 +155,55 @@ pub(super) enum CoordError {
     Count { count: usize, dimension: u8 },
 }
 
+/// Powers of ten exactly representable in an `f64`.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Plain decimals (`-123.456`: sign, digits, point, digits; no exponent) whose digits fit in
+/// 2^53 with at most 22 after the point: the mantissa and the power of ten are exact, so one
+/// IEEE division gives the correctly rounded value, bit for bit what a full parser returns
+/// (Clinger's fast path). `None` for anything else.
+#[inline]
+fn parse_plain_decimal(tok: &[u8]) -> Option<f64> {
+    let (neg, digits) = match tok.first() {
+        Some(b'-') => (true, &tok[1..]),
+        Some(b'+') => (false, &tok[1..]),
+        _ => (false, tok),
+    };
+    if digits.is_empty() || digits.len() > 19 {
+        return None;
+    }
+    let mut m = 0u64;
+    let mut frac: Option<usize> = None;
+    let mut n_digits = 0usize;
+    for (i, &c) in digits.iter().enumerate() {
+        match c {
+            b'0'..=b'9' => {
+                m = m * 10 + u64::from(c - b'0');
+                n_digits += 1;
+            }
+            b'.' if frac.is_none() => frac = Some(digits.len() - i - 1),
+            _ => return None,
+        }
+    }
+    // at most 19 digits: no overflow above; at least one digit
+    let k = frac.unwrap_or(0);
+    if n_digits == 0 || m > (1u64 << 53) || k >= POW10.len() {
+        return None;
+    }
+    let v = m as f64 / POW10[k];
+    Some(if neg { -v } else { v })
+}
+
 pub(super) fn parse_f64(tok: &[u8]) -> Result<f64, CoordError> {
     let bad = || CoordError::Token(String::from_utf8_lossy(&tok[..tok.len().min(40)]).into_owned());
     // fast-float2 parses the same grammar as `str::parse::<f64>` (incl. "nan", "inf"), from bytes.
-    let v: f64 = fast_float2::parse(tok).map_err(|_| bad())?;
+    let v: f64 = match parse_plain_decimal(tok) {
+        Some(v) => v,
+        None => fast_float2::parse(tok).map_err(|_| bad())?,
+    };
     if v.abs() <= MAX_COORDINATE {
         Ok(v)
     } else {
@@ -166,9 +211,38 @@ pub(super) fn parse_f64(tok: &[u8]) -> Result<f64, CoordError> {
     }
 }
 
-pub(super) fn tokens(text: &[u8]) -> impl Iterator<Item = &[u8]> {
-    text.split(|c| c.is_ascii_whitespace())
-        .filter(|t| !t.is_empty())
+/// Whitespace-separated tokens (XML whitespace and form feed, as `u8::is_ascii_whitespace`).
+pub(super) fn tokens(text: &[u8]) -> Tokens<'_> {
+    Tokens { text, at: 0 }
+}
+
+/// Iterator of [`tokens`]: one pass over the bytes, no empty tokens.
+pub(super) struct Tokens<'a> {
+    text: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a [u8];
+
+    #[inline]
+    fn next(&mut self) -> Option<&'a [u8]> {
+        let t = self.text;
+        let mut i = self.at;
+        while i < t.len() && t[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        if i >= t.len() {
+            self.at = i;
+            return None;
+        }
+        let from = i;
+        while i < t.len() && !t[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        self.at = i;
+        t.get(from..i)
+    }
 }
 
 pub(super) fn parse_numbers(text: &[u8], out: &mut Vec<f64>) -> Result<(), CoordError> {
@@ -181,11 +255,14 @@ pub(super) fn parse_numbers(text: &[u8], out: &mut Vec<f64>) -> Result<(), Coord
 pub(super) fn parse_pos_list(text: &[u8], dim: u8, out: &mut Vec<DVec3>) -> Result<(), CoordError> {
     let mut vals = [0.0f64; 3];
     let mut n = 0usize;
-    let d = dim as usize;
+    let d = usize::from(dim).clamp(1, 3);
+    let mut k = 0usize;
     for t in tokens(text) {
-        vals[n % d] = parse_f64(t)?;
+        vals[k] = parse_f64(t)?;
         n += 1;
-        if n % d == 0 {
+        k += 1;
+        if k == d {
+            k = 0;
             out.push(DVec3::new(
                 vals[0],
                 vals[1],
@@ -193,7 +270,7 @@ pub(super) fn parse_pos_list(text: &[u8], dim: u8, out: &mut Vec<DVec3>) -> Resu
             ));
         }
     }
-    if n % d != 0 {
+    if k != 0 {
         return Err(CoordError::Count {
             count: n,
             dimension: dim,
@@ -287,6 +364,88 @@ pub(super) fn parse_coordinates(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn plain_decimals_parse_bit_for_bit_like_std() {
+        let fixed = [
+            "0",
+            "-0",
+            "+0",
+            "0.0",
+            "-0.0",
+            ".5",
+            "5.",
+            "-.5",
+            "1",
+            "12.5",
+            "4463934.786",
+            "5404052.00123",
+            "0.1",
+            "0.2",
+            "0.3",
+            "-123.456",
+            "9007199254740992",
+            "9007199254740993",
+            "900719925474099.3",
+            "1.0000000000000002",
+            "0.000000000000000000001",
+            "1234567890123456789",
+            "12345678901234567.89",
+            "3.14159265358979323846",
+        ];
+        let mut cases: Vec<String> = fixed.iter().map(|s| s.to_string()).collect();
+        // pseudo-random decimals of every length and point position
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let digits = format!("{}", x % 10u64.pow((x % 17 + 1) as u32));
+            let point = (x >> 40) as usize % (digits.len() + 1);
+            let sign = if x & 1 == 1 { "-" } else { "" };
+            cases.push(format!("{sign}{}.{}", &digits[..point], &digits[point..]));
+        }
+        for s in &cases {
+            let want: f64 = s.parse().unwrap();
+            match parse_plain_decimal(s.as_bytes()) {
+                Some(v) => assert_eq!(v.to_bits(), want.to_bits(), "{s}"),
+                None if want.abs() <= MAX_COORDINATE => {
+                    assert_eq!(
+                        parse_f64(s.as_bytes()).unwrap().to_bits(),
+                        want.to_bits(),
+                        "{s}"
+                    )
+                }
+                None => assert!(parse_f64(s.as_bytes()).is_err(), "{s}"),
+            }
+        }
+        for bad in [
+            "",
+            "-",
+            ".",
+            "-.",
+            "1.2.3",
+            "1e5",
+            "1,5",
+            "--1",
+            "0x10",
+            "nan",
+            "12345678901234567890",
+        ] {
+            assert!(parse_plain_decimal(bad.as_bytes()).is_none(), "{bad}");
+        }
+        assert_eq!(parse_f64(b"1e5").unwrap(), 1e5);
+        assert!(parse_f64(b".").is_err());
+    }
+
+    #[test]
+    fn tokens_split_on_xml_whitespace() {
+        let t: Vec<&[u8]> = tokens(b"  1 2\t\n3\r\x0c4  ").collect();
+        assert_eq!(t, vec![&b"1"[..], b"2", b"3", b"4"]);
+        assert_eq!(tokens(b"   ").count(), 0);
+        assert_eq!(tokens(b"").count(), 0);
+        assert_eq!(tokens(b"a").collect::<Vec<_>>(), vec![&b"a"[..]]);
+    }
 
     #[test]
     fn pos_list_dims() {

@@ -53,7 +53,7 @@ impl Parser {
                 msg.push_str(TAIL);
                 self.warn(msg);
             }
-            let h = std::hash::BuildHasher::hash_one(&self.id_hasher, id.as_str());
+            let h = std::hash::BuildHasher::hash_one(&self.id_hasher, id.as_ref() as &str);
             if !self.seen_ids.insert(h) {
                 self.warn(format!("duplicate gml:id \"{id}\""));
             }
@@ -110,7 +110,7 @@ impl Parser {
                 ));
             }
             if self.srs_name.is_none() {
-                self.srs_name = Some(s.clone());
+                self.srs_name = Some(s.to_string());
             }
         }
 
@@ -182,10 +182,19 @@ impl Parser {
             self.polygon_elements += 1;
             self.poly = Some(PolyBuild::default());
         }
+        let id = attrs.id.as_deref().map(|s| {
+            let from = self.open_ids.len();
+            self.open_ids.push_str(s);
+            (
+                from,
+                self.open_ids.len(),
+                std::hash::BuildHasher::hash_one(&self.id_hasher, s),
+            )
+        });
         self.stack.push(Frame {
             kind,
             start: pos,
-            id: attrs.id.map(String::into_boxed_str),
+            id,
             register,
             dim,
             flip,
@@ -199,6 +208,7 @@ impl Parser {
         let Some(mut frame) = self.stack.pop() else {
             return Ok(());
         };
+        let id_span = frame.id;
         if frame.dim.is_some() {
             self.dims.pop();
         }
@@ -214,13 +224,16 @@ impl Parser {
             }
             Kind::Polygon => {
                 let id = frame.id.take();
-                let pushed = self.finish_polygon(id.as_deref().map(str::to_string));
-                let id = if frame.register.is_some() { id } else { None };
-                if let (Some(start), Some(id)) = (frame.register, id) {
-                    let end = self.parts.len() as u32;
-                    self.registry
-                        .entry(id)
-                        .or_insert((start, if pushed { end } else { start }));
+                let text = id.and_then(|(a, b, _)| self.open_ids.get(a..b));
+                let pushed = self.finish_polygon(text.map(str::to_string));
+                if let (Some(start), Some((a, b, hash))) = (frame.register, id) {
+                    let end = if pushed {
+                        self.parts.len() as u32
+                    } else {
+                        start
+                    };
+                    let text = self.open_ids.get(a..b).unwrap_or("");
+                    self.registry.add(hash, text, (start, end));
                 }
             }
             Kind::GeomProp { lod, start, owner } => {
@@ -294,11 +307,13 @@ impl Parser {
             Kind::Skip => self.skip_depth = self.skip_depth.saturating_sub(1),
             _ => {}
         }
-        if let Some(start) = frame.register {
-            if let Some(id) = frame.id.take() {
-                let end = self.parts.len() as u32;
-                self.registry.entry(id).or_insert((start, end));
-            }
+        if let (Some(start), Some((a, b, hash))) = (frame.register, frame.id) {
+            let end = self.parts.len() as u32;
+            let text = self.open_ids.get(a..b).unwrap_or("");
+            self.registry.add(hash, text, (start, end));
+        }
+        if let Some((a, _, _)) = id_span {
+            self.open_ids.truncate(a);
         }
         if frame.flip {
             self.flips = self.flips.saturating_sub(1);

@@ -12,12 +12,25 @@ use std::path::Path;
 
 /// Read from any buffered reader of the (decompressed) document.
 pub fn read_from<R: BufRead>(
-    mut reader: R,
+    reader: R,
     path: &Path,
     gzip: bool,
     opts: &ReadOptions,
 ) -> Result<CityModel, ReadError> {
+    read_sized(reader, path, gzip, opts, 0)
+}
+
+/// [`read_from`] with the expected document size in bytes (0: unknown), used to size the
+/// table of gml:ids once instead of growing it step by step.
+pub(super) fn read_sized<R: BufRead>(
+    mut reader: R,
+    path: &Path,
+    gzip: bool,
+    opts: &ReadOptions,
+    size_hint: u64,
+) -> Result<CityModel, ReadError> {
     let mut p = Parser::new(path, opts.clone());
+    p.expect_bytes(size_hint);
     let base = source::skip_bom(&mut reader, path)?;
     let mut reader = NsReader::from_reader(source::Limited::new(reader, opts.max_event_bytes));
     reader.config_mut().trim_text(false);

@@ -7,6 +7,7 @@ use glam::DVec3;
 
 impl Parser {
     pub(super) fn finish_ring(&mut self, exterior: bool, _frame: &Frame) {
+        // the points are parsed into a reused buffer; the polygon gets an exact-size copy
         let mut ring = std::mem::take(&mut self.ring);
         let closed = ring.len() >= 2 && ring.first() == ring.last();
         if closed {
@@ -40,15 +41,16 @@ impl Parser {
         if let Some(p) = self.poly.as_mut() {
             if exterior {
                 if valid {
-                    p.exterior = Some(ring);
+                    p.exterior = Some(ring.as_slice().to_vec());
                 } else {
                     p.invalid = true;
                 }
             } else if valid {
-                p.interiors.push(ring);
+                p.interiors.push(ring.as_slice().to_vec());
             }
         }
-        self.ring = Vec::with_capacity(16);
+        ring.clear();
+        self.ring = ring;
     }
 
     /// Push the polygon being built; false when it was dropped.

@@ -81,12 +81,28 @@ pub fn read_file(path: &Path) -> Result<CityModel, ReadError> {
 /// [`read_file`] with explicit limits.
 pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, ReadError> {
     let (reader, gzip) = source::open(path)?;
-    read_from(reader, path, gzip, opts)
+    // gzip-compressed CityGML is typically 8-12 times smaller than the document
+    let hint = std::fs::metadata(path)
+        .map(|m| {
+            if gzip {
+                m.len().saturating_mul(8)
+            } else {
+                m.len()
+            }
+        })
+        .unwrap_or(0);
+    events::read_sized(reader, path, gzip, opts, hint)
 }
 
 /// Read a document held in memory (tests, examples). `name` is used in messages.
 pub fn read_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<CityModel, ReadError> {
-    read_from(bytes, name.as_ref(), false, &ReadOptions::default())
+    events::read_sized(
+        bytes,
+        name.as_ref(),
+        false,
+        &ReadOptions::default(),
+        bytes.len() as u64,
+    )
 }
 
 /// Largest accepted coordinate magnitude: far beyond any real CRS (geocentric coordinates are

@@ -18,7 +18,8 @@ impl Parser {
         self.stack
             .iter()
             .rev()
-            .find_map(|f| f.id.as_deref().map(str::to_string))
+            .find_map(|f| f.id.and_then(|(a, b, _)| self.open_ids.get(a..b)))
+            .map(str::to_string)
     }
 
     pub(super) fn loc_at(&self, pos: u64) -> Location {

@@ -2,11 +2,13 @@
 //! the geometry arena; the small stack queries every concern uses.
 
 use super::coords::CoordAttrs;
+use super::xlink::Registry;
 use super::ReadOptions;
 use crate::citygml::error::Location;
 use crate::model::{Asset, AssetKind, Building, CityGmlVersion, EnvelopeSite, Polygon, Warning};
-use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
+use foldhash::{HashSet, HashSetExt};
 use glam::DVec3;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -92,7 +94,8 @@ pub(super) enum Kind {
 pub(super) struct Frame {
     pub(super) kind: Kind,
     pub(super) start: u64,
-    pub(super) id: Option<Box<str>>,
+    /// Byte range of the element's gml:id in [`Parser::open_ids`], and the id's hash.
+    pub(super) id: Option<(usize, usize, u64)>,
     /// Parts start when this geometry element has an id to register.
     pub(super) register: Option<u32>,
     pub(super) dim: Option<u8>,
@@ -151,7 +154,9 @@ pub(super) struct Parser {
     pub(super) hrefs: Vec<HrefRef>,
     pub(super) implicits: Vec<Implicit>,
     /// Range of geometry parts per gml:id of a geometry element.
-    pub(super) registry: HashMap<Box<str>, (u32, u32)>,
+    pub(super) registry: Registry,
+    /// Text of the gml:ids of the open elements, one after the other ([`Frame::id`] ranges).
+    pub(super) open_ids: String,
     /// 64-bit hashes of every gml:id seen, for duplicate detection without storing strings
     /// (a false "duplicate" needs a 64-bit collision: negligible).
     pub(super) seen_ids: HashSet<u64>,
@@ -179,11 +184,11 @@ pub(super) struct Parser {
 
 /// Attributes we care about, extracted from one start tag.
 #[derive(Default)]
-pub(super) struct Attrs {
-    pub(super) id: Option<String>,
-    pub(super) href: Option<String>,
-    pub(super) srs_name: Option<String>,
-    pub(super) srs_dimension: Option<String>,
+pub(super) struct Attrs<'e> {
+    pub(super) id: Option<Cow<'e, str>>,
+    pub(super) href: Option<Cow<'e, str>>,
+    pub(super) srs_name: Option<Cow<'e, str>>,
+    pub(super) srs_dimension: Option<Cow<'e, str>>,
     pub(super) orientation_minus: bool,
     pub(super) cs: Option<u8>,
     pub(super) ts: Option<u8>,
@@ -218,7 +223,8 @@ impl Parser {
             parts: Vec::new(),
             hrefs: Vec::new(),
             implicits: Vec::new(),
-            registry: HashMap::new(),
+            registry: Registry::default(),
+            open_ids: String::new(),
             seen_ids: HashSet::new(),
             id_hasher: foldhash::fast::FixedState::with_seed(0x5eed),
             pending: Vec::new(),
@@ -238,6 +244,13 @@ impl Parser {
             unknown_prefixes: HashSet::new(),
             relief_lod: 2,
         }
+    }
+
+    /// Size the gml:id table for a document of about `bytes` bytes (real files hold about one
+    /// gml:id per 300 bytes; the table grows beyond the estimate when needed).
+    pub(super) fn expect_bytes(&mut self, bytes: u64) {
+        let ids = (bytes / 400).min(1 << 24) as usize;
+        self.seen_ids.reserve(ids);
     }
 
     pub(super) fn current_dim(&self) -> u8 {

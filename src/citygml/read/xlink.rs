@@ -4,9 +4,76 @@
 use super::state::{HrefRef, Parser, Part};
 use crate::citygml::error::ReadError;
 use crate::model::Polygon;
+use foldhash::{HashMap, HashMapExt, HashSet};
 use glam::DVec3;
 
+/// The gml:ids of geometry elements and the range of geometry parts each stands for.
+///
+/// Reading only appends (one text arena, one list: no allocation per id, no hash table);
+/// after the last event, [`Registry::index`] indexes just the ids that references name.
+/// The first registration of an id wins.
+#[derive(Debug, Default)]
+pub(super) struct Registry {
+    text: String,
+    entries: Vec<RegEntry>,
+}
+
+#[derive(Debug)]
+struct RegEntry {
+    hash: u64,
+    from: usize,
+    to: usize,
+    range: (u32, u32),
+}
+
+impl Registry {
+    /// Record `id` (with its `hash`) for the parts `range`.
+    pub(super) fn add(&mut self, hash: u64, id: &str, range: (u32, u32)) {
+        let from = self.text.len();
+        self.text.push_str(id);
+        self.entries.push(RegEntry {
+            hash,
+            from,
+            to: self.text.len(),
+            range,
+        });
+    }
+
+    /// The ids whose hash is in `wanted`, each with its first registered range (the text is
+    /// compared, so two ids with the same hash stay apart).
+    pub(super) fn index(&self, wanted: &HashSet<u64>) -> HashMap<&str, (u32, u32)> {
+        let mut map = HashMap::with_capacity(wanted.len());
+        if wanted.is_empty() {
+            return map;
+        }
+        for e in &self.entries {
+            if wanted.contains(&e.hash) {
+                if let Some(t) = self.text.get(e.from..e.to) {
+                    map.entry(t).or_insert(e.range);
+                }
+            }
+        }
+        map
+    }
+}
+
+/// What resolving references needs besides the parser: the ids that references name, and the
+/// work left before the expansion limit.
+pub(super) struct Walk<'a> {
+    pub(super) index: HashMap<&'a str, (u32, u32)>,
+    pub(super) budget: usize,
+}
+
 impl Parser {
+    /// The gml:ids that references name (hashes of the targets after `#`), for [`Registry::index`].
+    pub(super) fn href_targets(&self) -> HashSet<u64> {
+        self.hrefs
+            .iter()
+            .filter_map(|h| h.target.strip_prefix('#'))
+            .map(|t| std::hash::BuildHasher::hash_one(&self.id_hasher, t))
+            .collect()
+    }
+
     pub(super) fn push_href(&mut self, href: &str, _pos: u64) {
         let reversed = self.flips % 2 == 1;
         let loc = self.loc();
@@ -29,12 +96,12 @@ impl Parser {
         depth: usize,
         implicit: Option<u32>,
         out: &mut Vec<PolyRef>,
-        budget: &mut usize,
+        walk: &mut Walk<'_>,
     ) -> Result<(), ReadError> {
         let mut i = range.0 as usize;
         let end = (range.1 as usize).min(self.parts.len());
         while i < end {
-            if *budget == 0 {
+            if walk.budget == 0 {
                 let loc = match self.parts[i] {
                     Part::Href(h) => self.hrefs.get(h as usize).map(|x| x.loc.clone()),
                     _ => None,
@@ -49,7 +116,7 @@ impl Parser {
                     ),
                 });
             }
-            *budget -= 1;
+            walk.budget -= 1;
             match self.parts[i] {
                 Part::Poly(p) => {
                     out.push(PolyRef {
@@ -73,7 +140,7 @@ impl Parser {
                             ),
                         });
                     };
-                    let Some(&r) = self.registry.get(target) else {
+                    let Some(&r) = walk.index.get(target) else {
                         return Err(ReadError::DanglingHref {
                             loc: href.loc.clone(),
                             href: href.target.to_string(),
@@ -85,19 +152,12 @@ impl Parser {
                             href: href.target.to_string(),
                         });
                     }
-                    self.resolve(
-                        r,
-                        reversed ^ href.reversed,
-                        depth + 1,
-                        implicit,
-                        out,
-                        budget,
-                    )?;
+                    self.resolve(r, reversed ^ href.reversed, depth + 1, implicit, out, walk)?;
                     i += 1;
                 }
                 Part::Implicit { idx, len } => {
                     let inner = (i as u32 + 1, (i as u32 + 1 + len).min(end as u32));
-                    self.resolve(inner, reversed, depth + 1, Some(idx), out, budget)?;
+                    self.resolve(inner, reversed, depth + 1, Some(idx), out, walk)?;
                     i = inner.1 as usize;
                 }
             }
@@ -157,4 +217,24 @@ pub(super) struct PolyRef {
     pub(super) poly: u32,
     pub(super) reversed: bool,
     pub(super) implicit: Option<u32>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_first_registration_wins_and_text_is_compared() {
+        let mut r = Registry::default();
+        r.add(7, "a", (0, 1));
+        r.add(7, "b", (1, 2)); // same hash, other id: kept apart
+        r.add(7, "a", (5, 6)); // a duplicate id: the first range stays
+        r.add(9, "c", (2, 3));
+        let wanted: HashSet<u64> = [7u64].into_iter().collect();
+        let idx = r.index(&wanted);
+        assert_eq!(idx.get("a"), Some(&(0, 1)));
+        assert_eq!(idx.get("b"), Some(&(1, 2)));
+        assert_eq!(idx.get("c"), None, "not wanted, not indexed");
+        assert!(r.index(&HashSet::default()).is_empty());
+    }
 }
