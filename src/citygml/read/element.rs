@@ -39,6 +39,10 @@ impl Parser {
                 self.gml_prefix = Some(self.cur_prefix.clone());
             }
         }
+        let ns_decl = self.xmlns.find(e.attributes_raw()).is_some();
+        if ns_decl {
+            self.attr_ns_cache.clear();
+        }
         let attrs = self.parse_attrs(reader, e)?;
 
         // ids: syntax and uniqueness
@@ -198,6 +202,7 @@ impl Parser {
             register,
             dim,
             flip,
+            ns_decl,
             content_start: self.content_start,
             name,
         });
@@ -209,6 +214,9 @@ impl Parser {
             return Ok(());
         };
         let id_span = frame.id;
+        if frame.ns_decl {
+            self.attr_ns_cache.clear();
+        }
         if frame.dim.is_some() {
             self.dims.pop();
         }

@@ -5,6 +5,7 @@ use super::coords::CoordAttrs;
 use super::xlink::Registry;
 use super::ReadOptions;
 use crate::citygml::error::Location;
+use crate::citygml::ns::Ns;
 use crate::model::{Asset, AssetKind, Building, CityGmlVersion, EnvelopeSite, Polygon, Warning};
 use foldhash::{HashSet, HashSetExt};
 use glam::DVec3;
@@ -100,6 +101,8 @@ pub(super) struct Frame {
     pub(super) register: Option<u32>,
     pub(super) dim: Option<u8>,
     pub(super) flip: bool,
+    /// The start tag declares namespaces.
+    pub(super) ns_decl: bool,
     pub(super) content_start: u64,
     /// Local name (for lod properties, building module etc.); only kept where needed.
     pub(super) name: Option<Box<str>>,
@@ -157,6 +160,11 @@ pub(super) struct Parser {
     pub(super) registry: Registry,
     /// Text of the gml:ids of the open elements, one after the other ([`Frame::id`] ranges).
     pub(super) open_ids: String,
+    /// Namespace per attribute prefix, valid until an element that declares namespaces
+    /// starts or ends (cleared there).
+    pub(super) attr_ns_cache: Vec<(Box<[u8]>, Ns)>,
+    /// Finds `xmlns` in a start tag's attributes.
+    pub(super) xmlns: memchr::memmem::Finder<'static>,
     /// 64-bit hashes of every gml:id seen, for duplicate detection without storing strings
     /// (a false "duplicate" needs a 64-bit collision: negligible).
     pub(super) seen_ids: HashSet<u64>,
@@ -225,6 +233,8 @@ impl Parser {
             implicits: Vec::new(),
             registry: Registry::default(),
             open_ids: String::new(),
+            attr_ns_cache: Vec::new(),
+            xmlns: memchr::memmem::Finder::new(b"xmlns").into_owned(),
             seen_ids: HashSet::new(),
             id_hasher: foldhash::fast::FixedState::with_seed(0x5eed),
             pending: Vec::new(),
