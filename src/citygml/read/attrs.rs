@@ -101,14 +101,24 @@ impl Parser {
                         a.href = Some(self.attr_value(&attr)?);
                     }
                 }
-                b"srsName" if attr.key.prefix().is_none() => a.srs_name = Some(self.attr_value(&attr)?),
-                b"srsDimension" if attr.key.prefix().is_none() => a.srs_dimension = Some(self.attr_value(&attr)?),
+                b"srsName" if attr.key.prefix().is_none() => {
+                    a.srs_name = Some(self.attr_value(&attr)?)
+                }
+                b"srsDimension" if attr.key.prefix().is_none() => {
+                    a.srs_dimension = Some(self.attr_value(&attr)?)
+                }
                 b"orientation" if attr.key.prefix().is_none() => {
                     a.orientation_minus = self.attr_value(&attr)?.trim() == "-"
                 }
-                b"cs" if attr.key.prefix().is_none() => a.cs = self.attr_value(&attr)?.bytes().next(),
-                b"ts" if attr.key.prefix().is_none() => a.ts = self.attr_value(&attr)?.bytes().next(),
-                b"decimal" if attr.key.prefix().is_none() => a.decimal = self.attr_value(&attr)?.bytes().next(),
+                b"cs" if attr.key.prefix().is_none() => {
+                    a.cs = self.attr_value(&attr)?.bytes().next()
+                }
+                b"ts" if attr.key.prefix().is_none() => {
+                    a.ts = self.attr_value(&attr)?.bytes().next()
+                }
+                b"decimal" if attr.key.prefix().is_none() => {
+                    a.decimal = self.attr_value(&attr)?.bytes().next()
+                }
                 _ => {}
             }
         }
