@@ -54,7 +54,11 @@ impl Parser {
             ResolveResult::Bound(n) => ns::classify(n.0),
             ResolveResult::Unbound => Ns::None,
         };
-        self.attr_ns_cache.push((prefix.into(), ns));
+        // a few prefixes in real files; capped so that a hostile file with thousands of
+        // prefixes costs a resolver search per attribute, not a quadratic cache search
+        if self.attr_ns_cache.len() < 8 {
+            self.attr_ns_cache.push((prefix.into(), ns));
+        }
         Some(ns)
     }
 
