@@ -1,5 +1,5 @@
 //! Parse throughput: skylod's reader (XML -> CityModel) against a raw `quick_xml` namespace-
-//! resolving event scan of the same bytes, in the same run (the machine is shared and noisy,
+//! resolving event scan of the same bytes, with and without parsing every number, in the same run (the machine is shared and noisy,
 //! so only the ratio and same-run figures mean something).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -38,6 +38,32 @@ fn raw_scan(bytes: &[u8]) -> usize {
     n
 }
 
+/// The reference of the reader's goal (issue 11, `../shared/tools/qxscan FILE floats`): the
+/// same scan, parsing every whitespace-separated number of every text node with `str::parse`.
+fn raw_scan_floats(bytes: &[u8]) -> f64 {
+    let mut r = NsReader::from_reader(bytes);
+    let mut buf = Vec::new();
+    let mut sum = 0.0;
+    loop {
+        match r.read_resolved_event_into(&mut buf) {
+            Ok((_, Event::Eof)) | Err(_) => break,
+            Ok((_, Event::Text(t))) => {
+                for tok in t.split(|b| b.is_ascii_whitespace()) {
+                    if let Some(v) = std::str::from_utf8(tok)
+                        .ok()
+                        .and_then(|s| s.parse::<f64>().ok())
+                    {
+                        sum += v;
+                    }
+                }
+            }
+            Ok(_) => {}
+        }
+        buf.clear();
+    }
+    sum
+}
+
 fn inputs() -> Vec<(String, Vec<u8>)> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let data = root.join("../shared/data");
@@ -57,6 +83,13 @@ fn inputs() -> Vec<(String, Vec<u8>)> {
     if let Some(b) = load(&synth) {
         v.push(("synth-small-lod3".to_string(), b));
     }
+    // a large file of one's own (e.g. `python3 ../shared/tools/bench_inputs.py ../shared/data
+    // /tmp/big.gml 56`): SKYLOD_PARSE_BENCH_FILE=/tmp/big.gml cargo bench --bench parse
+    if let Some(p) = std::env::var_os("SKYLOD_PARSE_BENCH_FILE") {
+        if let Some(b) = load(Path::new(&p)) {
+            v.push(("extra".to_string(), b));
+        }
+    }
     if v.is_empty() {
         eprintln!("parse bench: no input found (../shared/data missing); nothing measured");
     }
@@ -72,6 +105,11 @@ fn bench(c: &mut Criterion) {
             BenchmarkId::new("raw_quick_xml_scan", &name),
             &bytes,
             |b, x| b.iter(|| raw_scan(x)),
+        );
+        g.bench_with_input(
+            BenchmarkId::new("raw_quick_xml_scan_floats", &name),
+            &bytes,
+            |b, x| b.iter(|| raw_scan_floats(x)),
         );
         g.bench_with_input(BenchmarkId::new("skylod_read", &name), &bytes, |b, x| {
             b.iter(|| {

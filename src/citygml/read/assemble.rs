@@ -1,0 +1,207 @@
+//! Model assembly after the last event: geometry resolved into its owners, body assets,
+//! envelopes, the source file's record.
+
+use super::state::{EnvOwner, Owner, Parser};
+use super::xlink::{PolyRef, Walk};
+use crate::citygml::error::{Location, ReadError};
+use crate::model::{Asset, AssetKind, Bbox, CityModel, SourceFile, Warning};
+
+impl Parser {
+    pub(super) fn finish(mut self, len: u64, gzip: bool) -> Result<CityModel, ReadError> {
+        let Some(version) = self.version else {
+            return Err(ReadError::NotCityGml {
+                loc: Location {
+                    file: self.path.clone(),
+                    line: 1,
+                    column: 1,
+                    gml_id: None,
+                },
+                message: "no element in a CityGML 1.0, 2.0 or 3.0 namespace".into(),
+            });
+        };
+        // resolve geometry: references first, then move or clone the polygons
+        let pending = std::mem::take(&mut self.pending);
+        let mut refs: Vec<Vec<PolyRef>> = Vec::with_capacity(pending.len());
+        let mut uses = vec![0u32; self.polys.len()];
+        let wanted = self.href_targets();
+        let mut walk = Walk {
+            index: self.registry.index(&wanted),
+            budget: self
+                .opts
+                .max_href_work
+                .saturating_add(self.parts.len().saturating_mul(4)),
+        };
+        for pg in &pending {
+            let mut out = Vec::new();
+            self.resolve(pg.range, false, 0, None, &mut out, &mut walk)?;
+            for r in &out {
+                if let Some(u) = uses.get_mut(r.poly as usize) {
+                    *u += 1;
+                }
+            }
+            refs.push(out);
+        }
+        let mut polys = std::mem::take(&mut self.polys);
+        for (pg, rs) in pending.iter().zip(&refs) {
+            let resolved = self.materialise(rs, &mut polys, &mut uses);
+            let list = match pg.owner {
+                Owner::Asset(a) => self.assets.get_mut(a).map(|x| &mut x.geometries),
+                Owner::Building(b) => self.buildings.get_mut(b).map(|x| &mut x.geometries),
+            };
+            if let Some(g) = list.and_then(|l| l.get_mut(pg.index)) {
+                g.polygons = resolved;
+            }
+        }
+        // drop empty geometries (curves, points)
+        for a in &mut self.assets {
+            a.geometries.retain(|g| !g.polygons.is_empty());
+        }
+        for b in &mut self.buildings {
+            b.geometries.retain(|g| !g.polygons.is_empty());
+        }
+        // Body assets: a building's own geometry when it has no thematic surfaces
+        for b in 0..self.buildings.len() {
+            let has_surfaces = self.buildings[b]
+                .assets
+                .iter()
+                .any(|&a| self.assets[a].kind.is_shell_surface());
+            if !has_surfaces && !self.buildings[b].geometries.is_empty() {
+                let geoms = std::mem::take(&mut self.buildings[b].geometries);
+                let idx = self.assets.len();
+                let bb = &self.buildings[b];
+                self.assets.push(Asset {
+                    kind: AssetKind::Body,
+                    id: bb.id.clone(),
+                    element: if bb.is_part {
+                        "BuildingPart"
+                    } else {
+                        "Building"
+                    }
+                    .to_string(),
+                    building: Some(b),
+                    parent: None,
+                    span: bb.span.clone(),
+                    line: bb.line,
+                    function: None,
+                    geometries: geoms,
+                    file: 0,
+                });
+                self.buildings[b].assets.push(idx);
+            }
+        }
+        // Assets with no geometry left (e.g. a surface with only curves) are dropped from the
+        // model but stay verbatim in the output.
+        // envelopes
+        let envs: Vec<Bbox> = self
+            .env_owners
+            .iter()
+            .map(|o| match o {
+                EnvOwner::Root => {
+                    let mut b = Bbox::EMPTY;
+                    for a in &self.assets {
+                        b.union(&a.bbox());
+                    }
+                    for bd in &self.buildings {
+                        for g in &bd.geometries {
+                            for p in &g.polygons {
+                                for q in p.points() {
+                                    b.add(*q);
+                                }
+                            }
+                        }
+                    }
+                    b
+                }
+                EnvOwner::Building(b) => self.building_bbox(*b),
+                EnvOwner::Asset(a) => {
+                    let mut b = self.assets.get(*a).map(|x| x.bbox()).unwrap_or_default();
+                    for x in &self.assets {
+                        if x.parent == Some(*a) {
+                            b.union(&x.bbox());
+                        }
+                    }
+                    b
+                }
+            })
+            .collect();
+        for (e, b) in self.envelopes.iter_mut().zip(envs) {
+            if e.dimension == 0 {
+                e.dimension = 3;
+                e.bbox = Bbox::EMPTY;
+            } else {
+                e.bbox = b;
+            }
+        }
+        let mut has_root_env = false;
+        for o in &self.env_owners {
+            if matches!(o, EnvOwner::Root) {
+                has_root_env = true;
+            }
+        }
+        if !has_root_env && self.root_is_model {
+            self.warnings.push(Warning {
+                file: self.shared_path.clone(),
+                line: 1,
+                column: 1,
+                gml_id: None,
+                message: "CityModel has no gml:boundedBy envelope".into(),
+            });
+        }
+        let file = SourceFile {
+            path: self.path.clone(),
+            version,
+            srs_name: self.srs_name.clone(),
+            gzip,
+            len,
+            gml_prefix: self.gml_prefix.clone().unwrap_or_else(|| "gml:".into()),
+            envelopes: std::mem::take(&mut self.envelopes),
+            implicit_geometries: self.implicit_count,
+            library_objects: std::mem::take(&mut self.library_objects),
+            objects_without_geometry: self.objects_without_geometry,
+            polygon_elements: self.polygon_elements,
+            features: self
+                .feature_counts
+                .iter()
+                .map(|(name, n)| (String::from_utf8_lossy(name).into_owned(), *n))
+                .collect(),
+        };
+        Ok(CityModel {
+            files: vec![file],
+            buildings: self.buildings,
+            assets: self.assets,
+            warnings: self.warnings,
+        })
+    }
+
+    pub(super) fn building_bbox(&self, b: usize) -> Bbox {
+        let mut bb = Bbox::EMPTY;
+        for (i, x) in self.buildings.iter().enumerate() {
+            // the building itself and its parts (transitively)
+            let mut cur = Some(i);
+            let mut inside = false;
+            while let Some(c) = cur {
+                if c == b {
+                    inside = true;
+                    break;
+                }
+                cur = self.buildings.get(c).and_then(|y| y.parent);
+            }
+            if !inside {
+                continue;
+            }
+            for &a in &x.assets {
+                if let Some(asset) = self.assets.get(a) {
+                    bb.union(&asset.bbox());
+                }
+            }
+            for g in &x.geometries {
+                for p in &g.polygons {
+                    for q in p.points() {
+                        bb.add(*q);
+                    }
+                }
+            }
+        }
+        bb
+    }
+}

@@ -1,0 +1,110 @@
+//! Streaming CityGML reader: XML events -> [`CityModel`] of buildings and assets.
+//!
+//! Namespace-aware ([`quick_xml::NsReader`]): elements are matched by namespace URI, so any
+//! prefix and default namespaces work, for CityGML 1.0, 2.0 and 3.0. The document text is never
+//! held in memory: each event is handled and dropped, memory grows with the model only.
+//!
+//! Geometry is collected into a per-document arena of *parts* (polygons, `xlink:href`
+//! references, implicit-geometry headers); every geometry element with a `gml:id` records its
+//! range of parts, so references (forward ones too) are resolved after the last event.
+//!
+//! One concern per file: `events` (the event loop), `element` (start and end of an element),
+//! `classify` (what an element is), `attrs` (namespaces and attributes), `coords` (coordinates
+//! and other captured text), `geometry` (rings and polygons), `xlink` (references), `assemble`
+//! (the model after the last event), `position` (lines, columns, locations), `state` (the
+//! parser's state and stack queries).
+//!
+//! # Example
+//! ```
+//! let xml = br#"<CityModel xmlns="http://www.opengis.net/citygml/2.0"
+//!   xmlns:bldg="http://www.opengis.net/citygml/building/2.0" xmlns:gml="http://www.opengis.net/gml">
+//!  <cityObjectMember><bldg:Building gml:id="b1"><bldg:boundedBy><bldg:RoofSurface gml:id="r1">
+//!   <bldg:lod2MultiSurface><gml:MultiSurface><gml:surfaceMember><gml:Polygon><gml:exterior>
+//!    <gml:LinearRing><gml:posList>0 0 5 1 0 5 1 1 5 0 0 5</gml:posList></gml:LinearRing>
+//!   </gml:exterior></gml:Polygon></gml:surfaceMember></gml:MultiSurface></bldg:lod2MultiSurface>
+//!  </bldg:RoofSurface></bldg:boundedBy></bldg:Building></cityObjectMember></CityModel>"#;
+//! let model = skylod::citygml::read::read_bytes(xml, "inline.gml").unwrap();
+//! assert_eq!(model.buildings.len(), 1);
+//! assert_eq!(model.assets[0].kind, skylod::model::AssetKind::Roof);
+//! assert_eq!(model.assets[0].detail_polygons()[0].exterior.len(), 3);
+//! ```
+
+mod assemble;
+mod attrs;
+mod classify;
+mod coords;
+mod element;
+mod events;
+mod geometry;
+mod position;
+mod state;
+mod xlink;
+
+pub use events::read_from;
+
+use crate::citygml::error::ReadError;
+use crate::citygml::source;
+use crate::model::CityModel;
+use std::path::Path;
+
+/// Limits that protect against hostile input.
+#[derive(Debug, Clone)]
+pub struct ReadOptions {
+    /// Maximum element nesting depth.
+    pub max_depth: usize,
+    /// Maximum size of one XML event (a tag with its attributes, or one text node), bytes.
+    pub max_event_bytes: usize,
+    /// Maximum depth of chained `xlink:href` geometry references.
+    pub max_href_depth: usize,
+    /// Maximum number of steps (polygons and references visited) spent resolving
+    /// `xlink:href` geometry references, on top of five per polygon element of the document;
+    /// protects against exponential reference trees ("billion laughs" built from xlinks).
+    pub max_href_work: usize,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            max_depth: 4096,
+            max_event_bytes: 64 << 20,
+            max_href_depth: 64,
+            max_href_work: 2_000_000,
+        }
+    }
+}
+
+/// Read one CityGML file (`.gml`, `.xml`, gzip-compressed or not).
+pub fn read_file(path: &Path) -> Result<CityModel, ReadError> {
+    read_file_with(path, &ReadOptions::default())
+}
+
+/// [`read_file`] with explicit limits.
+pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, ReadError> {
+    let (reader, gzip) = source::open(path)?;
+    // gzip-compressed CityGML is typically 8-12 times smaller than the document
+    let hint = std::fs::metadata(path)
+        .map(|m| {
+            if gzip {
+                m.len().saturating_mul(8)
+            } else {
+                m.len()
+            }
+        })
+        .unwrap_or(0);
+    events::read_sized(reader, path, gzip, opts, hint)
+}
+
+/// Read a document held in memory (tests, examples). `name` is used in messages.
+pub fn read_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<CityModel, ReadError> {
+    events::read_sized(
+        bytes,
+        name.as_ref(),
+        false,
+        &ReadOptions::default(),
+        bytes.len() as u64,
+    )
+}
+
+/// Largest accepted coordinate magnitude: far beyond any real CRS (geocentric coordinates are
+/// about 6.4e6 m) yet small enough that areas and cross products of coordinates stay finite.
+pub const MAX_COORDINATE: f64 = 1e12;
