@@ -23,6 +23,8 @@ pub mod reproject;
 pub mod rough;
 pub mod scene;
 pub mod select;
+pub mod shard;
+pub mod shard_levels;
 pub mod sky;
 pub mod solar;
 pub mod stats;

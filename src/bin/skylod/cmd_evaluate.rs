@@ -17,6 +17,8 @@ pub struct Args {
     #[command(flatten)]
     region: crate::region_args::RegionArgs,
     #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
     site: SiteArgs,
     /// Skip sun hours (then --lat/--lon are not needed).
     #[arg(long)]
@@ -60,12 +62,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let t_all = Instant::now();
     args.site.check("evaluate")?;
+    let shard = args.shard.resolve()?;
     let pois = args.region.points(&args.pois)?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
     let pois = args.region.extend(pois, &loaded.model)?;
+    let pois = crate::shard_args::pois(shard, pois, "evaluate");
     let framed = args
         .pois
         .frame_checked(&mut loaded.model, pois, "evaluate")?;
@@ -116,7 +120,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             },
         });
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
-    } else {
+    } else if crate::shard_args::header(shard) {
         out_err(writeln!(
             out,
             "{:<18} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
@@ -133,6 +137,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             "trace ms",
             "select ms"
         ))?;
+    }
+    if !args.json {
         for p in &e.pois {
             for (name, m, svf_err, sun_err, sel) in [
                 (

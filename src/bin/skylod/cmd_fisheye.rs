@@ -37,6 +37,8 @@ enum ColourBy {
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
+    #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
     /// Output SVG (`-` for standard output, one POI only). With several POIs, one file per
     /// POI: `<stem>-<id>.svg`.
     #[arg(short, long)]
@@ -95,13 +97,16 @@ fn output_for(base: &Path, poi: &Poi, many: bool) -> PathBuf {
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
+    let shard = args.shard.resolve()?;
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
     if let (Some(lat), Some(lon)) = (args.lat, args.lon) {
         crate::common::lat_lon(Some(lat), Some(lon), "fisheye")?;
     }
+    // Named from all POIs, so a shard writes the files the serial run would.
     let many = pois.len() > 1;
+    let pois = crate::shard_args::pois(shard, pois, "fisheye");
     let outputs: Vec<PathBuf> = pois
         .iter()
         .map(|p| output_for(&args.output, p, many))

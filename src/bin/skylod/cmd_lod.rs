@@ -16,54 +16,63 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pois: PoiArgs,
+    pub(crate) pois: PoiArgs,
     #[command(flatten)]
-    region: crate::region_args::RegionArgs,
+    pub(crate) region: crate::region_args::RegionArgs,
     /// Output file (one input; `-` for standard output), or a directory that gets one file
     /// per input (created if missing; several inputs need a directory). `.gz` compresses. The
     /// format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl
     /// CityJSONSeq.
     #[arg(short, long)]
-    output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Output format when the output's name does not tell it (in a directory: the format of
     /// every output, named after its input with the format's ending).
     #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
-    format: Option<Format>,
+    pub(crate) format: Option<Format>,
     /// Rays per POI (cells of the equal-solid-angle hemisphere partition).
     #[arg(long, default_value_t = 10_000)]
-    rays: usize,
+    pub(crate) rays: usize,
     /// Seed of the ray jitter inside each cell (same seed, same output).
     #[arg(long, default_value_t = 1)]
-    seed: u64,
+    pub(crate) seed: u64,
     /// Silhouette threshold in degrees (default: 1.5 x the cell's angular size).
     #[arg(long, value_name = "DEG", value_parser = positive, allow_hyphen_values = true)]
-    threshold: Option<f64>,
+    pub(crate) threshold: Option<f64>,
     /// How far (m) below the lowest roof edge an installation may start and still count as
     /// standing on the roof.
     #[arg(long, default_value_t = 0.5, value_name = "M", value_parser = non_negative, allow_hyphen_values = true)]
-    roof_tolerance: f64,
+    pub(crate) roof_tolerance: f64,
     /// Rough model: largest angle (degrees) between normals of one plane.
     #[arg(long, default_value_t = 5.0, value_name = "DEG", value_parser = non_negative, allow_hyphen_values = true)]
-    angle: f64,
+    pub(crate) angle: f64,
     /// Rough model: largest distance (m) of a polygon from its plane to be merged.
     #[arg(long, default_value_t = 0.3, value_name = "M", value_parser = non_negative, allow_hyphen_values = true)]
-    thickness: f64,
+    pub(crate) thickness: f64,
     /// Rough model: do not use an asset's LoD2 geometry when it also has a higher LoD.
     #[arg(long)]
-    no_lod2: bool,
+    pub(crate) no_lod2: bool,
     /// Write a JSON report (schemas/report.schema.json; `-` for standard output).
     #[arg(long, value_name = "FILE.json")]
-    report: Option<PathBuf>,
+    pub(crate) report: Option<PathBuf>,
     /// Replace existing output files.
     #[arg(long)]
-    overwrite: bool,
+    pub(crate) overwrite: bool,
     #[command(flatten)]
-    bound: crate::bound_args::BoundArgs,
+    pub(crate) bound: crate::bound_args::BoundArgs,
+    /// With --shard (or a scheduler's index), -o names this shard's levels file (JSON lines,
+    /// `.jsonl`) instead of a model. Without: the model is written as usual.
+    #[command(flatten)]
+    pub(crate) shard: crate::shard_args::ShardArgs,
+    /// Reduce step: write the model (and --report) from the levels files of all shards
+    /// (levels combine by maximum) instead of tracing; POIs and options come from the files,
+    /// the inputs must be the shards' inputs.
+    #[arg(long, value_name = "LEVELS.jsonl", num_args = 1..)]
+    pub(crate) reduce: Vec<PathBuf>,
 }
 
 /// Output path per input: a file for one input (unless `out` is a directory), otherwise
 /// `out/<input file name>`.
-fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> {
+pub(crate) fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> {
     if inputs.len() == 1 && !out.is_dir() {
         return Ok(vec![out.to_path_buf()]);
     }
@@ -102,7 +111,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let t_all = Instant::now();
     args.bound.check()?;
-    let pois = args.region.points(&args.pois)?;
+    let shard = args.shard.resolve()?;
+    if let Some(s) = shard {
+        return crate::lod_shard::shard(args, s, t_all);
+    }
+    let reduce = crate::lod_shard::read(&mut args)?;
+    let pois = match &reduce {
+        Some(r) => r.pois.clone(),
+        None => args.region.points(&args.pois)?,
+    };
     let format = crate::export::resolve(args.pois.inputs.len(), &args.output, args.format)?;
     let mut outputs = output_paths(&args.pois.inputs, &args.output)?;
     if format != Format::CityGml && (outputs.len() > 1 || args.output.is_dir()) {
@@ -143,17 +160,24 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let pois = args.region.extend(pois, &loaded.model)?;
+    let combined = match reduce {
+        Some(r) => Some(r.combine(&loaded.model)?),
+        None => None,
+    };
+    let pois = match &combined {
+        Some(_) => pois,
+        None => args.region.extend(pois, &loaded.model)?,
+    };
     let mut failed = loaded.failed;
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
-    let mut result = lod(
-        &framed.model,
-        &framed.local_pois,
-        &LodOptions {
-            rough: rough_opts,
-            select: select_opts,
-        },
-    )?;
+    let lod_opts = LodOptions {
+        rough: rough_opts,
+        select: select_opts,
+    };
+    let mut result = match combined {
+        Some(c) => crate::lod_shard::result(&framed.model, c, &lod_opts),
+        None => lod(&framed.model, &framed.local_pois, &lod_opts)?,
+    };
     warn_flags(&framed.pois, &result.flags);
     let mut bound_report = None;
     if args.bound.active() {
@@ -359,7 +383,7 @@ fn buildings_without_kept_assets(
         .count()
 }
 
-fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {
+pub(crate) fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {
     let opts = WriteOptions {
         overwrite: args.overwrite,
         ..Default::default()

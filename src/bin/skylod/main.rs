@@ -20,7 +20,9 @@ mod cmd_synth;
 mod common;
 mod export;
 mod frames;
+mod lod_shard;
 mod region_args;
+mod shard_args;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]
