@@ -22,6 +22,7 @@ pub mod report;
 pub mod reproject;
 pub mod rough;
 pub mod scene;
+pub mod scene_radius;
 pub mod select;
 pub mod shard;
 pub mod shard_levels;

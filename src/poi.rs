@@ -30,36 +30,27 @@ impl Poi {
         }
     }
 
-    /// The seed of this POI's rays: `seed` mixed with its id and the bits of its position
-    /// and normal (SplitMix64 over FNV-1a), never its place in a list, so its result is the
-    /// same whichever POIs are traced with it (`--shard`).
+    /// The seed of this POI's rays: `seed` mixed with the POI's id (FNV-1a, then
+    /// SplitMix64), never with its place in a list, so its result is the same whichever
+    /// POIs are traced with it (`--shard`). The id (unique in a run) and not the
+    /// coordinates: the same point in a translated copy of the scene, or in feet instead of
+    /// metres, keeps its rays.
     ///
     /// ```
     /// use glam::DVec3;
     /// use skylod::poi::Poi;
     /// let p = Poi { id: "a".into(), position: DVec3::new(1.0, 2.0, 3.0), normal: None };
     /// let q = Poi { id: "b".into(), ..p.clone() };
-    /// assert_eq!(p.ray_seed(1), p.clone().ray_seed(1));
+    /// let moved = Poi { position: DVec3::new(5.0, 0.0, 0.0), ..p.clone() };
+    /// assert_eq!(p.ray_seed(1), moved.ray_seed(1));
     /// assert_ne!(p.ray_seed(1), q.ray_seed(1));
     /// assert_ne!(p.ray_seed(1), p.ray_seed(2));
     /// ```
     pub fn ray_seed(&self, seed: u64) -> u64 {
         let mut h: u64 = 0xCBF2_9CE4_8422_2325;
-        let mut eat = |bytes: &[u8]| {
-            for &b in bytes {
-                h ^= u64::from(b);
-                h = h.wrapping_mul(0x0100_0000_01B3);
-            }
-        };
-        eat(self.id.as_bytes());
-        eat(&[0xFF]);
-        for c in self.position.to_array() {
-            eat(&c.to_bits().to_le_bytes());
-        }
-        if let Some(n) = self.normal {
-            for c in n.to_array() {
-                eat(&c.to_bits().to_le_bytes());
-            }
+        for &b in self.id.as_bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01B3);
         }
         splitmix64(h ^ splitmix64(seed))
     }

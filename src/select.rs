@@ -20,7 +20,7 @@
 //!
 //! The bundle is Beckers' equal-solid-angle partition of the upper hemisphere (world
 //! frame, azimuth from north), one jittered ray per cell from an RNG seeded from the POI
-//! itself ([`Poi::ray_seed`]: id and coordinates with the seed). For a POI with
+//! itself ([`Poi::ray_seed`]: its id with the seed). For a POI with
 //! a normal only the rays in front of the surface (`dot(n, d) > 0`) are cast. Levels of
 //! several POIs combine by maximum, hits add up. POIs are traced in parallel (rayon); the
 //! result does not depend on the number of threads.

@@ -39,6 +39,8 @@ pub struct Args {
     pois: PoiArgs,
     #[command(flatten)]
     shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    scene: crate::scene_args::SceneArgs,
     /// Output SVG (`-` for standard output, one POI only). With several POIs, one file per
     /// POI: `<stem>-<id>.svg`.
     #[arg(short, long)]
@@ -106,6 +108,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     // Named from all POIs, so a shard writes the files the serial run would.
     let many = pois.len() > 1;
+    args.scene
+        .filter(&mut args.pois, &pois, shard, false, "fisheye")?;
     let pois = crate::shard_args::pois(shard, pois, "fisheye");
     let outputs: Vec<PathBuf> = pois
         .iter()

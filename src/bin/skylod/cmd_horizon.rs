@@ -18,6 +18,8 @@ pub struct Args {
     region: crate::region_args::RegionArgs,
     #[command(flatten)]
     shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    scene: crate::scene_args::SceneArgs,
     /// Azimuth step in degrees (0.01..=90); azimuths 0, step, 2 step, ... below 360.
     #[arg(long, default_value_t = 1.0)]
     step: f64,
@@ -63,6 +65,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     opts.validate().context("--step")?;
     let shard = args.shard.resolve()?;
     let pois = args.region.points(&args.pois)?;
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, shard, region, "horizon")?;
     if let Some(out) = &args.output {
         let w = WriteOptions {
             overwrite: args.overwrite,

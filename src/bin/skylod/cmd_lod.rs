@@ -63,6 +63,8 @@ pub struct Args {
     /// `.jsonl`) instead of a model. Without: the model is written as usual.
     #[command(flatten)]
     pub(crate) shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    pub(crate) scene: crate::scene_args::SceneArgs,
     /// Reduce step: write the model (and --report) from the levels files of all shards
     /// (levels combine by maximum) instead of tracing; POIs and options come from the files,
     /// the inputs must be the shards' inputs.
@@ -156,6 +158,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         threshold_deg: args.threshold,
         roof_tolerance_m: args.roof_tolerance,
     };
+    // Outputs are laid out for every input; --scene-radius then leaves out the far ones.
+    let all_inputs = args.pois.inputs.clone();
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, None, region, "lod")?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
@@ -222,7 +229,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let mut written: Vec<Option<(String, usize)>> = vec![None; model.files.len()];
     for (f, src) in model.files.iter().enumerate() {
         // Files of the model are the inputs that could be read, in input order.
-        let Some(k) = args.pois.inputs.iter().position(|p| p == &src.path) else {
+        let Some(k) = all_inputs.iter().position(|p| p == &src.path) else {
             continue;
         };
         let Some(out) = outputs.get(k) else { continue };

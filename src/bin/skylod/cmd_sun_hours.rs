@@ -19,6 +19,8 @@ pub struct Args {
     #[command(flatten)]
     shard: crate::shard_args::ShardArgs,
     #[command(flatten)]
+    scene: crate::scene_args::SceneArgs,
+    #[command(flatten)]
     site: SiteArgs,
     /// Calendar year (UTC) simulated.
     #[arg(long, default_value_t = DEFAULT_YEAR)]
@@ -44,6 +46,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.site.check("sun-hours")?;
     let shard = args.shard.resolve()?;
     let pois = args.region.points(&args.pois)?;
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, shard, region, "sun-hours")?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);

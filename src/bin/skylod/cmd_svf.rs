@@ -15,6 +15,8 @@ pub struct Args {
     region: crate::region_args::RegionArgs,
     #[command(flatten)]
     shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    scene: crate::scene_args::SceneArgs,
     /// Rays per bundle (cells of each Beckers sky partition).
     #[arg(long, default_value_t = 10_000)]
     rays: usize,
@@ -30,6 +32,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let shard = args.shard.resolve()?;
     let pois = args.region.points(&args.pois)?;
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, shard, region, "svf")?;
     let bundles = SkyBundles::new(args.rays, args.seed)?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {

@@ -54,6 +54,9 @@ pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome
         args.pois.inputs.iter().map(PathBuf::as_path),
     )?;
     let pois = args.region.points(&args.pois)?;
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, Some(s), region, "lod")?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);

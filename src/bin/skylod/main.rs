@@ -22,6 +22,7 @@ mod export;
 mod frames;
 mod lod_shard;
 mod region_args;
+mod scene_args;
 mod shard_args;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
