@@ -524,3 +524,168 @@ fn scene_radius_reads_only_nearby_tiles() {
     );
     assert_eq!(far.status.code(), Some(2), "{}", stderr(&far));
 }
+
+/// Daemons of the one-node Slurm cluster, stopped (by their pid files) when dropped.
+struct Daemons(Vec<PathBuf>);
+
+impl Drop for Daemons {
+    fn drop(&mut self) {
+        for pid in &self.0 {
+            if let Ok(p) = std::fs::read_to_string(pid) {
+                let _ = Command::new("kill").arg(p.trim()).status();
+            }
+        }
+    }
+}
+
+/// A real Slurm job array on a one-node cluster brought up on localhost (Debian's
+/// `slurm-wlm` and `munge`, as root): `sbatch --array=0-1 --wait`, the shards' outputs
+/// concatenated equal the serial run.
+#[test]
+#[ignore = "brings up a one-node Slurm cluster (slurm-wlm, munge, root): cargo test --test shard -- --ignored"]
+fn slurm_job_array_for_real() {
+    for tool in [
+        "munged",
+        "slurmctld",
+        "slurmd",
+        "sbatch",
+        "sinfo",
+        "hostname",
+    ] {
+        if Command::new("sh")
+            .args(["-c", &format!("command -v {tool}")])
+            .output()
+            .map_or(true, |o| !o.status.success())
+        {
+            missing(&format!("{tool} (Debian packages slurm-wlm, munge)"));
+            return;
+        }
+    }
+    let dir = tempfile::Builder::new()
+        .prefix("skylod-slurm-")
+        .tempdir()
+        .unwrap();
+    let d = dir.path();
+    let host = String::from_utf8(Command::new("hostname").output().unwrap().stdout).unwrap();
+    let host = host.trim();
+    let port = 20000 + (std::process::id() % 20000) as u16;
+    for sub in ["state", "spool", "munge"] {
+        std::fs::create_dir_all(d.join(sub)).unwrap();
+    }
+    let key = d.join("munge/munge.key");
+    std::fs::write(
+        &key,
+        (0..1024u32)
+            .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+            .collect::<Vec<u8>>(),
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o600)).unwrap();
+    std::fs::set_permissions(d.join("munge"), std::fs::Permissions::from_mode(0o700)).unwrap();
+    let sock = d.join("munge/munge.sock");
+    let p = |x: &str| d.join(x).display().to_string();
+    let conf = d.join("slurm.conf");
+    std::fs::write(
+        &conf,
+        format!(
+            "ClusterName=skylodtest\nSlurmctldHost={host}\nSlurmUser=root\nSlurmdUser=root\n\
+             AuthType=auth/munge\nAuthInfo=socket={sock}\nStateSaveLocation={state}\n\
+             SlurmdSpoolDir={spool}\nSlurmctldPidFile={cpid}\nSlurmdPidFile={dpid}\n\
+             SlurmctldPort={port}\nSlurmdPort={dport}\nProctrackType=proctrack/linuxproc\n\
+             TaskPlugin=task/none\nSchedulerType=sched/builtin\nSelectType=select/cons_tres\n\
+             SelectTypeParameters=CR_CPU\nReturnToService=2\nMpiDefault=none\n\
+             JobAcctGatherType=jobacct_gather/none\nSlurmctldLogFile={clog}\nSlurmdLogFile={dlog}\n\
+             NodeName={host} CPUs={cpus} State=UNKNOWN\n\
+             PartitionName=test Nodes={host} Default=YES MaxTime=INFINITE State=UP\n",
+            sock = sock.display(),
+            state = p("state"),
+            spool = p("spool"),
+            cpid = p("slurmctld.pid"),
+            dpid = p("slurmd.pid"),
+            dport = port + 1,
+            clog = p("slurmctld.log"),
+            dlog = p("slurmd.log"),
+            cpus = threads(),
+        ),
+    )
+    .unwrap();
+    let _daemons = Daemons(vec![
+        d.join("slurmd.pid"),
+        d.join("slurmctld.pid"),
+        d.join("munge/munged.pid"),
+    ]);
+    let started = Command::new("munged")
+        .arg("--force")
+        .arg(format!("--socket={}", sock.display()))
+        .arg(format!("--key-file={}", key.display()))
+        .arg(format!("--pid-file={}", p("munge/munged.pid")))
+        .arg(format!("--log-file={}", p("munge/munged.log")))
+        .arg(format!("--seed-file={}", p("munge/munged.seed")))
+        .status()
+        .unwrap();
+    assert!(started.success(), "munged did not start");
+    for daemon in ["slurmctld", "slurmd"] {
+        let st = Command::new(daemon)
+            .arg("-f")
+            .arg(&conf)
+            .env("SLURM_CONF", &conf)
+            .status()
+            .unwrap();
+        assert!(st.success(), "{daemon} did not start");
+    }
+    // Wait (at most 30 s) for the node to be idle.
+    let mut idle = false;
+    for _ in 0..60 {
+        let o = Command::new("sinfo")
+            .args(["-h", "-o", "%T"])
+            .env("SLURM_CONF", &conf)
+            .output()
+            .unwrap();
+        if String::from_utf8_lossy(&o.stdout).trim() == "idle" {
+            idle = true;
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(500));
+    }
+    assert!(
+        idle,
+        "the node did not come up: {}",
+        std::fs::read_to_string(d.join("slurmd.log")).unwrap_or_default()
+    );
+    let case = synth();
+    let serial = ok(
+        skylod(&with(&["svf"], &case, &["--rays", "1500"]), &[]),
+        "serial",
+    );
+    let mut line = format!("'{BIN}' svf");
+    for a in &case.args {
+        line.push_str(&format!(" '{a}'"));
+    }
+    let script = d.join("job.sh");
+    std::fs::write(
+        &script,
+        format!(
+            "#!/bin/sh\n{line} --rays 1500 > '{}'/out.$SLURM_ARRAY_TASK_ID.txt\n",
+            d.display()
+        ),
+    )
+    .unwrap();
+    let o = Command::new("sbatch")
+        .args(["--array=0-1", "--wait", "-o"])
+        .arg(d.join("log.%a.txt"))
+        .arg(&script)
+        .env("SLURM_CONF", &conf)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "sbatch: {}", stderr(&o));
+    let mut joined = Vec::new();
+    for i in 0..2 {
+        joined.extend(std::fs::read(d.join(format!("out.{i}.txt"))).unwrap());
+    }
+    assert!(
+        joined == serial,
+        "the Slurm array's outputs differ from the serial run:\n{}",
+        String::from_utf8_lossy(&joined)
+    );
+}
