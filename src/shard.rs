@@ -22,7 +22,7 @@
 //! use skylod::shard::Shard;
 //! use std::collections::HashMap;
 //! let s: Shard = "1/3".parse()?;
-//! assert_eq!(s.files(7), 3..5);
+//! assert_eq!(s.files(7), 2..4); // 7 files: 0..2, 2..4, 4..7
 //! // A Slurm array `--array=4-6`: task 5 is shard 1 of 3.
 //! let env: HashMap<&str, &str> = [
 //!     ("SLURM_ARRAY_TASK_ID", "5"),
