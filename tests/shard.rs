@@ -689,3 +689,54 @@ fn slurm_job_array_for_real() {
         String::from_utf8_lossy(&joined)
     );
 }
+
+/// `evaluate` (table, timing columns apart) and `svf --json` (the shards' `pois` arrays
+/// joined, as README's `jq -s '.[0] + {pois: map(.pois) | add}'` does) split the same way.
+#[test]
+fn evaluate_table_and_json_shards_combine_to_the_serial_run() {
+    let case = synth();
+    let eval = ["--no-sun", "--rays", "1500", "--svf-rays", "2000"];
+    // Everything but the last three columns (bvh ms, trace ms, select ms).
+    let untimed = |out: &[u8]| -> Vec<String> {
+        String::from_utf8_lossy(out)
+            .lines()
+            .map(|l| {
+                let w: Vec<&str> = l.split_whitespace().collect();
+                w[..w.len().saturating_sub(3)].join(" ")
+            })
+            .collect()
+    };
+    let serial = ok(skylod(&with(&["evaluate"], &case, &eval), &[]), "evaluate");
+    let serial_json = json(&skylod(
+        &with(&["svf"], &case, &["--rays", "1500", "--json"]),
+        &[],
+    ));
+    assert!(untimed(&serial).len() > 6);
+    for n in 2..=3 {
+        let (mut table, mut pois) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            let shard = format!("{i}/{n}");
+            let mut e = eval.to_vec();
+            e.extend(["--shard", &shard]);
+            table.extend(ok(
+                skylod(&with(&["evaluate"], &case, &e), &[]),
+                "evaluate shard",
+            ));
+            let o = skylod(
+                &with(
+                    &["svf"],
+                    &case,
+                    &["--rays", "1500", "--json", "--shard", &shard],
+                ),
+                &[],
+            );
+            pois.extend(json(&o)["pois"].as_array().unwrap().clone());
+        }
+        assert_eq!(untimed(&table), untimed(&serial), "evaluate, {n} shards");
+        assert_eq!(
+            &pois,
+            serial_json["pois"].as_array().unwrap(),
+            "svf --json, {n} shards"
+        );
+    }
+}
