@@ -238,6 +238,7 @@ fn probe(poi: &Poi, bundles: &SkyBundles, table: Option<&SunTable>) -> Probe {
         .unwrap_or(DVec3::Z);
     let frame = Frame::from_normal(n);
     let svf_dirs = bundles
+        .for_poi(poi)
         .projected_dirs()
         .iter()
         .map(|&l| frame.to_world(l))

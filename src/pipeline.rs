@@ -338,9 +338,23 @@ pub fn levels(
     opts: &LevelsOptions,
     progress: &dyn Progress,
 ) -> Result<Levels, PipelineError> {
+    let lod = lod_with(&framed.model, &framed.local_pois, &opts.lod, progress)?;
+    levels_of(framed, opts, lod, progress)
+}
+
+/// The rest of [`levels`] for a selection made elsewhere (e.g. the levels of every shard of
+/// an array job combined): the error bound when asked, the rough model back to the source CRS.
+///
+/// # Errors
+/// [`PipelineError::Bound`], [`PipelineError::Cancelled`].
+pub fn levels_of(
+    framed: &Framed<'_>,
+    opts: &LevelsOptions,
+    mut lod: LodResult,
+    progress: &dyn Progress,
+) -> Result<Levels, PipelineError> {
     let model: &CityModel = &framed.model;
     let pois = &framed.local_pois;
-    let mut lod = lod_with(model, pois, &opts.lod, progress)?;
     let mut bound_report = None;
     let t = Instant::now();
     if let Some(spec) = &opts.bound {

@@ -19,7 +19,8 @@
 //! `sqrt(2 pi / N)`.
 //!
 //! The bundle is Beckers' equal-solid-angle partition of the upper hemisphere (world
-//! frame, azimuth from north), one jittered ray per cell from a seeded RNG. For a POI with
+//! frame, azimuth from north), one jittered ray per cell from an RNG seeded from the POI
+//! itself ([`Poi::ray_seed`]: its id with the seed). For a POI with
 //! a normal only the rays in front of the surface (`dot(n, d) > 0`) are cast. Levels of
 //! several POIs combine by maximum, hits add up. POIs are traced in parallel (rayon); the
 //! result does not depend on the number of threads.
@@ -212,13 +213,13 @@ pub fn select_with(
             return Err(SelectError::Poi(p.id.clone()));
         }
     }
-    let dirs = partition.sample(opts.seed);
     let roof_asset = roof_assets(model, rough, opts.roof_tolerance_m);
 
     let per_poi: Vec<OnePoi> = pois
         .par_iter()
         .map(|poi| {
             check(progress, Stage::Select)?;
+            let dirs = partition.sample(poi.ray_seed(opts.seed));
             let one = select_one(poi, &dirs, scene, rough, &roof_asset, threshold);
             progress.advance(Stage::Select, 1, 0, None);
             Ok(one)
@@ -263,7 +264,7 @@ pub fn select_with(
         roof_asset,
         pois: out_pois,
         threshold_deg: threshold.to_degrees(),
-        rays: dirs.len(),
+        rays: partition.len(),
     })
 }
 

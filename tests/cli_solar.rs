@@ -80,37 +80,32 @@ fn svf_json_shape_and_order() {
         assert!(row["svf"].as_f64().unwrap() <= 0.5 + 1e-9);
     }
 
-    // Same seed, POIs in the other order: the same values per POI (parallel, deterministic).
-    let facade: Vec<String> = pois[1..]
-        .iter()
-        .map(|r| {
-            let c: Vec<String> = r["poi"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .chain(r["normal"].as_array().unwrap())
-                .map(|x| x.to_string())
-                .collect();
-            c.join(",")
-        })
-        .collect();
-    let mut args: Vec<&OsStr> = vec![os("svf"), os(&g)];
-    for f in facade.iter().rev() {
-        args.push(os("--poi"));
-        args.push(os(f));
-    }
-    args.extend([
+    // Same seed, the same POIs (same ids) in the other order: the same values per POI (a
+    // POI's rays are seeded from its id, never from its place in the list).
+    let text = std::fs::read_to_string(&p).unwrap();
+    let mut lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    let header = lines.remove(0);
+    lines.reverse();
+    let dir = tempfile::tempdir().unwrap();
+    let reversed = dir.path().join("reversed.csv");
+    std::fs::write(&reversed, format!("{header}\n{}\n", lines.join("\n"))).unwrap();
+    let args: Vec<&OsStr> = vec![
+        os("svf"),
+        os(&g),
+        os("--pois"),
+        os(&reversed),
         os("--rays"),
         os("2000"),
         os("--seed"),
         os("5"),
         os("--json"),
-    ]);
+    ];
     let o2 = run_s(&args);
     assert_eq!(o2.status.code(), Some(0), "{}", stderr(&o2));
     let v2 = json(&o2);
     let rev: Vec<&Value> = v2["pois"].as_array().unwrap().iter().rev().collect();
     for (a, b) in pois[1..].iter().zip(rev) {
+        assert_eq!(a["id"], b["id"]);
         assert_eq!(a["svf"], b["svf"]);
         assert_eq!(a["sky_exposure"], b["sky_exposure"]);
     }

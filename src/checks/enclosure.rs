@@ -30,13 +30,13 @@ use crate::poi::Poi;
 use crate::poi::POI_OFFSET;
 use crate::trace::Scene;
 use glam::DVec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Directions of the sphere probe (a Fibonacci lattice: near-uniform, deterministic).
 const PROBE_RAYS: usize = 128;
 
 /// Something that makes a POI's results suspect.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "flag", rename_all = "snake_case")]
 pub enum PoiFlag {
     /// Every direction of the sphere is blocked: the POI is inside a closed solid.

@@ -21,11 +21,15 @@ use crate::poi::POI_OFFSET;
 use crate::trace::Scene;
 
 /// [`sky_view()`] of a POI against a scene: rays start at [`Poi::ray_origin`] (moved
-/// [`POI_OFFSET`] along the normal) and ignore hits closer than [`POI_OFFSET`].
+/// [`POI_OFFSET`] along the normal) and ignore hits closer than [`POI_OFFSET`]; the bundles
+/// are jittered for this POI ([`SkyBundles::for_poi`]).
 pub fn poi_sky_view(scene: &Scene, poi: &Poi, bundles: &SkyBundles) -> SkyView {
-    sky_view(poi.ray_origin(), poi.normal, bundles, |o, d| {
-        scene.occluded(o, d, POI_OFFSET, f64::INFINITY)
-    })
+    sky_view(
+        poi.ray_origin(),
+        poi.normal,
+        &bundles.for_poi(poi),
+        |o, d| scene.occluded(o, d, POI_OFFSET, f64::INFINITY),
+    )
 }
 
 /// [`sun_hours()`] of a POI against a scene, with the same ray origin and `tmin` as

@@ -28,6 +28,7 @@
 //! # Ok::<(), skylod::sky::SkyError>(())
 //! ```
 
+use crate::poi::Poi;
 use crate::sky::{Frame, SkyError, SkyPartition, SkyVariant};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -44,6 +45,7 @@ pub struct SkyBundles {
     solid: SkyPartition,
     projected_dirs: Vec<DVec3>,
     solid_dirs: Vec<DVec3>,
+    seed: u64,
 }
 
 impl SkyBundles {
@@ -62,7 +64,30 @@ impl SkyBundles {
             solid,
             projected_dirs,
             solid_dirs,
+            seed,
         })
+    }
+
+    /// The seed the bundles were made with.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The same partitions jittered from another seed (as [`SkyBundles::new`] with it).
+    pub fn reseeded(&self, seed: u64) -> SkyBundles {
+        SkyBundles {
+            projected_dirs: self.projected.sample(seed),
+            solid_dirs: self.solid.sample(seed ^ SOLID_SEED_SALT),
+            projected: self.projected.clone(),
+            solid: self.solid.clone(),
+            seed,
+        }
+    }
+
+    /// The bundles of one POI: jittered from [`Poi::ray_seed`] of this bundle's seed, so a
+    /// POI gets the same rays whichever other POIs are traced.
+    pub fn for_poi(&self, poi: &Poi) -> SkyBundles {
+        self.reseeded(poi.ray_seed(self.seed))
     }
 
     /// Number of rays per bundle.

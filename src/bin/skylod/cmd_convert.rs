@@ -20,6 +20,8 @@ pub struct Args {
     /// Replace an existing output file.
     #[arg(long)]
     overwrite: bool,
+    #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
@@ -33,6 +35,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             args.input.display(),
             inputs.len()
         ),
+    }
+    // One input: shard 0 converts it, the others have nothing to do.
+    let shard = args.shard.resolve()?;
+    if crate::shard_args::files(shard, vec![()], "convert").is_empty() {
+        return Ok(Outcome::Ok);
     }
     let format = crate::export::resolve(1, &args.output, args.format)?;
     let opts = WriteOptions {

@@ -15,6 +15,10 @@ pub struct Args {
     #[command(flatten)]
     region: crate::region_args::RegionArgs,
     #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    scene: crate::scene_args::SceneArgs,
+    #[command(flatten)]
     site: SiteArgs,
     /// Skip sun hours (then --lat/--lon are not needed).
     #[arg(long)]
@@ -50,12 +54,17 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t_all = Instant::now();
     args.site.check("evaluate")?;
     let rough_opts = args.rough.options()?;
+    let shard = args.shard.resolve()?;
     let pois = args.region.points(&args.pois)?;
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, shard, region, "evaluate")?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
     let pois = args.region.extend(pois, &loaded.model)?;
+    let pois = crate::shard_args::pois(shard, pois, "evaluate");
     let framed = args
         .pois
         .frame_checked(&mut loaded.model, pois, "evaluate")?;
@@ -108,7 +117,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             },
         });
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
-    } else {
+    } else if crate::shard_args::header(shard) {
         out_err(writeln!(
             out,
             "{:<18} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
@@ -125,6 +134,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             "trace ms",
             "select ms"
         ))?;
+    }
+    if !args.json {
         for p in &e.pois {
             for (name, m, svf_err, sun_err, sel) in [
                 (

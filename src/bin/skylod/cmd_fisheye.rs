@@ -36,6 +36,10 @@ enum ColourBy {
 pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
+    #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    scene: crate::scene_args::SceneArgs,
     /// Output SVG (`-` for standard output, one POI only). With several POIs, one file per
     /// POI: `<stem>-<id>.svg`.
     #[arg(short, long)]
@@ -97,6 +101,7 @@ fn output_for(base: &Path, poi: &Poi, many: bool) -> PathBuf {
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
+    let shard = args.shard.resolve()?;
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
@@ -108,7 +113,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         rough: args.rough.options()?,
         select: args.silhouette.options(args.select_rays, args.seed),
     };
+    // Named from all POIs, so a shard writes the files the serial run would.
     let many = pois.len() > 1;
+    args.scene
+        .filter(&mut args.pois, &pois, shard, false, "fisheye")?;
+    let pois = crate::shard_args::pois(shard, pois, "fisheye");
     let outputs: Vec<PathBuf> = pois
         .iter()
         .map(|p| output_for(&args.output, p, many))

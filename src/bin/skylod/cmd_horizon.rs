@@ -16,6 +16,10 @@ pub struct Args {
     pois: PoiArgs,
     #[command(flatten)]
     region: crate::region_args::RegionArgs,
+    #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    scene: crate::scene_args::SceneArgs,
     /// Azimuth step in degrees (0.01..=90); azimuths 0, step, 2 step, ... below 360.
     #[arg(long, default_value_t = 1.0)]
     step: f64,
@@ -59,7 +63,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let opts = HorizonOptions::default().with_step(args.step);
     opts.validate().context("--step")?;
+    let shard = args.shard.resolve()?;
     let pois = args.region.points(&args.pois)?;
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, shard, region, "horizon")?;
     if let Some(out) = &args.output {
         let w = WriteOptions {
             overwrite: args.overwrite,
@@ -73,6 +81,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         return Ok(Outcome::SomeFailed);
     }
     let pois = args.region.extend(pois, &loaded.model)?;
+    let pois = crate::shard_args::pois(shard, pois, "horizon");
     // Traced in the local metric frame (y = north): azimuths are from north there.
     let framed = args
         .pois
@@ -113,7 +122,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         });
         serde_json::to_string_pretty(&doc)? + "\n"
     } else {
-        csv(pois, &profiles)
+        let text = csv(pois, &profiles);
+        if crate::shard_args::header(shard) {
+            text
+        } else {
+            // Shards after the first leave out the header line: concatenated in shard
+            // order, the shards' files are the serial run's.
+            text.split_once('\n')
+                .map_or(String::new(), |(_, rows)| rows.to_string())
+        }
     };
     match &args.output {
         Some(out) => {

@@ -7,7 +7,7 @@ use anyhow::{bail, Context};
 use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
 use skylod::export::Format;
 use skylod::lod::LodOptions;
-use skylod::pipeline::{levels, write_all, LevelsOptions};
+use skylod::pipeline::{levels, levels_of, write_all, LevelsOptions};
 use skylod::report::{Parameters, Report, Timings};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -15,20 +15,31 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pois: PoiArgs,
+    pub(crate) pois: PoiArgs,
     #[command(flatten)]
-    region: crate::region_args::RegionArgs,
+    pub(crate) region: crate::region_args::RegionArgs,
     #[command(flatten)]
-    out: OutputArgs,
+    pub(crate) out: OutputArgs,
     #[command(flatten)]
-    select: SelectArgs,
+    pub(crate) select: SelectArgs,
     #[command(flatten)]
-    rough: RoughArgs,
+    pub(crate) rough: RoughArgs,
     /// Write a JSON report (schemas/report.schema.json; `-` for standard output).
     #[arg(long, value_name = "FILE.json")]
-    report: Option<PathBuf>,
+    pub(crate) report: Option<PathBuf>,
     #[command(flatten)]
-    bound: crate::bound_args::BoundArgs,
+    pub(crate) bound: crate::bound_args::BoundArgs,
+    /// With --shard (or a scheduler's index), -o names this shard's levels file (JSON lines,
+    /// `.jsonl`) instead of a model. Without: the model is written as usual.
+    #[command(flatten)]
+    pub(crate) shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    pub(crate) scene: crate::scene_args::SceneArgs,
+    /// Reduce step: write the model (and --report) from the levels files of all shards
+    /// (levels combine by maximum) instead of tracing; POIs and options come from the files,
+    /// the inputs must be the shards' inputs.
+    #[arg(long, value_name = "LEVELS.jsonl", num_args = 1..)]
+    pub(crate) reduce: Vec<PathBuf>,
 }
 
 /// Output path per input: a file for one input (unless `out` is a directory), otherwise
@@ -72,7 +83,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let t_all = Instant::now();
     args.bound.check()?;
-    let pois = args.region.points(&args.pois)?;
+    let shard = args.shard.resolve()?;
+    if let Some(s) = shard {
+        return crate::lod_shard::shard(args, s, t_all);
+    }
+    let reduce = crate::lod_shard::read(&mut args)?;
+    let pois = match &reduce {
+        Some(r) => r.pois.clone(),
+        None => args.region.points(&args.pois)?,
+    };
     let format = crate::export::resolve(args.pois.inputs.len(), &args.out.output, args.out.format)?;
     let mut outputs = output_paths(&args.pois.inputs, &args.out.output)?;
     if format != Format::CityGml && (outputs.len() > 1 || args.out.output.is_dir()) {
@@ -100,11 +119,23 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     let rough_opts = args.rough.options()?;
     let select_opts = args.select.options();
+    // Outputs are laid out for every input; --scene-radius then leaves out the far ones.
+    let all_inputs = args.pois.inputs.clone();
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, None, region, "lod")?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
-    let pois = args.region.extend(pois, &loaded.model)?;
+    let combined = match reduce {
+        Some(r) => Some(r.combine(&loaded.model)?),
+        None => None,
+    };
+    let pois = match &combined {
+        Some(_) => pois,
+        None => args.region.extend(pois, &loaded.model)?,
+    };
     let mut failed = loaded.failed;
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
     let opts = LevelsOptions {
@@ -115,7 +146,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         bound: args.bound.spec(framed.source, args.select.seed)?,
     };
     let progress = crate::log::reporter();
-    let lv = levels(&framed, &opts, &progress)?;
+    let lv = match combined {
+        Some(c) => {
+            let lod = crate::lod_shard::result(&framed.model, c, &opts.lod);
+            levels_of(&framed, &opts, lod, &progress)?
+        }
+        None => levels(&framed, &opts, &progress)?,
+    };
     warn_flags(&framed.pois, &lv.lod.flags);
     if let Some(b) = &lv.bound {
         summary!(
@@ -149,7 +186,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         .iter()
         .enumerate()
         .filter_map(|(f, src)| {
-            let k = args.pois.inputs.iter().position(|p| p == &src.path)?;
+            let k = all_inputs.iter().position(|p| p == &src.path)?;
             Some((f, outputs.get(k)?.clone()))
         })
         .collect();

@@ -24,6 +24,8 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     overwrite: bool,
+    #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
 }
 
 #[cfg(not(feature = "proj"))]
@@ -55,6 +57,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         skylod::reproject::crs_info(s.horizontal).context("-s")?;
     }
     let targets = crate::common::outputs_per_input(&args.inputs, &args.output)?;
+    let targets = crate::shard_args::files(args.shard.resolve()?, targets, "reproject");
     let wopts = WriteOptions {
         overwrite: args.overwrite,
         protect: args.inputs.clone(),

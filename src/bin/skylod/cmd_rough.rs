@@ -26,10 +26,13 @@ pub struct Args {
     crs: SourceCrsArgs,
     #[command(flatten)]
     jobs: crate::common::JobsArgs,
+    #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t0 = std::time::Instant::now();
+    let shard = args.shard.resolve()?;
     let _spool = crate::common::expand_inputs(&mut args.inputs)?;
     let format = crate::export::resolve(args.inputs.len(), &args.out.output, args.out.format)?;
     let opts = args.rough.options()?;
@@ -64,6 +67,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
         v
     };
+    // Laid out for all inputs, then this shard's part: each file goes where the serial run
+    // writes it.
+    let targets = crate::shard_args::files(shard, targets, "rough");
     let wopts = WriteOptions {
         overwrite: args.out.overwrite,
         protect: args.inputs.clone(),

@@ -25,6 +25,8 @@ pub struct Args {
     crs: SourceCrsArgs,
     #[command(flatten)]
     jobs: crate::common::JobsArgs,
+    #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
 }
 
 #[derive(serde::Serialize)]
@@ -36,7 +38,12 @@ struct FileStats<'a> {
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t0 = std::time::Instant::now();
+    let shard = args.shard.resolve()?;
     let _spool = crate::common::expand_inputs(&mut args.inputs)?;
+    args.inputs = crate::shard_args::files(shard, std::mem::take(&mut args.inputs), "stats");
+    if args.inputs.is_empty() {
+        return Ok(Outcome::Ok);
+    }
     let results: Vec<_> = args.jobs.install(|| {
         args.inputs
             .par_iter()

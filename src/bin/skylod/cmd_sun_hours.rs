@@ -14,6 +14,10 @@ pub struct Args {
     #[command(flatten)]
     region: crate::region_args::RegionArgs,
     #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    scene: crate::scene_args::SceneArgs,
+    #[command(flatten)]
     site: SiteArgs,
     #[command(flatten)]
     sun: SunArgs,
@@ -33,12 +37,17 @@ const MONTHS: [&str; 12] = [
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     args.site.check("sun-hours")?;
+    let shard = args.shard.resolve()?;
     let pois = args.region.points(&args.pois)?;
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, shard, region, "sun-hours")?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
     let pois = args.region.extend(pois, &loaded.model)?;
+    let pois = crate::shard_args::pois(shard, pois, "sun-hours");
     let framed = args
         .pois
         .frame_checked(&mut loaded.model, pois, "sun-hours")?;
@@ -91,7 +100,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         for m in MONTHS {
             head.push_str(&format!(" {m:>6}"));
         }
-        out_err(writeln!(out, "{head}"))?;
+        if crate::shard_args::header(shard) {
+            out_err(writeln!(out, "{head}"))?;
+        }
         for (p, h) in pois.iter().zip(hours) {
             let mut line = format!("{:<20} {:>9.2} {:>9.2}", p.id, h.hours, h.possible_hours);
             for m in h.monthly {

@@ -13,6 +13,10 @@ pub struct Args {
     pois: PoiArgs,
     #[command(flatten)]
     region: crate::region_args::RegionArgs,
+    #[command(flatten)]
+    shard: crate::shard_args::ShardArgs,
+    #[command(flatten)]
+    scene: crate::scene_args::SceneArgs,
     /// Rays per bundle (cells of each Beckers sky partition).
     #[arg(long, default_value_t = 10_000)]
     rays: usize,
@@ -26,13 +30,18 @@ pub struct Args {
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
+    let shard = args.shard.resolve()?;
     let pois = args.region.points(&args.pois)?;
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, shard, region, "svf")?;
     let bundles = SkyBundles::new(args.rays, args.seed)?;
     let mut loaded = args.pois.load_checked()?;
     if loaded.inputs.is_empty() {
         return Ok(Outcome::SomeFailed);
     }
     let pois = args.region.extend(pois, &loaded.model)?;
+    let pois = crate::shard_args::pois(shard, pois, "svf");
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "svf")?;
     let traced = trace_full(
         &framed.model,
@@ -70,11 +79,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         });
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
-        out_err(writeln!(
-            out,
-            "{:<20} {:>14} {:>14} {:>9} {:>8} {:>8} {:>8} {:>7} {:>12}",
-            "id", "x", "y", "z", "nx", "ny", "nz", "svf", "sky_exposure"
-        ))?;
+        if crate::shard_args::header(shard) {
+            out_err(writeln!(
+                out,
+                "{:<20} {:>14} {:>14} {:>9} {:>8} {:>8} {:>8} {:>7} {:>12}",
+                "id", "x", "y", "z", "nx", "ny", "nz", "svf", "sky_exposure"
+            ))?;
+        }
         let dp = decimals(&framed.crs);
         for (p, v) in pois.iter().zip(views) {
             let n = p

@@ -21,7 +21,10 @@ mod common;
 mod export;
 mod frames;
 mod log;
+mod lod_shard;
 mod region_args;
+mod scene_args;
+mod shard_args;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]

@@ -1,0 +1,188 @@
+//! `skylod lod` in an array job: a shard writes its levels ([`skylod::shard_levels`]),
+//! `--reduce` writes the model from all shards' levels.
+
+use crate::cmd_lod::Args;
+use crate::common::{ms, warn_flags};
+use crate::Outcome;
+use anyhow::{bail, Context};
+use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
+use skylod::lod::{lod, LodOptions, LodResult};
+use skylod::model::CityModel;
+use skylod::poi::Poi;
+use skylod::rough::rough_model;
+use skylod::select::{roof_assets, Selection};
+use skylod::shard::Shard;
+use skylod::shard_levels::{self, Combined, LevelsFile};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Run one shard of `lod`: trace this shard's POIs and write their levels to `-o`.
+pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome> {
+    if !args.reduce.is_empty() {
+        bail!(
+            "--reduce combines the levels of every shard: run it once, without --shard (and \
+             outside the array job's JOB_COMPLETION_INDEX / SLURM_ARRAY_TASK_ID / \
+             AWS_BATCH_JOB_ARRAY_INDEX)"
+        );
+    }
+    if args.bound.active() {
+        bail!(
+            "the error bound (--max-svf-error, --max-sun-hours-error) needs every POI: give it \
+             to the --reduce step, not to shard {s}"
+        );
+    }
+    if args.report.is_some() {
+        bail!("shard {s} writes levels, not a model: give --report to the --reduce step");
+    }
+    let name = args.out.output.to_string_lossy().to_ascii_lowercase();
+    if !name.ends_with(".jsonl") || name.ends_with(".city.jsonl") || is_stdout(&args.out.output) {
+        bail!(
+            "shard {s} writes its levels, not a model: -o names its levels file \
+             (e.g. -o levels-{}.jsonl); then `skylod lod INPUTS -o OUT --reduce levels-*.jsonl` \
+             writes the model",
+            s.index()
+        );
+    }
+    let wopts = WriteOptions {
+        overwrite: args.out.overwrite,
+        protect: args.pois.inputs.clone(),
+        keep_envelopes: false,
+    };
+    check_target(
+        &args.out.output,
+        &wopts,
+        args.pois.inputs.iter().map(PathBuf::as_path),
+    )?;
+    let pois = args.region.points(&args.pois)?;
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, Some(s), region, "lod")?;
+    let mut loaded = args.pois.load_checked()?;
+    if loaded.inputs.is_empty() {
+        return Ok(Outcome::SomeFailed);
+    }
+    let pois = args.region.extend(pois, &loaded.model)?;
+    let pois = crate::shard_args::pois(Some(s), pois, "lod");
+    let opts = LodOptions {
+        rough: args.rough.options()?,
+        select: args.select.options(),
+    };
+    let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
+    let result = lod(&framed.model, &framed.local_pois, &opts)?;
+    warn_flags(&framed.pois, &result.flags);
+    let header = shard_levels::header(s, framed.source, &opts, &result.selection, result.triangles);
+    let out = std::mem::take(&mut args.out.output);
+    atomic_write(&out, |w| {
+        shard_levels::write_levels(
+            w,
+            &header,
+            framed.source,
+            &framed.pois,
+            &result.selection,
+            &result.flags,
+        )
+        .map_err(|source| skylod::citygml::WriteError::Io {
+            file: out.clone(),
+            source,
+        })
+    })
+    .with_context(|| format!("writing {}", out.display()))?;
+    let [l0, l1, l2] = result.selection.level_counts();
+    crate::log::summary!(
+        "lod: shard {s}: {} POI(s) -> {}: assets at level 0/1/2 = {l0}/{l1}/{l2}; read {:.0} ms, \
+         select {:.0} ms, total {:.0} ms",
+        framed.pois.len(),
+        out.display(),
+        loaded.read_ms,
+        result.select_s * 1e3,
+        ms(t_all)
+    );
+    Ok(loaded.outcome())
+}
+
+/// The levels files of `--reduce`, read before the inputs.
+pub struct Reduce {
+    files: Vec<LevelsFile>,
+    /// The POIs of all shards in shard order (model CRS).
+    pub pois: Vec<Poi>,
+}
+
+/// Read the `--reduce` files (none: `Ok(None)`), and take the options of the lod run from
+/// them (`--rays`, `--seed`, `--threshold`, `--roof-tolerance`, `--angle`, `--thickness`,
+/// `--no-lod2`): the model is written exactly as the shards selected it.
+pub fn read(args: &mut Args) -> anyhow::Result<Option<Reduce>> {
+    if args.reduce.is_empty() {
+        return Ok(None);
+    }
+    if !args.pois.poi.is_empty() || args.pois.pois.is_some() || args.region.active() {
+        bail!(
+            "--reduce takes the POIs from the levels files: leave out --poi, --pois, --facade \
+             and --region"
+        );
+    }
+    let files = args
+        .reduce
+        .iter()
+        .map(|p| shard_levels::read_levels(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let Some(first) = files.iter().min_by_key(|f| f.header.index) else {
+        bail!("--reduce needs the levels files of the shards");
+    };
+    let h = &first.header;
+    args.select.rays = h.rays;
+    args.select.seed = h.seed;
+    args.select.silhouette.threshold = Some(h.threshold_deg);
+    args.select.silhouette.roof_tolerance = h.roof_tolerance_m;
+    args.rough.angle = h.angle_deg;
+    args.rough.thickness = h.thickness_m;
+    args.rough.no_lod2 = !h.prefer_lod2;
+    let mut sorted: Vec<&LevelsFile> = files.iter().collect();
+    sorted.sort_by_key(|f| f.header.index);
+    let pois = sorted
+        .iter()
+        .flat_map(|f| &f.pois)
+        .map(|p| Poi {
+            id: p.id.clone(),
+            position: glam::DVec3::from_array(p.position),
+            normal: p.normal.map(glam::DVec3::from_array),
+        })
+        .collect();
+    crate::log::summary!(
+        "lod: reducing {} levels file(s) of a {}-shard run",
+        files.len(),
+        h.count
+    );
+    Ok(Some(Reduce { files, pois }))
+}
+
+impl Reduce {
+    /// Combine the shards' levels for the model read from the inputs (source CRS).
+    pub fn combine(self, model: &CityModel) -> anyhow::Result<Combined> {
+        Ok(shard_levels::combine(self.files, model)?)
+    }
+}
+
+/// The [`LodResult`] of the combined levels on `model` (the local frame's copy): the rough
+/// model as `lod` makes it, the levels and figures of the shards.
+pub fn result(model: &CityModel, c: Combined, opts: &LodOptions) -> LodResult {
+    let t = Instant::now();
+    let rough = rough_model(model, &opts.rough);
+    let rough_s = t.elapsed().as_secs_f64();
+    let roof_asset = roof_assets(model, &rough, opts.select.roof_tolerance_m);
+    LodResult {
+        selection: Selection {
+            levels: c.levels,
+            hits: c.hits,
+            roof_asset,
+            pois: c.selections,
+            threshold_deg: c.header.threshold_deg,
+            rays: c.header.cells,
+        },
+        rough,
+        rough_s,
+        bvh_s: 0.0,
+        select_s: 0.0,
+        triangles: c.header.triangles,
+        flags: c.flags,
+    }
+}
