@@ -173,6 +173,16 @@ pub struct Spool(#[allow(dead_code)] Option<tempfile::TempDir>);
 /// glob patterns, `-`), spooling standard input to a temporary file. Keep the returned
 /// [`Spool`] alive while the inputs are read and written.
 pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
+    let (expanded, spool) = expand_inputs_relative(inputs)?;
+    *inputs = expanded.into_iter().map(|i| i.path).collect();
+    Ok(spool)
+}
+
+/// [`expand_inputs`], keeping each input's path relative to its argument (for `-o DIR`; the
+/// spooled standard input is `stdin.gml`).
+pub fn expand_inputs_relative(
+    inputs: &[PathBuf],
+) -> anyhow::Result<(Vec<skylod::inputs::Input>, Spool)> {
     let expanded = skylod::inputs::expand(inputs)?;
     let mut spool = None;
     let mut out = Vec::with_capacity(expanded.len());
@@ -187,14 +197,16 @@ pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
                 .with_context(|| format!("spooling standard input to {}", path.display()))?;
             std::io::copy(&mut std::io::stdin().lock(), &mut f)
                 .context("reading standard input")?;
-            out.push(path);
+            out.push(skylod::inputs::Input {
+                path,
+                relative: PathBuf::from("stdin.gml"),
+            });
             spool = Some(dir);
         } else {
-            out.push(i.path);
+            out.push(i);
         }
     }
-    *inputs = out;
-    Ok(Spool(spool))
+    Ok((out, Spool(spool)))
 }
 
 /// The inputs that could be read, merged in input order.

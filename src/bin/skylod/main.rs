@@ -20,6 +20,7 @@ mod cmd_synth;
 mod common;
 mod export;
 mod frames;
+mod outputs;
 mod region_args;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
