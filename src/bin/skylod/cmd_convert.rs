@@ -55,7 +55,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let mut failed = 0usize;
     // Every target is refused or accepted before any input is read.
     let (todo, staging): (Vec<(usize, PathBuf)>, Option<Staging>) = match &plan {
-        Plan::PerInput(outs) => {
+        Plan::PerInput(outs) | Plan::Mirror(outs) => {
             let mut todo = Vec::new();
             for (k, out) in outs.iter().enumerate() {
                 match check_target(out, &wopts, paths.iter().map(PathBuf::as_path)) {
@@ -88,6 +88,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     } else {
         &wopts
     };
+    let mirror = matches!(plan, Plan::Mirror(_));
     let fmt = if staging.is_some() {
         Format::CityGml
     } else {
@@ -97,7 +98,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let results: Vec<(usize, PathBuf, anyhow::Result<Done>)> = args.jobs.install(|| {
         todo.into_par_iter()
             .map(|(k, out)| {
-                let r = one(&paths[k], &out, fmt, write_opts);
+                let r = one(&paths[k], &out, fmt, write_opts, mirror);
                 (k, out, r)
             })
             .collect()
@@ -163,11 +164,19 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
 }
 
 /// Read `input` and write it to `out`.
-fn one(input: &Path, out: &Path, format: Format, opts: &WriteOptions) -> anyhow::Result<Done> {
+fn one(
+    input: &Path,
+    out: &Path,
+    format: Format,
+    opts: &WriteOptions,
+    mirror: bool,
+) -> anyhow::Result<Done> {
     let model = read_file(input)?;
     let polygons = crate::common::polygons(&model);
     let warnings = model.warnings.len();
-    outputs::create_parent(out)?;
+    if mirror {
+        outputs::create_parent(out)?;
+    }
     if format != Format::CityGml {
         crate::export::write(format, &model, 0, Content::Full, out, opts)
             .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?;

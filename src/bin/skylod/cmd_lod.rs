@@ -1,6 +1,7 @@
 //! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs.
 
 use crate::common::{ms, non_negative, positive, warn_flags, PoiArgs};
+use crate::outputs::Plan;
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::mixed::write_mixed;
@@ -61,57 +62,24 @@ pub struct Args {
     bound: crate::bound_args::BoundArgs,
 }
 
-/// Output path per input: a file for one input (unless `out` is a directory), otherwise
-/// `out/<input file name>`.
-fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    if inputs.len() == 1 && !out.is_dir() {
-        return Ok(vec![out.to_path_buf()]);
-    }
-    if is_stdout(out) {
-        bail!(
-            "{} inputs cannot be written to standard output: one document per input needs -o DIR",
-            inputs.len()
-        );
-    }
-    if out.exists() && !out.is_dir() {
-        bail!(
-            "{} inputs need a directory for -o, and {} is a file",
-            inputs.len(),
-            out.display()
-        );
-    }
-    let mut seen = std::collections::HashSet::new();
-    let mut paths = Vec::with_capacity(inputs.len());
-    for i in inputs {
-        let Some(name) = i.file_name() else {
-            bail!("input {} has no file name", i.display());
-        };
-        if !seen.insert(name.to_os_string()) {
-            bail!(
-                "two inputs are named {}: their outputs in {} would collide",
-                name.to_string_lossy(),
-                out.display()
-            );
-        }
-        paths.push(out.join(name));
-    }
-    Ok(paths)
-}
-
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
+    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.pois.inputs)?;
+    args.pois.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let t_all = Instant::now();
     args.bound.check()?;
     let pois = args.region.points(&args.pois)?;
-    let format = crate::export::resolve(args.pois.inputs.len(), &args.output, args.format)?;
-    let mut outputs = output_paths(&args.pois.inputs, &args.output)?;
-    if format != Format::CityGml && (outputs.len() > 1 || args.output.is_dir()) {
-        for (o, i) in outputs.iter_mut().zip(&args.pois.inputs) {
-            if let Some(p) = crate::export::in_dir(&args.output, i, format) {
-                *o = p;
-            }
-        }
-    }
+    let (plan, format) = crate::outputs::plan(&inputs, &args.output, args.format)?;
+    // A merge (-o FILE or -o - for several inputs): each input's model is written to a
+    // staging directory, then merged into the target.
+    let staging = match &plan {
+        Plan::Merge(t) => Some(crate::outputs::Staging::new(t)?),
+        _ => None,
+    };
+    let (outputs, mirror): (Vec<PathBuf>, bool) = match (plan.per_input(), &staging) {
+        (Some((v, m)), _) => (v.to_vec(), m),
+        (None, Some(st)) => ((0..inputs.len()).map(|k| st.part(k)).collect(), false),
+        (None, None) => (Vec::new(), false),
+    };
     // Every target is checked before any work: a refusal after minutes of reading and
     // tracing helps nobody.
     let wopts = WriteOptions {
@@ -119,9 +87,22 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         protect: args.pois.inputs.clone(),
         keep_envelopes: false,
     };
-    for out in &outputs {
-        check_target(out, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+    let part_opts = WriteOptions {
+        overwrite: true,
+        ..wopts.clone()
+    };
+    if let Plan::Merge(t) = &plan {
+        check_target(t, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+    } else {
+        for out in &outputs {
+            check_target(out, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+        }
     }
+    let write_opts = if staging.is_some() {
+        &part_opts
+    } else {
+        &wopts
+    };
     if let Some(path) = &args.report {
         if is_stdout(path) && is_stdout(&args.output) {
             bail!("the model and the report cannot both go to standard output");
@@ -190,10 +171,6 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         .frame
         .rough_to_source(&framed.model, model, &result.rough);
 
-    if outputs.len() > 1 || args.output.is_dir() {
-        std::fs::create_dir_all(&args.output)
-            .with_context(|| format!("creating {}", args.output.display()))?;
-    }
     let t_write = Instant::now();
     let mut written: Vec<Option<(String, usize)>> = vec![None; model.files.len()];
     for (f, src) in model.files.iter().enumerate() {
@@ -202,17 +179,25 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             continue;
         };
         let Some(out) = outputs.get(k) else { continue };
+        if mirror {
+            crate::outputs::create_parent(out)?;
+        }
+        // In a merge, the report names the merged document.
+        let shown = match &plan {
+            Plan::Merge(t) => t.display().to_string(),
+            _ => out.display().to_string(),
+        };
         if format != Format::CityGml {
             let content = Content::Levels {
                 rough: &rough,
                 levels: &result.selection.levels,
             };
-            match crate::export::write(format, model, f, content, out, &wopts) {
+            match crate::export::write(format, model, f, content, out, write_opts) {
                 Ok(()) => {
                     if let Some(w) = written.get_mut(f) {
                         let dropped =
                             buildings_without_kept_assets(model, f, &result.selection.levels);
-                        *w = Some((out.display().to_string(), dropped));
+                        *w = Some((shown.clone(), dropped));
                     }
                 }
                 Err(e) => {
@@ -222,12 +207,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
             continue;
         }
-        match write_mixed(model, f, &rough, &result.selection.levels, out, &wopts) {
+        match write_mixed(model, f, &rough, &result.selection.levels, out, write_opts) {
             Ok(s) => {
                 eprintln!(
                     "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
                     src.path.display(),
-                    out.display(),
+                    shown,
                     s.levels[0],
                     s.levels[1],
                     s.levels[2],
@@ -236,12 +221,37 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                     s.buildings_dropped
                 );
                 if let Some(w) = written.get_mut(f) {
-                    *w = Some((out.display().to_string(), s.buildings_dropped));
+                    *w = Some((shown.clone(), s.buildings_dropped));
                 }
             }
             Err(e) => {
                 eprintln!("error: {e}");
                 failed = true;
+            }
+        }
+    }
+    if let (Some(st), Plan::Merge(t)) = (&staging, &plan) {
+        let parts: Vec<PathBuf> = model
+            .files
+            .iter()
+            .enumerate()
+            .filter(|(f, _)| written.get(*f).is_some_and(Option::is_some))
+            .filter_map(|(_, src)| {
+                let k = args.pois.inputs.iter().position(|p| p == &src.path)?;
+                outputs.get(k).cloned()
+            })
+            .collect();
+        if parts.is_empty() {
+            eprintln!("error: nothing to merge; {} not written", t.display());
+            failed = true;
+        } else {
+            match st.merge(&parts, t, &wopts) {
+                Ok(s) => eprintln!("{}", crate::outputs::merge_line(&s, t)),
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    failed = true;
+                    written.iter_mut().for_each(|w| *w = None);
+                }
             }
         }
     }
@@ -367,32 +377,4 @@ fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {
     skylod::citygml::write::check_target(path, &opts, args.pois.inputs.iter().map(|p| p.as_path()))
         .context("the report")?;
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn outputs_per_input() {
-        let one = output_paths(&[PathBuf::from("a/x.gml")], Path::new("o.gml")).unwrap();
-        assert_eq!(one, vec![PathBuf::from("o.gml")]);
-        let two = output_paths(
-            &[PathBuf::from("a/x.gml"), PathBuf::from("b/y.gml.gz")],
-            Path::new("outdir"),
-        )
-        .unwrap();
-        assert_eq!(
-            two,
-            vec![
-                PathBuf::from("outdir/x.gml"),
-                PathBuf::from("outdir/y.gml.gz")
-            ]
-        );
-        assert!(output_paths(
-            &[PathBuf::from("a/x.gml"), PathBuf::from("b/x.gml")],
-            Path::new("outdir")
-        )
-        .is_err());
-    }
 }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML files (.gml, .xml, .gz).
+    /// CityGML files (.gml, .xml, .gz), directories, glob patterns, or - for standard input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// Target CRS: EPSG:n, EPSG:h+v (compound), or an OGC URN. A 2-D target keeps the
@@ -17,8 +17,8 @@ pub struct Args {
     /// Source CRS, overriding the documents' srsName.
     #[arg(short = 's', long = "source-crs", value_name = "CRS")]
     source: Option<String>,
-    /// Output file for one input (.gz to compress); a directory for several inputs
-    /// (created if missing; one output per input, with the input's file name).
+    /// Output file for one input (.gz to compress; `-` for standard output); a directory that
+    /// mirrors the input tree; or, for several inputs, one CityGML file that merges them.
     #[arg(short, long)]
     output: PathBuf,
     /// Replace existing output files.
@@ -38,7 +38,8 @@ pub fn run(_args: Args) -> anyhow::Result<Outcome> {
 #[cfg(feature = "proj")]
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use anyhow::Context;
-    let _spool = crate::common::expand_inputs(&mut args.inputs)?;
+    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
+    args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     use skylod::citygml::write::WriteOptions;
     use skylod::reproject::{reproject_file, CrsName, ReprojectError};
 
@@ -54,16 +55,49 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if let Some(s) = source {
         skylod::reproject::crs_info(s.horizontal).context("-s")?;
     }
-    let targets = crate::common::outputs_per_input(&args.inputs, &args.output)?;
+    let (plan, _) =
+        crate::outputs::plan(&inputs, &args.output, Some(skylod::export::Format::CityGml))?;
     let wopts = WriteOptions {
         overwrite: args.overwrite,
         protect: args.inputs.clone(),
         keep_envelopes: true,
     };
+    // A merge: each input reprojected into a staging directory, then merged.
+    let staging = match &plan {
+        crate::outputs::Plan::Merge(t) => {
+            skylod::citygml::write::check_target(
+                t,
+                &wopts,
+                args.inputs.iter().map(PathBuf::as_path),
+            )?;
+            Some(crate::outputs::Staging::new(t)?)
+        }
+        _ => None,
+    };
+    let (outs, mirror) = match (plan.per_input(), &staging) {
+        (Some((v, m)), _) => (v.to_vec(), m),
+        (None, Some(st)) => ((0..args.inputs.len()).map(|k| st.part(k)).collect(), false),
+        (None, None) => (Vec::new(), false),
+    };
+    let part_opts = WriteOptions {
+        overwrite: true,
+        ..wopts.clone()
+    };
+    let write_opts = if staging.is_some() {
+        &part_opts
+    } else {
+        &wopts
+    };
+    let targets: Vec<(PathBuf, PathBuf)> = args.inputs.iter().cloned().zip(outs).collect();
+    let mut parts = Vec::new();
     let mut failed = 0usize;
     for (input, out) in &targets {
-        match reproject_file(input, out, source, target, &wopts) {
+        if mirror {
+            crate::outputs::create_parent(out)?;
+        }
+        match reproject_file(input, out, source, target, write_opts) {
             Ok(s) => {
+                parts.push(out.clone());
                 eprintln!(
                     "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
                     input.display(),
@@ -83,6 +117,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 eprintln!("error: {}: {e}", input.display());
                 failed += 1;
             }
+        }
+    }
+    if let (Some(st), crate::outputs::Plan::Merge(t)) = (&staging, &plan) {
+        if !parts.is_empty() {
+            eprintln!(
+                "{}",
+                crate::outputs::merge_line(&st.merge(&parts, t, &wopts)?, t)
+            );
         }
     }
     if failed > 0 {

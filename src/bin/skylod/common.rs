@@ -42,18 +42,33 @@ pub struct PoiArgs {
     /// `--source-crs`, `--poi-crs`: applied by `crate::frames::frame` after reading.
     #[command(flatten)]
     pub crs: crate::frames::CrsArgs,
+    /// `--jobs`: threads reading the inputs and tracing the POIs.
+    #[command(flatten)]
+    pub jobs: JobsArgs,
 }
 
 /// `--jobs`: how many input files are worked on at once.
 #[derive(clap::Args, Debug, Clone, Copy, Default)]
 pub struct JobsArgs {
-    /// Input files worked on at once (default: one per core). The outputs are the same
-    /// whatever the number.
+    /// Worker threads: input files read or written at once, POIs traced at once (default: one
+    /// per core). The outputs are the same whatever the number.
     #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub jobs: Option<u16>,
 }
 
 impl JobsArgs {
+    /// Make rayon's global pool `--jobs` threads wide (for commands whose every parallel step,
+    /// in the binary and in the library, should use it). Call before any parallel work.
+    pub fn global(&self) -> anyhow::Result<()> {
+        if let Some(n) = self.jobs {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(usize::from(n))
+                .build_global()
+                .context("starting the worker threads")?;
+        }
+        Ok(())
+    }
+
     /// Run `f` in a thread pool of `--jobs` threads (rayon's global pool without it).
     pub fn install<T: Send>(&self, f: impl FnOnce() -> T + Send) -> anyhow::Result<T> {
         match self.jobs {
@@ -130,10 +145,11 @@ impl PoiArgs {
         Ok(out.into_iter().map(|l| l.poi).collect())
     }
 
-    /// Read the inputs ([`load`]) and refuse a model that would give a confidently wrong
+    /// Size the thread pool (`--jobs`), read the inputs ([`load`]) and refuse a model that would give a confidently wrong
     /// answer whatever the POIs (`skylod::checks`): inputs in different CRSs (unless
     /// --allow-mixed-crs), a model without heights.
     pub fn load_checked(&self) -> anyhow::Result<Loaded> {
+        self.jobs.global()?;
         let loaded = load(&self.inputs);
         if loaded.inputs.is_empty() {
             return Ok(loaded);
@@ -394,46 +410,4 @@ pub fn warn_flags(pois: &[Poi], flags: &[Vec<PoiFlag>]) {
             eprintln!("warning: {}", f.message(p));
         }
     }
-}
-
-/// Output path per input for `reproject` (one document per input): one input writes the
-/// file `output`; several write `output/<input name>` (the directory is created; two inputs
-/// of the same name are refused).
-#[cfg_attr(not(feature = "proj"), allow(dead_code))]
-pub fn outputs_per_input(
-    inputs: &[PathBuf],
-    output: &std::path::Path,
-) -> anyhow::Result<Vec<(PathBuf, PathBuf)>> {
-    if inputs.len() == 1 {
-        if output.is_dir() {
-            bail!(
-                "{}: is a directory; with one input, -o names the output file",
-                output.display()
-            );
-        }
-        return Ok(vec![(inputs[0].clone(), output.to_path_buf())]);
-    }
-    if output.exists() && !output.is_dir() {
-        bail!(
-            "{}: with several inputs, -o must be a directory",
-            output.display()
-        );
-    }
-    let mut seen = std::collections::HashSet::new();
-    let mut v = Vec::new();
-    for i in inputs {
-        let Some(name) = i.file_name() else {
-            bail!("{}: not a file name", i.display());
-        };
-        if !seen.insert(name.to_os_string()) {
-            bail!(
-                "two inputs are named {}: their outputs would collide",
-                std::path::Path::new(name).display()
-            );
-        }
-        v.push((i.clone(), output.join(name)));
-    }
-    std::fs::create_dir_all(output)
-        .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
-    Ok(v)
 }

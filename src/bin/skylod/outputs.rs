@@ -22,8 +22,11 @@ use std::path::{Path, PathBuf};
 /// What `-o` means for these inputs.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Plan {
-    /// One output per input, in input order (parent directories are created by [`prepare`]).
+    /// One output per input, in input order.
     PerInput(Vec<PathBuf>),
+    /// One output per input below a directory, in input order (parent directories are
+    /// created when the input is written: [`create_parent`]).
+    Mirror(Vec<PathBuf>),
     /// All inputs merged into one CityGML document (a file or `-`).
     Merge(PathBuf),
 }
@@ -72,7 +75,7 @@ pub fn plan(
         }
     }
     let format = explicit.unwrap_or(Format::CityGml);
-    Ok((Plan::PerInput(mirror(inputs, out, format)?), format))
+    Ok((Plan::Mirror(mirror(inputs, out, format)?), format))
 }
 
 fn refuse_merge(format: Format, n: usize) -> anyhow::Result<()> {
@@ -129,6 +132,17 @@ pub fn create_parent(out: &Path) -> anyhow::Result<()> {
 /// temporary directory for `-`); removed when dropped.
 pub struct Staging {
     dir: tempfile::TempDir,
+}
+
+impl Plan {
+    /// The outputs per input (`None` for a merge) and whether they mirror a tree.
+    pub fn per_input(&self) -> Option<(&[PathBuf], bool)> {
+        match self {
+            Plan::PerInput(v) => Some((v, false)),
+            Plan::Mirror(v) => Some((v, true)),
+            Plan::Merge(_) => None,
+        }
+    }
 }
 
 impl Staging {
@@ -215,7 +229,7 @@ mod tests {
         assert_eq!(
             p(&two, "outdir", None),
             (
-                Plan::PerInput(vec!["outdir/a/x.gml".into(), "outdir/b/x.gml.gz".into()]),
+                Plan::Mirror(vec!["outdir/a/x.gml".into(), "outdir/b/x.gml.gz".into()]),
                 Format::CityGml
             )
         );
@@ -228,7 +242,7 @@ mod tests {
         );
         assert_eq!(
             p(&one, "outdir/", None).0,
-            Plan::PerInput(vec!["outdir/x.gml".into()])
+            Plan::Mirror(vec!["outdir/x.gml".into()])
         );
     }
 
