@@ -399,6 +399,18 @@ pub fn merge_files(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<MergeSummary, MergeError> {
+    merge_named(inputs, inputs, out, opts)
+}
+
+/// [`merge_files`], naming the inputs `names` (same length) in the errors that refuse a merge:
+/// for documents staged in temporary files, the files they were made from.
+pub fn merge_named(
+    inputs: &[PathBuf],
+    names: &[PathBuf],
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<MergeSummary, MergeError> {
+    let name = |k: usize| names.get(k).unwrap_or(&inputs[k]).clone();
     if inputs.is_empty() {
         return Err(MergeError::NoInput);
     }
@@ -408,29 +420,29 @@ pub fn merge_files(
         .map(|p| scan(p))
         .collect::<Result<Vec<_>, _>>()?;
     let first = &scans[0];
-    for (p, s) in inputs.iter().zip(&scans).skip(1) {
+    for (k, s) in scans.iter().enumerate().skip(1) {
         if s.root_ns != first.root_ns {
             return Err(MergeError::Version {
-                first: inputs[0].clone(),
+                first: name(0),
                 first_version: version_of(&first.root_ns),
-                other: p.clone(),
+                other: name(k),
                 other_version: version_of(&s.root_ns),
             });
         }
     }
     let mut srs: Option<(usize, &str)> = None;
     for (k, s) in scans.iter().enumerate() {
-        let Some(name) = s.srs.as_deref() else {
+        let Some(srs_name) = s.srs.as_deref() else {
             continue;
         };
         match srs {
-            None => srs = Some((k, name)),
-            Some((j, first_srs)) if !same_crs(first_srs, name) => {
+            None => srs = Some((k, srs_name)),
+            Some((j, first_srs)) if !same_crs(first_srs, srs_name) => {
                 return Err(MergeError::Crs {
-                    first: inputs[j].clone(),
+                    first: name(j),
                     first_srs: first_srs.to_string(),
-                    other: inputs[k].clone(),
-                    other_srs: name.to_string(),
+                    other: name(k),
+                    other_srs: srs_name.to_string(),
                 })
             }
             _ => {}

@@ -105,7 +105,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     })?;
     let (mut ok, mut warnings, mut polygons) = (0usize, 0usize, 0usize);
     let mut parts = Vec::new();
-    for (_, out, r) in results {
+    let mut names = Vec::new();
+    for (k, out, r) in results {
         match r {
             Ok(d) => {
                 if staging.is_none() {
@@ -117,6 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 warnings += d.warnings;
                 polygons += d.polygons;
                 parts.push(out);
+                names.push(paths[k].clone());
             }
             Err(e) => {
                 eprintln!("error: {e:#}");
@@ -131,7 +133,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 target.display()
             );
         } else {
-            match staging.merge(&parts, target, &wopts) {
+            match staging.merge(&parts, &names, target, &wopts) {
                 Ok(s) => {
                     if failed > 0 {
                         eprintln!(

@@ -231,21 +231,21 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if let (Some(st), Plan::Merge(t)) = (&staging, &plan) {
-        let parts: Vec<PathBuf> = model
+        let (parts, names): (Vec<PathBuf>, Vec<PathBuf>) = model
             .files
             .iter()
             .enumerate()
             .filter(|(f, _)| written.get(*f).is_some_and(Option::is_some))
             .filter_map(|(_, src)| {
                 let k = args.pois.inputs.iter().position(|p| p == &src.path)?;
-                outputs.get(k).cloned()
+                Some((outputs.get(k)?.clone(), src.path.clone()))
             })
-            .collect();
+            .unzip();
         if parts.is_empty() {
             eprintln!("error: nothing to merge; {} not written", t.display());
             failed = true;
         } else {
-            match st.merge(&parts, t, &wopts) {
+            match st.merge(&parts, &names, t, &wopts) {
                 Ok(s) => eprintln!("{}", crate::outputs::merge_line(&s, t)),
                 Err(e) => {
                     eprintln!("error: {e:#}");

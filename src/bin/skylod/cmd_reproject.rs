@@ -89,7 +89,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         &wopts
     };
     let targets: Vec<(PathBuf, PathBuf)> = args.inputs.iter().cloned().zip(outs).collect();
-    let mut parts = Vec::new();
+    let (mut parts, mut names) = (Vec::new(), Vec::new());
     let mut failed = 0usize;
     for (input, out) in &targets {
         if mirror {
@@ -98,6 +98,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         match reproject_file(input, out, source, target, write_opts) {
             Ok(s) => {
                 parts.push(out.clone());
+                names.push(input.clone());
                 eprintln!(
                     "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
                     input.display(),
@@ -123,7 +124,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         if !parts.is_empty() {
             eprintln!(
                 "{}",
-                crate::outputs::merge_line(&st.merge(&parts, t, &wopts)?, t)
+                crate::outputs::merge_line(&st.merge(&parts, &names, t, &wopts)?, t)
             );
         }
     }

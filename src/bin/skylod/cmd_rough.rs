@@ -117,22 +117,24 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         &wopts
     };
     // Files in parallel (--jobs); messages in input order, whatever finished first.
-    let results: Vec<anyhow::Result<(Done, PathBuf)>> = args.jobs.install(|| {
+    let results: Vec<anyhow::Result<(Done, PathBuf, PathBuf)>> = args.jobs.install(|| {
         todo.par_iter()
             .map(|(input, out)| {
                 if matches!(plan, crate::outputs::Plan::Mirror(_)) {
                     crate::outputs::create_parent(out)?;
                 }
-                one(input, out, format, &opts, write_opts, &args.crs).map(|d| (d, (*out).clone()))
+                one(input, out, format, &opts, write_opts, &args.crs)
+                    .map(|d| (d, (*out).clone(), (*input).clone()))
             })
             .collect()
     })?;
     let (mut ok, mut warnings, mut polys) = (0, 0, (0, 0));
-    let mut parts = Vec::new();
+    let (mut parts, mut names) = (Vec::new(), Vec::new());
     for r in results {
         match r {
-            Ok((d, out)) => {
+            Ok((d, out, input)) => {
                 parts.push(out);
+                names.push(input);
                 if let Some(line) = d.line.filter(|_| staging.is_none()) {
                     eprintln!("{line}");
                 }
@@ -151,7 +153,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         if parts.is_empty() {
             eprintln!("error: no input could be read; {} not written", t.display());
         } else {
-            match st.merge(&parts, t, &wopts) {
+            match st.merge(&parts, &names, t, &wopts) {
                 Ok(s) => eprintln!("{}", crate::outputs::merge_line(&s, t)),
                 Err(e) => {
                     eprintln!("error: {e:#}");

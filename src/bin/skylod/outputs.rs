@@ -12,7 +12,7 @@
 //!   target, then merged into it.
 
 use anyhow::{bail, Context};
-use skylod::citygml::merge::{merge_files, MergeSummary};
+use skylod::citygml::merge::{merge_named, MergeSummary};
 use skylod::citygml::write::{is_stdout, WriteOptions};
 use skylod::export::Format;
 use skylod::inputs::Input;
@@ -164,14 +164,15 @@ impl Staging {
         self.dir.path().join(format!("{k:06}.gml"))
     }
 
-    /// Merge `parts` (in order) into `target`.
+    /// Merge `parts` (in order; written from the inputs `names`) into `target`.
     pub fn merge(
         &self,
         parts: &[PathBuf],
+        names: &[PathBuf],
         target: &Path,
         opts: &WriteOptions,
     ) -> anyhow::Result<MergeSummary> {
-        Ok(merge_files(parts, target, opts)?)
+        Ok(merge_named(parts, names, target, opts)?)
     }
 }
 
