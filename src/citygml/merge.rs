@@ -307,10 +307,11 @@ fn scan(path: &Path) -> Result<Scan, ReadError> {
                                 s.ids.push(v);
                             }
                         }
-                        b"srsName" if ans.is_empty() => {
-                            if s.srs.is_none() || (in_root_bound && local == b"Envelope") {
-                                s.srs = Some(value()?);
-                            }
+                        b"srsName"
+                            if ans.is_empty()
+                                && (s.srs.is_none() || (in_root_bound && local == b"Envelope")) =>
+                        {
+                            s.srs = Some(value()?);
                         }
                         b"schemaLocation"
                             if depth == 0

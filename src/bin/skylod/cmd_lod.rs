@@ -4,6 +4,7 @@ use crate::common::{ms, non_negative, positive, warn_flags, PoiArgs};
 use crate::outputs::Plan;
 use crate::Outcome;
 use anyhow::{bail, Context};
+use rayon::prelude::*;
 use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
 use skylod::export::{Content, Format};
@@ -61,6 +62,9 @@ pub struct Args {
     #[command(flatten)]
     bound: crate::bound_args::BoundArgs,
 }
+
+/// One file written: its summary line (CityGML) and the buildings it dropped.
+type Written = anyhow::Result<(Option<String>, usize)>;
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (inputs, _spool) = crate::common::expand_inputs_relative(&args.pois.inputs)?;
@@ -173,45 +177,42 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
 
     let t_write = Instant::now();
     let mut written: Vec<Option<(String, usize)>> = vec![None; model.files.len()];
-    for (f, src) in model.files.iter().enumerate() {
-        // Files of the model are the inputs that could be read, in input order.
-        let Some(k) = args.pois.inputs.iter().position(|p| p == &src.path) else {
-            continue;
-        };
-        let Some(out) = outputs.get(k) else { continue };
-        if mirror {
-            crate::outputs::create_parent(out)?;
-        }
-        // In a merge, the report names the merged document.
-        let shown = match &plan {
-            Plan::Merge(t) => t.display().to_string(),
-            _ => out.display().to_string(),
-        };
-        if format != Format::CityGml {
-            let content = Content::Levels {
-                rough: &rough,
-                levels: &result.selection.levels,
+    // Files of the model are the inputs that could be read, in input order. They are written
+    // in parallel (--jobs); messages follow in input order.
+    let jobs: Vec<(usize, &PathBuf)> = model
+        .files
+        .iter()
+        .enumerate()
+        .filter_map(|(f, src)| {
+            let k = args.pois.inputs.iter().position(|p| p == &src.path)?;
+            Some((f, outputs.get(k)?))
+        })
+        .collect();
+    let levels = &result.selection.levels;
+    let results: Vec<(usize, String, Written)> = jobs
+        .par_iter()
+        .map(|&(f, out)| {
+            // In a merge, the report names the merged document.
+            let shown = match &plan {
+                Plan::Merge(t) => t.display().to_string(),
+                _ => out.display().to_string(),
             };
-            match crate::export::write(format, model, f, content, out, write_opts) {
-                Ok(()) => {
-                    if let Some(w) = written.get_mut(f) {
-                        let dropped =
-                            buildings_without_kept_assets(model, f, &result.selection.levels);
-                        *w = Some((shown.clone(), dropped));
-                    }
+            let r = (|| {
+                if mirror {
+                    crate::outputs::create_parent(out)?;
                 }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    failed = true;
+                if format != Format::CityGml {
+                    let content = Content::Levels {
+                        rough: &rough,
+                        levels,
+                    };
+                    crate::export::write(format, model, f, content, out, write_opts)?;
+                    return Ok((None, buildings_without_kept_assets(model, f, levels)));
                 }
-            }
-            continue;
-        }
-        match write_mixed(model, f, &rough, &result.selection.levels, out, write_opts) {
-            Ok(s) => {
-                eprintln!(
+                let s = write_mixed(model, f, &rough, levels, out, write_opts)?;
+                let line = format!(
                     "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
-                    src.path.display(),
+                    model.files[f].path.display(),
                     shown,
                     s.levels[0],
                     s.levels[1],
@@ -220,12 +221,23 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                     s.polygons_out,
                     s.buildings_dropped
                 );
+                Ok((Some(line), s.buildings_dropped))
+            })();
+            (f, shown, r)
+        })
+        .collect();
+    for (f, shown, r) in results {
+        match r {
+            Ok((line, dropped)) => {
+                if let Some(line) = line {
+                    eprintln!("{line}");
+                }
                 if let Some(w) = written.get_mut(f) {
-                    *w = Some((shown.clone(), s.buildings_dropped));
+                    *w = Some((shown, dropped));
                 }
             }
             Err(e) => {
-                eprintln!("error: {e}");
+                eprintln!("error: {e:#}");
                 failed = true;
             }
         }
