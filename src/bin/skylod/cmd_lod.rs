@@ -21,10 +21,10 @@ pub struct Args {
     pois: PoiArgs,
     #[command(flatten)]
     region: crate::region_args::RegionArgs,
-    /// Output file (one input; `-` for standard output), or a directory that gets one file
-    /// per input (created if missing; several inputs need a directory). `.gz` compresses. The
-    /// format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl
-    /// CityJSONSeq.
+    /// Output file for one input (`-` for standard output; `.gz` compresses; the format
+    /// follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl
+    /// CityJSONSeq); a directory that mirrors the input tree (created if missing); or, for
+    /// several inputs, one CityGML file (or `-`) that merges them.
     #[arg(short, long)]
     output: PathBuf,
     /// Output format when the output's name does not tell it (in a directory: the format of

@@ -18,10 +18,10 @@ pub struct Args {
     /// ('tiles/**/*.gml', quoted), or - for standard input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
-    /// Output file for one input (.gz to compress; `-` for standard output); a directory for
-    /// several inputs (created if missing; one output per input, with the input's file name).
-    /// The format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON,
-    /// .city.jsonl CityJSONSeq.
+    /// Output file for one input (`-` for standard output; `.gz` compresses; the format
+    /// follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl
+    /// CityJSONSeq); a directory that mirrors the input tree (created if missing); or, for
+    /// several inputs, one CityGML file (or `-`) that merges them.
     #[arg(short, long)]
     output: PathBuf,
     /// Output format when the output's name does not tell it (in a directory: the format of
