@@ -39,14 +39,14 @@
 //! use skylod::citygml::merge::merge_files;
 //! use skylod::citygml::write::WriteOptions;
 //! let dir = tempfile::tempdir().unwrap();
-//! let doc = |x: f64| format!(r#"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0"
+//! let doc = |x: f64| format!(r##"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0"
 //!  xmlns:gml="http://www.opengis.net/gml" xmlns:bldg="http://www.opengis.net/citygml/building/2.0"
 //!  xmlns:xlink="http://www.w3.org/1999/xlink">
 //!  <gml:boundedBy><gml:Envelope srsName="EPSG:25832"><gml:lowerCorner>{x} 0 0</gml:lowerCorner>
 //!  <gml:upperCorner>{} 1 1</gml:upperCorner></gml:Envelope></gml:boundedBy>
 //!  <core:cityObjectMember><bldg:Building gml:id="b"/></core:cityObjectMember>
 //!  <core:cityObjectMember><bldg:Building gml:id="c"><bldg:consistsOfBuildingPart xlink:href="#b"/>
-//!  </bldg:Building></core:cityObjectMember></core:CityModel>"#, x + 1.0);
+//!  </bldg:Building></core:cityObjectMember></core:CityModel>"##, x + 1.0);
 //! let (a, b) = (dir.path().join("a.gml"), dir.path().join("b.gml"));
 //! std::fs::write(&a, doc(0.0)).unwrap();
 //! std::fs::write(&b, doc(5.0)).unwrap();

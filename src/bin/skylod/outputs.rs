@@ -236,7 +236,7 @@ mod tests {
         );
         assert_eq!(
             p(&two, "outdir/", Some(Format::CityJson)).0,
-            Plan::PerInput(vec![
+            Plan::Mirror(vec![
                 "outdir/a/x.city.json".into(),
                 "outdir/b/x.city.json".into()
             ])
