@@ -445,8 +445,8 @@ pub fn write_levels(
     })
 }
 
-/// [`write_levels`] for each `(file, output)` pair in turn ([`Stage::Write`], cancellable
-/// between files); one result per pair, in order.
+/// [`write_levels`] for each `(file, output)` pair, files in parallel ([`Stage::Write`],
+/// cancellable between files); one result per pair, in the order of `targets`.
 ///
 /// # Errors
 /// [`Cancelled`] when `progress` asks to stop (files already written stay).
@@ -459,17 +459,18 @@ pub fn write_all(
     progress: &dyn Progress,
 ) -> Result<Vec<Result<Written, WriteError>>, Cancelled> {
     progress.start(Stage::Write, targets.len() as u64, 0);
-    let mut out = Vec::with_capacity(targets.len());
-    for (f, path) in targets {
-        if let Err(e) = check(progress, Stage::Write) {
-            progress.finish(Stage::Write);
-            return Err(e);
-        }
-        out.push(write_levels(model, *f, levels, path, format, wopts));
-        progress.advance(Stage::Write, 1, 0, Some(&path.display().to_string()));
-    }
+    // Files in parallel (the caller's rayon pool); results in the order of `targets`.
+    let out: Result<Vec<_>, Cancelled> = targets
+        .par_iter()
+        .map(|(f, path)| {
+            check(progress, Stage::Write)?;
+            let r = write_levels(model, *f, levels, path, format, wopts);
+            progress.advance(Stage::Write, 1, 0, Some(&path.display().to_string()));
+            Ok(r)
+        })
+        .collect();
     progress.finish(Stage::Write);
-    Ok(out)
+    out
 }
 
 /// Buildings and parts of file `f` that keep no asset (through any part below them): what

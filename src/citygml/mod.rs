@@ -1,6 +1,7 @@
 //! CityGML 1.0 / 2.0 / 3.0: streaming reader into the model, span-preserving writer.
 
 pub mod error;
+pub mod merge;
 pub mod mixed;
 pub mod ns;
 pub mod read;

@@ -1,89 +1,216 @@
-//! `skylod convert`.
+//! `skylod convert`: read CityGML and write it back (envelopes recomputed) or in another
+//! format; several inputs go to a mirrored directory or are merged into one document
+//! ([`crate::outputs`]), files in parallel (`--jobs`), the same bytes whatever the number.
 
+use crate::common::{summary_line, JobsArgs};
+use crate::log::{error, summary, warning};
+use crate::outputs::{self, Plan, Staging};
 use crate::Outcome;
+use rayon::prelude::*;
 use skylod::citygml::read_file;
 use skylod::citygml::write::{check_target, write_document, WriteOptions};
 use skylod::export::{Content, Format};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML file (.gml, .xml, .gz; gzip is recognised by content), or - for standard input.
-    input: PathBuf,
-    /// Output file (`-` for standard output): .gml/.xml (.gz to compress) CityGML, .obj OBJ,
-    /// .city.json CityJSON 2.0, .city.jsonl CityJSONSeq.
+    /// CityGML files (.gml, .xml, .gz; gzip is recognised by content), directories (searched
+    /// recursively), glob patterns ('tiles/**/*.gml', quoted), or - for standard input.
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// Output: a file for one input (`-` for standard output; .gml/.xml (.gz to compress)
+    /// CityGML, .obj OBJ, .city.json CityJSON 2.0, .city.jsonl CityJSONSeq); a directory
+    /// that mirrors the input tree; or, for several inputs, one CityGML file (or `-`) that
+    /// merges them (one CityModel, colliding gml:ids of later inputs renamed `<id>__<k>`).
     #[arg(short, long)]
     output: PathBuf,
     /// Output format when the output's name does not tell it.
     #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
     format: Option<Format>,
-    /// Replace an existing output file.
+    /// Replace existing output files.
     #[arg(long)]
     overwrite: bool,
+    #[command(flatten)]
+    jobs: JobsArgs,
     #[command(flatten)]
     shard: crate::shard_args::ShardArgs,
 }
 
-pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+/// What one input gave.
+struct Done {
+    line: Option<String>,
+    warnings: usize,
+    polygons: usize,
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let t0 = Instant::now();
     // `-` (standard input) is spooled to a file: the writer re-reads its source.
-    let mut inputs = vec![args.input.clone()];
-    let _spool = crate::common::expand_inputs(&mut inputs)?;
-    match inputs.as_slice() {
-        [one] => args.input = one.clone(),
-        _ => anyhow::bail!(
-            "{}: convert takes one input file ({} found)",
-            args.input.display(),
-            inputs.len()
-        ),
-    }
-    // One input: shard 0 converts it, the others have nothing to do.
+    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
     let shard = args.shard.resolve()?;
-    if crate::shard_args::files(shard, vec![()], "convert").is_empty() {
-        return Ok(Outcome::Ok);
+    let (plan, format) = outputs::plan(&inputs, &args.output, args.format)?;
+    if let (Some(s), Plan::Merge(t)) = (shard, &plan) {
+        anyhow::bail!(
+            "shard {s} cannot merge into {}: a merge needs every input (give -o DIR to the \
+             shards, then merge their outputs with `skylod convert DIR -o FILE`)",
+            t.display()
+        );
     }
-    let format = crate::export::resolve(1, &args.output, args.format)?;
-    let opts = WriteOptions {
+    let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
+    let wopts = WriteOptions {
         overwrite: args.overwrite,
-        protect: vec![args.input.clone()],
+        protect: paths.clone(),
         keep_envelopes: false,
     };
-    // Refuse a bad target before spending time on the input.
-    if let Err(e) = check_target(&args.output, &opts, [args.input.as_path()]) {
-        eprintln!("error: {e}");
-        return Ok(Outcome::SomeFailed);
-    }
-    let model = match read_file(&args.input) {
-        Ok(m) => m,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Ok(Outcome::SomeFailed);
-        }
-    };
-    if format != Format::CityGml {
-        return match crate::export::write(format, &model, 0, Content::Full, &args.output, &opts) {
-            Ok(()) => Ok(Outcome::Ok),
-            Err(e) => {
-                eprintln!("error: writing {}: {e}", args.output.display());
-                Ok(Outcome::SomeFailed)
+    let mut failed = 0usize;
+    // Every target is refused or accepted before any input is read.
+    let (todo, staging): (Vec<(usize, PathBuf)>, Option<Staging>) = match &plan {
+        Plan::PerInput(outs) | Plan::Mirror(outs) => {
+            let mut todo = Vec::new();
+            for (k, out) in outs.iter().enumerate() {
+                match check_target(out, &wopts, paths.iter().map(PathBuf::as_path)) {
+                    Ok(()) => todo.push((k, out.clone())),
+                    Err(e) => {
+                        error!("{e}");
+                        failed += 1;
+                    }
+                }
             }
-        };
-    }
-    // A failed write (refused target, unwritable directory, disk full) fails this input like a
-    // read error: exit 1, and no output or temporary file is left behind.
-    let summary = match write_document(&model, 0, Vec::new(), &args.output, &opts) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Ok(Outcome::SomeFailed);
+            // Laid out for all inputs, then this shard's part: each file goes where the
+            // serial run writes it.
+            (crate::shard_args::files(shard, todo, "convert"), None)
+        }
+        Plan::Merge(target) => {
+            if let Err(e) = check_target(target, &wopts, paths.iter().map(PathBuf::as_path)) {
+                error!("{e}");
+                summary!("{}", summary_line("convert", 0, paths.len(), 0, None, t0));
+                return Ok(Outcome::SomeFailed);
+            }
+            let staging = Staging::new(target)?;
+            let todo = (0..paths.len()).map(|k| (k, staging.part(k))).collect();
+            (todo, Some(staging))
         }
     };
-    eprintln!(
-        "{} -> {}: {} bytes, {} envelope(s) recomputed, {} warning(s)",
-        args.input.display(),
-        args.output.display(),
-        summary.bytes,
-        summary.edits,
-        model.warnings.len()
+    let part_opts = WriteOptions {
+        overwrite: true,
+        ..wopts.clone()
+    };
+    let write_opts = if staging.is_some() {
+        &part_opts
+    } else {
+        &wopts
+    };
+    let mirror = matches!(plan, Plan::Mirror(_));
+    let fmt = if staging.is_some() {
+        Format::CityGml
+    } else {
+        format
+    };
+    // Files in parallel; messages in input order whatever finished first.
+    let results: Vec<(usize, PathBuf, anyhow::Result<Done>)> = args.jobs.install(|| {
+        todo.into_par_iter()
+            .map(|(k, out)| {
+                let r = one(&paths[k], &out, fmt, write_opts, mirror);
+                (k, out, r)
+            })
+            .collect()
+    })?;
+    let (mut ok, mut warnings, mut polygons) = (0usize, 0usize, 0usize);
+    let mut parts = Vec::new();
+    let mut names = Vec::new();
+    for (k, out, r) in results {
+        match r {
+            Ok(d) => {
+                if staging.is_none() {
+                    if let Some(line) = d.line {
+                        summary!("{line}");
+                    }
+                }
+                ok += 1;
+                warnings += d.warnings;
+                polygons += d.polygons;
+                parts.push(out);
+                names.push(paths[k].clone());
+            }
+            Err(e) => {
+                error!("{e:#}");
+                failed += 1;
+            }
+        }
+    }
+    if let (Some(staging), Plan::Merge(target)) = (&staging, &plan) {
+        if parts.is_empty() {
+            error!("no input could be read; {} not written", target.display());
+        } else {
+            match staging.merge(&parts, &names, target, &wopts) {
+                Ok(s) => {
+                    if failed > 0 {
+                        warning!(
+                            "warning: {} holds {} of the {} inputs (the others failed)",
+                            target.display(),
+                            parts.len(),
+                            paths.len()
+                        );
+                    }
+                    summary!("{}", outputs::merge_line(&s, target));
+                }
+                Err(e) => {
+                    error!("{e:#}");
+                    failed += ok;
+                    ok = 0;
+                }
+            }
+        }
+    }
+    let polys = (format == Format::CityGml).then_some((polygons, polygons));
+    summary!(
+        "{}",
+        summary_line("convert", ok, failed, warnings, polys, t0)
     );
-    Ok(Outcome::Ok)
+    Ok(if failed > 0 {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}
+
+/// Read `input` and write it to `out`.
+fn one(
+    input: &Path,
+    out: &Path,
+    format: Format,
+    opts: &WriteOptions,
+    mirror: bool,
+) -> anyhow::Result<Done> {
+    let model = read_file(input)?;
+    let polygons = crate::common::polygons(&model);
+    let warnings = model.warnings.len();
+    if mirror {
+        outputs::create_parent(out)?;
+    }
+    if format != Format::CityGml {
+        crate::export::write(format, &model, 0, Content::Full, out, opts)
+            .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?;
+        return Ok(Done {
+            line: None,
+            warnings,
+            polygons,
+        });
+    }
+    // A failed write (refused target, unwritable directory, disk full) fails this input like
+    // a read error: no output or temporary file is left behind.
+    let s = write_document(&model, 0, Vec::new(), out, opts)?;
+    Ok(Done {
+        line: Some(format!(
+            "{} -> {}: {} bytes, {} envelope(s) recomputed, {} warning(s)",
+            input.display(),
+            out.display(),
+            s.bytes,
+            s.edits,
+            warnings
+        )),
+        warnings,
+        polygons,
+    })
 }

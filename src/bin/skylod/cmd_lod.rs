@@ -2,10 +2,10 @@
 
 use crate::common::{ms, warn_flags, OutputArgs, PoiArgs, RoughArgs, SelectArgs};
 use crate::log::{error, summary};
+use crate::outputs::Plan;
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
-use skylod::export::Format;
 use skylod::lod::LodOptions;
 use skylod::pipeline::{levels, levels_of, write_all, LevelsOptions};
 use skylod::report::{Parameters, Report, Timings};
@@ -42,45 +42,9 @@ pub struct Args {
     pub(crate) reduce: Vec<PathBuf>,
 }
 
-/// Output path per input: a file for one input (unless `out` is a directory), otherwise
-/// `out/<input file name>`.
-fn output_paths(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    if inputs.len() == 1 && !out.is_dir() {
-        return Ok(vec![out.to_path_buf()]);
-    }
-    if is_stdout(out) {
-        bail!(
-            "{} inputs cannot be written to standard output: one document per input needs -o DIR",
-            inputs.len()
-        );
-    }
-    if out.exists() && !out.is_dir() {
-        bail!(
-            "{} inputs need a directory for -o, and {} is a file",
-            inputs.len(),
-            out.display()
-        );
-    }
-    let mut seen = std::collections::HashSet::new();
-    let mut paths = Vec::with_capacity(inputs.len());
-    for i in inputs {
-        let Some(name) = i.file_name() else {
-            bail!("input {} has no file name", i.display());
-        };
-        if !seen.insert(name.to_os_string()) {
-            bail!(
-                "two inputs are named {}: their outputs in {} would collide",
-                name.to_string_lossy(),
-                out.display()
-            );
-        }
-        paths.push(out.join(name));
-    }
-    Ok(paths)
-}
-
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
+    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.pois.inputs)?;
+    args.pois.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let t_all = Instant::now();
     args.bound.check()?;
     let shard = args.shard.resolve()?;
@@ -92,15 +56,18 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         Some(r) => r.pois.clone(),
         None => args.region.points(&args.pois)?,
     };
-    let format = crate::export::resolve(args.pois.inputs.len(), &args.out.output, args.out.format)?;
-    let mut outputs = output_paths(&args.pois.inputs, &args.out.output)?;
-    if format != Format::CityGml && (outputs.len() > 1 || args.out.output.is_dir()) {
-        for (o, i) in outputs.iter_mut().zip(&args.pois.inputs) {
-            if let Some(p) = crate::export::in_dir(&args.out.output, i, format) {
-                *o = p;
-            }
-        }
-    }
+    let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
+    // A merge (-o FILE or -o - for several inputs): each input's model is written to a
+    // staging directory, then merged into the target.
+    let staging = match &plan {
+        Plan::Merge(t) => Some(crate::outputs::Staging::new(t)?),
+        _ => None,
+    };
+    let (outputs, mirror): (Vec<PathBuf>, bool) = match (plan.per_input(), &staging) {
+        (Some((v, m)), _) => (v.to_vec(), m),
+        (None, Some(st)) => ((0..inputs.len()).map(|k| st.part(k)).collect(), false),
+        (None, None) => (Vec::new(), false),
+    };
     // Every target is checked before any work: a refusal after minutes of reading and
     // tracing helps nobody.
     let wopts = WriteOptions {
@@ -108,9 +75,22 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         protect: args.pois.inputs.clone(),
         keep_envelopes: false,
     };
-    for out in &outputs {
-        check_target(out, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+    let part_opts = WriteOptions {
+        overwrite: true,
+        ..wopts.clone()
+    };
+    if let Plan::Merge(t) = &plan {
+        check_target(t, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+    } else {
+        for out in &outputs {
+            check_target(out, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+        }
     }
+    let write_opts = if staging.is_some() {
+        &part_opts
+    } else {
+        &wopts
+    };
     if let Some(path) = &args.report {
         if is_stdout(path) && is_stdout(&args.out.output) {
             bail!("the model and the report cannot both go to standard output");
@@ -176,10 +156,6 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let pois = &framed.pois;
     let rough = &lv.rough_source;
 
-    if outputs.len() > 1 || args.out.output.is_dir() {
-        std::fs::create_dir_all(&args.out.output)
-            .with_context(|| format!("creating {}", args.out.output.display()))?;
-    }
     // Files of the model are the inputs that could be read, in input order.
     let targets: Vec<(usize, PathBuf)> = model
         .files
@@ -191,7 +167,17 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         })
         .collect();
     let t_write = Instant::now();
-    let results = write_all(model, &targets, &lv, format, &wopts, &progress)?;
+    if mirror {
+        for (_, out) in &targets {
+            crate::outputs::create_parent(out)?;
+        }
+    }
+    // In a merge, the messages and the report name the merged document.
+    let shown = |out: &Path| match &plan {
+        Plan::Merge(t) => t.display().to_string(),
+        _ => out.display().to_string(),
+    };
+    let results = write_all(model, &targets, &lv, format, write_opts, &progress)?;
     let mut written: Vec<Option<(String, usize)>> = vec![None; model.files.len()];
     for ((f, out), r) in targets.iter().zip(results) {
         let s = match r {
@@ -207,7 +193,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             None => summary!(
                 "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
                 model.files[*f].path.display(),
-                out.display(),
+                shown(out),
                 s.levels[0],
                 s.levels[1],
                 s.levels[2],
@@ -217,7 +203,27 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             ),
         }
         if let Some(w) = written.get_mut(*f) {
-            *w = Some((out.display().to_string(), s.buildings_dropped));
+            *w = Some((shown(out), s.buildings_dropped));
+        }
+    }
+    if let (Some(st), Plan::Merge(t)) = (&staging, &plan) {
+        let (parts, names): (Vec<PathBuf>, Vec<PathBuf>) = targets
+            .iter()
+            .filter(|(f, _)| written.get(*f).is_some_and(Option::is_some))
+            .map(|(f, out)| (out.clone(), model.files[*f].path.clone()))
+            .unzip();
+        if parts.is_empty() {
+            error!("nothing to merge; {} not written", t.display());
+            failed = true;
+        } else {
+            match st.merge(&parts, &names, t, &wopts) {
+                Ok(s) => summary!("{}", crate::outputs::merge_line(&s, t)),
+                Err(e) => {
+                    error!("{e:#}");
+                    failed = true;
+                    written.iter_mut().for_each(|w| *w = None);
+                }
+            }
         }
     }
     let write_ms = ms(t_write);
@@ -309,32 +315,4 @@ fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {
     skylod::citygml::write::check_target(path, &opts, args.pois.inputs.iter().map(|p| p.as_path()))
         .context("the report")?;
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn outputs_per_input() {
-        let one = output_paths(&[PathBuf::from("a/x.gml")], Path::new("o.gml")).unwrap();
-        assert_eq!(one, vec![PathBuf::from("o.gml")]);
-        let two = output_paths(
-            &[PathBuf::from("a/x.gml"), PathBuf::from("b/y.gml.gz")],
-            Path::new("outdir"),
-        )
-        .unwrap();
-        assert_eq!(
-            two,
-            vec![
-                PathBuf::from("outdir/x.gml"),
-                PathBuf::from("outdir/y.gml.gz")
-            ]
-        );
-        assert!(output_paths(
-            &[PathBuf::from("a/x.gml"), PathBuf::from("b/x.gml")],
-            Path::new("outdir")
-        )
-        .is_err());
-    }
 }

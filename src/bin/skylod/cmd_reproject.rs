@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML files (.gml, .xml, .gz).
+    /// CityGML files (.gml, .xml, .gz), directories, glob patterns, or - for standard input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// Target CRS: EPSG:n, EPSG:h+v (compound), or an OGC URN. A 2-D target keeps the
@@ -17,8 +17,8 @@ pub struct Args {
     /// Source CRS, overriding the documents' srsName.
     #[arg(short = 's', long = "source-crs", value_name = "CRS")]
     source: Option<String>,
-    /// Output file for one input (.gz to compress); a directory for several inputs
-    /// (created if missing; one output per input, with the input's file name).
+    /// Output file for one input (.gz to compress; `-` for standard output); a directory that
+    /// mirrors the input tree; or, for several inputs, one CityGML file that merges them.
     #[arg(short, long)]
     output: PathBuf,
     /// Replace existing output files.
@@ -40,7 +40,8 @@ pub fn run(_args: Args) -> anyhow::Result<Outcome> {
 #[cfg(feature = "proj")]
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use anyhow::Context;
-    let _spool = crate::common::expand_inputs(&mut args.inputs)?;
+    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
+    args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     use skylod::citygml::write::WriteOptions;
     use skylod::reproject::{reproject_file, CrsName, ReprojectError};
 
@@ -56,17 +57,59 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if let Some(s) = source {
         skylod::reproject::crs_info(s.horizontal).context("-s")?;
     }
-    let targets = crate::common::outputs_per_input(&args.inputs, &args.output)?;
-    let targets = crate::shard_args::files(args.shard.resolve()?, targets, "reproject");
+    let shard = args.shard.resolve()?;
+    let (plan, _) =
+        crate::outputs::plan(&inputs, &args.output, Some(skylod::export::Format::CityGml))?;
+    if let (Some(s), crate::outputs::Plan::Merge(t)) = (shard, &plan) {
+        anyhow::bail!(
+            "shard {s} cannot merge into {}: a merge needs every input (give -o DIR to the \
+             shards, then merge their outputs with `skylod convert DIR -o FILE`)",
+            t.display()
+        );
+    }
     let wopts = WriteOptions {
         overwrite: args.overwrite,
         protect: args.inputs.clone(),
         keep_envelopes: true,
     };
+    // A merge: each input reprojected into a staging directory, then merged.
+    let staging = match &plan {
+        crate::outputs::Plan::Merge(t) => {
+            skylod::citygml::write::check_target(
+                t,
+                &wopts,
+                args.inputs.iter().map(PathBuf::as_path),
+            )?;
+            Some(crate::outputs::Staging::new(t)?)
+        }
+        _ => None,
+    };
+    let (outs, mirror) = match (plan.per_input(), &staging) {
+        (Some((v, m)), _) => (v.to_vec(), m),
+        (None, Some(st)) => ((0..args.inputs.len()).map(|k| st.part(k)).collect(), false),
+        (None, None) => (Vec::new(), false),
+    };
+    let part_opts = WriteOptions {
+        overwrite: true,
+        ..wopts.clone()
+    };
+    let write_opts = if staging.is_some() {
+        &part_opts
+    } else {
+        &wopts
+    };
+    let targets: Vec<(PathBuf, PathBuf)> = args.inputs.iter().cloned().zip(outs).collect();
+    let targets = crate::shard_args::files(shard, targets, "reproject");
+    let (mut parts, mut names) = (Vec::new(), Vec::new());
     let mut failed = 0usize;
     for (input, out) in &targets {
-        match reproject_file(input, out, source, target, &wopts) {
+        if mirror {
+            crate::outputs::create_parent(out)?;
+        }
+        match reproject_file(input, out, source, target, write_opts) {
             Ok(s) => {
+                parts.push(out.clone());
+                names.push(input.clone());
                 crate::log::summary!(
                     "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
                     input.display(),
@@ -86,6 +129,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 crate::log::error!("{}: {e}", input.display());
                 failed += 1;
             }
+        }
+    }
+    if let (Some(st), crate::outputs::Plan::Merge(t)) = (&staging, &plan) {
+        if !parts.is_empty() {
+            crate::log::summary!(
+                "{}",
+                crate::outputs::merge_line(&st.merge(&parts, &names, t, &wopts)?, t)
+            );
         }
     }
     if failed > 0 {

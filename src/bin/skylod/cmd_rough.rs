@@ -6,7 +6,7 @@ use anyhow::bail;
 use rayon::prelude::*;
 use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
-use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
+use skylod::citygml::write::{check_target, WriteOptions};
 use skylod::crs::{model_crs, LocalFrame};
 use skylod::export::{Content, Format};
 use skylod::rough::{rough_model, RoughOptions};
@@ -33,39 +33,36 @@ pub struct Args {
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t0 = std::time::Instant::now();
     let shard = args.shard.resolve()?;
-    let _spool = crate::common::expand_inputs(&mut args.inputs)?;
-    let format = crate::export::resolve(args.inputs.len(), &args.out.output, args.out.format)?;
+    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
+    args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let opts = args.rough.options()?;
-    let targets: Vec<(PathBuf, PathBuf)> = if args.inputs.len() == 1 {
-        if args.out.output.is_dir() {
-            bail!(
-                "{}: is a directory; with one input, -o names the output file",
-                args.out.output.display()
-            );
-        }
-        vec![(args.inputs[0].clone(), args.out.output.clone())]
-    } else {
-        if is_stdout(&args.out.output) {
-            bail!("several inputs cannot be written to standard output: give -o DIR");
-        }
-        if args.out.output.exists() && !args.out.output.is_dir() {
-            bail!(
-                "{}: with several inputs, -o must be a directory",
-                args.out.output.display()
-            );
-        }
-        let mut seen = std::collections::HashSet::new();
-        let mut v = Vec::new();
-        for i in &args.inputs {
-            let Some(out) = crate::export::in_dir(&args.out.output, i, format) else {
-                bail!("{}: not a file name", i.display());
-            };
-            if !seen.insert(out.clone()) {
-                bail!("two inputs would both be written to {}", out.display());
-            }
-            v.push((i.clone(), out));
-        }
-        v
+    let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
+    if let (Some(s), crate::outputs::Plan::Merge(t)) = (shard, &plan) {
+        bail!(
+            "shard {s} cannot merge into {}: a merge needs every input (give -o DIR to the \
+             shards, then merge their outputs with `skylod convert DIR -o FILE`)",
+            t.display()
+        );
+    }
+    // A merge: every input is written to a staging directory, then merged into the target.
+    let staging = match &plan {
+        crate::outputs::Plan::Merge(t) => Some(crate::outputs::Staging::new(t)?),
+        _ => None,
+    };
+    let targets: Vec<(PathBuf, PathBuf)> = match (&plan, &staging) {
+        (crate::outputs::Plan::PerInput(outs) | crate::outputs::Plan::Mirror(outs), _) => args
+            .inputs
+            .iter()
+            .cloned()
+            .zip(outs.iter().cloned())
+            .collect(),
+        (_, Some(st)) => args
+            .inputs
+            .iter()
+            .enumerate()
+            .map(|(k, i)| (i.clone(), st.part(k)))
+            .collect(),
+        _ => Vec::new(),
     };
     // Laid out for all inputs, then this shard's part: each file goes where the serial run
     // writes it.
@@ -79,7 +76,18 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // (exit 1) without being read; the others are done.
     let mut failed = 0usize;
     let mut todo = Vec::with_capacity(targets.len());
+    if let crate::outputs::Plan::Merge(t) = &plan {
+        check_target(t, &wopts, args.inputs.iter().map(PathBuf::as_path))?;
+    }
+    let part_opts = WriteOptions {
+        overwrite: true,
+        ..wopts.clone()
+    };
     for (input, out) in &targets {
+        if staging.is_some() {
+            todo.push((input, out));
+            continue;
+        }
         match check_target(out, &wopts, args.inputs.iter().map(PathBuf::as_path)) {
             Ok(()) => todo.push((input, out)),
             Err(e) => {
@@ -88,21 +96,31 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
         }
     }
-    if args.inputs.len() > 1 {
-        std::fs::create_dir_all(&args.out.output)
-            .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", args.out.output.display()))?;
-    }
+    let write_opts = if staging.is_some() {
+        &part_opts
+    } else {
+        &wopts
+    };
     // Files in parallel (--jobs); messages in input order, whatever finished first.
-    let results: Vec<anyhow::Result<Done>> = args.jobs.install(|| {
+    let results: Vec<anyhow::Result<(Done, PathBuf, PathBuf)>> = args.jobs.install(|| {
         todo.par_iter()
-            .map(|(input, out)| one(input, out, format, &opts, &wopts, &args.crs))
+            .map(|(input, out)| {
+                if matches!(plan, crate::outputs::Plan::Mirror(_)) {
+                    crate::outputs::create_parent(out)?;
+                }
+                one(input, out, format, &opts, write_opts, &args.crs)
+                    .map(|d| (d, (*out).clone(), (*input).clone()))
+            })
             .collect()
     })?;
     let (mut ok, mut warnings, mut polys) = (0, 0, (0, 0));
+    let (mut parts, mut names) = (Vec::new(), Vec::new());
     for r in results {
         match r {
-            Ok(d) => {
-                if let Some(line) = d.line {
+            Ok((d, out, input)) => {
+                parts.push(out);
+                names.push(input);
+                if let Some(line) = d.line.filter(|_| staging.is_none()) {
                     crate::log::summary!("{line}");
                 }
                 ok += 1;
@@ -113,6 +131,20 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             Err(e) => {
                 crate::log::error!("{e}");
                 failed += 1;
+            }
+        }
+    }
+    if let (Some(st), crate::outputs::Plan::Merge(t)) = (&staging, &plan) {
+        if parts.is_empty() {
+            crate::log::error!("no input could be read; {} not written", t.display());
+        } else {
+            match st.merge(&parts, &names, t, &wopts) {
+                Ok(s) => crate::log::summary!("{}", crate::outputs::merge_line(&s, t)),
+                Err(e) => {
+                    crate::log::error!("{e:#}");
+                    failed += ok;
+                    ok = 0;
+                }
             }
         }
     }

@@ -51,18 +51,33 @@ pub struct PoiArgs {
     /// `--source-crs`, `--poi-crs`: applied by `crate::frames::frame` after reading.
     #[command(flatten)]
     pub crs: crate::frames::CrsArgs,
+    /// `--jobs`: threads reading the inputs and tracing the POIs.
+    #[command(flatten)]
+    pub jobs: JobsArgs,
 }
 
 /// `--jobs`: how many input files are worked on at once.
 #[derive(clap::Args, Debug, Clone, Copy, Default)]
 pub struct JobsArgs {
-    /// Input files worked on at once (default: one per core). The outputs are the same
-    /// whatever the number.
+    /// Worker threads: input files read or written at once, POIs traced at once (default: one
+    /// per core). The outputs are the same whatever the number.
     #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub jobs: Option<u16>,
 }
 
 impl JobsArgs {
+    /// Make rayon's global pool `--jobs` threads wide (for commands whose every parallel step,
+    /// in the binary and in the library, should use it). Call before any parallel work.
+    pub fn global(&self) -> anyhow::Result<()> {
+        if let Some(n) = self.jobs {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(usize::from(n))
+                .build_global()
+                .context("starting the worker threads")?;
+        }
+        Ok(())
+    }
+
     /// Run `f` in a thread pool of `--jobs` threads (rayon's global pool without it).
     pub fn install<T: Send>(&self, f: impl FnOnce() -> T + Send) -> anyhow::Result<T> {
         match self.jobs {
@@ -139,10 +154,11 @@ impl PoiArgs {
         Ok(out.into_iter().map(|l| l.poi).collect())
     }
 
-    /// Read the inputs ([`load`]) and refuse a model that would give a confidently wrong
+    /// Size the thread pool (`--jobs`), read the inputs ([`load`]) and refuse a model that would give a confidently wrong
     /// answer whatever the POIs (`skylod::checks`): inputs in different CRSs (unless
     /// --allow-mixed-crs), a model without heights.
     pub fn load_checked(&self) -> anyhow::Result<Loaded> {
+        self.jobs.global()?;
         let loaded = load(&self.inputs)?;
         loaded.check(self.allow_mixed_crs)?;
         Ok(loaded)
@@ -168,6 +184,16 @@ pub struct Spool(#[allow(dead_code)] Option<tempfile::TempDir>);
 /// glob patterns, `-`), spooling standard input to a temporary file. Keep the returned
 /// [`Spool`] alive while the inputs are read and written.
 pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
+    let (expanded, spool) = expand_inputs_relative(inputs)?;
+    *inputs = expanded.into_iter().map(|i| i.path).collect();
+    Ok(spool)
+}
+
+/// [`expand_inputs`], keeping each input's path relative to its argument (for `-o DIR`; the
+/// spooled standard input is `stdin.gml`).
+pub fn expand_inputs_relative(
+    inputs: &[PathBuf],
+) -> anyhow::Result<(Vec<skylod::inputs::Input>, Spool)> {
     let expanded = skylod::inputs::expand(inputs)?;
     let mut spool = None;
     let mut out = Vec::with_capacity(expanded.len());
@@ -182,14 +208,16 @@ pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
                 .with_context(|| format!("spooling standard input to {}", path.display()))?;
             std::io::copy(&mut std::io::stdin().lock(), &mut f)
                 .context("reading standard input")?;
-            out.push(path);
+            out.push(skylod::inputs::Input {
+                path,
+                relative: PathBuf::from("stdin.gml"),
+            });
             spool = Some(dir);
         } else {
-            out.push(i.path);
+            out.push(i);
         }
     }
-    *inputs = out;
-    Ok(Spool(spool))
+    Ok((out, Spool(spool)))
 }
 
 /// The inputs that could be read, merged in input order ([`skylod::pipeline::Inputs`]).
@@ -387,49 +415,6 @@ pub fn warn_flags(pois: &[Poi], flags: &[Vec<PoiFlag>]) {
         }
     }
 }
-
-/// Output path per input for `reproject` (one document per input): one input writes the
-/// file `output`; several write `output/<input name>` (the directory is created; two inputs
-/// of the same name are refused).
-#[cfg_attr(not(feature = "proj"), allow(dead_code))]
-pub fn outputs_per_input(
-    inputs: &[PathBuf],
-    output: &std::path::Path,
-) -> anyhow::Result<Vec<(PathBuf, PathBuf)>> {
-    if inputs.len() == 1 {
-        if output.is_dir() {
-            bail!(
-                "{}: is a directory; with one input, -o names the output file",
-                output.display()
-            );
-        }
-        return Ok(vec![(inputs[0].clone(), output.to_path_buf())]);
-    }
-    if output.exists() && !output.is_dir() {
-        bail!(
-            "{}: with several inputs, -o must be a directory",
-            output.display()
-        );
-    }
-    let mut seen = std::collections::HashSet::new();
-    let mut v = Vec::new();
-    for i in inputs {
-        let Some(name) = i.file_name() else {
-            bail!("{}: not a file name", i.display());
-        };
-        if !seen.insert(name.to_os_string()) {
-            bail!(
-                "two inputs are named {}: their outputs would collide",
-                std::path::Path::new(name).display()
-            );
-        }
-        v.push((i.clone(), output.join(name)));
-    }
-    std::fs::create_dir_all(output)
-        .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", output.display()))?;
-    Ok(v)
-}
-
 /// Rough-model options, the same on every command that builds the rough model (`lod`,
 /// `evaluate`, `rough`, `fisheye`), so that the commands cannot drift apart.
 #[derive(clap::Args, Debug, Clone, Copy)]
@@ -519,10 +504,10 @@ pub struct SunArgs {
 /// Where a command writes its model (`lod`, `rough`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct OutputArgs {
-    /// Output file for one input (.gz to compress; `-` for standard output); a directory for
-    /// several inputs (created if missing; one output per input, with the input's file name).
-    /// The format follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON,
-    /// .city.jsonl CityJSONSeq.
+    /// Output file for one input (`-` for standard output; `.gz` compresses; the format
+    /// follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl
+    /// CityJSONSeq); a directory that mirrors the input tree (created if missing); or, for
+    /// several inputs, one CityGML file (or `-`) that merges them.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output format when the output's name does not tell it (in a directory: the format of

@@ -1,31 +1,13 @@
-//! Output formats for `convert`, `rough` and `lod`: `--format`, the format of an output path,
-//! and the OBJ / CityJSON / CityJSONSeq writers with their summary line.
+//! Output formats for `convert`, `rough` and `lod`: `--format` and the OBJ / CityJSON / CityJSONSeq writers with their summary line.
 
 use skylod::citygml::write::WriteOptions;
 use skylod::export::{Content, Format};
 use skylod::model::CityModel;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// `--format` values.
 pub fn parse_format(s: &str) -> Result<Format, String> {
     s.parse()
-}
-
-/// The format of the outputs, decided before any work: an output directory (or several inputs)
-/// and `-` (standard output) take `explicit` or CityGML; an output file takes `explicit` or the
-/// format its name asks for, and is refused (usage error) when it names none.
-pub fn resolve(n_inputs: usize, out: &Path, explicit: Option<Format>) -> anyhow::Result<Format> {
-    if n_inputs > 1 || out.is_dir() || out == Path::new("-") {
-        return Ok(explicit.unwrap_or(Format::CityGml));
-    }
-    Ok(Format::resolve(out, explicit)?)
-}
-
-/// Output path in a directory for `input` in `format` (the input's name, with the format's
-/// ending for formats other than CityGML).
-pub fn in_dir(dir: &Path, input: &Path, format: Format) -> Option<PathBuf> {
-    let name = input.file_name()?.to_string_lossy();
-    Some(dir.join(format.output_name(&name)))
 }
 
 /// Write file `file` of `model` in `format` (not CityGML) and print one summary line.

@@ -1,0 +1,260 @@
+//! Where the commands that write per input (`convert`, `rough`, `lod`, `reproject`) put their
+//! outputs, decided once before any work:
+//!
+//! * `-o DIR` (an existing directory, a name ending in `/`, or, for several inputs, a name with
+//!   no output ending) mirrors the input tree: each input goes to `DIR/<relative>`, its path
+//!   below the directory or pattern it was found in (its file name when named directly),
+//!   with the format's ending for formats other than CityGML. Two inputs that map to one
+//!   output are refused.
+//! * `-o FILE` with one input writes that file (format from its ending or `--format`).
+//! * `-o FILE` (CityGML) or `-o -` with several inputs merges them into one document
+//!   ([`skylod::citygml::merge`]): each input is written to a staging directory beside the
+//!   target, then merged into it.
+
+use anyhow::{bail, Context};
+use skylod::citygml::merge::{merge_named, MergeSummary};
+use skylod::citygml::write::{is_stdout, WriteOptions};
+use skylod::export::Format;
+use skylod::inputs::Input;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// What `-o` means for these inputs.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Plan {
+    /// One output per input, in input order.
+    PerInput(Vec<PathBuf>),
+    /// One output per input below a directory, in input order (parent directories are
+    /// created when the input is written: [`create_parent`]).
+    Mirror(Vec<PathBuf>),
+    /// All inputs merged into one CityGML document (a file or `-`).
+    Merge(PathBuf),
+}
+
+fn names_directory(out: &Path) -> bool {
+    out.is_dir() || out.as_os_str().to_string_lossy().ends_with('/')
+}
+
+/// The outputs of `inputs` for `-o out` and the format written (see the module docs). Usage
+/// errors (an unknown ending for one file, a merge into a format other than CityGML,
+/// colliding outputs) are returned before any input is read.
+pub fn plan(
+    inputs: &[Input],
+    out: &Path,
+    explicit: Option<Format>,
+) -> anyhow::Result<(Plan, Format)> {
+    let several = inputs.len() > 1;
+    if is_stdout(out) {
+        let format = explicit.unwrap_or(Format::CityGml);
+        if several {
+            refuse_merge(format, inputs.len())?;
+            return Ok((Plan::Merge(out.to_path_buf()), format));
+        }
+        return Ok((Plan::PerInput(vec![out.to_path_buf()]), format));
+    }
+    if !names_directory(out) {
+        match Format::resolve(out, explicit) {
+            Ok(format) if !several => {
+                return Ok((Plan::PerInput(vec![out.to_path_buf()]), format));
+            }
+            Ok(format) if Format::from_path(out).is_some() => {
+                refuse_merge(format, inputs.len())?;
+                return Ok((Plan::Merge(out.to_path_buf()), format));
+            }
+            Err(e) if !several => return Err(e.into()),
+            // Several inputs and a name without an output ending: a directory.
+            _ => {}
+        }
+        if out.exists() {
+            bail!(
+                "{}: is a file; {} inputs are written to a directory (-o DIR) or merged into \
+                 one CityGML file (-o FILE.gml)",
+                out.display(),
+                inputs.len()
+            );
+        }
+    }
+    let format = explicit.unwrap_or(Format::CityGml);
+    Ok((Plan::Mirror(mirror(inputs, out, format)?), format))
+}
+
+fn refuse_merge(format: Format, n: usize) -> anyhow::Result<()> {
+    if format != Format::CityGml {
+        bail!(
+            "{n} inputs cannot be merged into one {format} file: give -o DIR for one output per \
+             input, or a CityGML name (.gml, .xml, .gz) to merge"
+        );
+    }
+    Ok(())
+}
+
+/// `dir/<relative>` per input, with the format's ending; colliding outputs are refused.
+pub fn mirror(inputs: &[Input], dir: &Path, format: Format) -> anyhow::Result<Vec<PathBuf>> {
+    let mut seen: HashMap<PathBuf, &Path> = HashMap::new();
+    let mut out = Vec::with_capacity(inputs.len());
+    for i in inputs {
+        let rel = if i.relative.as_os_str().is_empty() || i.relative.as_os_str() == "-" {
+            PathBuf::from("stdin.gml")
+        } else {
+            i.relative.clone()
+        };
+        let Some(name) = rel.file_name() else {
+            bail!("{}: not a file name", i.path.display());
+        };
+        let p = dir
+            .join(&rel)
+            .with_file_name(format.output_name(&name.to_string_lossy()));
+        if let Some(other) = seen.insert(p.clone(), &i.path) {
+            bail!(
+                "{} and {} would both be written to {}",
+                other.display(),
+                i.path.display(),
+                p.display()
+            );
+        }
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// Create the parent directory of an output path (nothing for `-`).
+pub fn create_parent(out: &Path) -> anyhow::Result<()> {
+    if is_stdout(out) {
+        return Ok(());
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    Ok(())
+}
+
+/// A temporary directory for the per-input documents of a merge, beside the target (system
+/// temporary directory for `-`); removed when dropped.
+pub struct Staging {
+    dir: tempfile::TempDir,
+}
+
+impl Plan {
+    /// The outputs per input (`None` for a merge) and whether they mirror a tree.
+    pub fn per_input(&self) -> Option<(&[PathBuf], bool)> {
+        match self {
+            Plan::PerInput(v) => Some((v, false)),
+            Plan::Mirror(v) => Some((v, true)),
+            Plan::Merge(_) => None,
+        }
+    }
+}
+
+impl Staging {
+    /// A staging directory for a merge into `target`.
+    pub fn new(target: &Path) -> anyhow::Result<Staging> {
+        let mut b = tempfile::Builder::new();
+        b.prefix(".skylod-merge-");
+        let dir = match target.parent().filter(|d| !d.as_os_str().is_empty()) {
+            _ if is_stdout(target) => b.tempdir(),
+            Some(parent) => b.tempdir_in(parent),
+            None => b.tempdir_in("."),
+        }
+        .with_context(|| format!("creating a staging directory for {}", target.display()))?;
+        Ok(Staging { dir })
+    }
+
+    /// Where the `k`-th input's document is written.
+    pub fn part(&self, k: usize) -> PathBuf {
+        self.dir.path().join(format!("{k:06}.gml"))
+    }
+
+    /// Merge `parts` (in order; written from the inputs `names`) into `target`.
+    pub fn merge(
+        &self,
+        parts: &[PathBuf],
+        names: &[PathBuf],
+        target: &Path,
+        opts: &WriteOptions,
+    ) -> anyhow::Result<MergeSummary> {
+        Ok(merge_named(parts, names, target, opts)?)
+    }
+}
+
+/// The line printed after a merge.
+pub fn merge_line(s: &MergeSummary, target: &Path) -> String {
+    format!(
+        "merged {} file(s) into {}: {} member(s), {} gml:id(s) renamed, {} reference(s) \
+         rewritten, {} bytes",
+        s.files,
+        target.display(),
+        s.members,
+        s.ids_renamed,
+        s.refs_rewritten,
+        s.bytes
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn input(p: &str, rel: &str) -> Input {
+        Input {
+            path: PathBuf::from(p),
+            relative: PathBuf::from(rel),
+        }
+    }
+
+    #[test]
+    fn plans() {
+        let one = [input("a/x.gml", "x.gml")];
+        let two = [
+            input("t/a/x.gml", "a/x.gml"),
+            input("t/b/x.gml.gz", "b/x.gml.gz"),
+        ];
+        let p = |i: &[Input], o: &str, f| plan(i, Path::new(o), f).unwrap();
+        assert_eq!(
+            p(&one, "o.gml", None),
+            (Plan::PerInput(vec!["o.gml".into()]), Format::CityGml)
+        );
+        assert_eq!(
+            p(&one, "o.obj", None),
+            (Plan::PerInput(vec!["o.obj".into()]), Format::Obj)
+        );
+        assert!(plan(&one, Path::new("o.txt"), None).is_err());
+        assert_eq!(
+            p(&two, "m.gml.gz", None),
+            (Plan::Merge("m.gml.gz".into()), Format::CityGml)
+        );
+        assert_eq!(
+            p(&two, "-", None),
+            (Plan::Merge("-".into()), Format::CityGml)
+        );
+        assert!(plan(&two, Path::new("m.obj"), None).is_err());
+        assert_eq!(
+            p(&two, "outdir", None),
+            (
+                Plan::Mirror(vec!["outdir/a/x.gml".into(), "outdir/b/x.gml.gz".into()]),
+                Format::CityGml
+            )
+        );
+        assert_eq!(
+            p(&two, "outdir/", Some(Format::CityJson)).0,
+            Plan::Mirror(vec![
+                "outdir/a/x.city.json".into(),
+                "outdir/b/x.city.json".into()
+            ])
+        );
+        assert_eq!(
+            p(&one, "outdir/", None).0,
+            Plan::Mirror(vec!["outdir/x.gml".into()])
+        );
+    }
+
+    #[test]
+    fn colliding_outputs_are_refused() {
+        let two = [input("a/x.gml", "x.gml"), input("b/x.gml", "x.gml")];
+        let e = plan(&two, Path::new("outdir"), None).unwrap_err();
+        assert!(e.to_string().contains("would both be written"), "{e}");
+        // Different inputs, same output once the ending is replaced.
+        let two = [input("x.gml", "x.gml"), input("x.xml", "x.xml")];
+        assert!(plan(&two, Path::new("o/"), Some(Format::Obj)).is_err());
+        assert!(plan(&two, Path::new("o/"), None).is_ok());
+    }
+}

@@ -1,0 +1,1005 @@
+//! Several CityGML documents merged into one: what `-o FILE` writes for several inputs.
+//!
+//! The merged document has
+//!
+//! * the XML declaration and the `CityModel` start tag of the **first** input, with the
+//!   namespace declarations of every input added: a prefix the root does not declare yet is
+//!   declared on the root; a prefix an input binds to another URI than the root does is
+//!   declared again on each member copied from that input, so every element keeps its
+//!   namespace. `xsi:schemaLocation` pairs of later inputs whose namespace the first does not
+//!   list are appended;
+//! * the first input's leading `gml:metaDataProperty`, `gml:description`, `gml:name` (and the
+//!   other GML header properties before `gml:boundedBy`); those of later inputs, and every
+//!   input's root `gml:location`, are left out;
+//! * one `gml:boundedBy` envelope over all inputs: the union of the inputs' root envelopes (the
+//!   skylod writers recompute them), or, for an input without one, of its `gml:pos` /
+//!   `gml:posList` coordinates; in the `srsName` of the first input that names one;
+//! * the members of every input (each child of the root after the header), in input order,
+//!   grouped by member element (`cityObjectMember`, then `appearanceMember`, ... in the order
+//!   they first appear), so that the CityGML 3.0 content model, which orders them, holds.
+//!
+//! # Identifiers
+//!
+//! `gml:id`s must be unique in a document. The ids of the first input are kept. In the `k`-th
+//! input (1-based, k ≥ 2), an id already used by an earlier input is renamed `<id>__<k>`
+//! (`wall-1` in the 2nd input becomes `wall-1__2`); should that name be taken too (by any
+//! input), `<id>__<k>_2`, `<id>__<k>_3`, ... is the first free one. Inside that input every
+//! local reference to a renamed id follows: `xlink:href="#id"`, an appearance target's
+//! `uri="#id"` attribute and the `#id` text of an `app:target` element. The rule depends only on
+//! the inputs and their order, so the same inputs always give the same bytes.
+//!
+//! # Refused
+//!
+//! Inputs of different CityGML versions, and inputs whose `srsName`s denote different CRSs
+//! ([`crate::checks::same_crs::same_crs`]; an input without one agrees with any), are refused
+//! before anything is written, naming the files.
+//!
+//! # Example
+//! ```
+//! use skylod::citygml::merge::merge_files;
+//! use skylod::citygml::write::WriteOptions;
+//! let dir = tempfile::tempdir().unwrap();
+//! let doc = |x: f64| format!(r##"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0"
+//!  xmlns:gml="http://www.opengis.net/gml" xmlns:bldg="http://www.opengis.net/citygml/building/2.0"
+//!  xmlns:xlink="http://www.w3.org/1999/xlink">
+//!  <gml:boundedBy><gml:Envelope srsName="EPSG:25832"><gml:lowerCorner>{x} 0 0</gml:lowerCorner>
+//!  <gml:upperCorner>{} 1 1</gml:upperCorner></gml:Envelope></gml:boundedBy>
+//!  <core:cityObjectMember><bldg:Building gml:id="b"/></core:cityObjectMember>
+//!  <core:cityObjectMember><bldg:Building gml:id="c"><bldg:consistsOfBuildingPart xlink:href="#b"/>
+//!  </bldg:Building></core:cityObjectMember></core:CityModel>"##, x + 1.0);
+//! let (a, b) = (dir.path().join("a.gml"), dir.path().join("b.gml"));
+//! std::fs::write(&a, doc(0.0)).unwrap();
+//! std::fs::write(&b, doc(5.0)).unwrap();
+//! let out = dir.path().join("merged.gml");
+//! let s = merge_files(&[a, b], &out, &WriteOptions::default()).unwrap();
+//! assert_eq!((s.members, s.ids_renamed, s.refs_rewritten), (4, 2, 1));
+//! let text = std::fs::read_to_string(&out).unwrap();
+//! assert!(text.contains(r#"gml:id="b__2""#) && text.contains(r##"xlink:href="#b__2""##));
+//! assert!(text.contains("<gml:lowerCorner>0 0 0</gml:lowerCorner>"));
+//! assert!(text.contains("<gml:upperCorner>6 1 1</gml:upperCorner>"));
+//! ```
+
+use super::error::{Location, ReadError, WriteError};
+use super::ns::{classify, Ns};
+use super::source;
+use crate::checks::same_crs::same_crs;
+use quick_xml::escape::escape;
+use quick_xml::events::attributes::Attribute;
+use quick_xml::events::{BytesStart, BytesText, Event};
+use quick_xml::name::{QName, ResolveResult};
+use quick_xml::{NsReader, Writer};
+use std::collections::{HashMap, HashSet};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::write::{atomic_write, check_target, WriteOptions};
+
+/// Why documents cannot be merged.
+#[derive(Debug, thiserror::Error)]
+pub enum MergeError {
+    /// An input cannot be read or is not well-formed.
+    #[error(transparent)]
+    Read(#[from] ReadError),
+    /// Writing the merged document failed (nothing is left behind).
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    /// Nothing to merge.
+    #[error("no document to merge")]
+    NoInput,
+    /// Inputs of different CityGML versions.
+    #[error("cannot merge CityGML {first_version} ({first}) with CityGML {other_version} ({other})", first = .first.display(), other = .other.display())]
+    Version {
+        /// The first input.
+        first: PathBuf,
+        /// Its version.
+        first_version: String,
+        /// An input of another version.
+        other: PathBuf,
+        /// Its version.
+        other_version: String,
+    },
+    /// Inputs in different CRSs.
+    #[error("cannot merge inputs in different CRSs: {} ({first_srs}) and {} ({other_srs})", .first.display(), .other.display())]
+    Crs {
+        /// The first input naming a CRS.
+        first: PathBuf,
+        /// Its srsName.
+        first_srs: String,
+        /// An input in another CRS.
+        other: PathBuf,
+        /// Its srsName.
+        other_srs: String,
+    },
+}
+
+/// What was merged.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MergeSummary {
+    /// Input documents.
+    pub files: usize,
+    /// Members copied (children of the root after its header).
+    pub members: usize,
+    /// `gml:id`s renamed to keep ids unique.
+    pub ids_renamed: usize,
+    /// References (`xlink:href`, appearance targets) rewritten to follow a renamed id.
+    pub refs_rewritten: usize,
+    /// Bytes written (before compression).
+    pub bytes: u64,
+}
+
+/// The new name of an id of the `k`-th input (1-based) that collides: `<id>__<k>`, or the first
+/// of `<id>__<k>_2`, `<id>__<k>_3`, ... that `taken` does not hold.
+///
+/// ```
+/// use std::collections::HashSet;
+/// use skylod::citygml::merge::renamed_id;
+/// let taken: HashSet<String> = ["w".into(), "w__2".into()].into();
+/// assert_eq!(renamed_id("w", 3, &taken), "w__3");
+/// assert_eq!(renamed_id("w", 2, &taken), "w__2_2");
+/// ```
+pub fn renamed_id(id: &str, k: usize, taken: &HashSet<String>) -> String {
+    let base = format!("{id}__{k}");
+    if !taken.contains(&base) {
+        return base;
+    }
+    (2usize..)
+        .map(|n| format!("{base}_{n}"))
+        .find(|c| !taken.contains(c))
+        .unwrap_or(base)
+}
+
+/// A member element kind: namespace URI and local name.
+type Key = (Vec<u8>, Vec<u8>);
+
+/// What the first pass learns about one input.
+#[derive(Default)]
+struct Scan {
+    /// Events before the root (declaration, comments), raw.
+    prolog: Vec<Vec<u8>>,
+    /// Raw content of the root start tag (name and attributes).
+    root: Vec<u8>,
+    /// Namespace URI of the root.
+    root_ns: Vec<u8>,
+    /// Namespace declarations of the root: prefix ("" = default), URI.
+    decls: Vec<(Vec<u8>, Vec<u8>)>,
+    /// `xsi:schemaLocation` of the root.
+    schema_location: Option<String>,
+    /// The root envelope's srsName, or the first srsName of the document.
+    srs: Option<String>,
+    /// Bounds of the root envelope, or of the coordinates when there is none.
+    lower: [f64; 3],
+    upper: [f64; 3],
+    has_root_envelope: bool,
+    /// Every gml:id, in document order (duplicates kept once).
+    ids: Vec<String>,
+    /// Member kinds in order of first appearance.
+    kinds: Vec<Key>,
+}
+
+fn xml_err(path: &Path, pos: u64, e: impl std::fmt::Display) -> ReadError {
+    ReadError::Xml {
+        loc: Location {
+            file: path.to_path_buf(),
+            ..Default::default()
+        },
+        message: format!("at byte {pos}: {e}"),
+    }
+}
+
+fn open(path: &Path) -> Result<NsReader<Box<dyn std::io::BufRead + Send>>, ReadError> {
+    let (mut r, _) = source::open(path)?;
+    source::skip_bom(&mut r, path)?;
+    let mut reader = NsReader::from_reader(r);
+    reader.config_mut().expand_empty_elements = false;
+    reader.config_mut().trim_text(false);
+    Ok(reader)
+}
+
+/// GML properties of a feature collection that come before its members.
+fn is_header(ns: &[u8], local: &[u8]) -> bool {
+    classify(ns) == Ns::Gml
+        && matches!(
+            local,
+            b"metaDataProperty"
+                | b"description"
+                | b"descriptionReference"
+                | b"identifier"
+                | b"name"
+                | b"boundedBy"
+                | b"location"
+        )
+}
+
+fn ns_of(r: ResolveResult<'_>) -> Vec<u8> {
+    match r {
+        ResolveResult::Bound(ns) => ns.as_ref().to_vec(),
+        _ => Vec::new(),
+    }
+}
+
+fn parse_coords(text: &str, dim: usize, lower: &mut [f64; 3], upper: &mut [f64; 3]) {
+    let vals: Vec<f64> = text
+        .split_ascii_whitespace()
+        .filter_map(|t| t.parse().ok())
+        .collect();
+    if dim < 2 {
+        return;
+    }
+    for p in vals.chunks_exact(dim) {
+        for (i, v) in p.iter().take(3).enumerate() {
+            lower[i] = lower[i].min(*v);
+            upper[i] = upper[i].max(*v);
+        }
+    }
+}
+
+fn version_of(ns: &[u8]) -> String {
+    String::from_utf8_lossy(ns.rsplit(|&c| c == b'/').next().unwrap_or(b"?")).into_owned()
+}
+
+fn scan(path: &Path) -> Result<Scan, ReadError> {
+    let mut reader = open(path)?;
+    let mut s = Scan {
+        lower: [f64::INFINITY; 3],
+        upper: [f64::NEG_INFINITY; 3],
+        ..Default::default()
+    };
+    let mut env_lower = [f64::INFINITY; 3];
+    let mut env_upper = [f64::NEG_INFINITY; 3];
+    let mut buf = Vec::new();
+    let mut depth = 0usize;
+    // Inside the root's gml:boundedBy (depth where it opened).
+    let mut in_root_bound = false;
+    // Collecting coordinates: the local name and dimension of the open coordinate element.
+    let mut coord: Option<(&'static str, usize)> = None;
+    let mut coord_text = String::new();
+    let mut seen_ids = HashSet::new();
+    let mut seen_kinds = HashSet::new();
+    loop {
+        let pos = reader.buffer_position();
+        let ev = reader
+            .read_event_into(&mut buf)
+            .map_err(|e| xml_err(path, pos, e))?;
+        match ev {
+            Event::Eof => break,
+            Event::Decl(_) | Event::Comment(_) | Event::PI(_) | Event::DocType(_)
+                if depth == 0 && s.root.is_empty() =>
+            {
+                let mut w = Writer::new(Vec::new());
+                w.write_event(ev.borrow())
+                    .map_err(|e| xml_err(path, pos, e))?;
+                s.prolog.push(w.into_inner());
+            }
+            Event::Start(ref e) | Event::Empty(ref e) => {
+                let empty = matches!(ev, Event::Empty(_));
+                let (ns, local) = reader.resolve_element(e.name());
+                let ns = ns_of(ns);
+                let local = local.as_ref().to_vec();
+                if depth == 0 {
+                    s.root = e.to_vec();
+                    s.root_ns = ns.clone();
+                    for a in e.attributes().with_checks(false).flatten() {
+                        let key = a.key.as_ref();
+                        if key == b"xmlns" {
+                            s.decls.push((Vec::new(), a.value.to_vec()));
+                        } else if let Some(p) = key.strip_prefix(b"xmlns:") {
+                            s.decls.push((p.to_vec(), a.value.to_vec()));
+                        }
+                    }
+                } else if depth == 1 {
+                    if !is_header(&ns, &local) && seen_kinds.insert((ns.clone(), local.clone())) {
+                        s.kinds.push((ns.clone(), local.clone()));
+                    }
+                    in_root_bound = !empty && classify(&ns) == Ns::Gml && local == b"boundedBy";
+                }
+                for a in e.attributes().with_checks(false).flatten() {
+                    let (ans, alocal) = reader.resolve_attribute(a.key);
+                    let ans = ns_of(ans);
+                    let value = || {
+                        a.unescape_value()
+                            .map(|v| v.into_owned())
+                            .map_err(|err| xml_err(path, pos, err))
+                    };
+                    match alocal.as_ref() {
+                        b"id" if classify(&ans) == Ns::Gml => {
+                            let v = value()?;
+                            if seen_ids.insert(v.clone()) {
+                                s.ids.push(v);
+                            }
+                        }
+                        b"srsName"
+                            if ans.is_empty()
+                                && (s.srs.is_none() || (in_root_bound && local == b"Envelope")) =>
+                        {
+                            s.srs = Some(value()?);
+                        }
+                        b"schemaLocation"
+                            if depth == 0
+                                && ans == b"http://www.w3.org/2001/XMLSchema-instance" =>
+                        {
+                            s.schema_location = Some(value()?);
+                        }
+                        _ => {}
+                    }
+                }
+                if classify(&ns) == Ns::Gml && !empty {
+                    let dim = e
+                        .try_get_attribute("srsDimension")
+                        .ok()
+                        .flatten()
+                        .and_then(|a| std::str::from_utf8(&a.value).ok()?.trim().parse().ok())
+                        .unwrap_or(3usize);
+                    coord = match local.as_slice() {
+                        b"lowerCorner" if in_root_bound => Some(("lower", dim)),
+                        b"upperCorner" if in_root_bound => Some(("upper", dim)),
+                        b"pos" | b"posList" if !in_root_bound => Some(("pos", dim)),
+                        _ => None,
+                    };
+                    coord_text.clear();
+                }
+                if !empty {
+                    depth += 1;
+                }
+            }
+            Event::Text(ref t) if coord.is_some() => {
+                coord_text.push_str(&t.decode().map_err(|e| xml_err(path, pos, e))?);
+            }
+            Event::End(_) => {
+                if let Some((what, dim)) = coord.take() {
+                    match what {
+                        "lower" | "upper" => {
+                            let mut lo = [f64::INFINITY; 3];
+                            let mut hi = [f64::NEG_INFINITY; 3];
+                            parse_coords(&coord_text, dim, &mut lo, &mut hi);
+                            if lo[0].is_finite() {
+                                s.has_root_envelope = true;
+                                let (l, h) = (&mut env_lower, &mut env_upper);
+                                for i in 0..3 {
+                                    if lo[i].is_finite() {
+                                        l[i] = l[i].min(lo[i]);
+                                        h[i] = h[i].max(hi[i]);
+                                    }
+                                }
+                            }
+                        }
+                        _ => parse_coords(&coord_text, dim, &mut s.lower, &mut s.upper),
+                    }
+                }
+                depth = depth.saturating_sub(1);
+                if depth == 1 {
+                    in_root_bound = false;
+                }
+            }
+            _ => {}
+        }
+        buf.clear();
+    }
+    if s.root.is_empty() {
+        return Err(ReadError::Empty(path.to_path_buf()));
+    }
+    if s.has_root_envelope {
+        s.lower = env_lower;
+        s.upper = env_upper;
+    }
+    Ok(s)
+}
+
+/// Format a coordinate as the writers do: shortest round-trip decimal.
+fn num(v: f64) -> String {
+    if v == v.trunc() && v.abs() < 1e15 {
+        format!("{}", v as i64)
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Merge the CityGML documents `inputs` (plain or gzip) into `out` (gzip when it ends in `.gz`;
+/// `-` for standard output), written atomically. See the module docs for the rules.
+pub fn merge_files(
+    inputs: &[PathBuf],
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<MergeSummary, MergeError> {
+    merge_named(inputs, inputs, out, opts)
+}
+
+/// [`merge_files`], naming the inputs `names` (same length) in the errors that refuse a merge:
+/// for documents staged in temporary files, the files they were made from.
+pub fn merge_named(
+    inputs: &[PathBuf],
+    names: &[PathBuf],
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<MergeSummary, MergeError> {
+    let name = |k: usize| names.get(k).unwrap_or(&inputs[k]).clone();
+    if inputs.is_empty() {
+        return Err(MergeError::NoInput);
+    }
+    check_target(out, opts, inputs.iter().map(PathBuf::as_path))?;
+    let scans = inputs
+        .iter()
+        .map(|p| scan(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let first = &scans[0];
+    for (k, s) in scans.iter().enumerate().skip(1) {
+        if s.root_ns != first.root_ns {
+            return Err(MergeError::Version {
+                first: name(0),
+                first_version: version_of(&first.root_ns),
+                other: name(k),
+                other_version: version_of(&s.root_ns),
+            });
+        }
+    }
+    let mut srs: Option<(usize, &str)> = None;
+    for (k, s) in scans.iter().enumerate() {
+        let Some(srs_name) = s.srs.as_deref() else {
+            continue;
+        };
+        match srs {
+            None => srs = Some((k, srs_name)),
+            Some((j, first_srs)) if !same_crs(first_srs, srs_name) => {
+                return Err(MergeError::Crs {
+                    first: name(j),
+                    first_srs: first_srs.to_string(),
+                    other: name(k),
+                    other_srs: srs_name.to_string(),
+                })
+            }
+            _ => {}
+        }
+    }
+
+    // Ids: the first input keeps its own; later inputs rename what an earlier one used.
+    let mut taken: HashSet<String> = scans.iter().flat_map(|s| s.ids.iter().cloned()).collect();
+    let mut used: HashSet<String> = HashSet::new();
+    let mut renames: Vec<HashMap<String, String>> = Vec::with_capacity(scans.len());
+    let mut ids_renamed = 0;
+    for (k, s) in scans.iter().enumerate() {
+        let mut map = HashMap::new();
+        for id in &s.ids {
+            if used.contains(id) {
+                let new = renamed_id(id, k + 1, &taken);
+                taken.insert(new.clone());
+                used.insert(new.clone());
+                map.insert(id.clone(), new);
+                ids_renamed += 1;
+            } else {
+                used.insert(id.clone());
+            }
+        }
+        renames.push(map);
+    }
+
+    // Namespaces: the root's, plus what later inputs declare; conflicting prefixes go on the
+    // members of the input that binds them differently.
+    let mut decls: Vec<(Vec<u8>, Vec<u8>)> = first.decls.clone();
+    let mut added: Vec<(Vec<u8>, Vec<u8>)> = Vec::new();
+    let mut local_decls: Vec<Vec<(Vec<u8>, Vec<u8>)>> = vec![Vec::new(); scans.len()];
+    for (k, s) in scans.iter().enumerate().skip(1) {
+        for (p, u) in &s.decls {
+            match decls.iter().find(|(q, _)| q == p) {
+                None => {
+                    decls.push((p.clone(), u.clone()));
+                    added.push((p.clone(), u.clone()));
+                }
+                Some((_, v)) if v != u => local_decls[k].push((p.clone(), u.clone())),
+                _ => {}
+            }
+        }
+    }
+    let schema_location = first.schema_location.as_ref().map(|sl| {
+        let mut pairs: Vec<String> = sl.split_ascii_whitespace().map(str::to_string).collect();
+        for s in scans.iter().skip(1) {
+            let Some(other) = &s.schema_location else {
+                continue;
+            };
+            let toks: Vec<&str> = other.split_ascii_whitespace().collect();
+            for pair in toks.chunks_exact(2) {
+                if !pairs.chunks_exact(2).any(|q| q[0] == pair[0]) {
+                    pairs.push(pair[0].to_string());
+                    pairs.push(pair[1].to_string());
+                }
+            }
+        }
+        pairs.join(" ")
+    });
+
+    // The root start tag of the first input, declarations added.
+    let root = BytesStart::from_content(
+        String::from_utf8_lossy(&first.root).into_owned(),
+        first
+            .root
+            .iter()
+            .position(|c| c.is_ascii_whitespace() || *c == b'/')
+            .unwrap_or(first.root.len()),
+    );
+    let root_name = root.name().as_ref().to_vec();
+    let mut new_root = BytesStart::new(String::from_utf8_lossy(&root_name).into_owned());
+    for a in root.attributes().with_checks(false).flatten() {
+        if a.key.local_name().as_ref() == b"schemaLocation"
+            && a.key.prefix().is_some()
+            && schema_location.is_some()
+        {
+            if let Some(sl) = &schema_location {
+                new_root.push_attribute(Attribute {
+                    key: a.key,
+                    value: escape(sl.as_str()).as_bytes().to_vec().into(),
+                });
+            }
+        } else {
+            new_root.push_attribute(a);
+        }
+    }
+    for (p, u) in &added {
+        new_root.push_attribute(Attribute {
+            key: QName(&xmlns_key(p)),
+            value: u.clone().into(),
+        });
+    }
+
+    // The envelope over all inputs.
+    let mut lower = [f64::INFINITY; 3];
+    let mut upper = [f64::NEG_INFINITY; 3];
+    for s in &scans {
+        for i in 0..3 {
+            lower[i] = lower[i].min(s.lower[i]);
+            upper[i] = upper[i].max(s.upper[i]);
+        }
+    }
+    let gml_prefix = decls
+        .iter()
+        .find(|(_, u)| classify(u) == Ns::Gml)
+        .map(|(p, _)| p.clone());
+    let envelope = lower[0].is_finite().then(|| {
+        let dims = if lower[2].is_finite() { 3 } else { 2 };
+        let fmt = |c: &[f64; 3]| c[..dims].iter().map(|v| num(*v)).collect::<Vec<_>>().join(" ");
+        let (pre, decl) = match &gml_prefix {
+            Some(p) if p.is_empty() => (String::new(), String::new()),
+            Some(p) => (format!("{}:", String::from_utf8_lossy(p)), String::new()),
+            None => (
+                "gml:".to_string(),
+                if first.root_ns.ends_with(b"/3.0") {
+                    r#" xmlns:gml="http://www.opengis.net/gml/3.2""#.to_string()
+                } else {
+                    r#" xmlns:gml="http://www.opengis.net/gml""#.to_string()
+                },
+            ),
+        };
+        let srs_attr = srs
+            .map(|(_, n)| format!(r#" srsName="{}""#, escape(n)))
+            .unwrap_or_default();
+        format!(
+            "\n <{pre}boundedBy{decl}>\n  <{pre}Envelope{srs_attr} srsDimension=\"{dims}\">\n   \
+             <{pre}lowerCorner>{}</{pre}lowerCorner>\n   <{pre}upperCorner>{}</{pre}upperCorner>\n  \
+             </{pre}Envelope>\n </{pre}boundedBy>",
+            fmt(&lower),
+            fmt(&upper)
+        )
+    });
+
+    // Member kinds in order of first appearance over all inputs.
+    let mut kinds: Vec<Key> = Vec::new();
+    for s in &scans {
+        for k in &s.kinds {
+            if !kinds.contains(k) {
+                kinds.push(k.clone());
+            }
+        }
+    }
+
+    let mut members = 0usize;
+    let mut refs_rewritten = 0usize;
+    let bytes = atomic_write(out, |w| {
+        let mut cw = CountingWriter { inner: w, n: 0 };
+        let io = |e: std::io::Error| WriteError::Io {
+            file: out.to_path_buf(),
+            source: e,
+        };
+        if first.prolog.is_empty() {
+            cw.write_all(br#"<?xml version="1.0" encoding="UTF-8"?>"#)
+                .map_err(io)?;
+            cw.write_all(b"\n").map_err(io)?;
+        }
+        for p in &first.prolog {
+            cw.write_all(p).map_err(io)?;
+            cw.write_all(b"\n").map_err(io)?;
+        }
+        {
+            let mut xw = Writer::new(&mut cw);
+            xw.write_event(Event::Start(new_root.borrow()))
+                .map_err(io)?;
+        }
+        // The first input's header (name, description, ...), then the new envelope.
+        copy_children(&inputs[0], &mut cw, None, &mut |ns, local| {
+            is_header(ns, local) && !matches!(local, b"boundedBy" | b"location")
+        })
+        .map_err(|e| match e {
+            CopyError::Read(r) => WriteError::Read(r),
+            CopyError::Io(e) => io(e),
+        })?;
+        if let Some(env) = &envelope {
+            cw.write_all(env.as_bytes()).map_err(io)?;
+        }
+        for kind in &kinds {
+            for (k, p) in inputs.iter().enumerate() {
+                if !scans[k].kinds.contains(kind) {
+                    continue;
+                }
+                let ctx = Rewrite {
+                    ids: &renames[k],
+                    decls: &local_decls[k],
+                    rewritten: 0,
+                };
+                let mut ctx = Some(ctx);
+                let n = copy_children(p, &mut cw, ctx.as_mut(), &mut |ns, local| {
+                    ns == kind.0.as_slice() && local == kind.1.as_slice()
+                })
+                .map_err(|e| match e {
+                    CopyError::Read(r) => WriteError::Read(r),
+                    CopyError::Io(e) => io(e),
+                })?;
+                members += n;
+                refs_rewritten += ctx.map_or(0, |c| c.rewritten);
+            }
+        }
+        cw.write_all(b"\n</").map_err(io)?;
+        cw.write_all(&root_name).map_err(io)?;
+        cw.write_all(b">\n").map_err(io)?;
+        Ok(cw.n)
+    })?;
+    Ok(MergeSummary {
+        files: inputs.len(),
+        members,
+        ids_renamed,
+        refs_rewritten,
+        bytes,
+    })
+}
+
+fn xmlns_key(prefix: &[u8]) -> Vec<u8> {
+    if prefix.is_empty() {
+        b"xmlns".to_vec()
+    } else {
+        [b"xmlns:".as_slice(), prefix].concat()
+    }
+}
+
+struct CountingWriter<'a> {
+    inner: &'a mut dyn Write,
+    n: u64,
+}
+
+impl Write for CountingWriter<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.n += n as u64;
+        Ok(n)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Renaming applied to the members of one input.
+struct Rewrite<'a> {
+    ids: &'a HashMap<String, String>,
+    /// Declarations added to each member's start tag.
+    decls: &'a [(Vec<u8>, Vec<u8>)],
+    rewritten: usize,
+}
+
+enum CopyError {
+    Read(ReadError),
+    Io(std::io::Error),
+}
+
+/// Copy the children of the root of `path` that `want` selects (by namespace URI and local
+/// name), each on its own line, applying `rw`. Returns how many were copied.
+fn copy_children(
+    path: &Path,
+    out: &mut dyn Write,
+    mut rw: Option<&mut Rewrite<'_>>,
+    want: &mut dyn FnMut(&[u8], &[u8]) -> bool,
+) -> Result<usize, CopyError> {
+    let mut reader = open(path).map_err(CopyError::Read)?;
+    let mut w = Writer::new(out);
+    let mut buf = Vec::new();
+    let mut depth = 0usize;
+    let mut copying = false;
+    let mut in_target = false;
+    let mut n = 0;
+    loop {
+        let pos = reader.buffer_position();
+        let ev = reader
+            .read_event_into(&mut buf)
+            .map_err(|e| CopyError::Read(xml_err(path, pos, e)))?;
+        match &ev {
+            Event::Eof => break,
+            Event::Start(e) | Event::Empty(e) => {
+                let empty = matches!(ev, Event::Empty(_));
+                if depth == 1 {
+                    let (ns, local) = reader.resolve_element(e.name());
+                    copying = want(&ns_of(ns), local.as_ref());
+                    if copying {
+                        n += 1;
+                        w.get_mut().write_all(b"\n ").map_err(CopyError::Io)?;
+                    }
+                }
+                if copying {
+                    let (ens, elocal) = reader.resolve_element(e.name());
+                    in_target = !empty
+                        && elocal.as_ref() == b"target"
+                        && matches!(classify(&ns_of(ens)), Ns::CityGml(..));
+                    let start = match rw.as_deref_mut() {
+                        Some(r) => rewrite_start(&reader, e, r, depth == 1, path, pos)
+                            .map_err(CopyError::Read)?,
+                        None => None,
+                    };
+                    let e = start.as_ref().unwrap_or(e).borrow();
+                    let ev = if empty {
+                        Event::Empty(e)
+                    } else {
+                        Event::Start(e)
+                    };
+                    w.write_event(ev).map_err(CopyError::Io)?;
+                }
+                if !empty {
+                    depth += 1;
+                }
+            }
+            Event::End(_) => {
+                depth = depth.saturating_sub(1);
+                if copying {
+                    w.write_event(ev.borrow()).map_err(CopyError::Io)?;
+                }
+                in_target = false;
+                if depth == 1 {
+                    copying = false;
+                }
+            }
+            Event::Text(t) if copying && in_target => {
+                let text = t
+                    .decode()
+                    .map_err(|e| CopyError::Read(xml_err(path, pos, e)))?;
+                let trimmed = text.trim();
+                let new = rw.as_deref_mut().and_then(|r| {
+                    let id = trimmed.strip_prefix('#')?;
+                    let new = r.ids.get(id)?;
+                    r.rewritten += 1;
+                    Some(text.replace(trimmed, &format!("#{new}")))
+                });
+                match new {
+                    Some(s) => w
+                        .write_event(Event::Text(BytesText::new(&s)))
+                        .map_err(CopyError::Io)?,
+                    None => w.write_event(ev.borrow()).map_err(CopyError::Io)?,
+                }
+            }
+            _ if copying => w.write_event(ev.borrow()).map_err(CopyError::Io)?,
+            _ => {}
+        }
+        buf.clear();
+    }
+    Ok(n)
+}
+
+/// The start tag `e` with renamed ids and references (and, on a member, the declarations the
+/// input needs), or `None` when nothing changes.
+fn rewrite_start<R>(
+    reader: &NsReader<R>,
+    e: &BytesStart<'_>,
+    rw: &mut Rewrite<'_>,
+    member: bool,
+    path: &Path,
+    pos: u64,
+) -> Result<Option<BytesStart<'static>>, ReadError> {
+    let add_decls = member && !rw.decls.is_empty();
+    if rw.ids.is_empty() && !add_decls {
+        return Ok(None);
+    }
+    let mut changed = add_decls;
+    let mut attrs: Vec<(Vec<u8>, Vec<u8>)> = Vec::new();
+    for a in e.attributes().with_checks(false) {
+        let a = a.map_err(|err| xml_err(path, pos, err))?;
+        let (ns, local) = reader.resolve_attribute(a.key);
+        let ns = ns_of(ns);
+        let kind = match local.as_ref() {
+            b"id" if classify(&ns) == Ns::Gml => Some(false),
+            b"href" if classify(&ns) == Ns::Xlink => Some(true),
+            b"uri" if ns.is_empty() => Some(true),
+            _ => None,
+        };
+        let mut value = a.value.to_vec();
+        if let Some(is_ref) = kind {
+            let v = a.unescape_value().map_err(|err| xml_err(path, pos, err))?;
+            let id = if is_ref {
+                v.strip_prefix('#')
+            } else {
+                Some(&*v)
+            };
+            if let Some(new) = id.and_then(|id| rw.ids.get(id)) {
+                let new = if is_ref {
+                    format!("#{new}")
+                } else {
+                    new.clone()
+                };
+                value = escape(new.as_str()).as_bytes().to_vec();
+                changed = true;
+                if is_ref {
+                    rw.rewritten += 1;
+                }
+            }
+        }
+        attrs.push((a.key.as_ref().to_vec(), value));
+    }
+    if !changed {
+        return Ok(None);
+    }
+    let name = String::from_utf8_lossy(e.name().as_ref()).into_owned();
+    let mut out = BytesStart::new(name);
+    for (k, v) in &attrs {
+        out.push_attribute(Attribute {
+            key: QName(k),
+            value: v.as_slice().into(),
+        });
+    }
+    if add_decls {
+        for (p, u) in rw.decls {
+            let key = xmlns_key(p);
+            if !attrs.iter().any(|(k, _)| *k == key) {
+                out.push_attribute(Attribute {
+                    key: QName(&key),
+                    value: u.as_slice().into(),
+                });
+            }
+        }
+    }
+    Ok(Some(out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn doc(ns_default: bool, ids: &[&str], x: f64) -> String {
+        let members: String = ids
+            .iter()
+            .map(|id| {
+                if ns_default {
+                    format!(r##"<cityObjectMember><bldg:Building gml:id="{id}"><bldg:lod1Solid xlink:href="#{id}"/></bldg:Building></cityObjectMember>"##)
+                } else {
+                    format!(r##"<core:cityObjectMember><bldg:Building gml:id="{id}"><bldg:lod1Solid xlink:href="#{id}"/></bldg:Building></core:cityObjectMember>"##)
+                }
+            })
+            .collect();
+        let (open, close) = if ns_default {
+            (
+                r#"<CityModel xmlns="http://www.opengis.net/citygml/2.0""#,
+                "</CityModel>",
+            )
+        } else {
+            (
+                r#"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0""#,
+                "</core:CityModel>",
+            )
+        };
+        format!(
+            r#"<?xml version="1.0"?>{open} xmlns:gml="http://www.opengis.net/gml" xmlns:bldg="http://www.opengis.net/citygml/building/2.0" xmlns:xlink="http://www.w3.org/1999/xlink"><gml:name>n{x}</gml:name><gml:boundedBy><gml:Envelope srsName="EPSG:25832"><gml:lowerCorner>{x} 0 0</gml:lowerCorner><gml:upperCorner>{} 2 3</gml:upperCorner></gml:Envelope></gml:boundedBy>{members}{close}"#,
+            x + 1.0
+        )
+    }
+
+    fn merged(docs: &[String]) -> Result<(String, MergeSummary), MergeError> {
+        let d = tempfile::tempdir().unwrap();
+        let paths: Vec<PathBuf> = docs
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let p = d.path().join(format!("{i}.gml"));
+                std::fs::write(&p, t).unwrap();
+                p
+            })
+            .collect();
+        let out = d.path().join("m.gml");
+        let s = merge_files(&paths, &out, &WriteOptions::default())?;
+        Ok((std::fs::read_to_string(out).unwrap(), s))
+    }
+
+    #[test]
+    fn ids_and_hrefs_renamed_deterministically() {
+        let (text, s) = merged(&[
+            doc(false, &["a", "a__2"], 0.0),
+            doc(true, &["a", "b"], 10.0),
+            doc(false, &["a", "b"], -5.0),
+        ])
+        .unwrap();
+        assert_eq!(s.members, 6);
+        // 2nd: a -> a__2 is taken by the 1st, so a__2_2. 3rd: a -> a__3, b -> b__3.
+        for id in ["a", "a__2", "a__2_2", "b", "a__3", "b__3"] {
+            assert_eq!(
+                text.matches(&format!(r#"gml:id="{id}""#)).count(),
+                1,
+                "{id}\n{text}"
+            );
+            assert!(text.contains(&format!(r##"xlink:href="#{id}""##)), "{id}");
+        }
+        assert_eq!(s.ids_renamed, 3);
+        assert!(
+            text.contains("<gml:lowerCorner>-5 0 0</gml:lowerCorner>"),
+            "{text}"
+        );
+        assert!(
+            text.contains("<gml:upperCorner>11 2 3</gml:upperCorner>"),
+            "{text}"
+        );
+        // One header: the first input's name; one envelope.
+        assert_eq!(text.matches("<gml:name>").count(), 1);
+        assert_eq!(text.matches("boundedBy>").count(), 2);
+        // The default namespace of the 2nd input, unbound in the 1st, is declared on the root.
+        let root = text.split('>').nth(1).unwrap_or_default();
+        assert!(
+            root.contains(r#"xmlns="http://www.opengis.net/citygml/2.0""#),
+            "{root}"
+        );
+        // Same bytes again.
+        let (again, _) = merged(&[
+            doc(false, &["a", "a__2"], 0.0),
+            doc(true, &["a", "b"], 10.0),
+            doc(false, &["a", "b"], -5.0),
+        ])
+        .unwrap();
+        assert_eq!(text, again);
+    }
+
+    #[test]
+    fn different_versions_or_crs_are_refused() {
+        let v1 = doc(false, &["a"], 0.0).replace("citygml/2.0", "citygml/1.0");
+        let e = merged(&[doc(false, &["a"], 0.0), v1]).unwrap_err();
+        assert!(
+            e.to_string().contains("CityGML 2.0") && e.to_string().contains("CityGML 1.0"),
+            "{e}"
+        );
+        let other = doc(false, &["a"], 0.0).replace("EPSG:25832", "EPSG:4326");
+        let e = merged(&[doc(false, &["a"], 0.0), other]).unwrap_err();
+        assert!(e.to_string().contains("EPSG:4326"), "{e}");
+        // Another spelling of the same CRS is fine.
+        let same = doc(false, &["c"], 0.0).replace("EPSG:25832", "urn:ogc:def:crs:EPSG::25832");
+        assert!(merged(&[doc(false, &["a"], 0.0), same]).is_ok());
+    }
+
+    #[test]
+    fn a_prefix_bound_differently_is_declared_on_the_members() {
+        let d = |uri: &str, id: &str| {
+            format!(
+                r#"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0" xmlns:gml="http://www.opengis.net/gml" xmlns:x="{uri}"><core:cityObjectMember><x:Thing gml:id="{id}"/></core:cityObjectMember></core:CityModel>"#
+            )
+        };
+        let (text, _) = merged(&[d("urn:one", "a"), d("urn:two", "b")]).unwrap();
+        // Resolve every x:Thing with a namespace-aware reader.
+        let mut r = NsReader::from_str(&text);
+        let mut found = Vec::new();
+        loop {
+            match r.read_resolved_event().unwrap() {
+                (ResolveResult::Bound(ns), Event::Empty(e))
+                    if e.local_name().as_ref() == b"Thing" =>
+                {
+                    found.push(String::from_utf8(ns.as_ref().to_vec()).unwrap());
+                }
+                (_, Event::Eof) => break,
+                _ => {}
+            }
+        }
+        assert_eq!(found, ["urn:one", "urn:two"], "{text}");
+    }
+
+    #[test]
+    fn envelope_from_coordinates_when_an_input_has_none() {
+        let bare = r#"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0" xmlns:gml="http://www.opengis.net/gml" xmlns:bldg="http://www.opengis.net/citygml/building/2.0"><core:cityObjectMember><bldg:Building gml:id="z"><gml:posList>100 1 1 101 1 50 100 1 1</gml:posList></bldg:Building></core:cityObjectMember></core:CityModel>"#;
+        let (text, _) = merged(&[doc(false, &["a"], 0.0), bare.to_string()]).unwrap();
+        assert!(
+            text.contains("<gml:upperCorner>101 2 50</gml:upperCorner>"),
+            "{text}"
+        );
+    }
+}
