@@ -446,7 +446,8 @@ pub fn trace<T: Send>(
                     check(progress, Stage::Trace)?;
                     let r = f(&scene, p);
                     let flags = checks::poi_flags(&scene, model, p, sky_rays(&r));
-                    progress.advance(Stage::Trace, 1, 0, Some(&p.id));
+                    // No name: many cheap POIs in parallel (a log line each would drown the log).
+                    progress.advance(Stage::Trace, 1, 0, None);
                     Ok((r, flags))
                 })
                 .collect()
