@@ -1,11 +1,11 @@
 //! Sky view factor of points against a CityGML model, through the library alone (no CLI):
-//! the inputs and scene steps of [`skylod::pipeline`], then a full-detail scene and one ray
-//! bundle. `cargo run --release --example svf_of_points -- MODEL.gml POIS.csv`
+//! the inputs and scene steps of [`skylod::pipeline`], then [`skylod::pipeline::svf`] (the
+//! path `skylod svf` takes: full-detail scene, POIs traced in parallel). `cargo run --release --example svf_of_points -- MODEL.gml POIS.csv`
 //! (without arguments: the committed synth fixture and its POIs).
-use skylod::pipeline::{frame, read_inputs, FrameOptions};
+use skylod::pipeline::{frame, read_inputs, svf, FrameOptions};
 use skylod::poi::read_pois_csv;
 use skylod::progress::Silent;
-use skylod::solar::{poi_sky_view, SkyBundles};
+use skylod::solar::SkyBundles;
 use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -24,13 +24,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for w in &framed.warnings {
         eprintln!("warning: {w}");
     }
-    // Full detail, in the local frame; 10,000 rays per bundle, seed 1 (as `skylod svf`).
-    let scene = skylod::scene::full_scene(&framed.model);
+    // 10,000 rays per bundle, seed 1 (as `skylod svf`).
     let bundles = SkyBundles::new(10_000, 1)?;
+    let traced = svf(&framed, &bundles, &Silent)?;
     println!("id,svf,sky_exposure");
-    for (poi, local) in framed.pois.iter().zip(&framed.local_pois) {
-        let v = poi_sky_view(&scene, local, &bundles);
+    for ((poi, v), flags) in framed.pois.iter().zip(&traced.results).zip(&traced.flags) {
         println!("{},{:.4},{:.4}", poi.id, v.svf, v.sky_exposure);
+        for f in flags {
+            eprintln!("warning: {}", f.message(poi));
+        }
     }
     Ok(())
 }

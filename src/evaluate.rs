@@ -29,6 +29,7 @@ use crate::checks::{poi_flags, PoiFlag};
 use crate::lod::LodOptions;
 use crate::model::CityModel;
 use crate::poi::Poi;
+use crate::progress::{check, stage, Cancelled, Progress, Silent, Stage};
 use crate::rough::{all_boxes, rough_model};
 use crate::scene::{full_scene, mixed_scene, rough_scene, selection_scene};
 use crate::select::{select, SelectError};
@@ -68,6 +69,9 @@ pub enum EvalError {
     /// The SVF bundle could not be made.
     #[error("SVF bundle: {0}")]
     Sky(#[from] SkyError),
+    /// The caller asked to stop ([`evaluate_with`]).
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
 }
 
 /// Solar figures of one model at one POI.
@@ -184,59 +188,96 @@ pub fn evaluate(
     opts: &EvalOptions,
     table: Option<&SunTable>,
 ) -> Result<Evaluation, EvalError> {
+    evaluate_with(model, pois, opts, table, &Silent)
+}
+
+/// [`evaluate`] reporting its stages to `progress`: [`Stage::Rough`] (assets),
+/// [`Stage::Bvh`] (the selection, full and all-boxes scenes, one item each), [`Stage::Trace`]
+/// (one item per POI selected and traced on the three models); it stops with
+/// [`EvalError::Cancelled`] when `progress` asks to (checked before each POI).
+///
+/// # Errors
+/// As [`evaluate`], and [`EvalError::Cancelled`].
+pub fn evaluate_with(
+    model: &CityModel,
+    pois: &[Poi],
+    opts: &EvalOptions,
+    table: Option<&SunTable>,
+    progress: &dyn Progress,
+) -> Result<Evaluation, EvalError> {
     let bundles = SkyBundles::new(opts.svf_rays, opts.svf_seed)?;
+    check(progress, Stage::Rough)?;
+    let n = model.assets.len() as u64;
     let t = Instant::now();
-    let rough = rough_model(model, &opts.lod.rough);
+    let rough = stage(progress, Stage::Rough, n, 0, || {
+        let r = rough_model(model, &opts.lod.rough);
+        progress.advance(Stage::Rough, n, 0, None);
+        r
+    });
     let rough_ms = ms(t);
+    check(progress, Stage::Bvh)?;
+    progress.start(Stage::Bvh, 3, 0);
     let t = Instant::now();
     let sel_scene = selection_scene(model, &rough);
     let selection_bvh_ms = ms(t);
+    progress.advance(Stage::Bvh, 1, 0, Some("selection scene"));
 
     let t = Instant::now();
     let full = full_scene(model);
     let full_bvh = ms(t);
     let full_polys = model.polygon_count();
+    progress.advance(Stage::Bvh, 1, 0, Some("full scene"));
     let t = Instant::now();
     let boxes_geo = all_boxes(model);
     let boxes = rough_scene(&boxes_geo);
     let boxes_bvh = ms(t);
     let boxes_polys: usize = boxes_geo.iter().map(|r| r.polygons.len()).sum();
+    progress.advance(Stage::Bvh, 1, 0, Some("all-boxes scene"));
+    progress.finish(Stage::Bvh);
 
-    let mut out = Vec::with_capacity(pois.len());
-    for poi in pois {
-        let t = Instant::now();
-        let sel = select(
-            model,
-            &rough,
-            &sel_scene,
-            std::slice::from_ref(poi),
-            &opts.lod.select,
-        )?;
-        let select_ms = ms(t);
-        let t = Instant::now();
-        let lod_scene = mixed_scene(model, &rough, &sel.levels);
-        let lod_bvh = ms(t);
-        let lod_polys = crate::level::model_polygon_count(model, &rough, &sel.levels);
-        let f = figures(&full, full_polys, poi, &bundles, table, full_bvh);
-        let l = figures(&lod_scene, lod_polys, poi, &bundles, table, lod_bvh);
-        let b = figures(&boxes, boxes_polys, poi, &bundles, table, boxes_bvh);
-        let sky_rays = (f.sky_exposure == 0.0).then_some(0);
-        out.push(PoiEval {
-            id: poi.id.clone(),
-            flags: poi_flags(&full, model, poi, sky_rays),
-            lod_svf_error: l.svf_rel_error(&f),
-            boxes_svf_error: b.svf_rel_error(&f),
-            lod_sun_error: l.sun_rel_error(&f),
-            boxes_sun_error: b.sun_rel_error(&f),
-            full: f,
-            lod: l,
-            boxes: b,
-            levels: sel.level_counts(),
-            select_ms,
-        });
-    }
+    // Each POI in turn (its selection scene and bundles are shared); cancellable before each.
+    progress.start(Stage::Trace, pois.len() as u64, 0);
+    let out: Result<Vec<PoiEval>, EvalError> = pois
+        .iter()
+        .map(|poi| {
+            check(progress, Stage::Trace)?;
+            let t = Instant::now();
+            let sel = select(
+                model,
+                &rough,
+                &sel_scene,
+                std::slice::from_ref(poi),
+                &opts.lod.select,
+            )?;
+            let select_ms = ms(t);
+            let t = Instant::now();
+            let lod_scene = mixed_scene(model, &rough, &sel.levels);
+            let lod_bvh = ms(t);
+            let lod_polys = crate::level::model_polygon_count(model, &rough, &sel.levels);
+            let f = figures(&full, full_polys, poi, &bundles, table, full_bvh);
+            let l = figures(&lod_scene, lod_polys, poi, &bundles, table, lod_bvh);
+            let b = figures(&boxes, boxes_polys, poi, &bundles, table, boxes_bvh);
+            let sky_rays = (f.sky_exposure == 0.0).then_some(0);
+            let e = PoiEval {
+                id: poi.id.clone(),
+                flags: poi_flags(&full, model, poi, sky_rays),
+                lod_svf_error: l.svf_rel_error(&f),
+                boxes_svf_error: b.svf_rel_error(&f),
+                lod_sun_error: l.sun_rel_error(&f),
+                boxes_sun_error: b.sun_rel_error(&f),
+                full: f,
+                lod: l,
+                boxes: b,
+                levels: sel.level_counts(),
+                select_ms,
+            };
+            progress.advance(Stage::Trace, 1, 0, Some(&poi.id));
+            Ok(e)
+        })
+        .collect();
+    progress.finish(Stage::Trace);
     Ok(Evaluation {
-        pois: out,
+        pois: out?,
         rough_ms,
         selection_bvh_ms,
     })

@@ -13,8 +13,12 @@
 //! 4. [`write_levels`]: each input file written with its assets at their levels (mixed-LoD
 //!    CityGML, OBJ, CityJSON), atomically.
 //!
-//! `skylod lod` is these four calls plus messages; `evaluate`, `svf`, `sun-hours` and
-//! `fisheye` share steps 1 and 2. Nothing here prints: warnings are returned
+//! 5. Or, after step 2, the POIs traced instead of levels chosen: [`evaluate`] (full vs LoD
+//!    vs all-boxes model per POI), [`trace`] against the full-detail scene ([`svf`],
+//!    [`sun_hours`], [`horizon`]), one [`Stage::Trace`] item per POI, cancellable before each.
+//!
+//! `skylod lod` is steps 1–4 plus messages; `evaluate`, `svf`, `sun-hours` and `horizon` are
+//! steps 1, 2 and 5; `fisheye` is steps 1, 2 and [`sky_pictures`]. Nothing here prints: warnings are returned
 //! ([`Framed::warnings`]), progress goes to the [`Progress`].
 //!
 //! # Example
@@ -38,19 +42,30 @@
 //! ```
 
 use crate::bound::{bound, BoundError, BoundOptions, BoundReport};
-use crate::checks::{self, TrustError};
+use crate::checks::{self, PoiFlag, TrustError};
 use crate::citygml::mixed::write_mixed;
 use crate::citygml::write::WriteOptions;
 use crate::citygml::{read_file, ReadError, WriteError};
 use crate::crs::{build_transform, model_crs, Crs, CrsError, LocalFrame, PointTransform};
+use crate::evaluate::{evaluate_with, EvalError, EvalOptions, Evaluation};
 use crate::export::{Content, Format};
 use crate::lod::{lod_with, LodOptions, LodResult};
 use crate::model::CityModel;
 use crate::poi::Poi;
+use crate::poi::POI_OFFSET;
 use crate::progress::{check, Cancelled, Progress, Stage};
+use crate::rough::rough_model;
 use crate::rough::RoughGeometry;
+use crate::scene::{full_scene, selection_scene};
+use crate::select::select;
 use crate::select::SelectError;
-use crate::solar::SunTable;
+use crate::sky::SkyPartition;
+use crate::solar::fisheye::{classify_cells, CellClass};
+use crate::solar::{
+    poi_horizon, poi_sky_view, poi_sun_hours, HorizonOptions, HorizonProfile, SkyBundles, SkyView,
+    SolarError, SunHours, SunTable,
+};
+use crate::trace::Scene;
 use rayon::prelude::*;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -85,6 +100,12 @@ pub enum PipelineError {
     /// The error bound could not be computed.
     #[error(transparent)]
     Bound(#[from] BoundError),
+    /// The evaluation could not be made.
+    #[error(transparent)]
+    Eval(EvalError),
+    /// Invalid solar options (e.g. a horizon step out of range).
+    #[error(transparent)]
+    Solar(#[from] SolarError),
     /// The caller asked to stop.
     #[error(transparent)]
     Cancelled(#[from] Cancelled),
@@ -384,6 +405,259 @@ pub fn levels_of(
     })
 }
 
+/// What [`trace`] (and [`svf`], [`sun_hours`], [`horizon`]) computed: one result per POI
+/// against the full-detail scene, in POI order.
+#[derive(Debug, Clone)]
+pub struct Traced<T> {
+    /// One result per POI, in the order of [`Framed::local_pois`].
+    pub results: Vec<T>,
+    /// The trust flags of each POI ([`checks::poi_flags`]: inside a building, no sky).
+    pub flags: Vec<Vec<PoiFlag>>,
+    /// Seconds building the full-detail scene.
+    pub bvh_s: f64,
+    /// Seconds tracing the POIs.
+    pub trace_s: f64,
+}
+
+/// `f` for every POI of `framed` (local frame, in parallel) against the full-detail scene of
+/// its model ([`Stage::Bvh`], then [`Stage::Trace`]: one item per POI, cancellable before
+/// each POI), with each POI's flags; `sky_rays` of a result, when it knows them, adds the
+/// no-sky flag.
+///
+/// # Errors
+/// [`Cancelled`] when `progress` asks to stop.
+pub fn trace<T: Send>(
+    framed: &Framed<'_>,
+    f: impl Fn(&Scene, &Poi) -> T + Sync,
+    sky_rays: impl Fn(&T) -> Option<usize> + Sync,
+    progress: &dyn Progress,
+) -> Result<Traced<T>, Cancelled> {
+    let model: &CityModel = &framed.model;
+    let pois = &framed.local_pois;
+    check(progress, Stage::Bvh)?;
+    let t = Instant::now();
+    let scene = crate::progress::stage(progress, Stage::Bvh, 1, 0, || full_scene(model));
+    let bvh_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let traced: Result<Vec<(T, Vec<PoiFlag>)>, Cancelled> =
+        crate::progress::stage(progress, Stage::Trace, pois.len() as u64, 0, || {
+            pois.par_iter()
+                .map(|p| {
+                    check(progress, Stage::Trace)?;
+                    let r = f(&scene, p);
+                    let flags = checks::poi_flags(&scene, model, p, sky_rays(&r));
+                    // No name: many cheap POIs in parallel (a log line each would drown the log).
+                    progress.advance(Stage::Trace, 1, 0, None);
+                    Ok((r, flags))
+                })
+                .collect()
+        });
+    let (results, flags) = traced?.into_iter().unzip();
+    Ok(Traced {
+        results,
+        flags,
+        bvh_s,
+        trace_s: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// Sky view factor and sky exposure of every POI ([`poi_sky_view`]), through [`trace`].
+///
+/// # Errors
+/// [`Cancelled`] when `progress` asks to stop.
+pub fn svf(
+    framed: &Framed<'_>,
+    bundles: &SkyBundles,
+    progress: &dyn Progress,
+) -> Result<Traced<SkyView>, Cancelled> {
+    trace(
+        framed,
+        |s, p| poi_sky_view(s, p, bundles),
+        |v| (v.sky_exposure == 0.0).then_some(0),
+        progress,
+    )
+}
+
+/// Hours of direct sun of every POI over `table` ([`poi_sun_hours`]), through [`trace`].
+///
+/// # Errors
+/// [`Cancelled`] when `progress` asks to stop.
+pub fn sun_hours(
+    framed: &Framed<'_>,
+    table: &SunTable,
+    progress: &dyn Progress,
+) -> Result<Traced<SunHours>, Cancelled> {
+    trace(
+        framed,
+        |s, p| poi_sun_hours(s, p, table),
+        |_| None,
+        progress,
+    )
+}
+
+/// Horizon profile of every POI ([`poi_horizon`]; azimuths from north of the local frame),
+/// through [`trace`].
+///
+/// # Errors
+/// [`PipelineError::Solar`] for invalid options (checked before any work),
+/// [`PipelineError::Cancelled`].
+pub fn horizon(
+    framed: &Framed<'_>,
+    opts: &HorizonOptions,
+    progress: &dyn Progress,
+) -> Result<Traced<HorizonProfile>, PipelineError> {
+    opts.validate()?;
+    let t = trace(framed, |s, p| poi_horizon(s, p, opts), |_| None, progress)?;
+    Ok(Traced {
+        results: t.results.into_iter().collect::<Result<_, _>>()?,
+        flags: t.flags,
+        bvh_s: t.bvh_s,
+        trace_s: t.trace_s,
+    })
+}
+
+/// Options of [`evaluate`].
+#[derive(Debug, Clone, Default)]
+pub struct EvaluateOptions {
+    /// Rough model, selection and SVF bundle.
+    pub eval: EvalOptions,
+    /// The sun positions of the sun hours; `None` skips sun hours.
+    pub sun: Option<SunTable>,
+}
+
+/// Full vs LoD vs all-boxes model at every POI of `framed` ([`crate::evaluate`]): rough
+/// model ([`Stage::Rough`]), scenes ([`Stage::Bvh`]), then each POI selected and traced
+/// ([`Stage::Trace`], cancellable before each POI).
+///
+/// # Errors
+/// [`PipelineError::Eval`], [`PipelineError::Cancelled`].
+pub fn evaluate(
+    framed: &Framed<'_>,
+    opts: &EvaluateOptions,
+    progress: &dyn Progress,
+) -> Result<Evaluation, PipelineError> {
+    evaluate_with(
+        &framed.model,
+        &framed.local_pois,
+        &opts.eval,
+        opts.sun.as_ref(),
+        progress,
+    )
+    .map_err(|e| match e {
+        EvalError::Cancelled(c) => PipelineError::Cancelled(c),
+        e => PipelineError::Eval(e),
+    })
+}
+
+/// Options of [`sky_pictures`].
+#[derive(Debug, Clone, Copy)]
+pub struct SkyPictureOptions<'o> {
+    /// The cells of the picture (one ray through each centre).
+    pub partition: &'o SkyPartition,
+    /// The bundles of the SVF and sky exposure printed with the picture.
+    pub bundles: &'o SkyBundles,
+    /// When given, each POI's levels as `skylod lod` selects them for that POI alone.
+    pub levels: Option<LodOptions>,
+}
+
+/// What a fisheye picture of one POI shows ([`sky_pictures`]).
+#[derive(Debug, Clone)]
+pub struct SkyPicture {
+    /// What each cell of the partition sees (sky, below the surface, or the asset hit).
+    pub cells: Vec<CellClass>,
+    /// SVF and sky exposure of the POI against the full-detail scene.
+    pub view: SkyView,
+    /// The POI's trust flags ([`checks::poi_flags`]).
+    pub flags: Vec<PoiFlag>,
+    /// The level of each asset for this POI, when asked: an opening (window, door) left
+    /// out shows its wall's level, since the rough wall's plane closes it in the LoD model.
+    pub levels: Option<Vec<u8>>,
+}
+
+/// The fisheye pictures of the POIs of `framed`, one at a time, handed to `each` (POI index,
+/// picture) as soon as each is made (so a caller writes it before the next is traced): the
+/// full-detail scene and, with [`SkyPictureOptions::levels`], the rough model and selection
+/// scene built once ([`Stage::Bvh`]), then per POI ([`Stage::Trace`], cancellable before
+/// each) its cells, SVF, flags and levels.
+///
+/// # Errors
+/// [`PipelineError::Select`], [`PipelineError::Cancelled`] (as `E`), or what `each` returns.
+pub fn sky_pictures<E: From<PipelineError>>(
+    framed: &Framed<'_>,
+    opts: &SkyPictureOptions<'_>,
+    progress: &dyn Progress,
+    mut each: impl FnMut(usize, SkyPicture) -> Result<(), E>,
+) -> Result<(), E> {
+    let model: &CityModel = &framed.model;
+    check(progress, Stage::Bvh).map_err(PipelineError::from)?;
+    let n = if opts.levels.is_some() { 2 } else { 1 };
+    progress.start(Stage::Bvh, n, 0);
+    let scene = full_scene(model);
+    progress.advance(Stage::Bvh, 1, 0, Some("full scene"));
+    let selection = opts.levels.map(|lod| {
+        let rough = rough_model(model, &lod.rough);
+        let scene = selection_scene(model, &rough);
+        progress.advance(Stage::Bvh, 1, 0, Some("selection scene"));
+        (lod, rough, scene)
+    });
+    progress.finish(Stage::Bvh);
+    progress.start(Stage::Trace, framed.local_pois.len() as u64, 0);
+    let r = framed
+        .local_pois
+        .iter()
+        .enumerate()
+        .try_for_each(|(k, poi)| {
+            check(progress, Stage::Trace).map_err(PipelineError::from)?;
+            let cells = classify_cells(
+                opts.partition,
+                &scene,
+                poi.ray_origin(),
+                poi.normal,
+                POI_OFFSET,
+            );
+            let view = poi_sky_view(&scene, poi, opts.bundles);
+            let flags =
+                checks::poi_flags(&scene, model, poi, (view.sky_exposure == 0.0).then_some(0));
+            let levels = match &selection {
+                None => None,
+                Some((lod, rough, sel_scene)) => {
+                    let sel = select(
+                        model,
+                        rough,
+                        sel_scene,
+                        std::slice::from_ref(poi),
+                        &lod.select,
+                    )
+                    .map_err(PipelineError::from)?;
+                    Some(shown_levels(model, sel.levels))
+                }
+            };
+            let picture = SkyPicture {
+                cells,
+                view,
+                flags,
+                levels,
+            };
+            each(k, picture)?;
+            progress.advance(Stage::Trace, 1, 0, Some(&poi.id));
+            Ok(())
+        });
+    progress.finish(Stage::Trace);
+    r
+}
+
+/// `levels` with each opening left out at its wall's level (see [`SkyPicture::levels`]).
+fn shown_levels(model: &CityModel, mut levels: Vec<u8>) -> Vec<u8> {
+    for (i, a) in model.assets.iter().enumerate() {
+        if a.kind.is_opening() && levels.get(i) == Some(&0) {
+            if let Some(p) = a.parent.and_then(|p| levels.get(p).copied()) {
+                levels[i] = p;
+            }
+        }
+    }
+    levels
+}
+
 /// What [`write_levels`] wrote.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Written {
@@ -505,22 +779,35 @@ pub fn buildings_without_kept_assets(model: &CityModel, f: usize, levels: &[u8])
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::progress::Silent;
     use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
     fn fixture() -> PathBuf {
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml")
     }
 
-    /// Counts POIs selected; cancels after `stop_after` of them.
+    /// Counts POIs of `stage` (selected or traced); cancels after `stop_after` of them.
     struct Stopper {
+        stage: Stage,
         selected: AtomicU64,
         stop_after: u64,
         stopped: AtomicBool,
     }
 
+    impl Stopper {
+        fn new(stage: Stage, stop_after: u64) -> Self {
+            Stopper {
+                stage,
+                selected: AtomicU64::new(0),
+                stop_after,
+                stopped: AtomicBool::new(false),
+            }
+        }
+    }
+
     impl Progress for Stopper {
         fn advance(&self, stage: Stage, items: u64, _: u64, _: Option<&str>) {
-            if stage == Stage::Select
+            if stage == self.stage
                 && self.selected.fetch_add(items, Ordering::SeqCst) + items >= self.stop_after
             {
                 self.stopped.store(true, Ordering::SeqCst);
@@ -559,11 +846,7 @@ mod tests {
             },
             bound: None,
         };
-        let stop = Stopper {
-            selected: AtomicU64::new(0),
-            stop_after: 2,
-            stopped: AtomicBool::new(false),
-        };
+        let stop = Stopper::new(Stage::Select, 2);
         let r = levels(&framed, &opts, &stop);
         assert!(
             matches!(
@@ -652,5 +935,214 @@ mod tests {
         assert_eq!(inputs.read, vec![fixture()]);
         assert_eq!(inputs.failures.len(), 1);
         assert!(inputs.failures[0].to_string().contains("bad.gml"));
+    }
+
+    /// `n` POIs on the diagonal of the fixture at 1.5 m (streets and buildings), framed.
+    fn framed_with(inputs: &mut Inputs, n: usize) -> Framed<'_> {
+        let b = inputs.model.bbox();
+        let pois = (0..n)
+            .map(|i| {
+                let t = (i as f64 + 0.5) / n as f64;
+                Poi {
+                    id: format!("d{i}"),
+                    position: b.min.lerp(b.max, t).with_z(b.min.z + 1.5),
+                    normal: None,
+                }
+            })
+            .collect();
+        frame(&mut inputs.model, pois, &FrameOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn solar_entry_points_trace_every_poi_and_stop_when_cancelled() {
+        let mut inputs = read_inputs(&[fixture()], &crate::progress::Silent).unwrap();
+        let framed = framed_with(&mut inputs, 24);
+        let scene = full_scene(&framed.model);
+        let bundles = SkyBundles::new(400, 3).unwrap();
+        let site = crate::solar::Site::new(48.76, 11.42);
+        let table = SunTable::year(2025, 120, &site).unwrap();
+        let hopts = HorizonOptions::default().with_step(10.0);
+
+        // Each entry point: every POI announced and advanced once, results in POI order
+        // (against the per-POI functions on the full scene), one flag list per POI.
+        let tally = Tally::default();
+        let v = svf(&framed, &bundles, &tally).unwrap();
+        let h = sun_hours(&framed, &table, &tally).unwrap();
+        let z = horizon(&framed, &hopts, &tally).unwrap();
+        assert_eq!(tally.sum(Stage::Trace, "start").0, 3 * 24);
+        assert_eq!(tally.sum(Stage::Trace, "advance").0, 3 * 24);
+        assert_eq!(tally.sum(Stage::Bvh, "start").0, 3);
+        for (k, p) in framed.local_pois.iter().enumerate() {
+            assert_eq!(v.results[k], poi_sky_view(&scene, p, &bundles), "{}", p.id);
+            assert_eq!(h.results[k], poi_sun_hours(&scene, p, &table), "{}", p.id);
+            assert_eq!(z.results[k], poi_horizon(&scene, p, &hopts).unwrap());
+        }
+        // Streets and courtyards (some sky, some flags) as well as inside buildings.
+        assert!(v.results.iter().any(|r| r.svf > 0.0 && r.svf < 1.0));
+        assert!(v.flags.iter().any(Vec::is_empty));
+        assert_eq!((v.flags.len(), h.flags.len(), z.flags.len()), (24, 24, 24));
+
+        // Cancelled after 2 POIs: no results, the trace stage named.
+        let stop = Stopper::new(Stage::Trace, 2);
+        let r = svf(&framed, &bundles, &stop);
+        assert_eq!(
+            r.unwrap_err(),
+            Cancelled {
+                stage: Stage::Trace
+            }
+        );
+        assert!(stop.selected.load(Ordering::SeqCst) < 24);
+        let stop = Stopper::new(Stage::Trace, 2);
+        assert!(sun_hours(&framed, &table, &stop).is_err());
+        let stop = Stopper::new(Stage::Trace, 2);
+        assert!(matches!(
+            horizon(&framed, &hopts, &stop),
+            Err(PipelineError::Cancelled(Cancelled {
+                stage: Stage::Trace
+            }))
+        ));
+        // Invalid options are refused before any work.
+        let tally = Tally::default();
+        let bad = HorizonOptions::default().with_step(0.0);
+        assert!(matches!(
+            horizon(&framed, &bad, &tally),
+            Err(PipelineError::Solar(_))
+        ));
+        assert_eq!(tally.sum(Stage::Bvh, "start").0, 0);
+    }
+
+    #[test]
+    fn evaluate_reports_each_poi_and_stops_when_cancelled() {
+        let mut inputs = read_inputs(&[fixture()], &crate::progress::Silent).unwrap();
+        let framed = framed_with(&mut inputs, 6);
+        let site = crate::solar::Site::new(48.76, 11.42);
+        let opts = EvaluateOptions {
+            eval: EvalOptions {
+                lod: LodOptions {
+                    select: crate::select::SelectOptions {
+                        rays: 500,
+                        ..Default::default()
+                    },
+                    ..Default::default()
+                },
+                svf_rays: 500,
+                ..Default::default()
+            },
+            sun: Some(SunTable::year(2025, 120, &site).unwrap()),
+        };
+        let tally = Tally::default();
+        let e = evaluate(&framed, &opts, &tally).unwrap();
+        assert_eq!(tally.sum(Stage::Trace, "start").0, 6);
+        assert_eq!(tally.sum(Stage::Trace, "advance").0, 6);
+        assert_eq!(tally.sum(Stage::Bvh, "advance").0, 3);
+        let n = framed.source.assets.len() as u64;
+        assert_eq!(tally.sum(Stage::Rough, "advance").0, n);
+        // The same figures as the evaluation called directly (timings aside).
+        let direct = crate::evaluate::evaluate(
+            &framed.model,
+            &framed.local_pois,
+            &opts.eval,
+            opts.sun.as_ref(),
+        )
+        .unwrap();
+        assert_eq!(e.pois.len(), 6);
+        for (a, b) in e.pois.iter().zip(&direct.pois) {
+            assert_eq!(a.id, b.id);
+            assert_eq!(
+                (a.full.svf, a.lod.svf, a.boxes.svf),
+                (b.full.svf, b.lod.svf, b.boxes.svf)
+            );
+            assert_eq!(a.lod.sun_hours, b.lod.sun_hours);
+            assert_eq!(a.levels, b.levels);
+            assert!(a.full.sun_hours.is_some());
+        }
+        let stop = Stopper::new(Stage::Trace, 2);
+        let r = evaluate(&framed, &opts, &stop);
+        assert!(
+            matches!(
+                r,
+                Err(PipelineError::Cancelled(Cancelled {
+                    stage: Stage::Trace
+                }))
+            ),
+            "{r:?}"
+        );
+        assert_eq!(stop.selected.load(Ordering::SeqCst), 2);
+    }
+
+    #[test]
+    fn sky_pictures_come_one_per_poi_and_stop_when_cancelled() {
+        let mut inputs = read_inputs(&[fixture()], &crate::progress::Silent).unwrap();
+        let framed = framed_with(&mut inputs, 5);
+        let partition = SkyPartition::new(300, crate::sky::SkyVariant::EqualSolidAngle).unwrap();
+        let bundles = SkyBundles::new(400, 1).unwrap();
+        let lod = LodOptions {
+            select: crate::select::SelectOptions {
+                rays: 500,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let opts = SkyPictureOptions {
+            partition: &partition,
+            bundles: &bundles,
+            levels: Some(lod),
+        };
+        let tally = Tally::default();
+        let mut got = Vec::new();
+        sky_pictures(
+            &framed,
+            &opts,
+            &tally,
+            |k, p| -> Result<(), PipelineError> {
+                got.push((k, p));
+                Ok(())
+            },
+        )
+        .unwrap();
+        assert_eq!(got.iter().map(|g| g.0).collect::<Vec<_>>(), [0, 1, 2, 3, 4]);
+        assert_eq!(tally.sum(Stage::Trace, "start").0, 5);
+        assert_eq!(tally.sum(Stage::Trace, "advance").0, 5);
+        assert_eq!(tally.sum(Stage::Bvh, "advance").0, 2);
+        let scene = full_scene(&framed.model);
+        for (k, pic) in &got {
+            let poi = &framed.local_pois[*k];
+            assert_eq!(pic.cells.len(), partition.len());
+            assert_eq!(pic.view, poi_sky_view(&scene, poi, &bundles));
+            // The levels `lod` selects for this POI alone, openings shown at their wall's.
+            let alone = crate::lod::lod(&framed.model, std::slice::from_ref(poi), &lod).unwrap();
+            let want = shown_levels(&framed.model, alone.selection.levels);
+            assert_eq!(pic.levels.as_deref(), Some(&want[..]));
+        }
+
+        // Cancelled after the first picture: `each` saw one, the trace stage is named.
+        let stop = Stopper::new(Stage::Trace, 1);
+        let mut seen = 0;
+        let r = sky_pictures(&framed, &opts, &stop, |_, _| -> Result<(), PipelineError> {
+            seen += 1;
+            Ok(())
+        });
+        assert!(matches!(
+            r,
+            Err(PipelineError::Cancelled(Cancelled {
+                stage: Stage::Trace
+            }))
+        ));
+        assert_eq!(seen, 1);
+        // An error of `each` stops the work and is returned as is.
+        let mut calls = 0;
+        let r = sky_pictures(&framed, &opts, &Silent, |_, _| {
+            calls += 1;
+            Err::<(), _>(PipelineError::Cancelled(Cancelled {
+                stage: Stage::Write,
+            }))
+        });
+        assert!(matches!(
+            r,
+            Err(PipelineError::Cancelled(Cancelled {
+                stage: Stage::Write
+            }))
+        ));
+        assert_eq!(calls, 1);
     }
 }

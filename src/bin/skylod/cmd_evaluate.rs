@@ -2,8 +2,9 @@
 
 use crate::common::{ms, out_err, warn_flags, PoiArgs, RoughArgs, SelectArgs, SiteArgs, SunArgs};
 use crate::Outcome;
-use skylod::evaluate::{evaluate, EvalOptions};
+use skylod::evaluate::EvalOptions;
 use skylod::lod::LodOptions;
+use skylod::pipeline::EvaluateOptions;
 use skylod::solar::{Site, SunTable};
 use std::io::Write;
 use std::time::Instant;
@@ -80,22 +81,18 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         Some(s) => Some(SunTable::year(args.sun.year, args.sun.step, s)?),
         None => None,
     };
-    let opts = EvalOptions {
-        lod: LodOptions {
-            rough: rough_opts,
-            select: args.select.options(),
+    let opts = EvaluateOptions {
+        eval: EvalOptions {
+            lod: LodOptions {
+                rough: rough_opts,
+                select: args.select.options(),
+            },
+            svf_rays: args.svf_rays,
+            ..Default::default()
         },
-        svf_rays: args.svf_rays,
-        ..Default::default()
+        sun: table,
     };
-    // One stage without a count: a spinner on a terminal, so the step is never silent.
-    let e = skylod::progress::stage(
-        &crate::log::reporter(),
-        skylod::progress::Stage::Trace,
-        1,
-        0,
-        || evaluate(&framed.model, &framed.local_pois, &opts, table.as_ref()),
-    )?;
+    let e = skylod::pipeline::evaluate(&framed, &opts, &crate::log::reporter())?;
     let flags: Vec<_> = e.pois.iter().map(|p| p.flags.clone()).collect();
     warn_flags(&framed.pois, &flags);
     let mut out = std::io::stdout().lock();

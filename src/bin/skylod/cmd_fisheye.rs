@@ -4,17 +4,13 @@ use crate::common::{PoiArgs, RoughArgs, SilhouetteArgs, SiteArgs, DEFAULT_YEAR};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
-use skylod::lod::{lod, LodOptions};
+use skylod::lod::LodOptions;
 use skylod::model::AssetKind;
+use skylod::pipeline::{sky_pictures, SkyPictureOptions};
 use skylod::poi::Poi;
-use skylod::poi::POI_OFFSET;
-use skylod::progress::{Progress, Stage};
-use skylod::scene::full_scene;
 use skylod::sky::{SkyPartition, SkyVariant};
-use skylod::solar::fisheye::{
-    cell_shares, classify_cells, fisheye_svg, sun_paths, FisheyeOptions, Projection,
-};
-use skylod::solar::{poi_sky_view, Site, SkyBundles};
+use skylod::solar::fisheye::{cell_shares, fisheye_svg, sun_paths, FisheyeOptions, Projection};
+use skylod::solar::{Site, SkyBundles};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -168,108 +164,84 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         Some((lat, lon)) => sun_paths(&Site::new(lat, lon), args.year)?,
         None => Vec::new(),
     };
-    let scene = full_scene(&framed.model);
     let kinds: Vec<AssetKind> = framed.model.assets.iter().map(|a| a.kind).collect();
     let projection = match args.projection {
         ProjectionArg::EqualArea => Projection::EqualArea,
         ProjectionArg::Stereographic => Projection::Stereographic,
     };
-    let progress = crate::log::reporter();
-    progress.start(Stage::Trace, outputs.len() as u64, 0);
-    for ((poi, local), out) in framed.pois.iter().zip(&framed.local_pois).zip(&outputs) {
-        let cells = classify_cells(
-            &partition,
-            &scene,
-            local.ray_origin(),
-            local.normal,
-            POI_OFFSET,
-        );
-        let view = poi_sky_view(&scene, local, &bundles);
-        let flags = skylod::checks::poi_flags(
-            &scene,
-            &framed.model,
-            local,
-            (view.sky_exposure == 0.0).then_some(0),
-        );
-        crate::common::warn_flags(std::slice::from_ref(poi), std::slice::from_ref(&flags));
-        let p = poi.position;
-        let dp = if crate::frames::decimals(&framed.crs) == 8 {
-            8
-        } else {
-            2
-        };
-        let mut caption = vec![format!(
-            "POI ({:.dp$}, {:.dp$}, {:.2}){}",
-            p.x,
-            p.y,
-            p.z,
-            poi.normal
-                .map_or(", no normal (horizontal)".to_string(), |n| format!(
-                    ", normal ({:.2}, {:.2}, {:.2})",
-                    n.x, n.y, n.z
-                ))
-        )];
-        caption.push(format!(
-            "SVF {:.3}, sky exposure {:.3} ({} rays per bundle); input: {}",
-            view.svf,
-            view.sky_exposure,
-            bundles.len(),
-            loaded.inputs.join(", ")
-        ));
-        if let Some((lat, lon)) = site {
-            caption.push(format!("sun paths {} at lat {lat}, lon {lon}", args.year));
-        }
-        let opts = FisheyeOptions {
-            projection,
-            title: format!("Sky from {}", poi.id),
-            caption,
-            sun_paths: paths.clone(),
-            ..FisheyeOptions::default()
-        };
-        let levels = match args.colour_by {
-            ColourBy::Kind => None,
-            ColourBy::Level => {
-                let mut levels = lod(&framed.model, std::slice::from_ref(local), &lod_opts)?
-                    .selection
-                    .levels;
-                // A window or door of a rough wall is closed by the wall's plane in the LoD
-                // model: show the cells it covers at the wall's level.
-                for (i, a) in framed.model.assets.iter().enumerate() {
-                    if a.kind.is_opening() && levels.get(i) == Some(&0) {
-                        if let Some(p) = a.parent.and_then(|p| levels.get(p).copied()) {
-                            levels[i] = p;
-                        }
-                    }
-                }
-                Some(levels)
+    let popts = SkyPictureOptions {
+        partition: &partition,
+        bundles: &bundles,
+        levels: (args.colour_by == ColourBy::Level).then_some(lod_opts),
+    };
+    let dp = if crate::frames::decimals(&framed.crs) == 8 {
+        8
+    } else {
+        2
+    };
+    sky_pictures(
+        &framed,
+        &popts,
+        &crate::log::reporter(),
+        |k, pic| -> anyhow::Result<()> {
+            let (poi, out) = (&framed.pois[k], &outputs[k]);
+            crate::common::warn_flags(std::slice::from_ref(poi), std::slice::from_ref(&pic.flags));
+            let p = poi.position;
+            let mut caption = vec![format!(
+                "POI ({:.dp$}, {:.dp$}, {:.2}){}",
+                p.x,
+                p.y,
+                p.z,
+                poi.normal
+                    .map_or(", no normal (horizontal)".to_string(), |n| format!(
+                        ", normal ({:.2}, {:.2}, {:.2})",
+                        n.x, n.y, n.z
+                    ))
+            )];
+            caption.push(format!(
+                "SVF {:.3}, sky exposure {:.3} ({} rays per bundle); input: {}",
+                pic.view.svf,
+                pic.view.sky_exposure,
+                bundles.len(),
+                loaded.inputs.join(", ")
+            ));
+            if let Some((lat, lon)) = site {
+                caption.push(format!("sun paths {} at lat {lat}, lon {lon}", args.year));
             }
-        };
-        let doc = fisheye_svg(&partition, &cells, &kinds, levels.as_deref(), &opts);
-        let text = doc.to_string();
-        atomic_write(out, |w| {
-            w.write_all(text.as_bytes())
-                .map_err(|source| skylod::citygml::WriteError::Io {
-                    file: out.clone(),
-                    source,
-                })?;
-            Ok(text.len() as u64)
-        })
-        .context("writing the picture")?;
-        let sky = cell_shares(&cells, &kinds, levels.as_deref())
-            .into_iter()
-            .find(|s| s.0 == "sky")
-            .map_or(0.0, |s| s.1);
-        crate::log::summary!(
-            "{}: {} -> {} ({} cells, {:.1} % sky, SVF {:.3})",
-            poi.id,
-            loaded.inputs.join(", "),
-            out.display(),
-            partition.len(),
-            sky * 100.0,
-            view.svf
-        );
-        progress.advance(Stage::Trace, 1, 0, Some(&out.display().to_string()));
-    }
-    progress.finish(Stage::Trace);
+            let opts = FisheyeOptions {
+                projection,
+                title: format!("Sky from {}", poi.id),
+                caption,
+                sun_paths: paths.clone(),
+                ..FisheyeOptions::default()
+            };
+            let levels = pic.levels.as_deref();
+            let doc = fisheye_svg(&partition, &pic.cells, &kinds, levels, &opts);
+            let text = doc.to_string();
+            atomic_write(out, |w| {
+                w.write_all(text.as_bytes())
+                    .map_err(|source| skylod::citygml::WriteError::Io {
+                        file: out.clone(),
+                        source,
+                    })?;
+                Ok(text.len() as u64)
+            })
+            .context("writing the picture")?;
+            let sky = cell_shares(&pic.cells, &kinds, levels)
+                .into_iter()
+                .find(|s| s.0 == "sky")
+                .map_or(0.0, |s| s.1);
+            crate::log::summary!(
+                "{}: {} -> {} ({} cells, {:.1} % sky, SVF {:.3})",
+                poi.id,
+                loaded.inputs.join(", "),
+                out.display(),
+                partition.len(),
+                sky * 100.0,
+                pic.view.svf
+            );
+            Ok(())
+        },
+    )?;
     Ok(loaded.outcome())
 }

@@ -1,12 +1,12 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::common::{arr, out_err, polygons, trace_full, PoiArgs};
+use crate::common::{arr, out_err, polygons, s_to_ms, warn_flags, PoiArgs};
 use crate::Outcome;
 use anyhow::Context;
 use serde_json::json;
 use skylod::citygml::write::{atomic_write, check_target, WriteOptions};
 use skylod::poi::Poi;
-use skylod::solar::{poi_horizon, HorizonOptions, HorizonProfile};
+use skylod::solar::{HorizonOptions, HorizonProfile};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -86,15 +86,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let framed = args
         .pois
         .frame_checked(&mut loaded.model, pois, "horizon")?;
-    let traced = trace_full(
-        &framed.model,
-        &framed.local_pois,
-        |s, p| poi_horizon(s, p, &opts),
-        |_| None,
-    );
-    let (bvh_ms, trace_ms) = (traced.bvh_ms, traced.trace_ms);
-    let flags = traced.flags;
-    let profiles = traced.results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let traced = skylod::pipeline::horizon(&framed, &opts, &crate::log::reporter())?;
+    warn_flags(&framed.pois, &traced.flags);
+    let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
+    let (profiles, flags) = (traced.results, traced.flags);
     let pois = &framed.pois;
     let text = if args.json {
         let rows: Vec<_> = pois

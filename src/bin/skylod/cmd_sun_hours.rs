@@ -1,9 +1,9 @@
 //! `skylod sun-hours`.
 
-use crate::common::{arr, ms, out_err, polygons, trace_full, PoiArgs, SiteArgs, SunArgs};
+use crate::common::{arr, ms, out_err, polygons, s_to_ms, warn_flags, PoiArgs, SiteArgs, SunArgs};
 use crate::Outcome;
 use serde_json::json;
-use skylod::solar::{poi_sun_hours, Site, SunTable};
+use skylod::solar::{Site, SunTable};
 use std::io::Write;
 use std::time::Instant;
 
@@ -56,13 +56,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t = Instant::now();
     let table = SunTable::year(args.sun.year, args.sun.step, &site)?;
     let sun_ms = ms(t);
-    let traced = trace_full(
-        &framed.model,
-        &framed.local_pois,
-        |s, p| poi_sun_hours(s, p, &table),
-        |_| None,
+    let traced = skylod::pipeline::sun_hours(&framed, &table, &crate::log::reporter())?;
+    warn_flags(&framed.pois, &traced.flags);
+    let (hours, bvh_ms, trace_ms) = (
+        &traced.results,
+        s_to_ms(traced.bvh_s),
+        s_to_ms(traced.trace_s),
     );
-    let (hours, bvh_ms, trace_ms) = (&traced.results, traced.bvh_ms, traced.trace_ms);
     let pois = &framed.pois;
     let mut out = std::io::stdout().lock();
     if args.json {

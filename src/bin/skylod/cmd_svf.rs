@@ -1,10 +1,10 @@
 //! `skylod svf`.
 
-use crate::common::{arr, out_err, polygons, trace_full, PoiArgs};
+use crate::common::{arr, out_err, polygons, s_to_ms, warn_flags, PoiArgs};
 use crate::frames::decimals;
 use crate::Outcome;
 use serde_json::json;
-use skylod::solar::{poi_sky_view, SkyBundles};
+use skylod::solar::SkyBundles;
 use std::io::Write;
 
 #[derive(clap::Args, Debug)]
@@ -43,13 +43,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let pois = args.region.extend(pois, &loaded.model)?;
     let pois = crate::shard_args::pois(shard, pois, "svf");
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "svf")?;
-    let traced = trace_full(
-        &framed.model,
-        &framed.local_pois,
-        |s, p| poi_sky_view(s, p, &bundles),
-        |v| (v.sky_exposure == 0.0).then_some(0),
+    let traced = skylod::pipeline::svf(&framed, &bundles, &crate::log::reporter())?;
+    warn_flags(&framed.pois, &traced.flags);
+    let (views, bvh_ms, trace_ms) = (
+        &traced.results,
+        s_to_ms(traced.bvh_s),
+        s_to_ms(traced.trace_s),
     );
-    let (views, bvh_ms, trace_ms) = (&traced.results, traced.bvh_ms, traced.trace_ms);
     let pois = &framed.pois;
     let mut out = std::io::stdout().lock();
     if args.json {

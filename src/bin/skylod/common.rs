@@ -6,12 +6,10 @@ use crate::frames::{frame, Framed};
 use crate::log::{error, summary, warning};
 use crate::Outcome;
 use anyhow::{bail, Context};
-use rayon::prelude::*;
-use skylod::checks::{self, PoiFlag, DEFAULT_POI_MARGIN};
+use skylod::checks::{PoiFlag, DEFAULT_POI_MARGIN};
 use skylod::export::Format;
 use skylod::model::CityModel;
 use skylod::poi::{check_unique_ids, parse_poi, read_pois_csv, Located, Poi};
-use skylod::progress::{stage, Progress, Stage};
 use skylod::rough::RoughOptions;
 use skylod::select::SelectOptions;
 use std::path::PathBuf;
@@ -358,53 +356,9 @@ pub fn out_err<T>(r: std::io::Result<T>) -> anyhow::Result<T> {
     r.context("writing to stdout")
 }
 
-/// Results of [`trace_full`].
-pub struct Traced<T> {
-    /// One result per POI, in POI order.
-    pub results: Vec<T>,
-    /// The trust flags of each POI ([`checks::poi_flags`]).
-    pub flags: Vec<Vec<PoiFlag>>,
-    /// Milliseconds building the scene.
-    pub bvh_ms: f64,
-    /// Milliseconds tracing.
-    pub trace_ms: f64,
-}
-
-/// One result per POI (in POI order) computed in parallel against the full-detail scene of
-/// `model`, with each POI's flags (`sky_rays` of a result, when it knows them, adds the
-/// no-sky flag) and the milliseconds spent building the scene and tracing. Flags are
-/// printed as warnings on stderr.
-pub fn trace_full<T: Send>(
-    model: &CityModel,
-    pois: &[Poi],
-    f: impl Fn(&skylod::trace::Scene, &Poi) -> T + Sync,
-    sky_rays: impl Fn(&T) -> Option<usize> + Sync,
-) -> Traced<T> {
-    let progress = crate::log::reporter();
-    let t = Instant::now();
-    let scene = stage(&progress, Stage::Bvh, 1, 0, || {
-        skylod::scene::full_scene(model)
-    });
-    let bvh_ms = ms(t);
-    let t = Instant::now();
-    let (results, flags): (Vec<T>, Vec<Vec<PoiFlag>>) =
-        stage(&progress, Stage::Trace, pois.len() as u64, 0, || {
-            pois.par_iter()
-                .map(|p| {
-                    let r = f(&scene, p);
-                    let flags = checks::poi_flags(&scene, model, p, sky_rays(&r));
-                    progress.advance(Stage::Trace, 1, 0, None);
-                    (r, flags)
-                })
-                .unzip()
-        });
-    warn_flags(pois, &flags);
-    Traced {
-        results,
-        flags,
-        bvh_ms,
-        trace_ms: ms(t),
-    }
+/// Seconds as milliseconds rounded to 0.1 (the timings of the reports).
+pub fn s_to_ms(s: f64) -> f64 {
+    (s * 1e4).round() / 10.0
 }
 
 /// Print each POI's flags as a warning on stderr.
