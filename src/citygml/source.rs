@@ -67,8 +67,12 @@ pub fn load(path: &Path) -> Result<Document, ReadError> {
         // SAFETY: the map is read-only and private to this process; as with any reader of
         // memory-mapped input (ripgrep, the linkers), a file truncated or rewritten by another
         // process while it is read is outside what the reader protects against.
-        match unsafe { memmap2::MmapOptions::new().populate().map(&file) } {
-            Ok(m) => Bytes::Mapped(m),
+        match unsafe { memmap2::Mmap::map(&file) } {
+            Ok(m) => {
+                // read ahead of the parser (a hint: failure is harmless)
+                let _ = m.advise(memmap2::Advice::Sequential);
+                Bytes::Mapped(m)
+            }
             Err(_) => Bytes::Read(read_all(&mut file).map_err(io)?),
         }
     } else {
@@ -90,6 +94,24 @@ fn read_all(file: &mut File) -> std::io::Result<Vec<u8>> {
     let mut v = Vec::new();
     file.read_to_end(&mut v)?;
     Ok(v)
+}
+
+impl Bytes {
+    /// Let the memory of the first `upto` bytes go (a mapped file's pages return to the page
+    /// cache, out of this process's resident set): the parser calls this as it moves on, so
+    /// that a large document does not stay resident whole. Reading those bytes again stays
+    /// correct (they are mapped in again from the file).
+    pub fn release_before(&self, upto: usize) {
+        #[cfg(unix)]
+        if let Bytes::Mapped(m) = self {
+            let len = upto.min(m.len());
+            // SAFETY: the map is private and read-only, never written: after MADV_DONTNEED
+            // its pages read the file's contents again, the same bytes as before.
+            let _ = unsafe { m.unchecked_advise_range(memmap2::UncheckedAdvice::DontNeed, 0, len) };
+        }
+        #[cfg(not(unix))]
+        let _ = upto;
+    }
 }
 
 impl AsRef<[u8]> for Bytes {

@@ -62,13 +62,19 @@ pub(super) fn read_sized<R: BufRead>(
     finish(p, len, saw_root, gzip)
 }
 
+/// Bytes parsed between two calls of `release` in [`read_slice`].
+const RELEASE_STEP: u64 = 32 << 20;
+
 /// Read a whole (uncompressed) document held in memory: events borrow from `doc` (no copy
-/// per event) and lines are counted only where a location needs one.
+/// per event) and lines are counted only where a location needs one. `release(n)` is called
+/// every [`RELEASE_STEP`] bytes with an offset `n` the parser has passed (lines counted up
+/// to there): the memory of `doc[..n]` may be let go.
 pub(super) fn read_slice(
     doc: &[u8],
     path: &Path,
     gzip: bool,
     opts: &ReadOptions,
+    release: &dyn Fn(usize),
 ) -> Result<CityModel, ReadError> {
     let mut p = Parser::new(path, opts.clone(), doc);
     p.expect_bytes(doc.len() as u64);
@@ -79,9 +85,16 @@ pub(super) fn read_slice(
     let mut reader = NsReader::from_reader(body);
     configure(&mut reader);
     let mut saw_root = false;
+    let mut next_release = RELEASE_STEP;
     loop {
         let pos = reader.buffer_position() + base;
         p.event_pos = pos;
+        if pos >= next_release {
+            // count the lines so far, so that the bytes behind are never needed again
+            p.line_mark();
+            release(usize::try_from(pos - (1 << 20)).unwrap_or(0));
+            next_release = pos + RELEASE_STEP;
+        }
         let ev = match reader.read_event() {
             Ok(ev) => ev,
             Err(e) => {
@@ -231,7 +244,7 @@ mod tests {
         };
         let path = Path::new("t.gml");
         [
-            show(read_slice(doc.as_bytes(), path, false, &opts)),
+            show(read_slice(doc.as_bytes(), path, false, &opts, &|_| {})),
             show(read_from(doc.as_bytes(), path, false, &opts)),
         ]
     }
@@ -275,9 +288,9 @@ mod tests {
             ..ReadOptions::default()
         };
         let doc = format!("{HEAD}<!--{}-->{BODY}</CityModel>", "c".repeat(5000));
-        let e = read_slice(doc.as_bytes(), Path::new("t.gml"), false, &opts).unwrap_err();
+        let e = read_slice(doc.as_bytes(), Path::new("t.gml"), false, &opts, &|_| {}).unwrap_err();
         assert!(matches!(e, ReadError::Limit { .. }), "{e}");
         let ok = format!("{HEAD}<!--{}-->{BODY}</CityModel>", "c".repeat(500));
-        assert!(read_slice(ok.as_bytes(), Path::new("t.gml"), false, &opts).is_ok());
+        assert!(read_slice(ok.as_bytes(), Path::new("t.gml"), false, &opts, &|_| {}).is_ok());
     }
 }

@@ -85,7 +85,9 @@ pub fn read_file(path: &Path) -> Result<CityModel, ReadError> {
 /// parsed.
 pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, ReadError> {
     match source::load(path)? {
-        source::Document::Plain(doc) => events::read_slice(&doc, path, false, opts),
+        source::Document::Plain(doc) => {
+            events::read_slice(&doc, path, false, opts, &|upto| doc.release_before(upto))
+        }
         source::Document::Gzip(reader, compressed) => {
             // gzip-compressed CityGML is typically 8-12 times smaller than the document
             let hint = compressed.saturating_mul(8);
@@ -96,7 +98,13 @@ pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, Read
 
 /// Read a document held in memory (tests, examples). `name` is used in messages.
 pub fn read_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<CityModel, ReadError> {
-    events::read_slice(bytes, name.as_ref(), false, &ReadOptions::default())
+    events::read_slice(
+        bytes,
+        name.as_ref(),
+        false,
+        &ReadOptions::default(),
+        &|_| {},
+    )
 }
 
 /// Largest accepted coordinate magnitude: far beyond any real CRS (geocentric coordinates are
