@@ -105,12 +105,13 @@ pub(super) fn read_slice(
                 return Err(p.xml_error(at, e.to_string()));
             }
         };
-        if !dispatch::<_, false>(&mut p, &reader, ev, pos, base, &mut saw_root)? {
-            break;
-        }
-        // the token is not copied, but the limit holds alike for both readers
+        // the token is not copied, but the limit holds alike for both readers (checked
+        // before the event is handled, as the streamed reader fails while reading it)
         if reader.buffer_position() + base - pos > p.opts.max_event_bytes as u64 {
             return Err(p.token_limit(pos));
+        }
+        if !dispatch::<_, false>(&mut p, &reader, ev, pos, base, &mut saw_root)? {
+            break;
         }
     }
     let len = reader.buffer_position() + base;
@@ -290,6 +291,19 @@ mod tests {
         let doc = format!("{HEAD}<!--{}-->{BODY}</CityModel>", "c".repeat(5000));
         let e = read_slice(doc.as_bytes(), Path::new("t.gml"), false, &opts, &|_| {}).unwrap_err();
         assert!(matches!(e, ReadError::Limit { .. }), "{e}");
+        // a huge tag is refused before it is handled: reported at the enclosing element's id
+        // (as the streamed reader does when the tag outgrows its buffer)
+        let attr = format!(
+            "<bldg:RoofSurface note=\"{}\" gml:id=\"r1\">",
+            "a".repeat(5000)
+        );
+        let doc = format!(
+            "{HEAD}{}</CityModel>",
+            BODY.replacen("<bldg:RoofSurface gml:id=\"r1\">", &attr, 1)
+        );
+        let e = read_slice(doc.as_bytes(), Path::new("t.gml"), false, &opts, &|_| {}).unwrap_err();
+        assert!(matches!(e, ReadError::Limit { .. }), "{e}");
+        assert!(e.to_string().contains("[gml:id 1b]"), "{e}");
         let ok = format!("{HEAD}<!--{}-->{BODY}</CityModel>", "c".repeat(500));
         assert!(read_slice(ok.as_bytes(), Path::new("t.gml"), false, &opts, &|_| {}).is_ok());
     }
