@@ -25,6 +25,101 @@ pub fn open(path: &Path) -> Result<(Box<dyn BufRead + Send>, bool), ReadError> {
     }
 }
 
+/// A source document ready to parse: see [`load`].
+pub enum Document {
+    /// The whole uncompressed document.
+    Plain(Bytes),
+    /// A decompressing reader, and the compressed size in bytes.
+    Gzip(Box<dyn BufRead + Send>, u64),
+}
+
+/// The bytes of a whole file: mapped into memory, or read into a buffer where it cannot be
+/// mapped (empty files, special files).
+pub enum Bytes {
+    /// A read-only memory map of the file.
+    Mapped(memmap2::Mmap),
+    /// The file read into memory.
+    Read(Vec<u8>),
+}
+
+impl std::ops::Deref for Bytes {
+    type Target = [u8];
+    fn deref(&self) -> &[u8] {
+        match self {
+            Bytes::Mapped(m) => m,
+            Bytes::Read(v) => v,
+        }
+    }
+}
+
+/// Open `path` whole; gzip is detected from the magic bytes (not the extension) and then
+/// decompressed as it is read (the compressed bytes are held, not the document). An
+/// uncompressed file is memory-mapped: its pages come from the page cache as they are (no
+/// copy, no zeroed buffer), the cheapest way to hold a large document.
+pub fn load(path: &Path) -> Result<Document, ReadError> {
+    let io = |source| ReadError::Io {
+        file: path.to_path_buf(),
+        source,
+    };
+    let mut file = File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    let bytes = if meta.is_file() && meta.len() > 0 {
+        // SAFETY: the map is read-only and private to this process; as with any reader of
+        // memory-mapped input (ripgrep, the linkers), a file truncated or rewritten by another
+        // process while it is read is outside what the reader protects against.
+        match unsafe { memmap2::Mmap::map(&file) } {
+            Ok(m) => {
+                // read ahead of the parser (a hint: failure is harmless)
+                let _ = m.advise(memmap2::Advice::Sequential);
+                Bytes::Mapped(m)
+            }
+            Err(_) => Bytes::Read(read_all(&mut file).map_err(io)?),
+        }
+    } else {
+        Bytes::Read(read_all(&mut file).map_err(io)?)
+    };
+    if bytes.starts_with(&[0x1f, 0x8b]) {
+        let len = bytes.len() as u64;
+        let dec = flate2::bufread::MultiGzDecoder::new(std::io::Cursor::new(bytes));
+        Ok(Document::Gzip(
+            Box::new(BufReader::with_capacity(BUF, dec)),
+            len,
+        ))
+    } else {
+        Ok(Document::Plain(bytes))
+    }
+}
+
+fn read_all(file: &mut File) -> std::io::Result<Vec<u8>> {
+    let mut v = Vec::new();
+    file.read_to_end(&mut v)?;
+    Ok(v)
+}
+
+impl Bytes {
+    /// Let the memory of the first `upto` bytes go (a mapped file's pages return to the page
+    /// cache, out of this process's resident set): the parser calls this as it moves on, so
+    /// that a large document does not stay resident whole. Reading those bytes again stays
+    /// correct (they are mapped in again from the file).
+    pub fn release_before(&self, upto: usize) {
+        #[cfg(unix)]
+        if let Bytes::Mapped(m) = self {
+            let len = upto.min(m.len());
+            // SAFETY: the map is private and read-only, never written: after MADV_DONTNEED
+            // its pages read the file's contents again, the same bytes as before.
+            let _ = unsafe { m.unchecked_advise_range(memmap2::UncheckedAdvice::DontNeed, 0, len) };
+        }
+        #[cfg(not(unix))]
+        let _ = upto;
+    }
+}
+
+impl AsRef<[u8]> for Bytes {
+    fn as_ref(&self) -> &[u8] {
+        self
+    }
+}
+
 /// Skip a UTF-8 byte-order mark at the start of `reader`, so that every position recorded
 /// after it is a true offset in the document (quick-xml would skip it without counting it).
 /// Returns the offset the reader now stands at: 3 after a mark, 0 otherwise.

@@ -6,7 +6,7 @@ use super::xlink::{PolyRef, Walk};
 use crate::citygml::error::{Location, ReadError};
 use crate::model::{Asset, AssetKind, Bbox, CityModel, SourceFile, Warning};
 
-impl Parser {
+impl Parser<'_> {
     pub(super) fn finish(mut self, len: u64, gzip: bool) -> Result<CityModel, ReadError> {
         let Some(version) = self.version else {
             return Err(ReadError::NotCityGml {

@@ -9,7 +9,7 @@ use quick_xml::name::{QName, ResolveResult};
 use quick_xml::NsReader;
 use std::borrow::Cow;
 
-impl Parser {
+impl Parser<'_> {
     /// The namespace URI of a resolved element name. An undeclared prefix is not
     /// namespace-well-formed, but real data has them (e.g. PLATEAU ADE elements): the element
     /// is kept verbatim, not interpreted, with one warning per prefix.

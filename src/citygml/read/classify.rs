@@ -37,7 +37,7 @@ pub(super) fn is_lod_property(local: &[u8]) -> Option<u8> {
     None
 }
 
-impl Parser {
+impl Parser<'_> {
     pub(super) fn open_geom_prop(&mut self, local: &[u8], name: &mut Option<Box<str>>) -> Kind {
         let lod = is_lod_property(local).unwrap_or(self.relief_lod);
         *name = Some(String::from_utf8_lossy(local).into());
@@ -229,7 +229,7 @@ impl Parser {
                 is_part,
                 parent: building,
                 span: pos..pos,
-                line: self.line,
+                line: self.line(),
                 assets: Vec::new(),
                 geometries: Vec::new(),
                 file: 0,

@@ -14,7 +14,7 @@ pub(super) struct CoordAttrs {
     pub(super) decimal: u8,
 }
 
-impl Parser {
+impl Parser<'_> {
     /// Append captured character data (coordinates, codes), within the token size limit.
     pub(super) fn capture_text(&mut self, t: &[u8], pos: u64) -> Result<(), ReadError> {
         if self.text.len() + t.len() > self.opts.max_event_bytes {

@@ -9,7 +9,7 @@ use crate::model::{AssetKind, Bbox, LodGeometry};
 use quick_xml::events::BytesStart;
 use quick_xml::NsReader;
 
-impl Parser {
+impl Parser<'_> {
     pub(super) fn start<R>(
         &mut self,
         reader: &NsReader<R>,

@@ -5,7 +5,7 @@ use super::state::{Frame, Parser, Part};
 use crate::model::Polygon;
 use glam::DVec3;
 
-impl Parser {
+impl Parser<'_> {
     pub(super) fn finish_ring(&mut self, exterior: bool, _frame: &Frame) {
         // the points are parsed into a reused buffer; the polygon gets an exact-size copy
         let mut ring = std::mem::take(&mut self.ring);

@@ -1,8 +1,10 @@
 //! Streaming CityGML reader: XML events -> [`CityModel`] of buildings and assets.
 //!
 //! Namespace-aware ([`quick_xml::NsReader`]): elements are matched by namespace URI, so any
-//! prefix and default namespaces work, for CityGML 1.0, 2.0 and 3.0. The document text is never
-//! held in memory: each event is handled and dropped, memory grows with the model only.
+//! prefix and default namespaces work, for CityGML 1.0, 2.0 and 3.0. An uncompressed file is
+//! read whole into one buffer and parsed in place (events borrow from it, line numbers are
+//! counted only where a location needs one); a gzip-compressed one, or any [`read_from`]
+//! reader, is streamed: each event is handled and dropped, memory grows with the model only.
 //!
 //! Geometry is collected into a per-document arena of *parts* (polygons, `xlink:href`
 //! references, implicit-geometry headers); every geometry element with a `gml:id` records its
@@ -78,30 +80,30 @@ pub fn read_file(path: &Path) -> Result<CityModel, ReadError> {
     read_file_with(path, &ReadOptions::default())
 }
 
-/// [`read_file`] with explicit limits.
+/// [`read_file`] with explicit limits. An uncompressed file is read whole into memory and
+/// parsed from there (events borrow from it); a gzip-compressed one is decompressed as it is
+/// parsed.
 pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, ReadError> {
-    let (reader, gzip) = source::open(path)?;
-    // gzip-compressed CityGML is typically 8-12 times smaller than the document
-    let hint = std::fs::metadata(path)
-        .map(|m| {
-            if gzip {
-                m.len().saturating_mul(8)
-            } else {
-                m.len()
-            }
-        })
-        .unwrap_or(0);
-    events::read_sized(reader, path, gzip, opts, hint)
+    match source::load(path)? {
+        source::Document::Plain(doc) => {
+            events::read_slice(&doc, path, false, opts, &|upto| doc.release_before(upto))
+        }
+        source::Document::Gzip(reader, compressed) => {
+            // gzip-compressed CityGML is typically 8-12 times smaller than the document
+            let hint = compressed.saturating_mul(8);
+            events::read_sized(reader, path, true, opts, hint)
+        }
+    }
 }
 
 /// Read a document held in memory (tests, examples). `name` is used in messages.
 pub fn read_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<CityModel, ReadError> {
-    events::read_sized(
+    events::read_slice(
         bytes,
         name.as_ref(),
         false,
         &ReadOptions::default(),
-        bytes.len() as u64,
+        &|_| {},
     )
 }
 

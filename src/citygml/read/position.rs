@@ -4,14 +4,41 @@ use super::state::Parser;
 use crate::citygml::error::{Location, ReadError};
 use crate::model::Warning;
 
-impl Parser {
-    /// Advance the line counter over `bytes`, which start at file offset `content_start`.
+impl Parser<'_> {
+    /// Advance the line counter over `bytes`, which start at file offset `content_start`
+    /// (streaming only: a document in memory counts its lines on demand).
     #[inline]
     pub(super) fn count_lines(&mut self, bytes: &[u8], content_start: u64) {
         if let Some((n, last)) = newlines(bytes) {
-            self.line += n;
-            self.line_start = content_start + last as u64 + 1;
+            let m = self.lines.get_mut();
+            m.line += n;
+            m.line_start = content_start + last as u64 + 1;
         }
+    }
+
+    /// Line number and offset of the line's start at the current event's start
+    /// ([`Parser::event_pos`]). A document in memory counts the newlines since the last call
+    /// here (one SIMD count over a long span instead of a count per event).
+    pub(super) fn line_mark(&self) -> (u64, u64) {
+        let mut m = self.lines.get();
+        let to = usize::try_from(self.event_pos).unwrap_or(usize::MAX);
+        let from = usize::try_from(m.counted_to).unwrap_or(usize::MAX);
+        if to > from {
+            if let Some(span) = self.doc.get(from..to) {
+                if let Some((n, last)) = newlines(span) {
+                    m.line += n;
+                    m.line_start = m.counted_to + last as u64 + 1;
+                }
+                m.counted_to = self.event_pos;
+                self.lines.set(m);
+            }
+        }
+        (m.line, m.line_start)
+    }
+
+    /// Line number of the current event's start.
+    pub(super) fn line(&self) -> u64 {
+        self.line_mark().0
     }
 
     pub(super) fn nearest_id(&self) -> Option<String> {
@@ -23,10 +50,11 @@ impl Parser {
     }
 
     pub(super) fn loc_at(&self, pos: u64) -> Location {
+        let (line, line_start) = self.line_mark();
         Location {
             file: self.path.clone(),
-            line: self.line,
-            column: pos.saturating_sub(self.line_start) + 1,
+            line,
+            column: pos.saturating_sub(line_start) + 1,
             gml_id: self.nearest_id(),
         }
     }
@@ -37,7 +65,7 @@ impl Parser {
 
     pub(super) fn xml_error(&self, at: u64, message: String) -> ReadError {
         ReadError::Xml {
-            loc: self.loc_at(at.max(self.line_start)),
+            loc: self.loc_at(at.max(self.line_mark().1)),
             message,
         }
     }
@@ -54,10 +82,11 @@ impl Parser {
 
     pub(super) fn warn(&mut self, message: impl Into<String>) {
         // Warnings share one path (real files can have one per gml:id).
+        let (line, line_start) = self.line_mark();
         self.warnings.push(Warning {
             file: self.shared_path.clone(),
-            line: self.line,
-            column: self.event_pos.saturating_sub(self.line_start) + 1,
+            line,
+            column: self.event_pos.saturating_sub(line_start) + 1,
             gml_id: self.nearest_id(),
             message: message.into(),
         });

@@ -10,6 +10,7 @@ use crate::model::{Asset, AssetKind, Building, CityGmlVersion, EnvelopeSite, Pol
 use foldhash::{HashSet, HashSetExt};
 use glam::DVec3;
 use std::borrow::Cow;
+use std::cell::Cell;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -127,7 +128,7 @@ pub(super) enum EnvOwner {
     Asset(usize),
 }
 
-pub(super) struct Parser {
+pub(super) struct Parser<'d> {
     pub(super) path: PathBuf,
     /// The same path, shared by every warning.
     pub(super) shared_path: Arc<Path>,
@@ -136,8 +137,12 @@ pub(super) struct Parser {
     pub(super) cur_prefix: String,
     pub(super) opts: ReadOptions,
     pub(super) event_pos: u64,
-    pub(super) line: u64,
-    pub(super) line_start: u64,
+    /// Line counter: counted per event while streaming, or on demand from [`Parser::doc`].
+    pub(super) lines: Cell<LineMark>,
+    /// The whole document when it is held in memory (file offsets, the byte-order mark
+    /// included): lines are then counted only when a location needs one. Empty while
+    /// streaming.
+    pub(super) doc: &'d [u8],
     pub(super) stack: Vec<Frame>,
     pub(super) version: Option<CityGmlVersion>,
     pub(super) root_is_model: bool,
@@ -203,8 +208,17 @@ pub(super) struct Attrs<'e> {
     pub(super) decimal: Option<u8>,
 }
 
-impl Parser {
-    pub(super) fn new(path: &Path, opts: ReadOptions) -> Self {
+/// Where the line counter stands: `line` is the line of offset `counted_to`, which lies after
+/// the newline at `line_start - 1`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct LineMark {
+    pub(super) line: u64,
+    pub(super) line_start: u64,
+    pub(super) counted_to: u64,
+}
+
+impl<'d> Parser<'d> {
+    pub(super) fn new(path: &Path, opts: ReadOptions, doc: &'d [u8]) -> Self {
         Parser {
             path: path.to_path_buf(),
             shared_path: Arc::from(path),
@@ -213,8 +227,12 @@ impl Parser {
             cur_prefix: String::new(),
             opts,
             event_pos: 0,
-            line: 1,
-            line_start: 0,
+            lines: Cell::new(LineMark {
+                line: 1,
+                line_start: 0,
+                counted_to: 0,
+            }),
+            doc,
             stack: Vec::with_capacity(64),
             version: None,
             root_is_model: false,
@@ -344,7 +362,7 @@ impl Parser {
             building,
             parent,
             span: pos..pos,
-            line: self.line,
+            line: self.line(),
             function: None,
             geometries: Vec::new(),
             file: 0,

@@ -64,7 +64,7 @@ pub(super) struct Walk<'a> {
     pub(super) budget: usize,
 }
 
-impl Parser {
+impl Parser<'_> {
     /// The gml:ids that references name (hashes of the targets after `#`), for [`Registry::index`].
     pub(super) fn href_targets(&self) -> HashSet<u64> {
         self.hrefs
