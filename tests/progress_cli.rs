@@ -138,3 +138,45 @@ fn quiet_keeps_errors() {
     assert!(o.status.success());
     assert_eq!(stderr(&o), "", "stats -q");
 }
+
+/// Ctrl-C (SIGINT) stops `lod` at its next file or POI: exit 2 saying what was cancelled, and
+/// nothing left in the output directory (no merged model, no staging directory, no temporary
+/// file); or, should the run have ended before the signal, exit 0 with exactly the model.
+#[test]
+fn ctrl_c_leaves_nothing_partial() {
+    let Some(data) = common::shared_data() else {
+        return;
+    };
+    let tiles = data.join("ingolstadt-lod3");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("street.gml");
+    let child = Command::new(env!("CARGO_BIN_EXE_skylod"))
+        .arg("lod")
+        .arg(&tiles)
+        .args(["--poi", "678090,5403790,415", "-o"])
+        .arg(&out)
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    let left: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    match o.status.code() {
+        Some(2) => {
+            assert!(err.contains("cancelled while"), "{err}");
+            assert!(left.is_empty(), "left behind after Ctrl-C: {left:?}");
+        }
+        Some(0) => assert_eq!(left, vec!["street.gml".to_string()], "{err}"),
+        c => panic!("exit {c:?} after Ctrl-C: {err}"),
+    }
+}

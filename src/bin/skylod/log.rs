@@ -13,7 +13,7 @@ use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use skylod::progress::{Progress, Stage};
 use std::collections::HashMap;
 use std::io::IsTerminal;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
@@ -56,6 +56,20 @@ struct Logger {
 }
 
 static LOGGER: OnceLock<Logger> = OnceLock::new();
+
+/// Set by the first Ctrl-C (SIGINT): the library's long loops stop at their next
+/// item ([`Progress::is_cancelled`]), outputs not yet renamed into place are removed.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Ctrl-C asks the running command to stop at its next file or POI, so that no partial or
+/// temporary file is left behind; a second Ctrl-C ends the process at once (exit 2).
+pub fn on_interrupt() {
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(2);
+        }
+    });
+}
 
 /// Set up messages and progress from the global flags (once, before any command runs).
 pub fn init(args: &LogArgs) {
@@ -175,6 +189,10 @@ impl Reporter {
 }
 
 impl Progress for Reporter {
+    fn is_cancelled(&self) -> bool {
+        INTERRUPTED.load(Ordering::Relaxed)
+    }
+
     fn start(&self, stage: Stage, items: u64, bytes: u64) {
         let bar = self.bar(stage, items, bytes);
         if bar.is_none() && items <= 1 && bytes == 0 {

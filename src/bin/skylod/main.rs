@@ -88,6 +88,7 @@ fn main() -> ExitCode {
         }
     };
     log::init(&cli.log);
+    log::on_interrupt();
     let result = match cli.command {
         Command::Stats(a) => cmd_stats::run(a),
         Command::Convert(a) => cmd_convert::run(a),
