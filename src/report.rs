@@ -19,8 +19,8 @@
 use crate::model::{Asset, CityModel};
 use crate::poi::Poi;
 use crate::rough::{RoughGeometry, RoughOptions};
-use crate::select::Selection;
-use serde::Serialize;
+use crate::select::{PoiSelection, Selection};
+use serde::{Deserialize, Serialize};
 
 /// Format version of the report (bumped on incompatible changes).
 pub const REPORT_VERSION: u32 = 2;
@@ -99,9 +99,10 @@ impl Parameters {
     }
 }
 
-/// One POI.
-#[derive(Debug, Clone, Serialize)]
-pub struct PoiEntry {
+/// Where a POI is and what its rays saw: the part of a POI's summary that the report
+/// ([`PoiEntry`]) and a shard's levels file ([`crate::shard_levels::PoiRecord`]) share.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PoiSeen {
     /// Id.
     pub id: String,
     /// Position in the model's CRS.
@@ -116,6 +117,38 @@ pub struct PoiEntry {
     pub assets_hit: usize,
     /// Assets on this POI's silhouette.
     pub silhouette_assets: usize,
+}
+
+impl PoiSeen {
+    /// The POI `p` (model CRS) with what its selection `s` saw.
+    pub fn new(p: &Poi, s: &PoiSelection) -> Self {
+        PoiSeen {
+            id: s.id.clone(),
+            position: p.position.to_array(),
+            normal: p.normal.map(|n| n.to_array()),
+            rays: s.rays,
+            sky_rays: s.sky_rays,
+            assets_hit: s.assets_hit,
+            silhouette_assets: s.silhouette_assets,
+        }
+    }
+
+    /// The POI again (model CRS).
+    pub fn poi(&self) -> Poi {
+        Poi {
+            id: self.id.clone(),
+            position: glam::DVec3::from_array(self.position),
+            normal: self.normal.map(glam::DVec3::from_array),
+        }
+    }
+}
+
+/// One POI.
+#[derive(Debug, Clone, Serialize)]
+pub struct PoiEntry {
+    /// Where the POI is and what its rays saw.
+    #[serde(flatten)]
+    pub seen: PoiSeen,
     /// Time of this POI's selection (ms).
     pub ms: f64,
     /// Polygons of this POI's own LoD model (its levels alone, before any error bound).
@@ -273,13 +306,7 @@ impl Report {
             .iter()
             .zip(pois)
             .map(|(s, p)| PoiEntry {
-                id: s.id.clone(),
-                position: p.position.to_array(),
-                normal: p.normal.map(|n| n.to_array()),
-                rays: s.rays,
-                sky_rays: s.sky_rays,
-                assets_hit: s.assets_hit,
-                silhouette_assets: s.silhouette_assets,
+                seen: PoiSeen::new(p, s),
                 ms: s.seconds * 1e3,
                 polygons_own: s.polygons,
                 flags: Vec::new(),

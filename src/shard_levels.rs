@@ -23,9 +23,9 @@ use crate::checks::PoiFlag;
 use crate::lod::LodOptions;
 use crate::model::CityModel;
 use crate::poi::Poi;
+use crate::report::PoiSeen;
 use crate::select::{PoiSelection, Selection};
 use crate::shard::Shard;
-use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::io::{BufRead, Write};
@@ -87,20 +87,9 @@ pub struct Header {
 /// One POI of a shard and what it saw.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PoiRecord {
-    /// POI id.
-    pub id: String,
-    /// Position (model CRS).
-    pub position: [f64; 3],
-    /// Outward normal, if any.
-    pub normal: Option<[f64; 3]>,
-    /// [`PoiSelection::rays`].
-    pub rays: usize,
-    /// [`PoiSelection::sky_rays`].
-    pub sky_rays: usize,
-    /// [`PoiSelection::assets_hit`].
-    pub assets_hit: usize,
-    /// [`PoiSelection::silhouette_assets`].
-    pub silhouette_assets: usize,
+    /// Where the POI is (model CRS) and what its rays saw.
+    #[serde(flatten)]
+    pub seen: PoiSeen,
     /// [`PoiSelection::polygons`].
     pub polygons: usize,
     /// [`PoiSelection::seconds`].
@@ -235,13 +224,7 @@ pub fn write_levels(
     for (i, (p, s)) in pois.iter().zip(&selection.pois).enumerate() {
         line(
             &Line::Poi(PoiRecord {
-                id: p.id.clone(),
-                position: p.position.to_array(),
-                normal: p.normal.map(|n| n.to_array()),
-                rays: s.rays,
-                sky_rays: s.sky_rays,
-                assets_hit: s.assets_hit,
-                silhouette_assets: s.silhouette_assets,
+                seen: PoiSeen::new(p, s),
                 polygons: s.polygons,
                 seconds: s.seconds,
                 flags: flags.get(i).cloned().unwrap_or_default(),
@@ -494,17 +477,14 @@ pub fn combine(mut files: Vec<LevelsFile>, model: &CityModel) -> Result<Combined
             }
         }
         for p in &f.pois {
-            pois.push(Poi {
-                id: p.id.clone(),
-                position: DVec3::from_array(p.position),
-                normal: p.normal.map(DVec3::from_array),
-            });
+            let seen = &p.seen;
+            pois.push(seen.poi());
             selections.push(PoiSelection {
-                id: p.id.clone(),
-                rays: p.rays,
-                sky_rays: p.sky_rays,
-                assets_hit: p.assets_hit,
-                silhouette_assets: p.silhouette_assets,
+                id: seen.id.clone(),
+                rays: seen.rays,
+                sky_rays: seen.sky_rays,
+                assets_hit: seen.assets_hit,
+                silhouette_assets: seen.silhouette_assets,
                 seconds: p.seconds,
                 polygons: p.polygons,
             });
@@ -526,6 +506,7 @@ mod tests {
     use super::*;
     use crate::lod::lod;
     use crate::synth::{generate, pois as synth_pois, Preset};
+    use glam::DVec3;
 
     fn model() -> (CityModel, Vec<Poi>) {
         let opts = Preset::Small.defaults();

@@ -141,11 +141,7 @@ pub fn read(args: &mut Args) -> anyhow::Result<Option<Reduce>> {
     let pois = sorted
         .iter()
         .flat_map(|f| &f.pois)
-        .map(|p| Poi {
-            id: p.id.clone(),
-            position: glam::DVec3::from_array(p.position),
-            normal: p.normal.map(glam::DVec3::from_array),
-        })
+        .map(|p| p.seen.poi())
         .collect();
     crate::log::summary!(
         "lod: reducing {} levels file(s) of a {}-shard run",
