@@ -1,6 +1,7 @@
 //! `skylod evaluate`: full vs LoD vs all-boxes model, the paper's Tables 1 and 2.
 
-use crate::common::{ms, out_err, warn_flags, PoiArgs, RoughArgs, SelectArgs, SiteArgs, SunArgs};
+use crate::common::{ms, out_err, warn_flags, RoughArgs, SelectArgs, SiteArgs, SunArgs};
+use crate::tracing_args::Prepared;
 use crate::Outcome;
 use skylod::evaluate::EvalOptions;
 use skylod::lod::LodOptions;
@@ -12,13 +13,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pois: PoiArgs,
-    #[command(flatten)]
-    region: crate::region_args::RegionArgs,
-    #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
-    #[command(flatten)]
-    scene: crate::scene_args::SceneArgs,
+    tracing: crate::tracing_args::TracingArgs,
     #[command(flatten)]
     site: SiteArgs,
     /// Skip sun hours (then --lat/--lon are not needed).
@@ -51,24 +46,19 @@ fn hours(x: Option<f64>) -> String {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
-    let t_all = Instant::now();
     args.site.check("evaluate")?;
     let rough_opts = args.rough.options()?;
-    let shard = args.shard.resolve()?;
-    let pois = args.region.points(&args.pois)?;
-    let region = args.region.active();
-    args.scene
-        .filter(&mut args.pois, &pois, shard, region, "evaluate")?;
-    let mut loaded = args.pois.load_checked()?;
-    if loaded.inputs.is_empty() {
+    let t_all = Instant::now();
+    let Some(Prepared {
+        mut loaded,
+        pois,
+        shard,
+        ..
+    }) = args.tracing.prepare("evaluate", |_| Ok(()))?
+    else {
         return Ok(Outcome::SomeFailed);
-    }
-    let pois = args.region.extend(pois, &loaded.model)?;
-    let pois = crate::shard_args::pois(shard, pois, "evaluate");
-    let framed = args
-        .pois
-        .frame_checked(&mut loaded.model, pois, "evaluate")?;
+    };
+    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "evaluate")?;
     let site = if args.no_sun {
         None
     } else {

@@ -1,6 +1,7 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::common::{arr, out_err, polygons, s_to_ms, warn_flags, PoiArgs};
+use crate::common::{arr, out_err, polygons, s_to_ms, warn_flags};
+use crate::tracing_args::Prepared;
 use crate::Outcome;
 use anyhow::Context;
 use serde_json::json;
@@ -13,13 +14,7 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pois: PoiArgs,
-    #[command(flatten)]
-    region: crate::region_args::RegionArgs,
-    #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
-    #[command(flatten)]
-    scene: crate::scene_args::SceneArgs,
+    tracing: crate::tracing_args::TracingArgs,
     /// Azimuth step in degrees (0.01..=90); azimuths 0, step, 2 step, ... below 360.
     #[arg(long, default_value_t = 1.0)]
     step: f64,
@@ -60,32 +55,30 @@ fn csv(pois: &[Poi], profiles: &[HorizonProfile]) -> String {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     let opts = HorizonOptions::default().with_step(args.step);
     opts.validate().context("--step")?;
-    let shard = args.shard.resolve()?;
-    let pois = args.region.points(&args.pois)?;
-    let region = args.region.active();
-    args.scene
-        .filter(&mut args.pois, &pois, shard, region, "horizon")?;
-    if let Some(out) = &args.output {
-        let w = WriteOptions {
-            overwrite: args.overwrite,
-            ..Default::default()
-        };
-        check_target(out, &w, args.pois.inputs.iter().map(|p| p.as_path()))
-            .with_context(|| format!("output {}", out.display()))?;
-    }
-    let mut loaded = args.pois.load_checked()?;
-    if loaded.inputs.is_empty() {
+    let (output, overwrite) = (args.output.clone(), args.overwrite);
+    let Some(Prepared {
+        mut loaded,
+        pois,
+        shard,
+        ..
+    }) = args.tracing.prepare("horizon", |poi_args| {
+        if let Some(out) = &output {
+            let w = WriteOptions {
+                overwrite,
+                ..Default::default()
+            };
+            check_target(out, &w, poi_args.inputs.iter().map(|p| p.as_path()))
+                .with_context(|| format!("output {}", out.display()))?;
+        }
+        Ok(())
+    })?
+    else {
         return Ok(Outcome::SomeFailed);
-    }
-    let pois = args.region.extend(pois, &loaded.model)?;
-    let pois = crate::shard_args::pois(shard, pois, "horizon");
+    };
     // Traced in the local metric frame (y = north): azimuths are from north there.
-    let framed = args
-        .pois
-        .frame_checked(&mut loaded.model, pois, "horizon")?;
+    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "horizon")?;
     let traced = skylod::pipeline::horizon(&framed, &opts, &crate::log::reporter())?;
     warn_flags(&framed.pois, &traced.flags);
     let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));

@@ -1,6 +1,7 @@
 //! `skylod sun-hours`.
 
-use crate::common::{arr, ms, out_err, polygons, s_to_ms, warn_flags, PoiArgs, SiteArgs, SunArgs};
+use crate::common::{arr, ms, out_err, polygons, s_to_ms, warn_flags, SiteArgs, SunArgs};
+use crate::tracing_args::Prepared;
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{Site, SunTable};
@@ -10,13 +11,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pois: PoiArgs,
-    #[command(flatten)]
-    region: crate::region_args::RegionArgs,
-    #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
-    #[command(flatten)]
-    scene: crate::scene_args::SceneArgs,
+    tracing: crate::tracing_args::TracingArgs,
     #[command(flatten)]
     site: SiteArgs,
     #[command(flatten)]
@@ -35,22 +30,17 @@ const MONTHS: [&str; 12] = [
 ];
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
     args.site.check("sun-hours")?;
-    let shard = args.shard.resolve()?;
-    let pois = args.region.points(&args.pois)?;
-    let region = args.region.active();
-    args.scene
-        .filter(&mut args.pois, &pois, shard, region, "sun-hours")?;
-    let mut loaded = args.pois.load_checked()?;
-    if loaded.inputs.is_empty() {
+    let Some(Prepared {
+        mut loaded,
+        pois,
+        shard,
+        ..
+    }) = args.tracing.prepare("sun-hours", |_| Ok(()))?
+    else {
         return Ok(Outcome::SomeFailed);
-    }
-    let pois = args.region.extend(pois, &loaded.model)?;
-    let pois = crate::shard_args::pois(shard, pois, "sun-hours");
-    let framed = args
-        .pois
-        .frame_checked(&mut loaded.model, pois, "sun-hours")?;
+    };
+    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "sun-hours")?;
     let (lat, lon) = args.site.resolve(framed.source, "sun-hours")?;
     let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
     let t = Instant::now();

@@ -1,7 +1,8 @@
 //! `skylod svf`.
 
-use crate::common::{arr, out_err, polygons, s_to_ms, warn_flags, PoiArgs};
+use crate::common::{arr, out_err, polygons, s_to_ms, warn_flags};
 use crate::frames::decimals;
+use crate::tracing_args::Prepared;
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::SkyBundles;
@@ -10,13 +11,7 @@ use std::io::Write;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    pois: PoiArgs,
-    #[command(flatten)]
-    region: crate::region_args::RegionArgs,
-    #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
-    #[command(flatten)]
-    scene: crate::scene_args::SceneArgs,
+    tracing: crate::tracing_args::TracingArgs,
     /// Rays per bundle (cells of each Beckers sky partition).
     #[arg(long, default_value_t = 10_000)]
     rays: usize,
@@ -29,20 +24,17 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
-    let shard = args.shard.resolve()?;
-    let pois = args.region.points(&args.pois)?;
-    let region = args.region.active();
-    args.scene
-        .filter(&mut args.pois, &pois, shard, region, "svf")?;
     let bundles = SkyBundles::new(args.rays, args.seed)?;
-    let mut loaded = args.pois.load_checked()?;
-    if loaded.inputs.is_empty() {
+    let Some(Prepared {
+        mut loaded,
+        pois,
+        shard,
+        ..
+    }) = args.tracing.prepare("svf", |_| Ok(()))?
+    else {
         return Ok(Outcome::SomeFailed);
-    }
-    let pois = args.region.extend(pois, &loaded.model)?;
-    let pois = crate::shard_args::pois(shard, pois, "svf");
-    let framed = args.pois.frame_checked(&mut loaded.model, pois, "svf")?;
+    };
+    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "svf")?;
     let traced = skylod::pipeline::svf(&framed, &bundles, &crate::log::reporter())?;
     warn_flags(&framed.pois, &traced.flags);
     let (views, bvh_ms, trace_ms) = (

@@ -26,6 +26,7 @@ mod outputs;
 mod region_args;
 mod scene_args;
 mod shard_args;
+mod tracing_args;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]
