@@ -424,8 +424,10 @@ fn lod_shards_reduce_to_the_serial_model() {
 }
 
 /// Per-file commands: each shard does its files, written where the serial run writes them.
+/// The shards run last to first into one directory without `--overwrite`: a shard checks
+/// only its own targets (the others' files already there are not its business).
 #[test]
-fn rough_shards_write_the_serial_files() {
+fn per_file_shards_write_the_serial_files() {
     let Some(d) = shared_data() else { return };
     let d = d.join("ingolstadt-lod3");
     let inputs: Vec<String> = [
@@ -438,33 +440,35 @@ fn rough_shards_write_the_serial_files() {
     .map(|t| s(d.join(t)))
     .collect();
     let dir = tempfile::tempdir().unwrap();
-    let serial = dir.path().join("serial");
-    let mut a = vec!["rough".to_string()];
-    a.extend(inputs.iter().cloned());
-    a.extend(["-o".into(), s(&serial)]);
-    ok(skylod(&a, &[]), "serial rough");
-    let sharded = dir.path().join("sharded");
-    for i in 0..3 {
-        let mut a = vec!["rough".to_string()];
+    for cmd in ["rough", "convert"] {
+        let serial = dir.path().join(format!("{cmd}-serial"));
+        let mut a = vec![cmd.to_string()];
         a.extend(inputs.iter().cloned());
-        a.extend(["-o".into(), s(&sharded), "--shard".into(), format!("{i}/3")]);
-        ok(skylod(&a, &[]), "rough shard");
-    }
-    let names = |p: &Path| {
-        let mut v: Vec<_> = std::fs::read_dir(p)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        v.sort();
-        v
-    };
-    assert_eq!(names(&serial).len(), inputs.len());
-    assert_eq!(names(&serial), names(&sharded));
-    for n in names(&serial) {
-        assert!(
-            std::fs::read(serial.join(&n)).unwrap() == std::fs::read(sharded.join(&n)).unwrap(),
-            "{n:?}"
-        );
+        a.extend(["-o".into(), s(&serial)]);
+        ok(skylod(&a, &[]), &format!("serial {cmd}"));
+        let sharded = dir.path().join(format!("{cmd}-sharded"));
+        for i in (0..3).rev() {
+            let mut a = vec![cmd.to_string()];
+            a.extend(inputs.iter().cloned());
+            a.extend(["-o".into(), s(&sharded), "--shard".into(), format!("{i}/3")]);
+            ok(skylod(&a, &[]), &format!("{cmd} shard {i}/3"));
+        }
+        let names = |p: &Path| {
+            let mut v: Vec<_> = std::fs::read_dir(p)
+                .unwrap()
+                .map(|e| e.unwrap().file_name())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(names(&serial).len(), inputs.len(), "{cmd}");
+        assert_eq!(names(&serial), names(&sharded), "{cmd}");
+        for n in names(&serial) {
+            assert!(
+                std::fs::read(serial.join(&n)).unwrap() == std::fs::read(sharded.join(&n)).unwrap(),
+                "{cmd} {n:?}"
+            );
+        }
     }
 }
 

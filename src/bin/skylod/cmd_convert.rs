@@ -4,11 +4,11 @@
 
 use crate::common::{summary_line, JobsArgs};
 use crate::log::{error, summary, warning};
-use crate::outputs::{self, Plan, Staging};
+use crate::outputs::{self, Plan, Targets};
 use crate::Outcome;
 use rayon::prelude::*;
 use skylod::citygml::read_file;
-use skylod::citygml::write::{check_target, write_document, WriteOptions};
+use skylod::citygml::write::{write_document, WriteOptions};
 use skylod::export::{Content, Format};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -50,58 +50,21 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
     let shard = args.shard.resolve()?;
     let (plan, format) = outputs::plan(&inputs, &args.output, args.format)?;
-    if let (Some(s), Plan::Merge(t)) = (shard, &plan) {
-        anyhow::bail!(
-            "shard {s} cannot merge into {}: a merge needs every input (give -o DIR to the \
-             shards, then merge their outputs with `skylod convert DIR -o FILE`)",
-            t.display()
-        );
-    }
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
     let wopts = WriteOptions {
         overwrite: args.overwrite,
         protect: paths.clone(),
         keep_envelopes: false,
     };
-    let mut failed = 0usize;
     // Every target is refused or accepted before any input is read.
-    let (todo, staging): (Vec<(usize, PathBuf)>, Option<Staging>) = match &plan {
-        Plan::PerInput(outs) | Plan::Mirror(outs) => {
-            let mut todo = Vec::new();
-            for (k, out) in outs.iter().enumerate() {
-                match check_target(out, &wopts, paths.iter().map(PathBuf::as_path)) {
-                    Ok(()) => todo.push((k, out.clone())),
-                    Err(e) => {
-                        error!("{e}");
-                        failed += 1;
-                    }
-                }
-            }
-            // Laid out for all inputs, then this shard's part: each file goes where the
-            // serial run writes it.
-            (crate::shard_args::files(shard, todo, "convert"), None)
-        }
-        Plan::Merge(target) => {
-            if let Err(e) = check_target(target, &wopts, paths.iter().map(PathBuf::as_path)) {
-                error!("{e}");
-                summary!("{}", summary_line("convert", 0, paths.len(), 0, None, t0));
-                return Ok(Outcome::SomeFailed);
-            }
-            let staging = Staging::new(target)?;
-            let todo = (0..paths.len()).map(|k| (k, staging.part(k))).collect();
-            (todo, Some(staging))
-        }
-    };
-    let part_opts = WriteOptions {
-        overwrite: true,
-        ..wopts.clone()
-    };
-    let write_opts = if staging.is_some() {
-        &part_opts
-    } else {
-        &wopts
-    };
-    let mirror = matches!(plan, Plan::Mirror(_));
+    let Targets {
+        todo,
+        refused,
+        staging,
+        mirror,
+        write_opts,
+    } = plan.targets(&paths, &wopts, shard, "convert", |e| error!("{e}"))?;
+    let mut failed = refused;
     let fmt = if staging.is_some() {
         Format::CityGml
     } else {
@@ -111,7 +74,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let results: Vec<(usize, PathBuf, anyhow::Result<Done>)> = args.jobs.install(|| {
         todo.into_par_iter()
             .map(|(k, out)| {
-                let r = one(&paths[k], &out, fmt, write_opts, mirror);
+                let r = one(&paths[k], &out, fmt, &write_opts, mirror);
                 (k, out, r)
             })
             .collect()

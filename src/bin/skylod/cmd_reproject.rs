@@ -42,6 +42,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use anyhow::Context;
     let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
+    use crate::outputs::Targets;
     use skylod::citygml::write::WriteOptions;
     use skylod::reproject::{reproject_file, CrsName, ReprojectError};
 
@@ -60,60 +61,46 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let shard = args.shard.resolve()?;
     let (plan, _) =
         crate::outputs::plan(&inputs, &args.output, Some(skylod::export::Format::CityGml))?;
-    if let (Some(s), crate::outputs::Plan::Merge(t)) = (shard, &plan) {
-        anyhow::bail!(
-            "shard {s} cannot merge into {}: a merge needs every input (give -o DIR to the \
-             shards, then merge their outputs with `skylod convert DIR -o FILE`)",
-            t.display()
-        );
-    }
     let wopts = WriteOptions {
         overwrite: args.overwrite,
         protect: args.inputs.clone(),
         keep_envelopes: true,
     };
-    // A merge: each input reprojected into a staging directory, then merged.
-    let staging = match &plan {
-        crate::outputs::Plan::Merge(t) => {
-            skylod::citygml::write::check_target(
-                t,
-                &wopts,
-                args.inputs.iter().map(PathBuf::as_path),
-            )?;
-            Some(crate::outputs::Staging::new(t)?)
-        }
-        _ => None,
-    };
-    let (outs, mirror) = match (plan.per_input(), &staging) {
-        (Some((v, m)), _) => (v.to_vec(), m),
-        (None, Some(st)) => ((0..args.inputs.len()).map(|k| st.part(k)).collect(), false),
-        (None, None) => (Vec::new(), false),
-    };
-    let part_opts = WriteOptions {
-        overwrite: true,
-        ..wopts.clone()
-    };
-    let write_opts = if staging.is_some() {
-        &part_opts
-    } else {
-        &wopts
-    };
-    let targets: Vec<(PathBuf, PathBuf)> = args.inputs.iter().cloned().zip(outs).collect();
-    let targets = crate::shard_args::files(shard, targets, "reproject");
-    let (mut parts, mut names) = (Vec::new(), Vec::new());
+    // Every target is checked before any work; a merge reprojects each input into a staging
+    // directory, then merges them.
     let mut failed = 0usize;
-    for (input, out) in &targets {
+    let Targets {
+        todo,
+        refused,
+        staging,
+        mirror,
+        write_opts,
+    } = plan.targets(&args.inputs, &wopts, shard, "reproject", |e| {
+        crate::log::error!("{e}");
+    })?;
+    failed += refused;
+    let total = todo.len() + refused;
+    let target_name = args.output.as_path();
+    let (mut parts, mut names) = (Vec::new(), Vec::new());
+    for (k, out) in &todo {
+        let input = &args.inputs[*k];
         if mirror {
             crate::outputs::create_parent(out)?;
         }
-        match reproject_file(input, out, source, target, write_opts) {
+        match reproject_file(input, out, source, target, &write_opts) {
             Ok(s) => {
                 parts.push(out.clone());
                 names.push(input.clone());
+                // A staged part's path means nothing to the user: the merge line follows.
+                let shown = if staging.is_some() {
+                    target_name
+                } else {
+                    out.as_path()
+                };
                 crate::log::summary!(
                     "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
                     input.display(),
-                    out.display(),
+                    shown.display(),
                     s.source,
                     s.target,
                     s.rewrite.points,
@@ -140,7 +127,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if failed > 0 {
-        crate::log::summary!("{failed} of {} input(s) failed", targets.len());
+        crate::log::summary!("{failed} of {total} input(s) failed");
         Ok(Outcome::SomeFailed)
     } else {
         Ok(Outcome::Ok)

@@ -1,12 +1,12 @@
 //! `skylod rough`: the rough model (every asset at level 1) written as CityGML.
 
 use crate::frames::SourceCrsArgs;
+use crate::outputs::Targets;
 use crate::Outcome;
-use anyhow::bail;
 use rayon::prelude::*;
 use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
-use skylod::citygml::write::{check_target, WriteOptions};
+use skylod::citygml::write::WriteOptions;
 use skylod::crs::{model_crs, LocalFrame};
 use skylod::export::{Content, Format};
 use skylod::rough::{rough_model, RoughOptions};
@@ -37,79 +37,34 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let opts = args.rough.options()?;
     let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
-    if let (Some(s), crate::outputs::Plan::Merge(t)) = (shard, &plan) {
-        bail!(
-            "shard {s} cannot merge into {}: a merge needs every input (give -o DIR to the \
-             shards, then merge their outputs with `skylod convert DIR -o FILE`)",
-            t.display()
-        );
-    }
-    // A merge: every input is written to a staging directory, then merged into the target.
-    let staging = match &plan {
-        crate::outputs::Plan::Merge(t) => Some(crate::outputs::Staging::new(t)?),
-        _ => None,
-    };
-    let targets: Vec<(PathBuf, PathBuf)> = match (&plan, &staging) {
-        (crate::outputs::Plan::PerInput(outs) | crate::outputs::Plan::Mirror(outs), _) => args
-            .inputs
-            .iter()
-            .cloned()
-            .zip(outs.iter().cloned())
-            .collect(),
-        (_, Some(st)) => args
-            .inputs
-            .iter()
-            .enumerate()
-            .map(|(k, i)| (i.clone(), st.part(k)))
-            .collect(),
-        _ => Vec::new(),
-    };
-    // Laid out for all inputs, then this shard's part: each file goes where the serial run
-    // writes it.
-    let targets = crate::shard_args::files(shard, targets, "rough");
     let wopts = WriteOptions {
         overwrite: args.out.overwrite,
         protect: args.inputs.clone(),
         keep_envelopes: false,
     };
     // Every target is checked before any work: an input whose output is refused fails
-    // (exit 1) without being read; the others are done.
-    let mut failed = 0usize;
-    let mut todo = Vec::with_capacity(targets.len());
-    if let crate::outputs::Plan::Merge(t) = &plan {
-        check_target(t, &wopts, args.inputs.iter().map(PathBuf::as_path))?;
-    }
-    let part_opts = WriteOptions {
-        overwrite: true,
-        ..wopts.clone()
-    };
-    for (input, out) in &targets {
-        if staging.is_some() {
-            todo.push((input, out));
-            continue;
-        }
-        match check_target(out, &wopts, args.inputs.iter().map(PathBuf::as_path)) {
-            Ok(()) => todo.push((input, out)),
-            Err(e) => {
-                crate::log::error!("{e}");
-                failed += 1;
-            }
-        }
-    }
-    let write_opts = if staging.is_some() {
-        &part_opts
-    } else {
-        &wopts
-    };
+    // (exit 1) without being read; the others are done. A merge writes every input to a
+    // staging directory, then merges them into the target.
+    let Targets {
+        todo,
+        refused,
+        staging,
+        mirror,
+        write_opts,
+    } = plan.targets(&args.inputs, &wopts, shard, "rough", |e| {
+        crate::log::error!("{e}")
+    })?;
+    let mut failed = refused;
     // Files in parallel (--jobs); messages in input order, whatever finished first.
     let results: Vec<anyhow::Result<(Done, PathBuf, PathBuf)>> = args.jobs.install(|| {
         todo.par_iter()
-            .map(|(input, out)| {
-                if matches!(plan, crate::outputs::Plan::Mirror(_)) {
+            .map(|(k, out)| {
+                let input = &args.inputs[*k];
+                if mirror {
                     crate::outputs::create_parent(out)?;
                 }
-                one(input, out, format, &opts, write_opts, &args.crs)
-                    .map(|d| (d, (*out).clone(), (*input).clone()))
+                one(input, out, format, &opts, &write_opts, &args.crs)
+                    .map(|d| (d, out.clone(), input.clone()))
             })
             .collect()
     })?;

@@ -13,9 +13,10 @@
 
 use anyhow::{bail, Context};
 use skylod::citygml::merge::{merge_named, MergeSummary};
-use skylod::citygml::write::{is_stdout, WriteOptions};
+use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
 use skylod::export::Format;
 use skylod::inputs::Input;
+use skylod::shard::Shard;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -115,6 +116,96 @@ pub fn mirror(inputs: &[Input], dir: &Path, format: Format) -> anyhow::Result<Ve
         out.push(p);
     }
     Ok(out)
+}
+
+/// The work of a command that writes per input, laid out before any input is read: which
+/// inputs to do and where each goes (every target checked; this shard's part), the options
+/// to write them with, and the staging directory of a merge.
+pub struct Targets {
+    /// `(input index, output)` to do, in input order.
+    pub todo: Vec<(usize, PathBuf)>,
+    /// Targets refused (each reported): those inputs failed without being read.
+    pub refused: usize,
+    /// The merge's staging directory (per-input documents go there), for [`Plan::Merge`].
+    pub staging: Option<Staging>,
+    /// Whether outputs mirror a tree (their parent directories are created as written).
+    pub mirror: bool,
+    /// How each output is written: the user's options, or for a merge's staged parts the
+    /// same with `overwrite` (the merge target was checked instead).
+    pub write_opts: WriteOptions,
+}
+
+impl Plan {
+    /// Lay out the work of `cmd` for `inputs` (paths in input order) with the user's
+    /// `wopts`: this `shard`'s part of the per-input targets is kept, then each is checked
+    /// (a refused one is reported with `refused` and its input skipped). A merge checks its
+    /// target and makes its staging directory.
+    ///
+    /// # Errors
+    /// A merge under a shard (it needs every input), a refused merge target, a staging
+    /// directory that cannot be made.
+    pub fn targets(
+        &self,
+        inputs: &[PathBuf],
+        wopts: &WriteOptions,
+        shard: Option<Shard>,
+        cmd: &str,
+        refused: impl Fn(&anyhow::Error),
+    ) -> anyhow::Result<Targets> {
+        let protect = || inputs.iter().map(PathBuf::as_path);
+        match self {
+            Plan::PerInput(outs) | Plan::Mirror(outs) => {
+                // Laid out for all inputs, then this shard's part (each file goes where the
+                // serial run writes it); only that part is checked: other shards may have
+                // written theirs already.
+                let mine = crate::shard_args::files(
+                    shard,
+                    outs.iter().cloned().enumerate().collect(),
+                    cmd,
+                );
+                let mut todo = Vec::with_capacity(mine.len());
+                let mut n_refused = 0;
+                for (k, out) in mine {
+                    match check_target(&out, wopts, protect()) {
+                        Ok(()) => todo.push((k, out)),
+                        Err(e) => {
+                            refused(&e.into());
+                            n_refused += 1;
+                        }
+                    }
+                }
+                Ok(Targets {
+                    todo,
+                    refused: n_refused,
+                    staging: None,
+                    mirror: matches!(self, Plan::Mirror(_)),
+                    write_opts: wopts.clone(),
+                })
+            }
+            Plan::Merge(target) => {
+                if let Some(s) = shard {
+                    bail!(
+                        "shard {s} cannot merge into {}: a merge needs every input (give -o DIR \
+                         to the shards, then merge their outputs with `skylod convert DIR -o \
+                         FILE`)",
+                        target.display()
+                    );
+                }
+                check_target(target, wopts, protect())?;
+                let staging = Staging::new(target)?;
+                Ok(Targets {
+                    todo: (0..inputs.len()).map(|k| (k, staging.part(k))).collect(),
+                    refused: 0,
+                    staging: Some(staging),
+                    mirror: false,
+                    write_opts: WriteOptions {
+                        overwrite: true,
+                        ..wopts.clone()
+                    },
+                })
+            }
+        }
+    }
 }
 
 /// Create the parent directory of an output path (nothing for `-`).
