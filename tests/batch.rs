@@ -440,23 +440,47 @@ fn merged_output_is_valid_with_unique_ids_and_the_envelope_of_all() {
         ids_unique(&std::fs::read_to_string(&lod).unwrap());
         assert_eq!(unresolved_refs(&lod).unwrap(), Vec::<String>::new());
     }
-    // Different CityGML versions are refused, naming the files; nothing is written.
+    // Different CityGML versions are refused before any work (exit 2), naming the files;
+    // nothing is written. The same for rough; reproject (one target CRS) and lod are checked
+    // elsewhere.
     let mixed = tmp.path().join("mixed.gml");
-    let o = run(&[
-        os("convert"),
-        data.join("kit-fzk-haus/citygml2/fzk_haus_lod1_v2.gml")
-            .as_os_str(),
-        data.join("kit-fzk-haus/citygml3").as_os_str(),
-        os("-o"),
-        mixed.as_os_str(),
-    ]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("fzk_haus_lod1_v2.gml"),
-        "{}",
-        stderr(&o)
-    );
-    assert!(!mixed.exists());
+    for cmd in ["convert", "rough"] {
+        let o = run(&[
+            os(cmd),
+            data.join("kit-fzk-haus/citygml2/fzk_haus_lod1_v2.gml")
+                .as_os_str(),
+            data.join("kit-fzk-haus/citygml3").as_os_str(),
+            os("-o"),
+            mixed.as_os_str(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{cmd}: {err}");
+        assert!(
+            err.contains("cannot merge CityGML 2.0") && err.contains("fzk_haus_lod1_v2.gml"),
+            "{cmd}: {err}"
+        );
+        assert!(
+            !err.contains(" -> "),
+            "{cmd}: refused before any input is done: {err}"
+        );
+        assert!(!mixed.exists());
+    }
+    // Different CRSs too, from the documents' heads: FZK-Haus (EPSG:25832) and PLATEAU.
+    let plateau = data.join("plateau/sapporo/64413325_bldg_6697_op.gml");
+    {
+        let o = run(&[
+            os("convert"),
+            data.join("kit-fzk-haus/citygml2/fzk_haus_lod2_v2.gml")
+                .as_os_str(),
+            plateau.as_os_str(),
+            os("-o"),
+            mixed.as_os_str(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("different CRSs"), "{err}");
+        assert!(!mixed.exists());
+    }
     assert_eq!(
         std::fs::read_dir(tmp.path())
             .unwrap()

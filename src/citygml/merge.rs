@@ -393,6 +393,110 @@ fn num(v: f64) -> String {
     }
 }
 
+/// Refuse, before any work, inputs that cannot be merged once converted: different CityGML
+/// versions, and — when `same_crs_needed` (outputs keep their input's CRS; not after a
+/// reprojection to one target) — different CRSs. Reads only each document's head: the root
+/// element, and up to its first `srsName` (at most [`HEAD_BYTES`] of XML; a document that
+/// names none by then is not compared, the merge itself still checks it).
+///
+/// # Errors
+/// [`MergeError::Version`], [`MergeError::Crs`], [`MergeError::Read`] for an input that cannot
+/// be opened or whose head is not well-formed.
+pub fn check_mergeable(inputs: &[PathBuf], same_crs_needed: bool) -> Result<(), MergeError> {
+    let heads = inputs
+        .iter()
+        .map(|p| head(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let heads: Vec<(&[u8], Option<&str>)> = heads
+        .iter()
+        .map(|(ns, srs)| (ns.as_slice(), srs.as_deref()))
+        .collect();
+    compare(&heads, &|k| inputs[k].clone(), same_crs_needed)
+}
+
+/// How far [`check_mergeable`] looks for a document's first `srsName`.
+pub const HEAD_BYTES: u64 = 8 << 20;
+
+/// The root's namespace and the first `srsName` within [`HEAD_BYTES`] of a document.
+fn head(path: &Path) -> Result<(Vec<u8>, Option<String>), ReadError> {
+    let mut reader = open(path)?;
+    let mut buf = Vec::new();
+    let mut root_ns = None;
+    loop {
+        let pos = reader.buffer_position();
+        if pos > HEAD_BYTES && root_ns.is_some() {
+            return Ok((root_ns.unwrap_or_default(), None));
+        }
+        buf.clear();
+        match reader
+            .read_event_into(&mut buf)
+            .map_err(|e| xml_err(path, pos, e))?
+        {
+            Event::Eof => return Ok((root_ns.unwrap_or_default(), None)),
+            Event::Start(ref e) | Event::Empty(ref e) => {
+                if root_ns.is_none() {
+                    root_ns = Some(ns_of(reader.resolve_element(e.name()).0));
+                }
+                for a in e.attributes().with_checks(false).flatten() {
+                    let (ans, alocal) = reader.resolve_attribute(a.key);
+                    if alocal.as_ref() == b"srsName" && ns_of(ans).is_empty() {
+                        let v = a
+                            .unescape_value()
+                            .map_err(|err| xml_err(path, pos, err))?
+                            .into_owned();
+                        return Ok((root_ns.unwrap_or_default(), Some(v)));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// The version and CRS rules of a merge over each input's root namespace and srsName;
+/// `name(k)` names the k-th input in an error.
+fn compare(
+    heads: &[(&[u8], Option<&str>)],
+    name: &dyn Fn(usize) -> PathBuf,
+    same_crs_needed: bool,
+) -> Result<(), MergeError> {
+    let Some(&(first_ns, _)) = heads.first() else {
+        return Ok(());
+    };
+    for (k, &(ns, _)) in heads.iter().enumerate().skip(1) {
+        if ns != first_ns {
+            return Err(MergeError::Version {
+                first: name(0),
+                first_version: version_of(first_ns),
+                other: name(k),
+                other_version: version_of(ns),
+            });
+        }
+    }
+    if !same_crs_needed {
+        return Ok(());
+    }
+    let mut srs: Option<(usize, &str)> = None;
+    for (k, &(_, srs_name)) in heads.iter().enumerate() {
+        let Some(srs_name) = srs_name else {
+            continue;
+        };
+        match srs {
+            None => srs = Some((k, srs_name)),
+            Some((j, first_srs)) if !same_crs(first_srs, srs_name) => {
+                return Err(MergeError::Crs {
+                    first: name(j),
+                    first_srs: first_srs.to_string(),
+                    other: name(k),
+                    other_srs: srs_name.to_string(),
+                })
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 /// Merge the CityGML documents `inputs` (plain or gzip) into `out` (gzip when it ends in `.gz`;
 /// `-` for standard output), written atomically. See the module docs for the rules.
 pub fn merge_files(
@@ -420,35 +524,17 @@ pub fn merge_named(
         .iter()
         .map(|p| scan(p))
         .collect::<Result<Vec<_>, _>>()?;
+    let heads: Vec<(&[u8], Option<&str>)> = scans
+        .iter()
+        .map(|s| (s.root_ns.as_slice(), s.srs.as_deref()))
+        .collect();
+    compare(&heads, &name, true)?;
     let first = &scans[0];
-    for (k, s) in scans.iter().enumerate().skip(1) {
-        if s.root_ns != first.root_ns {
-            return Err(MergeError::Version {
-                first: name(0),
-                first_version: version_of(&first.root_ns),
-                other: name(k),
-                other_version: version_of(&s.root_ns),
-            });
-        }
-    }
-    let mut srs: Option<(usize, &str)> = None;
-    for (k, s) in scans.iter().enumerate() {
-        let Some(srs_name) = s.srs.as_deref() else {
-            continue;
-        };
-        match srs {
-            None => srs = Some((k, srs_name)),
-            Some((j, first_srs)) if !same_crs(first_srs, srs_name) => {
-                return Err(MergeError::Crs {
-                    first: name(j),
-                    first_srs: first_srs.to_string(),
-                    other: name(k),
-                    other_srs: srs_name.to_string(),
-                })
-            }
-            _ => {}
-        }
-    }
+    // The CRS written: the first input's that names one.
+    let srs: Option<(usize, &str)> = scans
+        .iter()
+        .enumerate()
+        .find_map(|(k, s)| s.srs.as_deref().map(|n| (k, n)));
 
     // Ids: the first input keeps its own; later inputs rename what an earlier one used.
     let mut taken: HashSet<String> = scans.iter().flat_map(|s| s.ids.iter().cloned()).collect();

@@ -63,7 +63,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         staging,
         mirror,
         write_opts,
-    } = plan.targets(&paths, &wopts, shard, "convert", |e| error!("{e}"))?;
+    } = plan.targets(&paths, &wopts, shard, "convert", true, |e| error!("{e}"))?;
     let mut failed = refused;
     let fmt = if staging.is_some() {
         Format::CityGml

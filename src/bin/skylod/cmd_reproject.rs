@@ -75,7 +75,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         staging,
         mirror,
         write_opts,
-    } = plan.targets(&args.inputs, &wopts, shard, "reproject", |e| {
+    } = plan.targets(&args.inputs, &wopts, shard, "reproject", false, |e| {
         crate::log::error!("{e}");
     })?;
     failed += refused;

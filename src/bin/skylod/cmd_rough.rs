@@ -51,7 +51,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         staging,
         mirror,
         write_opts,
-    } = plan.targets(&args.inputs, &wopts, shard, "rough", |e| {
+    } = plan.targets(&args.inputs, &wopts, shard, "rough", true, |e| {
         crate::log::error!("{e}")
     })?;
     let mut failed = refused;

@@ -12,7 +12,7 @@
 //!   target, then merged into it.
 
 use anyhow::{bail, Context};
-use skylod::citygml::merge::{merge_named, MergeSummary};
+use skylod::citygml::merge::{check_mergeable, merge_named, MergeSummary};
 use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
 use skylod::export::Format;
 use skylod::inputs::Input;
@@ -139,17 +139,20 @@ impl Plan {
     /// Lay out the work of `cmd` for `inputs` (paths in input order) with the user's
     /// `wopts`: this `shard`'s part of the per-input targets is kept, then each is checked
     /// (a refused one is reported with `refused` and its input skipped). A merge checks its
-    /// target and makes its staging directory.
+    /// target, refuses inputs that cannot be merged (CityGML versions; CRSs when the outputs
+    /// keep their input's, `keeps_crs`) from their heads before any work, and makes its
+    /// staging directory.
     ///
     /// # Errors
-    /// A merge under a shard (it needs every input), a refused merge target, a staging
-    /// directory that cannot be made.
+    /// A merge under a shard (it needs every input), a refused merge target, inputs that
+    /// cannot be merged, a staging directory that cannot be made.
     pub fn targets(
         &self,
         inputs: &[PathBuf],
         wopts: &WriteOptions,
         shard: Option<Shard>,
         cmd: &str,
+        keeps_crs: bool,
         refused: impl Fn(&anyhow::Error),
     ) -> anyhow::Result<Targets> {
         let protect = || inputs.iter().map(PathBuf::as_path);
@@ -192,6 +195,7 @@ impl Plan {
                     );
                 }
                 check_target(target, wopts, protect())?;
+                check_mergeable(inputs, keeps_crs)?;
                 let staging = Staging::new(target)?;
                 Ok(Targets {
                     todo: (0..inputs.len()).map(|k| (k, staging.part(k))).collect(),
