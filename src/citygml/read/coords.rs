@@ -124,6 +124,7 @@ impl Parser<'_> {
             Capture::ReliefLod => {
                 if let Ok(v) = String::from_utf8_lossy(&text).trim().parse::<u8>() {
                     self.relief_lod = v.min(4);
+                    self.relief_lod_set = true;
                 }
                 Ok(())
             }

@@ -78,14 +78,35 @@ pub(super) fn read_slice(
 ) -> Result<CityModel, ReadError> {
     let mut p = Parser::new(path, opts.clone(), doc);
     p.expect_bytes(doc.len() as u64);
-    let (body, base) = match doc.strip_prefix(&[0xEF, 0xBB, 0xBF]) {
+    let (body, base) = match doc.strip_prefix(&BOM) {
         Some(body) => (body, 3),
         None => (doc, 0),
     };
     let mut reader = NsReader::from_reader(body);
     configure(&mut reader);
     let mut saw_root = false;
-    let mut next_release = RELEASE_STEP;
+    parse_events(&mut p, &mut reader, base, &mut saw_root, release, false)?;
+    let len = reader.buffer_position() + base;
+    p.event_pos = len;
+    finish(p, len, saw_root, gzip)
+}
+
+/// The UTF-8 byte-order mark.
+pub(super) const BOM: [u8; 3] = [0xEF, 0xBB, 0xBF];
+
+/// The event loop over a slice of the document in memory: events until the slice's end, or
+/// with `until_root` until the root element has started (`true` then). `base` turns the
+/// reader's positions into file offsets; `release` is called every [`RELEASE_STEP`] bytes
+/// (see [`read_slice`]), from [`Parser::event_pos`]'s value at the start on.
+pub(super) fn parse_events(
+    p: &mut Parser<'_>,
+    reader: &mut NsReader<&[u8]>,
+    base: u64,
+    saw_root: &mut bool,
+    release: &dyn Fn(usize),
+    until_root: bool,
+) -> Result<bool, ReadError> {
+    let mut next_release = reader.buffer_position() + base + RELEASE_STEP;
     loop {
         let pos = reader.buffer_position() + base;
         p.event_pos = pos;
@@ -110,21 +131,27 @@ pub(super) fn read_slice(
         if reader.buffer_position() + base - pos > p.opts.max_event_bytes as u64 {
             return Err(p.token_limit(pos));
         }
-        if !dispatch::<_, false>(&mut p, &reader, ev, pos, base, &mut saw_root)? {
-            break;
+        let root_start = until_root && matches!(ev, Event::Start(_));
+        if !dispatch::<_, false>(p, reader, ev, pos, base, saw_root)? {
+            return Ok(false);
+        }
+        if root_start {
+            return Ok(true);
         }
     }
-    let len = reader.buffer_position() + base;
-    p.event_pos = len;
-    finish(p, len, saw_root, gzip)
 }
 
-fn configure<R>(reader: &mut NsReader<R>) {
+pub(super) fn configure<R>(reader: &mut NsReader<R>) {
     reader.config_mut().trim_text(false);
     reader.config_mut().check_end_names = true;
 }
 
-fn finish(p: Parser<'_>, len: u64, saw_root: bool, gzip: bool) -> Result<CityModel, ReadError> {
+pub(super) fn finish(
+    p: Parser<'_>,
+    len: u64,
+    saw_root: bool,
+    gzip: bool,
+) -> Result<CityModel, ReadError> {
     if !saw_root {
         return Err(ReadError::Empty(p.path));
     }
