@@ -63,7 +63,7 @@ pub(super) fn read_sized<R: BufRead>(
 }
 
 /// Bytes parsed between two calls of `release` in [`read_slice`].
-const RELEASE_STEP: u64 = 32 << 20;
+pub(super) const RELEASE_STEP: u64 = 32 << 20;
 
 /// Read a whole (uncompressed) document held in memory: events borrow from `doc` (no copy
 /// per event) and lines are counted only where a location needs one. `release(n)` is called
@@ -85,7 +85,15 @@ pub(super) fn read_slice(
     let mut reader = NsReader::from_reader(body);
     configure(&mut reader);
     let mut saw_root = false;
-    parse_events(&mut p, &mut reader, base, &mut saw_root, release, false)?;
+    let step = RELEASE_STEP;
+    parse_events(
+        &mut p,
+        &mut reader,
+        base,
+        &mut saw_root,
+        (release, step),
+        false,
+    )?;
     let len = reader.buffer_position() + base;
     p.event_pos = len;
     finish(p, len, saw_root, gzip)
@@ -96,17 +104,17 @@ pub(super) const BOM: [u8; 3] = [0xEF, 0xBB, 0xBF];
 
 /// The event loop over a slice of the document in memory: events until the slice's end, or
 /// with `until_root` until the root element has started (`true` then). `base` turns the
-/// reader's positions into file offsets; `release` is called every [`RELEASE_STEP`] bytes
-/// (see [`read_slice`]), from [`Parser::event_pos`]'s value at the start on.
+/// reader's positions into file offsets; `release.0` is called every `release.1` bytes (see
+/// [`read_slice`]).
 pub(super) fn parse_events(
     p: &mut Parser<'_>,
     reader: &mut NsReader<&[u8]>,
     base: u64,
     saw_root: &mut bool,
-    release: &dyn Fn(usize),
+    (release, step): (&dyn Fn(usize), u64),
     until_root: bool,
 ) -> Result<bool, ReadError> {
-    let mut next_release = reader.buffer_position() + base + RELEASE_STEP;
+    let mut next_release = reader.buffer_position() + base + step;
     loop {
         let pos = reader.buffer_position() + base;
         p.event_pos = pos;
@@ -114,7 +122,7 @@ pub(super) fn parse_events(
             // count the lines so far, so that the bytes behind are never needed again
             p.line_mark();
             release(usize::try_from(pos - (1 << 20)).unwrap_or(0));
-            next_release = pos + RELEASE_STEP;
+            next_release = pos + step;
         }
         let ev = match reader.read_event() {
             Ok(ev) => ev,

@@ -15,7 +15,7 @@
 //! Lines are counted per part from the part's start (on demand, as the serial read does) and
 //! made absolute when the parts are merged: a part's first line continues the line before it.
 
-use super::events::{configure, finish, parse_events, BOM};
+use super::events::{configure, finish, parse_events, BOM, RELEASE_STEP};
 use super::position::newlines;
 use super::state::{EnvOwner, IdRec, LineMark, Owner, Parser, Part};
 use super::ReadOptions;
@@ -23,6 +23,7 @@ use crate::model::{CityModel, Warning};
 use foldhash::{HashSet, HashSetExt};
 use quick_xml::events::Event;
 use quick_xml::NsReader;
+use std::collections::hash_map::Entry;
 use std::path::Path;
 
 /// Read `doc` (a whole uncompressed document) split across rayon's threads; `None` where the
@@ -56,7 +57,7 @@ pub(super) fn read_split(
         &mut reader,
         bom as u64,
         &mut saw_root,
-        &|_| {},
+        (&|_| {}, RELEASE_STEP),
         true,
     );
     if !matches!(started, Ok(true)) || head.stack.len() != 1 || !head.root_is_model {
@@ -77,6 +78,8 @@ pub(super) fn read_split(
     let ranges: Vec<(usize, usize)> = bounds.windows(2).map(|w| (w[0], w[1])).collect();
     let part_bytes = (body.len() - root_end) as u64 / ranges.len() as u64;
     head.expect_bytes(part_bytes);
+    // the parts' resident bytes together as the serial read's
+    let step = (RELEASE_STEP / ranges.len() as u64).max(4 << 20);
 
     let first = ranges[0];
     let (first, rest) = rayon::join(
@@ -90,7 +93,7 @@ pub(super) fn read_split(
                 &mut reader,
                 bom as u64,
                 &mut saw_root,
-                &rel,
+                (&rel, step),
                 false,
             )
             .ok()?;
@@ -112,7 +115,7 @@ pub(super) fn read_split(
                         &mut reader,
                         bom as u64,
                         &mut saw_root,
-                        &|_| {},
+                        (&|_| {}, RELEASE_STEP),
                         true,
                     );
                     if !matches!(started, Ok(true)) {
@@ -129,7 +132,15 @@ pub(super) fn read_split(
                     let base = from_doc.checked_sub(reader.buffer_position())?;
                     *reader.get_mut() = body.get(from..to)?;
                     let rel = |upto: usize| release(from + bom, upto);
-                    parse_events(&mut p, &mut reader, base, &mut saw_root, &rel, false).ok()?;
+                    parse_events(
+                        &mut p,
+                        &mut reader,
+                        base,
+                        &mut saw_root,
+                        (&rel, step),
+                        false,
+                    )
+                    .ok()?;
                     Some(Done::new(p, from_doc, (to + bom) as u64, root_id))
                 })
                 .collect::<Vec<_>>()
@@ -396,17 +407,19 @@ impl Parser<'_> {
         // a foreign namespace or undeclared prefix is warned about once per document
         let mut drop: Vec<usize> = Vec::new();
         for (key, at) in o.ade_namespaces {
-            if self.ade_namespaces.contains_key(&key) {
-                drop.push(at);
-            } else {
-                self.ade_namespaces.insert(key, 0);
+            match self.ade_namespaces.entry(key) {
+                Entry::Occupied(_) => drop.push(at),
+                Entry::Vacant(v) => {
+                    v.insert(0);
+                }
             }
         }
         for (key, at) in o.unknown_prefixes {
-            if self.unknown_prefixes.contains_key(&key) {
-                drop.push(at);
-            } else {
-                self.unknown_prefixes.insert(key, 0);
+            match self.unknown_prefixes.entry(key) {
+                Entry::Occupied(_) => drop.push(at),
+                Entry::Vacant(v) => {
+                    v.insert(0);
+                }
             }
         }
         drop.sort_unstable();
@@ -475,5 +488,96 @@ impl Parser<'_> {
             self.relief_lod_set = true;
         }
         Some(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cuts_follow_member_end_tags_of_any_prefix() {
+        let body = b"<M><cityObjectMember>a</cityObjectMember><core:cityObjectMember>b\
+            </core:cityObjectMember><x:cityObjectMember/></ cityObjectMember><cityObjectMember>c\
+            </cityObjectMember></M>";
+        let ends: Vec<usize> = memchr::memmem::find_iter(body, b"Member>")
+            .map(|m| m + 7)
+            .collect();
+        // one cut near the middle: the next end tag at or after it
+        let c = cuts(body, 3, 2);
+        assert_eq!(c.len(), 1);
+        assert!(ends.contains(&c[0]), "{c:?}");
+        assert!(
+            body[..c[0]].ends_with(b"</core:cityObjectMember>")
+                || body[..c[0]].ends_with(b"</cityObjectMember>")
+        );
+        // many parts asked for: increasing cuts, each at an end tag, none at the very end
+        let c = cuts(body, 3, 8);
+        assert!(c.windows(2).all(|w| w[0] < w[1]), "{c:?}");
+        assert!(
+            c.iter()
+                .all(|x| *x < body.len() && is_end_tag(body, x - 17)),
+            "{c:?}"
+        );
+        assert!(is_end_tag(b"</a:cityObjectMember>", 4));
+        assert!(!is_end_tag(b"< /a:cityObjectMember>", 5));
+        assert!(!is_end_tag(b"<a:cityObjectMember>", 3));
+        assert!(!is_end_tag(b"</:cityObjectMember>", 3));
+        // nothing to cut at
+        assert!(cuts(b"<M><a/></M>", 3, 2).is_empty());
+    }
+
+    #[test]
+    fn relief_lod_from_an_earlier_part_reads_serially() {
+        let doc = |lod: &str| {
+            let member = |i: usize| {
+                format!(
+                    r#"<cityObjectMember><dem:ReliefFeature gml:id="r{i}">{lod}<dem:reliefComponent><dem:TINRelief gml:id="t{i}">
+<dem:tin><gml:TriangulatedSurface><gml:trianglePatches><gml:Triangle><gml:exterior><gml:LinearRing>
+<gml:posList>0 0 0 1 0 0 1 1 0 0 0 0</gml:posList></gml:LinearRing></gml:exterior></gml:Triangle>
+</gml:trianglePatches></gml:TriangulatedSurface></dem:tin></dem:TINRelief></dem:reliefComponent>
+</dem:ReliefFeature></cityObjectMember>
+"#
+                )
+            };
+            let body: String = (0..8).map(member).collect();
+            format!(
+                r#"<CityModel xmlns="http://www.opengis.net/citygml/2.0" xmlns:gml="http://www.opengis.net/gml"
+ xmlns:dem="http://www.opengis.net/citygml/relief/2.0">
+{body}</CityModel>
+"#
+            )
+        };
+        let opts = ReadOptions {
+            split_min_bytes: 0,
+            split_parts: 2,
+            ..ReadOptions::default()
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let path = Path::new("relief.gml");
+        let serial = |d: &str| {
+            super::super::events::read_slice(d.as_bytes(), path, false, &opts, &|_| {}).unwrap()
+        };
+        // relief LoD 1 set in the first part only: the split declines
+        let first_only = doc("").replacen(
+            "<dem:reliefComponent>",
+            "<dem:lod>1</dem:lod><dem:reliefComponent>",
+            1,
+        );
+        let split = pool.install(|| read_split(first_only.as_bytes(), path, &opts, &|_, _| {}));
+        assert!(split.is_none());
+        let m = serial(&first_only);
+        assert!(m.assets.iter().all(|a| a.geometries[0].lod == 1));
+        // set in every member: split, and the same model
+        let every = doc("<dem:lod>1</dem:lod>");
+        let split = pool.install(|| read_split(every.as_bytes(), path, &opts, &|_, _| {}));
+        assert_eq!(split.as_ref(), Some(&serial(&every)));
+        // never set: the default (2) everywhere
+        let never = doc("");
+        let split = pool.install(|| read_split(never.as_bytes(), path, &opts, &|_, _| {}));
+        assert_eq!(split.as_ref(), Some(&serial(&never)));
     }
 }
