@@ -257,6 +257,14 @@ fn cut_inside_a_comment_or_nested_member_reads_serially() {
     let path = dir.path().join("comment.gml");
     std::fs::write(&path, format!("{HEAD}{fake}</CityModel>\n")).unwrap();
     check(&path);
+    // members nested deeper (a cut after one is not between children of the root)
+    let nested = body.replace(
+        "</bldg:Building>",
+        "<bldg:x><cityObjectMember><bldg:Building/></cityObjectMember></bldg:x></bldg:Building>",
+    );
+    let path = dir.path().join("nested.gml");
+    std::fs::write(&path, format!("{HEAD}{nested}</CityModel>\n")).unwrap();
+    check(&path);
     // warnings on later lines keep their line and column
     let warned = body.replace("0 0 5 1 0 5 1 1 5 0 0 5", "0 0 5 1 0 5 1 1 5");
     let path = dir.path().join("warn.gml");

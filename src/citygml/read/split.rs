@@ -147,6 +147,9 @@ pub(super) fn read_split(
         },
     );
     let mut m = first?;
+    if m.parser.stack.len() != 1 {
+        return None;
+    }
     let len = doc.len() as u64;
     let last = rest.len();
     for (i, d) in rest.into_iter().enumerate() {
