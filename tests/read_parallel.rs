@@ -230,6 +230,17 @@ fn doctype_and_one_thread_read_serially() {
         .install(|| read_file_split(&plain, &forced(3)))
         .unwrap()
         .is_none());
+    // gzip: streamed by one core
+    let gz = dir.path().join("plain.gml.gz");
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    std::io::Write::write_all(&mut enc, &std::fs::read(&plain).unwrap()).unwrap();
+    std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+    assert!(two
+        .install(|| read_file_split(&gz, &forced(3)))
+        .unwrap()
+        .is_none());
+    let streamed = two.install(|| read_file_with(&gz, &forced(3))).unwrap();
+    assert!(streamed.assets == m.assets && streamed.buildings == m.buildings);
     // below the size threshold: serial
     let small = ReadOptions {
         split_min_bytes: 1 << 30,
