@@ -283,6 +283,23 @@ fn cut_inside_a_comment_or_nested_member_reads_serially() {
     assert_eq!(check(&path), 2);
     let m = read_file_with(&path, &serial()).unwrap();
     assert_eq!(m.warnings.len(), 13, "{:?}", m.warnings);
+    // all members on one line: the later parts' first line continues the line before them
+    let path = dir.path().join("one-line.gml");
+    std::fs::write(
+        &path,
+        format!("{HEAD}{}</CityModel>\n", warned.replace('\n', " ")),
+    )
+    .unwrap();
+    assert_eq!(check(&path), 2);
+    let m = read_file_with(&path, &serial()).unwrap();
+    let rings: Vec<_> = m
+        .warnings
+        .iter()
+        .filter(|w| w.message.starts_with("ring is not closed"))
+        .collect();
+    assert_eq!(rings.len(), 12);
+    assert!(rings.iter().all(|w| w.line == rings[0].line));
+    assert!(rings.windows(2).all(|w| w[0].column < w[1].column));
 }
 
 #[test]
