@@ -5,6 +5,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use quick_xml::events::Event;
 use quick_xml::NsReader;
+use skylod::citygml::read::{read_bytes_with, ReadOptions};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -111,13 +112,21 @@ fn bench(c: &mut Criterion) {
             &bytes,
             |b, x| b.iter(|| raw_scan_floats(x)),
         );
-        g.bench_with_input(BenchmarkId::new("skylod_read", &name), &bytes, |b, x| {
-            b.iter(|| {
-                skylod::citygml::read::read_bytes(x, "bench.gml")
-                    .map(|m| m.assets.len())
-                    .unwrap_or(0)
-            })
-        });
+        // one core, and split across rayon's threads (issue 11: one large file read by both
+        // cores); the same model either way
+        for (id, split_min_bytes) in [("skylod_read", u64::MAX), ("skylod_read_split", 0)] {
+            let opts = ReadOptions {
+                split_min_bytes,
+                ..ReadOptions::default()
+            };
+            g.bench_with_input(BenchmarkId::new(id, &name), &bytes, |b, x| {
+                b.iter(|| {
+                    read_bytes_with(x, "bench.gml", &opts)
+                        .map(|m| m.assets.len())
+                        .unwrap_or(0)
+                })
+            });
+        }
     }
     g.finish();
 }

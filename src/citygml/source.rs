@@ -114,6 +114,29 @@ impl Bytes {
     }
 }
 
+impl Bytes {
+    /// Let the memory of the bytes `from..upto` go, like [`Bytes::release_before`] for one
+    /// part of the document (a part read by its own core). Only whole pages inside the range
+    /// are released, none of the neighbouring parts.
+    pub fn release_range(&self, from: usize, upto: usize) {
+        #[cfg(unix)]
+        if let Bytes::Mapped(m) = self {
+            const PAGE: usize = 64 << 10; // a multiple of any page size
+            let from = from.div_ceil(PAGE) * PAGE;
+            let upto = upto.min(m.len()) / PAGE * PAGE;
+            if upto > from {
+                // SAFETY: as in `release_before`: a private read-only map reads the file's
+                // bytes again after MADV_DONTNEED.
+                let _ = unsafe {
+                    m.unchecked_advise_range(memmap2::UncheckedAdvice::DontNeed, from, upto - from)
+                };
+            }
+        }
+        #[cfg(not(unix))]
+        let _ = (from, upto);
+    }
+}
+
 impl AsRef<[u8]> for Bytes {
     fn as_ref(&self) -> &[u8] {
         self

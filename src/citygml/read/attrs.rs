@@ -25,7 +25,9 @@ impl Parser<'_> {
     }
 
     pub(super) fn unbound_prefix(&mut self, prefix: &[u8]) {
-        if self.unknown_prefixes.insert(prefix.to_vec()) {
+        if !self.unknown_prefixes.contains_key(prefix) {
+            self.unknown_prefixes
+                .insert(prefix.to_vec(), self.warnings.len());
             self.warn(format!(
                 "namespace prefix \"{}\" is not declared: its elements and attributes are kept verbatim, not interpreted",
                 String::from_utf8_lossy(&prefix[..prefix.len().min(40)])

@@ -39,7 +39,13 @@ pub(super) fn is_lod_property(local: &[u8]) -> Option<u8> {
 
 impl Parser<'_> {
     pub(super) fn open_geom_prop(&mut self, local: &[u8], name: &mut Option<Box<str>>) -> Kind {
-        let lod = is_lod_property(local).unwrap_or(self.relief_lod);
+        let lod = match is_lod_property(local) {
+            Some(lod) => lod,
+            None => {
+                self.relief_default_used |= !self.relief_lod_set;
+                self.relief_lod
+            }
+        };
         *name = Some(String::from_utf8_lossy(local).into());
         Kind::GeomProp {
             lod,
@@ -91,6 +97,7 @@ impl Parser<'_> {
                     if matches!(owner, Some(Kind::Root)) {
                         if let Some(s) = &attrs.srs_name {
                             self.srs_name = Some(s.to_string());
+                            self.root_srs_set = true;
                         }
                     }
                     return Ok(Kind::Envelope(idx));

@@ -124,6 +124,7 @@ impl Parser<'_> {
             Capture::ReliefLod => {
                 if let Ok(v) = String::from_utf8_lossy(&text).trim().parse::<u8>() {
                     self.relief_lod = v.min(4);
+                    self.relief_lod_set = true;
                 }
                 Ok(())
             }
@@ -292,6 +293,12 @@ pub(super) fn parse_pos(text: &[u8], out: &mut Vec<DVec3>) -> Result<(), CoordEr
         vals[n] = parse_f64(t)?;
         n += 1;
     }
+    push_tuple(&vals, n, out)
+}
+
+/// One tuple of 2 or 3 values (`n` of `vals`) as a point (z 0 for 2); fewer than 2 values are
+/// an error (more are refused while parsing).
+fn push_tuple(vals: &[f64; 3], n: usize, out: &mut Vec<DVec3>) -> Result<(), CoordError> {
     if n < 2 {
         return Err(CoordError::Count {
             count: n,
@@ -346,17 +353,7 @@ pub(super) fn parse_coordinates(
             vals[n] = v;
             n += 1;
         }
-        if n < 2 {
-            return Err(CoordError::Count {
-                count: n,
-                dimension: 3,
-            });
-        }
-        out.push(DVec3::new(
-            vals[0],
-            vals[1],
-            if n == 3 { vals[2] } else { 0.0 },
-        ));
+        push_tuple(&vals, n, out)?;
     }
     Ok(())
 }

@@ -2,7 +2,9 @@
 //! at its end, what it built (polygon, geometry property, building, asset, envelope) is recorded.
 
 use super::classify::is_lod_property;
-use super::state::{Capture, EnvOwner, Frame, Kind, Owner, Parser, Part, PendingGeom, PolyBuild};
+use super::state::{
+    Capture, EnvOwner, Frame, Kind, Owner, Parser, Part, PendingGeom, PolyBuild, NO_REC,
+};
 use crate::citygml::error::ReadError;
 use crate::citygml::ns::{self, Module, Ns};
 use crate::model::{AssetKind, Bbox, LodGeometry};
@@ -46,6 +48,7 @@ impl Parser<'_> {
         let attrs = self.parse_attrs(reader, e)?;
 
         // ids: syntax and uniqueness
+        let mut rec = NO_REC;
         if let Some(id) = &attrs.id {
             if id.is_empty() || !(id.as_bytes()[0].is_ascii_alphabetic() || id.starts_with('_')) {
                 // built by hand, not with format!: some exporters (Ingolstadt) give every
@@ -60,6 +63,9 @@ impl Parser<'_> {
             let h = std::hash::BuildHasher::hash_one(&self.id_hasher, id.as_ref() as &str);
             if !self.seen_ids.insert(h) {
                 self.warn(format!("duplicate gml:id \"{id}\""));
+            }
+            if self.id_log.is_some() {
+                rec = self.log_id(h, pos);
             }
         }
 
@@ -76,8 +82,8 @@ impl Parser<'_> {
         }
         if ns == Ns::Foreign {
             if let Some(u) = uri {
-                if !ns::is_standard_foreign(u) && !self.ade_namespaces.contains(u) {
-                    self.ade_namespaces.insert(u.to_vec());
+                if !ns::is_standard_foreign(u) && !self.ade_namespaces.contains_key(u) {
+                    self.ade_namespaces.insert(u.to_vec(), self.warnings.len());
                     let msg = format!(
                         "element {} in namespace {} is not CityGML (ADE or foreign content): kept verbatim, not interpreted",
                         String::from_utf8_lossy(local),
@@ -205,6 +211,7 @@ impl Parser<'_> {
             ns_decl,
             content_start: self.content_start,
             name,
+            rec,
         });
         Ok(())
     }

@@ -63,7 +63,7 @@ pub(super) fn read_sized<R: BufRead>(
 }
 
 /// Bytes parsed between two calls of `release` in [`read_slice`].
-const RELEASE_STEP: u64 = 32 << 20;
+pub(super) const RELEASE_STEP: u64 = 32 << 20;
 
 /// Read a whole (uncompressed) document held in memory: events borrow from `doc` (no copy
 /// per event) and lines are counted only where a location needs one. `release(n)` is called
@@ -78,14 +78,43 @@ pub(super) fn read_slice(
 ) -> Result<CityModel, ReadError> {
     let mut p = Parser::new(path, opts.clone(), doc);
     p.expect_bytes(doc.len() as u64);
-    let (body, base) = match doc.strip_prefix(&[0xEF, 0xBB, 0xBF]) {
+    let (body, base) = match doc.strip_prefix(&BOM) {
         Some(body) => (body, 3),
         None => (doc, 0),
     };
     let mut reader = NsReader::from_reader(body);
     configure(&mut reader);
     let mut saw_root = false;
-    let mut next_release = RELEASE_STEP;
+    let step = RELEASE_STEP;
+    parse_events(
+        &mut p,
+        &mut reader,
+        base,
+        &mut saw_root,
+        (release, step),
+        false,
+    )?;
+    let len = reader.buffer_position() + base;
+    p.event_pos = len;
+    finish(p, len, saw_root, gzip)
+}
+
+/// The UTF-8 byte-order mark.
+pub(super) const BOM: [u8; 3] = [0xEF, 0xBB, 0xBF];
+
+/// The event loop over a slice of the document in memory: events until the slice's end, or
+/// with `until_root` until the root element has started (`true` then). `base` turns the
+/// reader's positions into file offsets; `release.0` is called every `release.1` bytes (see
+/// [`read_slice`]).
+pub(super) fn parse_events(
+    p: &mut Parser<'_>,
+    reader: &mut NsReader<&[u8]>,
+    base: u64,
+    saw_root: &mut bool,
+    (release, step): (&dyn Fn(usize), u64),
+    until_root: bool,
+) -> Result<bool, ReadError> {
+    let mut next_release = reader.buffer_position() + base + step;
     loop {
         let pos = reader.buffer_position() + base;
         p.event_pos = pos;
@@ -93,7 +122,7 @@ pub(super) fn read_slice(
             // count the lines so far, so that the bytes behind are never needed again
             p.line_mark();
             release(usize::try_from(pos - (1 << 20)).unwrap_or(0));
-            next_release = pos + RELEASE_STEP;
+            next_release = pos + step;
         }
         let ev = match reader.read_event() {
             Ok(ev) => ev,
@@ -110,21 +139,27 @@ pub(super) fn read_slice(
         if reader.buffer_position() + base - pos > p.opts.max_event_bytes as u64 {
             return Err(p.token_limit(pos));
         }
-        if !dispatch::<_, false>(&mut p, &reader, ev, pos, base, &mut saw_root)? {
-            break;
+        let root_start = until_root && matches!(ev, Event::Start(_));
+        if !dispatch::<_, false>(p, reader, ev, pos, base, saw_root)? {
+            return Ok(false);
+        }
+        if root_start {
+            return Ok(true);
         }
     }
-    let len = reader.buffer_position() + base;
-    p.event_pos = len;
-    finish(p, len, saw_root, gzip)
 }
 
-fn configure<R>(reader: &mut NsReader<R>) {
+pub(super) fn configure<R>(reader: &mut NsReader<R>) {
     reader.config_mut().trim_text(false);
     reader.config_mut().check_end_names = true;
 }
 
-fn finish(p: Parser<'_>, len: u64, saw_root: bool, gzip: bool) -> Result<CityModel, ReadError> {
+pub(super) fn finish(
+    p: Parser<'_>,
+    len: u64,
+    saw_root: bool,
+    gzip: bool,
+) -> Result<CityModel, ReadError> {
     if !saw_root {
         return Err(ReadError::Empty(p.path));
     }

@@ -39,6 +39,7 @@ mod element;
 mod events;
 mod geometry;
 mod position;
+mod split;
 mod state;
 mod xlink;
 
@@ -62,6 +63,13 @@ pub struct ReadOptions {
     /// `xlink:href` geometry references, on top of five per polygon element of the document;
     /// protects against exponential reference trees ("billion laughs" built from xlinks).
     pub max_href_work: usize,
+    /// An uncompressed document at least this long is read by several cores at once (cut at
+    /// top-level `cityObjectMember`s, one part per thread of rayon's current pool), when the
+    /// pool has more than one thread. The model is the same as one core's; inputs the split
+    /// cannot read exactly as one core would are read by one core.
+    pub split_min_bytes: u64,
+    /// Parts of a split read; 0: one per thread of rayon's current pool.
+    pub split_parts: usize,
 }
 
 impl Default for ReadOptions {
@@ -71,6 +79,8 @@ impl Default for ReadOptions {
             max_event_bytes: 64 << 20,
             max_href_depth: 64,
             max_href_work: 2_000_000,
+            split_min_bytes: 8 << 20,
+            split_parts: 0,
         }
     }
 }
@@ -86,6 +96,10 @@ pub fn read_file(path: &Path) -> Result<CityModel, ReadError> {
 pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, ReadError> {
     match source::load(path)? {
         source::Document::Plain(doc) => {
+            let release = |from, upto| doc.release_range(from, upto);
+            if let Some(model) = split::read_split(&doc, path, opts, &release) {
+                return Ok(model);
+            }
             events::read_slice(&doc, path, false, opts, &|upto| doc.release_before(upto))
         }
         source::Document::Gzip(reader, compressed) => {
@@ -96,15 +110,37 @@ pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, Read
     }
 }
 
+/// The split read of [`read_file_with`] alone (one document read by several cores, see
+/// [`ReadOptions::split_min_bytes`]): `Ok(None)` where `read_file_with` reads by one core
+/// instead (gzip, a small document, one thread, a document the split declines, and every
+/// input that fails to read). For tests and benchmarks.
+pub fn read_file_split(path: &Path, opts: &ReadOptions) -> Result<Option<CityModel>, ReadError> {
+    match source::load(path)? {
+        source::Document::Plain(doc) => {
+            let release = |from, upto| doc.release_range(from, upto);
+            Ok(split::read_split(&doc, path, opts, &release))
+        }
+        source::Document::Gzip(..) => Ok(None),
+    }
+}
+
 /// Read a document held in memory (tests, examples). `name` is used in messages.
 pub fn read_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<CityModel, ReadError> {
-    events::read_slice(
-        bytes,
-        name.as_ref(),
-        false,
-        &ReadOptions::default(),
-        &|_| {},
-    )
+    read_bytes_with(bytes, name, &ReadOptions::default())
+}
+
+/// [`read_bytes`] with explicit limits (a large document is split across cores as
+/// [`read_file_with`] does).
+pub fn read_bytes_with(
+    bytes: &[u8],
+    name: impl AsRef<Path>,
+    opts: &ReadOptions,
+) -> Result<CityModel, ReadError> {
+    let path = name.as_ref();
+    if let Some(model) = split::read_split(bytes, path, opts, &|_, _| {}) {
+        return Ok(model);
+    }
+    events::read_slice(bytes, path, false, opts, &|_| {})
 }
 
 /// Largest accepted coordinate magnitude: far beyond any real CRS (geocentric coordinates are

@@ -7,7 +7,7 @@ use super::ReadOptions;
 use crate::citygml::error::Location;
 use crate::citygml::ns::Ns;
 use crate::model::{Asset, AssetKind, Building, CityGmlVersion, EnvelopeSite, Polygon, Warning};
-use foldhash::{HashSet, HashSetExt};
+use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;
 use std::borrow::Cow;
 use std::cell::Cell;
@@ -107,6 +107,26 @@ pub(super) struct Frame {
     pub(super) content_start: u64,
     /// Local name (for lod properties, building module etc.); only kept where needed.
     pub(super) name: Option<Box<str>>,
+    /// Index of the element's gml:id in [`Parser::id_log`] ([`NO_REC`]: none).
+    pub(super) rec: u32,
+}
+
+/// No entry of [`Parser::id_log`].
+pub(super) const NO_REC: u32 = u32::MAX;
+
+/// One gml:id met by a parser reading a later part of a split document, so that the
+/// "duplicate gml:id" warning of an id also met in an earlier part can be placed afterwards.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct IdRec {
+    /// Hash of the id ([`Parser::id_hasher`]).
+    pub(super) hash: u64,
+    /// File offset of the element's start tag.
+    pub(super) pos: u64,
+    /// Number of warnings before the element's duplicate warning would be.
+    pub(super) warnings: u32,
+    /// The entry of the nearest enclosing element with a gml:id ([`NO_REC`]: none logged,
+    /// the root's or none).
+    pub(super) parent: u32,
 }
 
 #[derive(Debug, Default)]
@@ -190,9 +210,22 @@ pub(super) struct Parser<'d> {
     pub(super) flips: u32,
     pub(super) dims: Vec<u8>,
     pub(super) skip_depth: u32,
-    pub(super) ade_namespaces: HashSet<Vec<u8>>,
-    pub(super) unknown_prefixes: HashSet<Vec<u8>>,
+    /// Foreign namespaces and undeclared prefixes warned about (once each), with the index
+    /// of that warning.
+    pub(super) ade_namespaces: HashMap<Vec<u8>, usize>,
+    pub(super) unknown_prefixes: HashMap<Vec<u8>, usize>,
+    /// LoD of relief geometry without a `lodN` property name: the last relief `lod` read.
     pub(super) relief_lod: u8,
+    /// A relief `lod` was read ([`Parser::relief_lod`] set) in this parser.
+    pub(super) relief_lod_set: bool,
+    /// [`Parser::relief_lod`] was used before any relief `lod` was read in this parser (a
+    /// split read then depends on the part before it).
+    pub(super) relief_default_used: bool,
+    /// The root's envelope set [`Parser::srs_name`] (over any earlier `srsName`).
+    pub(super) root_srs_set: bool,
+    /// Every gml:id met, in document order: kept by the parsers of a split document's later
+    /// parts only.
+    pub(super) id_log: Option<Vec<IdRec>>,
 }
 
 /// Attributes we care about, extracted from one start tag.
@@ -268,9 +301,13 @@ impl<'d> Parser<'d> {
             flips: 0,
             dims: Vec::new(),
             skip_depth: 0,
-            ade_namespaces: HashSet::new(),
-            unknown_prefixes: HashSet::new(),
+            ade_namespaces: HashMap::new(),
+            unknown_prefixes: HashMap::new(),
             relief_lod: 2,
+            relief_lod_set: false,
+            relief_default_used: false,
+            root_srs_set: false,
+            id_log: None,
         }
     }
 
@@ -279,6 +316,28 @@ impl<'d> Parser<'d> {
     pub(super) fn expect_bytes(&mut self, bytes: u64) {
         let ids = (bytes / 400).min(1 << 24) as usize;
         self.seen_ids.reserve(ids);
+    }
+
+    /// Log a gml:id (see [`Parser::id_log`]); its entry.
+    pub(super) fn log_id(&mut self, hash: u64, pos: u64) -> u32 {
+        let parent = self
+            .stack
+            .iter()
+            .rev()
+            .find(|f| f.id.is_some())
+            .map_or(NO_REC, |f| f.rec);
+        let warnings = u32::try_from(self.warnings.len()).unwrap_or(u32::MAX);
+        let Some(log) = self.id_log.as_mut() else {
+            return NO_REC;
+        };
+        let at = u32::try_from(log.len()).unwrap_or(NO_REC);
+        log.push(IdRec {
+            hash,
+            pos,
+            warnings,
+            parent,
+        });
+        at
     }
 
     pub(super) fn current_dim(&self) -> u8 {

@@ -39,6 +39,20 @@ impl Registry {
         });
     }
 
+    /// Append the registrations of a later part of the document whose parts start at
+    /// `parts_offset` in the merged arena (a split read).
+    pub(super) fn append(&mut self, other: Registry, parts_offset: u32) {
+        let base = self.text.len();
+        self.text.push_str(&other.text);
+        self.entries
+            .extend(other.entries.into_iter().map(|e| RegEntry {
+                hash: e.hash,
+                from: e.from + base,
+                to: e.to + base,
+                range: (e.range.0 + parts_offset, e.range.1 + parts_offset),
+            }));
+    }
+
     /// The ids whose hash is in `wanted`, each with its first registered range (the text is
     /// compared, so two ids with the same hash stay apart).
     pub(super) fn index(&self, wanted: &HashSet<u64>) -> HashMap<&str, (u32, u32)> {

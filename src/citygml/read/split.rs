@@ -1,0 +1,586 @@
+//! One large document read by several cores: the bytes after the root's start tag are cut
+//! at the ends of top-level `cityObjectMember` elements, each part is parsed by its own
+//! [`Parser`] (seeded with the root's start tag: namespaces, version, root frame), and the
+//! parts' results are merged, in document order, into the state one parser reading the whole
+//! document would have reached; the model is then assembled from it as usual.
+//!
+//! The split is invisible except in speed: wherever its result could differ from the serial
+//! read's, it declines and the caller reads serially: for a DOCTYPE (entities), a root that
+//! is no `CityModel`, a cut that does not close a child of the root (found when the part
+//! before it ends inside an element, a comment or a CDATA section), relief geometry whose LoD
+//! depends on an earlier part, and any error (the serial read then reports the first one, as
+//! it does). A gml:id met in two parts gets its "duplicate" warning where the serial read
+//! gives it: the later parts log their ids (hash, offset) for that.
+//!
+//! Lines are counted per part from the part's start (on demand, as the serial read does) and
+//! made absolute when the parts are merged: a part's first line continues the line before it.
+
+use super::events::{configure, finish, parse_events, BOM, RELEASE_STEP};
+use super::position::newlines;
+use super::state::{EnvOwner, IdRec, LineMark, Owner, Parser, Part};
+use super::ReadOptions;
+use crate::model::{CityModel, Warning};
+use foldhash::{HashSet, HashSetExt};
+use quick_xml::events::Event;
+use quick_xml::NsReader;
+use std::collections::hash_map::Entry;
+use std::path::Path;
+
+/// Read `doc` (a whole uncompressed document) split across rayon's threads; `None` where the
+/// split does not apply (document smaller than [`ReadOptions::split_min_bytes`], one thread)
+/// or could differ from the serial read (see the module's documentation): read serially then.
+/// `release(from, upto)` lets the memory of `doc[from..upto]` go (see
+/// [`super::events::read_slice`]).
+pub(super) fn read_split(
+    doc: &[u8],
+    path: &Path,
+    opts: &ReadOptions,
+    release: &(dyn Fn(usize, usize) + Sync),
+) -> Option<CityModel> {
+    let threads = rayon::current_num_threads();
+    let n = match opts.split_parts {
+        0 => threads,
+        n => n,
+    };
+    if threads < 2 || n < 2 || (doc.len() as u64) < opts.split_min_bytes {
+        return None;
+    }
+    let bom = if doc.starts_with(&BOM) { 3 } else { 0 };
+    let body = &doc[bom..];
+    // the prolog and the root's start tag
+    let mut head = Parser::new(path, opts.clone(), doc);
+    let mut reader = NsReader::from_reader(body);
+    configure(&mut reader);
+    let mut saw_root = false;
+    let started = parse_events(
+        &mut head,
+        &mut reader,
+        bom as u64,
+        &mut saw_root,
+        (&|_| {}, RELEASE_STEP),
+        true,
+    );
+    if !matches!(started, Ok(true)) || head.stack.len() != 1 || !head.root_is_model {
+        return None;
+    }
+    let root_end = usize::try_from(reader.buffer_position()).ok()?;
+    let prolog = body.get(..root_end)?;
+    if memchr::memmem::find(prolog, b"<!DOCTYPE").is_some() {
+        return None;
+    }
+    // parts: [root_end, cut 1), [cut 1, cut 2), ..., [cut n-1, end) in body offsets
+    let mut bounds = vec![root_end];
+    bounds.extend(cuts(body, root_end, n));
+    if bounds.len() < 2 {
+        return None;
+    }
+    bounds.push(body.len());
+    let ranges: Vec<(usize, usize)> = bounds.windows(2).map(|w| (w[0], w[1])).collect();
+    let part_bytes = (body.len() - root_end) as u64 / ranges.len() as u64;
+    head.expect_bytes(part_bytes);
+    // the parts' resident bytes together as the serial read's
+    let step = (RELEASE_STEP / ranges.len() as u64).max(4 << 20);
+
+    let first = ranges[0];
+    let (first, rest) = rayon::join(
+        move || {
+            // the first part continues the parser that read the root's start tag
+            *reader.get_mut() = body.get(first.0..first.1)?;
+            let mut saw_root = true;
+            let rel = |upto: usize| release(0, upto);
+            parse_events(
+                &mut head,
+                &mut reader,
+                bom as u64,
+                &mut saw_root,
+                (&rel, step),
+                false,
+            )
+            .ok()?;
+            Some(Done::new(head, 0, (first.1 + bom) as u64, None))
+        },
+        || {
+            use rayon::prelude::*;
+            ranges[1..]
+                .par_iter()
+                .map(|&(from, to)| {
+                    let from_doc = (from + bom) as u64;
+                    let mut p = Parser::new(path, opts.clone(), doc);
+                    p.expect_bytes(part_bytes);
+                    let mut reader = NsReader::from_reader(prolog);
+                    configure(&mut reader);
+                    let mut saw_root = false;
+                    let started = parse_events(
+                        &mut p,
+                        &mut reader,
+                        bom as u64,
+                        &mut saw_root,
+                        (&|_| {}, RELEASE_STEP),
+                        true,
+                    );
+                    if !matches!(started, Ok(true)) {
+                        return None;
+                    }
+                    p.forget_root_start()?;
+                    p.id_log = Some(Vec::new());
+                    let root_id = p.nearest_id();
+                    p.lines.set(LineMark {
+                        line: 1,
+                        line_start: from_doc,
+                        counted_to: from_doc,
+                    });
+                    let base = from_doc.checked_sub(reader.buffer_position())?;
+                    *reader.get_mut() = body.get(from..to)?;
+                    let rel = |upto: usize| release(from + bom, upto);
+                    parse_events(
+                        &mut p,
+                        &mut reader,
+                        base,
+                        &mut saw_root,
+                        (&rel, step),
+                        false,
+                    )
+                    .ok()?;
+                    Some(Done::new(p, from_doc, (to + bom) as u64, root_id))
+                })
+                .collect::<Vec<_>>()
+        },
+    );
+    let mut m = first?;
+    if m.parser.stack.len() != 1 {
+        return None;
+    }
+    let len = doc.len() as u64;
+    let last = rest.len();
+    for (i, d) in rest.into_iter().enumerate() {
+        let d = d?;
+        // every part but the last ends between two children of the root, the last one after it
+        let depth = if i + 1 == last { 0 } else { 1 };
+        if d.parser.stack.len() != depth {
+            return None;
+        }
+        m.absorb(d, i + 1 < last)?;
+    }
+    let mut p = m.parser;
+    p.stack.clear();
+    p.event_pos = len;
+    p.lines.set(LineMark {
+        line: m.line,
+        line_start: m.line_start,
+        counted_to: len,
+    });
+    // an error (an unresolved xlink, limits) is reported by the serial read
+    finish(p, len, true, false).ok()
+}
+
+/// The ends of `</…cityObjectMember>` end tags (body offsets after `>`) near the `n - 1` even
+/// cut points of `body[from..]`, increasing, each followed by more of the document. A
+/// candidate is confirmed by parsing: the part before it must end between two children of
+/// the root.
+fn cuts(body: &[u8], from: usize, n: usize) -> Vec<usize> {
+    const NAME: &[u8] = b"cityObjectMember>";
+    let finder = memchr::memmem::Finder::new(NAME);
+    let span = body.len().saturating_sub(from);
+    let mut out: Vec<usize> = Vec::new();
+    for i in 1..n {
+        let mut at = from + span / n * i;
+        if let Some(&prev) = out.last() {
+            at = at.max(prev);
+        }
+        while let Some(hit) = body.get(at..).and_then(|b| finder.find(b)) {
+            let m = at + hit;
+            at = m + 1;
+            if is_end_tag(body, m) {
+                let cut = m + NAME.len();
+                if cut < body.len() {
+                    out.push(cut);
+                }
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// True when the local name at `m` is preceded by `</` or `</prefix:`.
+fn is_end_tag(body: &[u8], m: usize) -> bool {
+    let before = &body[..m];
+    if before.ends_with(b"</") {
+        return true;
+    }
+    let Some(without_colon) = before.strip_suffix(b":") else {
+        return false;
+    };
+    let name = |c: &u8| c.is_ascii_alphanumeric() || matches!(c, b'_' | b'-' | b'.');
+    let prefix_len = without_colon.iter().rev().take_while(|c| name(c)).count();
+    prefix_len > 0 && without_colon[..without_colon.len() - prefix_len].ends_with(b"</")
+}
+
+/// One part's parser after its last event, and where lines stand at its end.
+struct Done<'d> {
+    parser: Parser<'d>,
+    /// Line number at the part's end (relative to the part's start but for the first part).
+    line: u64,
+    /// Start of that line (file offset).
+    line_start: u64,
+    /// File offset of the part's start (0 for the first part: lines absolute).
+    start: u64,
+    /// The root's gml:id.
+    root_id: Option<String>,
+}
+
+impl<'d> Done<'d> {
+    fn new(mut parser: Parser<'d>, start: u64, end: u64, root_id: Option<String>) -> Self {
+        parser.event_pos = end;
+        let (line, line_start) = parser.line_mark();
+        Done {
+            parser,
+            line,
+            line_start,
+            start,
+            root_id,
+        }
+    }
+
+    /// Append the next part (`more`: others follow it).
+    fn absorb(&mut self, d: Done<'d>, more: bool) -> Option<()> {
+        let fix = LineFix {
+            line: self.line,
+            shift: d.start.checked_sub(self.line_start)?,
+        };
+        let dups = self.parser.duplicates(&d, &fix);
+        self.parser.absorb(d.parser, &fix, dups, more)?;
+        if d.line > 1 {
+            self.line_start = d.line_start;
+        }
+        self.line += d.line - 1;
+        Some(())
+    }
+}
+
+/// Relative lines of a part made absolute: `line` is the line the part starts on, `shift` the
+/// part's start minus that line's start (columns on the part's first line).
+struct LineFix {
+    line: u64,
+    shift: u64,
+}
+
+impl LineFix {
+    fn line(&self, line: &mut u64) -> bool {
+        let first = *line == 1;
+        *line += self.line - 1;
+        first
+    }
+
+    fn place(&self, line: &mut u64, column: &mut u64) {
+        if self.line(line) {
+            *column += self.shift;
+        }
+    }
+}
+
+impl Parser<'_> {
+    /// Forget what reading the root's start tag produced besides the state every part needs
+    /// (the first part keeps it); `None` if it produced more than a `CityModel` root can.
+    fn forget_root_start(&mut self) -> Option<()> {
+        let clean = self.buildings.is_empty()
+            && self.assets.is_empty()
+            && self.envelopes.is_empty()
+            && self.parts.is_empty()
+            && self.polygon_elements == 0
+            && self.implicit_count == 0;
+        if !clean {
+            return None;
+        }
+        self.warnings.clear();
+        self.seen_ids.clear();
+        self.feature_counts.clear();
+        self.ade_namespaces.clear();
+        self.unknown_prefixes.clear();
+        Some(())
+    }
+
+    /// The "duplicate gml:id" warnings the serial read gives in part `d` for ids met in an
+    /// earlier part (the first time each is met in `d`; later ones `d` warned about itself),
+    /// each with the index among `d`'s warnings it goes before.
+    fn duplicates(&self, d: &Done<'_>, fix: &LineFix) -> Vec<(u32, Warning)> {
+        let o = &d.parser;
+        let Some(log) = &o.id_log else {
+            return Vec::new();
+        };
+        if !o.seen_ids.iter().any(|h| self.seen_ids.contains(h)) {
+            return Vec::new();
+        }
+        let mut met = HashSet::new();
+        let mut lines = LineMark {
+            line: 1,
+            line_start: d.start,
+            counted_to: d.start,
+        };
+        let mut out = Vec::new();
+        for r in log {
+            if !self.seen_ids.contains(&r.hash) || !met.insert(r.hash) {
+                continue;
+            }
+            // lines up to the element, counted from the last one
+            let from = usize::try_from(lines.counted_to).unwrap_or(usize::MAX);
+            let to = usize::try_from(r.pos).unwrap_or(usize::MAX);
+            if let Some((n, last)) = self.doc.get(from..to).and_then(newlines) {
+                lines.line += n;
+                lines.line_start = lines.counted_to + last as u64 + 1;
+            }
+            lines.counted_to = r.pos.max(lines.counted_to);
+            let mut line = lines.line;
+            let mut column = r.pos.saturating_sub(lines.line_start) + 1;
+            fix.place(&mut line, &mut column);
+            let gml_id = match log.get(r.parent as usize) {
+                Some(p) => self.id_text(p),
+                None => d.root_id.clone(),
+            };
+            let id = self.id_text(r).unwrap_or_default();
+            out.push((
+                r.warnings,
+                Warning {
+                    file: self.shared_path.clone(),
+                    line,
+                    column,
+                    gml_id,
+                    message: format!("duplicate gml:id \"{id}\""),
+                },
+            ));
+        }
+        out
+    }
+
+    /// The text of a logged gml:id: the attribute of the element's start tag whose value has
+    /// the logged hash.
+    fn id_text(&self, r: &IdRec) -> Option<String> {
+        let tag = self.doc.get(usize::try_from(r.pos).ok()?..)?;
+        let mut reader = quick_xml::Reader::from_reader(tag);
+        let e = match reader.read_event().ok()? {
+            Event::Start(e) | Event::Empty(e) => e,
+            _ => return None,
+        };
+        e.attributes().with_checks(false).find_map(|a| {
+            let a = a.ok()?;
+            if a.key.local_name().as_ref() != b"id" {
+                return None;
+            }
+            let v = a.unescape_value().ok()?;
+            let h = std::hash::BuildHasher::hash_one(&self.id_hasher, v.as_ref() as &str);
+            (h == r.hash).then(|| v.into_owned())
+        })
+    }
+
+    /// Append the state of the next part of the document, read by `o`: indices offset,
+    /// lines made absolute, counts summed, once-per-document warnings kept once. `None` where
+    /// the serial read could have read the part differently (relief LoD from an earlier part). `dups`: [`Parser::duplicates`]. `more`: other parts
+    /// follow.
+    fn absorb(
+        &mut self,
+        o: Parser<'_>,
+        fix: &LineFix,
+        dups: Vec<(u32, Warning)>,
+        more: bool,
+    ) -> Option<()> {
+        if o.relief_default_used && self.relief_lod != 2 {
+            return None;
+        }
+        if more {
+            self.seen_ids.extend(o.seen_ids.iter().copied());
+        }
+        let b0 = self.buildings.len();
+        let a0 = self.assets.len();
+        let p0 = u32::try_from(self.parts.len()).ok()?;
+        let poly0 = u32::try_from(self.polys.len()).ok()?;
+        let h0 = u32::try_from(self.hrefs.len()).ok()?;
+        let i0 = u32::try_from(self.implicits.len()).ok()?;
+        for mut b in o.buildings {
+            b.parent = b.parent.map(|x| x + b0);
+            b.assets.iter_mut().for_each(|x| *x += a0);
+            fix.line(&mut b.line);
+            self.buildings.push(b);
+        }
+        for mut a in o.assets {
+            a.building = a.building.map(|x| x + b0);
+            a.parent = a.parent.map(|x| x + a0);
+            fix.line(&mut a.line);
+            self.assets.push(a);
+        }
+        // a foreign namespace or undeclared prefix is warned about once per document
+        let mut drop: Vec<usize> = Vec::new();
+        for (key, at) in o.ade_namespaces {
+            match self.ade_namespaces.entry(key) {
+                Entry::Occupied(_) => drop.push(at),
+                Entry::Vacant(v) => {
+                    v.insert(0);
+                }
+            }
+        }
+        for (key, at) in o.unknown_prefixes {
+            match self.unknown_prefixes.entry(key) {
+                Entry::Occupied(_) => drop.push(at),
+                Entry::Vacant(v) => {
+                    v.insert(0);
+                }
+            }
+        }
+        drop.sort_unstable();
+        let mut dups = dups.into_iter().peekable();
+        for (i, mut w) in o.warnings.into_iter().enumerate() {
+            while let Some((_, d)) = dups.next_if(|(at, _)| *at as usize <= i) {
+                self.warnings.push(d);
+            }
+            if drop.binary_search(&i).is_ok() {
+                continue;
+            }
+            fix.place(&mut w.line, &mut w.column);
+            w.file = self.shared_path.clone();
+            self.warnings.push(w);
+        }
+        self.warnings.extend(dups.map(|(_, d)| d));
+        self.envelopes.extend(o.envelopes);
+        self.env_owners
+            .extend(o.env_owners.into_iter().map(|e| match e {
+                EnvOwner::Root => EnvOwner::Root,
+                EnvOwner::Building(b) => EnvOwner::Building(b + b0),
+                EnvOwner::Asset(a) => EnvOwner::Asset(a + a0),
+            }));
+        self.implicit_count += o.implicit_count;
+        self.library_objects.extend(o.library_objects);
+        self.objects_without_geometry += o.objects_without_geometry;
+        self.polygon_elements += o.polygon_elements;
+        for (name, n) in o.feature_counts {
+            match self.feature_counts.iter_mut().find(|(x, _)| *x == name) {
+                Some((_, c)) => *c += n,
+                None => self.feature_counts.push((name, n)),
+            }
+        }
+        // the geometry arena
+        self.polys.extend(o.polys);
+        self.parts.extend(o.parts.into_iter().map(|p| match p {
+            Part::Poly(i) => Part::Poly(i + poly0),
+            Part::Href(i) => Part::Href(i + h0),
+            Part::Implicit { idx, len } => Part::Implicit { idx: idx + i0, len },
+        }));
+        for mut h in o.hrefs {
+            fix.place(&mut h.loc.line, &mut h.loc.column);
+            self.hrefs.push(h);
+        }
+        self.implicits.extend(o.implicits);
+        self.registry.append(o.registry, p0);
+        self.pending.extend(o.pending.into_iter().map(|mut g| {
+            g.owner = match g.owner {
+                Owner::Asset(a) => Owner::Asset(a + a0),
+                Owner::Building(b) => Owner::Building(b + b0),
+            };
+            g.range = (g.range.0 + p0, g.range.1 + p0);
+            g
+        }));
+        // document-wide state: as the serial read would have it after this part
+        self.gml_prefix = self.gml_prefix.take().or(o.gml_prefix);
+        self.version = self.version.or(o.version);
+        if o.root_srs_set {
+            self.srs_name = o.srs_name;
+            self.root_srs_set = true;
+        } else {
+            self.srs_name = self.srs_name.take().or(o.srs_name);
+        }
+        if o.relief_lod_set {
+            self.relief_lod = o.relief_lod;
+            self.relief_lod_set = true;
+        }
+        Some(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cuts_follow_member_end_tags_of_any_prefix() {
+        let body = b"<M><cityObjectMember>a</cityObjectMember><core:cityObjectMember>b\
+            </core:cityObjectMember><x:cityObjectMember/></ cityObjectMember><cityObjectMember>c\
+            </cityObjectMember></M>";
+        let ends: Vec<usize> = memchr::memmem::find_iter(body, b"Member>")
+            .map(|m| m + 7)
+            .collect();
+        // one cut near the middle: the next end tag at or after it
+        let c = cuts(body, 3, 2);
+        assert_eq!(c.len(), 1);
+        assert!(ends.contains(&c[0]), "{c:?}");
+        assert!(
+            body[..c[0]].ends_with(b"</core:cityObjectMember>")
+                || body[..c[0]].ends_with(b"</cityObjectMember>")
+        );
+        // many parts asked for: increasing cuts, each at an end tag, none at the very end
+        let c = cuts(body, 3, 8);
+        assert!(c.windows(2).all(|w| w[0] < w[1]), "{c:?}");
+        assert!(
+            c.iter()
+                .all(|x| *x < body.len() && is_end_tag(body, x - 17)),
+            "{c:?}"
+        );
+        assert!(is_end_tag(b"</a:cityObjectMember>", 4));
+        assert!(!is_end_tag(b"< /a:cityObjectMember>", 5));
+        assert!(!is_end_tag(b"<a:cityObjectMember>", 3));
+        assert!(!is_end_tag(b"</:cityObjectMember>", 3));
+        // nothing to cut at
+        assert!(cuts(b"<M><a/></M>", 3, 2).is_empty());
+    }
+
+    #[test]
+    fn relief_lod_from_an_earlier_part_reads_serially() {
+        let doc = |lod: &str| {
+            let member = |i: usize| {
+                format!(
+                    r#"<cityObjectMember><dem:ReliefFeature gml:id="r{i}">{lod}<dem:reliefComponent><dem:TINRelief gml:id="t{i}">
+<dem:tin><gml:TriangulatedSurface><gml:trianglePatches><gml:Triangle><gml:exterior><gml:LinearRing>
+<gml:posList>0 0 0 1 0 0 1 1 0 0 0 0</gml:posList></gml:LinearRing></gml:exterior></gml:Triangle>
+</gml:trianglePatches></gml:TriangulatedSurface></dem:tin></dem:TINRelief></dem:reliefComponent>
+</dem:ReliefFeature></cityObjectMember>
+"#
+                )
+            };
+            let body: String = (0..8).map(member).collect();
+            format!(
+                r#"<CityModel xmlns="http://www.opengis.net/citygml/2.0" xmlns:gml="http://www.opengis.net/gml"
+ xmlns:dem="http://www.opengis.net/citygml/relief/2.0">
+{body}</CityModel>
+"#
+            )
+        };
+        let opts = ReadOptions {
+            split_min_bytes: 0,
+            split_parts: 2,
+            ..ReadOptions::default()
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let path = Path::new("relief.gml");
+        let serial = |d: &str| {
+            super::super::events::read_slice(d.as_bytes(), path, false, &opts, &|_| {}).unwrap()
+        };
+        // relief LoD 1 set in the first part only: the split declines
+        let first_only = doc("").replacen(
+            "<dem:reliefComponent>",
+            "<dem:lod>1</dem:lod><dem:reliefComponent>",
+            1,
+        );
+        let split = pool.install(|| read_split(first_only.as_bytes(), path, &opts, &|_, _| {}));
+        assert!(split.is_none());
+        let m = serial(&first_only);
+        assert!(m.assets.iter().all(|a| a.geometries[0].lod == 1));
+        // set in every member: split, and the same model
+        let every = doc("<dem:lod>1</dem:lod>");
+        let split = pool.install(|| read_split(every.as_bytes(), path, &opts, &|_, _| {}));
+        assert_eq!(split.as_ref(), Some(&serial(&every)));
+        // never set: the default (2) everywhere
+        let never = doc("");
+        let split = pool.install(|| read_split(never.as_bytes(), path, &opts, &|_, _| {}));
+        assert_eq!(split.as_ref(), Some(&serial(&never)));
+    }
+}
