@@ -57,8 +57,9 @@ pub struct PoiArgs {
 /// `--jobs`: how many input files are worked on at once.
 #[derive(clap::Args, Debug, Clone, Copy, Default)]
 pub struct JobsArgs {
-    /// Worker threads: input files read or written at once, POIs traced at once (default: one
-    /// per core). The outputs are the same whatever the number.
+    /// Worker threads: input files read or written at once, parts of one large uncompressed
+    /// file read at once, POIs traced at once (default: one per core). The outputs are the
+    /// same whatever the number.
     #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub jobs: Option<u16>,
 }
