@@ -319,18 +319,18 @@ impl LocalFrame {
                 if !written(i) {
                     return RoughGeometry::default();
                 }
+                let rp = r.polygons();
                 let own = local.assets.get(i).and_then(|la| {
                     let same: Vec<_> = la.polygons_at(r.lod).collect();
-                    (!r.polygons.is_empty()
-                        && same.len() == r.polygons.len()
-                        && same.iter().zip(&r.polygons).all(|(x, y)| *x == y))
+                    (!rp.is_empty()
+                        && same.len() == rp.len()
+                        && same.iter().zip(rp.iter()).all(|(x, y)| *x == y))
                     .then(|| source.assets.get(i))
                     .flatten()
                 });
                 let polygons = match own {
                     Some(sa) => sa.polygons_at(r.lod).cloned().collect(),
-                    None => r
-                        .polygons
+                    None => rp
                         .iter()
                         .map(|p| {
                             let mut p = p.clone();

@@ -262,7 +262,7 @@ impl<'a> Plan<'a> {
     fn roughen(&mut self, a: usize) {
         let asset = &self.model.assets[a];
         let r = &self.rough[a];
-        if r.polygons.is_empty() {
+        if r.is_empty() {
             return;
         }
         let base = match &asset.id {
@@ -284,8 +284,10 @@ impl<'a> Plan<'a> {
             let doc = self.doc;
             let id = self
                 .ids
-                .fresh(&format!("{base}_g{j}"), r.polygons.len(), |s| doc.has_id(s));
-            let geom = self.encoder.geometry(enc, &id, &r.polygons);
+                .fresh(&format!("{base}_g{j}"), out.polygons.len(), |s| {
+                    doc.has_id(s)
+                });
+            let geom = self.encoder.geometry(enc, &id, &out.polygons);
             let node = self.doc.nodes[n as usize];
             let has_ref = self.ref_nodes.contains(&n);
             let whole = has_ref || node.end == node.content_start || g.content.is_empty();
@@ -301,7 +303,7 @@ impl<'a> Plan<'a> {
                 content: g.content.clone(),
                 whole,
                 xml,
-                polygons: r.polygons.clone(),
+                polygons: out.polygons.to_vec(),
             });
         }
     }
