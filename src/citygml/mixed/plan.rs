@@ -290,7 +290,7 @@ impl<'a> Plan<'a> {
             let geom = self.encoder.geometry(enc, &id, &out.polygons);
             let node = self.doc.nodes[n as usize];
             let has_ref = self.ref_nodes.contains(&n);
-            let whole = has_ref || node.end == node.content_start || g.content.is_empty();
+            let whole = has_ref || node.end == node.content_start() || g.content.is_empty();
             let xml = if whole {
                 let q = &self.doc.name(n).qname;
                 format!("<{q}>{geom}</{q}>")
@@ -419,7 +419,7 @@ impl<'a> Plan<'a> {
     /// Insert (or replace) the `skylod_level` attribute of the feature at node `n`.
     fn insert_level(&mut self, n: u32, level: u8) {
         let doc = self.doc;
-        let mut pos = doc.nodes[n as usize].content_start;
+        let mut pos = doc.nodes[n as usize].content_start();
         for c in doc.children(n) {
             let name = doc.name(c);
             let leading = match name.ns {
