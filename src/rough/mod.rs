@@ -40,12 +40,14 @@ impl Default for RoughOptions {
 /// The rough geometry of one asset.
 ///
 /// A boxed asset keeps its [`Obb`] only (the six faces are made where they are needed,
-/// [`RoughGeometry::polygons`]): a city holds hundreds of thousands of boxes.
+/// [`RoughGeometry::polygons()`](method@RoughGeometry::polygons)): a city holds hundreds
+/// of thousands of boxes.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RoughGeometry {
     /// Polygons besides the box's faces, rings open: generalised planes (no holes, no id),
     /// LoD2 polygons used unchanged (holes and ids kept), or geometry brought back to the
-    /// source CRS. Empty for a box; read them all with [`RoughGeometry::polygons`].
+    /// source CRS. Empty for a box; read them all with
+    /// [`RoughGeometry::polygons()`](method@RoughGeometry::polygons).
     pub polygons: Vec<Polygon>,
     /// The box, for assets replaced by their box (`None` for shell surfaces); its six faces
     /// ([`Obb::to_polygons`]) are the asset's rough polygons.
