@@ -180,9 +180,9 @@ fn soak_lod_on_a_generated_city() {
         t.elapsed().as_secs_f64(),
         peak as f64 / MIB
     );
-    // Recorded 2026-11-22 (branch mem): 18x18 (1,007 MB) 1,351 MiB = 1.34 MiB per MB, the
-    // peak at the selection scene's BVH build, the read stage 1,286 MiB (was ~2.4 GiB,
-    // 2.43 MiB per MB). Goal (issue 11): below 1 GiB. A regression past 1.6 MiB per MB of
+    // Recorded 2026-11-22 (branch mem, this test): 18x18 (1,007 MB) 13.2 s, peak 1,356 MiB =
+    // 1.35 MiB per MB, at the selection scene's BVH build; the read stage alone 1,286 MiB
+    // (main before: 2,142 MiB, 2.13 MiB per MB). Goal (issue 11): below 1 GiB. A regression past 1.6 MiB per MB of
     // XML plus 64 MiB (the process's own, what a 4x4 city shows) fails.
     if peak > 0 {
         let limit = 1.6 * bytes as f64 / 1e6 + 64.0;
