@@ -231,7 +231,7 @@ pub fn evaluate_with(
     let boxes_geo = all_boxes(model);
     let boxes = rough_scene(&boxes_geo);
     let boxes_bvh = ms(t);
-    let boxes_polys: usize = boxes_geo.iter().map(|r| r.polygons.len()).sum();
+    let boxes_polys: usize = boxes_geo.iter().map(|r| r.polygon_count()).sum();
     progress.advance(Stage::Bvh, 1, 0, Some("all-boxes scene"));
     progress.finish(Stage::Bvh);
 

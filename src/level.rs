@@ -39,16 +39,17 @@
 
 use crate::model::{Asset, CityModel, LodGeometry, Polygon};
 use crate::rough::RoughGeometry;
+use std::borrow::Cow;
 
 /// One LoD property of an asset as written at some level.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct PropertyOut<'a> {
     /// The property as read.
     pub geometry: &'a LodGeometry,
     /// Whether its content is replaced by the rough geometry.
     pub rough: bool,
-    /// The polygons written in it.
-    pub polygons: &'a [Polygon],
+    /// The polygons written in it (a box's faces are made for it).
+    pub polygons: Cow<'a, [Polygon]>,
 }
 
 /// Whether a LoD property (by local name) can hold world-coordinate polygons written by
@@ -67,9 +68,9 @@ pub fn holds_polygons(property: &str) -> bool {
 
 /// Whether the rough geometry of `asset` is its own geometry at the rough LoD (a shell
 /// surface whose LoD2 is used unchanged beside its LoD3): those properties stay verbatim.
-fn rough_is_own_geometry(asset: &Asset, r: &RoughGeometry) -> bool {
+fn rough_is_own_geometry(asset: &Asset, r: &RoughGeometry, polygons: &[Polygon]) -> bool {
     let same: Vec<&Polygon> = asset.polygons_at(r.lod).collect();
-    same.len() == r.polygons.len() && same.iter().zip(&r.polygons).all(|(x, y)| *x == y)
+    same.len() == polygons.len() && same.iter().zip(polygons).all(|(x, y)| *x == y)
 }
 
 /// The asset's LoD properties as written at `level` (none at level 0), in document order.
@@ -81,12 +82,13 @@ pub fn properties<'a>(
     let verbatim = |g: &'a LodGeometry| PropertyOut {
         geometry: g,
         rough: false,
-        polygons: &g.polygons,
+        polygons: Cow::Borrowed(&g.polygons),
     };
     match (level, rough) {
         (0, _) => Vec::new(),
-        (1, Some(r)) if !r.polygons.is_empty() => {
-            let unchanged = rough_is_own_geometry(asset, r);
+        (1, Some(r)) if !r.is_empty() => {
+            let polygons = r.polygons();
+            let unchanged = rough_is_own_geometry(asset, r, &polygons);
             asset
                 .geometries
                 .iter()
@@ -94,12 +96,12 @@ pub fn properties<'a>(
                     let replaced = !(g.lod < r.lod
                         || (g.lod == r.lod && unchanged)
                         || !holds_polygons(&g.property)
-                        || r.polygons.len() > g.polygons.len());
+                        || polygons.len() > g.polygons.len());
                     if replaced {
                         PropertyOut {
                             geometry: g,
                             rough: true,
-                            polygons: &r.polygons,
+                            polygons: polygons.clone(),
                         }
                     } else {
                         verbatim(g)
@@ -121,15 +123,19 @@ pub fn polygon_count(asset: &Asset, rough: Option<&RoughGeometry>, level: u8) ->
 
 /// Polygons the asset contributes to the traced LoD model at `level`: the first written
 /// property at the highest LoD (as [`Asset::detail_polygons`] of the asset read back).
-pub fn traced<'a>(asset: &'a Asset, rough: Option<&'a RoughGeometry>, level: u8) -> &'a [Polygon] {
+pub fn traced<'a>(
+    asset: &'a Asset,
+    rough: Option<&'a RoughGeometry>,
+    level: u8,
+) -> Cow<'a, [Polygon]> {
     let props = properties(asset, rough, level);
     let Some(top) = props.iter().map(|p| p.geometry.lod).max() else {
-        return &[];
+        return Cow::Borrowed(&[]);
     };
     props
-        .iter()
+        .into_iter()
         .find(|p| p.geometry.lod == top)
-        .map_or(&[], |p| p.polygons)
+        .map_or(Cow::Borrowed(&[]), |p| p.polygons)
 }
 
 /// Polygons of the whole model at the given levels (`rough[i]`, `levels[i]` per asset;

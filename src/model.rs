@@ -456,6 +456,11 @@ impl CityModel {
 
     /// Append another model (e.g. a second tile), re-indexing its references.
     pub fn merge(&mut self, mut other: CityModel) {
+        if *self == CityModel::default() {
+            // The first model is taken as it is: no copy of a city's vectors.
+            *self = other;
+            return;
+        }
         let f0 = self.files.len();
         let b0 = self.buildings.len();
         let a0 = self.assets.len();
@@ -498,6 +503,57 @@ mod tests {
         p.interiors.push(sq(1.0));
         assert!((p.area() - 15.0).abs() < 1e-12);
         assert!(p.newell_normal().z > 0.0);
+    }
+
+    #[test]
+    fn merge_takes_the_first_model_and_reindexes_the_next() {
+        let mut one = CityModel::default();
+        one.files.push(SourceFile {
+            path: "a.gml".into(),
+            version: CityGmlVersion::V2_0,
+            srs_name: None,
+            gzip: false,
+            len: 0,
+            gml_prefix: "gml:".into(),
+            envelopes: Vec::new(),
+            implicit_geometries: 0,
+            library_objects: Vec::new(),
+            objects_without_geometry: 0,
+            polygon_elements: 0,
+            features: Default::default(),
+        });
+        one.buildings.push(Building {
+            id: Some("b".into()),
+            is_part: false,
+            parent: None,
+            span: 0..1,
+            line: 1,
+            assets: vec![0],
+            geometries: Vec::new(),
+            file: 0,
+        });
+        one.assets.push(Asset {
+            kind: AssetKind::Roof,
+            id: Some("r".into()),
+            element: "RoofSurface".into(),
+            building: Some(0),
+            parent: None,
+            span: 0..1,
+            line: 1,
+            function: None,
+            geometries: Vec::new(),
+            file: 0,
+        });
+        let mut m = CityModel::default();
+        m.merge(one.clone());
+        assert_eq!(m, one);
+        m.merge(one.clone());
+        assert_eq!(
+            (m.files.len(), m.buildings.len(), m.assets.len()),
+            (2, 2, 2)
+        );
+        assert_eq!(m.buildings[1].assets, [1]);
+        assert_eq!((m.assets[1].building, m.assets[1].file), (Some(1), 1));
     }
 
     #[test]

@@ -328,8 +328,10 @@ pub struct Levels {
     /// Rough model (local frame), selection and timings; after a bound, its levels are the
     /// promoted ones.
     pub lod: LodResult,
-    /// The rough geometry in the input's CRS: what is written.
-    pub rough_source: Vec<RoughGeometry>,
+    /// The rough geometry in the input's CRS when the frame is not the identity (only the
+    /// level-1 assets', the others empty); `None` when it is the rough model itself
+    /// ([`Levels::rough_source`]).
+    pub rough_source: Option<Vec<RoughGeometry>>,
     /// The bound's report, when one was asked for (`met` says whether it holds; when it
     /// does not, nothing should be written).
     pub bound: Option<BoundReport>,
@@ -341,6 +343,12 @@ impl Levels {
     /// The level of each asset.
     pub fn levels(&self) -> &[u8] {
         &self.lod.selection.levels
+    }
+
+    /// The rough geometry in the input's CRS, what is written: [`LodResult::rough`] itself
+    /// when the frame is the identity (no copy), the level-1 assets' converted otherwise.
+    pub fn rough_source(&self) -> &[RoughGeometry] {
+        self.rough_source.as_deref().unwrap_or(&self.lod.rough)
     }
 
     /// Whether the bound holds (true without a bound).
@@ -394,9 +402,15 @@ pub fn levels_of(
         lod.selection.levels = b.levels;
     }
     let bound_s = t.elapsed().as_secs_f64();
-    let rough_source = framed
-        .frame
-        .rough_to_source(model, framed.source, &lod.rough);
+    let rough_source = match framed.frame.rough_to_source(
+        model,
+        framed.source,
+        &lod.rough,
+        Some(&lod.selection.levels),
+    ) {
+        Cow::Borrowed(_) => None,
+        Cow::Owned(v) => Some(v),
+    };
     Ok(Levels {
         lod,
         rough_source,
@@ -692,7 +706,7 @@ pub fn write_levels(
         let s = write_mixed(
             model,
             file,
-            &levels.rough_source,
+            levels.rough_source(),
             levels.levels(),
             out,
             wopts,
@@ -707,7 +721,7 @@ pub fn write_levels(
         });
     }
     let content = Content::Levels {
-        rough: &levels.rough_source,
+        rough: levels.rough_source(),
         levels: levels.levels(),
     };
     let s = crate::export::write(format, model, file, content, out, wopts)?;

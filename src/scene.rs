@@ -47,35 +47,42 @@ pub fn full_scene(model: &CityModel) -> Scene {
 
 /// Every asset as its rough geometry (`rough[i]` belongs to asset `i`).
 pub fn rough_scene(rough: &[RoughGeometry]) -> Scene {
-    scene_of(
-        rough
-            .iter()
-            .enumerate()
-            .flat_map(|(i, r)| r.polygons.iter().map(move |p| (i as u32, p))),
-    )
+    let mut b = SceneBuilder::new();
+    for (i, r) in rough.iter().enumerate() {
+        for p in r.polygons().iter() {
+            b.add_polygon(i as u32, p);
+        }
+    }
+    b.build()
 }
 
 /// The scene the selection traces: the rough model without the openings that their
 /// surface's rough plane closes ([`crate::level::selection_traced`]).
 pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> Scene {
     let traced = crate::level::selection_traced(model);
-    scene_of(
-        rough
-            .iter()
-            .zip(traced)
-            .enumerate()
-            .filter(|(_, (_, t))| *t)
-            .flat_map(|(i, (r, _))| r.polygons.iter().map(move |p| (i as u32, p))),
-    )
+    let mut b = SceneBuilder::new();
+    for (i, (r, _)) in rough
+        .iter()
+        .zip(traced)
+        .enumerate()
+        .filter(|(_, (_, t))| *t)
+    {
+        for p in r.polygons().iter() {
+            b.add_polygon(i as u32, p);
+        }
+    }
+    b.build()
 }
 
 /// The mixed-LoD model as `lod` writes it: each asset's [`crate::level::traced`] polygons
 /// at its level (level 0 absent).
 pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
-    scene_of(model.assets.iter().enumerate().flat_map(|(i, a)| {
+    let mut b = SceneBuilder::new();
+    for (i, a) in model.assets.iter().enumerate() {
         let level = levels.get(i).copied().unwrap_or(0);
-        crate::level::traced(a, rough.get(i), level)
-            .iter()
-            .map(move |p| (i as u32, p))
-    }))
+        for p in crate::level::traced(a, rough.get(i), level).iter() {
+            b.add_polygon(i as u32, p);
+        }
+    }
+    b.build()
 }

@@ -391,7 +391,7 @@ pub fn roof_assets(model: &CityModel, rough: &[RoughGeometry], tolerance: f64) -
                 let low = rough
                     .get(i)
                     .map(|r| {
-                        r.polygons
+                        r.polygons()
                             .iter()
                             .flat_map(|p| p.points())
                             .fold(f64::INFINITY, |z, p| z.min(p.z))

@@ -179,15 +179,18 @@ impl SceneBuilder {
     }
 
     /// Build the BVH. An empty builder gives an empty scene in which every ray is free.
-    pub fn build(self) -> Scene {
+    pub fn build(mut self) -> Scene {
         let bbox = Bbox::of_points(self.tris.iter().flatten());
         let origin = if bbox.is_empty() {
             DVec3::ZERO
         } else {
             bbox.center()
         };
-        let local: Vec<Triangle> = self
-            .tris
+        // The f64 triangles go before the BVH is built (its peak): a city's rough scene
+        // holds millions.
+        let world = std::mem::take(&mut self.tris);
+        self.scratch = Vec::new();
+        let local: Vec<Triangle> = world
             .iter()
             .map(|t| Triangle {
                 v0: to_local(t[0], origin),
@@ -195,6 +198,7 @@ impl SceneBuilder {
                 v2: to_local(t[2], origin),
             })
             .collect();
+        drop(world);
         if local.is_empty() {
             return Scene {
                 origin,

@@ -293,36 +293,44 @@ impl LocalFrame {
     }
 
     /// Rough geometry computed on `local` (= [`LocalFrame::model_to_local`] of `source`)
-    /// brought back to the source CRS for writing. Where an asset's rough geometry is its own
-    /// polygons at the rough LoD (LoD2 used unchanged), the source polygons are taken as read,
-    /// so that the writer keeps them verbatim; generated polygons are converted back and
-    /// rounded (1e-10 degree, 1e-6 unit). Oriented boxes are dropped (`obb: None`): they
-    /// are a tracing aid in the local frame, never written.
-    pub fn rough_to_source(
+    /// brought back to the source CRS for writing: borrowed unchanged for the identity.
+    /// Where an asset's rough geometry is its own polygons at the rough LoD (LoD2 used
+    /// unchanged), the source polygons are taken as read, so that the writer keeps them
+    /// verbatim; generated polygons are converted back and rounded (1e-10 degree, 1e-6 unit).
+    /// Oriented boxes are converted to their six faces (`obb: None`): the box is a tracing aid
+    /// in the local frame, never written. With `levels`, only the assets at level 1 (the only
+    /// ones written with their rough geometry) are converted; the others get an empty
+    /// [`RoughGeometry`].
+    pub fn rough_to_source<'r>(
         &self,
         local: &CityModel,
         source: &CityModel,
-        rough: &[RoughGeometry],
-    ) -> Vec<RoughGeometry> {
+        rough: &'r [RoughGeometry],
+        levels: Option<&[u8]>,
+    ) -> Cow<'r, [RoughGeometry]> {
         if self.is_identity() {
-            return rough.to_vec();
+            return Cow::Borrowed(rough);
         }
+        let written = |i: usize| levels.is_none_or(|l| l.get(i) == Some(&1));
         rough
             .iter()
             .enumerate()
             .map(|(i, r)| {
+                if !written(i) {
+                    return RoughGeometry::default();
+                }
+                let rp = r.polygons();
                 let own = local.assets.get(i).and_then(|la| {
                     let same: Vec<_> = la.polygons_at(r.lod).collect();
-                    (!r.polygons.is_empty()
-                        && same.len() == r.polygons.len()
-                        && same.iter().zip(&r.polygons).all(|(x, y)| *x == y))
+                    (!rp.is_empty()
+                        && same.len() == rp.len()
+                        && same.iter().zip(rp.iter()).all(|(x, y)| *x == y))
                     .then(|| source.assets.get(i))
                     .flatten()
                 });
                 let polygons = match own {
                     Some(sa) => sa.polygons_at(r.lod).cloned().collect(),
-                    None => r
-                        .polygons
+                    None => rp
                         .iter()
                         .map(|p| {
                             let mut p = p.clone();
@@ -467,7 +475,7 @@ mod tests {
         let (f, _) = LocalFrame::new(&Crs::parse("EPSG:6697"), &m.bbox());
         let local = f.model_to_local(&m);
         let rough = rough_model(&local, &RoughOptions::default());
-        let back = f.rough_to_source(&local, &m, &rough);
+        let back = f.rough_to_source(&local, &m, &rough, None);
         assert_eq!(back[0].lod, 2);
         assert_eq!(back[0].polygons, m.assets[0].geometries[0].polygons);
         assert!(!back[1].polygons.is_empty() && back[1].obb.is_none());
@@ -482,6 +490,12 @@ mod tests {
         let q = back[1].polygons[0].exterior[0];
         assert!((q.x - lat).abs() < 1e-3 && (q.y - lon).abs() < 1e-3);
         assert_eq!((q.x * 1e10).round() / 1e10, q.x);
+        // Only what is written at level 1 is converted; the identity converts nothing.
+        let some = f.rough_to_source(&local, &m, &rough, Some(&[1, 2]));
+        assert_eq!(some[0], back[0]);
+        assert_eq!(some[1], RoughGeometry::default());
+        let id = LocalFrame::IDENTITY.rough_to_source(&m, &m, &rough, None);
+        assert!(matches!(id, Cow::Borrowed(r) if std::ptr::eq(r, rough.as_slice())));
     }
 
     #[test]

@@ -59,6 +59,7 @@ use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon};
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;
 use serde_json::{json, Map, Value};
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::io::{self, Write};
 
@@ -426,7 +427,7 @@ impl<'a> Plan<'a> {
                 continue;
             }
             for (_, polys) in asset_lods(a, i, content) {
-                for p in polys {
+                for p in polys.iter() {
                     for q in p.points() {
                         bbox.add(*q);
                     }
@@ -611,7 +612,7 @@ impl<'a> Plan<'a> {
             for (lod, polys) in lods {
                 let g = geoms.entry(lod).or_default();
                 let sem = g.semantic(model, self.content, i);
-                s.polygons += g.add(verts, polys, sem);
+                s.polygons += g.add(verts, &polys, sem);
             }
         }
         for (lod, polys) in self.own_geometries(b) {
@@ -740,7 +741,7 @@ impl<'a> Plan<'a> {
         let lods = asset_lods(a, i, self.content);
         let mut geoms: BTreeMap<u8, Geom> = BTreeMap::new();
         for (lod, polys) in lods {
-            s.polygons += geoms.entry(lod).or_default().add(verts, polys, None);
+            s.polygons += geoms.entry(lod).or_default().add(verts, &polys, None);
         }
         let geometry: Vec<Value> = geoms
             .iter()
@@ -784,8 +785,8 @@ fn semantic_type(kind: AssetKind) -> Option<&'static str> {
 
 /// The polygons asset `i` has in the output, per LoD (ascending; several properties of one
 /// LoD together): see the module docs.
-fn asset_lods<'a>(a: &'a Asset, i: usize, content: Content<'a>) -> Vec<(u8, &'a [Polygon])> {
-    let mut out: Vec<(u8, &'a [Polygon])> = Vec::new();
+fn asset_lods<'a>(a: &'a Asset, i: usize, content: Content<'a>) -> Vec<(u8, Cow<'a, [Polygon]>)> {
+    let mut out: Vec<(u8, Cow<'a, [Polygon]>)> = Vec::new();
     match content.level(i) {
         0 => {}
         1 => {
@@ -801,7 +802,11 @@ fn asset_lods<'a>(a: &'a Asset, i: usize, content: Content<'a>) -> Vec<(u8, &'a 
                 out.push((g.lod, polys));
             }
         }
-        _ => out.extend(a.geometries.iter().map(|g| (g.lod, g.polygons.as_slice()))),
+        _ => out.extend(
+            a.geometries
+                .iter()
+                .map(|g| (g.lod, Cow::Borrowed(g.polygons.as_slice()))),
+        ),
     }
     out.retain(|(_, p)| !p.is_empty());
     out.sort_by_key(|(l, _)| *l);

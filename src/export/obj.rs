@@ -60,7 +60,7 @@ pub fn write_obj(
 ) -> io::Result<ExportSummary> {
     let mut bbox = Bbox::EMPTY;
     for (i, a) in assets_of(model, file) {
-        for p in level_polygons(a, content.rough(i), content.level(i)) {
+        for p in level_polygons(a, content.rough(i), content.level(i)).iter() {
             for q in p.points() {
                 bbox.add(*q);
             }
@@ -89,7 +89,7 @@ pub fn write_obj(
         let level = content.level(i);
         let polys = level_polygons(a, content.rough(i), level);
         tris.clear();
-        for p in polys {
+        for p in polys.iter() {
             triangulate(p, &mut tris);
         }
         if tris.is_empty() {

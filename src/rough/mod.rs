@@ -14,6 +14,7 @@ pub mod plane;
 use crate::model::{Asset, CityModel, Polygon};
 use obb::Obb;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// Options of the rough stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,12 +38,19 @@ impl Default for RoughOptions {
 }
 
 /// The rough geometry of one asset.
+///
+/// A boxed asset keeps its [`Obb`] only (the six faces are made where they are needed,
+/// [`RoughGeometry::polygons()`](method@RoughGeometry::polygons)): a city holds hundreds
+/// of thousands of boxes.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RoughGeometry {
-    /// Polygons, rings open. Generated polygons (boxes, generalised planes) have no holes
-    /// and no id; LoD2 polygons used unchanged keep their holes and ids.
+    /// Polygons besides the box's faces, rings open: generalised planes (no holes, no id),
+    /// LoD2 polygons used unchanged (holes and ids kept), or geometry brought back to the
+    /// source CRS. Empty for a box; read them all with
+    /// [`RoughGeometry::polygons()`](method@RoughGeometry::polygons).
     pub polygons: Vec<Polygon>,
-    /// The box, for assets replaced by their box (`None` for shell surfaces).
+    /// The box, for assets replaced by their box (`None` for shell surfaces); its six faces
+    /// ([`Obb::to_polygons`]) are the asset's rough polygons.
     pub obb: Option<Obb>,
     /// LoD of the geometry used as input (0 when the asset has no geometry); the writer
     /// puts the rough geometry into that LoD's property.
@@ -52,10 +60,34 @@ pub struct RoughGeometry {
 impl RoughGeometry {
     fn boxed(obb: Option<Obb>, lod: u8) -> Self {
         RoughGeometry {
-            polygons: obb.map(|b| b.to_polygons()).unwrap_or_default(),
+            polygons: Vec::new(),
             obb,
             lod,
         }
+    }
+
+    /// The rough polygons: the box's six faces (made now) followed by
+    /// [`RoughGeometry::polygons`](field@RoughGeometry::polygons), or those borrowed when
+    /// there is no box.
+    pub fn polygons(&self) -> Cow<'_, [Polygon]> {
+        match &self.obb {
+            Some(b) => {
+                let mut faces = b.to_polygons();
+                faces.extend(self.polygons.iter().cloned());
+                Cow::Owned(faces)
+            }
+            None => Cow::Borrowed(&self.polygons),
+        }
+    }
+
+    /// Number of rough polygons (`polygons().len()` without making them).
+    pub fn polygon_count(&self) -> usize {
+        self.polygons.len() + if self.obb.is_some() { 6 } else { 0 }
+    }
+
+    /// True when there is no rough polygon.
+    pub fn is_empty(&self) -> bool {
+        self.polygon_count() == 0
     }
 }
 
@@ -86,7 +118,7 @@ pub fn input_lod(asset: &Asset, opts: &RoughOptions) -> Option<u8> {
 ///         polygons: vec![quad(10.0), quad(12.0)] }],
 /// };
 /// let r = rough_asset(&chimney, &RoughOptions::default());
-/// assert_eq!((r.polygons.len(), r.lod), (6, 3));
+/// assert_eq!((r.polygon_count(), r.polygons().len(), r.lod), (6, 6, 3));
 /// assert!((r.obb.unwrap().volume() - 2.0).abs() < 1e-9);
 /// ```
 pub fn rough_asset(asset: &Asset, opts: &RoughOptions) -> RoughGeometry {
@@ -188,7 +220,7 @@ mod tests {
             vec![(3, lod3_wall(&f)), (2, vec![lod2.clone()])],
         );
         let r = rough_asset(&wall, &RoughOptions::default());
-        assert_eq!((r.lod, r.polygons.clone()), (2, vec![lod2]));
+        assert_eq!((r.lod, r.polygons().to_vec()), (2, vec![lod2]));
         let opts = RoughOptions {
             prefer_lod2: false,
             ..RoughOptions::default()
@@ -211,7 +243,8 @@ mod tests {
         let win = asset(AssetKind::Window, vec![(3, polys.clone())]);
         let r = rough_asset(&win, &RoughOptions::default());
         let obb = r.obb.unwrap();
-        assert_eq!(r.polygons.len(), 6);
+        assert_eq!(r.polygons().into_owned(), obb.to_polygons());
+        assert!(r.polygons.is_empty());
         assert!((obb.volume() - 1.2 * 1.5 * 0.08).abs() < 1e-9);
         assert!((obb.half.y - 0.04).abs() < 1e-9);
         assert!(polys
@@ -250,14 +283,14 @@ mod tests {
         for (a, r) in model.assets.iter().zip(&rough) {
             assert_eq!(*r, rough_asset(a, &RoughOptions::default()));
             if a.geometries.is_empty() {
-                assert!(r.polygons.is_empty() && r.obb.is_none());
+                assert!(r.is_empty() && r.obb.is_none());
             } else if a.kind.is_shell_surface() {
                 assert!(r.obb.is_none());
                 assert_eq!(r.polygons.len(), 1);
             } else {
                 // A flat polygon becomes a thin box.
                 let obb = r.obb.unwrap();
-                assert_eq!(r.polygons.len(), 6);
+                assert_eq!(r.polygon_count(), 6);
                 assert!((obb.volume() - 16.0 * obb::MIN_THICKNESS).abs() < 1e-9);
             }
         }

@@ -154,7 +154,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // Written geometry and the report are in the input's CRS.
     let model = framed.source;
     let pois = &framed.pois;
-    let rough = &lv.rough_source;
+    let rough = lv.rough_source();
 
     // Files of the model are the inputs that could be read, in input order.
     let targets: Vec<(usize, PathBuf)> = model

@@ -145,7 +145,8 @@ fn one(
         crate::log::warning!("rough: warning: {}: {w}", input.display());
     }
     let local = frame.model_to_local(&model);
-    let rough = frame.rough_to_source(&local, &model, &rough_model(&local, opts));
+    let rough_local = rough_model(&local, opts);
+    let rough = frame.rough_to_source(&local, &model, &rough_local, None);
     let levels = vec![1u8; model.assets.len()];
     if format != Format::CityGml {
         let content = Content::Levels {

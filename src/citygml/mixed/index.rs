@@ -56,12 +56,13 @@ pub(super) struct Name {
     pub(super) upper: bool,
 }
 
-/// One element.
+/// One element (32 bytes: a city file has millions).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Node {
     pub(super) start: u64,
     pub(super) end: u64,
-    pub(super) content_start: u64,
+    /// Length of the start tag: the content starts at `start + tag_len`.
+    pub(super) tag_len: u32,
     pub(super) parent: u32,
     /// Last descendant (the node itself when it has none).
     pub(super) last_desc: u32,
@@ -94,6 +95,13 @@ pub(super) struct Doc {
     pub(super) redeclared: HashSet<String>,
     /// Elements whose content was skipped, and the bytes of content skipped.
     pub(super) skipped: (usize, u64),
+}
+
+impl Node {
+    /// Byte offset of the element's content (after its start tag).
+    pub(super) fn content_start(&self) -> u64 {
+        self.start + u64::from(self.tag_len)
+    }
 }
 
 impl Doc {
@@ -414,10 +422,13 @@ pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc
                 };
                 let idx = doc.nodes.len() as u32;
                 let content_start = reader.buffer_position() + base + skipped;
+                let Ok(tag_len) = u32::try_from(content_start.saturating_sub(pos)) else {
+                    return Err(xml_err(path, pos, "a start tag of 4 GiB or more".into()));
+                };
                 doc.nodes.push(Node {
                     start: pos,
                     end: if empty { content_start } else { 0 },
-                    content_start,
+                    tag_len,
                     parent: stack.last().copied().unwrap_or(NONE),
                     last_desc: idx,
                     name,
@@ -748,6 +759,11 @@ fn scan_attrs<R>(
 mod tests {
     use super::*;
 
+    #[test]
+    fn a_node_is_32_bytes() {
+        assert_eq!(std::mem::size_of::<Node>(), 32);
+    }
+
     fn ids_of(c: &str) -> Option<Vec<String>> {
         let mut v = Vec::new();
         let ok = gml_ids(
@@ -887,7 +903,7 @@ mod tests {
             d.nodes
                 .iter()
                 .filter(|n| n.start >= skip[0].end)
-                .map(|n| (n.start, n.end, n.content_start))
+                .map(|n| (n.start, n.end, n.content_start()))
                 .collect::<Vec<_>>()
         };
         assert_eq!(tail(&full), tail(&fast));

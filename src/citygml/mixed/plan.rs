@@ -262,7 +262,7 @@ impl<'a> Plan<'a> {
     fn roughen(&mut self, a: usize) {
         let asset = &self.model.assets[a];
         let r = &self.rough[a];
-        if r.polygons.is_empty() {
+        if r.is_empty() {
             return;
         }
         let base = match &asset.id {
@@ -284,11 +284,13 @@ impl<'a> Plan<'a> {
             let doc = self.doc;
             let id = self
                 .ids
-                .fresh(&format!("{base}_g{j}"), r.polygons.len(), |s| doc.has_id(s));
-            let geom = self.encoder.geometry(enc, &id, &r.polygons);
+                .fresh(&format!("{base}_g{j}"), out.polygons.len(), |s| {
+                    doc.has_id(s)
+                });
+            let geom = self.encoder.geometry(enc, &id, &out.polygons);
             let node = self.doc.nodes[n as usize];
             let has_ref = self.ref_nodes.contains(&n);
-            let whole = has_ref || node.end == node.content_start || g.content.is_empty();
+            let whole = has_ref || node.end == node.content_start() || g.content.is_empty();
             let xml = if whole {
                 let q = &self.doc.name(n).qname;
                 format!("<{q}>{geom}</{q}>")
@@ -301,7 +303,7 @@ impl<'a> Plan<'a> {
                 content: g.content.clone(),
                 whole,
                 xml,
-                polygons: r.polygons.clone(),
+                polygons: out.polygons.to_vec(),
             });
         }
     }
@@ -417,7 +419,7 @@ impl<'a> Plan<'a> {
     /// Insert (or replace) the `skylod_level` attribute of the feature at node `n`.
     fn insert_level(&mut self, n: u32, level: u8) {
         let doc = self.doc;
-        let mut pos = doc.nodes[n as usize].content_start;
+        let mut pos = doc.nodes[n as usize].content_start();
         for c in doc.children(n) {
             let name = doc.name(c);
             let leading = match name.ns {
