@@ -128,7 +128,10 @@ impl SceneBuilder {
     /// [`BuildQuality::Fastest`] costs least overall (the paper district's selection scene,
     /// 166K triangles and 6 POIs of 10K rays: build 90-100 ms instead of 190-310 ms, tracing
     /// 60-65 ms instead of 31-37 ms); otherwise the default CWBVH. Call it after the last
-    /// triangle is added. Hits do not depend on the choice.
+    /// triangle is added. Occlusion ([`Scene::occluded`]) does not depend on the choice; a
+    /// first hit at exactly the distance of another triangle (coincident faces) may report
+    /// the other one, so the pipelines keep one layout whatever the number of POIs (a
+    /// shard's results must not depend on how the POIs were split).
     pub fn fit_to_rays(self, rays: usize) -> Self {
         if rays < self.tris.len() {
             self.with_layout(BvhLayout::Bvh2)
