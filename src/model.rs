@@ -5,6 +5,7 @@
 //! ([`glam::DVec3`]) in the model's CRS.
 
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt;
 use std::ops::Range;
@@ -434,11 +435,24 @@ pub struct CityModel {
 impl CityModel {
     /// Box of every asset polygon.
     pub fn bbox(&self) -> Bbox {
-        let mut b = Bbox::EMPTY;
-        for a in &self.assets {
-            b.union(&a.bbox());
-        }
-        b
+        // Every point of a city: in parallel over the assets (rayon's pool).
+        self.assets
+            .par_iter()
+            .with_min_len(1024)
+            .fold(
+                || Bbox::EMPTY,
+                |mut b, a| {
+                    b.union(&a.bbox());
+                    b
+                },
+            )
+            .reduce(
+                || Bbox::EMPTY,
+                |mut a, b| {
+                    a.union(&b);
+                    a
+                },
+            )
     }
 
     /// Total number of asset polygons over all LoDs.
