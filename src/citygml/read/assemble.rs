@@ -4,7 +4,18 @@
 use super::state::{EnvOwner, Owner, Parser};
 use super::xlink::{PolyRef, Walk};
 use crate::citygml::error::{Location, ReadError};
-use crate::model::{Asset, AssetKind, Bbox, CityModel, SourceFile, Warning};
+use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon, SourceFile, Warning};
+
+/// Drop the polygons at the end of the arena that no reference needs any more (`uses` 0),
+/// and give the arena's memory back once it is less than half used.
+fn release_consumed(polys: &mut Vec<Polygon>, uses: &[u32]) {
+    while !polys.is_empty() && uses.get(polys.len() - 1).is_none_or(|&u| u == 0) {
+        polys.pop();
+    }
+    if polys.capacity() > 4096 && polys.len() < polys.capacity() / 2 {
+        polys.shrink_to_fit();
+    }
+}
 
 impl Parser<'_> {
     pub(super) fn finish(mut self, len: u64, gzip: bool) -> Result<CityModel, ReadError> {
@@ -42,8 +53,12 @@ impl Parser<'_> {
             refs.push(out);
         }
         let mut polys = std::mem::take(&mut self.polys);
-        for (pg, rs) in pending.iter().zip(&refs) {
-            let resolved = self.materialise(rs, &mut polys, &mut uses);
+        // Last geometry first: the arena is consumed from its end, and what no reference
+        // needs any more is given back as the model's geometry grows (a city's polygons are
+        // never held twice: the read's peak is the model's size, not twice it).
+        for (pg, rs) in pending.iter().zip(refs).rev() {
+            let resolved = self.materialise(&rs, &mut polys, &mut uses);
+            release_consumed(&mut polys, &uses);
             let list = match pg.owner {
                 Owner::Asset(a) => self.assets.get_mut(a).map(|x| &mut x.geometries),
                 Owner::Building(b) => self.buildings.get_mut(b).map(|x| &mut x.geometries),

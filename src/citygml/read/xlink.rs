@@ -181,6 +181,7 @@ impl Parser<'_> {
 
     /// Turn references into polygons: a polygon used once is moved out of the arena, one used
     /// several times is cloned (the last use moves it); implicit geometry is transformed.
+    /// `uses` counts the uses left: 0 once a polygon is no longer needed.
     pub(super) fn materialise(
         &self,
         refs: &[PolyRef],
@@ -193,6 +194,8 @@ impl Parser<'_> {
                 continue;
             };
             let mut p = if r.implicit.is_none() && uses[r.poly as usize] <= 1 {
+                // The last use: moved out; nothing needs the slot any more.
+                uses[r.poly as usize] = 0;
                 std::mem::take(slot)
             } else {
                 uses[r.poly as usize] -= 1;
