@@ -441,22 +441,27 @@ fn merged_output_is_valid_with_unique_ids_and_the_envelope_of_all() {
         assert_eq!(unresolved_refs(&lod).unwrap(), Vec::<String>::new());
     }
     // Different CityGML versions are refused before any work (exit 2), naming the files;
-    // nothing is written. The same for rough; reproject (one target CRS) and lod are checked
-    // elsewhere.
+    // nothing is written. The same for rough and lod; reproject (one target CRS) compares
+    // versions only.
     let mixed = tmp.path().join("mixed.gml");
-    for cmd in ["convert", "rough"] {
-        let o = run(&[
+    for cmd in ["convert", "rough", "lod"] {
+        let v2 = data.join("kit-fzk-haus/citygml2/fzk_haus_lod2_v2.gml");
+        let v3 = data.join("kit-fzk-haus/citygml3");
+        let mut a = vec![
             os(cmd),
-            data.join("kit-fzk-haus/citygml2/fzk_haus_lod1_v2.gml")
-                .as_os_str(),
-            data.join("kit-fzk-haus/citygml3").as_os_str(),
+            v2.as_os_str(),
+            v3.as_os_str(),
             os("-o"),
             mixed.as_os_str(),
-        ]);
+        ];
+        if cmd == "lod" {
+            a.extend([os("--poi"), os("458877,5438353,1.5")]);
+        }
+        let o = run(&a);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{cmd}: {err}");
         assert!(
-            err.contains("cannot merge CityGML 2.0") && err.contains("fzk_haus_lod1_v2.gml"),
+            err.contains("cannot merge CityGML 2.0") && err.contains("fzk_haus_lod2_v2.gml"),
             "{cmd}: {err}"
         );
         assert!(

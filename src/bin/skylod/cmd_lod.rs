@@ -81,6 +81,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     if let Plan::Merge(t) = &plan {
         check_target(t, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+        skylod::citygml::merge::check_mergeable(&args.pois.inputs, true)?;
     } else {
         for out in &outputs {
             check_target(out, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
