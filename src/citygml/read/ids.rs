@@ -73,6 +73,7 @@ impl Parser<'_> {
             return;
         }
         let mut met = HashSet::with_capacity(repeated.len());
+        let marks = std::mem::take(self.marks.get_mut());
         let mut lines = LineMark {
             line: 1,
             line_start: 0,
@@ -83,7 +84,13 @@ impl Parser<'_> {
             if !repeated.contains(&r.hash) || met.insert(r.hash) {
                 continue;
             }
-            // lines up to the element, counted from the last one
+            // lines up to the element, counted from the last one or the nearest mark before it
+            let near = marks.partition_point(|m| m.counted_to <= r.pos);
+            if let Some(m) = near.checked_sub(1).and_then(|i| marks.get(i)) {
+                if m.counted_to > lines.counted_to {
+                    lines = *m;
+                }
+            }
             let from = usize::try_from(lines.counted_to).unwrap_or(usize::MAX);
             let to = usize::try_from(r.pos).unwrap_or(usize::MAX);
             if let Some((n, last)) = self.doc.get(from..to).and_then(newlines) {
@@ -181,7 +188,8 @@ mod tests {
 
     #[test]
     fn logged_ids_warn_as_the_streamed_check_per_id() {
-        for n in [0, 1, 2, 5, 9] {
+        // 400 members: ids far apart, lines counted from marks (MARK_STEP)
+        for n in [0, 1, 2, 5, 9, 400] {
             let d = doc(n);
             let streamed = read_from(
                 d.as_bytes(),
@@ -192,6 +200,23 @@ mod tests {
             .unwrap();
             let logged = in_memory(&d);
             assert_eq!(logged.warnings, streamed.warnings, "{n} members");
+            // split in three parts: the parts' logs and marks merged
+            let opts = ReadOptions {
+                split_min_bytes: 0,
+                split_parts: 3,
+                ..ReadOptions::default()
+            };
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(2)
+                .build()
+                .unwrap();
+            let split = pool.install(|| {
+                super::super::split::read_split(d.as_bytes(), Path::new("d.gml"), &opts, &|_, _| {})
+            });
+            if n >= 5 {
+                let split = split.expect("split read");
+                assert_eq!(split.warnings, streamed.warnings, "{n} members, split");
+            }
         }
         let m = in_memory(&doc(5));
         let dups: Vec<String> = m

@@ -286,6 +286,7 @@ impl Parser<'_> {
         self.warnings.clear();
         // the root's gml:id is logged by the first part: here the root encloses "no entry"
         self.id_log.clear();
+        self.marks.get_mut().clear();
         for f in &mut self.stack {
             f.rec = NO_REC;
         }
@@ -341,6 +342,13 @@ impl Parser<'_> {
             }
         }
         drop.sort_unstable();
+        let marks = self.marks.get_mut();
+        for mut m in o.marks.into_inner() {
+            if fix.line(&mut m.line) {
+                m.line_start = m.line_start.saturating_sub(fix.shift);
+            }
+            marks.push(m);
+        }
         let root_rec = self.stack.first().map_or(NO_REC, |f| f.rec);
         let log0 = u32::try_from(self.id_log.len()).ok()?;
         self.id_log.reserve(o.id_log.len());

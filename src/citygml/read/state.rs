@@ -10,7 +10,7 @@ use crate::model::{Asset, AssetKind, Building, CityGmlVersion, EnvelopeSite, Pol
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;
 use std::borrow::Cow;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -111,6 +111,9 @@ pub(super) struct Frame {
     pub(super) rec: u32,
 }
 
+/// Least distance in bytes between two [`Parser::marks`].
+pub(super) const MARK_STEP: u64 = 64 << 10;
+
 /// No entry of [`Parser::id_log`].
 pub(super) const NO_REC: u32 = u32::MAX;
 
@@ -159,6 +162,10 @@ pub(super) struct Parser<'d> {
     pub(super) event_pos: u64,
     /// Line counter: counted per event while streaming, or on demand from [`Parser::doc`].
     pub(super) lines: Cell<LineMark>,
+    /// Where the line counter stood, every [`MARK_STEP`] bytes or more of a document in
+    /// memory (increasing): lines of logged gml:ids are counted from the nearest one, without
+    /// touching again the memory of the document before it (let go while parsing).
+    pub(super) marks: RefCell<Vec<LineMark>>,
     /// The whole document when it is held in memory (file offsets, the byte-order mark
     /// included): lines are then counted only when a location needs one. Empty while
     /// streaming.
@@ -268,6 +275,7 @@ impl<'d> Parser<'d> {
                 line_start: 0,
                 counted_to: 0,
             }),
+            marks: RefCell::new(Vec::new()),
             doc,
             stack: Vec::with_capacity(64),
             version: None,
