@@ -49,6 +49,7 @@ impl Parser<'_> {
 
         // ids: syntax and uniqueness
         let mut rec = NO_REC;
+        let mut id_hash = 0;
         if let Some(id) = &attrs.id {
             if id.is_empty() || !(id.as_bytes()[0].is_ascii_alphabetic() || id.starts_with('_')) {
                 // built by hand, not with format!: some exporters (Ingolstadt) give every
@@ -61,12 +62,8 @@ impl Parser<'_> {
                 self.warn(msg);
             }
             let h = std::hash::BuildHasher::hash_one(&self.id_hasher, id.as_ref() as &str);
-            if !self.seen_ids.insert(h) {
-                self.warn(format!("duplicate gml:id \"{id}\""));
-            }
-            if self.id_log.is_some() {
-                rec = self.log_id(h, pos);
-            }
+            rec = self.check_id(id, h, pos);
+            id_hash = h;
         }
 
         if let Ns::CityGml(_, v) = ns {
@@ -195,11 +192,7 @@ impl Parser<'_> {
         let id = attrs.id.as_deref().map(|s| {
             let from = self.open_ids.len();
             self.open_ids.push_str(s);
-            (
-                from,
-                self.open_ids.len(),
-                std::hash::BuildHasher::hash_one(&self.id_hasher, s),
-            )
+            (from, self.open_ids.len(), id_hash)
         });
         self.stack.push(Frame {
             kind,

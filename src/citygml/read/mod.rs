@@ -12,8 +12,8 @@
 //!
 //! One concern per file: `events` (the event loop), `element` (start and end of an element),
 //! `classify` (what an element is), `attrs` (namespaces and attributes), `coords` (coordinates
-//! and other captured text), `geometry` (rings and polygons), `xlink` (references), `assemble`
-//! (the model after the last event), `position` (lines, columns, locations), `state` (the
+//! and other captured text), `geometry` (rings and polygons), `ids` (gml:id uniqueness),
+//! `xlink` (references), `assemble` (the model after the last event), `position` (lines, columns, locations), `state` (the
 //! parser's state and stack queries).
 //!
 //! # Example
@@ -38,6 +38,7 @@ mod coords;
 mod element;
 mod events;
 mod geometry;
+mod ids;
 mod position;
 mod split;
 mod state;

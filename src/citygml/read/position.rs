@@ -1,6 +1,6 @@
 //! Positions: byte offsets, line and column numbers, locations of errors and warnings.
 
-use super::state::Parser;
+use super::state::{Parser, MARK_STEP};
 use crate::citygml::error::{Location, ReadError};
 use crate::model::Warning;
 
@@ -31,6 +31,13 @@ impl Parser<'_> {
                 }
                 m.counted_to = self.event_pos;
                 self.lines.set(m);
+                let mut marks = self.marks.borrow_mut();
+                if marks
+                    .last()
+                    .is_none_or(|l| m.counted_to >= l.counted_to + MARK_STEP)
+                {
+                    marks.push(m);
+                }
             }
         }
         (m.line, m.line_start)

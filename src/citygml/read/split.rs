@@ -9,19 +9,16 @@
 //! is no `CityModel`, a cut that does not close a child of the root (found when the part
 //! before it ends inside an element, a comment or a CDATA section), relief geometry whose LoD
 //! depends on an earlier part, and any error (the serial read then reports the first one, as
-//! it does). A gml:id met in two parts gets its "duplicate" warning where the serial read
-//! gives it: the later parts log their ids (hash, offset) for that.
+//! it does). The parts' gml:id logs are merged into one, whose duplicates are then found as
+//! the serial read finds them (see `ids`).
 //!
 //! Lines are counted per part from the part's start (on demand, as the serial read does) and
 //! made absolute when the parts are merged: a part's first line continues the line before it.
 
 use super::events::{configure, finish, parse_events, BOM, RELEASE_STEP};
-use super::position::newlines;
-use super::state::{EnvOwner, IdRec, LineMark, Owner, Parser, Part};
+use super::state::{EnvOwner, IdRec, LineMark, Owner, Parser, Part, NO_REC};
 use super::ReadOptions;
-use crate::model::{CityModel, Warning};
-use foldhash::{HashSet, HashSetExt};
-use quick_xml::events::Event;
+use crate::model::CityModel;
 use quick_xml::NsReader;
 use std::collections::hash_map::Entry;
 use std::path::Path;
@@ -97,7 +94,7 @@ pub(super) fn read_split(
                 false,
             )
             .ok()?;
-            Some(Done::new(head, 0, (first.1 + bom) as u64, None))
+            Some(Done::new(head, 0, (first.1 + bom) as u64))
         },
         || {
             use rayon::prelude::*;
@@ -122,8 +119,6 @@ pub(super) fn read_split(
                         return None;
                     }
                     p.forget_root_start()?;
-                    p.id_log = Some(Vec::new());
-                    let root_id = p.nearest_id();
                     p.lines.set(LineMark {
                         line: 1,
                         line_start: from_doc,
@@ -141,7 +136,7 @@ pub(super) fn read_split(
                         false,
                     )
                     .ok()?;
-                    Some(Done::new(p, from_doc, (to + bom) as u64, root_id))
+                    Some(Done::new(p, from_doc, (to + bom) as u64))
                 })
                 .collect::<Vec<_>>()
         },
@@ -159,7 +154,7 @@ pub(super) fn read_split(
         if d.parser.stack.len() != depth {
             return None;
         }
-        m.absorb(d, i + 1 < last)?;
+        m.absorb(d)?;
     }
     let mut p = m.parser;
     p.stack.clear();
@@ -225,12 +220,10 @@ struct Done<'d> {
     line_start: u64,
     /// File offset of the part's start (0 for the first part: lines absolute).
     start: u64,
-    /// The root's gml:id.
-    root_id: Option<String>,
 }
 
 impl<'d> Done<'d> {
-    fn new(mut parser: Parser<'d>, start: u64, end: u64, root_id: Option<String>) -> Self {
+    fn new(mut parser: Parser<'d>, start: u64, end: u64) -> Self {
         parser.event_pos = end;
         let (line, line_start) = parser.line_mark();
         Done {
@@ -238,18 +231,16 @@ impl<'d> Done<'d> {
             line,
             line_start,
             start,
-            root_id,
         }
     }
 
-    /// Append the next part (`more`: others follow it).
-    fn absorb(&mut self, d: Done<'d>, more: bool) -> Option<()> {
+    /// Append the next part.
+    fn absorb(&mut self, d: Done<'d>) -> Option<()> {
         let fix = LineFix {
             line: self.line,
             shift: d.start.checked_sub(self.line_start)?,
         };
-        let dups = self.parser.duplicates(&d, &fix);
-        self.parser.absorb(d.parser, &fix, dups, more)?;
+        self.parser.absorb(d.parser, &fix)?;
         if d.line > 1 {
             self.line_start = d.line_start;
         }
@@ -293,101 +284,26 @@ impl Parser<'_> {
             return None;
         }
         self.warnings.clear();
-        self.seen_ids.clear();
+        // the root's gml:id is logged by the first part: here the root encloses "no entry"
+        self.id_log.clear();
+        self.marks.get_mut().clear();
+        for f in &mut self.stack {
+            f.rec = NO_REC;
+        }
         self.feature_counts.clear();
         self.ade_namespaces.clear();
         self.unknown_prefixes.clear();
         Some(())
     }
 
-    /// The "duplicate gml:id" warnings the serial read gives in part `d` for ids met in an
-    /// earlier part (the first time each is met in `d`; later ones `d` warned about itself),
-    /// each with the index among `d`'s warnings it goes before.
-    fn duplicates(&self, d: &Done<'_>, fix: &LineFix) -> Vec<(u32, Warning)> {
-        let o = &d.parser;
-        let Some(log) = &o.id_log else {
-            return Vec::new();
-        };
-        if !o.seen_ids.iter().any(|h| self.seen_ids.contains(h)) {
-            return Vec::new();
-        }
-        let mut met = HashSet::new();
-        let mut lines = LineMark {
-            line: 1,
-            line_start: d.start,
-            counted_to: d.start,
-        };
-        let mut out = Vec::new();
-        for r in log {
-            if !self.seen_ids.contains(&r.hash) || !met.insert(r.hash) {
-                continue;
-            }
-            // lines up to the element, counted from the last one
-            let from = usize::try_from(lines.counted_to).unwrap_or(usize::MAX);
-            let to = usize::try_from(r.pos).unwrap_or(usize::MAX);
-            if let Some((n, last)) = self.doc.get(from..to).and_then(newlines) {
-                lines.line += n;
-                lines.line_start = lines.counted_to + last as u64 + 1;
-            }
-            lines.counted_to = r.pos.max(lines.counted_to);
-            let mut line = lines.line;
-            let mut column = r.pos.saturating_sub(lines.line_start) + 1;
-            fix.place(&mut line, &mut column);
-            let gml_id = match log.get(r.parent as usize) {
-                Some(p) => self.id_text(p),
-                None => d.root_id.clone(),
-            };
-            let id = self.id_text(r).unwrap_or_default();
-            out.push((
-                r.warnings,
-                Warning {
-                    file: self.shared_path.clone(),
-                    line,
-                    column,
-                    gml_id,
-                    message: format!("duplicate gml:id \"{id}\""),
-                },
-            ));
-        }
-        out
-    }
-
-    /// The text of a logged gml:id: the attribute of the element's start tag whose value has
-    /// the logged hash.
-    fn id_text(&self, r: &IdRec) -> Option<String> {
-        let tag = self.doc.get(usize::try_from(r.pos).ok()?..)?;
-        let mut reader = quick_xml::Reader::from_reader(tag);
-        let e = match reader.read_event().ok()? {
-            Event::Start(e) | Event::Empty(e) => e,
-            _ => return None,
-        };
-        e.attributes().with_checks(false).find_map(|a| {
-            let a = a.ok()?;
-            if a.key.local_name().as_ref() != b"id" {
-                return None;
-            }
-            let v = a.unescape_value().ok()?;
-            let h = std::hash::BuildHasher::hash_one(&self.id_hasher, v.as_ref() as &str);
-            (h == r.hash).then(|| v.into_owned())
-        })
-    }
-
     /// Append the state of the next part of the document, read by `o`: indices offset,
     /// lines made absolute, counts summed, once-per-document warnings kept once. `None` where
-    /// the serial read could have read the part differently (relief LoD from an earlier part). `dups`: [`Parser::duplicates`]. `more`: other parts
-    /// follow.
-    fn absorb(
-        &mut self,
-        o: Parser<'_>,
-        fix: &LineFix,
-        dups: Vec<(u32, Warning)>,
-        more: bool,
-    ) -> Option<()> {
+    /// the serial read could have read the part differently (relief LoD from an earlier part).
+    /// The part's gml:ids are appended to the log as the serial read logs them (warnings
+    /// before each counted in the merged list, the root's entry for the root's children).
+    fn absorb(&mut self, o: Parser<'_>, fix: &LineFix) -> Option<()> {
         if o.relief_default_used && self.relief_lod != 2 {
             return None;
-        }
-        if more {
-            self.seen_ids.extend(o.seen_ids.iter().copied());
         }
         let b0 = self.buildings.len();
         let a0 = self.assets.len();
@@ -426,10 +342,20 @@ impl Parser<'_> {
             }
         }
         drop.sort_unstable();
-        let mut dups = dups.into_iter().peekable();
+        let marks = self.marks.get_mut();
+        for mut m in o.marks.into_inner() {
+            if fix.line(&mut m.line) {
+                m.line_start = m.line_start.saturating_sub(fix.shift);
+            }
+            marks.push(m);
+        }
+        let root_rec = self.stack.first().map_or(NO_REC, |f| f.rec);
+        let log0 = u32::try_from(self.id_log.len()).ok()?;
+        self.id_log.reserve(o.id_log.len());
+        let mut ids = o.id_log.into_iter().peekable();
         for (i, mut w) in o.warnings.into_iter().enumerate() {
-            while let Some((_, d)) = dups.next_if(|(at, _)| *at as usize <= i) {
-                self.warnings.push(d);
+            while let Some(r) = ids.next_if(|r| r.warnings as usize <= i) {
+                self.log_merged(r, log0, root_rec);
             }
             if drop.binary_search(&i).is_ok() {
                 continue;
@@ -438,7 +364,9 @@ impl Parser<'_> {
             w.file = self.shared_path.clone();
             self.warnings.push(w);
         }
-        self.warnings.extend(dups.map(|(_, d)| d));
+        for r in ids {
+            self.log_merged(r, log0, root_rec);
+        }
         self.envelopes.extend(o.envelopes);
         self.env_owners
             .extend(o.env_owners.into_iter().map(|e| match e {
@@ -491,6 +419,20 @@ impl Parser<'_> {
             self.relief_lod_set = true;
         }
         Some(())
+    }
+}
+
+impl Parser<'_> {
+    /// Append entry `r` of a later part's gml:id log, whose entries start at `log0` in the
+    /// merged log: its warnings counted in the merged list, its enclosing entry made global
+    /// (none in the part: the root's, `root_rec`).
+    fn log_merged(&mut self, mut r: IdRec, log0: u32, root_rec: u32) {
+        r.warnings = u32::try_from(self.warnings.len()).unwrap_or(u32::MAX);
+        r.parent = match r.parent {
+            NO_REC => root_rec,
+            p => p.saturating_add(log0),
+        };
+        self.id_log.push(r);
     }
 }
 

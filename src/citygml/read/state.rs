@@ -10,7 +10,7 @@ use crate::model::{Asset, AssetKind, Building, CityGmlVersion, EnvelopeSite, Pol
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;
 use std::borrow::Cow;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -111,11 +111,14 @@ pub(super) struct Frame {
     pub(super) rec: u32,
 }
 
+/// Least distance in bytes between two [`Parser::marks`].
+pub(super) const MARK_STEP: u64 = 64 << 10;
+
 /// No entry of [`Parser::id_log`].
 pub(super) const NO_REC: u32 = u32::MAX;
 
-/// One gml:id met by a parser reading a later part of a split document, so that the
-/// "duplicate gml:id" warning of an id also met in an earlier part can be placed afterwards.
+/// One gml:id met in a document held in memory, so that its "duplicate gml:id" warning can be
+/// placed after the last event (see [`Parser::id_log`]): 24 bytes per gml:id.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct IdRec {
     /// Hash of the id ([`Parser::id_hasher`]).
@@ -124,8 +127,8 @@ pub(super) struct IdRec {
     pub(super) pos: u64,
     /// Number of warnings before the element's duplicate warning would be.
     pub(super) warnings: u32,
-    /// The entry of the nearest enclosing element with a gml:id ([`NO_REC`]: none logged,
-    /// the root's or none).
+    /// The entry of the nearest enclosing element with a gml:id ([`NO_REC`]: none; in a
+    /// later part of a split document before it is merged: the root's or none).
     pub(super) parent: u32,
 }
 
@@ -159,6 +162,10 @@ pub(super) struct Parser<'d> {
     pub(super) event_pos: u64,
     /// Line counter: counted per event while streaming, or on demand from [`Parser::doc`].
     pub(super) lines: Cell<LineMark>,
+    /// Where the line counter stood, every [`MARK_STEP`] bytes or more of a document in
+    /// memory (increasing): lines of logged gml:ids are counted from the nearest one, without
+    /// touching again the memory of the document before it (let go while parsing).
+    pub(super) marks: RefCell<Vec<LineMark>>,
     /// The whole document when it is held in memory (file offsets, the byte-order mark
     /// included): lines are then counted only when a location needs one. Empty while
     /// streaming.
@@ -191,7 +198,8 @@ pub(super) struct Parser<'d> {
     /// Finds `xmlns` in a start tag's attributes.
     pub(super) xmlns: memchr::memmem::Finder<'static>,
     /// 64-bit hashes of every gml:id seen, for duplicate detection without storing strings
-    /// (a false "duplicate" needs a 64-bit collision: negligible).
+    /// (a false "duplicate" needs a 64-bit collision: negligible): while streaming only (a
+    /// document in memory logs its ids in [`Parser::id_log`] instead).
     pub(super) seen_ids: HashSet<u64>,
     pub(super) id_hasher: foldhash::fast::FixedState,
     pub(super) pending: Vec<PendingGeom>,
@@ -223,9 +231,11 @@ pub(super) struct Parser<'d> {
     pub(super) relief_default_used: bool,
     /// The root's envelope set [`Parser::srs_name`] (over any earlier `srsName`).
     pub(super) root_srs_set: bool,
-    /// Every gml:id met, in document order: kept by the parsers of a split document's later
-    /// parts only.
-    pub(super) id_log: Option<Vec<IdRec>>,
+    /// Every gml:id met, in document order, when the document is in memory (none while
+    /// streaming): duplicates are found once after the last event, by sorting the hashes,
+    /// cheaper than one insert per id into a hash set of every id (random access to a table
+    /// larger than the caches).
+    pub(super) id_log: Vec<IdRec>,
 }
 
 /// Attributes we care about, extracted from one start tag.
@@ -265,6 +275,7 @@ impl<'d> Parser<'d> {
                 line_start: 0,
                 counted_to: 0,
             }),
+            marks: RefCell::new(Vec::new()),
             doc,
             stack: Vec::with_capacity(64),
             version: None,
@@ -307,37 +318,8 @@ impl<'d> Parser<'d> {
             relief_lod_set: false,
             relief_default_used: false,
             root_srs_set: false,
-            id_log: None,
+            id_log: Vec::new(),
         }
-    }
-
-    /// Size the gml:id table for a document of about `bytes` bytes (real files hold about one
-    /// gml:id per 300 bytes; the table grows beyond the estimate when needed).
-    pub(super) fn expect_bytes(&mut self, bytes: u64) {
-        let ids = (bytes / 400).min(1 << 24) as usize;
-        self.seen_ids.reserve(ids);
-    }
-
-    /// Log a gml:id (see [`Parser::id_log`]); its entry.
-    pub(super) fn log_id(&mut self, hash: u64, pos: u64) -> u32 {
-        let parent = self
-            .stack
-            .iter()
-            .rev()
-            .find(|f| f.id.is_some())
-            .map_or(NO_REC, |f| f.rec);
-        let warnings = u32::try_from(self.warnings.len()).unwrap_or(u32::MAX);
-        let Some(log) = self.id_log.as_mut() else {
-            return NO_REC;
-        };
-        let at = u32::try_from(log.len()).unwrap_or(NO_REC);
-        log.push(IdRec {
-            hash,
-            pos,
-            warnings,
-            parent,
-        });
-        at
     }
 
     pub(super) fn current_dim(&self) -> u8 {

@@ -1,0 +1,256 @@
+//! gml:id uniqueness. A document in memory logs every gml:id (hash, offset, warnings before it,
+//! enclosing id) and finds the repeated ones once after the last event, by sorting the
+//! hashes: each "duplicate gml:id" warning is then inserted where a check per id would have
+//! given it (same message, location, gml:id and place among the warnings). While streaming
+//! (no document to read the ids back from) each id goes into a hash set as it is met.
+
+use super::position::newlines;
+use super::state::{IdRec, LineMark, Parser, NO_REC};
+use crate::model::Warning;
+use foldhash::{HashSet, HashSetExt};
+use quick_xml::events::Event;
+use rayon::slice::ParallelSliceMut;
+
+impl Parser<'_> {
+    /// Size the gml:id table or log for a document of about `bytes` bytes (real files hold
+    /// about one gml:id per 300 bytes; the table grows beyond the estimate when needed).
+    pub(super) fn expect_bytes(&mut self, bytes: u64) {
+        let ids = (bytes / 400).min(1 << 24) as usize;
+        if self.doc.is_empty() {
+            self.seen_ids.reserve(ids);
+        } else {
+            self.id_log.reserve(ids);
+        }
+    }
+
+    /// Check the gml:id (hashed: `hash`) of the element starting at `pos`: warn at once if it
+    /// was met before while streaming, else log it; the log entry ([`NO_REC`]: none).
+    pub(super) fn check_id(&mut self, id: &str, hash: u64, pos: u64) -> u32 {
+        if self.doc.is_empty() {
+            if !self.seen_ids.insert(hash) {
+                self.warn(format!("duplicate gml:id \"{id}\""));
+            }
+            return NO_REC;
+        }
+        self.log_id(hash, pos)
+    }
+
+    /// Log a gml:id (see [`Parser::id_log`]); its entry.
+    fn log_id(&mut self, hash: u64, pos: u64) -> u32 {
+        let parent = self
+            .stack
+            .iter()
+            .rev()
+            .find(|f| f.id.is_some())
+            .map_or(NO_REC, |f| f.rec);
+        let warnings = u32::try_from(self.warnings.len()).unwrap_or(u32::MAX);
+        let at = u32::try_from(self.id_log.len()).unwrap_or(NO_REC);
+        self.id_log.push(IdRec {
+            hash,
+            pos,
+            warnings,
+            parent,
+        });
+        at
+    }
+
+    /// Insert the "duplicate gml:id" warnings of the logged ids (every occurrence of an id
+    /// after its first), after the last event.
+    pub(super) fn duplicate_warnings(&mut self) {
+        let log = std::mem::take(&mut self.id_log);
+        if log.len() < 2 {
+            return;
+        }
+        let mut hashes: Vec<u64> = log.iter().map(|r| r.hash).collect();
+        hashes.par_sort_unstable();
+        let repeated: HashSet<u64> = hashes
+            .windows(2)
+            .filter(|w| w[0] == w[1])
+            .map(|w| w[0])
+            .collect();
+        drop(hashes);
+        if repeated.is_empty() {
+            return;
+        }
+        let mut met = HashSet::with_capacity(repeated.len());
+        let marks = std::mem::take(self.marks.get_mut());
+        let mut lines = LineMark {
+            line: 1,
+            line_start: 0,
+            counted_to: 0,
+        };
+        let mut dups: Vec<(u32, Warning)> = Vec::new();
+        for r in &log {
+            if !repeated.contains(&r.hash) || met.insert(r.hash) {
+                continue;
+            }
+            // lines up to the element, counted from the last one or the nearest mark before it
+            let near = marks.partition_point(|m| m.counted_to <= r.pos);
+            if let Some(m) = near.checked_sub(1).and_then(|i| marks.get(i)) {
+                if m.counted_to > lines.counted_to {
+                    lines = *m;
+                }
+            }
+            let from = usize::try_from(lines.counted_to).unwrap_or(usize::MAX);
+            let to = usize::try_from(r.pos).unwrap_or(usize::MAX);
+            if let Some((n, last)) = self.doc.get(from..to).and_then(newlines) {
+                lines.line += n;
+                lines.line_start = lines.counted_to + last as u64 + 1;
+            }
+            lines.counted_to = r.pos.max(lines.counted_to);
+            let gml_id = log.get(r.parent as usize).and_then(|p| self.id_text(p));
+            let id = self.id_text(r).unwrap_or_default();
+            dups.push((
+                r.warnings,
+                Warning {
+                    file: self.shared_path.clone(),
+                    line: lines.line,
+                    column: r.pos.saturating_sub(lines.line_start) + 1,
+                    gml_id,
+                    message: format!("duplicate gml:id \"{id}\""),
+                },
+            ));
+        }
+        let old = std::mem::take(&mut self.warnings);
+        self.warnings = Vec::with_capacity(old.len() + dups.len());
+        let mut dups = dups.into_iter().peekable();
+        for (i, w) in old.into_iter().enumerate() {
+            while let Some((_, d)) = dups.next_if(|(at, _)| *at as usize <= i) {
+                self.warnings.push(d);
+            }
+            self.warnings.push(w);
+        }
+        self.warnings.extend(dups.map(|(_, d)| d));
+    }
+
+    /// The text of a logged gml:id: the attribute of the element's start tag whose value has
+    /// the logged hash.
+    fn id_text(&self, r: &IdRec) -> Option<String> {
+        let tag = self.doc.get(usize::try_from(r.pos).ok()?..)?;
+        let mut reader = quick_xml::Reader::from_reader(tag);
+        let e = match reader.read_event().ok()? {
+            Event::Start(e) | Event::Empty(e) => e,
+            _ => return None,
+        };
+        e.attributes().with_checks(false).find_map(|a| {
+            let a = a.ok()?;
+            if a.key.local_name().as_ref() != b"id" {
+                return None;
+            }
+            let v = a.unescape_value().ok()?;
+            let h = std::hash::BuildHasher::hash_one(&self.id_hasher, v.as_ref() as &str);
+            (h == r.hash).then(|| v.into_owned())
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::events::{read_from, read_slice};
+    use super::super::ReadOptions;
+    use crate::model::CityModel;
+    use std::path::Path;
+
+    /// Ids repeated at the root, nested in a building, within one polygon's parts, with an
+    /// entity and invalid ids (warnings of their own) around them; `n` members.
+    fn doc(n: usize) -> String {
+        let mut s = String::from(
+            "\u{feff}<?xml version=\"1.0\"?>\n<CityModel gml:id=\"root\" xmlns=\"http://www.opengis.net/citygml/2.0\"\n  xmlns:gml=\"http://www.opengis.net/gml\" xmlns:bldg=\"http://www.opengis.net/citygml/building/2.0\">\n",
+        );
+        for i in 0..n {
+            let b = if i % 3 == 2 {
+                "root".into()
+            } else {
+                format!("b{}", i % 4)
+            };
+            s.push_str(&format!(
+                "<cityObjectMember><bldg:Building gml:id=\"{b}\"><bldg:lod2MultiSurface><gml:MultiSurface gml:id=\"9bad\">\n\
+                 <gml:surfaceMember><gml:Polygon gml:id=\"p{}&amp;\"><gml:exterior><gml:LinearRing gml:id=\"{b}\">\n\
+                 <gml:posList>0 0 5 1 0 5 1 1 5 0 0 5</gml:posList></gml:LinearRing></gml:exterior></gml:Polygon>\n\
+                 </gml:surfaceMember></gml:MultiSurface></bldg:lod2MultiSurface></bldg:Building></cityObjectMember>\n",
+                i % 2
+            ));
+        }
+        s.push_str("</CityModel>\n");
+        s
+    }
+
+    fn in_memory(d: &str) -> CityModel {
+        read_slice(
+            d.as_bytes(),
+            Path::new("d.gml"),
+            false,
+            &ReadOptions::default(),
+            &|_| {},
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn logged_ids_warn_as_the_streamed_check_per_id() {
+        // 400 members: ids far apart, lines counted from marks (MARK_STEP)
+        for n in [0, 1, 2, 5, 9, 400] {
+            let d = doc(n);
+            let streamed = read_from(
+                d.as_bytes(),
+                Path::new("d.gml"),
+                false,
+                &ReadOptions::default(),
+            )
+            .unwrap();
+            let logged = in_memory(&d);
+            assert_eq!(logged.warnings, streamed.warnings, "{n} members");
+            // split in three parts: the parts' logs and marks merged
+            let opts = ReadOptions {
+                split_min_bytes: 0,
+                split_parts: 3,
+                ..ReadOptions::default()
+            };
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(2)
+                .build()
+                .unwrap();
+            let split = pool.install(|| {
+                super::super::split::read_split(d.as_bytes(), Path::new("d.gml"), &opts, &|_, _| {})
+            });
+            if n >= 5 {
+                let split = split.expect("split read");
+                assert_eq!(split.warnings, streamed.warnings, "{n} members, split");
+            }
+        }
+        let m = in_memory(&doc(5));
+        let dups: Vec<String> = m
+            .warnings
+            .iter()
+            .filter(|w| w.message.starts_with("duplicate"))
+            .map(|w| {
+                format!(
+                    "{}:{} [{}] {}",
+                    w.line,
+                    w.column,
+                    w.gml_id.as_deref().unwrap_or(""),
+                    w.message
+                )
+            })
+            .collect();
+        // member 0: b0 again (its ring, in polygon p0&: column 64 of the member's second line);
+        // member 1: 9bad, b1; member 2: root (as a building nested in the root), 9bad, p0&,
+        // root (its ring); member 3: 9bad, p1&, b3; member 4: b0, 9bad, p0&, b0
+        let first = "5:64 [p0&] duplicate gml:id \"b0\"".to_string();
+        assert_eq!(dups.first(), Some(&first), "{dups:#?}");
+        let nested = "12:19 [root] duplicate gml:id \"root\"".to_string();
+        assert!(dups.contains(&nested), "{dups:#?}");
+        assert_eq!(dups.len(), 1 + 2 + 4 + 3 + 4, "{dups:#?}");
+        // the id warnings (duplicates and invalid ids) in document order
+        let ids: Vec<(u64, u64)> = m
+            .warnings
+            .iter()
+            .filter(|w| w.message.starts_with("duplicate") || w.message.contains("xs:ID"))
+            .map(|w| (w.line, w.column))
+            .collect();
+        assert!(
+            ids.len() > dups.len() && ids.windows(2).all(|w| w[0] <= w[1]),
+            "{ids:?}"
+        );
+    }
+}
