@@ -281,6 +281,17 @@ where
     Ok(n)
 }
 
+/// [`atomic_write`] of bytes already made (a report, a picture, a table): their length.
+pub fn atomic_write_bytes(out: &Path, bytes: &[u8]) -> Result<u64, WriteError> {
+    atomic_write(out, |w| {
+        w.write_all(bytes).map_err(|source| WriteError::Io {
+            file: out.to_path_buf(),
+            source,
+        })?;
+        Ok(bytes.len() as u64)
+    })
+}
+
 /// The recomputed envelope element, or `None` when its owner has no known geometry.
 pub fn envelope_xml(env: &EnvelopeSite) -> Option<String> {
     let b = env.bbox.to_array()?;

@@ -3,7 +3,7 @@
 use crate::common::{PoiArgs, RoughArgs, SilhouetteArgs, SiteArgs, DEFAULT_YEAR};
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
+use skylod::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use skylod::lod::LodOptions;
 use skylod::model::AssetKind;
 use skylod::pipeline::{sky_pictures, SkyPictureOptions};
@@ -218,15 +218,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             let levels = pic.levels.as_deref();
             let doc = fisheye_svg(&partition, &pic.cells, &kinds, levels, &opts);
             let text = doc.to_string();
-            atomic_write(out, |w| {
-                w.write_all(text.as_bytes())
-                    .map_err(|source| skylod::citygml::WriteError::Io {
-                        file: out.clone(),
-                        source,
-                    })?;
-                Ok(text.len() as u64)
-            })
-            .context("writing the picture")?;
+            atomic_write_bytes(out, text.as_bytes()).context("writing the picture")?;
             let sky = cell_shares(&pic.cells, &kinds, levels)
                 .into_iter()
                 .find(|s| s.0 == "sky")

@@ -5,7 +5,7 @@ use crate::tracing_args::Prepared;
 use crate::Outcome;
 use anyhow::Context;
 use serde_json::json;
-use skylod::citygml::write::{atomic_write, check_target, WriteOptions};
+use skylod::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
 use skylod::poi::Poi;
 use skylod::solar::{HorizonOptions, HorizonProfile};
 use std::io::Write;
@@ -122,15 +122,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     match &args.output {
         Some(out) => {
-            atomic_write(out, |w| {
-                w.write_all(text.as_bytes())
-                    .map_err(|source| skylod::citygml::WriteError::Io {
-                        file: out.clone(),
-                        source,
-                    })?;
-                Ok(text.len() as u64)
-            })
-            .with_context(|| format!("writing {}", out.display()))?;
+            atomic_write_bytes(out, text.as_bytes())
+                .with_context(|| format!("writing {}", out.display()))?;
         }
         None => out_err(std::io::stdout().lock().write_all(text.as_bytes()))?,
     }

@@ -5,7 +5,7 @@ use crate::log::{error, summary};
 use crate::outputs::Plan;
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
+use skylod::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use skylod::lod::LodOptions;
 use skylod::pipeline::{levels, levels_of, write_all, LevelsOptions};
 use skylod::report::{Parameters, Report, Timings};
@@ -289,17 +289,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
     }
     if let Some(path) = &args.report {
-        let json = serde_json::to_vec_pretty(&report)?;
-        atomic_write(path, |w| {
-            w.write_all(&json)
-                .and_then(|_| w.write_all(b"\n"))
-                .map_err(|e| skylod::citygml::WriteError::Io {
-                    file: path.clone(),
-                    source: e,
-                })?;
-            Ok(json.len() as u64 + 1)
-        })
-        .context("writing the report")?;
+        let mut json = serde_json::to_vec_pretty(&report)?;
+        json.push(b'\n');
+        atomic_write_bytes(path, &json).context("writing the report")?;
     }
     // The process ends here: handing a city's model back to the allocator piece by piece
     // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
