@@ -34,19 +34,7 @@ pub fn pois(shard: Option<Shard>, pois: Vec<Poi>, cmd: &str) -> Vec<Poi> {
     let Some(s) = shard else { return pois };
     let at: Vec<glam::DVec3> = pois.iter().map(|p| p.position).collect();
     let range = s.pois(&at);
-    let total = pois.len();
-    let mine: Vec<Poi> = pois
-        .into_iter()
-        .skip(range.start)
-        .take(range.len())
-        .collect();
-    crate::log::summary!(
-        "{cmd}: shard {s}: POIs {}..{} of {total} ({})",
-        range.start,
-        range.end,
-        mine.len()
-    );
-    mine
+    keep(pois, range, s, cmd, "POIs")
 }
 
 /// The files of `shard` (all without one) among `files`, one per input in path order (the
@@ -54,15 +42,26 @@ pub fn pois(shard: Option<Shard>, pois: Vec<Poi>, cmd: &str) -> Vec<Poi> {
 /// stderr which.
 pub fn files<T>(shard: Option<Shard>, files: Vec<T>, cmd: &str) -> Vec<T> {
     let Some(s) = shard else { return files };
-    let total = files.len();
-    let range = s.files(total);
-    let mine: Vec<T> = files
+    let range = s.files(files.len());
+    keep(files, range, s, cmd, "files")
+}
+
+/// The `range` of `items` (shard `s`'s part); says on stderr which.
+fn keep<T>(
+    items: Vec<T>,
+    range: std::ops::Range<usize>,
+    s: Shard,
+    cmd: &str,
+    what: &str,
+) -> Vec<T> {
+    let total = items.len();
+    let mine: Vec<T> = items
         .into_iter()
         .skip(range.start)
         .take(range.len())
         .collect();
     crate::log::summary!(
-        "{cmd}: shard {s}: files {}..{} of {total} ({})",
+        "{cmd}: shard {s}: {what} {}..{} of {total} ({})",
         range.start,
         range.end,
         mine.len()
