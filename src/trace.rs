@@ -123,25 +123,6 @@ impl SceneBuilder {
         self
     }
 
-    /// Choose layout and effort for a scene that will trace about `rays` rays: when they are
-    /// fewer than its triangles, building dominates and [`BvhLayout::Bvh2`] with
-    /// [`BuildQuality::Fastest`] costs least overall (the paper district's selection scene,
-    /// 166K triangles and 6 POIs of 10K rays: build 90-100 ms instead of 190-310 ms, tracing
-    /// 60-65 ms instead of 31-37 ms); otherwise the default CWBVH. Call it after the last
-    /// triangle is added. Occlusion ([`Scene::occluded`]) does not depend on the choice; a
-    /// first hit at exactly the distance of another triangle (coincident faces) may report
-    /// the other one, so the pipelines keep one layout whatever the number of POIs (a
-    /// shard's results must not depend on how the POIs were split).
-    pub fn fit_to_rays(self, rays: usize) -> Self {
-        if rays < self.tris.len() {
-            self.with_layout(BvhLayout::Bvh2)
-                .with_quality(BuildQuality::Fastest)
-        } else {
-            self.with_layout(BvhLayout::default())
-                .with_quality(BuildQuality::default())
-        }
-    }
-
     /// Number of triangles collected so far.
     pub fn len(&self) -> usize {
         self.tris.len()
@@ -703,25 +684,6 @@ mod tests {
     fn fastest_bvh2_matches_brute_force() {
         let hits = check_against_brute_with(3, 400, 2000, BvhLayout::Bvh2, BuildQuality::Fastest);
         assert!(hits > 100, "too few hits to mean anything: {hits}");
-    }
-
-    #[test]
-    fn few_rays_choose_the_quick_build() {
-        let mut rng = ChaCha8Rng::seed_from_u64(4);
-        let mut b = SceneBuilder::new();
-        for (i, t) in random_scene(&mut rng, 300).iter().enumerate() {
-            b.add_triangle(i as u32, *t);
-        }
-        let few = b.clone().fit_to_rays(100);
-        assert_eq!(
-            (few.layout, few.quality),
-            (BvhLayout::Bvh2, BuildQuality::Fastest)
-        );
-        let many = b.fit_to_rays(10_000);
-        assert_eq!(
-            (many.layout, many.quality),
-            (BvhLayout::Cwbvh, BuildQuality::Fast)
-        );
     }
 
     proptest! {
