@@ -68,7 +68,6 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     // Every target is checked before any work; a merge reprojects each input into a staging
     // directory, then merges them.
-    let mut failed = 0usize;
     let Targets {
         todo,
         refused,
@@ -78,7 +77,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     } = plan.targets(&args.inputs, &wopts, shard, "reproject", false, |e| {
         crate::log::error!("{e}");
     })?;
-    failed += refused;
+    let mut failed = refused;
     let total = todo.len() + refused;
     let target_name = args.output.as_path();
     let (mut parts, mut names) = (Vec::new(), Vec::new());
