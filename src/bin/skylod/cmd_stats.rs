@@ -44,13 +44,22 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if args.inputs.is_empty() {
         return Ok(Outcome::Ok);
     }
+    // One input: the process ends after its table, so its model is not handed back to the
+    // allocator piece by piece (a fifth of the run on a 3 MB tile). A batch frees each model
+    // after its statistics, so memory stays that of the files being read.
+    let single = args.inputs.len() == 1;
     let results: Vec<_> = args.jobs.install(|| {
         args.inputs
             .par_iter()
             .map(|p| {
                 read_file(p).map(|mut m| {
                     args.crs.apply(&mut m);
-                    (Stats::of(&m), m.warnings)
+                    let stats = Stats::of(&m);
+                    let warnings = std::mem::take(&mut m.warnings);
+                    if single {
+                        std::mem::forget(m);
+                    }
+                    (stats, warnings)
                 })
             })
             .collect()
@@ -64,6 +73,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                     for w in &warnings {
                         crate::log::warning!("warning: {w}");
                     }
+                }
+                if single {
+                    std::mem::forget(warnings);
                 }
                 ok.push((path, s));
             }
