@@ -605,3 +605,53 @@ fn jobs_one_and_two_give_the_same_bytes() {
     assert!(outs[0].2 == outs[1].2, "lod: --jobs 1 and 2 differ");
     assert_eq!(outs[0].3, outs[1].3, "svf: --jobs 1 and 2 differ");
 }
+
+/// A merge in which some inputs fail: the target holds the others and says so (exit 1); when
+/// every input fails nothing is written and no staging directory is left (exit 1). The same
+/// last step in convert and rough.
+#[test]
+fn a_merge_holds_the_inputs_that_did_not_fail() {
+    let tmp = tempfile::tempdir().unwrap();
+    let good = fixture("chimney-citygml2.gml");
+    let text = std::fs::read(&good).unwrap();
+    let (b1, b2) = (tmp.path().join("b1.gml"), tmp.path().join("b2.gml"));
+    std::fs::write(&b1, &text[..text.len() / 2]).unwrap();
+    std::fs::write(&b2, &text[..text.len() / 3]).unwrap();
+    for cmd in ["convert", "rough"] {
+        let out = tmp.path().join(format!("{cmd}-some.gml"));
+        let o = run(&[
+            os(cmd),
+            good.as_os_str(),
+            b1.as_os_str(),
+            os("-o"),
+            out.as_os_str(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{cmd}: {err}");
+        assert!(err.contains("holds 1 of the 2 inputs"), "{cmd}: {err}");
+        assert!(err.contains("merged 1 file(s) into"), "{cmd}: {err}");
+        assert!(err.contains("1 file(s) ok, 1 failed"), "{cmd}: {err}");
+        let merged = std::fs::read_to_string(&out).unwrap();
+        assert_eq!(merged.matches("<bldg:Building ").count(), 1, "{cmd}");
+
+        let out = tmp.path().join(format!("{cmd}-none.gml"));
+        let o = run(&[
+            os(cmd),
+            b1.as_os_str(),
+            b2.as_os_str(),
+            os("-o"),
+            out.as_os_str(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{cmd}: {err}");
+        assert!(err.contains("nothing to merge"), "{cmd}: {err}");
+        assert!(err.contains("0 file(s) ok, 2 failed"), "{cmd}: {err}");
+        assert!(!out.exists(), "{cmd}: nothing written");
+    }
+    let left: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with(".skylod"))
+        .collect();
+    assert!(left.is_empty(), "staging directories left: {left:?}");
+}

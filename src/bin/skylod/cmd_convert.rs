@@ -3,7 +3,7 @@
 //! ([`crate::outputs`]), files in parallel (`--jobs`), the same bytes whatever the number.
 
 use crate::common::{summary_line, JobsArgs};
-use crate::log::{error, summary, warning};
+use crate::log::{error, summary};
 use crate::outputs::{self, Plan, Targets};
 use crate::Outcome;
 use rayon::prelude::*;
@@ -103,27 +103,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if let (Some(staging), Plan::Merge(target)) = (&staging, &plan) {
-        if parts.is_empty() {
-            error!("no input could be read; {} not written", target.display());
-        } else {
-            match staging.merge(&parts, &names, target, &wopts) {
-                Ok(s) => {
-                    if failed > 0 {
-                        warning!(
-                            "warning: {} holds {} of the {} inputs (the others failed)",
-                            target.display(),
-                            parts.len(),
-                            paths.len()
-                        );
-                    }
-                    summary!("{}", outputs::merge_line(&s, target));
-                }
-                Err(e) => {
-                    error!("{e:#}");
-                    failed += ok;
-                    ok = 0;
-                }
-            }
+        if !staging.finish(&parts, &names, target, &wopts, paths.len()) {
+            failed += ok;
+            ok = 0;
         }
     }
     let polys = (format == Format::CityGml).then_some((polygons, polygons));

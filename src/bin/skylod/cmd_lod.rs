@@ -213,18 +213,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             .filter(|(f, _)| written.get(*f).is_some_and(Option::is_some))
             .map(|(f, out)| (out.clone(), model.files[*f].path.clone()))
             .unzip();
-        if parts.is_empty() {
-            error!("nothing to merge; {} not written", t.display());
+        if !st.finish(&parts, &names, t, &wopts, targets.len()) {
             failed = true;
-        } else {
-            match st.merge(&parts, &names, t, &wopts) {
-                Ok(s) => summary!("{}", crate::outputs::merge_line(&s, t)),
-                Err(e) => {
-                    error!("{e:#}");
-                    failed = true;
-                    written.iter_mut().for_each(|w| *w = None);
-                }
-            }
+            written.iter_mut().for_each(|w| *w = None);
         }
     }
     let write_ms = ms(t_write);

@@ -118,11 +118,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if let (Some(st), crate::outputs::Plan::Merge(t)) = (&staging, &plan) {
-        if !parts.is_empty() {
-            crate::log::summary!(
-                "{}",
-                crate::outputs::merge_line(&st.merge(&parts, &names, t, &wopts)?, t)
-            );
+        if !st.finish(&parts, &names, t, &wopts, total) {
+            failed = total;
         }
     }
     if failed > 0 {

@@ -90,17 +90,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if let (Some(st), crate::outputs::Plan::Merge(t)) = (&staging, &plan) {
-        if parts.is_empty() {
-            crate::log::error!("no input could be read; {} not written", t.display());
-        } else {
-            match st.merge(&parts, &names, t, &wopts) {
-                Ok(s) => crate::log::summary!("{}", crate::outputs::merge_line(&s, t)),
-                Err(e) => {
-                    crate::log::error!("{e:#}");
-                    failed += ok;
-                    ok = 0;
-                }
-            }
+        if !st.finish(&parts, &names, t, &wopts, args.inputs.len()) {
+            failed += ok;
+            ok = 0;
         }
     }
     crate::log::summary!(

@@ -259,15 +259,44 @@ impl Staging {
         self.dir.path().join(format!("{k:06}.gml"))
     }
 
-    /// Merge `parts` (in order; written from the inputs `names`) into `target`.
-    pub fn merge(
+    /// Merge `parts` (in input order; written from the inputs `names`) into `target`, the
+    /// last step of every command that merges: prints the merge line — with a warning when
+    /// some of the `inputs` failed and the target holds only the others — or why nothing was
+    /// written. False when `target` was not written (no part, or the merge failed): the
+    /// caller then counts every input as failed (exit 1).
+    pub fn finish(
         &self,
         parts: &[PathBuf],
         names: &[PathBuf],
         target: &Path,
         opts: &WriteOptions,
-    ) -> anyhow::Result<MergeSummary> {
-        Ok(merge_named(parts, names, target, opts)?)
+        inputs: usize,
+    ) -> bool {
+        if parts.is_empty() {
+            crate::log::error!(
+                "nothing to merge (every input failed); {} not written",
+                target.display()
+            );
+            return false;
+        }
+        match merge_named(parts, names, target, opts) {
+            Ok(s) => {
+                if parts.len() < inputs {
+                    crate::log::warning!(
+                        "warning: {} holds {} of the {} inputs (the others failed)",
+                        target.display(),
+                        parts.len(),
+                        inputs
+                    );
+                }
+                crate::log::summary!("{}", merge_line(&s, target));
+                true
+            }
+            Err(e) => {
+                crate::log::error!("{e:#}");
+                false
+            }
+        }
     }
 }
 
