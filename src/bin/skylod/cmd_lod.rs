@@ -2,10 +2,10 @@
 
 use crate::common::{ms, warn_flags, OutputArgs, PoiArgs, RoughArgs, SelectArgs};
 use crate::log::{error, summary};
-use crate::outputs::Plan;
+use crate::outputs::{Plan, Targets};
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
+use skylod::citygml::write::{atomic_write_bytes, is_stdout, WriteOptions};
 use skylod::lod::LodOptions;
 use skylod::pipeline::{levels, levels_of, write_all, LevelsOptions};
 use skylod::report::{Parameters, Report, Timings};
@@ -57,41 +57,33 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         None => args.region.points(&args.pois)?,
     };
     let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
-    // A merge (-o FILE or -o - for several inputs): each input's model is written to a
-    // staging directory, then merged into the target.
-    let staging = match &plan {
-        Plan::Merge(t) => Some(crate::outputs::Staging::new(t)?),
-        _ => None,
-    };
-    let (outputs, mirror): (Vec<PathBuf>, bool) = match (plan.per_input(), &staging) {
-        (Some((v, m)), _) => (v.to_vec(), m),
-        (None, Some(st)) => ((0..inputs.len()).map(|k| st.part(k)).collect(), false),
-        (None, None) => (Vec::new(), false),
-    };
     // Every target is checked before any work: a refusal after minutes of reading and
-    // tracing helps nobody.
+    // tracing helps nobody, and one scene needs every input, so any refusal is fatal. A merge
+    // (-o FILE or -o - for several inputs) writes each input's model to a staging directory,
+    // then merges them into the target.
     let wopts = WriteOptions {
         overwrite: args.out.overwrite,
         protect: args.pois.inputs.clone(),
         keep_envelopes: false,
     };
-    let part_opts = WriteOptions {
-        overwrite: true,
-        ..wopts.clone()
-    };
-    if let Plan::Merge(t) = &plan {
-        check_target(t, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
-        skylod::citygml::merge::check_mergeable(&args.pois.inputs, true)?;
-    } else {
-        for out in &outputs {
-            check_target(out, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
+    let Targets {
+        todo,
+        refused,
+        staging,
+        mirror,
+        write_opts,
+    } = plan.targets(&args.pois.inputs, &wopts, None, "lod", true, |e| {
+        error!("{e:#}");
+    })?;
+    if refused > 0 {
+        bail!("{refused} output(s) refused (above): lod writes every input's model, nothing done");
+    }
+    let mut outputs: Vec<Option<PathBuf>> = vec![None; inputs.len()];
+    for (k, out) in todo {
+        if let Some(o) = outputs.get_mut(k) {
+            *o = Some(out);
         }
     }
-    let write_opts = if staging.is_some() {
-        &part_opts
-    } else {
-        &wopts
-    };
     if let Some(path) = &args.report {
         if is_stdout(path) && is_stdout(&args.out.output) {
             bail!("the model and the report cannot both go to standard output");
@@ -164,7 +156,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         .enumerate()
         .filter_map(|(f, src)| {
             let k = all_inputs.iter().position(|p| p == &src.path)?;
-            Some((f, outputs.get(k)?.clone()))
+            Some((f, outputs.get(k)?.clone()?))
         })
         .collect();
     let t_write = Instant::now();
@@ -178,7 +170,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         Plan::Merge(t) => t.display().to_string(),
         _ => out.display().to_string(),
     };
-    let results = write_all(model, &targets, &lv, format, write_opts, &progress)?;
+    let results = write_all(model, &targets, &lv, format, &write_opts, &progress)?;
     let mut written: Vec<Option<(String, usize)>> = vec![None; model.files.len()];
     for ((f, out), r) in targets.iter().zip(results) {
         let s = match r {

@@ -229,17 +229,6 @@ pub struct Staging {
     dir: tempfile::TempDir,
 }
 
-impl Plan {
-    /// The outputs per input (`None` for a merge) and whether they mirror a tree.
-    pub fn per_input(&self) -> Option<(&[PathBuf], bool)> {
-        match self {
-            Plan::PerInput(v) => Some((v, false)),
-            Plan::Mirror(v) => Some((v, true)),
-            Plan::Merge(_) => None,
-        }
-    }
-}
-
 impl Staging {
     /// A staging directory for a merge into `target`.
     pub fn new(target: &Path) -> anyhow::Result<Staging> {
