@@ -38,6 +38,7 @@
 use crate::geom::triangulate;
 use crate::model::{Bbox, Polygon};
 use glam::{DVec3, Vec3A};
+use rayon::prelude::*;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::leaf_collapser::collapse;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
@@ -195,7 +196,7 @@ impl SceneBuilder {
         let world = std::mem::take(&mut self.tris);
         self.scratch = Vec::new();
         let local: Vec<Triangle> = world
-            .iter()
+            .par_iter()
             .map(|t| Triangle {
                 v0: to_local(t[0], origin),
                 v1: to_local(t[1], origin),
