@@ -24,13 +24,21 @@
 //! At equal build effort the CWBVH traces 5-20 % faster, so it is the default; its
 //! conversion from the binary tree makes it slower to build, and when building
 //! dominates (many small scenes, few rays) `Bvh2` + [`BuildQuality::Fastest`] is the
-//! better choice. obvhs is used without its `parallel` feature (single-thread build).
+//! better choice: [`SceneBuilder::for_rays`] is the one rule that picks it (`lod`'s
+//! selection scene). obvhs is used without its `parallel` feature (single-thread build).
 //!
 //! Triangles are intersected with the *watertight* test of Woop, Benthin and Wald
 //! (JCGT 2013) in f32, with an exact f64 fallback when an edge function is zero: a ray
 //! through the shared edge or vertex of two triangles of one mesh hits at least one of
 //! them. The distance of the closest hit is then refined in f64 against the plane of
 //! the hit triangle.
+//!
+//! Results do not depend on the tree: [`Scene::first_hit`] returns the smallest f32
+//! distance and, among triangles at exactly that distance (duplicated or coincident
+//! faces, shared edges), the smallest triangle index; the node boxes are grown a little
+//! (`node_pad`) so that obvhs' non-robust slab test never drops a triangle the triangle
+//! test hits. So layout, build effort, thread count and how POIs are split into shards
+//! never change an answer (`ties_resolve_to_smallest_triangle_index_whatever_the_tree`).
 //!
 //! All queries take `&self`; a [`Scene`] is `Send + Sync`, so callers parallelise over
 //! rays with rayon. Results do not depend on the thread count.
