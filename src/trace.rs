@@ -46,7 +46,6 @@
 use crate::geom::triangulate;
 use crate::model::{Bbox, Polygon};
 use glam::{DVec3, Vec3A};
-use rayon::prelude::*;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::leaf_collapser::collapse;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
@@ -57,6 +56,7 @@ use obvhs::ploc::PlocBuilder;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
+use rayon::prelude::*;
 
 /// Which obvhs acceleration structure a [`Scene`] uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -135,15 +135,18 @@ impl SceneBuilder {
     }
 
     /// Choose layout and effort for a scene that will trace about `rays` rays (the one
-    /// rule, used by `lod`'s selection scene): when they are fewer than its triangles,
-    /// building dominates and [`BvhLayout::Bvh2`] with [`BuildQuality::Fastest`] costs
-    /// least overall (the paper district's selection scene, 166K triangles, 6 POIs of 10K
-    /// rays: build + select about 165 ms instead of 235 ms); otherwise the default CWBVH
-    /// with [`BuildQuality::Fast`]. Call it after the last triangle is added. Results do
-    /// not depend on the choice ([`Scene::first_hit`] breaks ties by triangle index), so
-    /// a shard that traces fewer rays may build another tree and still agree.
+    /// rule, used by `lod`'s selection scene): when they are fewer than half its
+    /// triangles, building dominates and [`BvhLayout::Bvh2`] with [`BuildQuality::Fastest`]
+    /// costs least overall; otherwise the default CWBVH with [`BuildQuality::Fast`].
+    /// Measured (BENCHMARKS.md, "BVH: deterministic ties, quicker build"): the quick build
+    /// saves 0.8-0.95 µs per triangle and costs 0.6-1.2 µs more per ray (paper district,
+    /// 166K triangles, 60K rays: build + select ~295 → ~200 ms; 18x18 city, 1.33M
+    /// triangles, 1M rays: a wash, so it keeps the CWBVH). Call it after the last triangle
+    /// is added. Results do not depend on the choice ([`Scene::first_hit`] breaks ties by
+    /// triangle index), so a shard that traces fewer rays may build another tree and
+    /// still agree.
     pub fn for_rays(self, rays: usize) -> Self {
-        if rays < self.tris.len() {
+        if rays.saturating_mul(2) < self.tris.len() {
             self.with_layout(BvhLayout::Bvh2)
                 .with_quality(BuildQuality::Fastest)
         } else {
