@@ -23,7 +23,7 @@ use crate::model::CityModel;
 use crate::poi::Poi;
 use crate::progress::{check, stage, Progress, Stage};
 use crate::rough::{rough_model, RoughGeometry, RoughOptions};
-use crate::scene::selection_scene;
+use crate::scene::selection_scene_for_rays;
 use crate::select::{select_with, SelectError, SelectOptions, Selection};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -87,7 +87,7 @@ pub fn lod_with(
     check(progress, Stage::Bvh)?;
     let t = Instant::now();
     let scene = stage(progress, Stage::Bvh, 1, 0, || {
-        selection_scene(model, &rough)
+        selection_scene_for_rays(model, &rough, pois.len().saturating_mul(opts.select.rays))
     });
     let bvh_s = t.elapsed().as_secs_f64();
     let t = Instant::now();

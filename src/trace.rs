@@ -24,7 +24,8 @@
 //! At equal build effort the CWBVH traces 5-20 % faster, so it is the default; its
 //! conversion from the binary tree makes it slower to build, and when building
 //! dominates (many small scenes, few rays) `Bvh2` + [`BuildQuality::Fastest`] is the
-//! better choice. obvhs is used without its `parallel` feature (single-thread build).
+//! better choice: [`SceneBuilder::for_rays`] is the one rule that picks it (`lod`'s
+//! selection scene). obvhs is used without its `parallel` feature (single-thread build).
 //!
 //! Triangles are intersected with the *watertight* test of Woop, Benthin and Wald
 //! (JCGT 2013) in f32, with an exact f64 fallback when an edge function is zero: a ray
@@ -32,20 +33,30 @@
 //! them. The distance of the closest hit is then refined in f64 against the plane of
 //! the hit triangle.
 //!
+//! Results do not depend on the tree: [`Scene::first_hit`] returns the smallest f32
+//! distance and, among triangles at exactly that distance (duplicated or coincident
+//! faces, shared edges), the smallest triangle index; the node boxes are grown a little
+//! (`node_pad`) so that obvhs' non-robust slab test never drops a triangle the triangle
+//! test hits. So layout, build effort, thread count and how POIs are split into shards
+//! never change an answer (`ties_resolve_to_smallest_triangle_index_whatever_the_tree`).
+//!
 //! All queries take `&self`; a [`Scene`] is `Send + Sync`, so callers parallelise over
 //! rays with rayon. Results do not depend on the thread count.
 
 use crate::geom::triangulate;
 use crate::model::{Bbox, Polygon};
 use glam::{DVec3, Vec3A};
-use obvhs::bvh2::builder::build_bvh2_from_tris;
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::leaf_collapser::collapse;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::CwBvh;
+use obvhs::ploc::PlocBuilder;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
-use std::time::Duration;
+use rayon::prelude::*;
 
 /// Which obvhs acceleration structure a [`Scene`] uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -123,6 +134,27 @@ impl SceneBuilder {
         self
     }
 
+    /// Choose layout and effort for a scene that will trace about `rays` rays (the one
+    /// rule, used by `lod`'s selection scene): when they are fewer than half its
+    /// triangles, building dominates and [`BvhLayout::Bvh2`] with [`BuildQuality::Fastest`]
+    /// costs least overall; otherwise the default CWBVH with [`BuildQuality::Fast`].
+    /// Measured (BENCHMARKS.md, "BVH: deterministic ties, quicker build"): the quick build
+    /// saves 0.8-0.95 µs per triangle and costs 0.6-1.2 µs more per ray (paper district,
+    /// 166K triangles, 60K rays: build + select ~295 → ~200 ms; 18x18 city, 1.33M
+    /// triangles, 1M rays: a wash, so it keeps the CWBVH). Call it after the last triangle
+    /// is added. Results do not depend on the choice ([`Scene::first_hit`] breaks ties by
+    /// triangle index), so a shard that traces fewer rays may build another tree and
+    /// still agree.
+    pub fn for_rays(self, rays: usize) -> Self {
+        if rays.saturating_mul(2) < self.tris.len() {
+            self.with_layout(BvhLayout::Bvh2)
+                .with_quality(BuildQuality::Fastest)
+        } else {
+            self.with_layout(BvhLayout::default())
+                .with_quality(BuildQuality::default())
+        }
+    }
+
     /// Number of triangles collected so far.
     pub fn len(&self) -> usize {
         self.tris.len()
@@ -175,7 +207,7 @@ impl SceneBuilder {
         let world = std::mem::take(&mut self.tris);
         self.scratch = Vec::new();
         let local: Vec<Triangle> = world
-            .iter()
+            .par_iter()
             .map(|t| Triangle {
                 v0: to_local(t[0], origin),
                 v1: to_local(t[1], origin),
@@ -190,22 +222,12 @@ impl SceneBuilder {
                 tris: Vec::new(),
                 slot_triangle: Vec::new(),
                 tags: self.tags,
+                pad: 0.0,
                 accel: Accel::Empty,
             };
         }
-        let mut dur = Duration::default();
-        let (accel, indices) = match self.layout {
-            BvhLayout::Cwbvh => {
-                let mut bvh = build_cwbvh_from_tris(&local, self.quality.params(), &mut dur);
-                let idx = std::mem::take(&mut bvh.primitive_indices);
-                (Accel::Cw(bvh), idx)
-            }
-            BvhLayout::Bvh2 => {
-                let mut bvh = build_bvh2_from_tris(&local, self.quality.params(), &mut dur);
-                let idx = std::mem::take(&mut bvh.primitive_indices);
-                (Accel::Bvh2(bvh), idx)
-            }
-        };
+        let pad = node_pad(&local);
+        let (accel, indices) = build_accel(&local, self.layout, self.quality.params(), pad);
         // Lay the triangles out in BVH leaf order so traversal reads them directly.
         let mut tris = Vec::with_capacity(indices.len());
         let mut slot_triangle = Vec::with_capacity(indices.len());
@@ -221,7 +243,75 @@ impl SceneBuilder {
             tris,
             slot_triangle,
             tags: self.tags,
+            pad,
             accel,
+        }
+    }
+}
+
+/// How far every BVH node box is grown on each side: 2^-15 of the largest local
+/// coordinate (3 cm for a scene 2 km across; at least 2^-15 m).
+///
+/// obvhs' slab tests are not robust: a ray that hits a triangle exactly on the border of
+/// its node's box (a shared edge or vertex, an axis-aligned face in a flat box) can miss
+/// the box by rounding, and its neighbour across the edge, in another node, wins; which
+/// one then depends on the tree. Grown boxes contain every point the f32 triangle test
+/// can hit with a margin far above the rounding of both tests (tens of ulps of any
+/// distance within a few scene extents), so whether a triangle is tested no longer
+/// depends on the tree. Costs a few more node visits.
+fn node_pad(local: &[Triangle]) -> f32 {
+    let m = local
+        .iter()
+        .flat_map(|t| [t.v0, t.v1, t.v2])
+        .fold(1.0f32, |m, v| m.max(v.abs().max_element()));
+    m * (1.0 / 32768.0)
+}
+
+/// obvhs' `build_bvh2_from_tris` / `build_cwbvh_from_tris` (PLOC, reinsertion, then leaf
+/// collapse or the wide conversion), with every node box grown by `pad`
+/// ([`node_pad`]) before the tree is used. Returns the structure and its slot order.
+fn build_accel(
+    local: &[Triangle],
+    layout: BvhLayout,
+    params: BvhBuildParams,
+    pad: f32,
+) -> (Accel, Vec<u32>) {
+    let mut bvh2 = PlocBuilder::with_capacity(local.len()).build(
+        params.ploc_search_distance,
+        local,
+        (0..local.len() as u32).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    let mut reinsertion = ReinsertionOptimizer::default();
+    reinsertion.run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    if layout == BvhLayout::Bvh2 {
+        collapse(
+            &mut bvh2,
+            params.max_prims_per_leaf.clamp(1, 255),
+            params.collapse_traversal_cost,
+        );
+        reinsertion.run(
+            &mut bvh2,
+            params.reinsertion_batch_ratio
+                * params.post_collapse_reinsertion_batch_ratio_multiplier,
+            None,
+        );
+    }
+    let grow = Vec3A::splat(pad);
+    for node in bvh2.nodes.iter_mut() {
+        let a = *node.aabb();
+        node.set_aabb(Aabb::new(a.min - grow, a.max + grow));
+    }
+    match layout {
+        BvhLayout::Cwbvh => {
+            let mut cw = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+            let idx = std::mem::take(&mut cw.primitive_indices);
+            (Accel::Cw(cw), idx)
+        }
+        BvhLayout::Bvh2 => {
+            let idx = std::mem::take(&mut bvh2.primitive_indices);
+            (Accel::Bvh2(bvh2), idx)
         }
     }
 }
@@ -278,6 +368,8 @@ pub struct Scene {
     slot_triangle: Vec<u32>,
     /// Triangle index -> tag.
     tags: Vec<u32>,
+    /// How far the node boxes were grown ([`node_pad`]).
+    pad: f32,
     accel: Accel,
 }
 
@@ -415,9 +507,15 @@ impl Scene {
         let Some((ray, wt)) = self.local_ray(origin, dir, tmin, tmax) else {
             return false;
         };
+        let (t0, t1) = (ray.tmin, ray.tmax);
+        // Nodes entered at exactly `tmax` are still visited (see `prune_bound`).
+        let ray = Ray {
+            tmax: prune_bound(t1, self.pad),
+            ..ray
+        };
         let tris = &self.tris;
-        let mut isect = |r: &Ray, id: usize| match tris.get(id) {
-            Some(t) => wt.intersect(t, r.tmin, r.tmax),
+        let mut isect = |_: &Ray, id: usize| match tris.get(id) {
+            Some(t) => wt.intersect(t, t0, t1),
             None => f32::INFINITY,
         };
         match &self.accel {
@@ -429,29 +527,60 @@ impl Scene {
 
     /// The closest hit with `tmin <= t <= tmax`, if any. `tmin` lets a caller skip the
     /// surface its point lies on. Invalid rays and empty scenes hit nothing.
+    ///
+    /// Deterministic: the hit is the triangle with the smallest f32 distance and, among
+    /// triangles at exactly that distance (duplicated or coincident faces, shared edges),
+    /// the one with the smallest triangle index (insertion order), whatever the layout,
+    /// build quality or tree. Hits closer than 1e-4 (obvhs' CWBVH node epsilon) are not
+    /// covered by that promise; callers start rays at [`crate::poi::POI_OFFSET`] or more.
     pub fn first_hit(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Option<Hit> {
         let (ray, wt) = self.local_ray(origin, dir, tmin, tmax)?;
-        let tris = &self.tris;
-        let mut isect = |r: &Ray, id: usize| match tris.get(id) {
-            Some(t) => wt.intersect(t, r.tmin, r.tmax),
-            None => f32::INFINITY,
+        let (t0, t1) = (ray.tmin, ray.tmax);
+        let ray = Ray {
+            tmax: prune_bound(t1, self.pad),
+            ..ray
+        };
+        let (tris, slot_triangle, pad) = (&self.tris, &self.slot_triangle, self.pad);
+        // The authoritative best (t, triangle, slot) lives here, not in obvhs' `RayHit`:
+        // obvhs keeps the first of equal candidates it meets (`t < tmax`), which depends
+        // on the tree. It is told `prune_bound(best)` instead, so that every node that
+        // may hold a triangle at exactly `best` is still visited.
+        let mut best = (f32::INFINITY, u32::MAX, usize::MAX);
+        let mut isect = |_: &Ray, slot: usize| {
+            let (Some(tri), Some(&index)) = (tris.get(slot), slot_triangle.get(slot)) else {
+                return f32::INFINITY;
+            };
+            let t = wt.intersect(tri, t0, t1);
+            if t < f32::INFINITY && (t < best.0 || (t == best.0 && index < best.1)) {
+                best = (t, index, slot);
+                prune_bound(t, pad)
+            } else {
+                f32::INFINITY
+            }
         };
         let mut hit = RayHit::none();
-        let found = match &self.accel {
+        // Their own verdict (`hit`) is not used: `best` is.
+        let _ = match &self.accel {
             Accel::Empty => false,
             Accel::Cw(bvh) => bvh.ray_traverse(ray, &mut hit, &mut isect),
             Accel::Bvh2(bvh) => bvh.ray_traverse(ray, &mut hit, &mut isect),
         };
-        if !found {
-            return None;
-        }
-        let slot = hit.primitive_id as usize;
+        let (t32, triangle, slot) = best;
         let tri = self.tris.get(slot)?;
-        let triangle = *self.slot_triangle.get(slot)?;
         let tag = *self.tags.get(triangle as usize)?;
-        let t = refine_t(tri, origin - self.origin, dir, hit.t as f64);
+        let t = refine_t(tri, origin - self.origin, dir, t32 as f64);
         Some(Hit { tag, t, triangle })
     }
+}
+
+/// The `tmax` obvhs prunes with when the closest hit so far is at `t`: a little beyond
+/// `t` (2^-12 relative, plus the node growth `pad`), so that a node that may hold a
+/// triangle at exactly `t` is still visited even when the triangle's f32 distance is
+/// off (grazing rays): obvhs' Bvh2 visits a node only when its entry is `< tmax`. Costs
+/// a few node visits per ray.
+#[inline(always)]
+fn prune_bound(t: f32, pad: f32) -> f32 {
+    t + t.abs() * (1.0 / 4096.0) + pad
 }
 
 /// Distance to the plane of `tri` in f64 (from the unrounded local origin); falls back
@@ -669,6 +798,25 @@ mod tests {
     }
 
     #[test]
+    fn few_rays_choose_the_quick_build() {
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut b = SceneBuilder::new();
+        for (i, t) in random_scene(&mut rng, 300).iter().enumerate() {
+            b.add_triangle(i as u32, *t);
+        }
+        let few = b.clone().for_rays(100);
+        assert_eq!(
+            (few.layout, few.quality),
+            (BvhLayout::Bvh2, BuildQuality::Fastest)
+        );
+        let many = b.for_rays(10_000);
+        assert_eq!(
+            (many.layout, many.quality),
+            (BvhLayout::Cwbvh, BuildQuality::Fast)
+        );
+    }
+
+    #[test]
     fn random_scene_matches_brute_force_cwbvh() {
         let hits = check_against_brute(1, 400, 2000, BvhLayout::Cwbvh);
         assert!(hits > 100, "too few hits to mean anything: {hits}");
@@ -864,6 +1012,248 @@ mod tests {
                 s.first_hit(inside, d, 0.0, f64::INFINITY).is_some(),
                 "escaped along {d:?}"
             );
+        }
+    }
+
+    const LAYOUTS: [BvhLayout; 2] = [BvhLayout::Cwbvh, BvhLayout::Bvh2];
+    const QUALITIES: [BuildQuality; 4] = [
+        BuildQuality::Fastest,
+        BuildQuality::VeryFast,
+        BuildQuality::Fast,
+        BuildQuality::Medium,
+    ];
+
+    /// What `first_hit` promises, by brute force over every triangle with the same f32
+    /// test: the smallest (t, triangle index). Returns (t, triangle, number of
+    /// triangles at exactly that t).
+    fn brute_closest(
+        s: &Scene,
+        o: DVec3,
+        d: DVec3,
+        tmin: f64,
+        tmax: f64,
+    ) -> Option<(f32, u32, usize)> {
+        let (ray, wt) = s.local_ray(o, d, tmin, tmax)?;
+        let mut best: Option<(f32, u32, usize)> = None;
+        for (slot, tri) in s.tris.iter().enumerate() {
+            let t = wt.intersect(tri, ray.tmin, ray.tmax);
+            if !t.is_finite() {
+                continue;
+            }
+            let index = s.slot_triangle[slot];
+            best = match best {
+                Some((bt, bi, n)) if t == bt => Some((t, bi.min(index), n + 1)),
+                Some(b) if b.0 < t => Some(b),
+                _ => Some((t, index, 1)),
+            };
+        }
+        best
+    }
+
+    /// Triangles with exact ties: a ground grid (shared edges and vertices), boxes
+    /// whose every triangle is there twice, and overlapping coplanar quads on a wall
+    /// and on a tilted roof. Also the points rays are aimed at.
+    fn tie_scene(rng: &mut ChaCha8Rng) -> (Vec<[DVec3; 3]>, Vec<DVec3>) {
+        let mut tris = Vec::new();
+        let mut aims = Vec::new();
+        let g = UTM + DVec3::new(-50.0, -50.0, 0.0);
+        let at = |i: usize, j: usize| g + DVec3::new(i as f64 * 5.0, j as f64 * 5.0, 0.0);
+        for j in 0..20 {
+            for i in 0..20 {
+                let (a, b, c, e) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                tris.push([a, b, c]);
+                tris.push([a, c, e]);
+                aims.push(a);
+                aims.push(a.lerp(c, rng.random_range(0.0..1.0)));
+                aims.push(a.lerp(b, rng.random_range(0.0..1.0)));
+            }
+        }
+        for k in 0..30 {
+            let lo = g + DVec3::new(
+                rng.random_range(0.0..90.0),
+                rng.random_range(0.0..90.0),
+                0.0,
+            );
+            let hi = lo
+                + DVec3::new(
+                    rng.random_range(2.0..8.0),
+                    rng.random_range(2.0..8.0),
+                    rng.random_range(3.0..20.0),
+                );
+            let mut b = SceneBuilder::new();
+            add_box(&mut b, lo, hi, 0);
+            let copies = if k % 3 == 0 { 3 } else { 2 };
+            for _ in 0..copies {
+                tris.extend_from_slice(&b.tris);
+            }
+            for t in &b.tris {
+                aims.push((t[0] + t[1] + t[2]) / 3.0);
+                aims.push(t[0].lerp(t[2], rng.random_range(0.0..1.0)));
+            }
+        }
+        let x = g.x + 101.0;
+        let wall = |y0: f64, y1: f64, z0: f64, z1: f64| {
+            Polygon::new(vec![
+                DVec3::new(x, y0, z0),
+                DVec3::new(x, y1, z0),
+                DVec3::new(x, y1, z1),
+                DVec3::new(x, y0, z1),
+            ])
+        };
+        let (o, u, v) = (
+            g + DVec3::new(20.0, 110.0, 10.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.8, 0.6),
+        );
+        let roof = |a0: f64, a1: f64, b0: f64, b1: f64| {
+            Polygon::new(vec![
+                o + u * a0 + v * b0,
+                o + u * a1 + v * b0,
+                o + u * a1 + v * b1,
+                o + u * a0 + v * b1,
+            ])
+        };
+        for _ in 0..20 {
+            let (y0, z0) = (rng.random_range(0.0..60.0), rng.random_range(0.0..20.0));
+            let p = wall(g.y + y0, g.y + y0 + 30.0, z0, z0 + 10.0);
+            let (a0, b0) = (rng.random_range(0.0..40.0), rng.random_range(0.0..20.0));
+            let q = roof(a0, a0 + 20.0, b0, b0 + 10.0);
+            for poly in [p, q] {
+                let mut b = SceneBuilder::new();
+                b.add_polygon(0, &poly);
+                tris.extend_from_slice(&b.tris);
+                aims.push(b.tris[0][0].lerp(b.tris[0][2], rng.random_range(0.0..1.0)));
+                aims.push(b.tris[1][0].lerp(b.tris[1][1], 0.5));
+            }
+        }
+        (tris, aims)
+    }
+
+    #[test]
+    fn ties_resolve_to_smallest_triangle_index_whatever_the_tree() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let (tris, aims) = tie_scene(&mut rng);
+        let mut rays = Vec::new();
+        for k in 0..3000 {
+            let o = UTM
+                + DVec3::new(
+                    rng.random_range(-80.0..80.0),
+                    rng.random_range(-80.0..80.0),
+                    rng.random_range(1.0..60.0),
+                );
+            let d = if k % 10 == 9 {
+                random_dir(&mut rng)
+            } else {
+                (aims[rng.random_range(0..aims.len())] - o).normalize()
+            };
+            rays.push((o, d));
+        }
+        let mut ties = 0;
+        let mut winners_by_order = Vec::new();
+        for order in 0..3 {
+            // Original index as tag; the insertion order is shuffled after the first.
+            let mut tagged: Vec<(u32, [DVec3; 3])> = tris
+                .iter()
+                .enumerate()
+                .map(|(i, t)| (i as u32, *t))
+                .collect();
+            if order > 0 {
+                for i in (1..tagged.len()).rev() {
+                    tagged.swap(i, rng.random_range(0..=i));
+                }
+            }
+            let mut reference: Option<Vec<Option<Hit>>> = None;
+            for layout in LAYOUTS {
+                for quality in QUALITIES {
+                    let mut b = SceneBuilder::new()
+                        .with_layout(layout)
+                        .with_quality(quality);
+                    for (tag, t) in &tagged {
+                        assert!(b.add_triangle(*tag, *t));
+                    }
+                    let s = b.build();
+                    let hits: Vec<Option<Hit>> = rays
+                        .iter()
+                        .map(|&(o, d)| s.first_hit(o, d, 0.01, f64::INFINITY))
+                        .collect();
+                    if reference.is_none() {
+                        for (&(o, d), h) in rays.iter().zip(&hits) {
+                            let want = brute_closest(&s, o, d, 0.01, f64::INFINITY);
+                            assert_eq!(h.map(|h| h.triangle), want.map(|w| w.1), "{o:?} {d:?}");
+                            if let (Some(h), Some(w)) = (h, want) {
+                                assert_eq!(Some(h.tag), s.tag(w.1));
+                                assert_eq!(h.tag, tagged[w.1 as usize].0);
+                                if w.2 > 1 {
+                                    ties += 1;
+                                }
+                            }
+                        }
+                        reference = Some(hits);
+                    } else {
+                        // Bit-identical to the first tree's answers (t included).
+                        for (i, (a, b)) in reference.iter().flatten().zip(&hits).enumerate() {
+                            assert_eq!(
+                                a.map(|h| (h.tag, h.triangle, h.t.to_bits())),
+                                b.map(|h| (h.tag, h.triangle, h.t.to_bits())),
+                                "ray {i}, {layout:?} {quality:?}, order {order}"
+                            );
+                        }
+                    }
+                }
+            }
+            winners_by_order.push(reference.unwrap_or_default());
+        }
+        assert!(ties > 1000, "too few exact ties to mean anything: {ties}");
+        // Duplicates: the shuffled orders pick other copies (other tags) at the same t.
+        let changed = winners_by_order[0]
+            .iter()
+            .zip(&winners_by_order[1])
+            .filter(|(a, b)| match (a, b) {
+                (Some(a), Some(b)) => a.tag != b.tag && a.t == b.t,
+                _ => false,
+            })
+            .count();
+        assert!(
+            changed > 100,
+            "insertion order never decided a tie: {changed}"
+        );
+    }
+
+    #[test]
+    fn occluded_sees_a_face_at_exactly_tmax() {
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        let (tris, aims) = tie_scene(&mut rng);
+        for layout in LAYOUTS {
+            for quality in QUALITIES {
+                let mut b = SceneBuilder::new()
+                    .with_layout(layout)
+                    .with_quality(quality);
+                for (i, t) in tris.iter().enumerate() {
+                    b.add_triangle(i as u32, *t);
+                }
+                let s = b.build();
+                let mut checked = 0;
+                for a in aims.iter().step_by(7) {
+                    let o = UTM + DVec3::new(3.0, -7.0, 70.0);
+                    let d = (*a - o).normalize();
+                    let Some(h) = s.first_hit(o, d, 0.01, f64::INFINITY) else {
+                        continue;
+                    };
+                    let (ray, _) = s.local_ray(o, d, 0.01, f64::INFINITY).unwrap();
+                    let (_, wt) = s.local_ray(o, d, 0.0, 0.0).unwrap();
+                    let slot = s
+                        .slot_triangle
+                        .iter()
+                        .position(|&x| x == h.triangle)
+                        .unwrap();
+                    let t32 = wt.intersect(&s.tris[slot], ray.tmin, ray.tmax);
+                    assert!(s.occluded(o, d, 0.01, t32 as f64), "{layout:?} {quality:?}");
+                    let hit = s.first_hit(o, d, 0.01, t32 as f64).unwrap();
+                    assert_eq!(hit.triangle, h.triangle);
+                    checked += 1;
+                }
+                assert!(checked > 100, "{checked}");
+            }
         }
     }
 
