@@ -730,6 +730,16 @@ fn scan_slice(
         }
     }
     let mut pos = Pos { base, skipped: 0 };
+    // where round `r` starts (the last round ends with the document)
+    let round_at = |r: usize| {
+        rounds
+            .get(r)
+            .and_then(|g| g.first())
+            .map_or(all.len(), |&i| {
+                usize::try_from(skip[i].start).unwrap_or(usize::MAX)
+            })
+    };
+    bytes.populate_range(0, round_at(1));
     let mut pre = prescan(all, skip, rounds.first().map_or(&[][..], |r| &r[..]), opts);
     // the bytes let go so far, and the start of the round the loop is in
     let (mut released, mut behind) = (0usize, 0u64);
@@ -742,9 +752,11 @@ fn scan_slice(
         let (done, next_pre) = rayon::join(
             || run_slice(&mut reader, &mut ix, all, &mut pos, &pre, until),
             || {
-                // the loop is past `behind`: what lies 1 MiB before it is not read again
+                // the loop is past `behind`: what lies 1 MiB before it is not read again;
+                // the next round is mapped in at once (cheaper than its page faults)
                 let upto = usize::try_from(behind.saturating_sub(1 << 20)).unwrap_or(0);
                 bytes.release_range(released, upto);
+                bytes.populate_range(round_at(r + 1), round_at(r + 2));
                 prescan(all, skip, next, opts)
             },
         );
@@ -1100,16 +1112,20 @@ fn gml_ids(c: &[u8], is_gml: impl FnMut(&[u8]) -> bool, id: impl FnMut(&[u8])) -
 /// Hand the prefix and raw value of every prefixed `id` attribute in the element content
 /// `c` to `id`, in document order; `None` when `c` holds what [`gml_ids`] cannot judge.
 fn prefixed_ids<'a>(c: &'a [u8], mut id: impl FnMut(&'a [u8], &'a [u8])) -> Option<()> {
-    // A comment, CDATA section, processing instruction or DOCTYPE (`<` cannot stand in text
-    // or attribute values, so `<!` and `<?` start one of them), or a namespace declaration.
-    let mut marks = memchr::memchr2_iter(b'!', b'?', c);
-    if marks.any(|p| p > 0 && c[p - 1] == b'<') || memchr::memmem::find(c, b"xmlns").is_some() {
-        return None;
-    }
-    // Only tags holding an `=` can hold an id: find each `=`, then the tag around it.
+    // One pass: each `!` and `?` (after `<` they start a comment, CDATA section, processing
+    // instruction or DOCTYPE, since `<` cannot stand in text or attribute values; they
+    // cannot stand in a tag before its first `=`), and each `=`: only tags holding an `=`
+    // can hold an id or a namespace declaration; the tag around it is tokenized whole.
     let mut i = 0;
-    while let Some(eq) = memchr::memchr(b'=', &c[i..]) {
+    while let Some(eq) = memchr::memchr3(b'=', b'!', b'?', &c[i..]) {
         let eq = i + eq;
+        if c[eq] != b'=' {
+            if eq > 0 && c[eq - 1] == b'<' {
+                return None;
+            }
+            i = eq + 1;
+            continue;
+        }
         match memchr::memrchr(b'<', &c[i..eq]).map(|lt| i + lt) {
             // in text, or in text after an end tag
             None => i = eq + 1,
@@ -1121,7 +1137,7 @@ fn prefixed_ids<'a>(c: &'a [u8], mut id: impl FnMut(&'a [u8], &'a [u8])) -> Opti
 }
 
 /// The prefixed ids of the start tag at `c[lt]` (see [`prefixed_ids`]); returns the index
-/// after its `>`.
+/// after its `>`, `None` at a namespace declaration.
 fn start_tag_ids<'a>(
     c: &'a [u8],
     lt: usize,
@@ -1138,6 +1154,9 @@ fn start_tag_ids<'a>(
             return Some(j + k + 1);
         }
         let name = trim_ws(&rest[..k]);
+        if name.starts_with(b"xmlns") && matches!(name.get(5), None | Some(b':')) {
+            return None;
+        }
         let mut v = j + k + 1;
         while c.get(v).is_some_and(|&b| is_ws(b)) {
             v += 1;
@@ -1269,6 +1288,13 @@ mod tests {
             (r#"<?pi x?>"#, None),
             (r#"<a xmlns:gml="urn:other" gml:id="x"/>"#, None),
             (r#"<a xmlns="urn:other"/>"#, None),
+            (r#"<a x="1"/><b xmlns:q = 'urn:other'>t</b>"#, None),
+            (r#"<a gml:id="x"/>text<?pi?>"#, None),
+            // text may say what it likes; an attribute named like a declaration is not one
+            (
+                r#"<a xmlnsx="1" gml:id="x">xmlns:gml="u" ! ? a!b</a>"#,
+                some(&["x"]),
+            ),
             (r#"<a gml:id="x"#, None),
             (r#"<a gml:id=x/>"#, None),
         ];
