@@ -686,7 +686,7 @@ pub(super) fn scan_ways(path: &Path, skip: &[Span], opts: &ReadOptions) -> Vec<D
 
 /// Bytes of the document per round of [`scan_slice`]: the ids of the skipped content of one
 /// round are found while the event loop runs through the round before.
-const ROUND: u64 = 16 << 20;
+const ROUND: u64 = 8 << 20;
 
 /// The pass over a document in memory: events borrow from `bytes`, the content of a skipped
 /// element is jumped over (never copied). The document goes in rounds of about [`ROUND`]
