@@ -137,22 +137,6 @@ impl Bytes {
     }
 }
 
-impl Bytes {
-    /// Map the pages of the bytes `from..upto` in now, ahead of reading them (a hint, Linux
-    /// only: one call maps a range for a fraction of what a page fault per few pages costs).
-    pub fn populate_range(&self, from: usize, upto: usize) {
-        #[cfg(target_os = "linux")]
-        if let Bytes::Mapped(m) = self {
-            let upto = upto.min(m.len());
-            if upto > from {
-                let _ = m.advise_range(memmap2::Advice::PopulateRead, from, upto - from);
-            }
-        }
-        #[cfg(not(target_os = "linux"))]
-        let _ = (from, upto);
-    }
-}
-
 impl AsRef<[u8]> for Bytes {
     fn as_ref(&self) -> &[u8] {
         self
