@@ -1,16 +1,17 @@
-//! The element index of the mixed-LoD writer: one streaming pass over a source document
-//! that records, per element, its span, parent, name, `gml:id` and reference (`xlink:href`, appearance
-//! target), which the rules ([`super::plan`]) decide on.
+//! The element index of the mixed-LoD writer: one streaming pass over a source document that
+//! records, per element, its span, parent, name, `gml:id` and reference (`xlink:href`,
+//! appearance target), which the rules ([`super::plan`]) decide on.
 //!
 //! **Cost follows what is kept.** The pass is given the spans of the elements the writer
 //! drops whole (level-0 assets that hold no kept asset, see [`super::plan::skip_spans`]). Such
-//! an element is indexed as one node without children: its content is not parsed but
-//! scanned as bytes for the one thing the rules need from dropped content, the
+//! an element is indexed as one node without children: its content is not parsed but read
+//! as bytes and scanned for the one thing the rules need from dropped content, the
 //! `gml:id`s it holds (a kept `xlink:href` or appearance target pointing at one of them is
 //! pruned, and a fresh id must not meet one). References inside dropped content are never
 //! looked at (they are dead before the first pruning round), so they need not be found.
-//! The scan looks at each `=` and tokenizes the start tag around it (`<` cannot stand in text
-//! or attribute values), exact for well-formed XML; content holding a comment, CDATA
+//! The scan is one `memchr3` pass for `=`, `!` and `?`: it tokenizes the start tag around
+//! each `=` (`<` cannot stand in text or attribute values), exact for well-formed XML, and
+//! stops at `<!` or `<?`; content holding a comment, CDATA
 //! section, processing instruction or namespace declaration is parsed as usual instead (the
 //! namespace scope of its ids could change), as is content larger than half the token limit
 //! or not ending with the element's own end tag. Ids go to an arena table ([`IdTable`]): no
@@ -396,7 +397,7 @@ pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc
     scan_stream(reader, size, path, skip, opts)
 }
 
-/// The index being built: what both passes share (one call per start tag, end tag, text).
+/// The index being built: one call per start tag, end tag and text of the pass.
 struct Indexer<'p> {
     path: &'p Path,
     opts: &'p ReadOptions,
