@@ -9,8 +9,9 @@
 //! `gml:id`s it holds (a kept `xlink:href` or appearance target pointing at one of them is
 //! pruned, and a fresh id must not meet one). References inside dropped content are never
 //! looked at (they are dead before the first pruning round), so they need not be found.
-//! The scan looks at each `=` and tokenizes the start tag around it (`<` cannot stand in text
-//! or attribute values), exact for well-formed XML; content holding a comment, CDATA
+//! The scan is one `memchr3` pass for `=`, `!` and `?`: it tokenizes the start tag around
+//! each `=` (`<` cannot stand in text or attribute values), exact for well-formed XML, and
+//! stops at `<!` or `<?`; content holding a comment, CDATA
 //! section, processing instruction or namespace declaration is parsed as usual instead (the
 //! namespace scope of its ids could change), as is content larger than half the token limit
 //! or not ending with the element's own end tag. Ids go to an arena table ([`IdTable`]): no
@@ -29,6 +30,7 @@ use foldhash::{HashMap, HashMapExt, HashSet};
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::name::{QName, ResolveResult};
 use quick_xml::NsReader;
+use std::borrow::Cow;
 use std::io::{BufRead, Read};
 use std::path::Path;
 
@@ -47,7 +49,7 @@ pub(super) enum NsKind {
 }
 
 /// An element name, stored once per distinct qualified name and namespace.
-#[derive(Debug)]
+#[derive(Debug, PartialEq)]
 pub(super) struct Name {
     pub(super) qname: String,
     pub(super) local: String,
@@ -57,7 +59,7 @@ pub(super) struct Name {
 }
 
 /// One element (32 bytes: a city file has millions).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Node {
     pub(super) start: u64,
     pub(super) end: u64,
@@ -77,7 +79,7 @@ pub(super) enum RefKind {
 }
 
 /// The element index of one document.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, PartialEq)]
 pub(super) struct Doc {
     /// Elements in document order (start-tag order).
     pub(super) nodes: Vec<Node>,
@@ -95,6 +97,10 @@ pub(super) struct Doc {
     pub(super) redeclared: HashSet<String>,
     /// Elements whose content was skipped, and the bytes of content skipped.
     pub(super) skipped: (usize, u64),
+    /// See [`Doc::node_at`]: `starts[b]` is the first node starting at or after
+    /// `b << shift` (one more entry at the end).
+    starts: Vec<u32>,
+    shift: u32,
 }
 
 impl Node {
@@ -116,12 +122,41 @@ impl Doc {
         self.ids.get(id).is_some()
     }
 
-    /// The element starting at byte `start`.
+    /// The element starting at byte `start`: a directory of start offsets narrows the
+    /// search to the few nodes that start in the same `1 << shift` bytes (the plan asks once
+    /// per geometry of the file; a binary search of all the nodes missed the cache each step).
     pub(super) fn node_at(&self, start: u64) -> Option<u32> {
-        self.nodes
+        let (lo, hi) = match usize::try_from(start >> self.shift) {
+            Ok(b) if b + 1 < self.starts.len() => {
+                (self.starts[b] as usize, self.starts[b + 1] as usize)
+            }
+            _ if self.starts.is_empty() => (0, self.nodes.len()),
+            _ => return None,
+        };
+        self.nodes[lo..hi]
             .binary_search_by(|n| n.start.cmp(&start))
             .ok()
-            .map(|i| i as u32)
+            .map(|i| (lo + i) as u32)
+    }
+
+    /// Build the directory of [`Doc::node_at`] (nodes are in start order): about one
+    /// entry per node.
+    fn index_starts(&mut self) {
+        let Some(last) = self.nodes.last().map(|n| n.start) else {
+            return;
+        };
+        let per = (last / self.nodes.len() as u64).max(1);
+        self.shift = per.ilog2();
+        let buckets = usize::try_from(last >> self.shift).unwrap_or(usize::MAX - 2) + 1;
+        self.starts = Vec::with_capacity(buckets + 1);
+        let mut i = 0;
+        for b in 0..buckets as u64 {
+            while self.nodes.get(i).is_some_and(|n| n.start >> self.shift < b) {
+                i += 1;
+            }
+            self.starts.push(i as u32);
+        }
+        self.starts.push(self.nodes.len() as u32);
     }
 
     pub(super) fn name(&self, n: u32) -> &Name {
@@ -160,7 +195,7 @@ impl Doc {
 /// `gml:id`s: their bytes in one arena, found by hash (a sorted table, so that hundreds of
 /// thousands of ids cost no allocation each). An id that repeats maps to its smallest node,
 /// the first in document order.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, PartialEq)]
 pub(super) struct IdTable {
     bytes: Vec<u8>,
     /// (hash, start in `bytes`, length, node); sorted by hash once the scan is done.
@@ -184,27 +219,35 @@ impl IdTable {
             .push((Self::hash(id), start, id.len() as u32, node));
     }
 
-    /// Keep only the first `len` entries (ids of content that was given back to be parsed).
-    fn truncate(&mut self, len: usize) {
-        if let Some(&(_, start, _, _)) = self.entries.get(len) {
-            self.bytes.truncate(start);
-        }
-        self.entries.truncate(len);
+    /// Room for the ids of a document of about `bytes` bytes (about one per 350 bytes in the
+    /// files at hand; memory reserved and never touched is not resident).
+    fn expect_bytes(&mut self, bytes: u64) {
+        let ids = (bytes / 350).min(1 << 24) as usize;
+        self.entries.reserve(ids);
+        self.bytes.reserve(ids * 16);
     }
 
+    /// Group the entries by bucket (a counting sort: the order inside a bucket does not
+    /// matter to [`IdTable::get`], which takes the smallest node of the matching ones).
     fn finish(&mut self) {
-        self.entries.sort_unstable();
         self.bits = (self.entries.len().max(1).ilog2() + 1).min(24);
         let buckets = 1usize << self.bits;
-        self.dir = Vec::with_capacity(buckets + 1);
-        let mut e = 0;
-        for b in 0..buckets {
-            while self.entries.get(e).is_some_and(|x| self.bucket(x.0) < b) {
-                e += 1;
-            }
-            self.dir.push(e as u32);
+        let mut dir = vec![0u32; buckets + 1];
+        for e in &self.entries {
+            dir[self.bucket(e.0) + 1] += 1;
         }
-        self.dir.push(self.entries.len() as u32);
+        for b in 0..buckets {
+            dir[b + 1] += dir[b];
+        }
+        let mut next = dir.clone();
+        let mut sorted = vec![(0, 0, 0, 0); self.entries.len()];
+        for e in &self.entries {
+            let b = self.bucket(e.0);
+            sorted[next[b] as usize] = *e;
+            next[b] += 1;
+        }
+        self.entries = sorted;
+        self.dir = dir;
     }
 
     fn bucket(&self, h: u64) -> usize {
@@ -227,11 +270,6 @@ impl IdTable {
             .filter(|e| self.bytes.get(e.1..e.1 + e.2 as usize) == Some(id.as_bytes()))
             .map(|e| e.3)
             .min()
-    }
-
-    /// Number of ids.
-    pub(super) fn len(&self) -> usize {
-        self.entries.len()
     }
 }
 
@@ -354,20 +392,214 @@ type Source = PushBack<Limited<Box<dyn BufRead + Send>>>;
 /// One streaming pass over the source: the element index. `skip` are the spans of elements
 /// whose content is dropped with them (sorted by start; nested spans allowed).
 pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc, WriteError> {
-    let (mut reader, _) = source::open(path)?;
+    let (reader, _) = source::open(path)?;
+    let size = std::fs::metadata(path).map_or(0, |m| m.len());
+    scan_stream(reader, size, path, skip, opts)
+}
+
+/// The index being built: one call per start tag, end tag and text of the pass.
+struct Indexer<'p> {
+    path: &'p Path,
+    opts: &'p ReadOptions,
+    skip: &'p [Span],
+    next_skip: usize,
+    doc: Doc,
+    name_ids: HashMap<Box<[u8]>, Vec<(NsKind, u32)>>,
+    stack: Vec<u32>,
+    capture: TextCapture,
+    text: Vec<u8>,
+}
+
+impl<'p> Indexer<'p> {
+    fn new(path: &'p Path, skip: &'p [Span], opts: &'p ReadOptions) -> Self {
+        Indexer {
+            path,
+            opts,
+            skip,
+            next_skip: 0,
+            doc: Doc::default(),
+            name_ids: HashMap::new(),
+            stack: Vec::with_capacity(64),
+            capture: TextCapture::None,
+            text: Vec::new(),
+        }
+    }
+
+    /// A start (or empty) tag at `pos`, its content at `content_start`. Returns the node and
+    /// the span when its content is to be skipped.
+    fn start<R>(
+        &mut self,
+        reader: &NsReader<R>,
+        e: &BytesStart,
+        empty: bool,
+        pos: u64,
+        content_start: u64,
+    ) -> Result<Option<(u32, Span)>, WriteError> {
+        let doc = &mut self.doc;
+        let (res, _) = reader.resolve_element(e.name());
+        let uri = match res {
+            ResolveResult::Bound(n) => Some(n.0),
+            _ => None,
+        };
+        let kind = ns_kind(uri);
+        let qname = e.name();
+        let known = self
+            .name_ids
+            .get(qname.as_ref())
+            .and_then(|v| v.iter().find(|(k, _)| *k == kind).map(|&(_, i)| i));
+        let name = match known {
+            Some(i) => i,
+            None => {
+                let i = doc.names.len() as u32;
+                let local = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
+                doc.names.push(Name {
+                    qname: String::from_utf8_lossy(qname.as_ref()).into_owned(),
+                    upper: local.starts_with(|c: char| c.is_ascii_uppercase()),
+                    local,
+                    ns: kind,
+                });
+                self.name_ids
+                    .entry(qname.as_ref().into())
+                    .or_default()
+                    .push((kind, i));
+                i
+            }
+        };
+        let idx = doc.nodes.len() as u32;
+        let Ok(tag_len) = u32::try_from(content_start.saturating_sub(pos)) else {
+            return Err(xml_err(
+                self.path,
+                pos,
+                "a start tag of 4 GiB or more".into(),
+            ));
+        };
+        doc.nodes.push(Node {
+            start: pos,
+            end: if empty { content_start } else { 0 },
+            tag_len,
+            parent: self.stack.last().copied().unwrap_or(NONE),
+            last_desc: idx,
+            name,
+        });
+        scan_attrs(reader, e, idx, kind, self.stack.is_empty(), doc, self.path)?;
+        if empty {
+            return Ok(None);
+        }
+        let local = doc.names[name as usize].local.as_str();
+        let capture_here = match (kind, local) {
+            (NsKind::App, "target") => Some(TextCapture::Target(idx)),
+            (NsKind::Gen, "name") => Some(TextCapture::Label(idx)),
+            _ => None,
+        };
+        self.stack.push(idx);
+        if self.stack.len() > self.opts.max_depth {
+            return Err(xml_err(
+                self.path,
+                pos,
+                format!("elements nested deeper than {}", self.opts.max_depth),
+            ));
+        }
+        if let Some(c) = capture_here {
+            if !(c == TextCapture::Target(idx) && doc.refs.last().is_some_and(|r| r.0 == idx)) {
+                self.capture = c;
+                self.text.clear();
+            }
+        }
+        while self.skip.get(self.next_skip).is_some_and(|s| s.start < pos) {
+            self.next_skip += 1;
+        }
+        Ok(self
+            .skip
+            .get(self.next_skip)
+            .filter(|s| s.start == pos)
+            .map(|s| (idx, s.clone())))
+    }
+
+    /// The content of the element just opened was skipped: `n` bytes, up to its end tag;
+    /// `end` is the end of its span (skip spans inside it are passed).
+    fn skipped(&mut self, n: u64, end: u64) {
+        self.doc.skipped.0 += 1;
+        self.doc.skipped.1 += n;
+        while self.skip.get(self.next_skip).is_some_and(|x| x.start < end) {
+            self.next_skip += 1;
+        }
+    }
+
+    /// An end tag ending at `end`.
+    fn end(&mut self, end: u64) {
+        let Some(idx) = self.stack.pop() else {
+            return;
+        };
+        let doc = &mut self.doc;
+        let last = doc.nodes.len() as u32 - 1;
+        let n = &mut doc.nodes[idx as usize];
+        n.end = end;
+        n.last_desc = last;
+        match self.capture {
+            TextCapture::Target(t) if t == idx => {
+                let s = String::from_utf8_lossy(&self.text).trim().to_string();
+                if !s.is_empty() {
+                    doc.refs.push((idx, RefKind::AppTarget, s.into()));
+                }
+                self.capture = TextCapture::None;
+            }
+            TextCapture::Label(t) if t == idx => {
+                let s = String::from_utf8_lossy(&self.text).trim().to_string();
+                doc.labels.insert(idx, s.into());
+                self.capture = TextCapture::None;
+            }
+            _ => {}
+        }
+    }
+
+    /// Text or CDATA (kept only where captured).
+    fn text(&mut self, t: &[u8]) {
+        if self.capture != TextCapture::None {
+            self.text.extend_from_slice(t);
+        }
+    }
+
+    /// The document ended at `at`.
+    fn finish(mut self, at: u64) -> Result<Doc, WriteError> {
+        if !self.stack.is_empty() || self.doc.nodes.is_empty() {
+            return Err(xml_err(self.path, at, "unexpected end of document".into()));
+        }
+        self.doc.ids.finish();
+        self.doc.index_starts();
+        Ok(self.doc)
+    }
+
+    fn token_limit(&self, pos: u64) -> WriteError {
+        xml_err(
+            self.path,
+            pos,
+            format!(
+                "one XML token (tag, attribute value, text, comment or DOCTYPE) exceeds the limit of {} bytes",
+                self.opts.max_event_bytes
+            ),
+        )
+    }
+}
+
+/// The pass over `reader` (`size`: the file's size, a hint): skipped content is read and
+/// scanned as it comes ([`skip_content`]).
+fn scan_stream(
+    reader: Box<dyn BufRead + Send>,
+    size: u64,
+    path: &Path,
+    skip: &[Span],
+    opts: &ReadOptions,
+) -> Result<Doc, WriteError> {
+    let mut reader = reader;
     let base = source::skip_bom(&mut reader, path)?;
     let mut reader =
         NsReader::from_reader(PushBack::new(Limited::new(reader, opts.max_event_bytes)));
     reader.config_mut().trim_text(false);
     reader.config_mut().check_end_names = true;
-    let mut doc = Doc::default();
-    let mut name_ids: HashMap<Box<[u8]>, Vec<(NsKind, u32)>> = HashMap::new();
-    let mut stack: Vec<u32> = Vec::with_capacity(64);
+    let mut ix = Indexer::new(path, skip, opts);
+    ix.doc.ids.expect_bytes(size);
     let mut buf = Vec::with_capacity(64 * 1024);
-    let mut capture = TextCapture::None;
-    let mut text: Vec<u8> = Vec::new();
     let mut skipped = 0u64;
-    let mut next_skip = 0usize;
     let mut content = Vec::new();
     loop {
         let pos = reader.buffer_position() + base + skipped;
@@ -377,14 +609,7 @@ pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc
             Err(e) => {
                 let at = reader.error_position() + base + skipped;
                 if reader.get_mut().inner.exceeded() {
-                    return Err(xml_err(
-                        path,
-                        pos,
-                        format!(
-                            "one XML token (tag, attribute value, text, comment or DOCTYPE) exceeds the limit of {} bytes",
-                            opts.max_event_bytes
-                        ),
-                    ));
+                    return Err(ix.token_limit(pos));
                 }
                 return Err(xml_err(path, at, e.to_string()));
             }
@@ -392,132 +617,55 @@ pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc
         match ev {
             Event::Start(ref e) | Event::Empty(ref e) => {
                 let empty = matches!(ev, Event::Empty(_));
-                let (res, _) = reader.resolve_element(e.name());
-                let uri = match res {
-                    ResolveResult::Bound(n) => Some(n.0),
-                    _ => None,
-                };
-                let kind = ns_kind(uri);
-                let qname = e.name();
-                let known = name_ids
-                    .get(qname.as_ref())
-                    .and_then(|v| v.iter().find(|(k, _)| *k == kind).map(|&(_, i)| i));
-                let name = match known {
-                    Some(i) => i,
-                    None => {
-                        let i = doc.names.len() as u32;
-                        let local = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
-                        doc.names.push(Name {
-                            qname: String::from_utf8_lossy(qname.as_ref()).into_owned(),
-                            upper: local.starts_with(|c: char| c.is_ascii_uppercase()),
-                            local,
-                            ns: kind,
-                        });
-                        name_ids
-                            .entry(qname.as_ref().into())
-                            .or_default()
-                            .push((kind, i));
-                        i
-                    }
-                };
-                let idx = doc.nodes.len() as u32;
                 let content_start = reader.buffer_position() + base + skipped;
-                let Ok(tag_len) = u32::try_from(content_start.saturating_sub(pos)) else {
-                    return Err(xml_err(path, pos, "a start tag of 4 GiB or more".into()));
-                };
-                doc.nodes.push(Node {
-                    start: pos,
-                    end: if empty { content_start } else { 0 },
-                    tag_len,
-                    parent: stack.last().copied().unwrap_or(NONE),
-                    last_desc: idx,
-                    name,
-                });
-                scan_attrs(&reader, e, idx, kind, stack.is_empty(), &mut doc, path)?;
-                let local = doc.names[name as usize].local.as_str();
-                let capture_here = match (kind, local) {
-                    (NsKind::App, "target") => Some(TextCapture::Target(idx)),
-                    (NsKind::Gen, "name") => Some(TextCapture::Label(idx)),
-                    _ => None,
-                };
-                if !empty {
-                    stack.push(idx);
-                    if stack.len() > opts.max_depth {
-                        return Err(xml_err(
-                            path,
-                            pos,
-                            format!("elements nested deeper than {}", opts.max_depth),
-                        ));
-                    }
-                    if let Some(c) = capture_here {
-                        if !(c == TextCapture::Target(idx)
-                            && doc.refs.last().is_some_and(|r| r.0 == idx))
-                        {
-                            capture = c;
-                            text.clear();
-                        }
-                    }
-                    while skip.get(next_skip).is_some_and(|s| s.start < pos) {
-                        next_skip += 1;
-                    }
-                    if let Some(s) = skip.get(next_skip).filter(|s| s.start == pos) {
-                        let len = s.end.saturating_sub(content_start);
-                        let n = skip_content(&mut reader, idx, len, opts, &mut content, &mut doc)
-                            .map_err(|source| WriteError::Io {
+                if let Some((idx, s)) = ix.start(&reader, e, empty, pos, content_start)? {
+                    let len = s.end.saturating_sub(content_start);
+                    let n = skip_content(&mut reader, idx, len, opts, &mut content, &mut ix.doc)
+                        .map_err(|source| WriteError::Io {
                             file: path.to_path_buf(),
                             source,
                         })?;
-                        if n > 0 {
-                            skipped += n;
-                            doc.skipped.0 += 1;
-                            doc.skipped.1 += n;
-                            while skip.get(next_skip).is_some_and(|x| x.start < s.end) {
-                                next_skip += 1;
-                            }
-                        }
+                    if n > 0 {
+                        skipped += n;
+                        ix.skipped(n, s.end);
                     }
                 }
             }
-            Event::End(_) => {
-                let end = reader.buffer_position() + base + skipped;
-                if let Some(idx) = stack.pop() {
-                    let last = doc.nodes.len() as u32 - 1;
-                    let n = &mut doc.nodes[idx as usize];
-                    n.end = end;
-                    n.last_desc = last;
-                    match capture {
-                        TextCapture::Target(t) if t == idx => {
-                            let s = String::from_utf8_lossy(&text).trim().to_string();
-                            if !s.is_empty() {
-                                doc.refs.push((idx, RefKind::AppTarget, s.into()));
-                            }
-                            capture = TextCapture::None;
-                        }
-                        TextCapture::Label(t) if t == idx => {
-                            let s = String::from_utf8_lossy(&text).trim().to_string();
-                            doc.labels.insert(idx, s.into());
-                            capture = TextCapture::None;
-                        }
-                        _ => {}
-                    }
-                }
-            }
-            Event::Text(t) if capture != TextCapture::None => text.extend_from_slice(&t),
-            Event::CData(t) if capture != TextCapture::None => text.extend_from_slice(&t),
+            Event::End(_) => ix.end(reader.buffer_position() + base + skipped),
+            Event::Text(t) => ix.text(&t),
+            Event::CData(t) => ix.text(&t),
             Event::Eof => break,
             _ => {}
         }
         buf.clear();
     }
-    if !stack.is_empty() || doc.nodes.is_empty() {
-        return Err(xml_err(
-            path,
-            reader.buffer_position() + base + skipped,
-            "unexpected end of document".into(),
-        ));
+    ix.finish(reader.buffer_position() + base + skipped)
+}
+
+/// Does `tag` start with the end tag of `qname` (`</qname` then space or `>`)?
+fn is_end_tag(tag: &[u8], qname: &[u8]) -> bool {
+    tag.get(1) == Some(&b'/')
+        && tag.get(2..2 + qname.len()) == Some(qname)
+        && tag
+            .get(2 + qname.len())
+            .is_some_and(|&b| b == b'>' || is_ws(b))
+}
+
+/// Hand the unescaped attribute value `v` to `f`; false when it is not valid UTF-8 or
+/// badly escaped.
+fn unescaped(v: &[u8], f: impl FnOnce(&[u8])) -> bool {
+    unescape_value(v).map(|u| f(&u)).is_some()
+}
+
+/// The unescaped attribute value `v` (borrowed when it holds no reference); `None` when it
+/// is not valid UTF-8 or badly escaped.
+fn unescape_value(v: &[u8]) -> Option<Cow<'_, [u8]>> {
+    let s = std::str::from_utf8(v).ok()?;
+    if memchr::memchr(b'&', v).is_none() {
+        return Some(Cow::Borrowed(v));
     }
-    doc.ids.finish();
-    Ok(doc)
+    let u = quick_xml::escape::unescape(s).ok()?;
+    Some(Cow::Owned(u.into_owned().into_bytes()))
 }
 
 /// Skip the content of the element `idx` just opened, `len` bytes up to the end of its end
@@ -543,15 +691,7 @@ fn skip_content(
     let qname = doc.names[doc.nodes[idx as usize].name as usize]
         .qname
         .as_bytes();
-    let end_tag = memchr::memrchr(b'<', content).filter(|&k| {
-        let tag = &content[k..];
-        tag.get(1) == Some(&b'/')
-            && tag.get(2..2 + qname.len()) == Some(qname)
-            && tag
-                .get(2 + qname.len())
-                .is_some_and(|&b| b == b'>' || is_ws(b))
-    });
-    let before = doc.ids.len();
+    let end_tag = memchr::memrchr(b'<', content).filter(|&k| is_end_tag(&content[k..], qname));
     let table = &mut doc.ids;
     let skipped = match end_tag {
         Some(k) if content.len() as u64 == len => {
@@ -566,7 +706,6 @@ fn skip_content(
         _ => None,
     };
     let Some(k) = skipped else {
-        doc.ids.truncate(before);
         reader.get_mut().push_back(content);
         return Ok(0);
     };
@@ -581,7 +720,7 @@ struct PrefixCache {
 }
 
 impl PrefixCache {
-    fn is_gml(&mut self, reader: &NsReader<Source>, prefix: &[u8]) -> bool {
+    fn is_gml<R>(&mut self, reader: &NsReader<R>, prefix: &[u8]) -> bool {
         if let Some(&(_, g)) = self.known.iter().find(|(p, _)| p == prefix) {
             return g;
         }
@@ -620,42 +759,59 @@ fn trim_ws(mut s: &[u8]) -> &[u8] {
 /// content `c` (start and end tags, text) to `id`, in document order, unescaped. False when
 /// `c` holds a comment, CDATA section, processing instruction, DOCTYPE or namespace
 /// declaration, or is not well-formed enough to tell (the caller then parses it instead and
-/// forgets the ids handed out).
+/// pushes none of the ids).
 fn gml_ids(c: &[u8], is_gml: impl FnMut(&[u8]) -> bool, id: impl FnMut(&[u8])) -> bool {
-    gml_ids_in(c, is_gml, id).is_some()
+    let mut ids = Vec::new();
+    if prefixed_ids(c, |p, v| ids.push((p, v))).is_none() {
+        return false;
+    }
+    let mut id = id;
+    let mut is_gml = is_gml;
+    // check every value first, so that nothing is handed out when one is bad
+    let ok = ids.iter().all(|&(p, v)| !is_gml(p) || unescaped(v, |_| ()));
+    if ok {
+        for &(p, v) in &ids {
+            if is_gml(p) {
+                unescaped(v, &mut id);
+            }
+        }
+    }
+    ok
 }
 
-fn gml_ids_in(
-    c: &[u8],
-    mut is_gml: impl FnMut(&[u8]) -> bool,
-    mut id: impl FnMut(&[u8]),
-) -> Option<()> {
-    // A comment, CDATA section, processing instruction or DOCTYPE (`<` cannot stand in text
-    // or attribute values, so `<!` and `<?` start one of them), or a namespace declaration.
-    let mut marks = memchr::memchr2_iter(b'!', b'?', c);
-    if marks.any(|p| p > 0 && c[p - 1] == b'<') || memchr::memmem::find(c, b"xmlns").is_some() {
-        return None;
-    }
-    // Only tags holding an `=` can hold an id: find each `=`, then the tag around it.
+/// Hand the prefix and raw value of every prefixed `id` attribute in the element content
+/// `c` to `id`, in document order; `None` when `c` holds what [`gml_ids`] cannot judge.
+fn prefixed_ids<'a>(c: &'a [u8], mut id: impl FnMut(&'a [u8], &'a [u8])) -> Option<()> {
+    // One pass: each `!` and `?` (after `<` they start a comment, CDATA section, processing
+    // instruction or DOCTYPE, since `<` cannot stand in text or attribute values; they
+    // cannot stand in a tag before its first `=`), and each `=`: only tags holding an `=`
+    // can hold an id or a namespace declaration; the tag around it is tokenized whole.
     let mut i = 0;
-    while let Some(eq) = memchr::memchr(b'=', &c[i..]) {
+    while let Some(eq) = memchr::memchr3(b'=', b'!', b'?', &c[i..]) {
         let eq = i + eq;
+        if c[eq] != b'=' {
+            if eq > 0 && c[eq - 1] == b'<' {
+                return None;
+            }
+            i = eq + 1;
+            continue;
+        }
         match memchr::memrchr(b'<', &c[i..eq]).map(|lt| i + lt) {
             // in text, or in text after an end tag
             None => i = eq + 1,
             Some(lt) if c.get(lt + 1) == Some(&b'/') => i = eq + 1,
-            Some(lt) => i = start_tag_ids(c, lt, &mut is_gml, &mut id)?.max(eq + 1),
+            Some(lt) => i = start_tag_ids(c, lt, &mut id)?.max(eq + 1),
         }
     }
     Some(())
 }
 
-/// The ids of the start tag at `c[lt]` (see [`gml_ids`]); returns the index after its `>`.
-fn start_tag_ids(
-    c: &[u8],
+/// The prefixed ids of the start tag at `c[lt]` (see [`prefixed_ids`]); returns the index
+/// after its `>`, `None` at a namespace declaration.
+fn start_tag_ids<'a>(
+    c: &'a [u8],
     lt: usize,
-    is_gml: &mut impl FnMut(&[u8]) -> bool,
-    id: &mut impl FnMut(&[u8]),
+    id: &mut impl FnMut(&'a [u8], &'a [u8]),
 ) -> Option<usize> {
     let mut j = lt + 1;
     while j < c.len() && !is_ws(c[j]) && c[j] != b'>' && c[j] != b'/' {
@@ -668,21 +824,18 @@ fn start_tag_ids(
             return Some(j + k + 1);
         }
         let name = trim_ws(&rest[..k]);
+        if name.starts_with(b"xmlns") && matches!(name.get(5), None | Some(b':')) {
+            return None;
+        }
         let mut v = j + k + 1;
         while c.get(v).is_some_and(|&b| is_ws(b)) {
             v += 1;
         }
         let quote = *c.get(v).filter(|&&q| q == b'"' || q == b'\'')?;
         let e = v + 1 + memchr::memchr(quote, &c[v + 1..])?;
-        let value = &c[v + 1..e];
         if let Some(colon) = memchr::memchr(b':', name) {
-            if &name[colon + 1..] == b"id" && is_gml(&name[..colon]) {
-                let v = std::str::from_utf8(value).ok()?;
-                if memchr::memchr(b'&', value).is_some() {
-                    id(quick_xml::escape::unescape(v).ok()?.as_bytes());
-                } else {
-                    id(value);
-                }
+            if &name[colon + 1..] == b"id" {
+                id(&name[..colon], &c[v + 1..e]);
             }
         }
         j = e + 1;
@@ -805,6 +958,13 @@ mod tests {
             (r#"<?pi x?>"#, None),
             (r#"<a xmlns:gml="urn:other" gml:id="x"/>"#, None),
             (r#"<a xmlns="urn:other"/>"#, None),
+            (r#"<a x="1"/><b xmlns:q = 'urn:other'>t</b>"#, None),
+            (r#"<a gml:id="x"/>text<?pi?>"#, None),
+            // text may say what it likes; an attribute named like a declaration is not one
+            (
+                r#"<a xmlnsx="1" gml:id="x">xmlns:gml="u" ! ? a!b</a>"#,
+                some(&["x"]),
+            ),
             (r#"<a gml:id="x"#, None),
             (r#"<a gml:id=x/>"#, None),
         ];
@@ -814,14 +974,11 @@ mod tests {
     }
 
     #[test]
-    fn id_table_finds_the_first_node_and_forgets() {
+    fn id_table_finds_the_first_node() {
         let mut t = IdTable::default();
         t.push(b"a", 7);
         t.push(b"b", 3);
         t.push(b"a", 5);
-        let n = t.len();
-        t.push(b"c", 9);
-        t.truncate(n);
         assert_eq!(t.get("a"), Some(5), "before finish");
         t.finish();
         assert_eq!(t.get("a"), Some(5));
@@ -915,6 +1072,48 @@ mod tests {
     }
 
     #[test]
+    fn plain_and_gzip_give_the_same_index() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b, c) = (span_of(DOC, "A"), span_of(DOC, "B"), span_of(DOC, "C"));
+        for (name, text, shift) in [
+            ("plain", DOC.to_string(), 0),
+            ("bom", format!("\u{feff}{DOC}"), 3),
+        ] {
+            let path = dir.path().join(format!("{name}.gml"));
+            std::fs::write(&path, &text).unwrap();
+            let gz = dir.path().join(format!("{name}.gml.gz"));
+            let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            std::io::Write::write_all(&mut enc, text.as_bytes()).unwrap();
+            std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+            for skip in [vec![], vec![a.clone(), b.clone(), c.clone()]] {
+                let skip: Vec<Span> = skip
+                    .iter()
+                    .map(|s| s.start + shift..s.end + shift)
+                    .collect();
+                let opts = ReadOptions::default();
+                let plain = scan(&path, &skip, &opts).unwrap();
+                assert_eq!(plain, scan(&gz, &skip, &opts).unwrap(), "{name} {skip:?}");
+                assert_eq!(plain.skipped.0, usize::from(!skip.is_empty()), "{name}");
+            }
+        }
+    }
+
+    #[test]
+    fn node_at_finds_every_node_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.gml");
+        std::fs::write(&path, DOC).unwrap();
+        let doc = scan(&path, &[], &ReadOptions::default()).unwrap();
+        for (i, n) in doc.nodes.iter().enumerate() {
+            assert_eq!(doc.node_at(n.start), Some(i as u32));
+            assert_eq!(doc.node_at(n.start + 1), None);
+        }
+        assert_eq!(doc.node_at(0), None);
+        assert_eq!(doc.node_at(u64::MAX), None);
+        assert_eq!(Doc::default().node_at(0), None);
+    }
+
+    #[test]
     fn token_limit_and_depth_apply() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("d.gml");
@@ -926,14 +1125,28 @@ mod tests {
             max_event_bytes: 512 << 10,
             ..ReadOptions::default()
         };
-        assert!(scan(&big, &[], &ReadOptions::default()).is_ok());
-        let e = scan(&big, &[], &tight).unwrap_err().to_string();
-        assert!(e.contains("exceeds the limit of 524288 bytes"), "{e}");
+        let gz = |p: &Path| {
+            let z = p.with_extension("gml.gz");
+            let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            std::io::Write::write_all(&mut enc, &std::fs::read(p).unwrap()).unwrap();
+            std::fs::write(&z, enc.finish().unwrap()).unwrap();
+            z
+        };
         let shallow = ReadOptions {
             max_depth: 2,
             ..ReadOptions::default()
         };
-        let e = scan(&path, &[], &shallow).unwrap_err().to_string();
-        assert!(e.contains("nested deeper than 2"), "{e}");
+        // from the memory map and streamed (gzip) alike
+        for (big, path) in [(big.clone(), path.clone()), (gz(&big), gz(&path))] {
+            assert!(scan(&big, &[], &ReadOptions::default()).is_ok());
+            let e = scan(&big, &[], &tight).unwrap_err().to_string();
+            assert!(e.contains("exceeds the limit of 524288 bytes"), "{e}");
+            // content larger than half the limit is not skipped but parsed, and fails alike
+            let span = span_of(&DOC.replace("<!-- note -->", &text), "B");
+            let e = scan(&big, &[span], &tight).unwrap_err().to_string();
+            assert!(e.contains("exceeds the limit of 524288 bytes"), "{e}");
+            let e = scan(&path, &[], &shallow).unwrap_err().to_string();
+            assert!(e.contains("nested deeper than 2"), "{e}");
+        }
     }
 }
