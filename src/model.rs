@@ -119,14 +119,30 @@ impl fmt::Display for AssetKind {
 /// A planar (or nearly planar) polygon: one exterior ring and any interior rings.
 ///
 /// Rings are stored *open*: the closing point that repeats the first one is removed.
+///
+/// A city has millions of polygons, so a polygon is compact: every ring's points are in one
+/// allocation (the exterior first, then each interior ring), the interior rings' starts in a
+/// second one that is empty (no allocation) for a polygon without holes, the id a boxed
+/// string: 48 bytes plus the points and the id.
+///
+/// ```
+/// use glam::DVec3;
+/// use skylod::model::Polygon;
+/// let sq = |s: f64| vec![DVec3::ZERO, DVec3::new(s, 0.0, 0.0), DVec3::new(s, s, 0.0), DVec3::new(0.0, s, 0.0)];
+/// let mut p = Polygon::new(sq(4.0));
+/// p.push_interior(&sq(1.0));
+/// assert_eq!((p.exterior().len(), p.interior_count()), (4, 1));
+/// assert_eq!(p.interiors().next(), Some(&sq(1.0)[..]));
+/// assert!((p.area() - 15.0).abs() < 1e-12);
+/// ```
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Polygon {
     /// `gml:id` of the polygon, if it has one.
-    pub id: Option<String>,
-    /// Exterior ring, open, at least 3 points.
-    pub exterior: Vec<DVec3>,
-    /// Interior rings (holes), open.
-    pub interiors: Vec<Vec<DVec3>>,
+    pub id: Option<Box<str>>,
+    /// Exterior ring then interior rings, open.
+    points: Box<[DVec3]>,
+    /// Start of each interior ring in `points`.
+    holes: Box<[u32]>,
 }
 
 impl Polygon {
@@ -134,26 +150,119 @@ impl Polygon {
     pub fn new(exterior: Vec<DVec3>) -> Self {
         Polygon {
             id: None,
-            exterior,
-            interiors: Vec::new(),
+            points: exterior.into_boxed_slice(),
+            holes: Box::default(),
         }
+    }
+
+    /// A polygon from its rings (copied into one allocation).
+    pub fn from_rings<R: AsRef<[DVec3]>>(
+        id: Option<Box<str>>,
+        exterior: &[DVec3],
+        interiors: &[R],
+    ) -> Self {
+        let n = exterior.len() + interiors.iter().map(|r| r.as_ref().len()).sum::<usize>();
+        let mut points = Vec::with_capacity(n);
+        points.extend_from_slice(exterior);
+        let mut holes = Vec::with_capacity(interiors.len());
+        for r in interiors {
+            holes.push(points.len() as u32);
+            points.extend_from_slice(r.as_ref());
+        }
+        Polygon {
+            id,
+            points: points.into_boxed_slice(),
+            holes: holes.into_boxed_slice(),
+        }
+    }
+
+    /// The same polygon with this id.
+    pub fn with_id(mut self, id: Option<Box<str>>) -> Self {
+        self.id = id;
+        self
+    }
+
+    fn exterior_end(&self) -> usize {
+        self.holes
+            .first()
+            .map_or(self.points.len(), |&s| s as usize)
+    }
+
+    /// Exterior ring, open, at least 3 points (empty for a default polygon).
+    pub fn exterior(&self) -> &[DVec3] {
+        &self.points[..self.exterior_end()]
+    }
+
+    /// Exterior ring, mutable.
+    pub fn exterior_mut(&mut self) -> &mut [DVec3] {
+        let e = self.exterior_end();
+        &mut self.points[..e]
+    }
+
+    /// Number of interior rings (holes).
+    pub fn interior_count(&self) -> usize {
+        self.holes.len()
+    }
+
+    /// Interior ring `k`, open.
+    pub fn interior(&self, k: usize) -> Option<&[DVec3]> {
+        let s = *self.holes.get(k)? as usize;
+        let e = self
+            .holes
+            .get(k + 1)
+            .map_or(self.points.len(), |&e| e as usize);
+        self.points.get(s..e)
+    }
+
+    /// Interior rings (holes), open, in order.
+    pub fn interiors(&self) -> impl ExactSizeIterator<Item = &[DVec3]> + Clone + '_ {
+        (0..self.holes.len()).map(move |k| self.interior(k).unwrap_or(&[]))
+    }
+
+    /// Add an interior ring (the points are copied into a new allocation).
+    pub fn push_interior(&mut self, ring: &[DVec3]) {
+        let mut points = std::mem::take(&mut self.points).into_vec();
+        let mut holes = std::mem::take(&mut self.holes).into_vec();
+        holes.push(points.len() as u32);
+        points.extend_from_slice(ring);
+        self.points = points.into_boxed_slice();
+        self.holes = holes.into_boxed_slice();
     }
 
     /// All points of all rings.
     pub fn points(&self) -> impl Iterator<Item = &DVec3> {
-        self.exterior.iter().chain(self.interiors.iter().flatten())
+        self.points.iter()
+    }
+
+    /// All points of all rings (exterior first), mutable: for transforms.
+    pub fn points_mut(&mut self) -> &mut [DVec3] {
+        &mut self.points
+    }
+
+    /// Reverse every ring in place (the orientation flips, each ring keeps its place).
+    pub fn reverse_rings(&mut self) {
+        let mut start = 0usize;
+        for &h in self
+            .holes
+            .iter()
+            .chain(std::iter::once(&(self.points.len() as u32)))
+        {
+            let end = (h as usize).clamp(start, self.points.len());
+            self.points[start..end].reverse();
+            start = end;
+        }
     }
 
     /// Newell normal of the exterior ring, not normalised (length = 2 x area).
     pub fn newell_normal(&self) -> DVec3 {
-        newell(&self.exterior)
+        newell(self.exterior())
     }
 
     /// Area of the polygon (exterior minus holes), by Newell's method.
     pub fn area(&self) -> f64 {
-        let ext = newell(&self.exterior);
+        let ext = newell(self.exterior());
         let n = ext.normalize_or_zero();
-        let holes: f64 = self.interiors.iter().map(|r| newell(r).dot(n).abs()).sum();
+        let holes: f64 = self.interiors().map(|r| newell(r).dot(n).abs()).sum();
         (ext.length() - holes).max(0.0) * 0.5
     }
 }
@@ -244,7 +353,7 @@ pub struct LodGeometry {
     /// Level of detail 0..=4.
     pub lod: u8,
     /// Local name of the property element, e.g. `lod3MultiSurface`.
-    pub property: String,
+    pub property: Arc<str>,
     /// Byte span of the property element in the source (start tag to end tag).
     pub span: Span,
     /// Byte span of the property's content (between its start and end tags).
@@ -261,7 +370,7 @@ pub struct Asset {
     /// `gml:id` of the element, if any.
     pub id: Option<String>,
     /// Local name of the XML element, e.g. `RoofSurface`, `SolitaryVegetationObject`.
-    pub element: String,
+    pub element: Arc<str>,
     /// Index into [`CityModel::buildings`] of the building or part it belongs to.
     pub building: Option<usize>,
     /// Index into [`CityModel::assets`] of the asset it is nested in (an opening's wall).
@@ -514,9 +623,40 @@ mod tests {
         };
         let mut p = Polygon::new(sq(4.0));
         assert!((p.area() - 16.0).abs() < 1e-12);
-        p.interiors.push(sq(1.0));
+        p.push_interior(&sq(1.0));
         assert!((p.area() - 15.0).abs() < 1e-12);
         assert!(p.newell_normal().z > 0.0);
+    }
+
+    #[test]
+    fn rings_in_one_allocation() {
+        let r = |k: f64, n: usize| {
+            (0..n)
+                .map(|i| DVec3::splat(k + i as f64))
+                .collect::<Vec<_>>()
+        };
+        let mut p = Polygon::from_rings(Some("p".into()), &r(0.0, 4), &[r(10.0, 3), r(20.0, 5)]);
+        assert_eq!(std::mem::size_of::<Polygon>(), 48);
+        assert_eq!(p.exterior(), &r(0.0, 4)[..]);
+        assert_eq!(p.interior_count(), 2);
+        assert_eq!(p.interior(1), Some(&r(20.0, 5)[..]));
+        assert_eq!(p.interior(2), None);
+        assert_eq!(p.points().count(), 12);
+        p.reverse_rings();
+        let rev = |mut v: Vec<DVec3>| {
+            v.reverse();
+            v
+        };
+        assert_eq!(p.exterior(), &rev(r(0.0, 4))[..]);
+        let holes: Vec<&[DVec3]> = p.interiors().collect();
+        assert_eq!(holes, [&rev(r(10.0, 3))[..], &rev(r(20.0, 5))[..]]);
+        p.push_interior(&r(30.0, 3));
+        assert_eq!(p.interiors().len(), 3);
+        assert_eq!(p.id.as_deref(), Some("p"));
+        let plain = Polygon::new(r(0.0, 3));
+        assert_eq!((plain.interior_count(), plain.exterior().len()), (0, 3));
+        p.exterior_mut()[0] = DVec3::ZERO;
+        assert_eq!(p.exterior()[0], DVec3::ZERO);
     }
 
     #[test]

@@ -189,7 +189,7 @@ mod tests {
                 .into_iter()
                 .map(|(lod, polygons)| LodGeometry {
                     lod,
-                    property: format!("lod{lod}MultiSurface"),
+                    property: format!("lod{lod}MultiSurface").into(),
                     span: 0..0,
                     content: 0..0,
                     polygons,

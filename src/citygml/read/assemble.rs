@@ -93,7 +93,7 @@ impl Parser<'_> {
                     } else {
                         "Building"
                     }
-                    .to_string(),
+                    .into(),
                     building: Some(b),
                     parent: None,
                     span: bb.span.clone(),

@@ -248,9 +248,10 @@ impl Parser<'_> {
                 let range = (start, self.parts.len() as u32);
                 if let Some(owner) = owner {
                     if range.1 > range.0 {
+                        let property = self.intern(frame.name.as_deref().unwrap_or("").as_bytes());
                         let geom = LodGeometry {
                             lod,
-                            property: frame.name.as_deref().unwrap_or("").to_string(),
+                            property,
                             span: frame.start..end,
                             content: frame.content_start..self.event_pos.max(frame.content_start),
                             polygons: Vec::new(),

@@ -70,11 +70,13 @@ impl Parser<'_> {
             exterior.reverse();
             interiors.iter_mut().for_each(|r| r.reverse());
         }
+        let id = id.map(String::into_boxed_str);
         let idx = self.polys.len() as u32;
-        self.polys.push(Polygon {
-            id,
-            exterior,
-            interiors,
+        self.polys.push(if interiors.is_empty() {
+            // the exterior was copied at its exact size: moved, not copied again
+            Polygon::new(exterior).with_id(id)
+        } else {
+            Polygon::from_rings(id, &exterior, &interiors)
         });
         self.parts.push(Part::Poly(idx));
         true

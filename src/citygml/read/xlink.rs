@@ -202,8 +202,7 @@ impl Parser<'_> {
                 slot.clone()
             };
             if r.reversed {
-                p.exterior.reverse();
-                p.interiors.iter_mut().for_each(|x| x.reverse());
+                p.reverse_rings();
             }
             if let Some(idx) = r.implicit {
                 let imp = self.implicits.get(idx as usize);
@@ -220,8 +219,7 @@ impl Parser<'_> {
                     };
                     *q = v + rp;
                 };
-                p.exterior.iter_mut().for_each(tf);
-                p.interiors.iter_mut().flatten().for_each(tf);
+                p.points_mut().iter_mut().for_each(tf);
             }
             out.push(p);
         }
