@@ -233,7 +233,7 @@ impl Parser<'_> {
             Kind::Polygon => {
                 let id = frame.id.take();
                 let text = id.and_then(|(a, b, _)| self.open_ids.get(a..b));
-                let pushed = self.finish_polygon(text.map(str::to_string));
+                let pushed = self.finish_polygon(text.map(compact_str::CompactString::from));
                 if let (Some(start), Some((a, b, hash))) = (frame.register, id) {
                     let end = if pushed {
                         self.parts.len() as u32
