@@ -369,8 +369,8 @@ pub struct LodGeometry {
 pub struct Asset {
     /// What it is.
     pub kind: AssetKind,
-    /// `gml:id` of the element, if any.
-    pub id: Option<String>,
+    /// `gml:id` of the element, if any (up to 24 bytes inline).
+    pub id: Option<CompactString>,
     /// Local name of the XML element, e.g. `RoofSurface`, `SolitaryVegetationObject`.
     pub element: Arc<str>,
     /// Index into [`CityModel::buildings`] of the building or part it belongs to.

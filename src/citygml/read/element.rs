@@ -264,6 +264,9 @@ impl Parser<'_> {
                         };
                         if let Some(list) = list {
                             let index = list.len();
+                            // exact: a first push would reserve room for four (320 bytes for
+                            // the one geometry most of a city's assets have)
+                            list.reserve_exact(1);
                             list.push(geom);
                             self.pending.push(PendingGeom {
                                 owner,

@@ -413,7 +413,7 @@ impl<'d> Parser<'d> {
         let element = self.intern(local);
         self.assets.push(Asset {
             kind,
-            id: id.map(str::to_string),
+            id: id.map(compact_str::CompactString::from),
             element,
             building,
             parent,
