@@ -122,9 +122,8 @@ impl fmt::Display for AssetKind {
 /// Rings are stored *open*: the closing point that repeats the first one is removed.
 ///
 /// A city has millions of polygons, so a polygon is compact: every ring's points are in one
-/// allocation (the exterior first, then each interior ring), the interior rings' starts in a
-/// second one that is empty (no allocation) for a polygon without holes, a short id inline:
-/// 56 bytes plus the points (and a long id).
+/// allocation (the exterior first, then each interior ring, then the interior rings' starts),
+/// a short id inline: 48 bytes plus the points (and a long id).
 ///
 /// ```
 /// use glam::DVec3;
@@ -141,19 +140,24 @@ pub struct Polygon {
     /// `gml:id` of the polygon, if it has one (ids up to 24 bytes are stored inline: no
     /// allocation for the short ids of most files).
     pub id: Option<CompactString>,
-    /// Exterior ring then interior rings, open.
+    /// Exterior ring then interior rings, open; then, one entry per interior ring, its start
+    /// (in `x`): one allocation for the whole polygon.
     points: Box<[DVec3]>,
-    /// Start of each interior ring in `points`.
-    holes: Box<[u32]>,
+    /// Length of the exterior ring.
+    ext: u32,
+    /// Number of interior rings.
+    holes: u32,
 }
 
 impl Polygon {
     /// A polygon without holes and without id.
     pub fn new(exterior: Vec<DVec3>) -> Self {
+        let ext = exterior.len() as u32;
         Polygon {
             id: None,
             points: exterior.into_boxed_slice(),
-            holes: Box::default(),
+            ext,
+            holes: 0,
         }
     }
 
@@ -163,18 +167,22 @@ impl Polygon {
         exterior: &[DVec3],
         interiors: &[R],
     ) -> Self {
-        let n = exterior.len() + interiors.iter().map(|r| r.as_ref().len()).sum::<usize>();
+        let n = exterior.len()
+            + interiors.iter().map(|r| r.as_ref().len()).sum::<usize>()
+            + interiors.len();
         let mut points = Vec::with_capacity(n);
         points.extend_from_slice(exterior);
-        let mut holes = Vec::with_capacity(interiors.len());
+        let mut starts = Vec::with_capacity(interiors.len());
         for r in interiors {
-            holes.push(points.len() as u32);
+            starts.push(DVec3::new(points.len() as f64, 0.0, 0.0));
             points.extend_from_slice(r.as_ref());
         }
+        points.extend_from_slice(&starts);
         Polygon {
             id,
             points: points.into_boxed_slice(),
-            holes: holes.into_boxed_slice(),
+            ext: exterior.len() as u32,
+            holes: interiors.len() as u32,
         }
     }
 
@@ -184,74 +192,82 @@ impl Polygon {
         self
     }
 
-    fn exterior_end(&self) -> usize {
-        self.holes
-            .first()
-            .map_or(self.points.len(), |&s| s as usize)
+    /// End of the rings' points (the interior rings' starts follow).
+    fn rings_end(&self) -> usize {
+        self.points.len().saturating_sub(self.holes as usize)
     }
 
     /// Exterior ring, open, at least 3 points (empty for a default polygon).
     pub fn exterior(&self) -> &[DVec3] {
-        &self.points[..self.exterior_end()]
+        &self.points[..(self.ext as usize).min(self.rings_end())]
     }
 
     /// Exterior ring, mutable.
     pub fn exterior_mut(&mut self) -> &mut [DVec3] {
-        let e = self.exterior_end();
+        let e = (self.ext as usize).min(self.rings_end());
         &mut self.points[..e]
     }
 
     /// Number of interior rings (holes).
     pub fn interior_count(&self) -> usize {
-        self.holes.len()
+        self.holes as usize
     }
 
     /// Interior ring `k`, open.
     pub fn interior(&self, k: usize) -> Option<&[DVec3]> {
-        let s = *self.holes.get(k)? as usize;
-        let e = self
-            .holes
-            .get(k + 1)
-            .map_or(self.points.len(), |&e| e as usize);
+        let end = self.rings_end();
+        if k >= self.holes as usize {
+            return None;
+        }
+        let start = |k: usize| self.points.get(end + k).map(|q| q.x as usize);
+        let s = start(k)?;
+        let e = if k + 1 < self.holes as usize {
+            start(k + 1)?
+        } else {
+            end
+        };
         self.points.get(s..e)
     }
 
     /// Interior rings (holes), open, in order.
     pub fn interiors(&self) -> impl ExactSizeIterator<Item = &[DVec3]> + Clone + '_ {
-        (0..self.holes.len()).map(move |k| self.interior(k).unwrap_or(&[]))
+        (0..self.holes as usize).map(move |k| self.interior(k).unwrap_or(&[]))
     }
 
-    /// Add an interior ring (the points are copied into a new allocation).
+    /// Add an interior ring (the polygon's points are copied into a new allocation).
     pub fn push_interior(&mut self, ring: &[DVec3]) {
-        let mut points = std::mem::take(&mut self.points).into_vec();
-        let mut holes = std::mem::take(&mut self.holes).into_vec();
-        holes.push(points.len() as u32);
-        points.extend_from_slice(ring);
-        self.points = points.into_boxed_slice();
-        self.holes = holes.into_boxed_slice();
+        let mut rings: Vec<Vec<DVec3>> = self.interiors().map(<[DVec3]>::to_vec).collect();
+        rings.push(ring.to_vec());
+        let ext = self.exterior().to_vec();
+        *self = Polygon::from_rings(self.id.take(), &ext, &rings);
     }
 
     /// All points of all rings.
     pub fn points(&self) -> impl Iterator<Item = &DVec3> {
-        self.points.iter()
+        self.points[..self.rings_end()].iter()
     }
 
     /// All points of all rings (exterior first), mutable: for transforms.
     pub fn points_mut(&mut self) -> &mut [DVec3] {
-        &mut self.points
+        let e = self.rings_end();
+        &mut self.points[..e]
     }
 
     /// Reverse every ring in place (the orientation flips, each ring keeps its place).
     pub fn reverse_rings(&mut self) {
-        let mut start = 0usize;
-        for &h in self
-            .holes
-            .iter()
-            .chain(std::iter::once(&(self.points.len() as u32)))
-        {
-            let end = (h as usize).clamp(start, self.points.len());
-            self.points[start..end].reverse();
-            start = end;
+        let end = self.rings_end();
+        let mut bounds: Vec<usize> = Vec::with_capacity(self.holes as usize + 2);
+        bounds.push(0);
+        bounds.push((self.ext as usize).min(end));
+        for k in 0..self.holes as usize {
+            let s = self.points.get(end + k).map_or(end, |q| q.x as usize);
+            bounds.push(s.clamp(*bounds.last().unwrap_or(&0), end));
+        }
+        bounds.push(end);
+        for w in bounds.windows(2) {
+            if let Some(r) = self.points.get_mut(w[0]..w[1]) {
+                r.reverse();
+            }
         }
     }
 
@@ -638,7 +654,7 @@ mod tests {
                 .collect::<Vec<_>>()
         };
         let mut p = Polygon::from_rings(Some("p".into()), &r(0.0, 4), &[r(10.0, 3), r(20.0, 5)]);
-        assert_eq!(std::mem::size_of::<Polygon>(), 56);
+        assert_eq!(std::mem::size_of::<Polygon>(), 48);
         assert_eq!(p.exterior(), &r(0.0, 4)[..]);
         assert_eq!(p.interior_count(), 2);
         assert_eq!(p.interior(1), Some(&r(20.0, 5)[..]));
