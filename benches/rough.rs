@@ -28,7 +28,7 @@ fn lod3_wall() -> Vec<Polygon> {
             let (a1, h1, d) = (a0 + 1.2, h0 + 1.5, -0.2);
             let mut hole = quad(a0, a1, h0, h1, 0.0);
             hole.reverse();
-            wall.interiors.push(hole);
+            wall.push_interior(&hole);
             out.push(Polygon::new(vec![
                 p(a0, h0, 0.0),
                 p(a1, h0, 0.0),

@@ -427,7 +427,7 @@ pub fn bound(
                 promotions.push(Promotion {
                     round: rounds,
                     asset: i,
-                    id: model.assets[i].id.clone(),
+                    id: model.assets[i].id.as_deref().map(str::to_owned),
                     from,
                     to: from + 1,
                     poi: pois[k].id.clone(),
@@ -465,7 +465,7 @@ mod tests {
     fn asset(kind: AssetKind, polys: Vec<Polygon>) -> Asset {
         Asset {
             kind,
-            id: Some(format!("{}", polys.len())),
+            id: Some(format!("{}", polys.len()).into()),
             element: "X".into(),
             building: None,
             parent: None,

@@ -187,10 +187,7 @@ mod tests {
                     lod,
                     property: p.into(),
                     polygons: (0..n)
-                        .map(|k| Polygon {
-                            id: Some(format!("{p}{k}")),
-                            ..Default::default()
-                        })
+                        .map(|k| Polygon::default().with_id(Some(format!("{p}{k}").into())))
                         .collect(),
                     ..Default::default()
                 })

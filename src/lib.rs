@@ -53,6 +53,7 @@ pub mod geom;
 pub mod inputs;
 pub mod level;
 pub mod lod;
+pub mod mem;
 pub mod model;
 pub mod pipeline;
 pub mod poi;

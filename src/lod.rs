@@ -83,6 +83,7 @@ pub fn lod_with(
         progress.advance(Stage::Rough, n, 0, None);
         r
     });
+    crate::mem::give_back();
     let rough_s = t.elapsed().as_secs_f64();
     check(progress, Stage::Bvh)?;
     let t = Instant::now();

@@ -4,6 +4,7 @@
 //! (rough, trace, select, solar, write) works on it. Coordinates are `f64`
 //! ([`glam::DVec3`]) in the model's CRS.
 
+use compact_str::CompactString;
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -119,41 +120,167 @@ impl fmt::Display for AssetKind {
 /// A planar (or nearly planar) polygon: one exterior ring and any interior rings.
 ///
 /// Rings are stored *open*: the closing point that repeats the first one is removed.
+///
+/// A city has millions of polygons, so a polygon is compact: every ring's points are in one
+/// allocation (the exterior first, then each interior ring, then the interior rings' starts),
+/// a short id inline: 48 bytes plus the points (and a long id).
+///
+/// ```
+/// use glam::DVec3;
+/// use skylod::model::Polygon;
+/// let sq = |s: f64| vec![DVec3::ZERO, DVec3::new(s, 0.0, 0.0), DVec3::new(s, s, 0.0), DVec3::new(0.0, s, 0.0)];
+/// let mut p = Polygon::new(sq(4.0));
+/// p.push_interior(&sq(1.0));
+/// assert_eq!((p.exterior().len(), p.interior_count()), (4, 1));
+/// assert_eq!(p.interiors().next(), Some(&sq(1.0)[..]));
+/// assert!((p.area() - 15.0).abs() < 1e-12);
+/// ```
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Polygon {
-    /// `gml:id` of the polygon, if it has one.
-    pub id: Option<String>,
-    /// Exterior ring, open, at least 3 points.
-    pub exterior: Vec<DVec3>,
-    /// Interior rings (holes), open.
-    pub interiors: Vec<Vec<DVec3>>,
+    /// `gml:id` of the polygon, if it has one (ids up to 24 bytes are stored inline: no
+    /// allocation for the short ids of most files).
+    pub id: Option<CompactString>,
+    /// Exterior ring then interior rings, open; then, one entry per interior ring, its start
+    /// (in `x`): one allocation for the whole polygon.
+    points: Box<[DVec3]>,
+    /// Length of the exterior ring.
+    ext: u32,
+    /// Number of interior rings.
+    holes: u32,
 }
 
 impl Polygon {
     /// A polygon without holes and without id.
     pub fn new(exterior: Vec<DVec3>) -> Self {
+        let ext = exterior.len() as u32;
         Polygon {
             id: None,
-            exterior,
-            interiors: Vec::new(),
+            points: exterior.into_boxed_slice(),
+            ext,
+            holes: 0,
         }
+    }
+
+    /// A polygon from its rings (copied into one allocation).
+    pub fn from_rings<R: AsRef<[DVec3]>>(
+        id: Option<CompactString>,
+        exterior: &[DVec3],
+        interiors: &[R],
+    ) -> Self {
+        let n = exterior.len()
+            + interiors.iter().map(|r| r.as_ref().len()).sum::<usize>()
+            + interiors.len();
+        let mut points = Vec::with_capacity(n);
+        points.extend_from_slice(exterior);
+        let mut starts = Vec::with_capacity(interiors.len());
+        for r in interiors {
+            starts.push(DVec3::new(points.len() as f64, 0.0, 0.0));
+            points.extend_from_slice(r.as_ref());
+        }
+        points.extend_from_slice(&starts);
+        Polygon {
+            id,
+            points: points.into_boxed_slice(),
+            ext: exterior.len() as u32,
+            holes: interiors.len() as u32,
+        }
+    }
+
+    /// The same polygon with this id.
+    pub fn with_id(mut self, id: Option<CompactString>) -> Self {
+        self.id = id;
+        self
+    }
+
+    /// End of the rings' points (the interior rings' starts follow).
+    fn rings_end(&self) -> usize {
+        self.points.len().saturating_sub(self.holes as usize)
+    }
+
+    /// Exterior ring, open, at least 3 points (empty for a default polygon).
+    pub fn exterior(&self) -> &[DVec3] {
+        &self.points[..(self.ext as usize).min(self.rings_end())]
+    }
+
+    /// Exterior ring, mutable.
+    pub fn exterior_mut(&mut self) -> &mut [DVec3] {
+        let e = (self.ext as usize).min(self.rings_end());
+        &mut self.points[..e]
+    }
+
+    /// Number of interior rings (holes).
+    pub fn interior_count(&self) -> usize {
+        self.holes as usize
+    }
+
+    /// Interior ring `k`, open.
+    pub fn interior(&self, k: usize) -> Option<&[DVec3]> {
+        let end = self.rings_end();
+        if k >= self.holes as usize {
+            return None;
+        }
+        let start = |k: usize| self.points.get(end + k).map(|q| q.x as usize);
+        let s = start(k)?;
+        let e = if k + 1 < self.holes as usize {
+            start(k + 1)?
+        } else {
+            end
+        };
+        self.points.get(s..e)
+    }
+
+    /// Interior rings (holes), open, in order.
+    pub fn interiors(&self) -> impl ExactSizeIterator<Item = &[DVec3]> + Clone + '_ {
+        (0..self.holes as usize).map(move |k| self.interior(k).unwrap_or(&[]))
+    }
+
+    /// Add an interior ring (the polygon's points are copied into a new allocation).
+    pub fn push_interior(&mut self, ring: &[DVec3]) {
+        let mut rings: Vec<Vec<DVec3>> = self.interiors().map(<[DVec3]>::to_vec).collect();
+        rings.push(ring.to_vec());
+        let ext = self.exterior().to_vec();
+        *self = Polygon::from_rings(self.id.take(), &ext, &rings);
     }
 
     /// All points of all rings.
     pub fn points(&self) -> impl Iterator<Item = &DVec3> {
-        self.exterior.iter().chain(self.interiors.iter().flatten())
+        self.points[..self.rings_end()].iter()
+    }
+
+    /// All points of all rings (exterior first), mutable: for transforms.
+    pub fn points_mut(&mut self) -> &mut [DVec3] {
+        let e = self.rings_end();
+        &mut self.points[..e]
+    }
+
+    /// Reverse every ring in place (the orientation flips, each ring keeps its place).
+    pub fn reverse_rings(&mut self) {
+        let end = self.rings_end();
+        let mut bounds: Vec<usize> = Vec::with_capacity(self.holes as usize + 2);
+        bounds.push(0);
+        bounds.push((self.ext as usize).min(end));
+        for k in 0..self.holes as usize {
+            let s = self.points.get(end + k).map_or(end, |q| q.x as usize);
+            bounds.push(s.clamp(*bounds.last().unwrap_or(&0), end));
+        }
+        bounds.push(end);
+        for w in bounds.windows(2) {
+            if let Some(r) = self.points.get_mut(w[0]..w[1]) {
+                r.reverse();
+            }
+        }
     }
 
     /// Newell normal of the exterior ring, not normalised (length = 2 x area).
     pub fn newell_normal(&self) -> DVec3 {
-        newell(&self.exterior)
+        newell(self.exterior())
     }
 
     /// Area of the polygon (exterior minus holes), by Newell's method.
     pub fn area(&self) -> f64 {
-        let ext = newell(&self.exterior);
+        let ext = newell(self.exterior());
         let n = ext.normalize_or_zero();
-        let holes: f64 = self.interiors.iter().map(|r| newell(r).dot(n).abs()).sum();
+        let holes: f64 = self.interiors().map(|r| newell(r).dot(n).abs()).sum();
         (ext.length() - holes).max(0.0) * 0.5
     }
 }
@@ -244,7 +371,7 @@ pub struct LodGeometry {
     /// Level of detail 0..=4.
     pub lod: u8,
     /// Local name of the property element, e.g. `lod3MultiSurface`.
-    pub property: String,
+    pub property: Arc<str>,
     /// Byte span of the property element in the source (start tag to end tag).
     pub span: Span,
     /// Byte span of the property's content (between its start and end tags).
@@ -258,10 +385,10 @@ pub struct LodGeometry {
 pub struct Asset {
     /// What it is.
     pub kind: AssetKind,
-    /// `gml:id` of the element, if any.
-    pub id: Option<String>,
+    /// `gml:id` of the element, if any (up to 24 bytes inline).
+    pub id: Option<CompactString>,
     /// Local name of the XML element, e.g. `RoofSurface`, `SolitaryVegetationObject`.
-    pub element: String,
+    pub element: Arc<str>,
     /// Index into [`CityModel::buildings`] of the building or part it belongs to.
     pub building: Option<usize>,
     /// Index into [`CityModel::assets`] of the asset it is nested in (an opening's wall).
@@ -514,9 +641,40 @@ mod tests {
         };
         let mut p = Polygon::new(sq(4.0));
         assert!((p.area() - 16.0).abs() < 1e-12);
-        p.interiors.push(sq(1.0));
+        p.push_interior(&sq(1.0));
         assert!((p.area() - 15.0).abs() < 1e-12);
         assert!(p.newell_normal().z > 0.0);
+    }
+
+    #[test]
+    fn rings_in_one_allocation() {
+        let r = |k: f64, n: usize| {
+            (0..n)
+                .map(|i| DVec3::splat(k + i as f64))
+                .collect::<Vec<_>>()
+        };
+        let mut p = Polygon::from_rings(Some("p".into()), &r(0.0, 4), &[r(10.0, 3), r(20.0, 5)]);
+        assert_eq!(std::mem::size_of::<Polygon>(), 48);
+        assert_eq!(p.exterior(), &r(0.0, 4)[..]);
+        assert_eq!(p.interior_count(), 2);
+        assert_eq!(p.interior(1), Some(&r(20.0, 5)[..]));
+        assert_eq!(p.interior(2), None);
+        assert_eq!(p.points().count(), 12);
+        p.reverse_rings();
+        let rev = |mut v: Vec<DVec3>| {
+            v.reverse();
+            v
+        };
+        assert_eq!(p.exterior(), &rev(r(0.0, 4))[..]);
+        let holes: Vec<&[DVec3]> = p.interiors().collect();
+        assert_eq!(holes, [&rev(r(10.0, 3))[..], &rev(r(20.0, 5))[..]]);
+        p.push_interior(&r(30.0, 3));
+        assert_eq!(p.interiors().len(), 3);
+        assert_eq!(p.id.as_deref(), Some("p"));
+        let plain = Polygon::new(r(0.0, 3));
+        assert_eq!((plain.interior_count(), plain.exterior().len()), (0, 3));
+        p.exterior_mut()[0] = DVec3::ZERO;
+        assert_eq!(p.exterior()[0], DVec3::ZERO);
     }
 
     #[test]

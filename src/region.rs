@@ -106,19 +106,15 @@ fn grid_in(outer: &[DVec2], holes: &[Vec<DVec2>], spacing: f64) -> Vec<DVec2> {
 
 /// Points of one polygon at `spacing` in its plane, with its unit normal.
 fn sample_polygon(p: &Polygon, n: DVec3, spacing: f64) -> Vec<DVec3> {
-    let Some(&o) = p.exterior.first() else {
+    let Some(&o) = p.exterior().first() else {
         return Vec::new();
     };
     // in-plane basis: u horizontal when the plane is not horizontal
     let u = n.cross(DVec3::Z).try_normalize().unwrap_or(DVec3::X);
     let v = n.cross(u);
     let to2 = |q: &DVec3| DVec2::new((*q - o).dot(u), (*q - o).dot(v));
-    let outer: Vec<DVec2> = p.exterior.iter().map(to2).collect();
-    let holes: Vec<Vec<DVec2>> = p
-        .interiors
-        .iter()
-        .map(|h| h.iter().map(to2).collect())
-        .collect();
+    let outer: Vec<DVec2> = p.exterior().iter().map(to2).collect();
+    let holes: Vec<Vec<DVec2>> = p.interiors().map(|h| h.iter().map(to2).collect()).collect();
     grid_in(&outer, &holes, spacing)
         .into_iter()
         .map(|q| o + u * q.x + v * q.y)
@@ -325,8 +321,8 @@ mod tests {
             DVec3::new(0.0, 0.0, 5.0),
             DVec3::new(0.0, 10.0, 5.0),
         ]);
-        p.exterior.reverse();
-        p.interiors.push(vec![
+        p.exterior_mut().reverse();
+        p.push_interior(&[
             DVec3::new(0.0, 4.0, 1.0),
             DVec3::new(0.0, 6.0, 1.0),
             DVec3::new(0.0, 6.0, 3.0),

@@ -270,7 +270,7 @@ impl Report {
                     *c += 1;
                 }
                 AssetEntry {
-                    id: a.id.clone(),
+                    id: a.id.as_deref().map(str::to_owned),
                     kind: a.kind.as_str(),
                     building: a
                         .building

@@ -410,10 +410,10 @@ fn outline_edges(r: &RoughGeometry) -> Box<dyn Iterator<Item = [DVec3; 2]> + '_>
     match &r.obb {
         Some(b) => Box::new(b.top_edges().into_iter()),
         None => Box::new(r.polygons.iter().flat_map(|p| {
-            let n = p.exterior.len();
+            let n = p.exterior().len();
             (0..n).filter_map(move |k| {
-                let a = *p.exterior.get(k)?;
-                let b = *p.exterior.get((k + 1) % n)?;
+                let a = *p.exterior().get(k)?;
+                let b = *p.exterior().get((k + 1) % n)?;
                 Some([a, b])
             })
         })),

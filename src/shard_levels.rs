@@ -247,7 +247,7 @@ pub fn write_levels(
             &Line::Asset(AssetRecord {
                 file,
                 span: [a.span.start, a.span.end],
-                id: a.id.clone(),
+                id: a.id.as_deref().map(str::to_owned),
                 level,
                 hits,
             }),
@@ -459,7 +459,12 @@ pub fn combine(mut files: Vec<LevelsFile>, model: &CityModel) -> Result<Combined
             let found = by_span
                 .get(&(k, a.span[0], a.span[1]))
                 .copied()
-                .filter(|&i| model.assets.get(i).is_some_and(|x| x.id == a.id));
+                .filter(|&i| {
+                    model
+                        .assets
+                        .get(i)
+                        .is_some_and(|x| x.id.as_deref() == a.id.as_deref())
+                });
             let Some(i) = found else {
                 return mismatch(format!(
                     "{}: asset {} at bytes {}..{} of {} is not in that input (it has changed \

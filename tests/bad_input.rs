@@ -409,7 +409,7 @@ fn ring_unclosed_is_closed_implicitly() {
         1,
     );
     let m = read_ok(&bad("ring-unclosed.gml"));
-    assert_eq!(m.assets[0].detail_polygons()[0].exterior.len(), 4);
+    assert_eq!(m.assets[0].detail_polygons()[0].exterior().len(), 4);
 }
 
 const ZERO_AREA: &str =
@@ -438,7 +438,7 @@ fn ring_bowtie() {
 fn ring_self_intersecting_is_accepted() {
     let m = read_ok(&bad("ring-self-intersecting.gml"));
     assert!(m.warnings.is_empty(), "{:?}", m.warnings);
-    assert_eq!(m.assets[0].detail_polygons()[0].exterior.len(), 4);
+    assert_eq!(m.assets[0].detail_polygons()[0].exterior().len(), 4);
     convert_ok(&bad("ring-self-intersecting.gml"));
 }
 
@@ -612,8 +612,8 @@ fn character_references_in_coordinates_are_resolved() {
     let doc = doctype_doc("", "a &amp; b", &pos);
     let m = read_bytes(doc.as_bytes(), "refs.gml").unwrap();
     let p = &m.assets[0].detail_polygons()[0];
-    assert_eq!(p.exterior.len(), 4);
-    assert_eq!(p.exterior[0].x, 690000.0);
+    assert_eq!(p.exterior().len(), 4);
+    assert_eq!(p.exterior()[0].x, 690000.0);
 }
 
 /// External entities are never read: the file's content appears nowhere.

@@ -45,8 +45,12 @@ fn low_facade_pois(model: &CityModel, n: usize) -> Vec<Poi> {
         if nrm.z.abs() > 0.2 || p.area() < 20.0 {
             continue;
         }
-        let c = p.exterior.iter().fold(DVec3::ZERO, |s, q| s + *q) / p.exterior.len() as f64;
-        let zmin = p.exterior.iter().map(|q| q.z).fold(f64::INFINITY, f64::min);
+        let c = p.exterior().iter().fold(DVec3::ZERO, |s, q| s + *q) / p.exterior().len() as f64;
+        let zmin = p
+            .exterior()
+            .iter()
+            .map(|q| q.z)
+            .fold(f64::INFINITY, f64::min);
         let q = DVec3::new(c.x, c.y, zmin + 1.5) + nrm * 0.2;
         seen.insert(b);
         out.push(Poi {

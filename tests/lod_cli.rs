@@ -250,7 +250,7 @@ fn ingolstadt_pois(model: &CityModel) -> Vec<String> {
         if n.z.abs() > 0.2 || p.area() < 20.0 {
             continue;
         }
-        let c = p.exterior.iter().fold(DVec3::ZERO, |s, q| s + *q) / p.exterior.len() as f64;
+        let c = p.exterior().iter().fold(DVec3::ZERO, |s, q| s + *q) / p.exterior().len() as f64;
         let q = c + n * 0.2;
         seen.insert(b);
         out.push(format!("{},{},{},{},{},{}", q.x, q.y, q.z, n.x, n.y, n.z));

@@ -287,8 +287,8 @@ proptest! {
         let shift = DVec3::new(off[0] as f64, off[1] as f64, off[2] as f64) / 1000.0;
         for (a0, a1) in m0.assets.iter().zip(&m1.assets) {
             for (p0, p1) in a0.detail_polygons().iter().zip(a1.detail_polygons()) {
-                prop_assert_eq!(p0.exterior.len(), p1.exterior.len());
-                for (q0, q1) in p0.exterior.iter().zip(&p1.exterior) {
+                prop_assert_eq!(p0.exterior().len(), p1.exterior().len());
+                for (q0, q1) in p0.exterior().iter().zip(p1.exterior()) {
                     prop_assert!((*q1 - (*q0 + shift)).abs().max_element() <= 1e-6);
                 }
             }

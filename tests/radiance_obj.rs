@@ -263,7 +263,11 @@ fn obj_conventions() {
     };
 
     let (names, mtls, _, bbox) = parse(&full);
-    let ids: Vec<String> = model.assets.iter().map(|a| a.id.clone().unwrap()).collect();
+    let ids: Vec<String> = model
+        .assets
+        .iter()
+        .map(|a| a.id.clone().unwrap().to_string())
+        .collect();
     assert_eq!(names, ids, "one `o` per asset, named by its gml:id");
     let kinds: BTreeSet<String> = model
         .assets

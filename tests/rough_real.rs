@@ -79,9 +79,9 @@ fn surfaces(path: &PathBuf, element: &[u8]) -> Vec<Vec<Polygon>> {
                     continue;
                 }
                 if interior {
-                    poly.interiors.push(ring);
+                    poly.push_interior(&ring);
                 } else {
-                    poly.exterior = ring;
+                    *poly = Polygon::new(ring);
                 }
             }
             Event::Eof => break,
@@ -93,7 +93,7 @@ fn surfaces(path: &PathBuf, element: &[u8]) -> Vec<Vec<Polygon>> {
 }
 
 fn filled_area(p: &Polygon) -> f64 {
-    Polygon::new(p.exterior.clone()).area()
+    Polygon::new(p.exterior().to_vec()).area()
 }
 
 /// Generalise each surface; returns (surfaces without geometry, polygons in, holes in,
@@ -110,7 +110,7 @@ fn check(walls: &[Vec<Polygon>]) -> (usize, usize, usize, usize) {
         }
         n_in += polys.len();
         n_out += out.len();
-        holes += polys.iter().map(|p| p.interiors.len()).sum::<usize>();
+        holes += polys.iter().map(|p| p.interior_count()).sum::<usize>();
         assert!(!out.is_empty());
         assert!(out.len() <= polys.len());
         // The generalised surface covers at least the largest input polygon (holes filled)
@@ -119,8 +119,8 @@ fn check(walls: &[Vec<Polygon>]) -> (usize, usize, usize, usize) {
         let covered: f64 = out.iter().map(Polygon::area).sum();
         assert!(covered >= largest * 5f64.to_radians().cos() - 1e-6);
         for p in &out {
-            assert!(p.interiors.is_empty() && p.exterior.len() >= 3);
-            assert!(p.exterior.iter().all(|q| q.is_finite()));
+            assert!(p.interior_count() == 0 && p.exterior().len() >= 3);
+            assert!(p.exterior().iter().all(|q| q.is_finite()));
         }
     }
     (empty, n_in, holes, n_out)

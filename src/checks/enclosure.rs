@@ -90,7 +90,7 @@ impl Owner {
     /// gml:id of the whole building (not the part), or of the asset.
     fn id(self, model: &CityModel) -> Option<String> {
         match self {
-            Owner::Asset(i) => model.assets.get(i)?.id.clone(),
+            Owner::Asset(i) => model.assets.get(i)?.id.as_deref().map(str::to_owned),
             Owner::Building(i) => {
                 let mut b = model.buildings.get(i)?;
                 let mut steps = 0;

@@ -381,9 +381,9 @@ impl GmlWriter {
             let _ = write!(s, "<{g}Polygon>");
         }
         let _ = write!(s, "<{g}exterior>");
-        self.ring(s, &p.exterior);
+        self.ring(s, p.exterior());
         let _ = write!(s, "</{g}exterior>");
-        for r in &p.interiors {
+        for r in p.interiors() {
             let _ = write!(s, "<{g}interior>");
             self.ring(s, r);
             let _ = write!(s, "</{g}interior>");

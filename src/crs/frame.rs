@@ -280,11 +280,7 @@ impl LocalFrame {
             );
         for g in geoms {
             for poly in &mut g.polygons {
-                for q in poly
-                    .exterior
-                    .iter_mut()
-                    .chain(poly.interiors.iter_mut().flatten())
-                {
+                for q in poly.points_mut().iter_mut() {
                     *q = self.to_local(*q);
                 }
             }
@@ -334,11 +330,7 @@ impl LocalFrame {
                         .iter()
                         .map(|p| {
                             let mut p = p.clone();
-                            for q in p
-                                .exterior
-                                .iter_mut()
-                                .chain(p.interiors.iter_mut().flatten())
-                            {
+                            for q in p.points_mut().iter_mut() {
                                 *q = self.round(self.to_source(*q));
                             }
                             p
@@ -487,7 +479,7 @@ mod tests {
         );
         assert!((b.max - src.max).abs().max_element() < 0.2, "{b:?} {src:?}");
         // Degrees, not metres, and rounded to 1e-10 degree.
-        let q = back[1].polygons[0].exterior[0];
+        let q = back[1].polygons[0].exterior()[0];
         assert!((q.x - lat).abs() < 1e-3 && (q.y - lon).abs() < 1e-3);
         assert_eq!((q.x * 1e10).round() / 1e10, q.x);
         // Only what is written at level 1 is converted; the identity converts nothing.

@@ -291,11 +291,11 @@ impl Geom {
     fn add(&mut self, verts: &mut Vertices, polys: &[Polygon], sem: Option<usize>) -> usize {
         let mut n = 0;
         for p in polys {
-            let Some(ext) = verts.ring(&p.exterior) else {
+            let Some(ext) = verts.ring(p.exterior()) else {
                 continue;
             };
             let mut rings = vec![ext];
-            rings.extend(p.interiors.iter().filter_map(|r| verts.ring(r)));
+            rings.extend(p.interiors().filter_map(|r| verts.ring(r)));
             self.boundaries.push(rings);
             self.values.push(sem);
             n += 1;
@@ -710,7 +710,7 @@ impl<'a> Plan<'a> {
             "GenericCityObject",
         ];
         let ty = if a.kind == AssetKind::Other {
-            known.iter().copied().find(|k| *k == a.element)
+            known.iter().copied().find(|k| *k == &*a.element)
         } else {
             None
         };
@@ -722,7 +722,7 @@ impl<'a> Plan<'a> {
         let mut obj =
             self.simple_object(i, a, ty.unwrap_or("GenericCityObject"), geom, verts, s)?;
         if ty.is_none() {
-            obj.1["attributes"]["citygml_type"] = a.element.as_str().into();
+            obj.1["attributes"]["citygml_type"] = (&*a.element).into();
         }
         Some(obj)
     }

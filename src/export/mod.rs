@@ -180,7 +180,7 @@ pub fn asset_name(model: &CityModel, i: usize) -> String {
         return format!("asset_{i}");
     };
     if let Some(id) = &a.id {
-        return id.clone();
+        return id.to_string();
     }
     if let Some(b) = a.building.and_then(|b| model.buildings.get(b)) {
         if let Some(bid) = &b.id {

@@ -31,7 +31,7 @@ const AREA_EPS: f64 = 1e-12;
 ///     DVec3::new(o + s, o + s, 3.0), DVec3::new(o, o + s, 3.0),
 /// ];
 /// let mut p = Polygon::new(sq(4.0, 0.0));
-/// p.interiors.push(sq(1.0, 1.0));
+/// p.push_interior(&sq(1.0, 1.0));
 /// let mut tris = Vec::new();
 /// let n = triangulate(&p, &mut tris);
 /// assert_eq!(n, tris.len());
@@ -39,7 +39,7 @@ const AREA_EPS: f64 = 1e-12;
 /// assert!((area - 15.0).abs() < 1e-9);
 /// ```
 pub fn triangulate(p: &Polygon, out: &mut Vec<[DVec3; 3]>) -> usize {
-    let exterior = clean_ring(&p.exterior);
+    let exterior = clean_ring(p.exterior());
     if exterior.len() < 3 {
         return 0;
     }
@@ -67,7 +67,7 @@ pub fn triangulate(p: &Polygon, out: &mut Vec<[DVec3; 3]>) -> usize {
         coords.extend([c.x, c.y]);
     }
     let mut holes: Vec<usize> = Vec::new();
-    for ring in &p.interiors {
+    for ring in p.interiors() {
         let ring = clean_ring(ring);
         if ring.len() < 3 {
             continue;
@@ -164,8 +164,8 @@ mod tests {
     #[test]
     fn square_with_two_holes() {
         let mut p = Polygon::new(sq(10.0, 0.0));
-        p.interiors.push(sq(2.0, 1.0));
-        p.interiors.push(sq(3.0, 5.0));
+        p.push_interior(&sq(2.0, 1.0));
+        p.push_interior(&sq(3.0, 5.0));
         let mut out = Vec::new();
         let n = triangulate(&p, &mut out);
         assert!(n >= 8, "{n}");
@@ -201,8 +201,7 @@ mod tests {
         assert!(out.is_empty());
         // A degenerate hole is ignored, the exterior still counts.
         let mut p = Polygon::new(sq(2.0, 0.0));
-        p.interiors
-            .push(vec![DVec3::splat(0.5), DVec3::splat(0.5), DVec3::ONE]);
+        p.push_interior(&[DVec3::splat(0.5), DVec3::splat(0.5), DVec3::ONE]);
         assert_eq!(triangulate(&p, &mut out), 2);
     }
 
@@ -304,8 +303,7 @@ mod tests {
             angle in 0.0..std::f64::consts::TAU,
             shift in (0.0..1000.0f64, 0.0..1000.0f64, 0.0..100.0f64),
         ) {
-            let mut p = Polygon::new(star(DVec3::ZERO, &radii, &jitter));
-            p.interiors = holes(&spec);
+            let p = Polygon::from_rings(None, &star(DVec3::ZERO, &radii, &jitter), &holes(&spec));
             let expected = p.area();
             prop_assert!(expected > 0.0);
             let mut out = Vec::new();
@@ -318,9 +316,9 @@ mod tests {
             let axis = DVec3::new(axis.0, axis.1, axis.2).try_normalize().unwrap_or(DVec3::Z);
             let rot = DQuat::from_axis_angle(axis, angle);
             let off = DVec3::new(430_000.0 + shift.0, 4_581_000.0 + shift.1, shift.2);
-            let tf = |r: &Vec<DVec3>| r.iter().map(|q| rot * *q + off).collect::<Vec<_>>();
-            let mut q = Polygon::new(tf(&p.exterior));
-            q.interiors = p.interiors.iter().map(tf).collect();
+            let tf = |r: &[DVec3]| r.iter().map(|q| rot * *q + off).collect::<Vec<_>>();
+            let hs: Vec<Vec<DVec3>> = p.interiors().map(tf).collect();
+            let q = Polygon::from_rings(None, &tf(p.exterior()), &hs);
             prop_assert!((q.area() - expected).abs() <= 1e-6 * expected);
             out.clear();
             triangulate(&q, &mut out);

@@ -126,12 +126,14 @@ pub fn rough_asset(asset: &Asset, opts: &RoughOptions) -> RoughGeometry {
         return RoughGeometry::default();
     };
     if asset.kind.is_shell_surface() {
-        let polygons = if lod == 2 && asset.max_lod().is_some_and(|m| m > 2) {
+        let mut polygons: Vec<Polygon> = if lod == 2 && asset.max_lod().is_some_and(|m| m > 2) {
             // LoD2 alongside a higher LoD: already generalised.
             asset.polygons_at(lod).cloned().collect()
         } else {
             plane::generalize(asset.polygons_at(lod), opts.angle_deg, opts.thickness_m)
         };
+        // a city's hundreds of thousands of rough surfaces: no room for polygons never added
+        polygons.shrink_to_fit();
         RoughGeometry {
             polygons,
             obb: None,
@@ -178,7 +180,7 @@ mod tests {
     fn asset(kind: AssetKind, geoms: Vec<(u8, Vec<Polygon>)>) -> Asset {
         Asset {
             kind,
-            id: Some(format!("{kind}")),
+            id: Some(format!("{kind}").into()),
             element: "X".into(),
             building: Some(0),
             parent: None,
@@ -189,7 +191,7 @@ mod tests {
                 .into_iter()
                 .map(|(lod, polygons)| LodGeometry {
                     lod,
-                    property: format!("lod{lod}MultiSurface"),
+                    property: format!("lod{lod}MultiSurface").into(),
                     span: 0..0,
                     content: 0..0,
                     polygons,

@@ -134,7 +134,7 @@ impl Obb {
     /// assert_eq!(faces.len(), 6);
     /// // Every face normal points away from the centre.
     /// for f in &faces {
-    ///     let c = f.exterior.iter().sum::<DVec3>() / 4.0;
+    ///     let c = f.exterior().iter().sum::<DVec3>() / 4.0;
     ///     assert!(f.newell_normal().dot(c - obb.center) > 0.0);
     /// }
     /// ```
@@ -334,8 +334,8 @@ mod tests {
         assert_eq!(faces.len(), 6);
         let mut total = 0.0;
         for f in &faces {
-            assert_eq!(f.exterior.len(), 4);
-            let c = f.exterior.iter().sum::<DVec3>() / 4.0;
+            assert_eq!(f.exterior().len(), 4);
+            let c = f.exterior().iter().sum::<DVec3>() / 4.0;
             let n = f.newell_normal();
             assert!(n.normalize().dot((c - obb.center).normalize()) > 1.0 - 1e-9);
             total += f.area();

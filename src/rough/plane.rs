@@ -46,7 +46,7 @@ const COLLINEAR_EPS: f64 = 1e-4;
 /// let polys = [quad(0.0, 5.0, 0.0, 4.0, 0.0), quad(5.0, 10.0, 0.0, 4.0, 0.0), quad(2.0, 3.0, 1.0, 2.0, 0.1)];
 /// let out = generalize(&polys, 5.0, 0.3);
 /// assert_eq!(out.len(), 1);
-/// assert_eq!(out[0].exterior.len(), 4);
+/// assert_eq!(out[0].exterior().len(), 4);
 /// assert!((out[0].area() - 40.0).abs() < 1e-9);
 /// ```
 pub fn generalize<'a>(
@@ -127,12 +127,13 @@ fn prepare<'a>(polygons: impl IntoIterator<Item = &'a Polygon>) -> (Vec<Item>, D
     let mut origin: Option<DVec3> = None;
     let mut items = Vec::new();
     for p in polygons {
-        let Some(o) = origin.or_else(|| p.exterior.iter().find(|q| q.is_finite()).copied()) else {
+        let Some(o) = origin.or_else(|| p.exterior().iter().find(|q| q.is_finite()).copied())
+        else {
             continue;
         };
         origin = Some(o);
         let pts: Vec<DVec3> = p
-            .exterior
+            .exterior()
             .iter()
             .filter(|q| q.is_finite())
             .map(|q| *q - o)
@@ -384,7 +385,7 @@ pub(crate) mod tests {
                 let (a1, h1) = (a0 + 1.2, h0 + 1.5);
                 let mut hole = f.quad(a0, a1, h0, h1, 0.0);
                 hole.reverse();
-                wall.interiors.push(hole);
+                wall.push_interior(&hole);
                 // Reveals: from the wall plane (d = 0) to the pane (d = -0.2), facing in.
                 let d = -0.2;
                 out.push(Polygon::new(vec![
@@ -427,13 +428,13 @@ pub(crate) mod tests {
         assert_eq!(out.len(), 1, "{out:?}");
         let r = &out[0];
         assert!(
-            r.exterior.len() <= 8 && r.exterior.len() >= 4,
+            r.exterior().len() <= 8 && r.exterior().len() >= 4,
             "{}",
-            r.exterior.len()
+            r.exterior().len()
         );
-        assert!(r.interiors.is_empty());
+        assert!(r.interior_count() == 0);
         assert!((r.area() - 300.0).abs() < 1e-6, "{}", r.area());
-        for p in &r.exterior {
+        for p in r.exterior() {
             assert!((*p - f.o).dot(f.n()).abs() < 1e-6, "off the wall plane");
         }
         // Facing outward like the wall.
@@ -472,7 +473,7 @@ pub(crate) mod tests {
         let out = generalize(&polys, 5.0, 0.3);
         assert_eq!(out.len(), 1, "{out:?}");
         assert!((out[0].area() - 300.0).abs() < 1e-6, "{}", out[0].area());
-        assert!(out[0].exterior.len() <= 8);
+        assert!(out[0].exterior().len() <= 8);
     }
 
     #[test]
@@ -485,7 +486,7 @@ pub(crate) mod tests {
         let (aa, ab) = (a.area(), b.area());
         let out = generalize(&[a, b], 5.0, 0.3);
         assert_eq!(out.len(), 1);
-        assert_eq!(out[0].exterior.len(), 6, "{:?}", out[0].exterior);
+        assert_eq!(out[0].exterior().len(), 6, "{:?}", out[0].exterior());
         assert!((out[0].area() - (aa + ab)).abs() < 1e-6);
         assert!(out[0].newell_normal().z > 0.0);
     }
@@ -500,7 +501,7 @@ pub(crate) mod tests {
         let out = generalize(&[south, north], 5.0, 0.3);
         assert_eq!(out.len(), 2);
         for r in &out {
-            assert_eq!(r.exterior.len(), 4);
+            assert_eq!(r.exterior().len(), 4);
             assert!((r.area() - area).abs() < 1e-6);
         }
         assert!(out[0].newell_normal().y * out[1].newell_normal().y < 0.0);
@@ -541,7 +542,7 @@ pub(crate) mod tests {
         let out = generalize(&polys, 5.0, 0.3);
         assert_eq!(out.len(), 1, "{out:?}");
         assert!((out[0].area() - 36.0).abs() < 1e-6);
-        assert_eq!(out[0].exterior.len(), 4);
+        assert_eq!(out[0].exterior().len(), 4);
         assert!(generalize(&[], 5.0, 0.3).is_empty());
     }
 
@@ -588,7 +589,7 @@ pub(crate) mod tests {
             // All output lies on one plane parallel to the wall, within the depth range.
             for p in &out {
                 proptest::prop_assert!(p.newell_normal().normalize().dot(f.n()) > 1.0 - 1e-9);
-                for q in &p.exterior {
+                for q in p.exterior() {
                     proptest::prop_assert!((*q - f.o).dot(f.n()).abs() <= 0.25 + 1e-6);
                 }
             }

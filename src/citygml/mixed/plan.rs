@@ -506,10 +506,7 @@ impl<'a> Plan<'a> {
 
     fn polygon_alive(&self, p: &Polygon, dead: &[bool]) -> bool {
         match &p.id {
-            Some(id) => self
-                .doc
-                .id_node(id.as_str())
-                .is_none_or(|n| !dead[n as usize]),
+            Some(id) => self.doc.id_node(id).is_none_or(|n| !dead[n as usize]),
             None => true,
         }
     }

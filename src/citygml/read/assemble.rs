@@ -87,13 +87,13 @@ impl Parser<'_> {
                 let bb = &self.buildings[b];
                 self.assets.push(Asset {
                     kind: AssetKind::Body,
-                    id: bb.id.clone(),
+                    id: bb.id.as_deref().map(Into::into),
                     element: if bb.is_part {
                         "BuildingPart"
                     } else {
                         "Building"
                     }
-                    .to_string(),
+                    .into(),
                     building: Some(b),
                     parent: None,
                     span: bb.span.clone(),
@@ -105,6 +105,9 @@ impl Parser<'_> {
                 self.buildings[b].assets.push(idx);
             }
         }
+        // the model's lists at their size (a split read appended the parts' lists)
+        self.assets.shrink_to_fit();
+        self.buildings.shrink_to_fit();
         // Assets with no geometry left (e.g. a surface with only curves) are dropped from the
         // model but stay verbatim in the output.
         // envelopes

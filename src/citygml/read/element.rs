@@ -233,7 +233,7 @@ impl Parser<'_> {
             Kind::Polygon => {
                 let id = frame.id.take();
                 let text = id.and_then(|(a, b, _)| self.open_ids.get(a..b));
-                let pushed = self.finish_polygon(text.map(str::to_string));
+                let pushed = self.finish_polygon(text.map(compact_str::CompactString::from));
                 if let (Some(start), Some((a, b, hash))) = (frame.register, id) {
                     let end = if pushed {
                         self.parts.len() as u32
@@ -248,9 +248,10 @@ impl Parser<'_> {
                 let range = (start, self.parts.len() as u32);
                 if let Some(owner) = owner {
                     if range.1 > range.0 {
+                        let property = self.intern(frame.name.as_deref().unwrap_or("").as_bytes());
                         let geom = LodGeometry {
                             lod,
-                            property: frame.name.as_deref().unwrap_or("").to_string(),
+                            property,
                             span: frame.start..end,
                             content: frame.content_start..self.event_pos.max(frame.content_start),
                             polygons: Vec::new(),
@@ -263,6 +264,9 @@ impl Parser<'_> {
                         };
                         if let Some(list) = list {
                             let index = list.len();
+                            // exact: a first push would reserve room for four (320 bytes for
+                            // the one geometry most of a city's assets have)
+                            list.reserve_exact(1);
                             list.push(geom);
                             self.pending.push(PendingGeom {
                                 owner,

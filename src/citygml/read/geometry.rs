@@ -3,6 +3,7 @@
 
 use super::state::{Frame, Parser, Part};
 use crate::model::Polygon;
+use compact_str::CompactString;
 use glam::DVec3;
 
 impl Parser<'_> {
@@ -54,7 +55,7 @@ impl Parser<'_> {
     }
 
     /// Push the polygon being built; false when it was dropped.
-    pub(super) fn finish_polygon(&mut self, id: Option<String>) -> bool {
+    pub(super) fn finish_polygon(&mut self, id: Option<CompactString>) -> bool {
         let Some(p) = self.poly.take() else {
             return false;
         };
@@ -71,10 +72,11 @@ impl Parser<'_> {
             interiors.iter_mut().for_each(|r| r.reverse());
         }
         let idx = self.polys.len() as u32;
-        self.polys.push(Polygon {
-            id,
-            exterior,
-            interiors,
+        self.polys.push(if interiors.is_empty() {
+            // the exterior was copied at its exact size: moved, not copied again
+            Polygon::new(exterior).with_id(id)
+        } else {
+            Polygon::from_rings(id, &exterior, &interiors)
         });
         self.parts.push(Part::Poly(idx));
         true

@@ -28,7 +28,7 @@
 //! let model = skylod::citygml::read::read_bytes(xml, "inline.gml").unwrap();
 //! assert_eq!(model.buildings.len(), 1);
 //! assert_eq!(model.assets[0].kind, skylod::model::AssetKind::Roof);
-//! assert_eq!(model.assets[0].detail_polygons()[0].exterior.len(), 3);
+//! assert_eq!(model.assets[0].detail_polygons()[0].exterior().len(), 3);
 //! ```
 
 mod assemble;

@@ -207,6 +207,8 @@ pub(super) struct Parser<'d> {
     /// Start tags per CityGML feature/object type (UpperCamelCase local names in CityGML
     /// namespaces), wherever they nest: a few dozen distinct names, searched linearly.
     pub(super) feature_counts: Vec<(Box<[u8]>, usize)>,
+    /// Element and property names of the model, each allocated once ([`Parser::intern`]).
+    pub(super) names: HashMap<Box<[u8]>, Arc<str>>,
     // transient state
     pub(super) capture: bool,
     pub(super) capture_kind: Capture,
@@ -313,6 +315,7 @@ impl<'d> Parser<'d> {
             dims: Vec::new(),
             skip_depth: 0,
             ade_namespaces: HashMap::new(),
+            names: HashMap::new(),
             unknown_prefixes: HashMap::new(),
             relief_lod: 2,
             relief_lod_set: false,
@@ -386,6 +389,17 @@ impl<'d> Parser<'d> {
         })
     }
 
+    /// The model's shared copy of an element or property name: a city has hundreds of
+    /// thousands of assets and geometries but a few dozen names.
+    pub(super) fn intern(&mut self, name: &[u8]) -> Arc<str> {
+        if let Some(n) = self.names.get(name) {
+            return n.clone();
+        }
+        let n: Arc<str> = String::from_utf8_lossy(name).into();
+        self.names.insert(name.into(), n.clone());
+        n
+    }
+
     pub(super) fn new_asset(
         &mut self,
         kind: AssetKind,
@@ -396,10 +410,11 @@ impl<'d> Parser<'d> {
         pos: u64,
     ) -> usize {
         let idx = self.assets.len();
+        let element = self.intern(local);
         self.assets.push(Asset {
             kind,
-            id: id.map(str::to_string),
-            element: String::from_utf8_lossy(local).into_owned(),
+            id: id.map(compact_str::CompactString::from),
+            element,
             building,
             parent,
             span: pos..pos,

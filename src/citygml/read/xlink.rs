@@ -18,10 +18,10 @@ pub(super) struct Registry {
     entries: Vec<RegEntry>,
 }
 
+/// 24 bytes: an id's text starts where the previous entry's ends (the text only grows).
 #[derive(Debug)]
 struct RegEntry {
     hash: u64,
-    from: usize,
     to: usize,
     range: (u32, u32),
 }
@@ -29,11 +29,9 @@ struct RegEntry {
 impl Registry {
     /// Record `id` (with its `hash`) for the parts `range`.
     pub(super) fn add(&mut self, hash: u64, id: &str, range: (u32, u32)) {
-        let from = self.text.len();
         self.text.push_str(id);
         self.entries.push(RegEntry {
             hash,
-            from,
             to: self.text.len(),
             range,
         });
@@ -47,7 +45,6 @@ impl Registry {
         self.entries
             .extend(other.entries.into_iter().map(|e| RegEntry {
                 hash: e.hash,
-                from: e.from + base,
                 to: e.to + base,
                 range: (e.range.0 + parts_offset, e.range.1 + parts_offset),
             }));
@@ -60,12 +57,14 @@ impl Registry {
         if wanted.is_empty() {
             return map;
         }
+        let mut from = 0;
         for e in &self.entries {
             if wanted.contains(&e.hash) {
-                if let Some(t) = self.text.get(e.from..e.to) {
+                if let Some(t) = self.text.get(from..e.to) {
                     map.entry(t).or_insert(e.range);
                 }
             }
+            from = e.to;
         }
         map
     }
@@ -202,8 +201,7 @@ impl Parser<'_> {
                 slot.clone()
             };
             if r.reversed {
-                p.exterior.reverse();
-                p.interiors.iter_mut().for_each(|x| x.reverse());
+                p.reverse_rings();
             }
             if let Some(idx) = r.implicit {
                 let imp = self.implicits.get(idx as usize);
@@ -220,8 +218,7 @@ impl Parser<'_> {
                     };
                     *q = v + rp;
                 };
-                p.exterior.iter_mut().for_each(tf);
-                p.interiors.iter_mut().flatten().for_each(tf);
+                p.points_mut().iter_mut().for_each(tf);
             }
             out.push(p);
         }
