@@ -64,7 +64,8 @@ pub struct ReadOptions {
     /// `xlink:href` geometry references, on top of five per polygon element of the document;
     /// protects against exponential reference trees ("billion laughs" built from xlinks).
     pub max_href_work: usize,
-    /// An uncompressed document at least this long is read by several cores at once (cut at
+    /// An uncompressed document at least this long (default 1 MiB: a 3 MB tile of several
+    /// buildings is read 1.4× faster by two cores) is read by several cores at once (cut at
     /// top-level `cityObjectMember`s, one part per thread of rayon's current pool), when the
     /// pool has more than one thread. The model is the same as one core's; inputs the split
     /// cannot read exactly as one core would are read by one core.
@@ -80,7 +81,7 @@ impl Default for ReadOptions {
             max_event_bytes: 64 << 20,
             max_href_depth: 64,
             max_href_work: 2_000_000,
-            split_min_bytes: 8 << 20,
+            split_min_bytes: 1 << 20,
             split_parts: 0,
         }
     }
