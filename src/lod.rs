@@ -83,7 +83,7 @@ pub fn lod_with(
         progress.advance(Stage::Rough, n, 0, None);
         r
     });
-    crate::mem::give_back();
+    crate::mem::give_back_for(model.assets.len());
     let rough_s = t.elapsed().as_secs_f64();
     check(progress, Stage::Bvh)?;
     let t = Instant::now();

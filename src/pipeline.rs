@@ -183,9 +183,9 @@ pub fn read_inputs(paths: &[PathBuf], progress: &dyn Progress) -> Result<Inputs,
             Err(e) => inputs.failures.push(e),
         }
     }
-    // the reader's registry, id log and arena are freed: their pages go back before the
-    // next stage's large blocks are mapped
-    crate::mem::give_back();
+    // the reader's registry, id log and arena are freed: a large model's pages go back
+    // before the next stage's large blocks are mapped
+    crate::mem::give_back_for(inputs.model.assets.len());
     inputs.read_s = t.elapsed().as_secs_f64();
     Ok(inputs)
 }
