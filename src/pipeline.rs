@@ -266,7 +266,10 @@ pub fn frame<'a>(
             others.join(", ")
         ));
     }
-    let (frame, warning) = LocalFrame::new(&crs, &source.bbox());
+    // every point of a city: one pass for the frame and the POI check (and none more when
+    // the frame is the identity)
+    let source_bbox = source.bbox();
+    let (frame, warning) = LocalFrame::new(&crs, &source_bbox);
     warnings.extend(warning.map(|w| w.to_string()));
     let note = (!frame.is_identity()).then(|| format!("{crs}: tracing in {}", frame.describe()));
     let pois = match &opts.poi_crs {
@@ -288,10 +291,14 @@ pub fn frame<'a>(
     };
     let local_pois: Vec<Poi> = pois.iter().map(|p| frame.poi_to_local(p)).collect();
     let local = frame.model_to_local(source);
+    let local_bbox = match &local {
+        Cow::Borrowed(_) => source_bbox,
+        Cow::Owned(m) => m.bbox(),
+    };
     checks::check_pois_near_in_frame(
-        &local.bbox(),
+        &local_bbox,
         &local_pois,
-        &source.bbox(),
+        &source_bbox,
         &pois,
         opts.poi_margin,
     )?;
