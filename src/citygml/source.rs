@@ -175,6 +175,49 @@ pub(crate) fn copy_exact<R: Read + ?Sized, W: std::io::Write + ?Sized>(
     Ok(n)
 }
 
+/// A source that can pass over bytes without handing them out: a plain file seeks, anything
+/// else reads and drops them.
+pub(crate) trait SkipAhead: BufRead {
+    /// Pass over the next `n` bytes; fails when the source ends before.
+    fn skip_ahead(&mut self, n: u64) -> std::io::Result<()> {
+        let mut left = n;
+        while left > 0 {
+            let avail = self.fill_buf()?.len();
+            if avail == 0 {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::UnexpectedEof,
+                    "source shorter than expected",
+                ));
+            }
+            let k = usize::try_from(left).map_or(avail, |l| l.min(avail));
+            self.consume(k);
+            left -= k as u64;
+        }
+        Ok(())
+    }
+}
+
+impl SkipAhead for Box<dyn BufRead + Send> {}
+
+impl SkipAhead for BufReader<File> {
+    fn skip_ahead(&mut self, n: u64) -> std::io::Result<()> {
+        let n = i64::try_from(n).map_err(std::io::Error::other)?;
+        self.seek_relative(n)
+    }
+}
+
+/// Open `path` for streaming when it is not gzip-compressed (see [`open`]); `None` when it is.
+pub(crate) fn open_plain(path: &Path) -> Result<Option<BufReader<File>>, ReadError> {
+    let io = |source| ReadError::Io {
+        file: path.to_path_buf(),
+        source,
+    };
+    let file = File::open(path).map_err(io)?;
+    let mut reader = BufReader::with_capacity(BUF, file);
+    let head = reader.fill_buf().map_err(io)?;
+    Ok((!head.starts_with(&[0x1f, 0x8b])).then_some(reader))
+}
+
 /// A [`BufRead`] that refuses to hand out more than `limit` bytes between two calls of
 /// [`Limited::reset`]: the reader resets it before every XML event, so that one hostile token
 /// (a 100 MB attribute, an endless text node or comment) fails with a clear error after
@@ -229,6 +272,12 @@ impl<R: BufRead> BufRead for Limited<R> {
     fn consume(&mut self, amt: usize) {
         self.used = self.used.saturating_add(amt);
         self.inner.consume(amt);
+    }
+}
+
+impl<R: SkipAhead> SkipAhead for Limited<R> {
+    fn skip_ahead(&mut self, n: u64) -> std::io::Result<()> {
+        self.inner.skip_ahead(n)
     }
 }
 

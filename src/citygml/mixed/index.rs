@@ -4,33 +4,37 @@
 //!
 //! **Cost follows what is kept.** The pass is given the spans of the elements the writer
 //! drops whole (level-0 assets that hold no kept asset, see [`super::plan::skip_spans`]). Such
-//! an element is indexed as one node without children: its content is not parsed but read
-//! as bytes and scanned for the one thing the rules need from dropped content, the
-//! `gml:id`s it holds (a kept `xlink:href` or appearance target pointing at one of them is
-//! pruned, and a fresh id must not meet one). References inside dropped content are never
-//! looked at (they are dead before the first pruning round), so they need not be found.
-//! The scan is one `memchr3` pass for `=`, `!` and `?`: it tokenizes the start tag around
-//! each `=` (`<` cannot stand in text or attribute values), exact for well-formed XML, and
-//! stops at `<!` or `<?`; content holding a comment, CDATA
-//! section, processing instruction or namespace declaration is parsed as usual instead (the
-//! namespace scope of its ids could change), as is content larger than half the token limit
-//! or not ending with the element's own end tag. Ids go to an arena table ([`IdTable`]): no
-//! allocation per id; an id that repeats maps to its first element, as in a full parse.
+//! an element is indexed as one node without children: its content is not parsed, only
+//! scanned for the one thing the rules need from dropped content, the `gml:id`s it holds (a
+//! kept `xlink:href` or appearance target pointing at one of them is pruned, and a fresh id
+//! must not meet one). References inside dropped content are never looked at (they are dead
+//! before the first pruning round), so they need not be found. The scan
+//! ([`super::content_ids`]) is exact for well-formed XML and gives up on content holding a
+//! comment, CDATA section, processing instruction or namespace declaration (the namespace
+//! scope of its ids could change), larger than half the token limit or not ending with the
+//! element's own end tag: such content is parsed as usual instead.
+//!
+//! In a plain document holding 1 MiB or more of such content, the other cores scan it ahead
+//! of the pass ([`Prescan`]), and the pass jumps over it (a seek, no read); in a gzip stream,
+//! or for a span the prescan could not judge, the pass reads the content and scans it as it
+//! comes. Ids go to an arena table ([`IdTable`]): no allocation per id; an id that repeats
+//! maps to its first element, as in a full parse.
 //!
 //! The pass shares the reader's set-up: namespace classification ([`crate::citygml::ns`]),
 //! the byte-order-mark handling and the per-token size limit and nesting depth of
 //! [`ReadOptions`].
 
+use super::content_ids::{gml_ids, is_end_tag, Prescan, Taken, CHUNK_BYTES};
+use super::id_table::IdTable;
 use crate::citygml::error::{Location, ReadError, WriteError};
 use crate::citygml::ns::{self, Module, Ns};
 use crate::citygml::read::ReadOptions;
-use crate::citygml::source::{self, Limited};
+use crate::citygml::source::{self, Limited, SkipAhead};
 use crate::model::Span;
 use foldhash::{HashMap, HashMapExt, HashSet};
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::name::{QName, ResolveResult};
 use quick_xml::NsReader;
-use std::borrow::Cow;
 use std::io::{BufRead, Read};
 use std::path::Path;
 
@@ -122,6 +126,13 @@ impl Doc {
         self.ids.get(id).is_some()
     }
 
+    /// Make the index ready for lookups, once every id is in: [`IdTable::finish`] and the
+    /// directory of [`Doc::node_at`].
+    fn seal(&mut self) {
+        self.ids.finish();
+        self.index_starts();
+    }
+
     /// The element starting at byte `start`: a directory of start offsets narrows the
     /// search to the few nodes that start in the same `1 << shift` bytes (the plan asks once
     /// per geometry of the file; a binary search of all the nodes missed the cache each step).
@@ -189,87 +200,6 @@ impl Doc {
                     format!("{p}:")
                 }
             })
-    }
-}
-
-/// `gml:id`s: their bytes in one arena, found by hash (a sorted table, so that hundreds of
-/// thousands of ids cost no allocation each). An id that repeats maps to its smallest node,
-/// the first in document order.
-#[derive(Debug, Default, PartialEq)]
-pub(super) struct IdTable {
-    bytes: Vec<u8>,
-    /// (hash, start in `bytes`, length, node); sorted by hash once the scan is done.
-    entries: Vec<(u64, usize, u32, u32)>,
-    /// After [`IdTable::finish`]: the first entry of each range of hashes with the same top
-    /// `bits` bits (one more at the end), so that a lookup reads about one entry.
-    dir: Vec<u32>,
-    bits: u32,
-}
-
-impl IdTable {
-    fn hash(id: &[u8]) -> u64 {
-        use std::hash::BuildHasher;
-        foldhash::fast::FixedState::with_seed(0x05c7_110d).hash_one(id)
-    }
-
-    fn push(&mut self, id: &[u8], node: u32) {
-        let start = self.bytes.len();
-        self.bytes.extend_from_slice(id);
-        self.entries
-            .push((Self::hash(id), start, id.len() as u32, node));
-    }
-
-    /// Room for the ids of a document of about `bytes` bytes (about one per 350 bytes in the
-    /// files at hand; memory reserved and never touched is not resident).
-    fn expect_bytes(&mut self, bytes: u64) {
-        let ids = (bytes / 350).min(1 << 24) as usize;
-        self.entries.reserve(ids);
-        self.bytes.reserve(ids * 16);
-    }
-
-    /// Group the entries by bucket (a counting sort: the order inside a bucket does not
-    /// matter to [`IdTable::get`], which takes the smallest node of the matching ones).
-    fn finish(&mut self) {
-        self.bits = (self.entries.len().max(1).ilog2() + 1).min(24);
-        let buckets = 1usize << self.bits;
-        let mut dir = vec![0u32; buckets + 1];
-        for e in &self.entries {
-            dir[self.bucket(e.0) + 1] += 1;
-        }
-        for b in 0..buckets {
-            dir[b + 1] += dir[b];
-        }
-        let mut next = dir.clone();
-        let mut sorted = vec![(0, 0, 0, 0); self.entries.len()];
-        for e in &self.entries {
-            let b = self.bucket(e.0);
-            sorted[next[b] as usize] = *e;
-            next[b] += 1;
-        }
-        self.entries = sorted;
-        self.dir = dir;
-    }
-
-    fn bucket(&self, h: u64) -> usize {
-        (h >> (64 - self.bits)) as usize
-    }
-
-    /// Smallest node holding `id`.
-    pub(super) fn get(&self, id: &str) -> Option<u32> {
-        let h = Self::hash(id.as_bytes());
-        let entries = if self.dir.is_empty() {
-            &self.entries[..] // before finish: all of them
-        } else {
-            let b = self.bucket(h);
-            let (lo, hi) = (self.dir[b] as usize, self.dir[b + 1] as usize);
-            &self.entries[lo..hi]
-        };
-        entries
-            .iter()
-            .filter(|e| e.0 == h)
-            .filter(|e| self.bytes.get(e.1..e.1 + e.2 as usize) == Some(id.as_bytes()))
-            .map(|e| e.3)
-            .min()
     }
 }
 
@@ -387,14 +317,62 @@ impl<R: BufRead> BufRead for PushBack<R> {
     }
 }
 
-type Source = PushBack<Limited<Box<dyn BufRead + Send>>>;
+type Source<R> = PushBack<Limited<R>>;
+
+impl<R: SkipAhead> SkipAhead for PushBack<R> {
+    fn skip_ahead(&mut self, n: u64) -> std::io::Result<()> {
+        let front = (self.front.len() - self.at).min(usize::try_from(n).unwrap_or(usize::MAX));
+        self.consume(front);
+        self.inner.skip_ahead(n - front as u64)
+    }
+}
+
+/// Skipped bytes from which their ids are found on every core before the pass
+/// ([`Prescan`]); below it the pass scans them as they come (one core).
+const PRESCAN_MIN_BYTES: u64 = 1 << 20;
 
 /// One streaming pass over the source: the element index. `skip` are the spans of elements
 /// whose content is dropped with them (sorted by start; nested spans allowed).
 pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc, WriteError> {
-    let (reader, _) = source::open(path)?;
+    scan_with(path, skip, opts, PRESCAN_MIN_BYTES, CHUNK_BYTES)
+}
+
+/// [`scan`], with the ids of skipped content found ahead of the pass on the other cores
+/// ([`Prescan`], `chunk_bytes` at a time) when the document is plain and the spans hold
+/// `prescan_min` bytes or more.
+fn scan_with(
+    path: &Path,
+    skip: &[Span],
+    opts: &ReadOptions,
+    prescan_min: u64,
+    chunk_bytes: u64,
+) -> Result<Doc, WriteError> {
     let size = std::fs::metadata(path).map_or(0, |m| m.len());
-    scan_stream(reader, size, path, skip, opts)
+    let skipped: u64 = skip.iter().map(|s| s.end.saturating_sub(s.start)).sum();
+    if cfg!(unix) && skipped >= prescan_min {
+        if let Some(reader) = source::open_plain(path)? {
+            let file = reader
+                .get_ref()
+                .try_clone()
+                .map_err(|source| WriteError::Io {
+                    file: path.to_path_buf(),
+                    source,
+                })?;
+            let max_content = (opts.max_event_bytes / 2) as u64;
+            let pre = Prescan::new(file, skip, max_content, chunk_bytes);
+            let workers = rayon::current_num_threads().saturating_sub(1);
+            let (mut doc, taken) = pre.alongside(workers, |pre| {
+                scan_stream(reader, size, path, skip, opts, Some(pre))
+            })?;
+            pre.into_table(&taken, &mut doc.ids);
+            doc.seal();
+            return Ok(doc);
+        }
+    }
+    let (reader, _) = source::open(path)?;
+    let (mut doc, _) = scan_stream(reader, size, path, skip, opts, None)?;
+    doc.seal();
+    Ok(doc)
 }
 
 /// The index being built: one call per start tag, end tag and text of the pass.
@@ -434,7 +412,7 @@ impl<'p> Indexer<'p> {
         empty: bool,
         pos: u64,
         content_start: u64,
-    ) -> Result<Option<(u32, Span)>, WriteError> {
+    ) -> Result<Option<(u32, usize, Span)>, WriteError> {
         let doc = &mut self.doc;
         let (res, _) = reader.resolve_element(e.name());
         let uri = match res {
@@ -512,7 +490,7 @@ impl<'p> Indexer<'p> {
             .skip
             .get(self.next_skip)
             .filter(|s| s.start == pos)
-            .map(|s| (idx, s.clone())))
+            .map(|s| (idx, self.next_skip, s.clone())))
     }
 
     /// The content of the element just opened was skipped: `n` bytes, up to its end tag;
@@ -559,13 +537,11 @@ impl<'p> Indexer<'p> {
         }
     }
 
-    /// The document ended at `at`.
-    fn finish(mut self, at: u64) -> Result<Doc, WriteError> {
+    /// The document ended at `at` (the index is sealed by the caller: [`Doc::seal`]).
+    fn finish(self, at: u64) -> Result<Doc, WriteError> {
         if !self.stack.is_empty() || self.doc.nodes.is_empty() {
             return Err(xml_err(self.path, at, "unexpected end of document".into()));
         }
-        self.doc.ids.finish();
-        self.doc.index_starts();
         Ok(self.doc)
     }
 
@@ -581,15 +557,22 @@ impl<'p> Indexer<'p> {
     }
 }
 
-/// The pass over `reader` (`size`: the file's size, a hint): skipped content is read and
-/// scanned as it comes ([`skip_content`]).
-fn scan_stream(
-    reader: Box<dyn BufRead + Send>,
+/// The pass over `reader` (`size`: the file's size, a hint): skipped content found by
+/// `pre` is jumped over ([`jump`]), any other is read and scanned as it comes
+/// ([`skip_content`]).
+fn scan_stream<R: BufRead + SkipAhead>(
+    reader: R,
     size: u64,
     path: &Path,
     skip: &[Span],
     opts: &ReadOptions,
-) -> Result<Doc, WriteError> {
+    pre: Option<&Prescan>,
+) -> Result<(Doc, Taken), WriteError> {
+    let mut taken: Taken = if pre.is_some() {
+        vec![None; skip.len()]
+    } else {
+        Vec::new()
+    };
     let mut reader = reader;
     let base = source::skip_bom(&mut reader, path)?;
     let mut reader =
@@ -618,13 +601,26 @@ fn scan_stream(
             Event::Start(ref e) | Event::Empty(ref e) => {
                 let empty = matches!(ev, Event::Empty(_));
                 let content_start = reader.buffer_position() + base + skipped;
-                if let Some((idx, s)) = ix.start(&reader, e, empty, pos, content_start)? {
+                if let Some((idx, si, s)) = ix.start(&reader, e, empty, pos, content_start)? {
+                    let io = |source| WriteError::Io {
+                        file: path.to_path_buf(),
+                        source,
+                    };
                     let len = s.end.saturating_sub(content_start);
-                    let n = skip_content(&mut reader, idx, len, opts, &mut content, &mut ix.doc)
-                        .map_err(|source| WriteError::Io {
-                            file: path.to_path_buf(),
-                            source,
-                        })?;
+                    let jumped = match pre {
+                        Some(p) => jump(&mut reader, p, si, content_start).map_err(io)?,
+                        None => None,
+                    };
+                    let n = match jumped {
+                        Some((n, gml)) => {
+                            taken[si] = Some((idx, gml));
+                            n
+                        }
+                        None => {
+                            skip_content(&mut reader, idx, len, opts, &mut content, &mut ix.doc)
+                                .map_err(io)?
+                        }
+                    };
                     if n > 0 {
                         skipped += n;
                         ix.skipped(n, s.end);
@@ -639,41 +635,45 @@ fn scan_stream(
         }
         buf.clear();
     }
-    ix.finish(reader.buffer_position() + base + skipped)
+    let doc = ix.finish(reader.buffer_position() + base + skipped)?;
+    Ok((doc, taken))
 }
 
-/// Does `tag` start with the end tag of `qname` (`</qname` then space or `>`)?
-fn is_end_tag(tag: &[u8], qname: &[u8]) -> bool {
-    tag.get(1) == Some(&b'/')
-        && tag.get(2..2 + qname.len()) == Some(qname)
-        && tag
-            .get(2 + qname.len())
-            .is_some_and(|&b| b == b'>' || is_ws(b))
-}
-
-/// Hand the unescaped attribute value `v` to `f`; false when it is not valid UTF-8 or
-/// badly escaped.
-fn unescaped(v: &[u8], f: impl FnOnce(&[u8])) -> bool {
-    unescape_value(v).map(|u| f(&u)).is_some()
-}
-
-/// The unescaped attribute value `v` (borrowed when it holds no reference); `None` when it
-/// is not valid UTF-8 or badly escaped.
-fn unescape_value(v: &[u8]) -> Option<Cow<'_, [u8]>> {
-    let s = std::str::from_utf8(v).ok()?;
-    if memchr::memchr(b'&', v).is_none() {
-        return Some(Cow::Borrowed(v));
+/// Jump over the content of the element just opened, skip span `span`, when the prescan
+/// found it starting at `content_start` and its ids valid where GML prefixes are bound
+/// here: the bytes up to its end tag are passed without being read. Returns the bytes
+/// passed and the prefixes bound to GML (bits of [`Prescan::prefixes_of`]); `None` when
+/// [`skip_content`] must read it.
+fn jump<R: BufRead + SkipAhead>(
+    reader: &mut NsReader<Source<R>>,
+    pre: &Prescan,
+    span: usize,
+    content_start: u64,
+) -> std::io::Result<Option<(u64, u64)>> {
+    let Some(f) = pre.found(span).filter(|f| f.content_start == content_start) else {
+        return Ok(None);
+    };
+    let mut cache = PrefixCache::default();
+    let mut gml = 0u64;
+    for (bit, prefix) in pre.prefixes_of(&f) {
+        if cache.is_gml(reader, prefix) {
+            gml |= 1 << bit;
+        }
     }
-    let u = quick_xml::escape::unescape(s).ok()?;
-    Some(Cow::Owned(u.into_owned().into_bytes()))
+    if f.bad & gml != 0 {
+        return Ok(None);
+    }
+    let n = f.end_tag - content_start;
+    reader.get_mut().skip_ahead(n)?;
+    Ok(Some((n, gml)))
 }
 
 /// Skip the content of the element `idx` just opened, `len` bytes up to the end of its end
 /// tag: read them, record the `gml:id`s of the content, and give the end tag back to the
 /// reader. Returns the bytes skipped; 0 when the content is given back whole to be parsed
 /// (see the module docs).
-fn skip_content(
-    reader: &mut NsReader<Source>,
+fn skip_content<R: BufRead>(
+    reader: &mut NsReader<Source<R>>,
     idx: u32,
     len: u64,
     opts: &ReadOptions,
@@ -732,113 +732,6 @@ impl PrefixCache {
         );
         self.known.push((prefix.to_vec(), g));
         g
-    }
-}
-
-fn is_ws(b: u8) -> bool {
-    matches!(b, b' ' | b'\t' | b'\r' | b'\n')
-}
-
-fn trim_ws(mut s: &[u8]) -> &[u8] {
-    while let [first, rest @ ..] = s {
-        if !is_ws(*first) {
-            break;
-        }
-        s = rest;
-    }
-    while let [rest @ .., last] = s {
-        if !is_ws(*last) {
-            break;
-        }
-        s = rest;
-    }
-    s
-}
-
-/// Hand the values of the prefixed `id` attributes whose prefix `is_gml` in the element
-/// content `c` (start and end tags, text) to `id`, in document order, unescaped. False when
-/// `c` holds a comment, CDATA section, processing instruction, DOCTYPE or namespace
-/// declaration, or is not well-formed enough to tell (the caller then parses it instead and
-/// pushes none of the ids).
-fn gml_ids(c: &[u8], is_gml: impl FnMut(&[u8]) -> bool, id: impl FnMut(&[u8])) -> bool {
-    let mut ids = Vec::new();
-    if prefixed_ids(c, |p, v| ids.push((p, v))).is_none() {
-        return false;
-    }
-    let mut id = id;
-    let mut is_gml = is_gml;
-    // check every value first, so that nothing is handed out when one is bad
-    let ok = ids.iter().all(|&(p, v)| !is_gml(p) || unescaped(v, |_| ()));
-    if ok {
-        for &(p, v) in &ids {
-            if is_gml(p) {
-                unescaped(v, &mut id);
-            }
-        }
-    }
-    ok
-}
-
-/// Hand the prefix and raw value of every prefixed `id` attribute in the element content
-/// `c` to `id`, in document order; `None` when `c` holds what [`gml_ids`] cannot judge.
-fn prefixed_ids<'a>(c: &'a [u8], mut id: impl FnMut(&'a [u8], &'a [u8])) -> Option<()> {
-    // One pass: each `!` and `?` (after `<` they start a comment, CDATA section, processing
-    // instruction or DOCTYPE, since `<` cannot stand in text or attribute values; they
-    // cannot stand in a tag before its first `=`), and each `=`: only tags holding an `=`
-    // can hold an id or a namespace declaration; the tag around it is tokenized whole.
-    let mut i = 0;
-    while let Some(eq) = memchr::memchr3(b'=', b'!', b'?', &c[i..]) {
-        let eq = i + eq;
-        if c[eq] != b'=' {
-            if eq > 0 && c[eq - 1] == b'<' {
-                return None;
-            }
-            i = eq + 1;
-            continue;
-        }
-        match memchr::memrchr(b'<', &c[i..eq]).map(|lt| i + lt) {
-            // in text, or in text after an end tag
-            None => i = eq + 1,
-            Some(lt) if c.get(lt + 1) == Some(&b'/') => i = eq + 1,
-            Some(lt) => i = start_tag_ids(c, lt, &mut id)?.max(eq + 1),
-        }
-    }
-    Some(())
-}
-
-/// The prefixed ids of the start tag at `c[lt]` (see [`prefixed_ids`]); returns the index
-/// after its `>`, `None` at a namespace declaration.
-fn start_tag_ids<'a>(
-    c: &'a [u8],
-    lt: usize,
-    id: &mut impl FnMut(&'a [u8], &'a [u8]),
-) -> Option<usize> {
-    let mut j = lt + 1;
-    while j < c.len() && !is_ws(c[j]) && c[j] != b'>' && c[j] != b'/' {
-        j += 1;
-    }
-    loop {
-        let rest = c.get(j..)?;
-        let k = memchr::memchr2(b'=', b'>', rest)?;
-        if rest[k] == b'>' {
-            return Some(j + k + 1);
-        }
-        let name = trim_ws(&rest[..k]);
-        if name.starts_with(b"xmlns") && matches!(name.get(5), None | Some(b':')) {
-            return None;
-        }
-        let mut v = j + k + 1;
-        while c.get(v).is_some_and(|&b| is_ws(b)) {
-            v += 1;
-        }
-        let quote = *c.get(v).filter(|&&q| q == b'"' || q == b'\'')?;
-        let e = v + 1 + memchr::memchr(quote, &c[v + 1..])?;
-        if let Some(colon) = memchr::memchr(b':', name) {
-            if &name[colon + 1..] == b"id" {
-                id(&name[..colon], &c[v + 1..e]);
-            }
-        }
-        j = e + 1;
     }
 }
 
@@ -915,83 +808,6 @@ mod tests {
     #[test]
     fn a_node_is_32_bytes() {
         assert_eq!(std::mem::size_of::<Node>(), 32);
-    }
-
-    fn ids_of(c: &str) -> Option<Vec<String>> {
-        let mut v = Vec::new();
-        let ok = gml_ids(
-            c.as_bytes(),
-            |p| p == b"gml" || p == b"g",
-            |id| v.push(String::from_utf8_lossy(id).into_owned()),
-        );
-        ok.then_some(v)
-    }
-
-    #[test]
-    fn id_scan_table() {
-        let some = |v: &[&str]| Some(v.iter().map(|s| s.to_string()).collect::<Vec<_>>());
-        let table: &[(&str, Option<Vec<String>>)] = &[
-            ("", some(&[])),
-            ("text only 1 2 3", some(&[])),
-            (r#"<a gml:id="x"/><b g:id='y'>t</b>"#, some(&["x", "y"])),
-            // spaces around '=', other attributes first, '>' and '=' inside values
-            (
-                "<a\n  srsDimension=\"3\" v=\"a>b=c\"  gml:id = \"x\" ></a>",
-                some(&["x"]),
-            ),
-            // unprefixed, other prefix, text that looks like an attribute
-            (
-                r#"<a id="u" xlink:id="v">gml:id="w"</a><e gml:id="z"/>"#,
-                some(&["z"]),
-            ),
-            // '=' in text before, between and after tags; '?' and '!' in values
-            (
-                r#"a=b <x gml:id="1">c=d</x><y/>e=f<z k="v" gml:id="2"/>=<w/>"#,
-                some(&["1", "2"]),
-            ),
-            (r#"<a v="x?y!z" gml:id="q"/>"#, some(&["q"])),
-            // escaped value
-            (r#"<a gml:id="a&amp;b"/>"#, some(&["a&b"])),
-            // what the scan cannot judge: the caller parses instead
-            (r#"<!-- <a gml:id="x"/> -->"#, None),
-            (r#"<![CDATA[<a gml:id="x"/>]]>"#, None),
-            (r#"<?pi x?>"#, None),
-            (r#"<a xmlns:gml="urn:other" gml:id="x"/>"#, None),
-            (r#"<a xmlns="urn:other"/>"#, None),
-            (r#"<a x="1"/><b xmlns:q = 'urn:other'>t</b>"#, None),
-            (r#"<a gml:id="x"/>text<?pi?>"#, None),
-            // text may say what it likes; an attribute named like a declaration is not one
-            (
-                r#"<a xmlnsx="1" gml:id="x">xmlns:gml="u" ! ? a!b</a>"#,
-                some(&["x"]),
-            ),
-            (r#"<a gml:id="x"#, None),
-            (r#"<a gml:id=x/>"#, None),
-        ];
-        for (c, want) in table {
-            assert_eq!(&ids_of(c), want, "{c}");
-        }
-    }
-
-    #[test]
-    fn id_table_finds_the_first_node() {
-        let mut t = IdTable::default();
-        t.push(b"a", 7);
-        t.push(b"b", 3);
-        t.push(b"a", 5);
-        assert_eq!(t.get("a"), Some(5), "before finish");
-        t.finish();
-        assert_eq!(t.get("a"), Some(5));
-        assert_eq!(t.get("b"), Some(3));
-        assert_eq!(t.get("c"), None);
-        assert_eq!(t.get(""), None);
-        let mut big = IdTable::default();
-        for i in 0..5000u32 {
-            big.push(format!("id{i}").as_bytes(), i);
-        }
-        big.finish();
-        assert!((0..5000u32).all(|i| big.get(&format!("id{i}")) == Some(i)));
-        assert_eq!(big.get("id5000"), None);
     }
 
     #[test]
@@ -1096,6 +912,132 @@ mod tests {
                 assert_eq!(plain.skipped.0, usize::from(!skip.is_empty()), "{name}");
             }
         }
+    }
+
+    /// A document whose members hold each case the prescan meets, `copies` times over
+    /// (ids numbered per copy), and the spans the writer would skip in it.
+    fn prescan_doc(copies: usize) -> (String, Vec<Span>) {
+        let member = |k: usize| {
+            format!(
+                r##"<cityObjectMember><A gml:id="a{k}"><b><c gml:id="c{k}"/><c gml:id="x{k}" xlink:href="#q"/></b></A></cityObjectMember>
+<cityObjectMember><B gml:id="b{k}"><!-- note --><c gml:id="b{k}_1"/></B></cityObjectMember>
+<cityObjectMember><C gml:id="cc{k}"><c xmlns:gml="urn:not-gml" gml:id="n{k}"/><c gml:id="c{k}"/></C></cityObjectMember>
+<cityObjectMember><D gml:id="d{k}" note="1 > 0"><c gml:id="d{k}_1" v='a"b'/>text = 1</D></cityObjectMember>
+<cityObjectMember><E gml:id="e{k}"><c xlink:id="&amp;bogus;" gml:id="e{k}&amp;1"/></E></cityObjectMember>
+<cityObjectMember><F gml:id="f{k}"><G gml:id="g{k}"><c gml:id="g{k}_1"/></G><c gml:id="f{k}_1"/></F></cityObjectMember>
+<cityObjectMember><H gml:id="h{k}"/></cityObjectMember>
+<cityObjectMember><I xmlns:g="http://www.opengis.net/gml" gml:id="i{k}"><c g:id="i{k}_1"/><c xlink:id="i{k}_2"/></I></cityObjectMember>
+<cityObjectMember><J gml:id="j{k}"><c gml:id="j{k}_1"/></J></cityObjectMember>
+<cityObjectMember><K gml:id="k{k}"><c gml:id="c{k}"/><c gml:id="k{k}_1">{pad}</c></K></cityObjectMember>
+"##,
+                pad = "1 2 3 ".repeat(k % 7 * 40)
+            )
+        };
+        let mut doc = String::from(
+            r#"<?xml version="1.0"?>
+<CityModel xmlns="http://www.opengis.net/citygml/2.0" xmlns:gml="http://www.opengis.net/gml" xmlns:xlink="http://www.w3.org/1999/xlink">
+"#,
+        );
+        let mut skip = Vec::new();
+        for k in 0..copies {
+            let at = doc.len() as u64;
+            let m = member(k);
+            for tag in ["A", "B", "C", "D", "E", "F", "G", "H", "I", "K"] {
+                let start = m.find(&format!("<{tag} ")).unwrap() as u64;
+                let end = match m.find(&format!("</{tag}>")) {
+                    Some(e) => (e + tag.len() + 3) as u64,
+                    None => start + m[start as usize..].find("/>").unwrap() as u64 + 2,
+                };
+                skip.push(at + start..at + end);
+            }
+            // J's span runs past its end tag: not its own, the pass parses it
+            let j = m.find("<J ").unwrap() as u64;
+            skip.push(
+                at + j
+                    ..at + m.find("</cityObjectMember>\n<cityObjectMember><K").unwrap() as u64 + 19,
+            );
+            doc.push_str(&m);
+        }
+        doc.push_str("</CityModel>\n");
+        skip.sort_by_key(|s| (s.start, std::cmp::Reverse(s.end)));
+        (doc, skip)
+    }
+
+    /// Everything of two indexes but the order of their id arenas; ids compared by lookup.
+    fn assert_same_index(a: &Doc, b: &Doc, ids: &[String], what: &str) {
+        assert_eq!(a.nodes, b.nodes, "{what}");
+        assert_eq!(a.names, b.names, "{what}");
+        assert_eq!(a.refs, b.refs, "{what}");
+        assert_eq!(a.labels, b.labels, "{what}");
+        assert_eq!(a.root_ns, b.root_ns, "{what}");
+        assert_eq!(a.redeclared, b.redeclared, "{what}");
+        assert_eq!(a.skipped, b.skipped, "{what}");
+        for id in ids {
+            assert_eq!(a.id_node(id), b.id_node(id), "{what}: {id}");
+        }
+    }
+
+    #[test]
+    fn prescan_gives_the_index_of_the_pass() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.gml");
+        let (text, skip) = prescan_doc(60);
+        std::fs::write(&path, &text).unwrap();
+        let mut ids: Vec<String> = text
+            .split(":id=\"")
+            .skip(1)
+            .filter_map(|s| s.split('"').next())
+            .map(|s| s.replace("&amp;", "&"))
+            .collect();
+        ids.extend(["nope".to_string(), "a60".to_string()]);
+        let opts = ReadOptions::default();
+        let serial = scan_with(&path, &skip, &opts, u64::MAX, CHUNK_BYTES).unwrap();
+        // the cases: A, D, E, F (with G inside), I, K jumped over; B, C, J parsed; H empty
+        assert_eq!(serial.skipped.0, 60 * 6, "spans skipped");
+        assert!(serial.has_id("i0_1") && !serial.has_id("i0_2") && !serial.has_id("n0"));
+        assert!(serial.has_id("e0&1") && serial.has_id("g0_1"));
+        assert_eq!(
+            serial.id_node("c0"),
+            serial.node_at(skip[0].start),
+            "first wins"
+        );
+        // what the prescan finds, span by span (A..K of each copy; G nested in F)
+        let pre = Prescan::new(std::fs::File::open(&path).unwrap(), &skip, 1 << 30, 4096);
+        let found: String = (0..skip.len())
+            .map(|i| if pre.found(i).is_some() { '+' } else { '-' })
+            .collect();
+        assert_eq!(found, "+--+++--+-+".repeat(60), "A B C D E F G H I J K");
+        let full = scan_with(&path, &[], &opts, u64::MAX, CHUNK_BYTES).unwrap();
+        // one chunk, chunks of a few spans, a chunk per span: with workers or without
+        for chunk in [CHUNK_BYTES, 4096, 1] {
+            for workers in [0, 1, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(workers + 1)
+                    .build()
+                    .unwrap();
+                let pre = pool
+                    .install(|| scan_with(&path, &skip, &opts, 0, chunk))
+                    .unwrap();
+                assert_same_index(
+                    &serial,
+                    &pre,
+                    &ids,
+                    &format!("chunk {chunk}, {workers} workers"),
+                );
+            }
+        }
+        // and the full parse agrees on where every id is, skipped or not
+        for id in &ids {
+            let (f, s) = (full.id_node(id), serial.id_node(id));
+            assert_eq!(f.is_some(), s.is_some(), "{id}");
+        }
+        // gzip streams: no prescan, the same index
+        let gz = dir.path().join("d.gml.gz");
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        std::io::Write::write_all(&mut enc, text.as_bytes()).unwrap();
+        std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+        let z = scan_with(&gz, &skip, &opts, 0, 1).unwrap();
+        assert_same_index(&serial, &z, &ids, "gzip");
     }
 
     #[test]

@@ -136,7 +136,9 @@
 //! assert_eq!(again.assets.len(), 1);
 //! ```
 
+mod content_ids;
 mod encode;
+mod id_table;
 mod index;
 mod plan;
 
