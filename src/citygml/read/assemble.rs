@@ -30,6 +30,7 @@ impl Parser<'_> {
                 message: "no element in a CityGML 1.0, 2.0 or 3.0 namespace".into(),
             });
         };
+        self.invalid_id_summary();
         self.duplicate_warnings();
         // resolve geometry: references first, then move or clone the polygons
         let pending = std::mem::take(&mut self.pending);

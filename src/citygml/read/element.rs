@@ -52,14 +52,7 @@ impl Parser<'_> {
         let mut id_hash = 0;
         if let Some(id) = &attrs.id {
             if id.is_empty() || !(id.as_bytes()[0].is_ascii_alphabetic() || id.starts_with('_')) {
-                // built by hand, not with format!: some exporters (Ingolstadt) give every
-                // element such an id, and this warning is then a visible part of reading time
-                const TAIL: &str = "\" is not a valid xs:ID (must start with a letter or '_')";
-                let mut msg = String::with_capacity(8 + id.len() + TAIL.len());
-                msg.push_str("gml:id \"");
-                msg.push_str(id);
-                msg.push_str(TAIL);
-                self.warn(msg);
+                self.invalid_id(id);
             }
             let h = std::hash::BuildHasher::hash_one(&self.id_hasher, id.as_ref() as &str);
             rec = self.check_id(id, h, pos);

@@ -3,6 +3,13 @@
 //! hashes: each "duplicate gml:id" warning is then inserted where a check per id would have
 //! given it (same message, location, gml:id and place among the warnings). While streaming
 //! (no document to read the ids back from) each id goes into a hash set as it is met.
+//!
+//! A gml:id that is not a valid `xs:ID` (it must start with a letter or `_`) is listed as a
+//! warning up to [`INVALID_IDS_LISTED`] times per document; the last one listed tells how
+//! many more follow ([`Parser::invalid_id`], [`Parser::invalid_id_summary`]). Some exporters
+//! give every element such an id (an Ingolstadt tile: 9,315): one line per element is noise
+//! in a log, and building them was a sixth of reading such a tile (GDAL caps repeated
+//! errors the same way).
 
 use super::position::newlines;
 use super::state::{IdRec, LineMark, Parser, NO_REC};
@@ -11,7 +18,46 @@ use foldhash::{HashSet, HashSetExt};
 use quick_xml::events::Event;
 use rayon::slice::ParallelSliceMut;
 
+/// Invalid `xs:ID`s listed one by one per document (see the module docs).
+pub(super) const INVALID_IDS_LISTED: usize = 100;
+
 impl Parser<'_> {
+    /// Warn that gml:id `id` is not a valid `xs:ID`, unless [`INVALID_IDS_LISTED`] were
+    /// listed already (then it is only counted).
+    pub(super) fn invalid_id(&mut self, id: &str) {
+        self.invalid_ids += 1;
+        if self.invalid_listed.len() >= INVALID_IDS_LISTED {
+            return;
+        }
+        // built by hand, not with format!: the first hundred of a file are listed
+        const TAIL: &str = "\" is not a valid xs:ID (must start with a letter or '_')";
+        let mut msg = String::with_capacity(8 + id.len() + TAIL.len());
+        msg.push_str("gml:id \"");
+        msg.push_str(id);
+        msg.push_str(TAIL);
+        self.invalid_listed.push(self.warnings.len());
+        self.warn(msg);
+    }
+
+    /// After the last event (of the whole document, parts merged): the last invalid id
+    /// listed tells how many more there are.
+    pub(super) fn invalid_id_summary(&mut self) {
+        let listed = self.invalid_listed.len() as u64;
+        let more = self.invalid_ids.saturating_sub(listed);
+        if more == 0 {
+            return;
+        }
+        if let Some(w) = self
+            .invalid_listed
+            .last()
+            .and_then(|&i| self.warnings.get_mut(i))
+        {
+            w.message.push_str(&format!(
+                "; {more} more gml:ids after it are not valid xs:IDs either (not listed one by one)"
+            ));
+        }
+    }
+
     /// Size the gml:id table or log for a document of about `bytes` bytes (real files hold
     /// about one gml:id per 300 bytes; the table grows beyond the estimate when needed).
     pub(super) fn expect_bytes(&mut self, bytes: u64) {
@@ -217,6 +263,20 @@ mod tests {
                 let split = split.expect("split read");
                 assert_eq!(split.warnings, streamed.warnings, "{n} members, split");
             }
+            // one invalid id per member ("9bad"): the first hundred listed, then a count
+            let invalid: Vec<&str> = logged
+                .warnings
+                .iter()
+                .filter(|w| w.message.contains("xs:ID"))
+                .map(|w| w.message.as_str())
+                .collect();
+            assert_eq!(invalid.len(), n.min(super::INVALID_IDS_LISTED), "{n} members");
+            let last = invalid.last().copied().unwrap_or_default();
+            assert_eq!(
+                last.contains("; 300 more gml:ids after it are not valid xs:IDs"),
+                n == 400,
+                "{last}"
+            );
         }
         let m = in_memory(&doc(5));
         let dups: Vec<String> = m

@@ -16,6 +16,7 @@
 //! made absolute when the parts are merged: a part's first line continues the line before it.
 
 use super::events::{configure, finish, parse_events, BOM, RELEASE_STEP};
+use super::ids::INVALID_IDS_LISTED;
 use super::state::{EnvOwner, IdRec, LineMark, Owner, Parser, Part, NO_REC};
 use super::ReadOptions;
 use crate::model::CityModel;
@@ -293,6 +294,8 @@ impl Parser<'_> {
         self.feature_counts.clear();
         self.ade_namespaces.clear();
         self.unknown_prefixes.clear();
+        self.invalid_ids = 0;
+        self.invalid_listed.clear();
         Some(())
     }
 
@@ -353,12 +356,21 @@ impl Parser<'_> {
         let log0 = u32::try_from(self.id_log.len()).ok()?;
         self.id_log.reserve(o.id_log.len());
         let mut ids = o.id_log.into_iter().peekable();
+        // invalid ids are listed up to INVALID_IDS_LISTED per document, not per part
+        let mut invalid = o.invalid_listed.into_iter().peekable();
+        self.invalid_ids += o.invalid_ids;
         for (i, mut w) in o.warnings.into_iter().enumerate() {
             while let Some(r) = ids.next_if(|r| r.warnings as usize <= i) {
                 self.log_merged(r, log0, root_rec);
             }
             if drop.binary_search(&i).is_ok() {
                 continue;
+            }
+            if invalid.next_if_eq(&i).is_some() {
+                if self.invalid_listed.len() >= INVALID_IDS_LISTED {
+                    continue;
+                }
+                self.invalid_listed.push(self.warnings.len());
             }
             fix.place(&mut w.line, &mut w.column);
             w.file = self.shared_path.clone();

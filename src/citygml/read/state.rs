@@ -224,6 +224,11 @@ pub(super) struct Parser<'d> {
     /// of that warning.
     pub(super) ade_namespaces: HashMap<Vec<u8>, usize>,
     pub(super) unknown_prefixes: HashMap<Vec<u8>, usize>,
+    /// gml:ids met that are not valid `xs:ID`s, and the indices of the warnings that list
+    /// them: the first [`super::ids::INVALID_IDS_LISTED`]; the last of those is told, at the end, how
+    /// many more there are.
+    pub(super) invalid_ids: u64,
+    pub(super) invalid_listed: Vec<usize>,
     /// LoD of relief geometry without a `lodN` property name: the last relief `lod` read.
     pub(super) relief_lod: u8,
     /// A relief `lod` was read ([`Parser::relief_lod`] set) in this parser.
@@ -317,6 +322,8 @@ impl<'d> Parser<'d> {
             ade_namespaces: HashMap::new(),
             names: HashMap::new(),
             unknown_prefixes: HashMap::new(),
+            invalid_ids: 0,
+            invalid_listed: Vec::new(),
             relief_lod: 2,
             relief_lod_set: false,
             relief_default_used: false,
