@@ -270,7 +270,11 @@ mod tests {
                 .filter(|w| w.message.contains("xs:ID"))
                 .map(|w| w.message.as_str())
                 .collect();
-            assert_eq!(invalid.len(), n.min(super::INVALID_IDS_LISTED), "{n} members");
+            assert_eq!(
+                invalid.len(),
+                n.min(super::INVALID_IDS_LISTED),
+                "{n} members"
+            );
             let last = invalid.last().copied().unwrap_or_default();
             assert_eq!(
                 last.contains("; 300 more gml:ids after it are not valid xs:IDs"),
