@@ -6,7 +6,7 @@
 //! The prescan reads the skipped spans in chunks of a few MiB (positioned reads, one buffer
 //! per thread: no page faults of a memory map, no copy through the pass's buffer), finds
 //! each span's start tag, its own end tag and the prefixed `id` attributes in between, and
-//! keeps the ids hashed in one arena per chunk. What depends on where the pass stands is
+//! keeps the ids as their hashes (the table matches them by hash: [`IdTable::push_hashed`]). What depends on where the pass stands is
 //! decided there, when it reaches the span: that the content starts where the pass found
 //! it, and which prefixes are bound to GML in that scope. A span the prescan cannot judge
 //! (a comment, CDATA section, processing instruction or namespace declaration inside, no
@@ -35,13 +35,11 @@ pub(super) struct Found {
     ids: (u32, u32),
 }
 
-/// One id of a chunk: its hash ([`IdTable::hash`]), its unescaped bytes in the chunk's
-/// arena and its prefix (a bit of the chunk's prefix table).
+/// One id of a chunk: the hash of its unescaped value ([`IdTable::hash`]) and its prefix (a
+/// bit of the chunk's prefix table).
 #[derive(Debug, Clone, Copy)]
 struct ChunkId {
     hash: u64,
-    start: u32,
-    len: u32,
     prefix: u8,
 }
 
@@ -50,7 +48,6 @@ struct ChunkId {
 #[derive(Debug, Default)]
 struct Chunk {
     prefixes: Vec<Vec<u8>>,
-    bytes: Vec<u8>,
     ids: Vec<ChunkId>,
     found: Vec<Option<Found>>,
 }
@@ -178,14 +175,12 @@ impl<'s> Prescan<'s> {
     }
 
     /// Put the GML ids of the spans the pass jumped over (`taken`, per skip span) into
-    /// `table`, each with its span's node: a chunk's arena is appended whole (an unused id
-    /// costs its bytes, not a copy of each), and each chunk is freed once handed over.
+    /// `table`, each with its span's node; each chunk is freed once handed over.
     pub(super) fn into_table(self, taken: &Taken, table: &mut IdTable) {
         for (c, cell) in self.chunks.into_iter().enumerate() {
             let Some(chunk) = cell.into_inner() else {
                 continue;
             };
-            let base = table.append_bytes(&chunk.bytes);
             let spans = &self.outer[self.starts[c] as usize..self.starts[c + 1] as usize];
             for (&span, f) in spans.iter().zip(&chunk.found) {
                 let (Some(f), Some(Some((node, gml)))) = (f, taken.get(span as usize)) else {
@@ -193,7 +188,7 @@ impl<'s> Prescan<'s> {
                 };
                 for id in &chunk.ids[f.ids.0 as usize..f.ids.1 as usize] {
                     if gml >> id.prefix & 1 == 1 {
-                        table.push_entry(id.hash, base + id.start as usize, id.len, *node);
+                        table.push_hashed(id.hash, *node);
                     }
                 }
             }
@@ -276,7 +271,7 @@ fn scan_span(bytes: &[u8], at: u64, max_content: u64, chunk: &mut Chunk, c: u32)
         return None;
     }
     let k = memchr::memrchr(b'<', content).filter(|&k| is_end_tag(&content[k..], qname))?;
-    let (ids0, bytes0) = (chunk.ids.len(), chunk.bytes.len());
+    let ids0 = chunk.ids.len();
     let (mut prefixes, mut bad, mut ok) = (0u64, 0u64, true);
     let scanned = prefixed_ids(&content[..k], |p, v| {
         let bit = match chunk.prefixes.iter().position(|q| q == p) {
@@ -292,24 +287,15 @@ fn scan_span(bytes: &[u8], at: u64, max_content: u64, chunk: &mut Chunk, c: u32)
         };
         prefixes |= 1 << bit;
         match unescape_value(v) {
-            Some(u) => match u32::try_from(chunk.bytes.len()) {
-                Ok(start) => {
-                    chunk.ids.push(ChunkId {
-                        hash: IdTable::hash(&u),
-                        start,
-                        len: u.len() as u32,
-                        prefix: bit as u8,
-                    });
-                    chunk.bytes.extend_from_slice(&u);
-                }
-                Err(_) => ok = false,
-            },
+            Some(u) => chunk.ids.push(ChunkId {
+                hash: IdTable::hash(&u),
+                prefix: bit as u8,
+            }),
             None => bad |= 1 << bit,
         }
     });
     if scanned.is_none() || !ok {
         chunk.ids.truncate(ids0);
-        chunk.bytes.truncate(bytes0);
         return None;
     }
     let content_start = at + gt as u64 + 1;

@@ -3,17 +3,24 @@
 
 /// `gml:id`s: their bytes in one arena, found by hash (a sorted table, so that hundreds of
 /// thousands of ids cost no allocation each). An id that repeats maps to its smallest node,
-/// the first in document order.
+/// the first in document order. The ids of skipped content found by the prescan are kept as
+/// their hash alone ([`IdTable::push_hashed`]): a lookup matches them by their 64-bit hash,
+/// as the reader's duplicate check does (a false match needs a 64-bit collision), and a
+/// city's millions of dropped ids cost no bytes.
 #[derive(Debug, Default, PartialEq)]
 pub(super) struct IdTable {
     bytes: Vec<u8>,
-    /// (hash, start in `bytes`, length, node); sorted by hash once the scan is done.
+    /// (hash, start in `bytes`, length or [`HASH_ONLY`], node); sorted by hash once the scan
+    /// is done.
     entries: Vec<(u64, usize, u32, u32)>,
     /// After [`IdTable::finish`]: the first entry of each range of hashes with the same top
     /// `bits` bits (one more at the end), so that a lookup reads about one entry.
     dir: Vec<u32>,
     bits: u32,
 }
+
+/// The length of an entry kept as its hash alone.
+const HASH_ONLY: u32 = u32::MAX;
 
 impl IdTable {
     pub(super) fn hash(id: &[u8]) -> u64 {
@@ -22,22 +29,15 @@ impl IdTable {
     }
 
     pub(super) fn push(&mut self, id: &[u8], node: u32) {
-        let start = self.append_bytes(id);
+        let start = self.bytes.len();
+        self.bytes.extend_from_slice(id);
         self.entries
             .push((Self::hash(id), start, id.len() as u32, node));
     }
 
-    /// Append `bytes` to the arena (ids of several entries at once); returns where they start.
-    pub(super) fn append_bytes(&mut self, bytes: &[u8]) -> usize {
-        let start = self.bytes.len();
-        self.bytes.extend_from_slice(bytes);
-        start
-    }
-
-    /// The entry of an id whose `len` bytes are in the arena at `start` (see
-    /// [`IdTable::append_bytes`]), with its hash ([`IdTable::hash`]).
-    pub(super) fn push_entry(&mut self, hash: u64, start: usize, len: u32, node: u32) {
-        self.entries.push((hash, start, len, node));
+    /// An id known by its hash alone ([`IdTable::hash`] of its unescaped value).
+    pub(super) fn push_hashed(&mut self, hash: u64, node: u32) {
+        self.entries.push((hash, 0, HASH_ONLY, node));
     }
 
     /// Room for the ids of a document of about `bytes` bytes (about one per 350 bytes in the
@@ -88,7 +88,9 @@ impl IdTable {
         entries
             .iter()
             .filter(|e| e.0 == h)
-            .filter(|e| self.bytes.get(e.1..e.1 + e.2 as usize) == Some(id.as_bytes()))
+            .filter(|e| {
+                e.2 == HASH_ONLY || self.bytes.get(e.1..e.1 + e.2 as usize) == Some(id.as_bytes())
+            })
             .map(|e| e.3)
             .min()
     }
