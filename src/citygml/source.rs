@@ -10,6 +10,22 @@ const BUF: usize = 256 * 1024;
 /// Open `path` for streaming; gzip is detected from the magic bytes (not the extension).
 /// Returns the reader and whether the file was compressed.
 pub fn open(path: &Path) -> Result<(Box<dyn BufRead + Send>, bool), ReadError> {
+    Ok(match open_stream(path)? {
+        Stream::Plain(reader) => (Box::new(reader), false),
+        Stream::Gzip(reader) => (reader, true),
+    })
+}
+
+/// A source opened for streaming ([`open_stream`]).
+pub(crate) enum Stream {
+    /// An uncompressed file, buffered (it can seek: [`SkipAhead`]).
+    Plain(BufReader<File>),
+    /// A gzip-compressed file, decompressed as it is read.
+    Gzip(Box<dyn BufRead + Send>),
+}
+
+/// [`open`], keeping the plain file's own reader.
+pub(crate) fn open_stream(path: &Path) -> Result<Stream, ReadError> {
     let io = |source| ReadError::Io {
         file: path.to_path_buf(),
         source,
@@ -19,9 +35,9 @@ pub fn open(path: &Path) -> Result<(Box<dyn BufRead + Send>, bool), ReadError> {
     let head = reader.fill_buf().map_err(io)?;
     if head.starts_with(&[0x1f, 0x8b]) {
         let dec = flate2::bufread::MultiGzDecoder::new(reader);
-        Ok((Box::new(BufReader::with_capacity(BUF, dec)), true))
+        Ok(Stream::Gzip(Box::new(BufReader::with_capacity(BUF, dec))))
     } else {
-        Ok((Box::new(reader), false))
+        Ok(Stream::Plain(reader))
     }
 }
 
@@ -204,18 +220,6 @@ impl SkipAhead for BufReader<File> {
         let n = i64::try_from(n).map_err(std::io::Error::other)?;
         self.seek_relative(n)
     }
-}
-
-/// Open `path` for streaming when it is not gzip-compressed (see [`open`]); `None` when it is.
-pub(crate) fn open_plain(path: &Path) -> Result<Option<BufReader<File>>, ReadError> {
-    let io = |source| ReadError::Io {
-        file: path.to_path_buf(),
-        source,
-    };
-    let file = File::open(path).map_err(io)?;
-    let mut reader = BufReader::with_capacity(BUF, file);
-    let head = reader.fill_buf().map_err(io)?;
-    Ok((!head.starts_with(&[0x1f, 0x8b])).then_some(reader))
 }
 
 /// A [`BufRead`] that refuses to hand out more than `limit` bytes between two calls of

@@ -29,7 +29,7 @@ use super::id_table::IdTable;
 use crate::citygml::error::{Location, ReadError, WriteError};
 use crate::citygml::ns::{self, Module, Ns};
 use crate::citygml::read::ReadOptions;
-use crate::citygml::source::{self, Limited, SkipAhead};
+use crate::citygml::source::{self, Limited, SkipAhead, Stream};
 use crate::model::Span;
 use foldhash::{HashMap, HashMapExt, HashSet};
 use quick_xml::events::{BytesStart, Event};
@@ -349,8 +349,8 @@ fn scan_with(
 ) -> Result<Doc, WriteError> {
     let size = std::fs::metadata(path).map_or(0, |m| m.len());
     let skipped: u64 = skip.iter().map(|s| s.end.saturating_sub(s.start)).sum();
-    if cfg!(unix) && skipped >= prescan_min {
-        if let Some(reader) = source::open_plain(path)? {
+    let mut doc = match source::open_stream(path)? {
+        Stream::Plain(reader) if cfg!(unix) && skipped >= prescan_min => {
             let file = reader
                 .get_ref()
                 .try_clone()
@@ -365,12 +365,11 @@ fn scan_with(
                 scan_stream(reader, size, path, skip, opts, Some(pre))
             })?;
             pre.into_table(&taken, &mut doc.ids);
-            doc.seal();
-            return Ok(doc);
+            doc
         }
-    }
-    let (reader, _) = source::open(path)?;
-    let (mut doc, _) = scan_stream(reader, size, path, skip, opts, None)?;
+        Stream::Plain(reader) => scan_stream(reader, size, path, skip, opts, None)?.0,
+        Stream::Gzip(reader) => scan_stream(reader, size, path, skip, opts, None)?.0,
+    };
     doc.seal();
     Ok(doc)
 }
