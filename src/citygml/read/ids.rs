@@ -29,14 +29,10 @@ impl Parser<'_> {
         if self.invalid_listed.len() >= INVALID_IDS_LISTED {
             return;
         }
-        // built by hand, not with format!: the first hundred of a file are listed
-        const TAIL: &str = "\" is not a valid xs:ID (must start with a letter or '_')";
-        let mut msg = String::with_capacity(8 + id.len() + TAIL.len());
-        msg.push_str("gml:id \"");
-        msg.push_str(id);
-        msg.push_str(TAIL);
         self.invalid_listed.push(self.warnings.len());
-        self.warn(msg);
+        self.warn(format!(
+            "gml:id \"{id}\" is not a valid xs:ID (must start with a letter or '_')"
+        ));
     }
 
     /// After the last event (of the whole document, parts merged): the last invalid id
