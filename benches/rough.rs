@@ -4,10 +4,10 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
+use skylod::lod::rough::obb::Obb;
+use skylod::lod::rough::plane::generalize;
+use skylod::lod::rough::{rough_asset, RoughOptions};
 use skylod::model::{Asset, AssetKind, LodGeometry, Polygon};
-use skylod::rough::obb::Obb;
-use skylod::rough::plane::generalize;
-use skylod::rough::{rough_asset, RoughOptions};
 use std::hint::black_box;
 
 /// The wall of the unit tests, placed at UTM-sized coordinates and rotated 30 degrees.

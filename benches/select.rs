@@ -10,11 +10,11 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use skylod::citygml::read::read_bytes;
+use skylod::lod::rough::{rough_model, RoughOptions};
+use skylod::lod::scene::{full_scene, rough_scene, selection_scene};
+use skylod::lod::select::{select, SelectOptions};
+use skylod::lod::sky::{SkyPartition, SkyVariant};
 use skylod::poi::POI_OFFSET;
-use skylod::rough::{rough_model, RoughOptions};
-use skylod::scene::{full_scene, rough_scene, selection_scene};
-use skylod::select::{select, SelectOptions};
-use skylod::sky::{SkyPartition, SkyVariant};
 use skylod::synth::{generate, pois, Preset};
 use std::hint::black_box;
 use std::time::Duration;

@@ -10,7 +10,7 @@
 //! above a street near the centre, `first_hit` and `occluded`, single thread and
 //! rayon `par_iter`.
 //!
-//! Baseline (same run): the f64 brute-force loop (`geom::ray_triangle`) over the
+//! Baseline (same run): the f64 brute-force loop (`trace::ray::ray_triangle`) over the
 //! first 1,000 triangles of the scene for the same 10,000 rays; multiply by the
 //! scene size / 1,000 for what brute force over the whole scene would cost.
 
@@ -19,8 +19,8 @@ use glam::{DQuat, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use skylod::geom::ray_triangle;
 use skylod::model::Polygon;
+use skylod::trace::ray::ray_triangle;
 use skylod::trace::{BuildQuality, BvhLayout, Scene, SceneBuilder};
 use std::hint::black_box;
 use std::time::Duration;

@@ -15,9 +15,9 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use quick_xml::events::Event;
 use quick_xml::NsReader;
-use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read::read_file;
 use skylod::citygml::write::WriteOptions;
+use skylod::lod::mixed::write_mixed;
 use skylod::lod::{lod, LodOptions};
 use skylod::poi::Poi;
 use skylod::synth::{generate, pois, Preset};

@@ -5,7 +5,7 @@
 use skylod::export::Format;
 use skylod::pipeline::{frame, levels, read_inputs, write_all, FrameOptions, LevelsOptions};
 use skylod::poi::read_pois_csv;
-use skylod::progress::{Progress, Stage};
+use skylod::runtime::progress::{Progress, Stage};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};

@@ -4,7 +4,7 @@
 //! (without arguments: the committed synth fixture and its POIs).
 use skylod::pipeline::{frame, read_inputs, svf, FrameOptions};
 use skylod::poi::read_pois_csv;
-use skylod::progress::Silent;
+use skylod::runtime::progress::Silent;
 use skylod::solar::SkyBundles;
 use std::path::PathBuf;
 

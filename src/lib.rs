@@ -3,7 +3,7 @@
 //! The library follows the pipeline of `DESIGN.md`:
 //! read (CityGML -> [`model::CityModel`]) -> rough -> sky -> trace -> select -> write.
 //! [`pipeline`] runs it for a program in four calls — inputs → scene → levels → outputs —
-//! with progress and cancellation through a [`progress::Progress`]; the `skylod` binary
+//! with progress and cancellation through a [`runtime::progress::Progress`]; the `skylod` binary
 //! is a thin front end over the same calls. The library never prints and never panics on
 //! input.
 //!
@@ -16,7 +16,7 @@
 //! use skylod::export::Format;
 //! use skylod::pipeline::{frame, levels, read_inputs, write_levels, FrameOptions, LevelsOptions};
 //! use skylod::poi::read_pois_csv;
-//! use skylod::progress::Silent;
+//! use skylod::runtime::progress::Silent;
 //! use std::path::Path;
 //!
 //! let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
@@ -43,32 +43,38 @@
 //! ```
 #![warn(missing_docs)]
 
-pub mod bound;
-pub mod checks;
+pub mod batch;
 pub mod citygml;
 pub mod crs;
-pub mod evaluate;
 pub mod export;
-pub mod geom;
-pub mod inputs;
-pub mod level;
 pub mod lod;
-pub mod mem;
 pub mod model;
+pub mod output;
 pub mod pipeline;
 pub mod poi;
-pub mod progress;
-pub mod region;
-pub mod report;
-pub mod reproject;
-pub mod rough;
-pub mod scene;
-pub mod scene_radius;
-pub mod select;
-pub mod shard;
-pub mod shard_levels;
-pub mod sky;
+pub mod runtime;
 pub mod solar;
-pub mod stats;
 pub mod synth;
 pub mod trace;
+
+// The paths of release 0.1, kept for one release (moved in 0.2, see CHANGELOG.md).
+#[doc(hidden)]
+pub use batch::{inputs, scene_radius, shard, shard_levels};
+#[doc(hidden)]
+pub use crs::reproject;
+#[doc(hidden)]
+pub use lod::{bound, level, rough, scene, select, sky};
+#[doc(hidden)]
+pub use output::{report, stats};
+#[doc(hidden)]
+pub use pipeline::evaluation as evaluate;
+#[doc(hidden)]
+pub use poi::{checks, region};
+#[doc(hidden)]
+pub use runtime::{mem, progress};
+/// Moved: polygon triangulation is [`mod@model::triangulate`], the exact ray tests [`trace::ray`].
+#[doc(hidden)]
+pub mod geom {
+    pub use crate::model::triangulate::{self, triangulate};
+    pub use crate::trace::ray::{self, ray_aabb, ray_triangle, RayTriangleHit};
+}

@@ -12,7 +12,7 @@ use common::*;
 use skylod::citygml::read::{read_bytes, read_file, read_from, ReadOptions};
 use skylod::citygml::ReadError;
 use skylod::model::CityModel;
-use skylod::stats::Stats;
+use skylod::output::stats::Stats;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};

@@ -11,7 +11,7 @@ use serde_json::Value;
 use skylod::citygml::read_file;
 use skylod::export::{write, Content, Format};
 use skylod::model::{AssetKind, CityModel};
-use skylod::stats::Stats;
+use skylod::output::stats::Stats;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 

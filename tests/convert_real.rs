@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use skylod::citygml::read_file;
-use skylod::stats::Stats;
+use skylod::output::stats::Stats;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 

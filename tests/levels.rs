@@ -1,4 +1,4 @@
-//! One definition of a level's output (`skylod::level`): on real LoD3 files, the polygons the
+//! One definition of a level's output (`skylod::lod::level`): on real LoD3 files, the polygons the
 //! report counts, the polygons `evaluate` counts, the polygons the writer writes and the
 //! polygons a reader finds in the written file are the same number, and `evaluate`'s LoD SVF is
 //! the SVF of the written file read back and traced with the same rays.
@@ -6,14 +6,14 @@
 mod common;
 
 use glam::DVec3;
-use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
-use skylod::evaluate::{evaluate, EvalOptions};
+use skylod::lod::mixed::write_mixed;
+use skylod::lod::scene::{full_scene, mixed_scene};
 use skylod::lod::{lod, LodOptions};
+use skylod::output::report::{Parameters, Report, Timings};
+use skylod::pipeline::evaluation::{evaluate, EvalOptions};
 use skylod::poi::Poi;
-use skylod::report::{Parameters, Report, Timings};
-use skylod::scene::{full_scene, mixed_scene};
 use skylod::solar::{poi_sky_view, SkyBundles};
 
 /// Files with installations (several below the roof edge, some with 3-polygon geometry that
@@ -117,7 +117,7 @@ fn report_evaluate_writer_and_written_file_agree() {
             .zip(levels)
             .filter(|((a, rg), l)| {
                 **l == 1
-                    && skylod::level::properties(a, Some(rg), 1)
+                    && skylod::lod::level::properties(a, Some(rg), 1)
                         .iter()
                         .any(|p| !p.rough && !p.polygons.is_empty())
             })

@@ -5,10 +5,10 @@ mod common;
 
 use glam::DVec3;
 use skylod::citygml::read_file;
+use skylod::lod::select::SelectOptions;
 use skylod::lod::{lod, LodOptions};
 use skylod::model::CityModel;
 use skylod::poi::Poi;
-use skylod::select::SelectOptions;
 
 const X0: f64 = 430_000.0;
 const Y0: f64 = 4_581_000.0;

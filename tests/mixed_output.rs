@@ -7,12 +7,12 @@ mod common;
 
 use common::*;
 use rand::{Rng, SeedableRng};
-use skylod::citygml::mixed::{write_mixed, MixedSummary};
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
+use skylod::lod::mixed::{write_mixed, MixedSummary};
+use skylod::lod::rough::{rough_model, RoughOptions};
 use skylod::model::{AssetKind, CityModel};
-use skylod::rough::{rough_model, RoughOptions};
-use skylod::stats::Stats;
+use skylod::output::stats::Stats;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 

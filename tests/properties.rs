@@ -8,8 +8,8 @@ use glam::DVec3;
 use proptest::prelude::*;
 use skylod::citygml::read::{read_bytes, read_file};
 use skylod::citygml::write::{write_document, WriteOptions};
-use skylod::geom::{ray_aabb, ray_triangle};
-use skylod::stats::Stats;
+use skylod::output::stats::Stats;
+use skylod::trace::ray::{ray_aabb, ray_triangle};
 
 // ---------------------------------------------------------------------------------------------
 // ray-box against ray-triangle
@@ -299,9 +299,9 @@ proptest! {
 // ---------------------------------------------------------------------------------------------
 // lod levels under a UTM-sized translation of the scene and the POI
 
+use skylod::lod::select::SelectOptions;
 use skylod::lod::{lod, LodOptions};
 use skylod::poi::Poi;
-use skylod::select::SelectOptions;
 use skylod::synth::boxes::{boxes_citygml, BoxBuilding};
 
 /// Half-metre grid values, so that every coordinate and its translate are exact in f64.

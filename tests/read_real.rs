@@ -9,7 +9,7 @@ use common::*;
 use glam::DVec3;
 use skylod::citygml::{read_file, ReadError};
 use skylod::model::{AssetKind, CityModel, Polygon};
-use skylod::stats::Stats;
+use skylod::output::stats::Stats;
 use std::path::Path;
 
 /// The one shared file that is plain GML, not CityGML.

@@ -5,7 +5,7 @@ mod common;
 
 use serde_json::Value;
 use skylod::citygml::read_file;
-use skylod::region::facade_pois;
+use skylod::poi::region::facade_pois;
 use std::ffi::OsStr;
 use std::path::Path;
 

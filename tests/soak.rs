@@ -17,13 +17,13 @@
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
+use skylod::lod::mixed::write_mixed;
+use skylod::lod::rough::{rough_model, RoughOptions};
+use skylod::lod::scene::selection_scene;
+use skylod::lod::select::{select, SelectOptions};
 use skylod::poi::Poi;
-use skylod::rough::{rough_model, RoughOptions};
-use skylod::scene::selection_scene;
-use skylod::select::{select, SelectOptions};
 use skylod::synth::{generate, Preset};
 use std::io::BufWriter;
 use std::time::Instant;

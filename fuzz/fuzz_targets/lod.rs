@@ -7,12 +7,12 @@
 
 use glam::DVec3;
 use libfuzzer_sys::fuzz_target;
-use skylod::citygml::mixed::write_mixed;
+use skylod::lod::mixed::write_mixed;
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
 use skylod::lod::{lod, LodOptions};
 use skylod::poi::Poi;
-use skylod::select::SelectOptions;
+use skylod::lod::select::SelectOptions;
 use skylod::synth::boxes::{boxes_citygml, BoxBuilding};
 
 struct Bytes<'a>(&'a [u8], usize);

@@ -2,7 +2,6 @@
 
 pub mod error;
 pub mod merge;
-pub mod mixed;
 pub mod ns;
 pub mod read;
 pub mod reproject;
@@ -11,3 +10,7 @@ pub mod write;
 
 pub use error::{Location, ReadError, WriteError};
 pub use read::{read_file, read_file_with, ReadOptions};
+
+/// Moved to [`crate::lod::mixed`] (the mixed-LoD writer is a rule of the LoD stage).
+#[doc(hidden)]
+pub use crate::lod::mixed;

@@ -1,5 +1,5 @@
 //! Rewriting every coordinate of a CityGML document through a point transform, span-preserving
-//! (the machinery of `skylod reproject`; the PROJ transform itself is in [`crate::reproject`]).
+//! (the machinery of `skylod reproject`; the PROJ transform itself is in [`crate::crs::reproject`]).
 //!
 //! One streaming pass over the source ([`quick_xml::NsReader`]) finds every coordinate in the
 //! GML namespace and replaces the text of its element; everything else is copied byte for byte

@@ -33,9 +33,9 @@
 
 use super::geodesy::Enu;
 use super::parse::{Crs, CrsKind};
+use crate::lod::rough::RoughGeometry;
 use crate::model::{Bbox, CityModel};
 use crate::poi::Poi;
-use crate::rough::RoughGeometry;
 use glam::DVec3;
 use std::borrow::Cow;
 use std::fmt;
@@ -415,8 +415,8 @@ mod tests {
     /// read, bit for bit, and the box lies where the installation is.
     #[test]
     fn rough_back_to_source() {
+        use crate::lod::rough::{rough_model, RoughOptions};
         use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
-        use crate::rough::{rough_model, RoughOptions};
         let (lat, lon) = (35.54, 139.777);
         let d = 1e-4; // ~10 m
         let quad = |z: f64, s: f64| {

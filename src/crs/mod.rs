@@ -32,6 +32,7 @@ pub mod geodesy;
 pub mod parse;
 #[cfg(feature = "proj")]
 pub mod proj_transform;
+pub mod reproject;
 pub mod site;
 
 pub use convert::{build_transform, site_lat_lon, Builtin, CrsError, PointTransform};

@@ -26,8 +26,8 @@
 //!   (`https://www.opengis.net/def/crs/EPSG/0/<code>`, the horizontal code of a compound
 //!   CRS, AdV `ETRS89_UTM<zone>` names as `EPSG:258<zone>`), `metadata.geographicalExtent`.
 //! * Levels ([`Content::Levels`]): what the mixed CityGML output holds
-//!   ([`crate::citygml::mixed`]): level 2 every LoD of the asset, level 1 the rough geometry in
-//!   the LoDs it replaces ([`crate::level::properties`]), level 0 nothing. Every
+//!   ([`crate::lod::mixed`]): level 2 every LoD of the asset, level 1 the rough geometry in
+//!   the LoDs it replaces ([`crate::lod::level::properties`]), level 0 nothing. Every
 //!   written surface, opening, installation or other object carries `skylod_level` (an
 //!   attribute, or a property of the semantic object); a building left with nothing is
 //!   dropped. [`Content::Full`] writes every building, also one without geometry.
@@ -794,7 +794,7 @@ fn asset_lods<'a>(a: &'a Asset, i: usize, content: Content<'a>) -> Vec<(u8, Cow<
                 return out;
             };
             let mut rough_at: HashSet<u8> = HashSet::new();
-            for p in crate::level::properties(a, Some(r), 1) {
+            for p in crate::lod::level::properties(a, Some(r), 1) {
                 let (g, polys, replaced) = (p.geometry, p.polygons, p.rough);
                 if replaced && !rough_at.insert(g.lod) {
                     continue;

@@ -2,13 +2,13 @@
 //! model or the mixed-LoD model written as OBJ ([`obj`]) for daylight tools, or as CityJSON 2.0
 //! and CityJSONSeq ([`cityjson`]) for the CityJSON tools. The format follows the output's name
 //! ([`mod@format`]). CityGML itself is written by [`crate::citygml::write`] and
-//! [`crate::citygml::mixed`].
+//! [`crate::lod::mixed`].
 //!
 //! What each asset contributes is decided once: [`Content::Full`] (`convert`) writes every asset
 //! at full detail; [`Content::Levels`] (`rough`, `lod`) writes level 2 at full detail, level 1
 //! with its rough geometry and drops level 0, as the traced LoD scene
-//! ([`crate::scene::mixed_scene`], for OBJ) and the mixed CityGML writer
-//! ([`crate::level::properties`], for CityJSON's per-LoD geometry) do.
+//! ([`crate::lod::scene::mixed_scene`], for OBJ) and the mixed CityGML writer
+//! ([`crate::lod::level::properties`], for CityJSON's per-LoD geometry) do.
 //!
 //! # Example
 //! ```
@@ -35,8 +35,8 @@ pub use format::{Format, UnknownFormat};
 
 use crate::citygml::write::WriteOptions;
 use crate::citygml::WriteError;
+use crate::lod::rough::RoughGeometry;
 use crate::model::{Asset, CityModel};
-use crate::rough::RoughGeometry;
 use std::io::Write;
 use std::path::Path;
 
@@ -115,7 +115,7 @@ pub struct ExportSummary {
 ///
 /// # Errors
 /// [`WriteError`] for a refused target, I/O errors, mismatched `content` lengths, or
-/// [`Format::CityGml`] (written by [`crate::citygml::write`] and [`crate::citygml::mixed`]).
+/// [`Format::CityGml`] (written by [`crate::citygml::write`] and [`crate::lod::mixed`]).
 pub fn write(
     format: Format,
     model: &CityModel,

@@ -9,11 +9,11 @@
 //! * one `usemtl` per semantic class and level: `roof_l2`, `wall_l1`, `installation_l1`,
 //!   `window_l2`, ... (the kinds of [`crate::model::AssetKind::as_str`]); `convert` writes full
 //!   detail as level 2;
-//! * triangles only ([`crate::geom::triangulate()`]), oriented like the polygon's exterior ring;
+//! * triangles only ([`crate::model::triangulate()`]), oriented like the polygon's exterior ring;
 //!   Z up, metres, no normals and no material library (the material names are the classes).
 //!
-//! What an asset contributes is [`crate::level::traced`], the definition the traced
-//! LoD scene uses ([`crate::scene::mixed_scene`]): level 2 its highest LoD, level 1 its rough
+//! What an asset contributes is [`crate::lod::level::traced`], the definition the traced
+//! LoD scene uses ([`crate::lod::scene::mixed_scene`]): level 2 its highest LoD, level 1 its rough
 //! geometry, level 0 nothing. Vertices are shared within an object.
 //!
 //! # Example
@@ -41,8 +41,8 @@
 //! ```
 
 use super::{asset_name, assets_of, Content, ExportSummary};
-use crate::geom::triangulate;
-use crate::level::traced as level_polygons;
+use crate::lod::level::traced as level_polygons;
+use crate::model::triangulate;
 use crate::model::{Bbox, CityModel};
 use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
@@ -161,8 +161,8 @@ fn push_coord(s: &mut String, x: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lod::rough::RoughGeometry;
     use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
-    use crate::rough::RoughGeometry;
 
     fn asset(kind: AssetKind, id: Option<&str>, z: f64) -> Asset {
         let sq = Polygon::new(vec![

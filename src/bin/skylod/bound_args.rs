@@ -1,8 +1,8 @@
 //! `--max-svf-error` / `--max-sun-hours-error` of `skylod lod`: the error-bounded LoD
-//! ([`skylod::bound`]) run between the selection and the writing.
+//! ([`skylod::lod::bound`]) run between the selection and the writing.
 
 use crate::common::{non_negative, SiteArgs, SunArgs};
-use skylod::bound::{BoundOptions, BoundReport};
+use skylod::lod::bound::{BoundOptions, BoundReport};
 use skylod::model::CityModel;
 use skylod::pipeline::BoundSpec;
 use skylod::solar::{Site, SunTable};

@@ -3,8 +3,8 @@
 use crate::common::{ms, out_err, warn_flags, RoughArgs, SelectArgs, SiteArgs, SunArgs};
 use crate::tracing_args::Prepared;
 use crate::Outcome;
-use skylod::evaluate::EvalOptions;
 use skylod::lod::LodOptions;
+use skylod::pipeline::evaluation::EvalOptions;
 use skylod::pipeline::EvaluateOptions;
 use skylod::solar::{Site, SunTable};
 use std::io::Write;

@@ -7,8 +7,8 @@ use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::write::{atomic_write_bytes, is_stdout, WriteOptions};
 use skylod::lod::LodOptions;
+use skylod::output::report::{Parameters, Report, Timings};
 use skylod::pipeline::{levels, levels_of, write_all, LevelsOptions};
-use skylod::report::{Parameters, Report, Timings};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

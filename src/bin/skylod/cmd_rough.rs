@@ -4,12 +4,12 @@ use crate::frames::SourceCrsArgs;
 use crate::outputs::Targets;
 use crate::Outcome;
 use rayon::prelude::*;
-use skylod::citygml::mixed::write_mixed;
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
 use skylod::crs::{model_crs, LocalFrame};
 use skylod::export::{Content, Format};
-use skylod::rough::{rough_model, RoughOptions};
+use skylod::lod::mixed::write_mixed;
+use skylod::lod::rough::{rough_model, RoughOptions};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]

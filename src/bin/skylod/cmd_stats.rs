@@ -4,7 +4,7 @@ use crate::frames::SourceCrsArgs;
 use crate::Outcome;
 use rayon::prelude::*;
 use skylod::citygml::read_file;
-use skylod::stats::Stats;
+use skylod::output::stats::Stats;
 use std::io::Write;
 use std::path::PathBuf;
 

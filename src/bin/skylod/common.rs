@@ -6,12 +6,12 @@ use crate::frames::{frame, Framed};
 use crate::log::{error, summary, warning};
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::checks::{PoiFlag, DEFAULT_POI_MARGIN};
 use skylod::export::Format;
+use skylod::lod::rough::RoughOptions;
+use skylod::lod::select::SelectOptions;
 use skylod::model::CityModel;
+use skylod::poi::checks::{PoiFlag, DEFAULT_POI_MARGIN};
 use skylod::poi::{check_unique_ids, parse_poi, read_pois_csv, Located, Poi};
-use skylod::rough::RoughOptions;
-use skylod::select::SelectOptions;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -154,7 +154,7 @@ impl PoiArgs {
     }
 
     /// Size the thread pool (`--jobs`), read the inputs ([`load`]) and refuse a model that would give a confidently wrong
-    /// answer whatever the POIs (`skylod::checks`): inputs in different CRSs (unless
+    /// answer whatever the POIs (`skylod::poi::checks`): inputs in different CRSs (unless
     /// --allow-mixed-crs), a model without heights.
     pub fn load_checked(&self) -> anyhow::Result<Loaded> {
         self.jobs.global()?;
@@ -179,7 +179,7 @@ impl PoiArgs {
 /// re-reads its source, and a pipe can be read only once.
 pub struct Spool(#[allow(dead_code)] Option<tempfile::TempDir>);
 
-/// Expand the input arguments in place ([`skylod::inputs::expand`]: files, directories,
+/// Expand the input arguments in place ([`skylod::batch::inputs::expand`]: files, directories,
 /// glob patterns, `-`), spooling standard input to a temporary file. Keep the returned
 /// [`Spool`] alive while the inputs are read and written.
 pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
@@ -192,8 +192,8 @@ pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
 /// spooled standard input is `stdin.gml`).
 pub fn expand_inputs_relative(
     inputs: &[PathBuf],
-) -> anyhow::Result<(Vec<skylod::inputs::Input>, Spool)> {
-    let expanded = skylod::inputs::expand(inputs)?;
+) -> anyhow::Result<(Vec<skylod::batch::inputs::Input>, Spool)> {
+    let expanded = skylod::batch::inputs::expand(inputs)?;
     let mut spool = None;
     let mut out = Vec::with_capacity(expanded.len());
     for i in expanded {
@@ -207,7 +207,7 @@ pub fn expand_inputs_relative(
                 .with_context(|| format!("spooling standard input to {}", path.display()))?;
             std::io::copy(&mut std::io::stdin().lock(), &mut f)
                 .context("reading standard input")?;
-            out.push(skylod::inputs::Input {
+            out.push(skylod::batch::inputs::Input {
                 path,
                 relative: PathBuf::from("stdin.gml"),
             });

@@ -1,18 +1,18 @@
-//! `skylod lod` in an array job: a shard writes its levels ([`skylod::shard_levels`]),
+//! `skylod lod` in an array job: a shard writes its levels ([`skylod::batch::shard_levels`]),
 //! `--reduce` writes the model from all shards' levels.
 
 use crate::cmd_lod::Args;
 use crate::common::{ms, warn_flags};
 use crate::Outcome;
 use anyhow::{bail, Context};
+use skylod::batch::shard::Shard;
+use skylod::batch::shard_levels::{self, Combined, LevelsFile};
 use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
+use skylod::lod::rough::rough_model;
+use skylod::lod::select::{roof_assets, Selection};
 use skylod::lod::{lod, LodOptions, LodResult};
 use skylod::model::CityModel;
 use skylod::poi::Poi;
-use skylod::rough::rough_model;
-use skylod::select::{roof_assets, Selection};
-use skylod::shard::Shard;
-use skylod::shard_levels::{self, Combined, LevelsFile};
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -1,5 +1,5 @@
 //! Messages and progress on standard error: `--quiet`, `--log-level`, and the
-//! [`skylod::progress::Progress`] of the library drawn as `indicatif` bars on a terminal or
+//! [`skylod::runtime::progress::Progress`] of the library drawn as `indicatif` bars on a terminal or
 //! written as plain lines otherwise.
 //!
 //! Levels: errors always (also with `--quiet`); warnings and the summary lines (one per
@@ -10,7 +10,7 @@
 //! step is silent.
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use skylod::progress::{Progress, Stage};
+use skylod::runtime::progress::{Progress, Stage};
 use std::collections::HashMap;
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};

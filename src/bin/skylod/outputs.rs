@@ -12,11 +12,11 @@
 //!   target, then merged into it.
 
 use anyhow::{bail, Context};
+use skylod::batch::inputs::Input;
+use skylod::batch::shard::Shard;
 use skylod::citygml::merge::{check_mergeable, merge_named, MergeSummary};
 use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
 use skylod::export::Format;
-use skylod::inputs::Input;
-use skylod::shard::Shard;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 

@@ -1,12 +1,12 @@
 //! `--facade ID` / `--region WKT --height Z` with `--spacing M`: POIs sampled over a surface
-//! or an area ([`skylod::region`]), on `lod`, `svf`, `sun-hours` and `evaluate`. They are
+//! or an area ([`skylod::poi::region`]), on `lod`, `svf`, `sun-hours` and `evaluate`. They are
 //! added after the `--poi`/`--pois` points, in the model's CRS.
 
 use crate::common::{positive, PoiArgs};
 use anyhow::bail;
 use skylod::model::CityModel;
+use skylod::poi::region::{facade_pois, grid_pois};
 use skylod::poi::Poi;
-use skylod::region::{facade_pois, grid_pois};
 
 /// Distance (m) facade POIs are moved out along the surface normal.
 const FACADE_OFFSET: f64 = 0.05;

@@ -1,11 +1,11 @@
-//! `--scene-radius M`: read only the inputs within reach of the POIs ([`skylod::scene_radius`]).
+//! `--scene-radius M`: read only the inputs within reach of the POIs ([`skylod::batch::scene_radius`]).
 
 use crate::common::PoiArgs;
 use anyhow::bail;
 use rayon::prelude::*;
+use skylod::batch::scene_radius::{file_extent, ExtentSource};
+use skylod::batch::shard::Shard;
 use skylod::poi::Poi;
-use skylod::scene_radius::{file_extent, ExtentSource};
-use skylod::shard::Shard;
 
 /// The scene options of the commands that trace POIs.
 #[derive(clap::Args, Debug, Clone, Default)]

@@ -1,8 +1,8 @@
 //! `--shard I/N` and `--shards N`: the part of an array job this run does
-//! ([`skylod::shard`]), flattened into every command that reads inputs.
+//! ([`skylod::batch::shard`]), flattened into every command that reads inputs.
 
+use skylod::batch::shard::Shard;
 use skylod::poi::Poi;
-use skylod::shard::Shard;
 
 /// The shard options of a command.
 #[derive(clap::Args, Debug, Clone, Default)]

@@ -5,8 +5,8 @@ use crate::common::{expand_inputs, Loaded, PoiArgs, Spool};
 use crate::region_args::RegionArgs;
 use crate::scene_args::SceneArgs;
 use crate::shard_args::ShardArgs;
+use skylod::batch::shard::Shard;
 use skylod::poi::Poi;
-use skylod::shard::Shard;
 
 #[derive(clap::Args, Debug)]
 pub struct TracingArgs {

@@ -1,0 +1,617 @@
+//! Error-bounded LoD (DESIGN.md "Regions and error bounds"): after the selection, compare the
+//! mixed-LoD model with the full model at every POI with the *same* rays, and promote assets
+//! (level 0 → 1, 1 → 2) where a POI's relative SVF or sun-hours error is over the bound,
+//! until every POI holds.
+//!
+//! **Rays.** SVF uses the equal-projected-area bundle of [`SkyBundles`] in the POI's frame
+//! (exactly as [`crate::solar::poi_sky_view`]: the figures here equal it); sun hours use every
+//! step of a [`SunTable`] in front of the surface (as [`crate::solar::poi_sun_hours`]). Each
+//! ray is traced to its first hit in both models: the full model once, the LoD model
+//! ([`crate::lod::scene::mixed_scene`], the model `lod` writes) once per round.
+//!
+//! **Promotion.** At a POI over the bound, the rays whose answers differ tell which assets
+//! are to blame. When the LoD model sees *less* sky than the full one, the culprits are the
+//! assets the LoD model hits on rays that reach the sky in the full model (a rough box or
+//! plane larger than the detail); when it sees *more*, they are the assets the full model
+//! hits on rays that reach the sky in the LoD model (an asset dropped, or a rough plane
+//! smaller than the detail, e.g. an asset hidden by a neighbour's rough box that becomes
+//! visible through the neighbour's real geometry). Culprits below level 2 are promoted in
+//! decreasing order of their rays until their rays cover the excess over the bound; when
+//! none is left, any asset below level 2 hit by a differing ray (sky against hit, or two
+//! different assets) is promoted. Levels only rise, so the loop ends; when a POI is over
+//! the bound and nothing can be promoted (or [`BoundOptions::max_rounds`] is reached), the
+//! result says which POIs fail ([`Bounded::met`] is false).
+//!
+//! # Example
+//! ```
+//! use skylod::lod::bound::{bound, BoundOptions};
+//! use skylod::lod::{lod, LodOptions};
+//! use skylod::poi::Poi;
+//! use skylod::synth::{generate, pois, Preset};
+//! let opts = Preset::Small.defaults();
+//! let mut xml = Vec::new();
+//! generate(&opts, &mut xml).unwrap();
+//! let model = skylod::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
+//! let r = lod(&model, &pois, &LodOptions::default()).unwrap();
+//! let b = BoundOptions { max_svf_error: Some(0.001), ..Default::default() };
+//! let out = bound(&model, &r.rough, &r.selection.levels, &pois, &b, None).unwrap();
+//! assert!(out.met);
+//! for p in &out.pois {
+//!     assert!(p.svf_error <= 0.001, "{}: {}", p.id, p.svf_error);
+//! }
+//! // levels only rise
+//! assert!(out.levels.iter().zip(&r.selection.levels).all(|(a, b)| a >= b));
+//! ```
+
+use crate::lod::rough::RoughGeometry;
+use crate::lod::scene::{full_scene, mixed_scene};
+use crate::lod::sky::{Frame, SkyError};
+use crate::model::CityModel;
+use crate::poi::{Poi, POI_OFFSET};
+use crate::solar::{SkyBundles, SunTable};
+use crate::trace::Scene;
+use foldhash::{HashMap, HashMapExt};
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Options of [`bound`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoundOptions {
+    /// Largest relative SVF error allowed at any POI (`None`: not bounded).
+    pub max_svf_error: Option<f64>,
+    /// Largest relative sun-hours error allowed at any POI (`None`: not bounded; needs a
+    /// sun table).
+    pub max_sun_error: Option<f64>,
+    /// Rays of the SVF bundle.
+    pub svf_rays: usize,
+    /// Seed of the SVF bundle.
+    pub svf_seed: u64,
+    /// Most rounds of promotions before giving up.
+    pub max_rounds: usize,
+}
+
+impl Default for BoundOptions {
+    fn default() -> Self {
+        BoundOptions {
+            max_svf_error: None,
+            max_sun_error: None,
+            svf_rays: 20_000,
+            svf_seed: 7,
+            max_rounds: 64,
+        }
+    }
+}
+
+/// Errors of [`bound`].
+#[derive(Debug, thiserror::Error)]
+pub enum BoundError {
+    /// The SVF bundle could not be made.
+    #[error("SVF bundle: {0}")]
+    Sky(#[from] SkyError),
+    /// A sun-hours bound without a sun table.
+    #[error("a sun-hours error bound needs a sun table (site and year)")]
+    NoSunTable,
+    /// A bound that is negative or not a number.
+    #[error("error bound {0} is not a non-negative number")]
+    BadBound(f64),
+    /// One level per asset and one rough geometry per asset are needed.
+    #[error("{levels} levels and {rough} rough geometries for {assets} assets")]
+    Mismatch {
+        /// Assets.
+        assets: usize,
+        /// Levels given.
+        levels: usize,
+        /// Rough geometries given.
+        rough: usize,
+    },
+}
+
+/// Achieved figures at one POI.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PoiBound {
+    /// POI id.
+    pub id: String,
+    /// SVF of the full model.
+    pub svf_full: f64,
+    /// SVF of the LoD model.
+    pub svf_lod: f64,
+    /// Relative SVF error (0 when both are 0).
+    pub svf_error: f64,
+    /// Sun hours of the full model (with a sun table).
+    pub sun_hours_full: Option<f64>,
+    /// Sun hours of the LoD model.
+    pub sun_hours_lod: Option<f64>,
+    /// Relative sun-hours error.
+    pub sun_hours_error: Option<f64>,
+    /// Whether the POI is within every bound.
+    pub holds: bool,
+}
+
+/// One promotion.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Promotion {
+    /// Round (1-based) in which it was made.
+    pub round: usize,
+    /// Index of the asset in the model.
+    pub asset: usize,
+    /// `gml:id` of the asset, if any.
+    pub id: Option<String>,
+    /// Level before.
+    pub from: u8,
+    /// Level after.
+    pub to: u8,
+    /// The POI whose error asked for it.
+    pub poi: String,
+    /// Rays of that POI whose answer differed on this asset.
+    pub rays: usize,
+}
+
+/// What [`bound`] made.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Bounded {
+    /// Levels after the promotions.
+    pub levels: Vec<u8>,
+    /// Figures per POI with the final levels, in POI order.
+    pub pois: Vec<PoiBound>,
+    /// Promotions in the order made.
+    pub promotions: Vec<Promotion>,
+    /// Rounds of tracing the LoD model (1 when nothing had to be promoted).
+    pub rounds: usize,
+    /// Whether every POI holds.
+    pub met: bool,
+}
+
+impl Bounded {
+    /// Ids of the POIs over a bound.
+    pub fn failing(&self) -> Vec<&str> {
+        self.pois
+            .iter()
+            .filter(|p| !p.holds)
+            .map(|p| p.id.as_str())
+            .collect()
+    }
+}
+
+/// The `bound` section of the `lod` report (`schemas/report.schema.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BoundReport {
+    /// The SVF bound asked for.
+    pub max_svf_error: Option<f64>,
+    /// The sun-hours bound asked for.
+    pub max_sun_hours_error: Option<f64>,
+    /// Rays of the SVF bundle.
+    pub rays: usize,
+    /// Seed of the SVF bundle.
+    pub seed: u64,
+    /// Rounds of tracing the LoD model.
+    pub rounds: usize,
+    /// Whether every POI holds.
+    pub met: bool,
+    /// Achieved figures per POI.
+    pub pois: Vec<PoiBound>,
+    /// Promotions in the order made.
+    pub promotions: Vec<Promotion>,
+}
+
+impl BoundReport {
+    /// The report section of a result made with `opts`.
+    pub fn new(b: &Bounded, opts: &BoundOptions) -> BoundReport {
+        BoundReport {
+            max_svf_error: opts.max_svf_error,
+            max_sun_hours_error: opts.max_sun_error,
+            rays: opts.svf_rays,
+            seed: opts.svf_seed,
+            rounds: b.rounds,
+            met: b.met,
+            pois: b.pois.clone(),
+            promotions: b.promotions.clone(),
+        }
+    }
+}
+
+/// Relative error of `a` against `b` (0 when both are 0, infinite when only `b` is).
+fn rel(a: f64, b: f64) -> f64 {
+    if b == 0.0 {
+        if a == 0.0 {
+            0.0
+        } else {
+            f64::INFINITY
+        }
+    } else {
+        (a - b).abs() / b.abs()
+    }
+}
+
+/// The rays of one POI: SVF directions then sun directions (world frame).
+struct Probe {
+    origin: DVec3,
+    svf_dirs: Vec<DVec3>,
+    sun_dirs: Vec<DVec3>,
+}
+
+fn probe(poi: &Poi, bundles: &SkyBundles, table: Option<&SunTable>) -> Probe {
+    let n = poi
+        .normal
+        .and_then(|n| n.try_normalize())
+        .unwrap_or(DVec3::Z);
+    let frame = Frame::from_normal(n);
+    let svf_dirs = bundles
+        .for_poi(poi)
+        .projected_dirs()
+        .iter()
+        .map(|&l| frame.to_world(l))
+        .filter(|d| d.z > 0.0)
+        .collect();
+    let sun_dirs = table.map_or_else(Vec::new, |t| {
+        t.steps()
+            .iter()
+            .filter(|s| s.above_horizon && n.dot(s.direction) > 0.0)
+            .map(|s| s.direction)
+            .collect()
+    });
+    Probe {
+        origin: poi.ray_origin(),
+        svf_dirs,
+        sun_dirs,
+    }
+}
+
+/// First-hit tags of every ray of a probe (SVF rays, then sun rays).
+fn tags(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
+    p.svf_dirs
+        .par_iter()
+        .chain(p.sun_dirs.par_iter())
+        .with_min_len(512)
+        .map(|&d| {
+            scene
+                .first_hit(p.origin, d, POI_OFFSET, f64::INFINITY)
+                .map(|h| h.tag)
+        })
+        .collect()
+}
+
+/// Sky rays among `tags[range]`.
+fn sky(tags: &[Option<u32>]) -> usize {
+    tags.iter().filter(|t| t.is_none()).count()
+}
+
+/// Check the mixed-LoD model given by `levels` against the full model at every POI and
+/// promote assets until every POI is within the bounds of `opts` (see the module docs).
+/// `rough[i]` and `levels[i]` belong to `model.assets[i]`.
+///
+/// # Errors
+/// [`BoundError`] for a bad bound, a sun-hours bound without `table`, mismatched lengths or
+/// an SVF bundle that cannot be made. A bound that cannot be met is not an error: see
+/// [`Bounded::met`].
+pub fn bound(
+    model: &CityModel,
+    rough: &[RoughGeometry],
+    levels: &[u8],
+    pois: &[Poi],
+    opts: &BoundOptions,
+    table: Option<&SunTable>,
+) -> Result<Bounded, BoundError> {
+    let n = model.assets.len();
+    if levels.len() != n || rough.len() != n {
+        return Err(BoundError::Mismatch {
+            assets: n,
+            levels: levels.len(),
+            rough: rough.len(),
+        });
+    }
+    for b in [opts.max_svf_error, opts.max_sun_error]
+        .into_iter()
+        .flatten()
+    {
+        if b.is_nan() || b < 0.0 {
+            return Err(BoundError::BadBound(b));
+        }
+    }
+    if opts.max_sun_error.is_some() && table.is_none() {
+        return Err(BoundError::NoSunTable);
+    }
+    let bundles = SkyBundles::new(opts.svf_rays, opts.svf_seed)?;
+    let total = bundles.len().max(1) as f64;
+    let step_h = table.map_or(0.0, SunTable::step_hours);
+    let table = if opts.max_sun_error.is_some() {
+        table
+    } else {
+        None
+    };
+    let probes: Vec<Probe> = pois.iter().map(|p| probe(p, &bundles, table)).collect();
+    let full = full_scene(model);
+    let full_tags: Vec<Vec<Option<u32>>> = probes.iter().map(|p| tags(&full, p)).collect();
+
+    let mut levels: Vec<u8> = levels.iter().map(|&l| l.min(2)).collect();
+    let mut promotions = Vec::new();
+    let mut rounds = 0;
+    loop {
+        rounds += 1;
+        let scene = mixed_scene(model, rough, &levels);
+        let lod_tags: Vec<Vec<Option<u32>>> = probes.iter().map(|p| tags(&scene, p)).collect();
+        let mut figures = Vec::with_capacity(pois.len());
+        // (poi, metric range, excess rays, lod sees less sky)
+        let mut over: Vec<(usize, std::ops::Range<usize>, f64, bool)> = Vec::new();
+        for (k, poi) in pois.iter().enumerate() {
+            let ns = probes[k].svf_dirs.len();
+            let (f, l) = (&full_tags[k], &lod_tags[k]);
+            let (sf, sl) = (sky(&f[..ns]), sky(&l[..ns]));
+            let svf_full = sf as f64 / total;
+            let svf_lod = sl as f64 / total;
+            let svf_error = rel(svf_lod, svf_full);
+            let mut holds = true;
+            if let Some(b) = opts.max_svf_error {
+                if svf_error > b {
+                    holds = false;
+                    let excess = sf.abs_diff(sl) as f64 - b * sf as f64;
+                    over.push((k, 0..ns, excess, sl < sf));
+                }
+            }
+            let (mut sun_full, mut sun_lod, mut sun_err) = (None, None, None);
+            if table.is_some() {
+                let (uf, ul) = (sky(&f[ns..]), sky(&l[ns..]));
+                let e = rel(ul as f64, uf as f64);
+                sun_full = Some(uf as f64 * step_h);
+                sun_lod = Some(ul as f64 * step_h);
+                sun_err = Some(e);
+                if let Some(b) = opts.max_sun_error {
+                    if e > b {
+                        holds = false;
+                        let excess = uf.abs_diff(ul) as f64 - b * uf as f64;
+                        over.push((k, ns..f.len(), excess, ul < uf));
+                    }
+                }
+            }
+            figures.push(PoiBound {
+                id: poi.id.clone(),
+                svf_full,
+                svf_lod,
+                svf_error,
+                sun_hours_full: sun_full,
+                sun_hours_lod: sun_lod,
+                sun_hours_error: sun_err,
+                holds,
+            });
+        }
+        if over.is_empty() || rounds > opts.max_rounds {
+            return Ok(Bounded {
+                met: over.is_empty(),
+                levels,
+                pois: figures,
+                promotions,
+                rounds,
+            });
+        }
+        let mut promoted_any = false;
+        let mut promoted: Vec<bool> = vec![false; n];
+        for (k, range, excess, lod_less) in over {
+            let (f, l) = (&full_tags[k][range.clone()], &lod_tags[k][range]);
+            // culprits: rays that move the metric in the direction of the error
+            let mut culprit: HashMap<u32, usize> = HashMap::new();
+            let mut other: HashMap<u32, usize> = HashMap::new();
+            for (a, b) in f.iter().zip(l) {
+                match (a, b) {
+                    (None, Some(t)) if lod_less => *culprit.entry(*t).or_insert(0) += 1,
+                    (Some(t), None) if !lod_less => *culprit.entry(*t).or_insert(0) += 1,
+                    (x, y) if x != y => {
+                        for t in [x, y].into_iter().flatten() {
+                            *other.entry(*t).or_insert(0) += 1;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            let promotable = |t: &u32| levels.get(*t as usize).is_some_and(|&l| l < 2);
+            let mut ranked: Vec<(u32, usize)> =
+                culprit.into_iter().filter(|(t, _)| promotable(t)).collect();
+            if ranked.is_empty() {
+                ranked = other.into_iter().filter(|(t, _)| promotable(t)).collect();
+            }
+            ranked.sort_unstable_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+            let mut covered = 0.0;
+            for (t, rays) in ranked {
+                if covered >= excess && promoted_any {
+                    break;
+                }
+                let i = t as usize;
+                covered += rays as f64;
+                if promoted[i] {
+                    continue;
+                }
+                promoted[i] = true;
+                promoted_any = true;
+                let from = levels[i];
+                levels[i] = from + 1;
+                promotions.push(Promotion {
+                    round: rounds,
+                    asset: i,
+                    id: model.assets[i].id.as_deref().map(str::to_owned),
+                    from,
+                    to: from + 1,
+                    poi: pois[k].id.clone(),
+                    rays,
+                });
+            }
+        }
+        if !promoted_any {
+            return Ok(Bounded {
+                met: false,
+                levels,
+                pois: figures,
+                promotions,
+                rounds,
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
+    use crate::solar::poi_sky_view;
+
+    fn quad(x0: f64, x1: f64, y0: f64, y1: f64, z: f64) -> Polygon {
+        Polygon::new(vec![
+            DVec3::new(x0, y0, z),
+            DVec3::new(x1, y0, z),
+            DVec3::new(x1, y1, z),
+            DVec3::new(x0, y1, z),
+        ])
+    }
+
+    fn asset(kind: AssetKind, polys: Vec<Polygon>) -> Asset {
+        Asset {
+            kind,
+            id: Some(format!("{}", polys.len()).into()),
+            element: "X".into(),
+            building: None,
+            parent: None,
+            span: 0..0,
+            line: 1,
+            function: None,
+            file: 0,
+            geometries: vec![LodGeometry {
+                lod: 3,
+                property: "lod3MultiSurface".into(),
+                polygons: polys,
+                ..Default::default()
+            }],
+        }
+    }
+
+    /// An L-shaped canopy over the POI whose rough geometry is its full square (a rough
+    /// model too big), and a small roof far off that the selection dropped.
+    fn scene() -> (CityModel, Vec<RoughGeometry>, Vec<u8>) {
+        let mut m = CityModel::default();
+        m.assets.push(asset(
+            AssetKind::Roof,
+            vec![
+                quad(-5.0, 5.0, -5.0, 0.0, 4.0),
+                quad(-5.0, 0.0, 0.0, 5.0, 4.0),
+            ],
+        ));
+        m.assets.push(asset(
+            AssetKind::Roof,
+            vec![quad(20.0, 30.0, -5.0, 5.0, 3.0)],
+        ));
+        let rough = vec![
+            RoughGeometry {
+                polygons: vec![quad(-5.0, 5.0, -5.0, 5.0, 4.0)],
+                obb: None,
+                lod: 3,
+            },
+            RoughGeometry {
+                polygons: vec![quad(20.0, 30.0, -5.0, 5.0, 3.0)],
+                obb: None,
+                lod: 3,
+            },
+        ];
+        (m, rough, vec![1, 0])
+    }
+
+    fn poi() -> Poi {
+        Poi {
+            id: "p".into(),
+            position: DVec3::ZERO,
+            normal: None,
+        }
+    }
+
+    #[test]
+    fn figures_equal_poi_sky_view() {
+        let (m, rough, levels) = scene();
+        let opts = BoundOptions {
+            max_svf_error: Some(10.0),
+            svf_rays: 4000,
+            ..Default::default()
+        };
+        let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
+        assert!(b.met && b.promotions.is_empty() && b.rounds == 1);
+        let bundles = SkyBundles::new(4000, 7).unwrap();
+        let full = poi_sky_view(&full_scene(&m), &poi(), &bundles).svf;
+        let lod = poi_sky_view(&mixed_scene(&m, &rough, &levels), &poi(), &bundles).svf;
+        assert_eq!(b.pois[0].svf_full, full);
+        assert_eq!(b.pois[0].svf_lod, lod);
+        assert!(lod < full);
+    }
+
+    #[test]
+    fn promotes_the_too_big_rough_asset_and_not_the_far_one() {
+        let (m, rough, levels) = scene();
+        let opts = BoundOptions {
+            max_svf_error: Some(0.01),
+            svf_rays: 4000,
+            ..Default::default()
+        };
+        let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
+        assert!(b.met);
+        assert_eq!(b.levels, vec![2, 0]);
+        assert_eq!(b.promotions.len(), 1);
+        assert_eq!((b.promotions[0].asset, b.promotions[0].from), (0, 1));
+        // what is left is the far roof, within the bound
+        assert!(b.pois[0].svf_error > 0.0 && b.pois[0].svf_error <= 0.01);
+    }
+
+    #[test]
+    fn a_dropped_asset_that_is_seen_comes_back() {
+        let (m, rough, _) = scene();
+        // everything dropped: the LoD model sees the whole sky
+        let opts = BoundOptions {
+            max_svf_error: Some(0.0),
+            svf_rays: 4000,
+            ..Default::default()
+        };
+        let b = bound(&m, &rough, &[0, 0], &[poi()], &opts, None).unwrap();
+        assert!(b.met, "{:?}", b.pois);
+        assert_eq!(b.levels[0], 2);
+        assert!(b.promotions.iter().any(|p| p.from == 0));
+    }
+
+    #[test]
+    fn unmet_bound_names_the_poi_and_bad_input_is_an_error() {
+        let (m, rough, levels) = scene();
+        let opts = BoundOptions {
+            max_svf_error: Some(0.0),
+            svf_rays: 2000,
+            max_rounds: 0,
+            ..Default::default()
+        };
+        let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
+        assert!(!b.met);
+        assert_eq!(b.failing(), vec!["p"]);
+        let bad = BoundOptions {
+            max_svf_error: Some(f64::NAN),
+            ..Default::default()
+        };
+        assert!(bound(&m, &rough, &levels, &[poi()], &bad, None).is_err());
+        let sun = BoundOptions {
+            max_sun_error: Some(0.01),
+            ..Default::default()
+        };
+        assert!(matches!(
+            bound(&m, &rough, &levels, &[poi()], &sun, None),
+            Err(BoundError::NoSunTable)
+        ));
+        assert!(bound(&m, &rough, &[1], &[poi()], &opts, None).is_err());
+    }
+
+    #[test]
+    fn sun_hours_bound() {
+        let (m, rough, levels) = scene();
+        let site = crate::solar::Site::new(41.39, 2.17);
+        let table = SunTable::year(2025, 60, &site).unwrap();
+        let opts = BoundOptions {
+            max_sun_error: Some(0.0),
+            svf_rays: 1000,
+            ..Default::default()
+        };
+        let b = bound(&m, &rough, &levels, &[poi()], &opts, Some(&table)).unwrap();
+        assert!(b.met);
+        let p = &b.pois[0];
+        assert_eq!(p.sun_hours_error, Some(0.0));
+        assert!(p.sun_hours_full.unwrap() > 0.0);
+    }
+}

@@ -1,0 +1,121 @@
+//! The `skylod lod` pipeline in memory: rough model -> selection scene (BVH) -> selection,
+//! with the time of each stage. Reading and writing stay with the caller (the command
+//! writes with [`crate::lod::mixed::write_mixed`]; `evaluate` traces the result).
+//!
+//! # Example
+//! ```
+//! use skylod::lod::{lod, LodOptions};
+//! use skylod::poi::Poi;
+//! use skylod::synth::{generate, pois, Preset};
+//! let opts = Preset::Small.defaults();
+//! let mut xml = Vec::new();
+//! generate(&opts, &mut xml).unwrap();
+//! let model = skylod::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
+//! let r = lod(&model, &pois, &LodOptions::default()).unwrap();
+//! let [l0, l1, l2] = r.selection.level_counts();
+//! assert_eq!(l0 + l1 + l2, model.assets.len());
+//! assert!(l1 > 0 && l0 > 0);
+//! ```
+
+pub mod bound;
+pub mod level;
+pub mod mixed;
+pub mod rough;
+pub mod scene;
+pub mod select;
+pub mod sky;
+
+use crate::lod::rough::{rough_model, RoughGeometry, RoughOptions};
+use crate::lod::scene::selection_scene_for_rays;
+use crate::lod::select::{select_with, SelectError, SelectOptions, Selection};
+use crate::model::CityModel;
+use crate::poi::checks::{poi_flags, PoiFlag};
+use crate::poi::Poi;
+use crate::runtime::progress::{check, stage, Progress, Stage};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Options of the whole pipeline.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LodOptions {
+    /// The rough stage.
+    pub rough: RoughOptions,
+    /// The selection stage.
+    pub select: SelectOptions,
+}
+
+/// What the pipeline made.
+#[derive(Debug, Clone)]
+pub struct LodResult {
+    /// Rough geometry per asset.
+    pub rough: Vec<RoughGeometry>,
+    /// Levels and hits per asset.
+    pub selection: Selection,
+    /// Seconds in the rough stage.
+    pub rough_s: f64,
+    /// Seconds triangulating and building the BVH of the selection scene.
+    pub bvh_s: f64,
+    /// Seconds of the selection over all POIs.
+    pub select_s: f64,
+    /// Triangles of the selection scene.
+    pub triangles: usize,
+    /// Per POI, what makes its result suspect ([`poi_flags`] against the selection scene).
+    pub flags: Vec<Vec<PoiFlag>>,
+}
+
+/// Run rough, scene and selection for `pois` on `model`.
+///
+/// # Errors
+/// As [`crate::lod::select::select`].
+pub fn lod(model: &CityModel, pois: &[Poi], opts: &LodOptions) -> Result<LodResult, SelectError> {
+    lod_with(model, pois, opts, &crate::runtime::progress::Silent)
+}
+
+/// [`lod`] reporting its stages to `progress` ([`Stage::Rough`], [`Stage::Bvh`],
+/// [`Stage::Select`] per POI) and stopping with [`SelectError::Cancelled`] when it asks to.
+///
+/// # Errors
+/// As [`crate::lod::select::select`], and [`SelectError::Cancelled`].
+pub fn lod_with(
+    model: &CityModel,
+    pois: &[Poi],
+    opts: &LodOptions,
+    progress: &dyn Progress,
+) -> Result<LodResult, SelectError> {
+    let n = model.assets.len() as u64;
+    check(progress, Stage::Rough)?;
+    let t = Instant::now();
+    let rough = stage(progress, Stage::Rough, n, 0, || {
+        let r = rough_model(model, &opts.rough);
+        progress.advance(Stage::Rough, n, 0, None);
+        r
+    });
+    crate::runtime::mem::give_back_for(model.assets.len());
+    let rough_s = t.elapsed().as_secs_f64();
+    check(progress, Stage::Bvh)?;
+    let t = Instant::now();
+    let scene = stage(progress, Stage::Bvh, 1, 0, || {
+        selection_scene_for_rays(model, &rough, pois.len().saturating_mul(opts.select.rays))
+    });
+    let bvh_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let selection = stage(progress, Stage::Select, pois.len() as u64, 0, || {
+        select_with(model, &rough, &scene, pois, &opts.select, progress)
+    })?;
+    let select_s = t.elapsed().as_secs_f64();
+    let flags = pois
+        .par_iter()
+        .zip(&selection.pois)
+        .map(|(p, s)| poi_flags(&scene, model, p, Some(s.sky_rays)))
+        .collect();
+    Ok(LodResult {
+        flags,
+        rough,
+        selection,
+        rough_s,
+        bvh_s,
+        select_s,
+        triangles: scene.len(),
+    })
+}

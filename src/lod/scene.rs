@@ -1,0 +1,135 @@
+//! Building ray-tracing scenes from a model: the full-detail model, the rough model, or a
+//! mixed-LoD model given a level per asset. Triangles are tagged with the asset index.
+//!
+//! # Example
+//! ```
+//! use glam::DVec3;
+//! use skylod::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
+//! let mut m = CityModel::default();
+//! let quad = Polygon::new(vec![
+//!     DVec3::new(-1.0, -1.0, 5.0), DVec3::new(1.0, -1.0, 5.0),
+//!     DVec3::new(1.0, 1.0, 5.0), DVec3::new(-1.0, 1.0, 5.0),
+//! ]);
+//! m.assets.push(Asset {
+//!     kind: AssetKind::Roof, id: None, element: "RoofSurface".into(), building: None,
+//!     parent: None, span: 0..0, line: 1, function: None, file: 0,
+//!     geometries: vec![LodGeometry { lod: 2, polygons: vec![quad], ..Default::default() }],
+//! });
+//! let scene = skylod::lod::scene::full_scene(&m);
+//! let hit = scene.first_hit(DVec3::ZERO, DVec3::Z, 0.0, f64::INFINITY).unwrap();
+//! assert_eq!(hit.tag, 0);
+//! assert!((hit.t - 5.0).abs() < 1e-6);
+//! ```
+
+use crate::lod::rough::RoughGeometry;
+use crate::model::triangulate;
+use crate::model::{CityModel, Polygon};
+use crate::trace::{Scene, SceneBuilder};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// A scene of the given polygons, each tagged with its asset index.
+pub fn scene_of<'a>(polys: impl IntoIterator<Item = (u32, &'a Polygon)>) -> Scene {
+    let mut b = SceneBuilder::new();
+    for (tag, p) in polys {
+        b.add_polygon(tag, p);
+    }
+    b.build()
+}
+
+/// Assets triangulated per parallel task, and per group added before the next group is
+/// triangulated (the group's triangles are the only extra memory).
+const CHUNK: usize = 256;
+const GROUP: usize = 1 << 15;
+
+/// Adds the triangles of assets `0..n`, tagged with the asset index, in asset order:
+/// `triangles(i, out)` triangulates asset `i`'s polygons into `out`. Triangulation runs
+/// in parallel; the scene is the same as with one thread (same triangles, same order).
+fn add_assets(
+    b: &mut SceneBuilder,
+    n: usize,
+    triangles: impl Fn(usize, &mut Vec<[DVec3; 3]>) + Sync,
+) {
+    let mut start = 0;
+    while start < n {
+        let end = n.min(start + GROUP);
+        let parts: Vec<Vec<(u32, [DVec3; 3])>> = (start..end)
+            .step_by(CHUNK)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|c| {
+                let (mut out, mut scratch) = (Vec::new(), Vec::new());
+                for i in c..end.min(c + CHUNK) {
+                    scratch.clear();
+                    triangles(i, &mut scratch);
+                    out.extend(scratch.iter().map(|t| (i as u32, *t)));
+                }
+                out
+            })
+            .collect();
+        for (tag, t) in parts.into_iter().flatten() {
+            b.add_triangle(tag, t);
+        }
+        start = end;
+    }
+}
+
+/// Every asset at full detail (its highest LoD).
+pub fn full_scene(model: &CityModel) -> Scene {
+    let mut b = SceneBuilder::new();
+    add_assets(&mut b, model.assets.len(), |i, out| {
+        for p in model.assets[i].detail_polygons() {
+            triangulate(p, out);
+        }
+    });
+    b.build()
+}
+
+/// Every asset as its rough geometry (`rough[i]` belongs to asset `i`).
+pub fn rough_scene(rough: &[RoughGeometry]) -> Scene {
+    let mut b = SceneBuilder::new();
+    add_assets(&mut b, rough.len(), |i, out| {
+        for p in rough[i].polygons().iter() {
+            triangulate(p, out);
+        }
+    });
+    b.build()
+}
+
+/// The scene the selection traces: the rough model without the openings that their
+/// surface's rough plane closes ([`crate::lod::level::selection_traced`]).
+pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> Scene {
+    selection_builder(model, rough).build()
+}
+
+/// [`selection_scene`] built for about `rays` rays ([`SceneBuilder::for_rays`]): the same
+/// answers, a quicker build when few rays are traced.
+pub fn selection_scene_for_rays(model: &CityModel, rough: &[RoughGeometry], rays: usize) -> Scene {
+    selection_builder(model, rough).for_rays(rays).build()
+}
+
+fn selection_builder(model: &CityModel, rough: &[RoughGeometry]) -> SceneBuilder {
+    let traced = crate::lod::level::selection_traced(model);
+    let mut b = SceneBuilder::new();
+    add_assets(&mut b, rough.len().min(traced.len()), |i, out| {
+        if traced[i] {
+            for p in rough[i].polygons().iter() {
+                triangulate(p, out);
+            }
+        }
+    });
+    b
+}
+
+/// The mixed-LoD model as `lod` writes it: each asset's [`crate::lod::level::traced`] polygons
+/// at its level (level 0 absent).
+pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
+    let mut b = SceneBuilder::new();
+    add_assets(&mut b, model.assets.len(), |i, out| {
+        let level = levels.get(i).copied().unwrap_or(0);
+        for p in crate::lod::level::traced(&model.assets[i], rough.get(i), level).iter() {
+            triangulate(p, out);
+        }
+    });
+    b.build()
+}

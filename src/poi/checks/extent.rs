@@ -1,0 +1,152 @@
+//! POIs far outside the scene: almost always coordinates in another CRS (latitude and
+//! longitude against a projected model) or swapped axes. Tracing them gives SVF 1 and an
+//! empty model with exit 0, so they are refused with a hint.
+//!
+//! # Example
+//! ```
+//! use glam::DVec3;
+//! use skylod::poi::checks::check_pois_near;
+//! use skylod::model::Bbox;
+//! use skylod::poi::Poi;
+//! let scene = Bbox::of_points(&[DVec3::new(430000.0, 4581000.0, 0.0), DVec3::new(430500.0, 4581500.0, 30.0)]);
+//! let near = Poi { id: "a".into(), position: DVec3::new(430100.0, 4581100.0, 2.0), normal: None };
+//! assert!(check_pois_near(&scene, &[near], 1000.0).is_ok());
+//! let latlon = Poi { id: "b".into(), position: DVec3::new(41.38, 2.16, 2.0), normal: None };
+//! let e = check_pois_near(&scene, &[latlon], 1000.0).unwrap_err().to_string();
+//! assert!(e.contains("--poi-crs"), "{e}");
+//! ```
+
+use super::TrustError;
+use crate::model::Bbox;
+use crate::poi::Poi;
+use glam::DVec3;
+use std::fmt::Write as _;
+
+/// Default margin (m) around the scene's bounding box within which a POI is accepted: a
+/// kilometre, far more than any street or square around a modelled block, far less than the
+/// error of a wrong CRS or swapped axes (tens of kilometres and more).
+pub const DEFAULT_POI_MARGIN: f64 = 1000.0;
+
+/// Distance from `p` to the box (0 inside).
+fn distance(b: &Bbox, p: DVec3) -> f64 {
+    let d = (b.min - p).max(p - b.max).max(DVec3::ZERO);
+    d.length()
+}
+
+/// Refuse POIs farther than `margin` from the scene's box, naming each (up to five) with its
+/// distance and a hint: swapped axes when swapping x and y brings it inside, `--poi-crs
+/// EPSG:4326` when it looks like degrees. An empty scene accepts everything (nothing to trace).
+/// For a scene and POIs in a metric CRS; see [`check_pois_near_in_frame`] otherwise.
+pub fn check_pois_near(scene: &Bbox, pois: &[Poi], margin: f64) -> Result<(), TrustError> {
+    check_pois_near_in_frame(scene, pois, scene, pois, margin)
+}
+
+/// [`check_pois_near`] for a scene traced in a local metric frame: distances from `local`
+/// POIs to the `scene` box (both in the frame, metres), while the message shows the POIs and
+/// the box as the user gave them (`shown`, `shown_scene`: the model's CRS, e.g. degrees).
+pub fn check_pois_near_in_frame(
+    scene: &Bbox,
+    local: &[Poi],
+    shown_scene: &Bbox,
+    shown: &[Poi],
+    margin: f64,
+) -> Result<(), TrustError> {
+    if scene.is_empty() {
+        return Ok(());
+    }
+    let far: Vec<(&Poi, &Poi, f64)> = local
+        .iter()
+        .zip(shown)
+        .map(|(l, s)| (l, s, distance(scene, l.position)))
+        .filter(|(_, _, d)| *d > margin)
+        .collect();
+    if far.is_empty() {
+        return Ok(());
+    }
+    let b = shown_scene;
+    let mut message = format!(
+        "{} of {} POI(s) lie more than {margin} m outside the scene (x {:.1}..{:.1}, y {:.1}..{:.1}, z {:.1}..{:.1}):",
+        far.len(),
+        local.len(),
+        b.min.x,
+        b.max.x,
+        b.min.y,
+        b.max.y,
+        b.min.z,
+        b.max.z
+    );
+    for (l, p, d) in far.iter().take(5) {
+        let q = p.position;
+        let _ = write!(
+            message,
+            " {} at ({}, {}, {}) is {:.0} m away",
+            p.id, q.x, q.y, q.z, d
+        );
+        let l = l.position;
+        let swapped = DVec3::new(l.y, l.x, l.z);
+        if distance(scene, swapped) <= margin {
+            message.push_str(" (x and y look swapped);");
+        } else if q.x.abs() <= 180.0 && q.y.abs() <= 180.0 {
+            message.push_str(" (looks like degrees);");
+        } else {
+            message.push(';');
+        }
+    }
+    if far.len() > 5 {
+        let _ = write!(message, " and {} more;", far.len() - 5);
+    }
+    message.push_str(
+        " POIs are in the model's CRS and axis order: check the CRS (--poi-crs EPSG:4326 for \
+         latitude/longitude) and the order of x and y",
+    );
+    Err(TrustError::PoiOutside { message })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn poi(x: f64, y: f64, z: f64) -> Poi {
+        Poi {
+            id: format!("p{x}"),
+            position: DVec3::new(x, y, z),
+            normal: None,
+        }
+    }
+
+    fn scene() -> Bbox {
+        Bbox::of_points(&[
+            DVec3::new(678000.0, 5403800.0, 400.0),
+            DVec3::new(678200.0, 5404000.0, 440.0),
+        ])
+    }
+
+    #[test]
+    fn margin_is_inclusive_and_three_dimensional() {
+        assert!(
+            check_pois_near(&scene(), &[poi(678200.0 + 999.0, 5403900.0, 420.0)], 1000.0).is_ok()
+        );
+        assert!(check_pois_near(
+            &scene(),
+            &[poi(678200.0 + 1001.0, 5403900.0, 420.0)],
+            1000.0
+        )
+        .is_err());
+        // 2 km above the city is as wrong as 2 km beside it.
+        assert!(check_pois_near(&scene(), &[poi(678100.0, 5403900.0, 2500.0)], 1000.0).is_err());
+    }
+
+    #[test]
+    fn swapped_axes_are_named() {
+        let e = check_pois_near(&scene(), &[poi(5403900.0, 678100.0, 420.0)], 1000.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("x and y look swapped"), "{e}");
+        assert!(e.contains("1 of 1 POI"), "{e}");
+    }
+
+    #[test]
+    fn empty_scene_accepts() {
+        assert!(check_pois_near(&Bbox::default(), &[poi(0.0, 0.0, 0.0)], 1.0).is_ok());
+    }
+}

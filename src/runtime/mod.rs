@@ -1,0 +1,5 @@
+//! How a run behaves while it works, apart from what it computes: progress and
+//! cancellation ([`progress`]) and giving memory back between stages ([`mem`]).
+
+pub mod mem;
+pub mod progress;
