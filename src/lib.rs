@@ -60,10 +60,18 @@ pub mod trace;
 // The paths of release 0.1, kept for one release (moved in 0.2, see CHANGELOG.md).
 #[doc(hidden)]
 pub use batch::{inputs, scene_radius, shard, shard_levels};
+/// Moved: [`crs::CrsName`], `crs::proj` (feature `proj`), [`citygml::reproject`].
 #[doc(hidden)]
-pub use crs::reproject;
+pub mod reproject {
+    pub use crate::citygml::reproject::ReprojectError;
+    #[cfg(feature = "proj")]
+    pub use crate::citygml::reproject::{reproject_file, ReprojectSummary};
+    #[cfg(feature = "proj")]
+    pub use crate::crs::proj::{crs_info, CrsInfo, Reprojector};
+    pub use crate::crs::CrsName;
+}
 #[doc(hidden)]
-pub use lod::{bound, level, rough, scene, select, sky};
+pub use lod::{bound, level, rough, scene, select};
 #[doc(hidden)]
 pub use output::{report, stats};
 #[doc(hidden)]
@@ -72,6 +80,8 @@ pub use pipeline::evaluation as evaluate;
 pub use poi::{checks, region};
 #[doc(hidden)]
 pub use runtime::{mem, progress};
+#[doc(hidden)]
+pub use solar::sky;
 /// Moved: polygon triangulation is [`mod@model::triangulate`], the exact ray tests [`trace::ray`].
 #[doc(hidden)]
 pub mod geom {

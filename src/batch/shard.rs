@@ -14,7 +14,7 @@
 //!   shard and each shard's scene stays small. Contiguous groups keep the output order:
 //!   the shards' outputs, concatenated in shard order, are the serial run's.
 //!
-//! A POI's rays are seeded from the POI itself ([`crate::poi::Poi::ray_seed`]), so its
+//! A POI's rays are seeded from the POI itself ([`crate::model::Poi::ray_seed`]), so its
 //! result does not depend on which shard traces it.
 //!
 //! # Example

@@ -31,7 +31,7 @@
 //! # Refused
 //!
 //! Inputs of different CityGML versions, and inputs whose `srsName`s denote different CRSs
-//! ([`crate::poi::checks::same_crs::same_crs`]; an input without one agrees with any), are refused
+//! ([`crate::crs::same_crs`]; an input without one agrees with any), are refused
 //! before anything is written, naming the files.
 //!
 //! # Example
@@ -62,7 +62,7 @@
 use super::error::{Location, ReadError, WriteError};
 use super::ns::{classify, Ns};
 use super::source;
-use crate::poi::checks::same_crs::same_crs;
+use crate::crs::same_crs;
 use quick_xml::escape::escape;
 use quick_xml::events::attributes::Attribute;
 use quick_xml::events::{BytesStart, BytesText, Event};

@@ -10,7 +10,3 @@ pub mod write;
 
 pub use error::{Location, ReadError, WriteError};
 pub use read::{read_file, read_file_with, ReadOptions};
-
-/// Moved to [`crate::lod::mixed`] (the mixed-LoD writer is a rule of the LoD stage).
-#[doc(hidden)]
-pub use crate::lod::mixed;

@@ -30,7 +30,7 @@
 use super::frame::LocalFrame;
 use super::parse::{Crs, CrsKind, Ellipsoid};
 use crate::model::Bbox;
-use crate::poi::Poi;
+use crate::model::Poi;
 use glam::DVec3;
 
 /// Errors converting between CRSs.

@@ -7,6 +7,10 @@
 //! * [`geodesy`]: geodetic ⇄ ECEF ⇄ ENU on an ellipsoid (pure Rust, no PROJ).
 //! * [`convert`]: [`PointTransform`], points between CRSs (POIs in `--poi-crs`, the sun's
 //!   site); [`Builtin`] is the default build's, [`build_transform`] the build's best.
+//! * [`name`]: [`CrsName`], a CRS by its EPSG codes (read by [`Crs::parse`]), for PROJ and
+//!   `skylod reproject`.
+//! * `proj` (feature `proj`): what PROJ says of a CRS, and `Reprojector`, PROJ in the axis
+//!   order of CityGML files.
 //! * `proj_transform` (feature `proj`): `ProjTransform`, [`Builtin`] first, then PROJ.
 //! * [`feet`]: the EPSG projected CRSs in US survey feet and international feet.
 //! * [`site`]: site latitude/longitude from a CRS name for the sun.
@@ -29,15 +33,18 @@ pub mod convert;
 pub mod feet;
 pub mod frame;
 pub mod geodesy;
+pub mod name;
 pub mod parse;
 #[cfg(feature = "proj")]
+pub mod proj;
+#[cfg(feature = "proj")]
 pub mod proj_transform;
-pub mod reproject;
 pub mod site;
 
 pub use convert::{build_transform, site_lat_lon, Builtin, CrsError, PointTransform};
 pub use frame::{FrameWarning, LocalFrame};
-pub use parse::{Crs, CrsKind, Ellipsoid};
+pub use name::CrsName;
+pub use parse::{same_crs, srs_key, Crs, CrsKind, Ellipsoid};
 #[cfg(feature = "proj")]
 pub use proj_transform::ProjTransform;
 pub use site::{lat_lon, utm_zone};

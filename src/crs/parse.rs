@@ -291,6 +291,30 @@ impl Crs {
     }
 }
 
+/// The key two names are compared by: the EPSG code of the horizontal CRS when the name
+/// carries one ([`Crs::parse`]: an AdV `ETRS89_UTMzz` name is EPSG:258zz), otherwise the
+/// trimmed name.
+pub fn srs_key(name: &str) -> String {
+    match Crs::parse(name).epsg {
+        Some(code) => format!("EPSG:{code}"),
+        None => name.trim().to_string(),
+    }
+}
+
+/// Whether two `srsName`s denote the same horizontal CRS (a vertical datum stated in one
+/// name and not in the other does not make them differ: merging tiles asks only this;
+/// [`Crs::compatible`] also compares vertical CRSs where both name one).
+///
+/// ```
+/// use skylod::crs::same_crs;
+/// assert!(same_crs("EPSG:25832", "urn:ogc:def:crs:EPSG::25832"));
+/// assert!(same_crs("urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH", "urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"));
+/// assert!(!same_crs("EPSG:25832", "EPSG:25833"));
+/// ```
+pub fn same_crs(a: &str, b: &str) -> bool {
+    srs_key(a) == srs_key(b)
+}
+
 /// Kind of the EPSG code `code`.
 pub fn kind_of(code: u32) -> CrsKind {
     if let Some((_, lat_first, ellipsoid)) = GEOGRAPHIC.iter().find(|g| g.0 == code) {
@@ -349,20 +373,26 @@ fn adv_codes(upper: &str) -> (Option<u32>, Option<u32>) {
 /// The code after each `EPSG` authority in the name: the last number of the run of digits
 /// and separators that follows it (`EPSG::25832`, `EPSG/0/25832`, `EPSG:6.12:31466`).
 pub(crate) fn epsg_codes(upper: &str) -> Vec<u32> {
-    upper
-        .split("EPSG")
-        .skip(1)
-        .filter_map(|rest| {
-            let token: &str = rest
-                .split(|c: char| !(c.is_ascii_digit() || matches!(c, ':' | '/' | '.')))
-                .next()?;
-            token
+    let mut codes = Vec::new();
+    for rest in upper.split("EPSG").skip(1) {
+        // The run of digits and separators after the authority; its last number is the
+        // code (`::25832`, `/0/25832`, `:6.12:31466`); `EPSG:a+b` (a compound CRS as PROJ
+        // and the command line write it) gives two.
+        let run: &str = rest
+            .split(|c: char| !(c.is_ascii_digit() || matches!(c, ':' | '/' | '.' | '+')))
+            .next()
+            .unwrap_or("");
+        for part in run.split('+') {
+            if let Some(code) = part
                 .rsplit(|c: char| !c.is_ascii_digit())
-                .find(|d| !d.is_empty())?
-                .parse()
-                .ok()
-        })
-        .collect()
+                .find(|d| !d.is_empty())
+                .and_then(|d| d.parse::<u32>().ok())
+            {
+                codes.push(code);
+            }
+        }
+    }
+    codes
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //!
 //! It tries [`Builtin`] first (so every conversion the default build does gives the same
 //! result with the feature on) and falls back to PROJ through
-//! [`crate::crs::reproject::Reprojector`], with its axis-order handling: geographic CRSs in their
+//! [`crate::crs::proj::Reprojector`], with its axis-order handling: geographic CRSs in their
 //! EPSG order (EPSG:4326 latitude first), projected CRSs easting first. The CRS is handed to
 //! PROJ by its EPSG codes ([`CrsName::from_crs`]); a CRS without one that [`Builtin`] knows
 //! (OGC:CRS84) goes through EPSG:4326. Heights pass through unchanged, as with [`Builtin`].
@@ -23,8 +23,9 @@
 //! ```
 
 use super::convert::{Builtin, CrsError, PointTransform};
+use super::name::CrsName;
 use super::parse::Crs;
-use crate::crs::reproject::{CrsName, Reprojector};
+use super::proj::Reprojector;
 use glam::DVec3;
 use std::cell::RefCell;
 use std::collections::hash_map::Entry;

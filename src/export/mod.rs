@@ -146,7 +146,7 @@ pub fn write(
             }
             Format::CityGml => {
                 return Err(WriteError::Invalid(
-                    "CityGML is written by citygml::write / citygml::mixed".into(),
+                    "CityGML is written by citygml::write / lod::mixed".into(),
                 ))
             }
         }

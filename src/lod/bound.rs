@@ -46,9 +46,9 @@
 
 use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{full_scene, mixed_scene};
-use crate::lod::sky::{Frame, SkyError};
 use crate::model::CityModel;
 use crate::poi::{Poi, POI_OFFSET};
+use crate::solar::sky::{Frame, SkyError};
 use crate::solar::{SkyBundles, SunTable};
 use crate::trace::Scene;
 use foldhash::{HashMap, HashMapExt};

@@ -24,14 +24,17 @@ pub mod mixed;
 pub mod rough;
 pub mod scene;
 pub mod select;
-pub mod sky;
+
+/// Moved to [`crate::solar::sky`]: the sky partition serves SVF as much as the selection.
+#[doc(hidden)]
+pub use crate::solar::sky;
 
 use crate::lod::rough::{rough_model, RoughGeometry, RoughOptions};
 use crate::lod::scene::selection_scene_for_rays;
 use crate::lod::select::{select_with, SelectError, SelectOptions, Selection};
 use crate::model::CityModel;
+use crate::model::Poi;
 use crate::poi::checks::{poi_flags, PoiFlag};
-use crate::poi::Poi;
 use crate::runtime::progress::{check, stage, Progress, Stage};
 use rayon::prelude::*;
 use std::time::Instant;

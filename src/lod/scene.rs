@@ -23,19 +23,12 @@
 
 use crate::lod::rough::RoughGeometry;
 use crate::model::triangulate;
-use crate::model::{CityModel, Polygon};
+use crate::model::CityModel;
 use crate::trace::{Scene, SceneBuilder};
 use glam::DVec3;
 use rayon::prelude::*;
 
-/// A scene of the given polygons, each tagged with its asset index.
-pub fn scene_of<'a>(polys: impl IntoIterator<Item = (u32, &'a Polygon)>) -> Scene {
-    let mut b = SceneBuilder::new();
-    for (tag, p) in polys {
-        b.add_polygon(tag, p);
-    }
-    b.build()
-}
+pub use crate::trace::scene_of;
 
 /// Assets triangulated per parallel task, and per group added before the next group is
 /// triangulated (the group's triangles are the only extra memory).

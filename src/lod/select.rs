@@ -53,9 +53,9 @@
 //! ```
 
 use crate::lod::rough::RoughGeometry;
-use crate::lod::sky::{SkyError, SkyPartition, SkyVariant};
 use crate::model::{AssetKind, CityModel};
 use crate::poi::{Poi, POI_OFFSET};
+use crate::solar::sky::{SkyError, SkyPartition, SkyVariant};
 use crate::trace::Scene;
 use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;

@@ -4,8 +4,10 @@
 //! (rough, trace, select, solar, write) works on it. Coordinates are `f64`
 //! ([`glam::DVec3`]) in the model's CRS.
 
+pub mod poi;
 pub mod triangulate;
 
+pub use poi::{Poi, POI_OFFSET};
 pub use triangulate::triangulate;
 
 use compact_str::CompactString;

@@ -18,8 +18,8 @@
 
 use crate::lod::rough::{RoughGeometry, RoughOptions};
 use crate::lod::select::{PoiSelection, Selection};
+use crate::model::Poi;
 use crate::model::{Asset, CityModel};
-use crate::poi::Poi;
 use serde::{Deserialize, Serialize};
 
 /// Format version of the report (bumped on incompatible changes).

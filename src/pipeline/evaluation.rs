@@ -28,12 +28,12 @@
 use crate::lod::rough::{all_boxes, rough_model};
 use crate::lod::scene::{full_scene, mixed_scene, rough_scene, selection_scene};
 use crate::lod::select::{select, SelectError};
-use crate::lod::sky::SkyError;
 use crate::lod::LodOptions;
 use crate::model::CityModel;
+use crate::model::Poi;
 use crate::poi::checks::{poi_flags, PoiFlag};
-use crate::poi::Poi;
 use crate::runtime::progress::{check, stage, Cancelled, Progress, Silent, Stage};
+use crate::solar::sky::SkyError;
 use crate::solar::{poi_sky_view, poi_sun_hours, SkyBundles, SunTable};
 use crate::trace::Scene;
 use serde::Serialize;

@@ -415,7 +415,8 @@ pub fn levels_of(
         lod.selection.levels = b.levels;
     }
     let bound_s = t.elapsed().as_secs_f64();
-    let rough_source = match framed.frame.rough_to_source(
+    let rough_source = match crate::lod::rough::rough_to_source(
+        &framed.frame,
         model,
         framed.source,
         &lod.rough,

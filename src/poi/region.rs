@@ -39,10 +39,10 @@
 //! assert_eq!(street.len(), 20);
 //! ```
 
-use crate::lod::scene::scene_of;
+use crate::model::Poi;
 use crate::model::{AssetKind, Bbox, CityModel, Polygon};
 use crate::poi::checks::{poi_flags, PoiFlag};
-use crate::poi::Poi;
+use crate::trace::scene_of;
 use glam::{DVec2, DVec3};
 use std::collections::HashSet;
 

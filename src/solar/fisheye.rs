@@ -19,7 +19,7 @@
 //! # Example
 //! ```rust
 //! use skylod::model::AssetKind;
-//! use skylod::lod::sky::{SkyPartition, SkyVariant};
+//! use skylod::solar::sky::{SkyPartition, SkyVariant};
 //! use skylod::solar::fisheye::{fisheye_svg, CellClass, FisheyeOptions};
 //! let sky = SkyPartition::new(145, SkyVariant::EqualSolidAngle)?;
 //! // The outer ring (30 cells) is blocked by asset 0, a wall.
@@ -30,13 +30,13 @@
 //! let doc = fisheye_svg(&sky, &cells, &[AssetKind::Wall], None, &FisheyeOptions::default());
 //! let text = doc.to_string();
 //! assert!(text.starts_with("<svg") && text.contains("wall"));
-//! # Ok::<(), skylod::lod::sky::SkyError>(())
+//! # Ok::<(), skylod::solar::sky::SkyError>(())
 //! ```
 
 use super::sun::{sun_position, Site};
 use super::SolarError;
-use crate::lod::sky::{SkyPartition, SkyVariant};
 use crate::model::AssetKind;
+use crate::solar::sky::{SkyPartition, SkyVariant};
 use crate::trace::Scene;
 use chrono::{Duration, NaiveDate, TimeZone, Utc};
 use glam::DVec3;

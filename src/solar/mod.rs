@@ -1,12 +1,13 @@
-//! Solar analysis beside the LoD pipeline (paper 3, 5): sun positions ([`sun`]), sky view
-//! factor and sky exposure ([`mod@svf`]), sun hours ([`mod@sun_hours`]) and horizon profiles
-//! ([`horizon`]).
+//! Solar analysis beside the LoD pipeline (paper 3, 5): the sky partition into ray bundles
+//! ([`sky`], shared with the selection), sun positions ([`sun`]), sky view factor and sky
+//! exposure ([`mod@svf`]), sun hours ([`mod@sun_hours`]) and horizon profiles ([`horizon`]).
 //!
 //! All three take the scene only through an occlusion predicate (`true` = blocked), so
 //! they work with any ray caster; parallelism over points of interest is the caller's.
 
 pub mod fisheye;
 pub mod horizon;
+pub mod sky;
 pub mod sun;
 pub mod sun_hours;
 pub mod svf;
@@ -16,8 +17,8 @@ pub use sun::{sun_position, Site, SiteTimeZone, SunPosition, SunStep, SunTable};
 pub use sun_hours::{sun_hours, visible_steps, SunHours};
 pub use svf::{sky_view, SkyBundles, SkyView};
 
-use crate::poi::Poi;
-use crate::poi::POI_OFFSET;
+use crate::model::Poi;
+use crate::model::POI_OFFSET;
 use crate::trace::Scene;
 
 /// [`sky_view()`] of a POI against a scene: rays start at [`Poi::ray_origin`] (moved

@@ -25,11 +25,11 @@
 //! let v = sky_view(DVec3::ZERO, None, &bundles, wall);
 //! let beta = std::f64::consts::FRAC_PI_4;
 //! assert!((v.svf - (1.0 + beta.cos()) / 2.0).abs() < 0.01);
-//! # Ok::<(), skylod::lod::sky::SkyError>(())
+//! # Ok::<(), skylod::solar::sky::SkyError>(())
 //! ```
 
-use crate::lod::sky::{Frame, SkyError, SkyPartition, SkyVariant};
-use crate::poi::Poi;
+use crate::model::Poi;
+use crate::solar::sky::{Frame, SkyError, SkyPartition, SkyVariant};
 use glam::DVec3;
 use rayon::prelude::*;
 

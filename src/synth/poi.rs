@@ -40,10 +40,10 @@ pub struct Poi {
     pub normal: DVec3,
 }
 
-impl From<Poi> for crate::poi::Poi {
+impl From<Poi> for crate::model::Poi {
     /// The generic POI of the analysis stages (with its normal).
     fn from(p: Poi) -> Self {
-        crate::poi::Poi {
+        crate::model::Poi {
             id: p.id,
             position: p.position,
             normal: Some(p.normal),

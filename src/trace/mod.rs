@@ -43,7 +43,10 @@
 //! All queries take `&self`; a [`Scene`] is `Send + Sync`, so callers parallelise over
 //! rays with rayon. Results do not depend on the thread count.
 
+mod polygons;
 pub mod ray;
+
+pub use polygons::scene_of;
 
 use crate::model::triangulate;
 use crate::model::{Bbox, Polygon};

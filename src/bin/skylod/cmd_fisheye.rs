@@ -4,12 +4,12 @@ use crate::common::{PoiArgs, RoughArgs, SilhouetteArgs, SiteArgs, DEFAULT_YEAR};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
-use skylod::lod::sky::{SkyPartition, SkyVariant};
 use skylod::lod::LodOptions;
 use skylod::model::AssetKind;
 use skylod::pipeline::{sky_pictures, SkyPictureOptions};
 use skylod::poi::Poi;
 use skylod::solar::fisheye::{cell_shares, fisheye_svg, sun_paths, FisheyeOptions, Projection};
+use skylod::solar::sky::{SkyPartition, SkyVariant};
 use skylod::solar::{Site, SkyBundles};
 use std::path::{Path, PathBuf};
 

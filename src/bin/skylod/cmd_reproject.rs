@@ -43,8 +43,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     use crate::outputs::Targets;
+    use skylod::citygml::reproject::{reproject_file, ReprojectError};
     use skylod::citygml::write::WriteOptions;
-    use skylod::crs::reproject::{reproject_file, CrsName, ReprojectError};
+    use skylod::crs::CrsName;
 
     let parse = |flag: &str, text: &str| {
         CrsName::parse(text)
@@ -54,9 +55,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let target = parse("-t", &args.target)?;
     let source = args.source.as_deref().map(|s| parse("-s", s)).transpose()?;
     // Both CRSs known to PROJ before any file is touched (usage error otherwise).
-    skylod::crs::reproject::crs_info(target.horizontal).context("-t")?;
+    skylod::crs::proj::crs_info(target.horizontal).context("-t")?;
     if let Some(s) = source {
-        skylod::crs::reproject::crs_info(s.horizontal).context("-s")?;
+        skylod::crs::proj::crs_info(s.horizontal).context("-s")?;
     }
     let shard = args.shard.resolve()?;
     let (plan, _) =

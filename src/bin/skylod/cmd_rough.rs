@@ -138,7 +138,7 @@ fn one(
     }
     let local = frame.model_to_local(&model);
     let rough_local = rough_model(&local, opts);
-    let rough = frame.rough_to_source(&local, &model, &rough_local, None);
+    let rough = skylod::lod::rough::rough_to_source(&frame, &local, &model, &rough_local, None);
     let levels = vec![1u8; model.assets.len()];
     if format != Format::CityGml {
         let content = Content::Levels {

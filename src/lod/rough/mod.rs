@@ -10,6 +10,9 @@
 
 pub mod obb;
 pub mod plane;
+mod to_source;
+
+pub use to_source::rough_to_source;
 
 use crate::model::{Asset, CityModel, Polygon};
 use obb::Obb;

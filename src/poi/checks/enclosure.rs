@@ -26,8 +26,8 @@
 //! ```
 
 use crate::model::CityModel;
-use crate::poi::Poi;
-use crate::poi::POI_OFFSET;
+use crate::model::Poi;
+use crate::model::POI_OFFSET;
 use crate::trace::Scene;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};

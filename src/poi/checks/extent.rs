@@ -18,7 +18,7 @@
 
 use super::TrustError;
 use crate::model::Bbox;
-use crate::poi::Poi;
+use crate::model::Poi;
 use glam::DVec3;
 use std::fmt::Write as _;
 

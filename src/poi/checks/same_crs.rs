@@ -10,30 +10,16 @@
 //!
 //! # Example
 //! ```
-//! use skylod::poi::checks::same_crs::same_crs;
+//! use skylod::crs::same_crs;
 //! assert!(same_crs("EPSG:25832", "urn:ogc:def:crs:EPSG::25832"));
 //! assert!(same_crs("urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH", "urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"));
 //! assert!(!same_crs("EPSG:25832", "EPSG:25833"));
 //! ```
 
 use super::TrustError;
-use crate::crs::Crs;
+pub use crate::crs::same_crs;
+use crate::crs::srs_key as key;
 use crate::model::CityModel;
-
-/// The key two names are compared by: the EPSG code of the horizontal CRS when the name
-/// carries one ([`Crs::parse`]: an AdV `ETRS89_UTMzz` name is EPSG:258zz), otherwise the
-/// trimmed name.
-fn key(name: &str) -> String {
-    match Crs::parse(name).epsg {
-        Some(code) => format!("EPSG:{code}"),
-        None => name.trim().to_string(),
-    }
-}
-
-/// Whether two `srsName`s denote the same CRS.
-pub fn same_crs(a: &str, b: &str) -> bool {
-    key(a) == key(b)
-}
 
 /// Refuse a model merged from files in different CRSs, naming one file per CRS.
 pub fn check_same_crs(model: &CityModel) -> Result<(), TrustError> {

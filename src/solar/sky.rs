@@ -25,14 +25,14 @@
 //!
 //! # Example
 //! ```rust
-//! use skylod::lod::sky::{SkyPartition, SkyVariant};
+//! use skylod::solar::sky::{SkyPartition, SkyVariant};
 //! let sky = SkyPartition::new(145, SkyVariant::EqualSolidAngle)?;
 //! let cells: Vec<usize> = sky.rings().iter().map(|r| r.cells).collect();
 //! assert_eq!(cells, vec![1, 7, 12, 18, 22, 26, 29, 30]);
 //! let dirs = sky.sample(42);
 //! assert_eq!(dirs.len(), 145);
 //! assert!(dirs.iter().enumerate().all(|(i, d)| sky.cell_of(*d) == Some(i)));
-//! # Ok::<(), skylod::lod::sky::SkyError>(())
+//! # Ok::<(), skylod::solar::sky::SkyError>(())
 //! ```
 
 use glam::DVec3;
@@ -351,7 +351,7 @@ impl SkyPartition {
 /// # Example
 /// ```rust
 /// use glam::DVec3;
-/// use skylod::lod::sky::Frame;
+/// use skylod::solar::sky::Frame;
 /// let f = Frame::from_normal(DVec3::new(0.0, -1.0, 0.0)); // a south-facing wall
 /// assert!((f.to_world(DVec3::Z) - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-12);
 /// assert!((f.to_world(DVec3::Y) - DVec3::Z).length() < 1e-12);
