@@ -9,8 +9,8 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
 use skylod::citygml::read::read_bytes;
 use skylod::lod::scene::full_scene;
-use skylod::lod::sky::{SkyPartition, SkyVariant};
 use skylod::poi::Poi;
+use skylod::solar::sky::{SkyPartition, SkyVariant};
 use skylod::solar::{poi_sky_view, poi_sun_hours, sky_view, sun_hours, Site, SkyBundles, SunTable};
 use skylod::synth::{generate, Preset};
 use skylod::trace::SceneBuilder;
@@ -118,7 +118,7 @@ fn district(c: &mut Criterion) {
         b.iter(|| {
             let p = black_box(poi());
             let o = p.ray_origin();
-            let f = skylod::lod::sky::Frame::from_normal(p.normal.unwrap_or(DVec3::Z));
+            let f = skylod::solar::sky::Frame::from_normal(p.normal.unwrap_or(DVec3::Z));
             bundles
                 .projected_dirs()
                 .iter()
