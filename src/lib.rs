@@ -47,6 +47,7 @@ pub mod batch;
 pub mod citygml;
 pub mod crs;
 pub mod export;
+pub mod io;
 pub mod lod;
 pub mod model;
 pub mod output;

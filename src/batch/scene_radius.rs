@@ -97,7 +97,7 @@ fn open(path: &Path) -> Result<Box<dyn BufRead>, ExtentError> {
         source,
     };
     let mut f = BufReader::with_capacity(256 * 1024, std::fs::File::open(path).map_err(io)?);
-    let gz = f.fill_buf().map_err(io)?.starts_with(&[0x1f, 0x8b]);
+    let gz = crate::io::is_gzip(f.fill_buf().map_err(io)?);
     Ok(if gz {
         Box::new(BufReader::with_capacity(
             256 * 1024,

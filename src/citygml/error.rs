@@ -172,3 +172,21 @@ pub enum WriteError {
     #[error("invalid writer input: {0}")]
     Invalid(String),
 }
+
+impl From<crate::io::FileError> for WriteError {
+    fn from(e: crate::io::FileError) -> Self {
+        WriteError::Io {
+            file: e.file,
+            source: e.source,
+        }
+    }
+}
+
+impl From<crate::io::TargetError> for WriteError {
+    fn from(e: crate::io::TargetError) -> Self {
+        match e {
+            crate::io::TargetError::Exists(p) => WriteError::Exists(p),
+            crate::io::TargetError::IsInput(p) => WriteError::IsInput(p),
+        }
+    }
+}

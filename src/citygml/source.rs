@@ -33,7 +33,7 @@ pub(crate) fn open_stream(path: &Path) -> Result<Stream, ReadError> {
     let file = File::open(path).map_err(io)?;
     let mut reader = BufReader::with_capacity(BUF, file);
     let head = reader.fill_buf().map_err(io)?;
-    if head.starts_with(&[0x1f, 0x8b]) {
+    if crate::io::is_gzip(head) {
         let dec = flate2::bufread::MultiGzDecoder::new(reader);
         Ok(Stream::Gzip(Box::new(BufReader::with_capacity(BUF, dec))))
     } else {
@@ -94,7 +94,7 @@ pub fn load(path: &Path) -> Result<Document, ReadError> {
     } else {
         Bytes::Read(read_all(&mut file).map_err(io)?)
     };
-    if bytes.starts_with(&[0x1f, 0x8b]) {
+    if crate::io::is_gzip(&bytes) {
         let len = bytes.len() as u64;
         let dec = flate2::bufread::MultiGzDecoder::new(std::io::Cursor::new(bytes));
         Ok(Document::Gzip(

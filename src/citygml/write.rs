@@ -31,7 +31,7 @@ use super::error::WriteError;
 use super::source;
 use crate::model::{CityModel, EnvelopeSite, Polygon, Span};
 use std::fmt::Write as _;
-use std::io::{BufWriter, Read, Write};
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 /// Replace the bytes of `span` in the source with `replacement` (empty: delete).
@@ -173,112 +173,27 @@ fn normalise(mut edits: Vec<Edit>) -> Vec<Edit> {
     out
 }
 
-/// `-` as an output path: standard output (never a file named `-`).
-///
-/// ```
-/// use std::path::Path;
-/// assert!(skylod::citygml::write::is_stdout(Path::new("-")));
-/// assert!(!skylod::citygml::write::is_stdout(Path::new("./-")));
-/// ```
-pub fn is_stdout(out: &Path) -> bool {
-    out.as_os_str() == "-"
-}
+pub use crate::io::is_stdout;
 
-/// Refuse to write over an input, or over an existing file without `overwrite`. Standard
-/// output (`-`) is always a valid target.
+/// Refuse to write over an input (or over `opts.protect`), or over an existing file without
+/// `overwrite` ([`crate::io::check_target`]). Standard output (`-`) is always a valid target.
 pub fn check_target<'a>(
     out: &Path,
     opts: &WriteOptions,
     inputs: impl IntoIterator<Item = &'a Path>,
 ) -> Result<(), WriteError> {
-    if is_stdout(out) {
-        return Ok(());
-    }
-    let canon_out = canonical_target(out);
     let mut protected: Vec<&Path> = inputs.into_iter().collect();
     protected.extend(opts.protect.iter().map(PathBuf::as_path));
-    for p in protected {
-        if let Ok(c) = p.canonicalize() {
-            if Some(&c) == canon_out.as_ref() {
-                return Err(WriteError::IsInput(out.to_path_buf()));
-            }
-        }
-    }
-    if out.exists() && !opts.overwrite {
-        return Err(WriteError::Exists(out.to_path_buf()));
-    }
-    Ok(())
+    Ok(crate::io::check_target(out, protected, opts.overwrite)?)
 }
 
-fn canonical_target(out: &Path) -> Option<PathBuf> {
-    if let Ok(c) = out.canonicalize() {
-        return Some(c);
-    }
-    let parent = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = out.file_name()?;
-    parent.canonicalize().ok().map(|p| p.join(name))
-}
-
-/// Write through `f` into a temporary file beside `out`, gzip when `out` ends in `.gz`,
-/// then rename it into place. On any error the temporary file is removed. The file is created
-/// with mode 0666 minus the process umask, as `open(2)` would create it.
-///
-/// `out` = `-` ([`is_stdout`]) streams to standard output instead (uncompressed; a closed
-/// pipe is an [`WriteError::Io`] of kind [`std::io::ErrorKind::BrokenPipe`]).
+/// [`crate::io::atomic_write`] with the writer's error: a temporary file beside `out`
+/// (gzip when `out` ends in `.gz`) renamed into place, or standard output for `-`.
 pub fn atomic_write<F>(out: &Path, f: F) -> Result<u64, WriteError>
 where
     F: FnOnce(&mut dyn Write) -> Result<u64, WriteError>,
 {
-    let io = |source| WriteError::Io {
-        file: out.to_path_buf(),
-        source,
-    };
-    if is_stdout(out) {
-        let stdout = std::io::stdout();
-        let mut bw = BufWriter::with_capacity(256 * 1024, stdout.lock());
-        let n = f(&mut bw)?;
-        bw.flush().map_err(io)?;
-        return Ok(n);
-    }
-    let dir = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".skylod-").suffix(".tmp");
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        // Subject to the umask, like any file the user's tools create (tempfile's 0600 is
-        // right for secrets, wrong for a city model others in the group must read).
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let tmp = builder.tempfile_in(dir).map_err(io)?;
-    let gz = out
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
-    let file = tmp.as_file().try_clone().map_err(io)?;
-    let n = if gz {
-        let mut enc = flate2::write::GzEncoder::new(
-            BufWriter::with_capacity(256 * 1024, file),
-            flate2::Compression::default(),
-        );
-        let n = f(&mut enc)?;
-        let mut bw = enc.finish().map_err(io)?;
-        bw.flush().map_err(io)?;
-        n
-    } else {
-        let mut bw = BufWriter::with_capacity(256 * 1024, file);
-        let n = f(&mut bw)?;
-        bw.flush().map_err(io)?;
-        n
-    };
-    tmp.as_file().sync_all().map_err(io)?;
-    tmp.persist(out).map_err(|e| io(e.error))?;
-    Ok(n)
+    crate::io::atomic_write(out, f)
 }
 
 /// [`atomic_write`] of bytes already made (a report, a picture, a table): their length.

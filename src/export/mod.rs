@@ -37,7 +37,6 @@ use crate::citygml::write::WriteOptions;
 use crate::citygml::WriteError;
 use crate::lod::rough::RoughGeometry;
 use crate::model::{Asset, CityModel};
-use std::io::Write;
 use std::path::Path;
 
 /// What the export holds per asset.
@@ -135,7 +134,7 @@ pub fn write(
         source: e,
     };
     let bytes = crate::citygml::write::atomic_write(out, |w| {
-        let mut cw = Counting { inner: w, n: 0 };
+        let mut cw = crate::io::CountingWriter::new(w);
         match format {
             Format::Obj => summary = obj::write_obj(model, file, content, &mut cw).map_err(io)?,
             Format::CityJson => {
@@ -150,27 +149,10 @@ pub fn write(
                 ))
             }
         }
-        Ok(cw.n)
+        Ok(cw.count())
     })?;
     summary.bytes = bytes;
     Ok(summary)
-}
-
-/// A writer that counts the bytes through it.
-struct Counting<'a> {
-    inner: &'a mut dyn Write,
-    n: u64,
-}
-
-impl Write for Counting<'_> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let k = self.inner.write(buf)?;
-        self.n += k as u64;
-        Ok(k)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
 }
 
 /// Name of asset `i` in an export: its `gml:id`, else its building's id and its index among

@@ -1,0 +1,253 @@
+//! Files in and out, the same for every reader and writer: gzip recognised by its magic
+//! bytes, `-` as standard output, outputs checked before any work (never over an input, never
+//! over an existing file unless allowed) and written atomically (a temporary file beside the
+//! target, renamed into place, with the user's umask), and a writer that counts its bytes.
+//!
+//! The errors here are the file's and the cause alone ([`FileError`], [`TargetError`]); each
+//! stage wraps them in its own error type (`citygml::WriteError`, ...).
+//!
+//! # Example
+//! ```
+//! use std::io::Write;
+//! let dir = tempfile::tempdir()?;
+//! let out = dir.path().join("table.csv");
+//! skylod::io::check_target(&out, [], false)?;
+//! let n = skylod::io::atomic_write(&out, |w| -> Result<u64, skylod::io::FileError> {
+//!     let mut c = skylod::io::CountingWriter::new(w);
+//!     c.write_all(b"id,svf\np1,0.5\n").map_err(|e| skylod::io::FileError::new("table.csv", e))?;
+//!     Ok(c.count())
+//! })?;
+//! assert_eq!(n, 14);
+//! assert!(skylod::io::check_target(&out, [], false).is_err()); // exists now
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The first two bytes of a gzip member (RFC 1952).
+pub const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
+
+/// Whether bytes that start a file are gzip's (whatever the file's name says).
+///
+/// ```
+/// assert!(skylod::io::is_gzip(&[0x1f, 0x8b, 8, 0]));
+/// assert!(!skylod::io::is_gzip(b"<?xml"));
+/// ```
+pub fn is_gzip(head: &[u8]) -> bool {
+    head.starts_with(&GZIP_MAGIC)
+}
+
+/// `-` as an output path: standard output (never a file named `-`).
+///
+/// ```
+/// use std::path::Path;
+/// assert!(skylod::io::is_stdout(Path::new("-")));
+/// assert!(!skylod::io::is_stdout(Path::new("./-")));
+/// ```
+pub fn is_stdout(out: &Path) -> bool {
+    out.as_os_str() == "-"
+}
+
+/// I/O on a file failed.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {source}", file = .file.display())]
+pub struct FileError {
+    /// The file concerned.
+    pub file: PathBuf,
+    /// The cause.
+    pub source: std::io::Error,
+}
+
+impl FileError {
+    /// I/O on `file` failed with `source`.
+    pub fn new(file: impl Into<PathBuf>, source: std::io::Error) -> FileError {
+        FileError {
+            file: file.into(),
+            source,
+        }
+    }
+}
+
+/// An output that must not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum TargetError {
+    /// The output exists and overwriting was not allowed.
+    #[error("{}: output exists", .0.display())]
+    Exists(PathBuf),
+    /// The output would replace an input.
+    #[error("{}: output path is one of the inputs", .0.display())]
+    IsInput(PathBuf),
+}
+
+/// Refuse to write over one of `protected` (the inputs), or over an existing file unless
+/// `overwrite`. Standard output (`-`) is always a valid target.
+pub fn check_target<'a>(
+    out: &Path,
+    protected: impl IntoIterator<Item = &'a Path>,
+    overwrite: bool,
+) -> Result<(), TargetError> {
+    if is_stdout(out) {
+        return Ok(());
+    }
+    let canon_out = canonical_target(out);
+    for p in protected {
+        if let Ok(c) = p.canonicalize() {
+            if Some(&c) == canon_out.as_ref() {
+                return Err(TargetError::IsInput(out.to_path_buf()));
+            }
+        }
+    }
+    if out.exists() && !overwrite {
+        return Err(TargetError::Exists(out.to_path_buf()));
+    }
+    Ok(())
+}
+
+/// The path `out` will have once written: canonical, through its parent when it does not
+/// exist yet.
+fn canonical_target(out: &Path) -> Option<PathBuf> {
+    if let Ok(c) = out.canonicalize() {
+        return Some(c);
+    }
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = out.file_name()?;
+    parent.canonicalize().ok().map(|p| p.join(name))
+}
+
+/// Write through `f` into a temporary file beside `out`, gzip when `out` ends in `.gz`,
+/// then rename it into place. On any error the temporary file is removed. The file is created
+/// with mode 0666 minus the process umask, as `open(2)` would create it.
+///
+/// `out` = `-` ([`is_stdout`]) streams to standard output instead (uncompressed; a closed
+/// pipe is an error of kind [`std::io::ErrorKind::BrokenPipe`]).
+pub fn atomic_write<E, F>(out: &Path, f: F) -> Result<u64, E>
+where
+    F: FnOnce(&mut dyn Write) -> Result<u64, E>,
+    E: From<FileError>,
+{
+    let io = |source| E::from(FileError::new(out, source));
+    if is_stdout(out) {
+        let stdout = std::io::stdout();
+        let mut bw = BufWriter::with_capacity(256 * 1024, stdout.lock());
+        let n = f(&mut bw)?;
+        bw.flush().map_err(io)?;
+        return Ok(n);
+    }
+    let dir = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".skylod-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        // Subject to the umask, like any file the user's tools create (tempfile's 0600 is
+        // right for secrets, wrong for a city model others in the group must read).
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder.tempfile_in(dir).map_err(io)?;
+    let gz = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+    let file = tmp.as_file().try_clone().map_err(io)?;
+    let n = if gz {
+        let mut enc = flate2::write::GzEncoder::new(
+            BufWriter::with_capacity(256 * 1024, file),
+            flate2::Compression::default(),
+        );
+        let n = f(&mut enc)?;
+        let mut bw = enc.finish().map_err(io)?;
+        bw.flush().map_err(io)?;
+        n
+    } else {
+        let mut bw = BufWriter::with_capacity(256 * 1024, file);
+        let n = f(&mut bw)?;
+        bw.flush().map_err(io)?;
+        n
+    };
+    tmp.as_file().sync_all().map_err(io)?;
+    tmp.persist(out).map_err(|e| io(e.error))?;
+    Ok(n)
+}
+
+/// A writer that counts the bytes written through it.
+#[derive(Debug)]
+pub struct CountingWriter<W> {
+    inner: W,
+    n: u64,
+}
+
+impl<W: Write> CountingWriter<W> {
+    /// Count what goes into `inner`.
+    pub fn new(inner: W) -> CountingWriter<W> {
+        CountingWriter { inner, n: 0 }
+    }
+
+    /// Bytes written so far.
+    pub fn count(&self) -> u64 {
+        self.n
+    }
+
+    /// The writer inside.
+    pub fn into_inner(self) -> W {
+        self.inner
+    }
+}
+
+impl<W: Write> Write for CountingWriter<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let k = self.inner.write(buf)?;
+        self.n += k as u64;
+        Ok(k)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_input_is_never_a_target_and_stdout_always_is() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.gml");
+        std::fs::write(&input, b"x").unwrap();
+        let same = dir.path().join(".").join("in.gml");
+        assert!(matches!(
+            check_target(&same, [input.as_path()], true),
+            Err(TargetError::IsInput(_))
+        ));
+        assert!(check_target(Path::new("-"), [input.as_path()], false).is_ok());
+        let new = dir.path().join("new.gml");
+        assert!(check_target(&new, [input.as_path()], false).is_ok());
+    }
+
+    #[test]
+    fn a_failed_write_leaves_nothing_behind() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.gml.gz");
+        let r = atomic_write(&out, |w| {
+            w.write_all(b"partial")
+                .map_err(|e| FileError::new("out", e))?;
+            Err(FileError::new("out", std::io::Error::other("stop")))
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        let n = atomic_write(&out, |w| -> Result<u64, FileError> {
+            w.write_all(b"<CityModel/>")
+                .map_err(|e| FileError::new("out", e))?;
+            Ok(12)
+        })
+        .unwrap();
+        assert_eq!(n, 12);
+        let bytes = std::fs::read(&out).unwrap();
+        assert!(is_gzip(&bytes), "a .gz output is compressed");
+    }
+}
