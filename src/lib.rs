@@ -1,11 +1,14 @@
 //! skylod: skyline-controlled mixed level-of-detail CityGML for solar analysis.
 //!
 //! The library follows the pipeline of `DESIGN.md`:
-//! read (CityGML -> [`model::CityModel`]) -> rough -> sky -> trace -> select -> write.
+//! read (CityGML → [`CityModel`]) → rough → sky → trace → select → write.
 //! [`pipeline`] runs it for a program in four calls — inputs → scene → levels → outputs —
-//! with progress and cancellation through a [`runtime::progress::Progress`]; the `skylod` binary
-//! is a thin front end over the same calls. The library never prints and never panics on
-//! input.
+//! with progress and cancellation through a [`Progress`]; the `skylod` binary is a thin front
+//! end over the same calls. The library never prints and never panics on input.
+//!
+//! The crate root re-exports what a program needs for that path (the calls, their options and
+//! results, the model, POIs, formats, errors, progress); the modules below hold the rest, one
+//! stage per folder, each importing only stages below it (`ARCHITECTURE.md`).
 //!
 //! Cargo features: `cli` (default) builds the `skylod` program and its dependencies (clap,
 //! anyhow, indicatif, clap_complete, clap_mangen); `skylod = { default-features = false }`
@@ -13,10 +16,8 @@
 //!
 //! # Example: read → POIs → levels → write
 //! ```
-//! use skylod::export::Format;
-//! use skylod::pipeline::{frame, levels, read_inputs, write_levels, FrameOptions, LevelsOptions};
-//! use skylod::poi::read_pois_csv;
-//! use skylod::runtime::progress::Silent;
+//! use skylod::{frame, levels, read_inputs, read_pois_csv, write_levels};
+//! use skylod::{Format, FrameOptions, LevelsOptions, Silent};
 //! use std::path::Path;
 //!
 //! let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
@@ -43,20 +44,45 @@
 //! ```
 #![warn(missing_docs)]
 
+// Batch work: input files, shards, levels files and their reduce, scene radius.
 pub mod batch;
+// CityGML 1.0/2.0/3.0: the streaming reader, the span-preserving writer, merge, reprojection.
 pub mod citygml;
+// Coordinate reference systems: the `srsName` parser, local frames, conversions, PROJ.
 pub mod crs;
+// OBJ and CityJSON outputs of a model at its levels.
 pub mod export;
+// Files in and out: gzip, standard output, target checks, atomic writes.
 pub mod io;
+// The LoD stage: rough model, scenes, silhouette selection, levels, error bound, the mixed writer.
 pub mod lod;
+// Plain data: the city model, its assets and polygons, POIs, triangulation.
 pub mod model;
+// What the commands report: the `lod` report, model counts.
 pub mod output;
+// The pipeline a program runs: read, frame, levels, analyse, write.
 pub mod pipeline;
+// Reading POIs, POIs from regions and facades, trust checks.
 pub mod poi;
+// Progress, cancellation, memory given back between stages.
 pub mod runtime;
+// Solar analysis: sky partition, sun positions, SVF, sun hours, horizons, fisheye pictures.
 pub mod solar;
+// Deterministic synthetic districts (the paper's Eixample) and box scenes.
 pub mod synth;
+// Ray tracing: triangles in a BVH, first hit and occlusion, exact reference tests.
 pub mod trace;
+
+// The facade: read → POIs → levels → write, and the solar numbers, from the root.
+pub use citygml::{read_file, ReadError, WriteError};
+pub use export::Format;
+pub use model::{Asset, AssetKind, CityModel, Poi};
+pub use pipeline::{
+    frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, FrameOptions, Framed,
+    Inputs, Levels, LevelsOptions, PipelineError, Written,
+};
+pub use poi::{read_pois_csv, PoiError};
+pub use runtime::progress::{Cancelled, Progress, Silent};
 
 // The paths of release 0.1, kept for one release (moved in 0.2, see CHANGELOG.md).
 #[doc(hidden)]

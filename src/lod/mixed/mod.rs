@@ -104,7 +104,8 @@
 //!
 //! # Example
 //! ```
-//! use skylod::citygml::{read_file, mixed::write_mixed, write::WriteOptions};
+//! use skylod::citygml::{read_file, write::WriteOptions};
+//! use skylod::lod::mixed::write_mixed;
 //! use skylod::lod::rough::{rough_model, RoughOptions};
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");
