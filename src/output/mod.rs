@@ -5,6 +5,7 @@
 pub mod evaluate;
 pub mod horizon;
 pub mod report;
+pub mod schema;
 pub mod stats;
 pub mod sun_hours;
 pub mod svf;
