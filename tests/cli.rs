@@ -216,6 +216,7 @@ fn stats_json_two_inputs_total_is_sum() {
     };
     let o = run(&[os("stats"), os("--json"), a.as_os_str(), b.as_os_str()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    check_stdout_schema("stats.schema.json", &o);
     let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
     let files = v["files"].as_array().expect("files array");
     assert_eq!(files.len(), 2);

@@ -28,6 +28,7 @@ fn json_shape_and_consistent_figures() {
         os("60"),
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    check_stdout_schema("evaluate.schema.json", &o);
     let v = json(&o);
     for key in [
         "inputs",

@@ -50,6 +50,7 @@ fn svf_json_shape_and_order() {
         os("--json"),
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    check_stdout_schema("svf.schema.json", &o);
     let v = json(&o);
     assert_eq!(v["rays"], 2000);
     assert_eq!(v["seed"], 5);
@@ -193,6 +194,7 @@ fn sun_hours_json_and_errors() {
     ]);
     let o = run_s(&args);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    check_stdout_schema("sun-hours.schema.json", &o);
     let v = json(&o);
     assert_eq!(v["year"], 2025);
     assert_eq!(v["step_minutes"], 60);

@@ -96,7 +96,10 @@ fn horizon_json(args: &[&OsStr]) -> Value {
     let mut a = vec![os("horizon")];
     a.extend_from_slice(args);
     a.push(os("--json"));
-    json_out(&run(&a))
+    let o = run(&a);
+    let v = json_out(&o);
+    check_stdout_schema("horizon.schema.json", &o);
+    v
 }
 
 fn numbers(v: &Value) -> Vec<f64> {

@@ -109,38 +109,50 @@ pub enum BoundError {
 }
 
 /// Achieved figures at one POI.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
+#[schemars(deny_unknown_fields)]
 pub struct PoiBound {
     /// POI id.
     pub id: String,
     /// SVF of the full model.
+    #[schemars(range(min = 0, max = 1))]
     pub svf_full: f64,
     /// SVF of the LoD model.
+    #[schemars(range(min = 0, max = 1))]
     pub svf_lod: f64,
-    /// Relative SVF error (0 when both are 0).
+    /// Relative SVF error (0 when both are 0); infinite (written `null`) when the full SVF
+    /// is 0 and the LoD SVF is not.
+    #[schemars(with = "Option<f64>", range(min = 0))]
     pub svf_error: f64,
     /// Sun hours of the full model (with a sun table).
+    #[schemars(range(min = 0))]
     pub sun_hours_full: Option<f64>,
     /// Sun hours of the LoD model.
+    #[schemars(range(min = 0))]
     pub sun_hours_lod: Option<f64>,
     /// Relative sun-hours error.
+    #[schemars(range(min = 0))]
     pub sun_hours_error: Option<f64>,
     /// Whether the POI is within every bound.
     pub holds: bool,
 }
 
 /// One promotion.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
+#[schemars(deny_unknown_fields)]
 pub struct Promotion {
     /// Round (1-based) in which it was made.
+    #[schemars(range(min = 1))]
     pub round: usize,
     /// Index of the asset in the model.
     pub asset: usize,
     /// `gml:id` of the asset, if any.
     pub id: Option<String>,
     /// Level before.
+    #[schemars(range(max = 1))]
     pub from: u8,
     /// Level after.
+    #[schemars(range(min = 1, max = 2))]
     pub to: u8,
     /// The POI whose error asked for it.
     pub poi: String,
@@ -175,17 +187,22 @@ impl Bounded {
 }
 
 /// The `bound` section of the `lod` report (`schemas/report.schema.json`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
+#[schemars(deny_unknown_fields)]
 pub struct BoundReport {
-    /// The SVF bound asked for.
+    /// The SVF bound asked for (relative).
+    #[schemars(range(min = 0))]
     pub max_svf_error: Option<f64>,
-    /// The sun-hours bound asked for.
+    /// The sun-hours bound asked for (relative).
+    #[schemars(range(min = 0))]
     pub max_sun_hours_error: Option<f64>,
     /// Rays of the SVF bundle.
+    #[schemars(range(min = 1))]
     pub rays: usize,
     /// Seed of the SVF bundle.
     pub seed: u64,
-    /// Rounds of tracing the LoD model.
+    /// Rounds of tracing the LoD model (1: nothing promoted).
+    #[schemars(range(min = 1))]
     pub rounds: usize,
     /// Whether every POI holds.
     pub met: bool,

@@ -1,5 +1,11 @@
-//! What the commands report: the `lod` report ([`report`], `schemas/report.schema.json`)
-//! and the model counts of `skylod stats` ([`stats`]).
+//! What the commands report, as typed JSON: the `lod` report ([`report`],
+//! `schemas/report.schema.json`), the documents of `svf`, `sun-hours`, `horizon` and
+//! `evaluate` with `--json`, and the model counts of `skylod stats` ([`stats`]).
 
+pub mod evaluate;
+pub mod horizon;
 pub mod report;
+pub mod schema;
 pub mod stats;
+pub mod sun_hours;
+pub mod svf;

@@ -20,15 +20,26 @@ use crate::lod::rough::{RoughGeometry, RoughOptions};
 use crate::lod::select::{PoiSelection, Selection};
 use crate::model::Poi;
 use crate::model::{Asset, CityModel};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Format version of the report (bumped on incompatible changes).
 pub const REPORT_VERSION: u32 = 2;
 
 /// The whole report.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+#[schemars(
+    title = "skylod lod report",
+    description = "Written by `skylod lod --report FILE`: parameters, per-POI summaries, one entry per asset with its level, totals and timings per stage.",
+    deny_unknown_fields,
+    extend("$id" = "https://github.com/skylod/skylod/schemas/report.schema.json")
+)]
 pub struct Report {
     /// [`REPORT_VERSION`].
+    #[schemars(
+        description = "Format version of the report (bumped on incompatible changes).",
+        extend("const" = REPORT_VERSION)
+    )]
     pub report_version: u32,
     /// Version of skylod that wrote it.
     pub skylod_version: String,
@@ -47,15 +58,18 @@ pub struct Report {
     /// The error bound check and its promotions (`--max-svf-error`,
     /// `--max-sun-hours-error`), when asked for.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(with = "crate::lod::bound::BoundReport")]
     pub bound: Option<crate::lod::bound::BoundReport>,
 }
 
 /// One input file.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
 pub struct InputEntry {
     /// Path as given.
     pub path: String,
     /// CityGML version ("1.0", "2.0", "3.0").
+    #[schemars(extend("enum" = ["1.0", "2.0", "3.0"]))]
     pub citygml_version: String,
     /// `srsName` of the file, if any.
     pub srs_name: Option<String>,
@@ -66,13 +80,16 @@ pub struct InputEntry {
 }
 
 /// Parameters of the run.
-#[derive(Debug, Clone, Serialize, Default)]
+#[derive(Debug, Clone, Serialize, JsonSchema, Default)]
+#[schemars(deny_unknown_fields)]
 pub struct Parameters {
-    /// Rays per POI.
+    /// Rays per POI: cells of the equal-solid-angle hemisphere partition.
+    #[schemars(range(min = 1))]
     pub rays: usize,
     /// Jitter seed.
     pub seed: u64,
     /// Silhouette threshold in degrees (the value used).
+    #[schemars(extend("exclusiveMinimum" = 0, "maximum" = 90))]
     pub threshold_deg: f64,
     /// Tolerance below the roof edge for roof installations (m).
     pub roof_tolerance_m: f64,
@@ -101,7 +118,8 @@ impl Parameters {
 
 /// Where a POI is and what its rays saw: the part of a POI's summary that the report
 /// ([`PoiEntry`]) and a shard's levels file ([`crate::batch::shard_levels::PoiRecord`]) share.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
 pub struct PoiSeen {
     /// Id.
     pub id: String,
@@ -144,26 +162,33 @@ impl PoiSeen {
 }
 
 /// One POI.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
 pub struct PoiEntry {
     /// Where the POI is and what its rays saw.
     #[serde(flatten)]
     pub seen: PoiSeen,
     /// Time of this POI's selection (ms).
+    #[schemars(range(min = 0))]
     pub ms: f64,
     /// Polygons of this POI's own LoD model (its levels alone, before any error bound).
     pub polygons_own: usize,
     /// What makes this POI's result suspect ([`crate::poi::checks::poi_flags`]); set by
     /// [`Report::set_flags`].
+    #[schemars(
+        description = "What makes this POI's results suspect: inside a closed building solid (every direction blocked), or no sky ray at all."
+    )]
     pub flags: Vec<crate::poi::checks::PoiFlag>,
 }
 
 /// One asset.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
 pub struct AssetEntry {
     /// `gml:id`, if any.
     pub id: Option<String>,
     /// Kind ("roof", "wall", "installation", ...).
+    #[schemars(extend("enum" = ["roof", "wall", "ground", "closure", "outer_ceiling", "outer_floor", "installation", "window", "door", "body", "other"]))]
     pub kind: &'static str,
     /// `gml:id` of its building (or building part), if any.
     pub building: Option<String>,
@@ -172,17 +197,20 @@ pub struct AssetEntry {
     /// Ray hits over all POIs.
     pub hits: u64,
     /// Level 0 (dropped), 1 (rough) or 2 (full detail).
+    #[schemars(extend("enum" = [0, 1, 2]))]
     pub level: u8,
     /// Whether it counts as a roof asset (candidate for level 2).
     pub roof_asset: bool,
     /// Polygons in the input (all LoDs).
     pub polygons_in: usize,
     /// Polygons in the output (see [`polygons_out`]).
+    #[schemars(description = "Polygons in the output (at its level).")]
     pub polygons_out: usize,
 }
 
 /// Totals.
-#[derive(Debug, Clone, Serialize, Default)]
+#[derive(Debug, Clone, Serialize, JsonSchema, Default)]
+#[schemars(deny_unknown_fields)]
 pub struct Totals {
     /// Assets in the input.
     pub assets: usize,
@@ -193,6 +221,7 @@ pub struct Totals {
     /// Polygons of all assets in the output.
     pub polygons_out: usize,
     /// `polygons_out / polygons_in` (0 for an empty input).
+    #[schemars(range(min = 0))]
     pub polygon_fraction: f64,
     /// Buildings and parts in the input.
     pub buildings_in: usize,
@@ -200,28 +229,40 @@ pub struct Totals {
     /// region) costs `polygons_out` instead of one model per POI.
     pub single_poi_polygons_max: usize,
     /// The mean of the POIs' own LoD models (polygons).
+    #[schemars(range(min = 0))]
     pub single_poi_polygons_mean: f64,
     /// `polygons_out / single_poi_polygons_max` (0 when no POI kept anything).
+    #[schemars(range(min = 0))]
     pub region_over_single_poi: f64,
     /// Buildings and parts in the outputs written, as the writer counted them (see
     /// [`Report::record_output`]); 0 until outputs are recorded.
+    #[schemars(
+        description = "Buildings and parts in the outputs written, as the writer counted them; 0 when none was written."
+    )]
     pub buildings_out: usize,
 }
 
 /// Milliseconds per stage.
-#[derive(Debug, Clone, Copy, Serialize, Default)]
+#[derive(Debug, Clone, Copy, Serialize, JsonSchema, Default)]
+#[schemars(deny_unknown_fields)]
 pub struct Timings {
     /// Reading the inputs.
+    #[schemars(range(min = 0))]
     pub read: f64,
     /// The rough model.
+    #[schemars(range(min = 0))]
     pub rough: f64,
     /// Triangulation and BVH build of the rough scene.
+    #[schemars(range(min = 0))]
     pub bvh: f64,
     /// Selection over all POIs.
+    #[schemars(range(min = 0))]
     pub select: f64,
     /// Writing the outputs.
+    #[schemars(range(min = 0))]
     pub write: f64,
     /// The whole command.
+    #[schemars(range(min = 0))]
     pub total: f64,
 }
 

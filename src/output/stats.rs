@@ -1,11 +1,51 @@
-//! Counts of what a model holds: `skylod stats`.
+//! Counts of what a model holds: `skylod stats`, and its JSON ([`StatsOutput`]).
 
 use crate::model::{AssetKind, Bbox, CityModel};
+use schemars::JsonSchema;
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet};
 
+/// The whole `stats --json` document: one shape whatever the number of inputs, so that a
+/// pipeline never has to test for it.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+#[non_exhaustive]
+pub struct StatsOutput {
+    /// One entry per file read, in input order.
+    pub files: Vec<FileStats>,
+    /// Sum over the files.
+    pub total: Stats,
+}
+
+impl StatsOutput {
+    /// The document of `files` and their `total`.
+    pub fn new(files: Vec<FileStats>, total: Stats) -> Self {
+        StatsOutput { files, total }
+    }
+}
+
+/// One file of `stats --json`: its path, then its counts.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+#[non_exhaustive]
+pub struct FileStats {
+    /// Path as given.
+    pub path: String,
+    /// Its counts.
+    #[serde(flatten)]
+    pub stats: Stats,
+}
+
+impl FileStats {
+    /// The counts `stats` of the file at `path`.
+    pub fn new(path: String, stats: Stats) -> Self {
+        FileStats { path, stats }
+    }
+}
+
 /// Counts of one model (one file or several merged).
-#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema, Default)]
+#[schemars(deny_unknown_fields)]
 pub struct Stats {
     /// "1.0", "2.0", "3.0", or "mixed" over files of several versions.
     pub citygml_version: Option<String>,

@@ -75,7 +75,7 @@ pub enum EvalError {
 }
 
 /// Solar figures of one model at one POI.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ModelFigures {
     /// Polygons of the model (the whole scene, not only what the POI sees).
     pub polygons: usize,
@@ -115,7 +115,7 @@ impl ModelFigures {
 }
 
 /// One POI's evaluation.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct PoiEval {
     /// POI id.
     pub id: String,
@@ -129,9 +129,12 @@ pub struct PoiEval {
     pub levels: [usize; 3],
     /// Milliseconds of this POI's selection.
     pub select_ms: f64,
-    /// Relative SVF error of the LoD model.
+    /// Relative SVF error of the LoD model (infinite, written `null`, when the full model's
+    /// SVF is 0 and this one's is not).
+    #[schemars(with = "Option<f64>")]
     pub lod_svf_error: f64,
-    /// Relative SVF error of the all-boxes model.
+    /// Relative SVF error of the all-boxes model (infinite, written `null`, likewise).
+    #[schemars(with = "Option<f64>")]
     pub boxes_svf_error: f64,
     /// Relative sun-hours error of the LoD model.
     pub lod_sun_error: Option<f64>,

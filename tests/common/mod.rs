@@ -417,6 +417,15 @@ pub fn check_json_schema(schema: &str, doc: &Path) {
     );
 }
 
+/// Validate a command's standard output, a JSON document, against a schema of `schemas/`
+/// ([`check_json_schema`]).
+pub fn check_stdout_schema(schema: &str, o: &Output) {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let doc = dir.path().join("stdout.json");
+    std::fs::write(&doc, &o.stdout).expect("writing stdout.json");
+    check_json_schema(schema, &doc);
+}
+
 /// An argument as `&OsStr` (mixing `&str` and paths in one argument list).
 pub fn os<S: AsRef<OsStr> + ?Sized>(s: &S) -> &OsStr {
     s.as_ref()

@@ -4,6 +4,8 @@ use crate::common::{ms, out_err, warn_flags, RoughArgs, SelectArgs, SiteArgs, Su
 use crate::tracing_args::Prepared;
 use crate::Outcome;
 use skylod::lod::LodOptions;
+use skylod::output::evaluate::{EvaluateOutput, EvaluateTimings};
+use skylod::output::sun_hours::SunSetting;
 use skylod::pipeline::evaluation::EvalOptions;
 use skylod::pipeline::EvaluateOptions;
 use skylod::solar::{Site, SunTable};
@@ -87,22 +89,20 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     warn_flags(&framed.pois, &flags);
     let mut out = std::io::stdout().lock();
     if args.json {
-        let doc = serde_json::json!({
-            "inputs": loaded.inputs,
-            "rays": args.select.rays,
-            "svf_rays": args.svf_rays,
-            "seed": args.select.seed,
-            "sun": site.map(|s| serde_json::json!({
-                "lat": s.latitude, "lon": s.longitude, "year": args.sun.year, "step_minutes": args.sun.step
-            })),
-            "pois": e.pois,
-            "timings_ms": {
-                "read": loaded.read_ms,
-                "rough": e.rough_ms,
-                "selection_bvh": e.selection_bvh_ms,
-                "total": ms(t_all),
+        let doc = EvaluateOutput::new(
+            loaded.inputs.clone(),
+            args.select.rays,
+            args.svf_rays,
+            args.select.seed,
+            site.map(|s| SunSetting::new(s.latitude, s.longitude, args.sun.year, args.sun.step)),
+            e.pois.clone(),
+            EvaluateTimings {
+                read: loaded.read_ms,
+                rough: e.rough_ms,
+                selection_bvh: e.selection_bvh_ms,
+                total: ms(t_all),
             },
-        });
+        );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else if crate::shard_args::header(shard) {
         out_err(writeln!(

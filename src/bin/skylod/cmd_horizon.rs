@@ -1,11 +1,12 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::common::{arr, out_err, polygons, s_to_ms, warn_flags};
+use crate::common::{out_err, polygons, s_to_ms, warn_flags};
 use crate::tracing_args::Prepared;
 use crate::Outcome;
 use anyhow::Context;
-use serde_json::json;
 use skylod::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
+use skylod::output::horizon::{HorizonOutput, HorizonPoi};
+use skylod::output::svf::TraceTimings;
 use skylod::poi::Poi;
 use skylod::solar::{HorizonOptions, HorizonProfile};
 use std::io::Write;
@@ -90,24 +91,26 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             .zip(&profiles)
             .zip(&flags)
             .map(|((p, h), flags)| {
-                json!({
-                    "id": p.id,
-                    "poi": arr(p.position),
-                    "normal": p.normal.map(arr),
-                    "azimuth": h.azimuth.iter().map(|a| deg(*a)).collect::<Vec<_>>(),
-                    "elevation": h.elevation.iter().map(|e| deg(*e)).collect::<Vec<_>>(),
-                    "flags": flags,
-                })
+                HorizonPoi::new(
+                    p,
+                    h.azimuth.iter().map(|a| deg(*a)).collect(),
+                    h.elevation.iter().map(|e| deg(*e)).collect(),
+                    flags,
+                )
             })
             .collect();
-        let doc = json!({
-            "pois": rows,
-            "step_deg": args.step,
-            "tolerance_deg": opts.tolerance_deg,
-            "inputs": loaded.inputs,
-            "polygons": polygons(framed.source),
-            "timings_ms": {"read": loaded.read_ms, "bvh": bvh_ms, "trace": trace_ms},
-        });
+        let doc = HorizonOutput::new(
+            rows,
+            args.step,
+            opts.tolerance_deg,
+            loaded.inputs.clone(),
+            polygons(framed.source),
+            TraceTimings {
+                read: loaded.read_ms,
+                bvh: bvh_ms,
+                trace: trace_ms,
+            },
+        );
         serde_json::to_string_pretty(&doc)? + "\n"
     } else {
         let text = csv(pois, &profiles);

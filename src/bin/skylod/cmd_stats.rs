@@ -4,7 +4,7 @@ use crate::frames::SourceCrsArgs;
 use crate::Outcome;
 use rayon::prelude::*;
 use skylod::citygml::read_file;
-use skylod::output::stats::Stats;
+use skylod::output::stats::{FileStats, Stats, StatsOutput};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -27,13 +27,6 @@ pub struct Args {
     jobs: crate::common::JobsArgs,
     #[command(flatten)]
     shard: crate::shard_args::ShardArgs,
-}
-
-#[derive(serde::Serialize)]
-struct FileStats<'a> {
-    path: String,
-    #[serde(flatten)]
-    stats: &'a Stats,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
@@ -95,15 +88,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     let mut out = std::io::stdout().lock();
     if args.json {
-        let files: Vec<FileStats> = ok
+        let files = ok
             .iter()
-            .map(|(p, s)| FileStats {
-                path: p.display().to_string(),
-                stats: s,
-            })
+            .map(|(p, s)| FileStats::new(p.display().to_string(), s.clone()))
             .collect();
         // One shape whatever the number of inputs: a pipeline never has to test for it.
-        let v = serde_json::json!({ "files": files, "total": total });
+        let v = StatsOutput::new(files, total);
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
     } else {
         for (p, s) in &ok {

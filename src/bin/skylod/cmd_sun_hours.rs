@@ -1,9 +1,9 @@
 //! `skylod sun-hours`.
 
-use crate::common::{arr, ms, out_err, polygons, s_to_ms, warn_flags, SiteArgs, SunArgs};
+use crate::common::{ms, out_err, polygons, s_to_ms, warn_flags, SiteArgs, SunArgs};
 use crate::tracing_args::Prepared;
 use crate::Outcome;
-use serde_json::json;
+use skylod::output::sun_hours::{SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting};
 use skylod::solar::{Site, SunTable};
 use std::io::Write;
 use std::time::Instant;
@@ -60,30 +60,22 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             .iter()
             .zip(hours)
             .zip(&traced.flags)
-            .map(|((p, h), flags)| {
-                json!({
-                    "id": p.id,
-                    "poi": arr(p.position),
-                    "normal": p.normal.map(arr),
-                    "sun_hours": h.hours,
-                    "monthly": h.monthly,
-                    "possible_hours": h.possible_hours,
-                    "flags": flags,
-                })
-            })
+            .map(|((p, h), flags)| SunHoursPoi::new(p, h, flags))
             .collect();
-        let doc = json!({
-            "pois": rows,
-            "lat": lat,
-            "lon": lon,
-            "year": args.sun.year,
-            "step_minutes": args.sun.step,
-            "timezone": args.timezone,
-            "steps": table.len(),
-            "inputs": loaded.inputs,
-            "polygons": polygons(framed.source),
-            "timings_ms": {"read": loaded.read_ms, "sun": sun_ms, "bvh": bvh_ms, "trace": trace_ms},
-        });
+        let doc = SunHoursOutput::new(
+            rows,
+            SunSetting::new(lat, lon, args.sun.year, args.sun.step),
+            args.timezone.clone(),
+            table.len(),
+            loaded.inputs.clone(),
+            polygons(framed.source),
+            SunHoursTimings {
+                read: loaded.read_ms,
+                sun: sun_ms,
+                bvh: bvh_ms,
+                trace: trace_ms,
+            },
+        );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
         let mut head = format!("{:<20} {:>9} {:>9}", "id", "sun_h", "possible");

@@ -1,10 +1,10 @@
 //! `skylod svf`.
 
-use crate::common::{arr, out_err, polygons, s_to_ms, warn_flags};
+use crate::common::{out_err, polygons, s_to_ms, warn_flags};
 use crate::frames::decimals;
 use crate::tracing_args::Prepared;
 use crate::Outcome;
-use serde_json::json;
+use skylod::output::svf::{SvfOutput, SvfPoi, TraceTimings};
 use skylod::solar::SkyBundles;
 use std::io::Write;
 
@@ -49,26 +49,20 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             .iter()
             .zip(views)
             .zip(&traced.flags)
-            .map(|((p, v), flags)| {
-                json!({
-                    "id": p.id,
-                    "poi": arr(p.position),
-                    "normal": p.normal.map(arr),
-                    "svf": v.svf,
-                    "sky_exposure": v.sky_exposure,
-                    "rays": v.rays,
-                    "flags": flags,
-                })
-            })
+            .map(|((p, v), flags)| SvfPoi::new(p, v, flags))
             .collect();
-        let doc = json!({
-            "pois": rows,
-            "rays": args.rays,
-            "seed": args.seed,
-            "inputs": loaded.inputs,
-            "polygons": polygons(framed.source),
-            "timings_ms": {"read": loaded.read_ms, "bvh": bvh_ms, "trace": trace_ms},
-        });
+        let doc = SvfOutput::new(
+            rows,
+            args.rays,
+            args.seed,
+            loaded.inputs.clone(),
+            polygons(framed.source),
+            TraceTimings {
+                read: loaded.read_ms,
+                bvh: bvh_ms,
+                trace: trace_ms,
+            },
+        );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
         if crate::shard_args::header(shard) {

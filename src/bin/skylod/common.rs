@@ -275,11 +275,6 @@ pub fn polygons(m: &CityModel) -> usize {
     m.assets.iter().map(|a| a.detail_polygons().len()).sum()
 }
 
-/// A `[x, y, z]` array for JSON.
-pub fn arr(v: glam::DVec3) -> [f64; 3] {
-    [v.x, v.y, v.z]
-}
-
 /// Check `--lat`/`--lon` given together, or say that they are needed.
 pub fn lat_lon(lat: Option<f64>, lon: Option<f64>, cmd: &str) -> anyhow::Result<(f64, f64)> {
     match (lat, lon) {

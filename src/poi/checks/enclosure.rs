@@ -36,7 +36,7 @@ use serde::{Deserialize, Serialize};
 const PROBE_RAYS: usize = 128;
 
 /// Something that makes a POI's results suspect.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "flag", rename_all = "snake_case")]
 pub enum PoiFlag {
     /// Every direction of the sphere is blocked: the POI is inside a closed solid.

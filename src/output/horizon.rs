@@ -1,0 +1,84 @@
+//! The JSON of `skylod horizon --json`: per POI its horizon profile (PVGIS / pvlib
+//! convention: azimuths from north, elevations in degrees), the step, the inputs and the
+//! timings.
+
+use super::svf::TraceTimings;
+use crate::model::Poi;
+use crate::poi::checks::PoiFlag;
+use schemars::JsonSchema;
+use serde::Serialize;
+
+/// The whole `horizon --json` document.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+#[non_exhaustive]
+pub struct HorizonOutput {
+    /// One entry per POI, in input order.
+    pub pois: Vec<HorizonPoi>,
+    /// Azimuth step (degrees).
+    #[schemars(range(min = 0.01, max = 90))]
+    pub step_deg: f64,
+    /// Resolution of each elevation (degrees).
+    pub tolerance_deg: f64,
+    /// Paths read.
+    pub inputs: Vec<String>,
+    /// Polygons of the scene at full detail.
+    pub polygons: usize,
+    /// Wall-clock milliseconds per stage.
+    pub timings_ms: TraceTimings,
+}
+
+impl HorizonOutput {
+    /// The document of a run with azimuth step `step_deg` and tolerance `tolerance_deg`.
+    pub fn new(
+        pois: Vec<HorizonPoi>,
+        step_deg: f64,
+        tolerance_deg: f64,
+        inputs: Vec<String>,
+        polygons: usize,
+        timings_ms: TraceTimings,
+    ) -> Self {
+        HorizonOutput {
+            pois,
+            step_deg,
+            tolerance_deg,
+            inputs,
+            polygons,
+            timings_ms,
+        }
+    }
+}
+
+/// One POI of `horizon --json`.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+#[non_exhaustive]
+pub struct HorizonPoi {
+    /// Id.
+    pub id: String,
+    /// Position in the model's CRS.
+    pub poi: [f64; 3],
+    /// Surface normal, if given.
+    pub normal: Option<[f64; 3]>,
+    /// Azimuths (degrees from north, clockwise), as written.
+    pub azimuth: Vec<f64>,
+    /// Elevation of the horizon at each azimuth (degrees), as written.
+    pub elevation: Vec<f64>,
+    /// What makes this POI's result suspect.
+    pub flags: Vec<PoiFlag>,
+}
+
+impl HorizonPoi {
+    /// The entry of `poi` with its profile (`azimuth`, `elevation`, as they are to be
+    /// written: the command rounds them) and flags.
+    pub fn new(poi: &Poi, azimuth: Vec<f64>, elevation: Vec<f64>, flags: &[PoiFlag]) -> Self {
+        HorizonPoi {
+            id: poi.id.clone(),
+            poi: poi.position.to_array(),
+            normal: poi.normal.map(|n| n.to_array()),
+            azimuth,
+            elevation,
+            flags: flags.to_vec(),
+        }
+    }
+}

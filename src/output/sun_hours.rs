@@ -1,0 +1,140 @@
+//! The JSON of `skylod sun-hours --json`: per POI its hours of direct sun (over the year and
+//! per month), the sun table, the inputs and the timings.
+
+use crate::model::Poi;
+use crate::poi::checks::PoiFlag;
+use crate::solar::SunHours;
+use schemars::JsonSchema;
+use serde::Serialize;
+
+/// The whole `sun-hours --json` document.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+#[non_exhaustive]
+pub struct SunHoursOutput {
+    /// One entry per POI, in input order.
+    pub pois: Vec<SunHoursPoi>,
+    /// Site, year and step of the sun table.
+    #[serde(flatten)]
+    pub sun: SunSetting,
+    /// Time zone the steps were attributed to months in, as given.
+    pub timezone: String,
+    /// Steps of the sun table.
+    pub steps: usize,
+    /// Paths read.
+    pub inputs: Vec<String>,
+    /// Polygons of the scene at full detail.
+    pub polygons: usize,
+    /// Wall-clock milliseconds per stage.
+    pub timings_ms: SunHoursTimings,
+}
+
+impl SunHoursOutput {
+    /// The document of a run over the sun table `sun` (`steps` steps, months in `timezone`).
+    pub fn new(
+        pois: Vec<SunHoursPoi>,
+        sun: SunSetting,
+        timezone: String,
+        steps: usize,
+        inputs: Vec<String>,
+        polygons: usize,
+        timings_ms: SunHoursTimings,
+    ) -> Self {
+        SunHoursOutput {
+            pois,
+            sun,
+            timezone,
+            steps,
+            inputs,
+            polygons,
+            timings_ms,
+        }
+    }
+}
+
+/// Where and over which year a sun table was made: `sun-hours` writes it at the top level,
+/// `evaluate` as its `sun` object.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+#[non_exhaustive]
+pub struct SunSetting {
+    /// Latitude (degrees).
+    #[schemars(range(min = -90, max = 90))]
+    pub lat: f64,
+    /// Longitude (degrees).
+    #[schemars(range(min = -180, max = 180))]
+    pub lon: f64,
+    /// Year.
+    pub year: i32,
+    /// Step of the table (minutes).
+    #[schemars(range(min = 1))]
+    pub step_minutes: u32,
+}
+
+impl SunSetting {
+    /// A table at (`lat`, `lon`) over `year` every `step_minutes` minutes.
+    pub fn new(lat: f64, lon: f64, year: i32, step_minutes: u32) -> Self {
+        SunSetting {
+            lat,
+            lon,
+            year,
+            step_minutes,
+        }
+    }
+}
+
+/// One POI of `sun-hours --json`.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+#[non_exhaustive]
+pub struct SunHoursPoi {
+    /// Id.
+    pub id: String,
+    /// Position in the model's CRS.
+    pub poi: [f64; 3],
+    /// Surface normal, if given.
+    pub normal: Option<[f64; 3]>,
+    /// Hours of direct sun over the table.
+    #[schemars(range(min = 0))]
+    pub sun_hours: f64,
+    /// The same per local month (January first).
+    pub monthly: [f64; 12],
+    /// Hours the sun is above the horizon and in front of the surface, blocked or not.
+    #[schemars(range(min = 0))]
+    pub possible_hours: f64,
+    /// What makes this POI's result suspect.
+    pub flags: Vec<PoiFlag>,
+}
+
+impl SunHoursPoi {
+    /// The entry of `poi` with its sun hours and flags.
+    pub fn new(poi: &Poi, hours: &SunHours, flags: &[PoiFlag]) -> Self {
+        SunHoursPoi {
+            id: poi.id.clone(),
+            poi: poi.position.to_array(),
+            normal: poi.normal.map(|n| n.to_array()),
+            sun_hours: hours.hours,
+            monthly: hours.monthly,
+            possible_hours: hours.possible_hours,
+            flags: flags.to_vec(),
+        }
+    }
+}
+
+/// Milliseconds per stage of `sun-hours`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct SunHoursTimings {
+    /// Reading the inputs.
+    #[schemars(range(min = 0))]
+    pub read: f64,
+    /// The sun table.
+    #[schemars(range(min = 0))]
+    pub sun: f64,
+    /// Triangulation and BVH build of the scene.
+    #[schemars(range(min = 0))]
+    pub bvh: f64,
+    /// Tracing.
+    #[schemars(range(min = 0))]
+    pub trace: f64,
+}
