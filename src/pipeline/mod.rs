@@ -6,10 +6,10 @@
 //!    neighbouring tile count); a file that cannot be read is reported, the others are used.
 //!    [`Inputs::check`] refuses a model that would give a confidently wrong answer whatever
 //!    the POIs (mixed CRSs, no heights).
-//! 2. [`frame`]: the model and the POIs in the local metric frame the tracing works in
+//! 2. [`frame`](fn@frame): the model and the POIs in the local metric frame the tracing works in
 //!    (ENU for degrees, metres for feet; `source_crs`, `poi_crs`), POIs far outside the scene
 //!    refused.
-//! 3. [`levels`]: rough model → selection scene (BVH) → selection, then the error bound when
+//! 3. [`levels`](fn@levels): rough model → selection scene (BVH) → selection, then the error bound when
 //!    one is asked for; the rough geometry is brought back to the input's CRS for writing.
 //! 4. [`write_levels`]: each input file written with its assets at their levels (mixed-LoD
 //!    CityGML, OBJ, CityJSON), atomically.
