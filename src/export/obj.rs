@@ -26,11 +26,9 @@
 //!     DVec3::new(430000.0, 4581000.0, 20.0), DVec3::new(430010.0, 4581000.0, 20.0),
 //!     DVec3::new(430010.0, 4581010.0, 20.0), DVec3::new(430000.0, 4581010.0, 20.0),
 //! ]);
-//! m.assets.push(Asset {
-//!     kind: AssetKind::Roof, id: Some("r1".into()), element: "RoofSurface".into(), building: None,
-//!     parent: None, span: 0..0, line: 1, function: None, file: 0,
-//!     geometries: vec![LodGeometry { lod: 2, polygons: vec![quad], ..Default::default() }],
-//! });
+//! m.assets.push(Asset::new(AssetKind::Roof, Some("r1"), "RoofSurface",
+//!     vec![LodGeometry { lod: 2, polygons: vec![quad], ..Default::default() }],
+//! ));
 //! let mut out = Vec::new();
 //! let s = write_obj(&m, 0, Content::Full, &mut out).unwrap();
 //! let text = String::from_utf8(out).unwrap();
@@ -171,23 +169,17 @@ mod tests {
             DVec3::new(2.0, 2.0, z),
             DVec3::new(0.0, 2.0, z),
         ]);
-        Asset {
+        Asset::new(
             kind,
-            id: id.map(Into::into),
-            element: "X".into(),
-            building: None,
-            parent: None,
-            span: 0..0,
-            line: 1,
-            function: None,
-            file: 0,
-            geometries: vec![LodGeometry {
+            id,
+            "X",
+            vec![LodGeometry {
                 lod: 3,
                 property: "lod3MultiSurface".into(),
                 polygons: vec![sq],
                 ..Default::default()
             }],
-        }
+        )
     }
 
     #[test]

@@ -480,23 +480,17 @@ mod tests {
     }
 
     fn asset(kind: AssetKind, polys: Vec<Polygon>) -> Asset {
-        Asset {
+        Asset::new(
             kind,
-            id: Some(format!("{}", polys.len()).into()),
-            element: "X".into(),
-            building: None,
-            parent: None,
-            span: 0..0,
-            line: 1,
-            function: None,
-            file: 0,
-            geometries: vec![LodGeometry {
+            Some(&format!("{}", polys.len())),
+            "X",
+            vec![LodGeometry {
                 lod: 3,
                 property: "lod3MultiSurface".into(),
                 polygons: polys,
                 ..Default::default()
             }],
-        }
+        )
     }
 
     /// An L-shaped canopy over the POI whose rough geometry is its full square (a rough

@@ -26,10 +26,9 @@
 //! use skylod::lod::level::{polygon_count, traced};
 //! use skylod::model::{Asset, AssetKind, LodGeometry, Polygon};
 //! use skylod::lod::rough::RoughGeometry;
-//! let wall = Asset { kind: AssetKind::Wall, id: None, element: "WallSurface".into(),
-//!     building: None, parent: None, span: 0..0, line: 1, function: None, file: 0,
-//!     geometries: vec![LodGeometry { lod: 3, property: "lod3MultiSurface".into(),
-//!         polygons: vec![Polygon::default(); 40], ..Default::default() }] };
+//! let wall = Asset::new(AssetKind::Wall, None, "WallSurface",
+//!     vec![LodGeometry { lod: 3, property: "lod3MultiSurface".into(),
+//!         polygons: vec![Polygon::default(); 40], ..Default::default() }]);
 //! let rough = RoughGeometry { polygons: vec![Polygon::default(); 2], obb: None, lod: 3 };
 //! assert_eq!(polygon_count(&wall, Some(&rough), 2), 40);
 //! assert_eq!(polygon_count(&wall, Some(&rough), 1), 2);
@@ -171,17 +170,11 @@ mod tests {
     use crate::model::AssetKind;
 
     fn asset(geoms: Vec<(u8, &str, usize)>) -> Asset {
-        Asset {
-            kind: AssetKind::Installation,
-            id: None,
-            element: "BuildingInstallation".into(),
-            building: None,
-            parent: None,
-            span: 0..0,
-            line: 1,
-            function: None,
-            file: 0,
-            geometries: geoms
+        Asset::new(
+            AssetKind::Installation,
+            None,
+            "BuildingInstallation",
+            geoms
                 .into_iter()
                 .map(|(lod, p, n)| LodGeometry {
                     lod,
@@ -192,7 +185,7 @@ mod tests {
                     ..Default::default()
                 })
                 .collect(),
-        }
+        )
     }
 
     fn boxed(lod: u8) -> RoughGeometry {

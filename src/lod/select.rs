@@ -38,11 +38,9 @@
 //!     DVec3::new(10.0, 10.0, 10.0), DVec3::new(-10.0, 10.0, 10.0),
 //! ]);
 //! let mut m = CityModel::default();
-//! m.assets.push(Asset {
-//!     kind: AssetKind::Roof, id: Some("R".into()), element: "RoofSurface".into(),
-//!     building: None, parent: None, span: 0..0, line: 1, function: None, file: 0,
-//!     geometries: vec![LodGeometry { lod: 2, polygons: vec![roof], ..Default::default() }],
-//! });
+//! m.assets.push(Asset::new(AssetKind::Roof, Some("R"), "RoofSurface",
+//!     vec![LodGeometry { lod: 2, polygons: vec![roof], ..Default::default() }],
+//! ));
 //! let rough = rough_model(&m, &RoughOptions::default());
 //! let scene = skylod::lod::scene::rough_scene(&rough);
 //! let poi = Poi { id: "p".into(), position: DVec3::ZERO, normal: None };
@@ -542,20 +540,17 @@ mod tests {
 
     fn asset(kind: AssetKind, id: &str, building: Option<usize>, polys: Vec<Polygon>) -> Asset {
         Asset {
-            kind,
-            id: Some(id.into()),
-            element: kind.as_str().into(),
             building,
-            parent: None,
-            span: 0..0,
-            line: 1,
-            function: None,
-            file: 0,
-            geometries: vec![LodGeometry {
-                lod: 3,
-                polygons: polys,
-                ..Default::default()
-            }],
+            ..Asset::new(
+                kind,
+                Some(id),
+                kind.as_str(),
+                vec![LodGeometry {
+                    lod: 3,
+                    polygons: polys,
+                    ..Default::default()
+                }],
+            )
         }
     }
 

@@ -412,6 +412,39 @@ pub struct Asset {
 }
 
 impl Asset {
+    /// An asset of `kind` (element `element`, `gml:id` `id`) with `geometries`, in file 0,
+    /// in no building, nested in nothing, with no `function`, at span `0..0` of line 1: what
+    /// tests and examples build by hand (the reader fills every field). Other fields by
+    /// struct update.
+    ///
+    /// ```
+    /// use skylod::model::{Asset, AssetKind, LodGeometry};
+    /// let roof = Asset {
+    ///     building: Some(0),
+    ///     ..Asset::new(AssetKind::Roof, Some("r1"), "RoofSurface", vec![LodGeometry::default()])
+    /// };
+    /// assert_eq!((roof.id.as_deref(), roof.building, roof.file), (Some("r1"), Some(0), 0));
+    /// ```
+    pub fn new(
+        kind: AssetKind,
+        id: Option<&str>,
+        element: &str,
+        geometries: Vec<LodGeometry>,
+    ) -> Asset {
+        Asset {
+            kind,
+            id: id.map(Into::into),
+            element: element.into(),
+            building: None,
+            parent: None,
+            span: 0..0,
+            line: 1,
+            function: None,
+            geometries,
+            file: 0,
+        }
+    }
+
     /// Highest LoD present, if the asset has geometry.
     pub fn max_lod(&self) -> Option<u8> {
         self.geometries.iter().map(|g| g.lod).max()
@@ -711,16 +744,9 @@ mod tests {
             file: 0,
         });
         one.assets.push(Asset {
-            kind: AssetKind::Roof,
-            id: Some("r".into()),
-            element: "RoofSurface".into(),
             building: Some(0),
-            parent: None,
             span: 0..1,
-            line: 1,
-            function: None,
-            geometries: Vec::new(),
-            file: 0,
+            ..Asset::new(AssetKind::Roof, Some("r"), "RoofSurface", Vec::new())
         });
         let mut m = CityModel::default();
         m.merge(one.clone());

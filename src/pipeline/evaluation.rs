@@ -9,7 +9,7 @@
 //! # Example
 //! ```
 //! use skylod::pipeline::evaluation::{evaluate, EvalOptions};
-//! use skylod::poi::Poi;
+//! use skylod::model::Poi;
 //! use skylod::solar::{Site, SunTable};
 //! use skylod::synth::{generate, pois, Preset};
 //! let opts = Preset::Small.defaults();

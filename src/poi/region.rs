@@ -350,20 +350,17 @@ mod tests {
             DVec3::new(0.0, 6.0, 1.5),
         ]);
         m.assets.push(Asset {
-            kind: AssetKind::Wall,
-            id: Some("W".into()),
-            element: "WallSurface".into(),
             building: Some(0),
-            parent: None,
-            span: 0..0,
-            line: 1,
-            function: None,
-            file: 0,
-            geometries: vec![LodGeometry {
-                lod: 3,
-                polygons: vec![wall_with_window(), reveal],
-                ..Default::default()
-            }],
+            ..Asset::new(
+                AssetKind::Wall,
+                Some("W"),
+                "WallSurface",
+                vec![LodGeometry {
+                    lod: 3,
+                    polygons: vec![wall_with_window(), reveal],
+                    ..Default::default()
+                }],
+            )
         });
         m
     }

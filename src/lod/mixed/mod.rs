@@ -138,10 +138,12 @@
 //! ```
 
 mod content_ids;
+mod doc;
 mod encode;
 mod id_table;
 mod index;
 mod plan;
+mod push_back;
 
 use crate::citygml::error::WriteError;
 use crate::citygml::read::ReadOptions;

@@ -3,8 +3,8 @@
 //! appearance targets are pruned, which buildings go with nothing kept, and the envelopes,
 //! all decided on the element index ([`super::index`]) and turned into span [`Edit`]s.
 
+use super::doc::{Doc, Name, NsKind, RefKind};
 use super::encode::{encoding, Encoder, IdPool};
-use super::index::{Doc, Name, NsKind, RefKind};
 use super::MixedSummary;
 use crate::citygml::write::{envelope_xml, Edit};
 use crate::lod::rough::RoughGeometry;

@@ -59,20 +59,28 @@
 //! assert!(text.contains("<gml:upperCorner>6 1 1</gml:upperCorner>"));
 //! ```
 
-use super::error::{Location, ReadError, WriteError};
+mod copy;
+mod ids;
+mod scan;
+
+pub use ids::renamed_id;
+
+use super::error::{ReadError, WriteError};
 use super::ns::{classify, Ns};
-use super::source;
 use crate::crs::same_crs;
 use quick_xml::escape::escape;
 use quick_xml::events::attributes::Attribute;
-use quick_xml::events::{BytesStart, BytesText, Event};
-use quick_xml::name::{QName, ResolveResult};
-use quick_xml::{NsReader, Writer};
+use quick_xml::events::{BytesStart, Event};
+use quick_xml::name::QName;
+use quick_xml::Writer;
 use std::collections::{HashMap, HashSet};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::write::{atomic_write, check_target, WriteOptions};
+use copy::{copy_children, xmlns_key, CopyError, CountingWriter};
+use ids::Rewrite;
+use scan::{is_header, ns_of, open, scan, xml_err, Key};
 
 /// Why documents cannot be merged.
 #[derive(Debug, thiserror::Error)]
@@ -126,264 +134,9 @@ pub struct MergeSummary {
     /// Bytes written (before compression).
     pub bytes: u64,
 }
-
-/// The new name of an id of the `k`-th input (1-based) that collides: `<id>__<k>`, or the first
-/// of `<id>__<k>_2`, `<id>__<k>_3`, ... that `taken` does not hold.
-///
-/// ```
-/// use std::collections::HashSet;
-/// use skylod::citygml::merge::renamed_id;
-/// let taken: HashSet<String> = ["w".into(), "w__2".into()].into();
-/// assert_eq!(renamed_id("w", 3, &taken), "w__3");
-/// assert_eq!(renamed_id("w", 2, &taken), "w__2_2");
-/// ```
-pub fn renamed_id(id: &str, k: usize, taken: &HashSet<String>) -> String {
-    let base = format!("{id}__{k}");
-    if !taken.contains(&base) {
-        return base;
-    }
-    (2usize..)
-        .map(|n| format!("{base}_{n}"))
-        .find(|c| !taken.contains(c))
-        .unwrap_or(base)
-}
-
-/// A member element kind: namespace URI and local name.
-type Key = (Vec<u8>, Vec<u8>);
-
-/// What the first pass learns about one input.
-#[derive(Default)]
-struct Scan {
-    /// Events before the root (declaration, comments), raw.
-    prolog: Vec<Vec<u8>>,
-    /// Raw content of the root start tag (name and attributes).
-    root: Vec<u8>,
-    /// Namespace URI of the root.
-    root_ns: Vec<u8>,
-    /// Namespace declarations of the root: prefix ("" = default), URI.
-    decls: Vec<(Vec<u8>, Vec<u8>)>,
-    /// `xsi:schemaLocation` of the root.
-    schema_location: Option<String>,
-    /// The root envelope's srsName, or the first srsName of the document.
-    srs: Option<String>,
-    /// Bounds of the root envelope, or of the coordinates when there is none.
-    lower: [f64; 3],
-    upper: [f64; 3],
-    has_root_envelope: bool,
-    /// Every gml:id, in document order (duplicates kept once).
-    ids: Vec<String>,
-    /// Member kinds in order of first appearance.
-    kinds: Vec<Key>,
-}
-
-fn xml_err(path: &Path, pos: u64, e: impl std::fmt::Display) -> ReadError {
-    ReadError::Xml {
-        loc: Location {
-            file: path.to_path_buf(),
-            ..Default::default()
-        },
-        message: format!("at byte {pos}: {e}"),
-    }
-}
-
-fn open(path: &Path) -> Result<NsReader<Box<dyn std::io::BufRead + Send>>, ReadError> {
-    let (mut r, _) = source::open(path)?;
-    source::skip_bom(&mut r, path)?;
-    let mut reader = NsReader::from_reader(r);
-    reader.config_mut().expand_empty_elements = false;
-    reader.config_mut().trim_text(false);
-    Ok(reader)
-}
-
-/// GML properties of a feature collection that come before its members.
-fn is_header(ns: &[u8], local: &[u8]) -> bool {
-    classify(ns) == Ns::Gml
-        && matches!(
-            local,
-            b"metaDataProperty"
-                | b"description"
-                | b"descriptionReference"
-                | b"identifier"
-                | b"name"
-                | b"boundedBy"
-                | b"location"
-        )
-}
-
-fn ns_of(r: ResolveResult<'_>) -> Vec<u8> {
-    match r {
-        ResolveResult::Bound(ns) => ns.as_ref().to_vec(),
-        _ => Vec::new(),
-    }
-}
-
-fn parse_coords(text: &str, dim: usize, lower: &mut [f64; 3], upper: &mut [f64; 3]) {
-    let vals: Vec<f64> = text
-        .split_ascii_whitespace()
-        .filter_map(|t| t.parse().ok())
-        .collect();
-    if dim < 2 {
-        return;
-    }
-    for p in vals.chunks_exact(dim) {
-        for (i, v) in p.iter().take(3).enumerate() {
-            lower[i] = lower[i].min(*v);
-            upper[i] = upper[i].max(*v);
-        }
-    }
-}
-
 fn version_of(ns: &[u8]) -> String {
     String::from_utf8_lossy(ns.rsplit(|&c| c == b'/').next().unwrap_or(b"?")).into_owned()
 }
-
-fn scan(path: &Path) -> Result<Scan, ReadError> {
-    let mut reader = open(path)?;
-    let mut s = Scan {
-        lower: [f64::INFINITY; 3],
-        upper: [f64::NEG_INFINITY; 3],
-        ..Default::default()
-    };
-    let mut env_lower = [f64::INFINITY; 3];
-    let mut env_upper = [f64::NEG_INFINITY; 3];
-    let mut buf = Vec::new();
-    let mut depth = 0usize;
-    // Inside the root's gml:boundedBy (depth where it opened).
-    let mut in_root_bound = false;
-    // Collecting coordinates: the local name and dimension of the open coordinate element.
-    let mut coord: Option<(&'static str, usize)> = None;
-    let mut coord_text = String::new();
-    let mut seen_ids = HashSet::new();
-    let mut seen_kinds = HashSet::new();
-    loop {
-        let pos = reader.buffer_position();
-        let ev = reader
-            .read_event_into(&mut buf)
-            .map_err(|e| xml_err(path, pos, e))?;
-        match ev {
-            Event::Eof => break,
-            Event::Decl(_) | Event::Comment(_) | Event::PI(_) | Event::DocType(_)
-                if depth == 0 && s.root.is_empty() =>
-            {
-                let mut w = Writer::new(Vec::new());
-                w.write_event(ev.borrow())
-                    .map_err(|e| xml_err(path, pos, e))?;
-                s.prolog.push(w.into_inner());
-            }
-            Event::Start(ref e) | Event::Empty(ref e) => {
-                let empty = matches!(ev, Event::Empty(_));
-                let (ns, local) = reader.resolve_element(e.name());
-                let ns = ns_of(ns);
-                let local = local.as_ref().to_vec();
-                if depth == 0 {
-                    s.root = e.to_vec();
-                    s.root_ns = ns.clone();
-                    for a in e.attributes().with_checks(false).flatten() {
-                        let key = a.key.as_ref();
-                        if key == b"xmlns" {
-                            s.decls.push((Vec::new(), a.value.to_vec()));
-                        } else if let Some(p) = key.strip_prefix(b"xmlns:") {
-                            s.decls.push((p.to_vec(), a.value.to_vec()));
-                        }
-                    }
-                } else if depth == 1 {
-                    if !is_header(&ns, &local) && seen_kinds.insert((ns.clone(), local.clone())) {
-                        s.kinds.push((ns.clone(), local.clone()));
-                    }
-                    in_root_bound = !empty && classify(&ns) == Ns::Gml && local == b"boundedBy";
-                }
-                for a in e.attributes().with_checks(false).flatten() {
-                    let (ans, alocal) = reader.resolve_attribute(a.key);
-                    let ans = ns_of(ans);
-                    let value = || {
-                        a.unescape_value()
-                            .map(|v| v.into_owned())
-                            .map_err(|err| xml_err(path, pos, err))
-                    };
-                    match alocal.as_ref() {
-                        b"id" if classify(&ans) == Ns::Gml => {
-                            let v = value()?;
-                            if seen_ids.insert(v.clone()) {
-                                s.ids.push(v);
-                            }
-                        }
-                        b"srsName"
-                            if ans.is_empty()
-                                && (s.srs.is_none() || (in_root_bound && local == b"Envelope")) =>
-                        {
-                            s.srs = Some(value()?);
-                        }
-                        b"schemaLocation"
-                            if depth == 0
-                                && ans == b"http://www.w3.org/2001/XMLSchema-instance" =>
-                        {
-                            s.schema_location = Some(value()?);
-                        }
-                        _ => {}
-                    }
-                }
-                if classify(&ns) == Ns::Gml && !empty {
-                    let dim = e
-                        .try_get_attribute("srsDimension")
-                        .ok()
-                        .flatten()
-                        .and_then(|a| std::str::from_utf8(&a.value).ok()?.trim().parse().ok())
-                        .unwrap_or(3usize);
-                    coord = match local.as_slice() {
-                        b"lowerCorner" if in_root_bound => Some(("lower", dim)),
-                        b"upperCorner" if in_root_bound => Some(("upper", dim)),
-                        b"pos" | b"posList" if !in_root_bound => Some(("pos", dim)),
-                        _ => None,
-                    };
-                    coord_text.clear();
-                }
-                if !empty {
-                    depth += 1;
-                }
-            }
-            Event::Text(ref t) if coord.is_some() => {
-                coord_text.push_str(&t.decode().map_err(|e| xml_err(path, pos, e))?);
-            }
-            Event::End(_) => {
-                if let Some((what, dim)) = coord.take() {
-                    match what {
-                        "lower" | "upper" => {
-                            let mut lo = [f64::INFINITY; 3];
-                            let mut hi = [f64::NEG_INFINITY; 3];
-                            parse_coords(&coord_text, dim, &mut lo, &mut hi);
-                            if lo[0].is_finite() {
-                                s.has_root_envelope = true;
-                                let (l, h) = (&mut env_lower, &mut env_upper);
-                                for i in 0..3 {
-                                    if lo[i].is_finite() {
-                                        l[i] = l[i].min(lo[i]);
-                                        h[i] = h[i].max(hi[i]);
-                                    }
-                                }
-                            }
-                        }
-                        _ => parse_coords(&coord_text, dim, &mut s.lower, &mut s.upper),
-                    }
-                }
-                depth = depth.saturating_sub(1);
-                if depth == 1 {
-                    in_root_bound = false;
-                }
-            }
-            _ => {}
-        }
-        buf.clear();
-    }
-    if s.root.is_empty() {
-        return Err(ReadError::Empty(path.to_path_buf()));
-    }
-    if s.has_root_envelope {
-        s.lower = env_lower;
-        s.upper = env_upper;
-    }
-    Ok(s)
-}
-
 /// Format a coordinate as the writers do: shortest round-trip decimal.
 fn num(v: f64) -> String {
     if v == v.trunc() && v.abs() < 1e15 {
@@ -392,7 +145,6 @@ fn num(v: f64) -> String {
         format!("{v}")
     }
 }
-
 /// Refuse, before any work, inputs that cannot be merged once converted: different CityGML
 /// versions, and — when `same_crs_needed` (outputs keep their input's CRS; not after a
 /// reprojection to one target) — different CRSs. Reads only each document's head: the root
@@ -743,210 +495,11 @@ pub fn merge_named(
     })
 }
 
-fn xmlns_key(prefix: &[u8]) -> Vec<u8> {
-    if prefix.is_empty() {
-        b"xmlns".to_vec()
-    } else {
-        [b"xmlns:".as_slice(), prefix].concat()
-    }
-}
-
-struct CountingWriter<'a> {
-    inner: &'a mut dyn Write,
-    n: u64,
-}
-
-impl Write for CountingWriter<'_> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.n += n as u64;
-        Ok(n)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
-}
-
-/// Renaming applied to the members of one input.
-struct Rewrite<'a> {
-    ids: &'a HashMap<String, String>,
-    /// Declarations added to each member's start tag.
-    decls: &'a [(Vec<u8>, Vec<u8>)],
-    rewritten: usize,
-}
-
-enum CopyError {
-    Read(ReadError),
-    Io(std::io::Error),
-}
-
-/// Copy the children of the root of `path` that `want` selects (by namespace URI and local
-/// name), each on its own line, applying `rw`. Returns how many were copied.
-fn copy_children(
-    path: &Path,
-    out: &mut dyn Write,
-    mut rw: Option<&mut Rewrite<'_>>,
-    want: &mut dyn FnMut(&[u8], &[u8]) -> bool,
-) -> Result<usize, CopyError> {
-    let mut reader = open(path).map_err(CopyError::Read)?;
-    let mut w = Writer::new(out);
-    let mut buf = Vec::new();
-    let mut depth = 0usize;
-    let mut copying = false;
-    let mut in_target = false;
-    let mut n = 0;
-    loop {
-        let pos = reader.buffer_position();
-        let ev = reader
-            .read_event_into(&mut buf)
-            .map_err(|e| CopyError::Read(xml_err(path, pos, e)))?;
-        match &ev {
-            Event::Eof => break,
-            Event::Start(e) | Event::Empty(e) => {
-                let empty = matches!(ev, Event::Empty(_));
-                if depth == 1 {
-                    let (ns, local) = reader.resolve_element(e.name());
-                    copying = want(&ns_of(ns), local.as_ref());
-                    if copying {
-                        n += 1;
-                        w.get_mut().write_all(b"\n ").map_err(CopyError::Io)?;
-                    }
-                }
-                if copying {
-                    let (ens, elocal) = reader.resolve_element(e.name());
-                    in_target = !empty
-                        && elocal.as_ref() == b"target"
-                        && matches!(classify(&ns_of(ens)), Ns::CityGml(..));
-                    let start = match rw.as_deref_mut() {
-                        Some(r) => rewrite_start(&reader, e, r, depth == 1, path, pos)
-                            .map_err(CopyError::Read)?,
-                        None => None,
-                    };
-                    let e = start.as_ref().unwrap_or(e).borrow();
-                    let ev = if empty {
-                        Event::Empty(e)
-                    } else {
-                        Event::Start(e)
-                    };
-                    w.write_event(ev).map_err(CopyError::Io)?;
-                }
-                if !empty {
-                    depth += 1;
-                }
-            }
-            Event::End(_) => {
-                depth = depth.saturating_sub(1);
-                if copying {
-                    w.write_event(ev.borrow()).map_err(CopyError::Io)?;
-                }
-                in_target = false;
-                if depth == 1 {
-                    copying = false;
-                }
-            }
-            Event::Text(t) if copying && in_target => {
-                let text = t
-                    .decode()
-                    .map_err(|e| CopyError::Read(xml_err(path, pos, e)))?;
-                let trimmed = text.trim();
-                let new = rw.as_deref_mut().and_then(|r| {
-                    let id = trimmed.strip_prefix('#')?;
-                    let new = r.ids.get(id)?;
-                    r.rewritten += 1;
-                    Some(text.replace(trimmed, &format!("#{new}")))
-                });
-                match new {
-                    Some(s) => w
-                        .write_event(Event::Text(BytesText::new(&s)))
-                        .map_err(CopyError::Io)?,
-                    None => w.write_event(ev.borrow()).map_err(CopyError::Io)?,
-                }
-            }
-            _ if copying => w.write_event(ev.borrow()).map_err(CopyError::Io)?,
-            _ => {}
-        }
-        buf.clear();
-    }
-    Ok(n)
-}
-
-/// The start tag `e` with renamed ids and references (and, on a member, the declarations the
-/// input needs), or `None` when nothing changes.
-fn rewrite_start<R>(
-    reader: &NsReader<R>,
-    e: &BytesStart<'_>,
-    rw: &mut Rewrite<'_>,
-    member: bool,
-    path: &Path,
-    pos: u64,
-) -> Result<Option<BytesStart<'static>>, ReadError> {
-    let add_decls = member && !rw.decls.is_empty();
-    if rw.ids.is_empty() && !add_decls {
-        return Ok(None);
-    }
-    let mut changed = add_decls;
-    let mut attrs: Vec<(Vec<u8>, Vec<u8>)> = Vec::new();
-    for a in e.attributes().with_checks(false) {
-        let a = a.map_err(|err| xml_err(path, pos, err))?;
-        let (ns, local) = reader.resolve_attribute(a.key);
-        let ns = ns_of(ns);
-        let kind = match local.as_ref() {
-            b"id" if classify(&ns) == Ns::Gml => Some(false),
-            b"href" if classify(&ns) == Ns::Xlink => Some(true),
-            b"uri" if ns.is_empty() => Some(true),
-            _ => None,
-        };
-        let mut value = a.value.to_vec();
-        if let Some(is_ref) = kind {
-            let v = a.unescape_value().map_err(|err| xml_err(path, pos, err))?;
-            let id = if is_ref {
-                v.strip_prefix('#')
-            } else {
-                Some(&*v)
-            };
-            if let Some(new) = id.and_then(|id| rw.ids.get(id)) {
-                let new = if is_ref {
-                    format!("#{new}")
-                } else {
-                    new.clone()
-                };
-                value = escape(new.as_str()).as_bytes().to_vec();
-                changed = true;
-                if is_ref {
-                    rw.rewritten += 1;
-                }
-            }
-        }
-        attrs.push((a.key.as_ref().to_vec(), value));
-    }
-    if !changed {
-        return Ok(None);
-    }
-    let name = String::from_utf8_lossy(e.name().as_ref()).into_owned();
-    let mut out = BytesStart::new(name);
-    for (k, v) in &attrs {
-        out.push_attribute(Attribute {
-            key: QName(k),
-            value: v.as_slice().into(),
-        });
-    }
-    if add_decls {
-        for (p, u) in rw.decls {
-            let key = xmlns_key(p);
-            if !attrs.iter().any(|(k, _)| *k == key) {
-                out.push_attribute(Attribute {
-                    key: QName(&key),
-                    value: u.as_slice().into(),
-                });
-            }
-        }
-    }
-    Ok(Some(out))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use quick_xml::name::ResolveResult;
+    use quick_xml::NsReader;
 
     fn doc(ns_default: bool, ids: &[&str], x: f64) -> String {
         let members: String = ids

@@ -1,0 +1,49 @@
+//! The errors that stop the pipeline.
+
+use crate::crs::CrsError;
+use crate::lod::bound::BoundError;
+use crate::lod::select::SelectError;
+use crate::pipeline::evaluation::EvalError;
+use crate::poi::checks::TrustError;
+use crate::runtime::progress::Cancelled;
+use crate::solar::SolarError;
+
+/// Errors of the pipeline that stop it (a file that cannot be read does not: see
+/// [`Inputs::failures`](super::Inputs::failures)).
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    /// The model or the POIs would give a confidently wrong answer.
+    #[error(transparent)]
+    Trust(#[from] TrustError),
+    /// The POIs could not be converted from their CRS to the model's.
+    #[error("--poi-crs {from}: {source}")]
+    PoiCrs {
+        /// The POIs' CRS.
+        from: String,
+        /// Why.
+        source: CrsError,
+    },
+    /// The POIs are in another CRS but the model's is not known.
+    #[error("--poi-crs {from}: the model's CRS ({model}) is not known, so POIs cannot be converted to it (give --source-crs)")]
+    UnknownModelCrs {
+        /// The POIs' CRS.
+        from: String,
+        /// The model's CRS as named.
+        model: String,
+    },
+    /// The selection failed (or was cancelled).
+    #[error(transparent)]
+    Select(#[from] SelectError),
+    /// The error bound could not be computed.
+    #[error(transparent)]
+    Bound(#[from] BoundError),
+    /// The evaluation could not be made.
+    #[error(transparent)]
+    Eval(EvalError),
+    /// Invalid solar options (e.g. a horizon step out of range).
+    #[error(transparent)]
+    Solar(#[from] SolarError),
+    /// The caller asked to stop.
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
+}

@@ -1,0 +1,132 @@
+//! Step 2: the model and the POIs in the local metric frame the tracing works in.
+
+use super::PipelineError;
+use crate::crs::{build_transform, model_crs, Crs, LocalFrame, PointTransform};
+use crate::model::CityModel;
+use crate::model::Poi;
+use crate::poi::checks;
+use std::borrow::Cow;
+
+/// How the model and the POIs are brought into the tracing frame ([`frame`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameOptions {
+    /// CRS of the inputs instead of their `srsName` (written into the model's files, so
+    /// reports and the sun's site see it).
+    pub source_crs: Option<Crs>,
+    /// CRS of the POIs when it is not the model's.
+    pub poi_crs: Option<Crs>,
+    /// POIs farther than this (m) outside the scene's bounding box are refused.
+    pub poi_margin: f64,
+}
+
+impl Default for FrameOptions {
+    fn default() -> Self {
+        FrameOptions {
+            source_crs: None,
+            poi_crs: None,
+            poi_margin: checks::DEFAULT_POI_MARGIN,
+        }
+    }
+}
+
+/// The model and POIs in the local metric frame, with what reports need.
+#[derive(Debug)]
+pub struct Framed<'a> {
+    /// The model as read (CRS of the input): what outputs are written from.
+    pub source: &'a CityModel,
+    /// The model in the local frame: what is traced.
+    pub model: Cow<'a, CityModel>,
+    /// The model's CRS.
+    pub crs: Crs,
+    /// The frame.
+    pub frame: LocalFrame,
+    /// POIs in the model's CRS (for reports).
+    pub pois: Vec<Poi>,
+    /// POIs in the local frame (for tracing).
+    pub local_pois: Vec<Poi>,
+    /// What the caller should tell the user (other CRSs named by the inputs, the frame
+    /// chosen, its accuracy).
+    pub warnings: Vec<String>,
+    /// A note on the frame when it is not the identity ("tracing in ...").
+    pub note: Option<String>,
+}
+
+/// Apply `source_crs`, choose the frame, convert `pois` from `poi_crs` to the model's CRS
+/// and everything into the frame; refuse POIs farther than `poi_margin` outside the scene.
+///
+/// # Errors
+/// [`PipelineError::PoiCrs`], [`PipelineError::UnknownModelCrs`], [`PipelineError::Trust`].
+pub fn frame<'a>(
+    model: &'a mut CityModel,
+    pois: Vec<Poi>,
+    opts: &FrameOptions,
+) -> Result<Framed<'a>, PipelineError> {
+    if let Some(c) = &opts.source_crs {
+        for f in &mut model.files {
+            f.srs_name = Some(c.name.clone());
+        }
+    }
+    let source: &'a CityModel = model;
+    let crs = model_crs(source, opts.source_crs.as_ref());
+    let mut warnings = Vec::new();
+    let others: Vec<String> = source
+        .files
+        .iter()
+        .filter_map(|f| f.srs_name.as_deref())
+        .map(Crs::parse)
+        .filter(|c| !c.compatible(&crs))
+        .map(|c| c.to_string())
+        .collect();
+    if !others.is_empty() {
+        warnings.push(format!(
+            "inputs name other CRSs than {crs} ({}); all are traced as {crs}",
+            others.join(", ")
+        ));
+    }
+    // every point of a city: one pass for the frame and the POI check (and none more when
+    // the frame is the identity)
+    let source_bbox = source.bbox();
+    let (frame, warning) = LocalFrame::new(&crs, &source_bbox);
+    warnings.extend(warning.map(|w| w.to_string()));
+    let note = (!frame.is_identity()).then(|| format!("{crs}: tracing in {}", frame.describe()));
+    let pois = match &opts.poi_crs {
+        Some(pc) => {
+            if !crs.is_known() {
+                return Err(PipelineError::UnknownModelCrs {
+                    from: pc.to_string(),
+                    model: crs.to_string(),
+                });
+            }
+            build_transform()
+                .pois(pc, &crs, &pois)
+                .map_err(|source| PipelineError::PoiCrs {
+                    from: pc.to_string(),
+                    source,
+                })?
+        }
+        None => pois,
+    };
+    let local_pois: Vec<Poi> = pois.iter().map(|p| frame.poi_to_local(p)).collect();
+    let local = frame.model_to_local(source);
+    let local_bbox = match &local {
+        Cow::Borrowed(_) => source_bbox,
+        Cow::Owned(m) => m.bbox(),
+    };
+    checks::check_pois_near_in_frame(
+        &local_bbox,
+        &local_pois,
+        &source_bbox,
+        &pois,
+        opts.poi_margin,
+    )?;
+    Ok(Framed {
+        source,
+        model: local,
+        crs,
+        frame,
+        pois,
+        local_pois,
+        warnings,
+        note,
+    })
+}

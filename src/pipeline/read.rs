@@ -1,0 +1,106 @@
+//! Step 1: the inputs read and merged, and the checks of the model alone.
+
+use crate::citygml::{read_file, ReadError};
+use crate::model::CityModel;
+use crate::poi::checks::{self, TrustError};
+use crate::runtime::progress::{check, Cancelled, Progress, Stage};
+use rayon::prelude::*;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The inputs that could be read, merged in input order.
+#[derive(Debug, Default)]
+pub struct Inputs {
+    /// All inputs read, merged ([`CityModel::merge`]): `model.files[k]` is `read[k]`.
+    pub model: CityModel,
+    /// Paths read successfully, in input order.
+    pub read: Vec<PathBuf>,
+    /// Inputs that could not be read (file, line:column, reason), in input order.
+    pub failures: Vec<ReadError>,
+    /// Seconds spent reading.
+    pub read_s: f64,
+}
+
+impl Inputs {
+    /// Refuse a model that would give a confidently wrong answer whatever the POIs: inputs
+    /// whose CRSs differ (unless `allow_mixed_crs`), a model without heights. Nothing read
+    /// passes.
+    ///
+    /// # Errors
+    /// [`TrustError`].
+    pub fn check(&self, allow_mixed_crs: bool) -> Result<(), TrustError> {
+        if self.read.is_empty() {
+            return Ok(());
+        }
+        check_model(&self.model, allow_mixed_crs)
+    }
+}
+
+/// The checks of [`Inputs::check`] on a model.
+///
+/// # Errors
+/// [`TrustError`].
+pub fn check_model(model: &CityModel, allow_mixed_crs: bool) -> Result<(), TrustError> {
+    if !allow_mixed_crs {
+        checks::check_same_crs(model)?;
+    }
+    checks::check_heights(model)
+}
+
+/// Read `paths` in parallel ([`Stage::Read`]: files and bytes) and merge them in input
+/// order. A file that cannot be read goes to [`Inputs::failures`].
+///
+/// # Errors
+/// [`Cancelled`] when `progress` asks to stop (before a file is started).
+pub fn read_inputs(paths: &[PathBuf], progress: &dyn Progress) -> Result<Inputs, Cancelled> {
+    let t = Instant::now();
+    let sizes: Vec<u64> = paths
+        .iter()
+        .map(|p| std::fs::metadata(p).map_or(0, |m| m.len()))
+        .collect();
+    progress.start(Stage::Read, paths.len() as u64, sizes.iter().sum());
+    let results: Result<Vec<_>, Cancelled> = paths
+        .par_iter()
+        .zip(&sizes)
+        .map(|(p, size)| {
+            check(progress, Stage::Read)?;
+            let r = read_file(p);
+            progress.advance(Stage::Read, 1, *size, Some(&p.display().to_string()));
+            Ok(r)
+        })
+        .collect();
+    progress.finish(Stage::Read);
+    let mut inputs = Inputs::default();
+    for (p, r) in paths.iter().zip(results?) {
+        match r {
+            Ok(m) => {
+                inputs.model.merge(m);
+                inputs.read.push(p.clone());
+            }
+            Err(e) => inputs.failures.push(e),
+        }
+    }
+    // the reader's registry, id log and arena are freed: a large model's pages go back
+    // before the next stage's large blocks are mapped
+    crate::runtime::mem::give_back_for(inputs.model.assets.len());
+    inputs.read_s = t.elapsed().as_secs_f64();
+    Ok(inputs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::test_support::*;
+
+    #[test]
+    fn unreadable_input_is_a_failure_not_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let bad = dir.path().join("bad.gml");
+        std::fs::write(&bad, "<CityModel").unwrap();
+        let inputs =
+            read_inputs(&[fixture(), bad.clone()], &crate::runtime::progress::Silent).unwrap();
+        assert_eq!(inputs.read, vec![fixture()]);
+        assert_eq!(inputs.failures.len(), 1);
+        assert!(inputs.failures[0].to_string().contains("bad.gml"));
+    }
+}

@@ -1,0 +1,100 @@
+//! What the unit tests of the pipeline share: the fixture, POIs on it, progress that
+//! counts and cancels.
+
+use super::{frame, FrameOptions, Framed, Inputs};
+use crate::model::CityModel;
+use crate::model::Poi;
+use crate::runtime::progress::{Progress, Stage};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+pub(crate) fn fixture() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml")
+}
+
+/// Counts POIs of `stage` (selected or traced); cancels after `stop_after` of them.
+pub(crate) struct Stopper {
+    pub(crate) stage: Stage,
+    pub(crate) selected: AtomicU64,
+    pub(crate) stop_after: u64,
+    pub(crate) stopped: AtomicBool,
+}
+
+impl Stopper {
+    pub(crate) fn new(stage: Stage, stop_after: u64) -> Self {
+        Stopper {
+            stage,
+            selected: AtomicU64::new(0),
+            stop_after,
+            stopped: AtomicBool::new(false),
+        }
+    }
+}
+
+impl Progress for Stopper {
+    fn advance(&self, stage: Stage, items: u64, _: u64, _: Option<&str>) {
+        if stage == self.stage
+            && self.selected.fetch_add(items, Ordering::SeqCst) + items >= self.stop_after
+        {
+            self.stopped.store(true, Ordering::SeqCst);
+        }
+    }
+    fn is_cancelled(&self) -> bool {
+        self.stopped.load(Ordering::SeqCst)
+    }
+}
+
+pub(crate) fn grid_pois(model: &CityModel, n: usize) -> Vec<Poi> {
+    let b = model.bbox();
+    let c = b.center();
+    (0..n)
+        .map(|i| Poi {
+            id: format!("p{i}"),
+            position: glam::DVec3::new(c.x + i as f64 * 0.1, c.y, b.min.z + 1.5),
+            normal: None,
+        })
+        .collect()
+}
+
+/// Sums what each stage was told and what it got.
+#[derive(Default)]
+pub(crate) struct Tally(std::sync::Mutex<Vec<(Stage, &'static str, u64, u64)>>);
+
+impl Progress for Tally {
+    fn start(&self, stage: Stage, items: u64, bytes: u64) {
+        self.0.lock().unwrap().push((stage, "start", items, bytes));
+    }
+    fn advance(&self, stage: Stage, items: u64, bytes: u64, _: Option<&str>) {
+        self.0
+            .lock()
+            .unwrap()
+            .push((stage, "advance", items, bytes));
+    }
+}
+
+impl Tally {
+    pub(crate) fn sum(&self, stage: Stage, what: &str) -> (u64, u64) {
+        self.0
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|e| e.0 == stage && e.1 == what)
+            .fold((0, 0), |a, e| (a.0 + e.2, a.1 + e.3))
+    }
+}
+
+/// `n` POIs on the diagonal of the fixture at 1.5 m (streets and buildings), framed.
+pub(crate) fn framed_with(inputs: &mut Inputs, n: usize) -> Framed<'_> {
+    let b = inputs.model.bbox();
+    let pois = (0..n)
+        .map(|i| {
+            let t = (i as f64 + 0.5) / n as f64;
+            Poi {
+                id: format!("d{i}"),
+                position: b.min.lerp(b.max, t).with_z(b.min.z + 1.5),
+                normal: None,
+            }
+        })
+        .collect();
+    frame(&mut inputs.model, pois, &FrameOptions::default()).unwrap()
+}

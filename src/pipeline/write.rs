@@ -1,0 +1,166 @@
+//! Step 4: each input file written with its assets at their levels.
+
+use super::Levels;
+use crate::citygml::write::WriteOptions;
+use crate::citygml::WriteError;
+use crate::export::{Content, Format};
+use crate::lod::mixed::write_mixed;
+use crate::model::CityModel;
+use crate::runtime::progress::{check, Cancelled, Progress, Stage};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// What [`write_levels`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Written {
+    /// Bytes written (before compression).
+    pub bytes: u64,
+    /// Assets of the file per level (CityGML only; zeros for other formats).
+    pub levels: [usize; 3],
+    /// Asset polygons of the file in the input (CityGML only).
+    pub polygons_in: usize,
+    /// Asset polygons written (CityGML only).
+    pub polygons_out: usize,
+    /// Buildings and building parts left out because nothing of them was kept.
+    pub buildings_dropped: usize,
+    /// What the OBJ / CityJSON writer wrote (formats other than CityGML).
+    pub export: Option<crate::export::ExportSummary>,
+}
+
+/// Write file `file` of `model` (as read, [`Framed::source`](super::Framed::source)) to `out` in `format` with
+/// every asset at its level.
+///
+/// # Errors
+/// [`WriteError`] (the target is checked first; nothing partial is left behind).
+pub fn write_levels(
+    model: &CityModel,
+    file: usize,
+    levels: &Levels,
+    out: &Path,
+    format: Format,
+    wopts: &WriteOptions,
+) -> Result<Written, WriteError> {
+    if format == Format::CityGml {
+        let s = write_mixed(
+            model,
+            file,
+            levels.rough_source(),
+            levels.levels(),
+            out,
+            wopts,
+        )?;
+        return Ok(Written {
+            bytes: s.bytes,
+            levels: s.levels,
+            polygons_in: s.polygons_in,
+            polygons_out: s.polygons_out,
+            buildings_dropped: s.buildings_dropped,
+            export: None,
+        });
+    }
+    let content = Content::Levels {
+        rough: levels.rough_source(),
+        levels: levels.levels(),
+    };
+    let s = crate::export::write(format, model, file, content, out, wopts)?;
+    Ok(Written {
+        bytes: s.bytes,
+        buildings_dropped: buildings_without_kept_assets(model, file, levels.levels()),
+        export: Some(s),
+        ..Written::default()
+    })
+}
+
+/// [`write_levels`] for each `(file, output)` pair, files in parallel ([`Stage::Write`],
+/// cancellable between files); one result per pair, in the order of `targets`.
+///
+/// # Errors
+/// [`Cancelled`] when `progress` asks to stop (files already written stay).
+pub fn write_all(
+    model: &CityModel,
+    targets: &[(usize, PathBuf)],
+    levels: &Levels,
+    format: Format,
+    wopts: &WriteOptions,
+    progress: &dyn Progress,
+) -> Result<Vec<Result<Written, WriteError>>, Cancelled> {
+    progress.start(Stage::Write, targets.len() as u64, 0);
+    // Files in parallel (the caller's rayon pool); results in the order of `targets`.
+    let out: Result<Vec<_>, Cancelled> = targets
+        .par_iter()
+        .map(|(f, path)| {
+            check(progress, Stage::Write)?;
+            let r = write_levels(model, *f, levels, path, format, wopts);
+            progress.advance(Stage::Write, 1, 0, Some(&path.display().to_string()));
+            Ok(r)
+        })
+        .collect();
+    progress.finish(Stage::Write);
+    out
+}
+
+/// Buildings and parts of file `f` that keep no asset (through any part below them): what
+/// the OBJ and CityJSON writers leave out.
+pub fn buildings_without_kept_assets(model: &CityModel, f: usize, levels: &[u8]) -> usize {
+    let mut kept = vec![false; model.buildings.len()];
+    for (a, l) in model.assets.iter().zip(levels) {
+        if *l == 0 {
+            continue;
+        }
+        let mut b = a.building;
+        let mut steps = 0;
+        while let Some(k) = b {
+            if let Some(x) = kept.get_mut(k) {
+                *x = true;
+            }
+            b = model.buildings.get(k).and_then(|x| x.parent);
+            steps += 1;
+            if steps > model.buildings.len() {
+                break;
+            }
+        }
+    }
+    model
+        .buildings
+        .iter()
+        .zip(&kept)
+        .filter(|(b, k)| b.file == f && !**k)
+        .count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::test_support::*;
+    use crate::pipeline::{frame, levels, read_inputs, FrameOptions, LevelsOptions};
+
+    #[test]
+    fn every_stage_advances_as_far_as_it_announced() {
+        let tally = Tally::default();
+        let size = std::fs::metadata(fixture()).unwrap().len();
+        let mut inputs = read_inputs(&[fixture()], &tally).unwrap();
+        assert_eq!(tally.sum(Stage::Read, "start"), (1, size));
+        assert_eq!(tally.sum(Stage::Read, "advance"), (1, size));
+        let pois = grid_pois(&inputs.model, 5);
+        let framed = frame(&mut inputs.model, pois, &FrameOptions::default()).unwrap();
+        let lv = levels(&framed, &LevelsOptions::default(), &tally).unwrap();
+        assert_eq!(tally.sum(Stage::Select, "start").0, 5);
+        assert_eq!(tally.sum(Stage::Select, "advance").0, 5);
+        let n = framed.source.assets.len() as u64;
+        assert_eq!(tally.sum(Stage::Rough, "advance").0, n);
+        let dir = tempfile::tempdir().unwrap();
+        let targets = vec![(0, dir.path().join("a.gml")), (0, dir.path().join("b.gml"))];
+        let w = write_all(
+            framed.source,
+            &targets,
+            &lv,
+            Format::CityGml,
+            &WriteOptions::default(),
+            &tally,
+        )
+        .unwrap();
+        assert!(w.iter().all(Result::is_ok));
+        assert_eq!(tally.sum(Stage::Write, "start").0, 2);
+        assert_eq!(tally.sum(Stage::Write, "advance").0, 2);
+    }
+}
