@@ -161,7 +161,7 @@ impl Plan {
                 // Laid out for all inputs, then this shard's part (each file goes where the
                 // serial run writes it); only that part is checked: other shards may have
                 // written theirs already.
-                let mine = crate::shard_args::files(
+                let mine = crate::args::shard::files(
                     shard,
                     outs.iter().cloned().enumerate().collect(),
                     cmd,

@@ -1,7 +1,7 @@
 //! `skylod sun-hours`.
 
-use crate::common::{arr, ms, out_err, polygons, s_to_ms, warn_flags, SiteArgs, SunArgs};
-use crate::tracing_args::Prepared;
+use crate::args::common::{arr, ms, out_err, polygons, s_to_ms, warn_flags, SiteArgs, SunArgs};
+use crate::args::tracing::Prepared;
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{Site, SunTable};
@@ -11,7 +11,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    tracing: crate::tracing_args::TracingArgs,
+    tracing: crate::args::tracing::TracingArgs,
     #[command(flatten)]
     site: SiteArgs,
     #[command(flatten)]
@@ -90,7 +90,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         for m in MONTHS {
             head.push_str(&format!(" {m:>6}"));
         }
-        if crate::shard_args::header(shard) {
+        if crate::args::shard::header(shard) {
             out_err(writeln!(out, "{head}"))?;
         }
         for (p, h) in pois.iter().zip(hours) {

@@ -2,7 +2,7 @@
 //! format; several inputs go to a mirrored directory or are merged into one document
 //! ([`crate::outputs`]), files in parallel (`--jobs`), the same bytes whatever the number.
 
-use crate::common::{summary_line, JobsArgs};
+use crate::args::common::{summary_line, JobsArgs};
 use crate::log::{error, summary};
 use crate::outputs::{self, Plan, Targets};
 use crate::Outcome;
@@ -34,7 +34,7 @@ pub struct Args {
     #[command(flatten)]
     jobs: JobsArgs,
     #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
+    shard: crate::args::shard::ShardArgs,
 }
 
 /// What one input gave.
@@ -47,7 +47,7 @@ struct Done {
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t0 = Instant::now();
     // `-` (standard input) is spooled to a file: the writer re-reads its source.
-    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
+    let (inputs, _spool) = crate::args::common::expand_inputs_relative(&args.inputs)?;
     let shard = args.shard.resolve()?;
     let (plan, format) = outputs::plan(&inputs, &args.output, args.format)?;
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
@@ -129,7 +129,7 @@ fn one(
     mirror: bool,
 ) -> anyhow::Result<Done> {
     let model = read_file(input)?;
-    let polygons = crate::common::polygons(&model);
+    let polygons = crate::args::common::polygons(&model);
     let warnings = model.warnings.len();
     if mirror {
         outputs::create_parent(out)?;

@@ -1,8 +1,8 @@
 //! `skylod lod` in an array job: a shard writes its levels ([`skylod::batch::shard_levels`]),
 //! `--reduce` writes the model from all shards' levels.
 
-use crate::cmd_lod::Args;
-use crate::common::{ms, warn_flags};
+use crate::args::common::{ms, warn_flags};
+use crate::commands::lod::Args;
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::batch::shard::Shard;
@@ -62,7 +62,7 @@ pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome
         return Ok(Outcome::SomeFailed);
     }
     let pois = args.region.extend(pois, &loaded.model)?;
-    let pois = crate::shard_args::pois(Some(s), pois, "lod");
+    let pois = crate::args::shard::pois(Some(s), pois, "lod");
     let opts = LodOptions {
         rough: args.rough.options()?,
         select: args.select.options(),

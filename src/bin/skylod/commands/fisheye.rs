@@ -1,6 +1,6 @@
 //! `skylod fisheye`.
 
-use crate::common::{PoiArgs, RoughArgs, SilhouetteArgs, SiteArgs, DEFAULT_YEAR};
+use crate::args::common::{PoiArgs, RoughArgs, SilhouetteArgs, SiteArgs, DEFAULT_YEAR};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
@@ -33,9 +33,9 @@ pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
     #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
+    shard: crate::args::shard::ShardArgs,
     #[command(flatten)]
-    scene: crate::scene_args::SceneArgs,
+    scene: crate::args::scene::SceneArgs,
     /// Output SVG (`-` for standard output, one POI only). With several POIs, one file per
     /// POI: `<stem>-<id>.svg`.
     #[arg(short, long)]
@@ -96,14 +96,14 @@ fn output_for(base: &Path, poi: &Poi, many: bool) -> PathBuf {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
+    let _spool = crate::args::common::expand_inputs(&mut args.pois.inputs)?;
     let shard = args.shard.resolve()?;
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
     args.site.check("fisheye")?;
     if let Some((lat, lon)) = args.site.given() {
-        crate::common::lat_lon(Some(lat), Some(lon), "fisheye")?;
+        crate::args::common::lat_lon(Some(lat), Some(lon), "fisheye")?;
     }
     let lod_opts = LodOptions {
         rough: args.rough.options()?,
@@ -113,7 +113,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let many = pois.len() > 1;
     args.scene
         .filter(&mut args.pois, &pois, shard, false, "fisheye")?;
-    let pois = crate::shard_args::pois(shard, pois, "fisheye");
+    let pois = crate::args::shard::pois(shard, pois, "fisheye");
     let outputs: Vec<PathBuf> = pois
         .iter()
         .map(|p| output_for(&args.output, p, many))
@@ -174,7 +174,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         bundles: &bundles,
         levels: (args.colour_by == ColourBy::Level).then_some(lod_opts),
     };
-    let dp = if crate::frames::decimals(&framed.crs) == 8 {
+    let dp = if crate::args::crs::decimals(&framed.crs) == 8 {
         8
     } else {
         2
@@ -185,7 +185,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         &crate::log::reporter(),
         |k, pic| -> anyhow::Result<()> {
             let (poi, out) = (&framed.pois[k], &outputs[k]);
-            crate::common::warn_flags(std::slice::from_ref(poi), std::slice::from_ref(&pic.flags));
+            crate::args::common::warn_flags(
+                std::slice::from_ref(poi),
+                std::slice::from_ref(&pic.flags),
+            );
             let p = poi.position;
             let mut caption = vec![format!(
                 "POI ({:.dp$}, {:.dp$}, {:.2}){}",

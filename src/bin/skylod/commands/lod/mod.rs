@@ -1,6 +1,8 @@
 //! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs.
 
-use crate::common::{ms, warn_flags, OutputArgs, PoiArgs, RoughArgs, SelectArgs};
+pub mod shard;
+
+use crate::args::common::{ms, warn_flags, OutputArgs, PoiArgs, RoughArgs, SelectArgs};
 use crate::log::{error, summary};
 use crate::outputs::{Plan, Targets};
 use crate::Outcome;
@@ -17,7 +19,7 @@ pub struct Args {
     #[command(flatten)]
     pub(crate) pois: PoiArgs,
     #[command(flatten)]
-    pub(crate) region: crate::region_args::RegionArgs,
+    pub(crate) region: crate::args::region::RegionArgs,
     #[command(flatten)]
     pub(crate) out: OutputArgs,
     #[command(flatten)]
@@ -28,13 +30,13 @@ pub struct Args {
     #[arg(long, value_name = "FILE.json")]
     pub(crate) report: Option<PathBuf>,
     #[command(flatten)]
-    pub(crate) bound: crate::bound_args::BoundArgs,
+    pub(crate) bound: crate::args::bound::BoundArgs,
     /// With --shard (or a scheduler's index), -o names this shard's levels file (JSON lines,
     /// `.jsonl`) instead of a model. Without: the model is written as usual.
     #[command(flatten)]
-    pub(crate) shard: crate::shard_args::ShardArgs,
+    pub(crate) shard: crate::args::shard::ShardArgs,
     #[command(flatten)]
-    pub(crate) scene: crate::scene_args::SceneArgs,
+    pub(crate) scene: crate::args::scene::SceneArgs,
     /// Reduce step: write the model (and --report) from the levels files of all shards
     /// (levels combine by maximum) instead of tracing; POIs and options come from the files,
     /// the inputs must be the shards' inputs.
@@ -43,15 +45,15 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.pois.inputs)?;
+    let (inputs, _spool) = crate::args::common::expand_inputs_relative(&args.pois.inputs)?;
     args.pois.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let t_all = Instant::now();
     args.bound.check()?;
     let shard = args.shard.resolve()?;
     if let Some(s) = shard {
-        return crate::lod_shard::shard(args, s, t_all);
+        return crate::commands::lod::shard::shard(args, s, t_all);
     }
-    let reduce = crate::lod_shard::read(&mut args)?;
+    let reduce = crate::commands::lod::shard::read(&mut args)?;
     let pois = match &reduce {
         Some(r) => r.pois.clone(),
         None => args.region.points(&args.pois)?,
@@ -121,7 +123,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let progress = crate::log::reporter();
     let lv = match combined {
         Some(c) => {
-            let lod = crate::lod_shard::result(&framed.model, c, &opts.lod);
+            let lod = crate::commands::lod::shard::result(&framed.model, c, &opts.lod);
             levels_of(&framed, &opts, lod, &progress)?
         }
         None => levels(&framed, &opts, &progress)?,
@@ -138,7 +140,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         if !b.met {
             error!(
                 "the error bound cannot be met at these POIs (nothing written):\n{}",
-                crate::bound_args::failing_lines(b)
+                crate::args::bound::failing_lines(b)
             );
             return Ok(Outcome::SomeFailed);
         }

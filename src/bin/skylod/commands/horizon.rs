@@ -1,7 +1,7 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::common::{arr, out_err, polygons, s_to_ms, warn_flags};
-use crate::tracing_args::Prepared;
+use crate::args::common::{arr, out_err, polygons, s_to_ms, warn_flags};
+use crate::args::tracing::Prepared;
 use crate::Outcome;
 use anyhow::Context;
 use serde_json::json;
@@ -14,7 +14,7 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    tracing: crate::tracing_args::TracingArgs,
+    tracing: crate::args::tracing::TracingArgs,
     /// Azimuth step in degrees (0.01..=90); azimuths 0, step, 2 step, ... below 360.
     #[arg(long, default_value_t = 1.0)]
     step: f64,
@@ -111,7 +111,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         serde_json::to_string_pretty(&doc)? + "\n"
     } else {
         let text = csv(pois, &profiles);
-        if crate::shard_args::header(shard) {
+        if crate::args::shard::header(shard) {
             text
         } else {
             // Shards after the first leave out the header line: concatenated in shard

@@ -2,7 +2,7 @@
 //! (rough model, selection, site, sun, output) flattened into each command so that the
 //! commands cannot drift apart.
 
-use crate::frames::{frame, Framed};
+use crate::args::crs::{frame, Framed};
 use crate::log::{error, summary, warning};
 use crate::Outcome;
 use anyhow::{bail, Context};
@@ -46,9 +46,9 @@ pub struct PoiArgs {
     /// the names differ but the coordinates really are in one CRS).
     #[arg(long)]
     pub allow_mixed_crs: bool,
-    /// `--source-crs`, `--poi-crs`: applied by `crate::frames::frame` after reading.
+    /// `--source-crs`, `--poi-crs`: applied by `crate::args::crs::frame` after reading.
     #[command(flatten)]
-    pub crs: crate::frames::CrsArgs,
+    pub crs: crate::args::crs::CrsArgs,
     /// `--jobs`: threads reading the inputs and tracing the POIs.
     #[command(flatten)]
     pub jobs: JobsArgs,

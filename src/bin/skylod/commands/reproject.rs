@@ -25,7 +25,7 @@ pub struct Args {
     #[arg(long)]
     overwrite: bool,
     #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
+    shard: crate::args::shard::ShardArgs,
 }
 
 #[cfg(not(feature = "proj"))]
@@ -40,7 +40,7 @@ pub fn run(_args: Args) -> anyhow::Result<Outcome> {
 #[cfg(feature = "proj")]
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use anyhow::Context;
-    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
+    let (inputs, _spool) = crate::args::common::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     use crate::outputs::Targets;
     use skylod::citygml::write::WriteOptions;

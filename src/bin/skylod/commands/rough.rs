@@ -1,6 +1,6 @@
 //! `skylod rough`: the rough model (every asset at level 1) written as CityGML.
 
-use crate::frames::SourceCrsArgs;
+use crate::args::crs::SourceCrsArgs;
 use crate::outputs::Targets;
 use crate::Outcome;
 use rayon::prelude::*;
@@ -19,21 +19,21 @@ pub struct Args {
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     #[command(flatten)]
-    out: crate::common::OutputArgs,
+    out: crate::args::common::OutputArgs,
     #[command(flatten)]
-    rough: crate::common::RoughArgs,
+    rough: crate::args::common::RoughArgs,
     #[command(flatten)]
     crs: SourceCrsArgs,
     #[command(flatten)]
-    jobs: crate::common::JobsArgs,
+    jobs: crate::args::common::JobsArgs,
     #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
+    shard: crate::args::shard::ShardArgs,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t0 = std::time::Instant::now();
     let shard = args.shard.resolve()?;
-    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
+    let (inputs, _spool) = crate::args::common::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let opts = args.rough.options()?;
     let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
@@ -97,7 +97,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     crate::log::summary!(
         "{}",
-        crate::common::summary_line(
+        crate::args::common::summary_line(
             "rough",
             ok,
             failed,
