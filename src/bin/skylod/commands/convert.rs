@@ -4,9 +4,10 @@
 
 use crate::args::common::{summary_line, JobsArgs};
 use crate::log::{error, summary};
-use crate::outputs::{self, Plan, Targets};
+use crate::outputs;
 use crate::Outcome;
 use rayon::prelude::*;
+use skylod::batch::outputs::{Plan, Targets};
 use skylod::citygml::read_file;
 use skylod::citygml::write::{write_document, WriteOptions};
 use skylod::export::{Content, Format};
@@ -57,13 +58,18 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         keep_envelopes: false,
     };
     // Every target is refused or accepted before any input is read.
-    let Targets {
-        todo,
+    let (
+        Targets {
+            todo,
+            staging,
+            mirror,
+            write_opts,
+            ..
+        },
         refused,
-        staging,
-        mirror,
-        write_opts,
-    } = plan.targets(&paths, &wopts, shard, "convert", true, |e| error!("{e}"))?;
+    ) = outputs::targets(&plan, &paths, &wopts, shard, "convert", true, |e| {
+        error!("{e}")
+    })?;
     let mut failed = refused;
     let fmt = if staging.is_some() {
         Format::CityGml
@@ -102,8 +108,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             }
         }
     }
-    if let (Some(staging), Plan::Merge(target)) = (&staging, &plan) {
-        if !staging.finish(&parts, &names, target, &wopts, paths.len()) {
+    if let (Some(_), Plan::Merge(target)) = (&staging, &plan) {
+        if !outputs::merge(&parts, &names, target, &wopts, paths.len()) {
             failed += ok;
             ok = 0;
         }

@@ -3,15 +3,15 @@
 use crate::args::common::{PoiArgs, RoughArgs, SilhouetteArgs, SiteArgs, DEFAULT_YEAR};
 use crate::Outcome;
 use anyhow::{bail, Context};
+use skylod::batch::outputs::per_poi;
 use skylod::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use skylod::lod::sky::{SkyPartition, SkyVariant};
 use skylod::lod::LodOptions;
 use skylod::model::AssetKind;
 use skylod::pipeline::{sky_pictures, SkyPictureOptions};
-use skylod::poi::Poi;
 use skylod::solar::fisheye::{cell_shares, fisheye_svg, sun_paths, FisheyeOptions, Projection};
 use skylod::solar::{Site, SkyBundles};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
 enum ProjectionArg {
@@ -73,28 +73,6 @@ pub struct Args {
     rough: RoughArgs,
 }
 
-fn output_for(base: &Path, poi: &Poi, many: bool) -> PathBuf {
-    if !many {
-        return base.to_path_buf();
-    }
-    let stem = base
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "sky".into());
-    let id: String = poi
-        .id
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    base.with_file_name(format!("{stem}-{id}.svg"))
-}
-
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let _spool = crate::args::common::expand_inputs(&mut args.pois.inputs)?;
     let shard = args.shard.resolve()?;
@@ -116,7 +94,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let pois = crate::args::shard::pois(shard, pois, "fisheye");
     let outputs: Vec<PathBuf> = pois
         .iter()
-        .map(|p| output_for(&args.output, p, many))
+        .map(|p| per_poi(&args.output, &p.id, many))
         .collect();
     if many && is_stdout(&args.output) {
         bail!(

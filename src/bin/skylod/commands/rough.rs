@@ -1,9 +1,9 @@
 //! `skylod rough`: the rough model (every asset at level 1) written as CityGML.
 
 use crate::args::crs::SourceCrsArgs;
-use crate::outputs::Targets;
 use crate::Outcome;
 use rayon::prelude::*;
+use skylod::batch::outputs::{Plan, Targets};
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
 use skylod::crs::{model_crs, LocalFrame};
@@ -45,13 +45,16 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // Every target is checked before any work: an input whose output is refused fails
     // (exit 1) without being read; the others are done. A merge writes every input to a
     // staging directory, then merges them into the target.
-    let Targets {
-        todo,
+    let (
+        Targets {
+            todo,
+            staging,
+            mirror,
+            write_opts,
+            ..
+        },
         refused,
-        staging,
-        mirror,
-        write_opts,
-    } = plan.targets(&args.inputs, &wopts, shard, "rough", true, |e| {
+    ) = crate::outputs::targets(&plan, &args.inputs, &wopts, shard, "rough", true, |e| {
         crate::log::error!("{e}")
     })?;
     let mut failed = refused;
@@ -89,8 +92,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
         }
     }
-    if let (Some(st), crate::outputs::Plan::Merge(t)) = (&staging, &plan) {
-        if !st.finish(&parts, &names, t, &wopts, args.inputs.len()) {
+    if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
+        if !crate::outputs::merge(&parts, &names, t, &wopts, args.inputs.len()) {
             failed += ok;
             ok = 0;
         }

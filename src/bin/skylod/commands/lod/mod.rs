@@ -4,9 +4,9 @@ pub mod shard;
 
 use crate::args::common::{ms, warn_flags, OutputArgs, PoiArgs, RoughArgs, SelectArgs};
 use crate::log::{error, summary};
-use crate::outputs::{Plan, Targets};
 use crate::Outcome;
 use anyhow::{bail, Context};
+use skylod::batch::outputs::{Plan, Targets};
 use skylod::citygml::write::{atomic_write_bytes, is_stdout, WriteOptions};
 use skylod::lod::LodOptions;
 use skylod::output::report::{Parameters, Report, Timings};
@@ -68,13 +68,16 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         protect: args.pois.inputs.clone(),
         keep_envelopes: false,
     };
-    let Targets {
-        todo,
+    let (
+        Targets {
+            todo,
+            staging,
+            mirror,
+            write_opts,
+            ..
+        },
         refused,
-        staging,
-        mirror,
-        write_opts,
-    } = plan.targets(&args.pois.inputs, &wopts, None, "lod", true, |e| {
+    ) = crate::outputs::targets(&plan, &args.pois.inputs, &wopts, None, "lod", true, |e| {
         error!("{e:#}");
     })?;
     if refused > 0 {
@@ -201,13 +204,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             *w = Some((shown(out), s.buildings_dropped));
         }
     }
-    if let (Some(st), Plan::Merge(t)) = (&staging, &plan) {
+    if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
         let (parts, names): (Vec<PathBuf>, Vec<PathBuf>) = targets
             .iter()
             .filter(|(f, _)| written.get(*f).is_some_and(Option::is_some))
             .map(|(f, out)| (out.clone(), model.files[*f].path.clone()))
             .unzip();
-        if !st.finish(&parts, &names, t, &wopts, targets.len()) {
+        if !crate::outputs::merge(&parts, &names, t, &wopts, targets.len()) {
             failed = true;
             written.iter_mut().for_each(|w| *w = None);
         }
