@@ -7,10 +7,12 @@
 //! * [`outputs`]: an output name → one output per input, a mirrored tree, or a merge.
 //! * [`shard`]: `--shard I/N` or a scheduler's array index → this run's files or POIs.
 //! * [`shard_levels`]: the levels files `lod` shards write and `--reduce` combines.
+//! * [`reduce`]: the levels files of every shard → the levels one serial run selects.
 //! * [`scene_radius`]: file envelopes → the inputs within `--scene-radius` of the POIs.
 
 pub mod inputs;
 pub mod outputs;
+pub mod reduce;
 pub mod scene_radius;
 pub mod shard;
 pub mod shard_levels;

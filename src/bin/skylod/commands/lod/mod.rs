@@ -55,7 +55,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     let reduce = crate::commands::lod::shard::read(&mut args)?;
     let pois = match &reduce {
-        Some(r) => r.pois.clone(),
+        Some(r) => r.pois().to_vec(),
         None => args.region.points(&args.pois)?,
     };
     let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
@@ -126,7 +126,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let progress = crate::log::reporter();
     let lv = match combined {
         Some(c) => {
-            let lod = crate::commands::lod::shard::result(&framed.model, c, &opts.lod);
+            let lod = skylod::batch::reduce::lod_result(&framed.model, c, &opts.lod);
             levels_of(&framed, &opts, lod, &progress)?
         }
         None => levels(&framed, &opts, &progress)?,
