@@ -6,7 +6,6 @@ use std::process::ExitCode;
 
 mod args;
 mod commands;
-mod export;
 mod log;
 mod outputs;
 

@@ -1,13 +1,16 @@
 //! `-o` of the commands that write per input (`convert`, `rough`, `lod`, `reproject`):
 //! [`skylod::batch::outputs`] lays the outputs out; this module says it in the flags' words,
-//! reports refused targets and the merge.
+//! reports refused targets, the merge and the outputs in other formats than CityGML.
 
 use crate::log::{error, summary, warning};
 use anyhow::anyhow;
+use skylod::batch::inputs::Input;
 use skylod::batch::outputs::{Plan, PlanError, Targets};
 use skylod::batch::shard::Shard;
 use skylod::citygml::merge::{merge_named, MergeSummary};
 use skylod::citygml::write::WriteOptions;
+use skylod::export::{Content, ExportSummary, Format};
+use skylod::model::CityModel;
 use std::path::{Path, PathBuf};
 
 /// A layout error in the flags' words (`-o DIR`, `-o FILE`).
@@ -36,10 +39,10 @@ pub fn usage(e: PlanError) -> anyhow::Error {
 
 /// [`skylod::batch::outputs::plan`] for `-o out` and `--format`.
 pub fn plan(
-    inputs: &[skylod::batch::inputs::Input],
+    inputs: &[Input],
     out: &Path,
-    format: Option<skylod::export::Format>,
-) -> anyhow::Result<(Plan, skylod::export::Format)> {
+    format: Option<Format>,
+) -> anyhow::Result<(Plan, Format)> {
     skylod::batch::outputs::plan(inputs, out, format).map_err(usage)
 }
 
@@ -65,6 +68,36 @@ pub fn targets(
         refused(&e.into());
     }
     Ok((t, n))
+}
+
+/// Write file `file` of `model` in `format` (not CityGML: [`skylod::export::write`]) and
+/// print its summary line.
+pub fn export(
+    format: Format,
+    model: &CityModel,
+    file: usize,
+    content: Content<'_>,
+    out: &Path,
+    wopts: &WriteOptions,
+) -> anyhow::Result<()> {
+    let s = skylod::export::write(format, model, file, content, out, wopts)?;
+    summary!("{}", describe(&s, format, model, file, out));
+    Ok(())
+}
+
+/// [`skylod::export::ExportSummary::describe`] of file `file` of `model`.
+pub fn describe(
+    s: &ExportSummary,
+    format: Format,
+    model: &CityModel,
+    file: usize,
+    out: &Path,
+) -> String {
+    let input = model
+        .files
+        .get(file)
+        .map_or(Path::new(""), |f| f.path.as_path());
+    s.describe(format, input, out)
 }
 
 /// Create the parent directory of an output path (nothing for `-`).

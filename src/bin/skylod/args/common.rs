@@ -456,6 +456,11 @@ pub struct SunArgs {
     pub step: u32,
 }
 
+/// `--format` values.
+pub fn parse_format(s: &str) -> Result<Format, String> {
+    s.parse()
+}
+
 /// Where a command writes its model (`lod`, `rough`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct OutputArgs {
@@ -467,7 +472,7 @@ pub struct OutputArgs {
     pub output: PathBuf,
     /// Output format when the output's name does not tell it (in a directory: the format of
     /// every output, named after its input with the format's ending).
-    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = parse_format)]
     pub format: Option<Format>,
     /// Replace existing output files.
     #[arg(long)]

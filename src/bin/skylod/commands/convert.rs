@@ -27,7 +27,7 @@ pub struct Args {
     #[arg(short, long)]
     output: PathBuf,
     /// Output format when the output's name does not tell it.
-    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::args::common::parse_format)]
     format: Option<Format>,
     /// Replace existing output files.
     #[arg(long)]
@@ -141,7 +141,7 @@ fn one(
         outputs::create_parent(out)?;
     }
     if format != Format::CityGml {
-        crate::export::write(format, &model, 0, Content::Full, out, opts)
+        outputs::export(format, &model, 0, Content::Full, out, opts)
             .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?;
         return Ok(Done {
             line: None,

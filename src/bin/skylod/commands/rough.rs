@@ -148,7 +148,7 @@ fn one(
             rough: &rough,
             levels: &levels,
         };
-        crate::export::write(format, &model, 0, content, out, wopts)?;
+        crate::outputs::export(format, &model, 0, content, out, wopts)?;
         return Ok(Done {
             line: None,
             warnings: model.warnings.len(),

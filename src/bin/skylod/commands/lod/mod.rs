@@ -187,7 +187,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
         };
         match &s.export {
-            Some(e) => summary!("{}", crate::export::describe(format, model, *f, e, out)),
+            Some(e) => summary!("{}", crate::outputs::describe(e, format, model, *f, out)),
             None => summary!(
                 "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
                 model.files[*f].path.display(),
