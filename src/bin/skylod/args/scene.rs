@@ -1,6 +1,6 @@
 //! `--scene-radius M`: read only the inputs within reach of the POIs ([`skylod::batch::scene_radius`]).
 
-use crate::args::common::PoiArgs;
+use crate::args::poi::PoiArgs;
 use anyhow::bail;
 use rayon::prelude::*;
 use skylod::batch::scene_radius::{file_extent, ExtentSource};
@@ -14,7 +14,7 @@ pub struct SceneArgs {
     /// of their coordinates) comes within M (CRS units, metres for projected CRSs,
     /// horizontally) of a POI of this run; the others are not parsed. Needs the POIs from
     /// --poi/--pois in the model's CRS.
-    #[arg(long, value_name = "M", value_parser = crate::args::common::non_negative)]
+    #[arg(long, value_name = "M", value_parser = crate::args::non_negative)]
     pub scene_radius: Option<f64>,
 }
 

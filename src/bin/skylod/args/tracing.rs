@@ -1,10 +1,11 @@
 //! The arguments every tracing command (svf, sun-hours, horizon, evaluate) shares — inputs
 //! and POIs, region, shard, scene radius — and the steps they take before tracing.
 
-use crate::args::common::{expand_inputs, Loaded, PoiArgs, Spool};
+use crate::args::poi::PoiArgs;
 use crate::args::region::RegionArgs;
 use crate::args::scene::SceneArgs;
 use crate::args::shard::ShardArgs;
+use crate::inputs::{expand_inputs, Loaded, Spool};
 use skylod::batch::shard::Shard;
 use skylod::poi::Poi;
 

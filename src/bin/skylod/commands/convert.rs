@@ -2,7 +2,8 @@
 //! format; several inputs go to a mirrored directory or are merged into one document
 //! ([`crate::outputs`]), files in parallel (`--jobs`), the same bytes whatever the number.
 
-use crate::args::common::{summary_line, JobsArgs};
+use crate::args::jobs::JobsArgs;
+use crate::commands::summary_line;
 use crate::log::{error, summary};
 use crate::outputs;
 use crate::Outcome;
@@ -27,7 +28,7 @@ pub struct Args {
     #[arg(short, long)]
     output: PathBuf,
     /// Output format when the output's name does not tell it.
-    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::args::common::parse_format)]
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::args::output::parse_format)]
     format: Option<Format>,
     /// Replace existing output files.
     #[arg(long)]
@@ -48,7 +49,7 @@ struct Done {
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t0 = Instant::now();
     // `-` (standard input) is spooled to a file: the writer re-reads its source.
-    let (inputs, _spool) = crate::args::common::expand_inputs_relative(&args.inputs)?;
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     let shard = args.shard.resolve()?;
     let (plan, format) = outputs::plan(&inputs, &args.output, args.format)?;
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
@@ -135,7 +136,7 @@ fn one(
     mirror: bool,
 ) -> anyhow::Result<Done> {
     let model = read_file(input)?;
-    let polygons = crate::args::common::polygons(&model);
+    let polygons = crate::commands::polygons(&model);
     let warnings = model.warnings.len();
     if mirror {
         outputs::create_parent(out)?;

@@ -1,7 +1,11 @@
 //! `skylod evaluate`: full vs LoD vs all-boxes model, the paper's Tables 1 and 2.
 
-use crate::args::common::{ms, out_err, warn_flags, RoughArgs, SelectArgs, SiteArgs, SunArgs};
+use crate::args::rough::RoughArgs;
+use crate::args::select::SelectArgs;
+use crate::args::site::SiteArgs;
+use crate::args::sun::SunArgs;
 use crate::args::tracing::Prepared;
+use crate::commands::{ms, out_err, warn_flags};
 use crate::Outcome;
 use skylod::lod::LodOptions;
 use skylod::pipeline::evaluation::EvalOptions;

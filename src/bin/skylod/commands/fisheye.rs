@@ -1,6 +1,10 @@
 //! `skylod fisheye`.
 
-use crate::args::common::{PoiArgs, RoughArgs, SilhouetteArgs, SiteArgs, DEFAULT_YEAR};
+use crate::args::poi::PoiArgs;
+use crate::args::rough::RoughArgs;
+use crate::args::select::SilhouetteArgs;
+use crate::args::site::SiteArgs;
+use crate::args::sun::DEFAULT_YEAR;
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::batch::outputs::per_poi;
@@ -74,14 +78,14 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::args::common::expand_inputs(&mut args.pois.inputs)?;
+    let _spool = crate::inputs::expand_inputs(&mut args.pois.inputs)?;
     let shard = args.shard.resolve()?;
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
     args.site.check("fisheye")?;
     if let Some((lat, lon)) = args.site.given() {
-        crate::args::common::lat_lon(Some(lat), Some(lon), "fisheye")?;
+        crate::args::site::lat_lon(Some(lat), Some(lon), "fisheye")?;
     }
     let lod_opts = LodOptions {
         rough: args.rough.options()?,
@@ -163,7 +167,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         &crate::log::reporter(),
         |k, pic| -> anyhow::Result<()> {
             let (poi, out) = (&framed.pois[k], &outputs[k]);
-            crate::args::common::warn_flags(
+            crate::commands::warn_flags(
                 std::slice::from_ref(poi),
                 std::slice::from_ref(&pic.flags),
             );

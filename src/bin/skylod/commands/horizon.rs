@@ -1,7 +1,7 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::args::common::{arr, out_err, polygons, s_to_ms, warn_flags};
 use crate::args::tracing::Prepared;
+use crate::commands::{arr, out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
 use anyhow::Context;
 use serde_json::json;

@@ -40,7 +40,7 @@ pub fn run(_args: Args) -> anyhow::Result<Outcome> {
 #[cfg(feature = "proj")]
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use anyhow::Context;
-    let (inputs, _spool) = crate::args::common::expand_inputs_relative(&args.inputs)?;
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     use skylod::batch::outputs::{Plan, Targets};
     use skylod::citygml::write::WriteOptions;

@@ -19,13 +19,13 @@ pub struct Args {
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     #[command(flatten)]
-    out: crate::args::common::OutputArgs,
+    out: crate::args::output::OutputArgs,
     #[command(flatten)]
-    rough: crate::args::common::RoughArgs,
+    rough: crate::args::rough::RoughArgs,
     #[command(flatten)]
     crs: SourceCrsArgs,
     #[command(flatten)]
-    jobs: crate::args::common::JobsArgs,
+    jobs: crate::args::jobs::JobsArgs,
     #[command(flatten)]
     shard: crate::args::shard::ShardArgs,
 }
@@ -33,7 +33,7 @@ pub struct Args {
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t0 = std::time::Instant::now();
     let shard = args.shard.resolve()?;
-    let (inputs, _spool) = crate::args::common::expand_inputs_relative(&args.inputs)?;
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let opts = args.rough.options()?;
     let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
@@ -100,7 +100,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     crate::log::summary!(
         "{}",
-        crate::args::common::summary_line(
+        crate::commands::summary_line(
             "rough",
             ok,
             failed,

@@ -24,7 +24,7 @@ pub struct Args {
     #[command(flatten)]
     crs: SourceCrsArgs,
     #[command(flatten)]
-    jobs: crate::args::common::JobsArgs,
+    jobs: crate::args::jobs::JobsArgs,
     #[command(flatten)]
     shard: crate::args::shard::ShardArgs,
 }
@@ -39,7 +39,7 @@ struct FileStats<'a> {
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t0 = std::time::Instant::now();
     let shard = args.shard.resolve()?;
-    let _spool = crate::args::common::expand_inputs(&mut args.inputs)?;
+    let _spool = crate::inputs::expand_inputs(&mut args.inputs)?;
     args.inputs = crate::args::shard::files(shard, std::mem::take(&mut args.inputs), "stats");
     if args.inputs.is_empty() {
         return Ok(Outcome::Ok);
@@ -90,14 +90,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         let n_failed = args.inputs.len() - ok.len();
         crate::log::summary!(
             "{}",
-            crate::args::common::summary_line(
-                "stats",
-                ok.len(),
-                n_failed,
-                total.warnings,
-                None,
-                t0
-            )
+            crate::commands::summary_line("stats", ok.len(), n_failed, total.warnings, None, t0)
         );
     }
     let mut out = std::io::stdout().lock();

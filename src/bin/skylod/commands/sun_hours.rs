@@ -1,7 +1,9 @@
 //! `skylod sun-hours`.
 
-use crate::args::common::{arr, ms, out_err, polygons, s_to_ms, warn_flags, SiteArgs, SunArgs};
+use crate::args::site::SiteArgs;
+use crate::args::sun::SunArgs;
 use crate::args::tracing::Prepared;
+use crate::commands::{arr, ms, out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::{Site, SunTable};

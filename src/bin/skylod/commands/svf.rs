@@ -1,8 +1,8 @@
 //! `skylod svf`.
 
-use crate::args::common::{arr, out_err, polygons, s_to_ms, warn_flags};
 use crate::args::crs::decimals;
 use crate::args::tracing::Prepared;
+use crate::commands::{arr, out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
 use serde_json::json;
 use skylod::solar::SkyBundles;

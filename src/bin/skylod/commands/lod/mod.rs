@@ -2,7 +2,11 @@
 
 pub mod shard;
 
-use crate::args::common::{ms, warn_flags, OutputArgs, PoiArgs, RoughArgs, SelectArgs};
+use crate::args::output::OutputArgs;
+use crate::args::poi::PoiArgs;
+use crate::args::rough::RoughArgs;
+use crate::args::select::SelectArgs;
+use crate::commands::{ms, warn_flags};
 use crate::log::{error, summary};
 use crate::Outcome;
 use anyhow::{bail, Context};
@@ -45,7 +49,7 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let (inputs, _spool) = crate::args::common::expand_inputs_relative(&args.pois.inputs)?;
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.pois.inputs)?;
     args.pois.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let t_all = Instant::now();
     args.bound.check()?;

@@ -1,8 +1,8 @@
 //! `skylod lod` in an array job: a shard writes its levels ([`skylod::batch::shard_levels`]),
 //! `--reduce` writes the model from all shards' levels ([`skylod::batch::reduce`]).
 
-use crate::args::common::{ms, warn_flags};
 use crate::commands::lod::Args;
+use crate::commands::{ms, warn_flags};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::batch::reduce::Reduce;
