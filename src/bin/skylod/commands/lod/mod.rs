@@ -1,6 +1,11 @@
-//! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs.
+//! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs, step by step:
+//! outputs laid out and checked ([`write::layout`]), inputs read, levels selected (or
+//! reduced from the shards' levels files, [`shard`]), the error bound, outputs written
+//! ([`write`]) and the report ([`report`]).
 
+pub mod report;
 pub mod shard;
+pub mod write;
 
 use crate::args::output::OutputArgs;
 use crate::args::poi::PoiArgs;
@@ -9,13 +14,9 @@ use crate::args::select::SelectArgs;
 use crate::commands::{ms, warn_flags};
 use crate::log::{error, summary};
 use crate::Outcome;
-use anyhow::{bail, Context};
-use skylod::batch::outputs::{Plan, Targets};
-use skylod::citygml::write::{atomic_write_bytes, is_stdout, WriteOptions};
 use skylod::lod::LodOptions;
-use skylod::output::report::{Parameters, Report, Timings};
-use skylod::pipeline::{levels, levels_of, write_all, LevelsOptions};
-use std::path::{Path, PathBuf};
+use skylod::pipeline::{levels, levels_of, Levels, LevelsOptions};
+use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
@@ -53,52 +54,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.pois.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let t_all = Instant::now();
     args.bound.check()?;
-    let shard = args.shard.resolve()?;
-    if let Some(s) = shard {
-        return crate::commands::lod::shard::shard(args, s, t_all);
+    if let Some(s) = args.shard.resolve()? {
+        return shard::shard(args, s, t_all);
     }
-    let reduce = crate::commands::lod::shard::read(&mut args)?;
+    let reduce = shard::read(&mut args)?;
     let pois = match &reduce {
         Some(r) => r.pois().to_vec(),
         None => args.region.points(&args.pois)?,
     };
-    let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
-    // Every target is checked before any work: a refusal after minutes of reading and
-    // tracing helps nobody, and one scene needs every input, so any refusal is fatal. A merge
-    // (-o FILE or -o - for several inputs) writes each input's model to a staging directory,
-    // then merges them into the target.
-    let wopts = WriteOptions {
-        overwrite: args.out.overwrite,
-        protect: args.pois.inputs.clone(),
-        keep_envelopes: false,
-    };
-    let (
-        Targets {
-            todo,
-            staging,
-            mirror,
-            write_opts,
-            ..
-        },
-        refused,
-    ) = crate::outputs::targets(&plan, &args.pois.inputs, &wopts, None, "lod", true, |e| {
-        error!("{e:#}");
-    })?;
-    if refused > 0 {
-        bail!("{refused} output(s) refused (above): lod writes every input's model, nothing done");
-    }
-    let mut outputs: Vec<Option<PathBuf>> = vec![None; inputs.len()];
-    for (k, out) in todo {
-        if let Some(o) = outputs.get_mut(k) {
-            *o = Some(out);
-        }
-    }
-    if let Some(path) = &args.report {
-        if is_stdout(path) && is_stdout(&args.out.output) {
-            bail!("the model and the report cannot both go to standard output");
-        }
-        check_report_target(path, &args)?;
-    }
+    let layout = write::layout(&args, &inputs)?;
     let rough_opts = args.rough.options()?;
     let select_opts = args.select.options();
     // Outputs are laid out for every input; --scene-radius then leaves out the far ones.
@@ -118,7 +82,6 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         Some(_) => pois,
         None => args.region.extend(pois, &loaded.model)?,
     };
-    let mut failed = loaded.failed;
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
     let opts = LevelsOptions {
         lod: LodOptions {
@@ -136,160 +99,21 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         None => levels(&framed, &opts, &progress)?,
     };
     warn_flags(&framed.pois, &lv.lod.flags);
-    if let Some(b) = &lv.bound {
-        summary!(
-            "error bound: {} promotion(s) in {} round(s), largest SVF error {:.3}%, {:.0} ms",
-            b.promotions.len(),
-            b.rounds,
-            100.0 * b.pois.iter().map(|p| p.svf_error).fold(0.0, f64::max),
-            lv.bound_s * 1e3
-        );
-        if !b.met {
-            error!(
-                "the error bound cannot be met at these POIs (nothing written):\n{}",
-                crate::args::bound::failing_lines(b)
-            );
-            return Ok(Outcome::SomeFailed);
-        }
+    if !bound_holds(&lv) {
+        return Ok(Outcome::SomeFailed);
     }
-    let result = &lv.lod;
     // Written geometry and the report are in the input's CRS.
-    let model = framed.source;
-    let pois = &framed.pois;
-    let rough = lv.rough_source();
-
-    // Files of the model are the inputs that could be read, in input order.
-    let targets: Vec<(usize, PathBuf)> = model
-        .files
-        .iter()
-        .enumerate()
-        .filter_map(|(f, src)| {
-            let k = all_inputs.iter().position(|p| p == &src.path)?;
-            Some((f, outputs.get(k)?.clone()?))
-        })
-        .collect();
     let t_write = Instant::now();
-    if mirror {
-        for (_, out) in &targets {
-            crate::outputs::create_parent(out)?;
-        }
-    }
-    // In a merge, the messages and the report name the merged document.
-    let shown = |out: &Path| match &plan {
-        Plan::Merge(t) => t.display().to_string(),
-        _ => out.display().to_string(),
-    };
-    let results = write_all(model, &targets, &lv, format, &write_opts, &progress)?;
-    let mut written: Vec<Option<(String, usize)>> = vec![None; model.files.len()];
-    for ((f, out), r) in targets.iter().zip(results) {
-        let s = match r {
-            Ok(s) => s,
-            Err(e) => {
-                error!("{e}");
-                failed = true;
-                continue;
-            }
-        };
-        match &s.export {
-            Some(e) => summary!("{}", crate::outputs::describe(e, format, model, *f, out)),
-            None => summary!(
-                "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
-                model.files[*f].path.display(),
-                shown(out),
-                s.levels[0],
-                s.levels[1],
-                s.levels[2],
-                s.polygons_in,
-                s.polygons_out,
-                s.buildings_dropped
-            ),
-        }
-        if let Some(w) = written.get_mut(*f) {
-            *w = Some((shown(out), s.buildings_dropped));
-        }
-    }
-    if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
-        let (parts, names): (Vec<PathBuf>, Vec<PathBuf>) = targets
-            .iter()
-            .filter(|(f, _)| written.get(*f).is_some_and(Option::is_some))
-            .map(|(f, out)| (out.clone(), model.files[*f].path.clone()))
-            .unzip();
-        if !crate::outputs::merge(&parts, &names, t, &wopts, targets.len()) {
-            failed = true;
-            written.iter_mut().for_each(|w| *w = None);
-        }
-    }
-    let write_ms = ms(t_write);
-
-    let timings = Timings {
-        read: loaded.read_ms,
-        rough: result.rough_s * 1e3,
-        bvh: result.bvh_s * 1e3,
-        select: result.select_s * 1e3,
-        write: write_ms,
-        total: ms(t_all),
-    };
-    let mut report = Report::new(
-        model,
-        rough,
-        &result.selection,
-        pois,
-        Parameters::of(
-            &result.selection,
-            args.select.seed,
-            args.select.silhouette.roof_tolerance,
-            &rough_opts,
-        ),
-        timings,
-    );
-    report.set_flags(&result.flags);
-    report.bound = lv.bound.clone();
-    for (f, w) in written.into_iter().enumerate() {
-        if let Some((path, dropped)) = w {
-            let in_file = model.buildings.iter().filter(|b| b.file == f).count();
-            report.record_output(f, path, in_file, dropped);
-        }
-    }
-    let t = &report.totals;
-    summary!(
-        "{} POI(s), {} rays each: assets at level 0/1/2 = {}/{}/{}; polygons {} -> {} ({:.1}%); \
-         {} triangles traced; read {:.0} ms, rough {:.0} ms, bvh {:.0} ms, select {:.0} ms, write {:.0} ms",
-        pois.len(),
-        result.selection.rays,
-        t.levels[0],
-        t.levels[1],
-        t.levels[2],
-        t.polygons_in,
-        t.polygons_out,
-        100.0 * t.polygon_fraction,
-        result.triangles,
-        timings.read,
-        timings.rough,
-        timings.bvh,
-        timings.select,
-        timings.write
-    );
-    if args.region.active() {
-        summary!(
-            "region: one model of {} polygons for {} POIs; their own models hold {:.0} on average, \
-             {} at most ({:.2}x)",
-            t.polygons_out,
-            pois.len(),
-            t.single_poi_polygons_mean,
-            t.single_poi_polygons_max,
-            t.region_over_single_poi
-        );
-    }
-    if let Some(path) = &args.report {
-        let mut json = serde_json::to_vec_pretty(&report)?;
-        json.push(b'\n');
-        atomic_write_bytes(path, &json).context("writing the report")?;
-    }
+    let (written, write_failed) =
+        write::outputs(framed.source, &all_inputs, &layout, &lv, &progress)?;
+    let timings = report::timings(&lv, loaded.read_ms, ms(t_write), t_all);
+    let report = report::report(&args, framed.source, &framed.pois, &lv, written, timings)?;
     // The process ends here: handing a city's model back to the allocator piece by piece
     // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
     std::mem::forget(report);
     std::mem::forget(lv);
     std::mem::forget(framed);
+    let failed = loaded.failed || write_failed;
     std::mem::forget(loaded);
     Ok(if failed {
         Outcome::SomeFailed
@@ -298,12 +122,21 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     })
 }
 
-fn check_report_target(path: &Path, args: &Args) -> anyhow::Result<()> {
-    let opts = WriteOptions {
-        overwrite: args.out.overwrite,
-        ..Default::default()
-    };
-    skylod::citygml::write::check_target(path, &opts, args.pois.inputs.iter().map(|p| p.as_path()))
-        .context("the report")?;
-    Ok(())
+/// The error bound's line, or why it cannot be met (nothing is written then): false.
+fn bound_holds(lv: &Levels) -> bool {
+    let Some(b) = &lv.bound else { return true };
+    summary!(
+        "error bound: {} promotion(s) in {} round(s), largest SVF error {:.3}%, {:.0} ms",
+        b.promotions.len(),
+        b.rounds,
+        100.0 * b.pois.iter().map(|p| p.svf_error).fold(0.0, f64::max),
+        lv.bound_s * 1e3
+    );
+    if !b.met {
+        error!(
+            "the error bound cannot be met at these POIs (nothing written):\n{}",
+            crate::args::bound::failing_lines(b)
+        );
+    }
+    b.met
 }
