@@ -3,13 +3,11 @@
 
 use crate::log::error;
 use crate::Outcome;
-use anyhow::{bail, Context};
+use skylod::batch::inputs::Input;
 use skylod::model::CityModel;
 use std::path::PathBuf;
 
-/// Standard input spooled to a temporary file (removed when this is dropped): the writer
-/// re-reads its source, and a pipe can be read only once.
-pub struct Spool(#[allow(dead_code)] Option<tempfile::TempDir>);
+pub use skylod::batch::inputs::Spool;
 
 /// Expand the input arguments in place ([`skylod::batch::inputs::expand`]: files, directories,
 /// glob patterns, `-`), spooling standard input to a temporary file. Keep the returned
@@ -21,34 +19,12 @@ pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
 }
 
 /// [`expand_inputs`], keeping each input's path relative to its argument (for `-o DIR`; the
-/// spooled standard input is `stdin.gml`).
-pub fn expand_inputs_relative(
-    inputs: &[PathBuf],
-) -> anyhow::Result<(Vec<skylod::batch::inputs::Input>, Spool)> {
-    let expanded = skylod::batch::inputs::expand(inputs)?;
-    let mut spool = None;
-    let mut out = Vec::with_capacity(expanded.len());
-    for i in expanded {
-        if i.path.as_os_str() == "-" {
-            if spool.is_some() {
-                bail!("standard input (-) can be read only once");
-            }
-            let dir = tempfile::Builder::new().prefix("skylod-stdin-").tempdir()?;
-            let path = dir.path().join("stdin");
-            let mut f = std::fs::File::create(&path)
-                .with_context(|| format!("spooling standard input to {}", path.display()))?;
-            std::io::copy(&mut std::io::stdin().lock(), &mut f)
-                .context("reading standard input")?;
-            out.push(skylod::batch::inputs::Input {
-                path,
-                relative: PathBuf::from("stdin.gml"),
-            });
-            spool = Some(dir);
-        } else {
-            out.push(i);
-        }
-    }
-    Ok((out, Spool(spool)))
+/// spooled standard input is `stdin.gml`): [`skylod::batch::inputs::expand_spooled`].
+pub fn expand_inputs_relative(inputs: &[PathBuf]) -> anyhow::Result<(Vec<Input>, Spool)> {
+    Ok(skylod::batch::inputs::expand_spooled(
+        inputs,
+        &mut std::io::stdin().lock(),
+    )?)
 }
 
 /// The inputs that could be read, merged in input order ([`skylod::pipeline::Inputs`]).
