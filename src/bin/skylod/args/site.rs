@@ -2,6 +2,7 @@
 
 use crate::log::summary;
 use anyhow::bail;
+use skylod::crs::Crs;
 use skylod::model::CityModel;
 
 /// Check `--lat`/`--lon` given together, or say that they are needed.
@@ -41,6 +42,36 @@ impl SiteArgs {
             lat_lon(self.lat, self.lon, cmd)?;
         }
         Ok(())
+    }
+
+    /// [`SiteArgs::check`], and the flags' ranges when they are given.
+    pub fn check_given(&self, cmd: &str) -> anyhow::Result<()> {
+        self.check(cmd)?;
+        if let Some((lat, lon)) = self.given() {
+            lat_lon(Some(lat), Some(lon), cmd)?;
+        }
+        Ok(())
+    }
+
+    /// The site of the sun paths: the flags, or else the centre of `model` in `crs` when
+    /// skylod converts it (said on stderr, prefixed by `cmd`); `None` when neither gives one.
+    pub fn for_sun_paths(&self, model: &CityModel, crs: &Crs, cmd: &str) -> Option<(f64, f64)> {
+        if let Some(s) = self.given() {
+            return Some(s);
+        }
+        let bbox = model.bbox();
+        let site = (!bbox.is_empty())
+            .then(|| skylod::crs::site_lat_lon(crs, bbox.center()))
+            .flatten();
+        match site {
+            Some((a, o)) => {
+                summary!("{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {crs}")
+            }
+            None => summary!(
+                "{cmd}: no sun paths: the CRS ({crs}) is not one skylod converts; give --lat/--lon"
+            ),
+        }
+        site
     }
 
     /// The site, from the flags or from `model` ([`site_lat_lon`]).

@@ -1,10 +1,9 @@
 //! `skylod fisheye`.
 
+use crate::args::crs::decimals;
 use crate::args::poi::PoiArgs;
 use crate::args::rough::RoughArgs;
-use crate::args::select::SilhouetteArgs;
 use crate::args::site::SiteArgs;
-use crate::args::sun::DEFAULT_YEAR;
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::batch::outputs::per_poi;
@@ -58,7 +57,7 @@ pub struct Args {
     #[command(flatten)]
     site: SiteArgs,
     /// Year of the sun paths.
-    #[arg(long, default_value_t = DEFAULT_YEAR)]
+    #[arg(long, default_value_t = crate::args::sun::DEFAULT_YEAR)]
     year: i32,
     /// What hit cells are coloured by.
     #[arg(long, value_enum, default_value = "level")]
@@ -71,7 +70,7 @@ pub struct Args {
     seed: u64,
     /// `--threshold`, `--roof-tolerance` of the selection, as `skylod lod`.
     #[command(flatten)]
-    silhouette: SilhouetteArgs,
+    silhouette: crate::args::select::SilhouetteArgs,
     /// The rough model of the selection, as `skylod lod`.
     #[command(flatten)]
     rough: RoughArgs,
@@ -83,10 +82,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
-    args.site.check("fisheye")?;
-    if let Some((lat, lon)) = args.site.given() {
-        crate::args::site::lat_lon(Some(lat), Some(lon), "fisheye")?;
-    }
+    args.site.check_given("fisheye")?;
     let lod_opts = LodOptions {
         rough: args.rough.options()?,
         select: args.silhouette.options(args.select_rays, args.seed),
@@ -122,26 +118,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let framed = args
         .pois
         .frame_checked(&mut loaded.model, pois, "fisheye")?;
-    let site = match args.site.given() {
-        Some(s) => Some(s),
-        _ => {
-            let bbox = framed.source.bbox();
-            let site = (!bbox.is_empty())
-                .then(|| skylod::crs::site_lat_lon(&framed.crs, bbox.center()))
-                .flatten();
-            match site {
-                Some((a, o)) => crate::log::summary!(
-                    "fisheye: site lat {a:.5}, lon {o:.5}: the centre of the model in {}",
-                    framed.crs
-                ),
-                None => crate::log::summary!(
-                    "fisheye: no sun paths: the CRS ({}) is not one skylod converts; give --lat/--lon",
-                    framed.crs
-                ),
-            }
-            site
-        }
-    };
+    let site = args
+        .site
+        .for_sun_paths(framed.source, &framed.crs, "fisheye");
     let paths = match site {
         Some((lat, lon)) => sun_paths(&Site::new(lat, lon), args.year)?,
         None => Vec::new(),
@@ -156,11 +135,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         bundles: &bundles,
         levels: (args.colour_by == ColourBy::Level).then_some(lod_opts),
     };
-    let dp = if crate::args::crs::decimals(&framed.crs) == 8 {
-        8
-    } else {
-        2
-    };
+    let dp = if decimals(&framed.crs) == 8 { 8 } else { 2 };
     sky_pictures(
         &framed,
         &popts,
