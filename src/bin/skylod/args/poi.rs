@@ -1,7 +1,7 @@
 //! Inputs and points of interest (`--poi`, `--pois`, `--poi-margin`, `--allow-mixed-crs`,
 //! with `--source-crs`, `--poi-crs` and `--jobs`), for the commands that trace POIs.
 
-use super::crs::{frame, CrsArgs, Framed};
+use super::crs::{to_local_frame, CrsArgs, Framed};
 use super::jobs::JobsArgs;
 use super::non_negative;
 use crate::inputs::{load, Loaded};
@@ -39,7 +39,7 @@ pub struct PoiArgs {
     /// the names differ but the coordinates really are in one CRS).
     #[arg(long)]
     pub allow_mixed_crs: bool,
-    /// `--source-crs`, `--poi-crs`: applied by `crate::args::crs::frame` after reading.
+    /// `--source-crs`, `--poi-crs`: applied by [`PoiArgs::frame_checked`] after reading.
     #[command(flatten)]
     pub crs: CrsArgs,
     /// `--jobs`: threads reading the inputs and tracing the POIs.
@@ -78,14 +78,15 @@ impl PoiArgs {
         Ok(loaded)
     }
 
-    /// Bring the model and `pois` into the local metric frame ([`frame`]: `--source-crs`,
-    /// `--poi-crs`) and refuse POIs farther than `--poi-margin` metres outside the scene.
+    /// Bring the model and `pois` into the local metric frame ([`to_local_frame`]:
+    /// `--source-crs`, `--poi-crs`) and refuse POIs farther than `--poi-margin` metres outside
+    /// the scene.
     pub fn frame_checked<'a>(
         &self,
         model: &'a mut CityModel,
         pois: Vec<Poi>,
         cmd: &str,
     ) -> anyhow::Result<Framed<'a>> {
-        frame(model, &self.crs, pois, self.poi_margin, cmd)
+        to_local_frame(model, pois, &self.crs.frame_options(self.poi_margin), cmd)
     }
 }
