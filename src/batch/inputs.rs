@@ -1,7 +1,8 @@
 //! The inputs of a command, as users give them: files, directories (searched recursively for
 //! CityGML: `.gml`, `.xml`, `.citygml`, each optionally `.gz`), glob patterns expanded by
 //! skylod itself (`'tiles/**/*.gml'`, quoted so that the shell leaves them alone), and `-` for
-//! standard input (left to the caller, which spools it: the writer re-reads its source).
+//! standard input (spooled to a temporary file by [`expand_spooled`]: the writer re-reads
+//! its source, and a pipe can be read only once).
 //!
 //! Directories and patterns yield CityGML names only (a `README.md` or an `.xsd` beside the
 //! tiles is not an input); a file named directly is read whatever its name.
@@ -57,6 +58,23 @@ pub enum InputError {
         /// Cause.
         source: std::io::Error,
     },
+    /// `-` given more than once.
+    #[error("standard input (-) can be read only once")]
+    StdinTwice,
+    /// The temporary directory of the spooled standard input cannot be made.
+    #[error(transparent)]
+    SpoolDir(std::io::Error),
+    /// The spool file cannot be created.
+    #[error("spooling standard input to {}", .path.display())]
+    SpoolFile {
+        /// The spool file.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// Standard input cannot be read.
+    #[error("reading standard input")]
+    Stdin(#[source] std::io::Error),
 }
 
 /// Whether a file name is a CityGML document skylod reads from a directory.
@@ -170,6 +188,57 @@ pub fn expand(args: &[PathBuf]) -> Result<Vec<Input>, InputError> {
     let mut seen = std::collections::HashSet::new();
     out.retain(|i| i.path.as_os_str() == "-" || seen.insert(i.path.clone()));
     Ok(out)
+}
+
+/// Standard input spooled to a temporary file (removed when this is dropped).
+#[derive(Debug, Default)]
+pub struct Spool(Option<tempfile::TempDir>);
+
+impl Spool {
+    /// Whether standard input was spooled.
+    pub fn is_used(&self) -> bool {
+        self.0.is_some()
+    }
+}
+
+/// [`expand`], with `-` read from `stdin` into a temporary file (the input is that file,
+/// its relative path `stdin.gml`). Keep the returned [`Spool`] alive while the inputs are
+/// read and written.
+///
+/// # Errors
+/// As [`expand`]; `-` given twice; the spool file cannot be made or written.
+pub fn expand_spooled(
+    args: &[PathBuf],
+    stdin: &mut dyn std::io::Read,
+) -> Result<(Vec<Input>, Spool), InputError> {
+    let expanded = expand(args)?;
+    let mut spool = None;
+    let mut out = Vec::with_capacity(expanded.len());
+    for i in expanded {
+        if i.path.as_os_str() != "-" {
+            out.push(i);
+            continue;
+        }
+        if spool.is_some() {
+            return Err(InputError::StdinTwice);
+        }
+        let dir = tempfile::Builder::new()
+            .prefix("skylod-stdin-")
+            .tempdir()
+            .map_err(InputError::SpoolDir)?;
+        let path = dir.path().join("stdin");
+        let mut f = std::fs::File::create(&path).map_err(|source| InputError::SpoolFile {
+            path: path.clone(),
+            source,
+        })?;
+        std::io::copy(stdin, &mut f).map_err(InputError::Stdin)?;
+        out.push(Input {
+            path,
+            relative: PathBuf::from("stdin.gml"),
+        });
+        spool = Some(dir);
+    }
+    Ok((out, Spool(spool)))
 }
 
 #[cfg(test)]

@@ -1,13 +1,18 @@
-//! Batch work: which files a run reads, which part of the work a shard does, the levels
-//! files shards write and their reduce, and which neighbouring tiles a scene needs.
+//! Batch work: which files a run reads and where it writes them, which part of the work a
+//! shard does, the levels files shards write and their reduce, and which neighbouring tiles
+//! a scene needs.
 //!
 //! * [`inputs`]: arguments (files, directories, globs, `-`) → the input files, with the
 //!   relative path each mirrors under `-o DIR`.
+//! * [`outputs`]: an output name → one output per input, a mirrored tree, or a merge.
 //! * [`shard`]: `--shard I/N` or a scheduler's array index → this run's files or POIs.
 //! * [`shard_levels`]: the levels files `lod` shards write and `--reduce` combines.
+//! * [`reduce`]: the levels files of every shard → the levels one serial run selects.
 //! * [`scene_radius`]: file envelopes → the inputs within `--scene-radius` of the POIs.
 
 pub mod inputs;
+pub mod outputs;
+pub mod reduce;
 pub mod scene_radius;
 pub mod shard;
 pub mod shard_levels;

@@ -249,6 +249,39 @@ fn scan(path: &Path) -> Result<Option<Extent>, ExtentError> {
     Ok(ext.is_valid().then_some(ext))
 }
 
+/// Which inputs come within reach of the POIs ([`within_reach`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Reach {
+    /// Per input, in order: whether it is read (within reach, or unreadable: kept so that
+    /// the reader reports it; a file without any coordinate is left out).
+    pub keep: Vec<bool>,
+    /// Inputs without an envelope, whose extent came from a pre-scan.
+    pub scanned: usize,
+}
+
+/// The extents of `inputs` (in parallel) against the points `at`: which come within
+/// `radius` (CRS units, horizontally) of one.
+pub fn within_reach(inputs: &[PathBuf], at: &[DVec3], radius: f64) -> Reach {
+    use rayon::prelude::*;
+    let found: Vec<(bool, Option<ExtentSource>)> = inputs
+        .par_iter()
+        .map(|p| match file_extent(p) {
+            Ok(Some((e, how))) => (e.within(at, radius), Some(how)),
+            // No coordinate at all: nothing of it can occlude.
+            Ok(None) => (false, None),
+            // Unreadable: kept, so that the reader reports it.
+            Err(_) => (true, None),
+        })
+        .collect();
+    Reach {
+        scanned: found
+            .iter()
+            .filter(|(_, h)| *h == Some(ExtentSource::Scan))
+            .count(),
+        keep: found.into_iter().map(|(k, _)| k).collect(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -17,9 +17,12 @@
 //!
 //! [`combine`] reads the files of all N shards and gives what one serial run would have
 //! selected: levels combine by maximum, hits add up, POIs follow in shard order (the order
-//! of the serial run, [`crate::batch::shard`]).
+//! of the serial run, [`crate::batch::shard`]); [`crate::batch::reduce`] makes the
+//! selection of it.
 
 use crate::batch::shard::Shard;
+use crate::citygml::write::atomic_write;
+use crate::citygml::WriteError;
 use crate::lod::select::{PoiSelection, Selection};
 use crate::lod::LodOptions;
 use crate::model::CityModel;
@@ -255,6 +258,26 @@ pub fn write_levels(
         )?;
     }
     Ok(n)
+}
+
+/// [`write_levels`] into the file `out`, atomically (`-`: standard output).
+///
+/// # Errors
+/// [`WriteError`] of the target or of writing.
+pub fn write_levels_file(
+    out: &Path,
+    header: &Header,
+    model: &CityModel,
+    pois: &[Poi],
+    selection: &Selection,
+    flags: &[Vec<PoiFlag>],
+) -> Result<u64, WriteError> {
+    atomic_write(out, |w| {
+        write_levels(w, header, model, pois, selection, flags).map_err(|source| WriteError::Io {
+            file: out.to_path_buf(),
+            source,
+        })
+    })
 }
 
 /// Read a levels file.

@@ -108,6 +108,33 @@ pub struct ExportSummary {
     pub features: usize,
 }
 
+impl ExportSummary {
+    /// One line saying what was written from `input` to `out` in `format`:
+    /// `a.gml -> a.obj (obj): 3 objects, 40 polygons as 80 triangles, 60 vertices, 2048 bytes`.
+    pub fn describe(&self, format: Format, input: &Path, out: &Path) -> String {
+        let what = match format {
+            Format::Obj => format!(
+                "{} objects, {} polygons as {} triangles, {} vertices",
+                self.objects, self.polygons, self.triangles, self.vertices
+            ),
+            Format::CityJsonSeq => format!(
+                "{} city objects in {} features, {} surfaces, {} vertices",
+                self.objects, self.features, self.polygons, self.vertices
+            ),
+            _ => format!(
+                "{} city objects, {} surfaces, {} vertices",
+                self.objects, self.polygons, self.vertices
+            ),
+        };
+        format!(
+            "{} -> {} ({format}): {what}, {} bytes",
+            input.display(),
+            out.display(),
+            self.bytes
+        )
+    }
+}
+
 /// Write file `file` of `model` to `out` in `format` (OBJ, CityJSON or CityJSONSeq), atomically
 /// (temporary file + rename), refusing to write over an input or, without `overwrite`, over an
 /// existing file.

@@ -119,6 +119,30 @@ pub fn write_pois_csv<W: Write>(pois: &[Poi], mut out: W) -> Result<(), SynthErr
     Ok(())
 }
 
+/// Where the POIs of a district written to `out` go by default: beside it, named after it
+/// (`district.gml` / `district.gml.gz` → `district.pois.csv`).
+///
+/// ```
+/// use skylod::synth::pois_path;
+/// use std::path::{Path, PathBuf};
+/// assert_eq!(pois_path(Path::new("a/d.gml")), PathBuf::from("a/d.pois.csv"));
+/// assert_eq!(pois_path(Path::new("d.gml.gz")), PathBuf::from("d.pois.csv"));
+/// assert_eq!(pois_path(Path::new("d")), PathBuf::from("d.pois.csv"));
+/// ```
+pub fn pois_path(out: &std::path::Path) -> std::path::PathBuf {
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let stem = name
+        .strip_suffix(".gz")
+        .unwrap_or(&name)
+        .trim_end_matches(".gml")
+        .trim_end_matches(".xml")
+        .to_string();
+    out.with_file_name(format!("{stem}.pois.csv"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,29 +4,11 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
-mod bound_args;
-mod cmd_completions;
-mod cmd_convert;
-mod cmd_evaluate;
-mod cmd_fisheye;
-mod cmd_horizon;
-mod cmd_lod;
-mod cmd_reproject;
-mod cmd_rough;
-mod cmd_stats;
-mod cmd_sun_hours;
-mod cmd_svf;
-mod cmd_synth;
-mod common;
-mod export;
-mod frames;
-mod lod_shard;
+mod args;
+mod commands;
+mod inputs;
 mod log;
 mod outputs;
-mod region_args;
-mod scene_args;
-mod shard_args;
-mod tracing_args;
 
 /// Skyline-controlled mixed level-of-detail CityGML for solar analysis.
 #[derive(Parser, Debug)]
@@ -42,31 +24,31 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Count buildings, surfaces, installations, openings and polygons per file and in total.
-    Stats(cmd_stats::Args),
+    Stats(commands::stats::Args),
     /// Read a CityGML file and write it back (identity of the pipeline; envelopes recomputed).
-    Convert(cmd_convert::Args),
+    Convert(commands::convert::Args),
     /// Write the rough model (every asset generalised: planes, boxes) as CityGML.
-    Rough(cmd_rough::Args),
+    Rough(commands::rough::Args),
     /// Generate a procedural Barcelona-Eixample LoD3 district (CityGML 2.0) and facade POIs.
-    Synth(cmd_synth::Args),
+    Synth(commands::synth::Args),
     /// Skyline-controlled mixed-LoD CityGML for a set of POIs (rough model, sky bundle, BVH, silhouette selection).
-    Lod(cmd_lod::Args),
+    Lod(commands::lod::Args),
     /// SVF and sun hours on the full, the LoD and the all-boxes model per POI (paper Tables 1-2).
-    Evaluate(cmd_evaluate::Args),
+    Evaluate(commands::evaluate::Args),
     /// Sky view factor and sky exposure of points of interest against the full model.
-    Svf(cmd_svf::Args),
+    Svf(commands::svf::Args),
     /// Direct-sun hours per year and per month of points of interest.
-    SunHours(cmd_sun_hours::Args),
+    SunHours(commands::sun_hours::Args),
     /// Fisheye picture (SVG) of the sky hemisphere seen from a point, with sun paths.
-    Fisheye(cmd_fisheye::Args),
+    Fisheye(commands::fisheye::Args),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
-    Completions(cmd_completions::CompletionArgs),
+    Completions(commands::completions::CompletionArgs),
     /// Print the manual page (roff; `skylod man | man -l -`).
-    Man(cmd_completions::ManArgs),
+    Man(commands::completions::ManArgs),
     /// Horizon profile (skyline elevation per azimuth) of points, as CSV or JSON (PVGIS/pvlib).
-    Horizon(cmd_horizon::Args),
+    Horizon(commands::horizon::Args),
     /// Transform every coordinate into another CRS through PROJ (needs the cargo feature `proj`).
-    Reproject(cmd_reproject::Args),
+    Reproject(commands::reproject::Args),
 }
 
 /// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
@@ -91,19 +73,19 @@ fn main() -> ExitCode {
     log::init(&cli.log);
     log::on_interrupt();
     let result = match cli.command {
-        Command::Stats(a) => cmd_stats::run(a),
-        Command::Convert(a) => cmd_convert::run(a),
-        Command::Rough(a) => cmd_rough::run(a),
-        Command::Synth(a) => cmd_synth::run(a),
-        Command::Lod(a) => cmd_lod::run(a),
-        Command::Evaluate(a) => cmd_evaluate::run(a),
-        Command::Svf(a) => cmd_svf::run(a),
-        Command::SunHours(a) => cmd_sun_hours::run(a),
-        Command::Fisheye(a) => cmd_fisheye::run(a),
-        Command::Completions(a) => cmd_completions::completions(a),
-        Command::Man(a) => cmd_completions::man(a),
-        Command::Horizon(a) => cmd_horizon::run(a),
-        Command::Reproject(a) => cmd_reproject::run(a),
+        Command::Stats(a) => commands::stats::run(a),
+        Command::Convert(a) => commands::convert::run(a),
+        Command::Rough(a) => commands::rough::run(a),
+        Command::Synth(a) => commands::synth::run(a),
+        Command::Lod(a) => commands::lod::run(a),
+        Command::Evaluate(a) => commands::evaluate::run(a),
+        Command::Svf(a) => commands::svf::run(a),
+        Command::SunHours(a) => commands::sun_hours::run(a),
+        Command::Fisheye(a) => commands::fisheye::run(a),
+        Command::Completions(a) => commands::completions::completions(a),
+        Command::Man(a) => commands::completions::man(a),
+        Command::Horizon(a) => commands::horizon::run(a),
+        Command::Reproject(a) => commands::reproject::run(a),
     };
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,

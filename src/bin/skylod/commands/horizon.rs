@@ -1,7 +1,7 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::common::{out_err, polygons, s_to_ms, warn_flags};
-use crate::tracing_args::Prepared;
+use crate::args::tracing::Prepared;
+use crate::commands::{out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
 use anyhow::Context;
 use skylod::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
@@ -15,7 +15,7 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    tracing: crate::tracing_args::TracingArgs,
+    tracing: crate::args::tracing::TracingArgs,
     /// Azimuth step in degrees (0.01..=90); azimuths 0, step, 2 step, ... below 360.
     #[arg(long, default_value_t = 1.0)]
     step: f64,
@@ -114,7 +114,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         serde_json::to_string_pretty(&doc)? + "\n"
     } else {
         let text = csv(pois, &profiles);
-        if crate::shard_args::header(shard) {
+        if crate::args::shard::header(shard) {
             text
         } else {
             // Shards after the first leave out the header line: concatenated in shard

@@ -2,11 +2,13 @@
 //! format; several inputs go to a mirrored directory or are merged into one document
 //! ([`crate::outputs`]), files in parallel (`--jobs`), the same bytes whatever the number.
 
-use crate::common::{summary_line, JobsArgs};
+use crate::args::jobs::JobsArgs;
+use crate::commands::summary_line;
 use crate::log::{error, summary};
-use crate::outputs::{self, Plan, Targets};
+use crate::outputs;
 use crate::Outcome;
 use rayon::prelude::*;
+use skylod::batch::outputs::{Plan, Targets};
 use skylod::citygml::read_file;
 use skylod::citygml::write::{write_document, WriteOptions};
 use skylod::export::{Content, Format};
@@ -26,7 +28,7 @@ pub struct Args {
     #[arg(short, long)]
     output: PathBuf,
     /// Output format when the output's name does not tell it.
-    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::export::parse_format)]
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::args::output::parse_format)]
     format: Option<Format>,
     /// Replace existing output files.
     #[arg(long)]
@@ -34,7 +36,7 @@ pub struct Args {
     #[command(flatten)]
     jobs: JobsArgs,
     #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
+    shard: crate::args::shard::ShardArgs,
 }
 
 /// What one input gave.
@@ -47,7 +49,7 @@ struct Done {
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t0 = Instant::now();
     // `-` (standard input) is spooled to a file: the writer re-reads its source.
-    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     let shard = args.shard.resolve()?;
     let (plan, format) = outputs::plan(&inputs, &args.output, args.format)?;
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
@@ -57,13 +59,18 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         keep_envelopes: false,
     };
     // Every target is refused or accepted before any input is read.
-    let Targets {
-        todo,
+    let (
+        Targets {
+            todo,
+            staging,
+            mirror,
+            write_opts,
+            ..
+        },
         refused,
-        staging,
-        mirror,
-        write_opts,
-    } = plan.targets(&paths, &wopts, shard, "convert", true, |e| error!("{e}"))?;
+    ) = outputs::targets(&plan, &paths, &wopts, shard, "convert", true, |e| {
+        error!("{e}")
+    })?;
     let mut failed = refused;
     let fmt = if staging.is_some() {
         Format::CityGml
@@ -102,8 +109,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             }
         }
     }
-    if let (Some(staging), Plan::Merge(target)) = (&staging, &plan) {
-        if !staging.finish(&parts, &names, target, &wopts, paths.len()) {
+    if let (Some(_), Plan::Merge(target)) = (&staging, &plan) {
+        if !outputs::merge(&parts, &names, target, &wopts, paths.len()) {
             failed += ok;
             ok = 0;
         }
@@ -129,13 +136,13 @@ fn one(
     mirror: bool,
 ) -> anyhow::Result<Done> {
     let model = read_file(input)?;
-    let polygons = crate::common::polygons(&model);
+    let polygons = crate::commands::polygons(&model);
     let warnings = model.warnings.len();
     if mirror {
         outputs::create_parent(out)?;
     }
     if format != Format::CityGml {
-        crate::export::write(format, &model, 0, Content::Full, out, opts)
+        outputs::export(format, &model, 0, Content::Full, out, opts)
             .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?;
         return Ok(Done {
             line: None,

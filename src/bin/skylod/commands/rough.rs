@@ -1,9 +1,9 @@
 //! `skylod rough`: the rough model (every asset at level 1) written as CityGML.
 
-use crate::frames::SourceCrsArgs;
-use crate::outputs::Targets;
+use crate::args::crs::SourceCrsArgs;
 use crate::Outcome;
 use rayon::prelude::*;
+use skylod::batch::outputs::{Plan, Targets};
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
 use skylod::crs::{model_crs, LocalFrame};
@@ -19,21 +19,21 @@ pub struct Args {
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     #[command(flatten)]
-    out: crate::common::OutputArgs,
+    out: crate::args::output::OutputArgs,
     #[command(flatten)]
-    rough: crate::common::RoughArgs,
+    rough: crate::args::rough::RoughArgs,
     #[command(flatten)]
     crs: SourceCrsArgs,
     #[command(flatten)]
-    jobs: crate::common::JobsArgs,
+    jobs: crate::args::jobs::JobsArgs,
     #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
+    shard: crate::args::shard::ShardArgs,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t0 = std::time::Instant::now();
     let shard = args.shard.resolve()?;
-    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let opts = args.rough.options()?;
     let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
@@ -45,13 +45,16 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // Every target is checked before any work: an input whose output is refused fails
     // (exit 1) without being read; the others are done. A merge writes every input to a
     // staging directory, then merges them into the target.
-    let Targets {
-        todo,
+    let (
+        Targets {
+            todo,
+            staging,
+            mirror,
+            write_opts,
+            ..
+        },
         refused,
-        staging,
-        mirror,
-        write_opts,
-    } = plan.targets(&args.inputs, &wopts, shard, "rough", true, |e| {
+    ) = crate::outputs::targets(&plan, &args.inputs, &wopts, shard, "rough", true, |e| {
         crate::log::error!("{e}")
     })?;
     let mut failed = refused;
@@ -89,15 +92,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
         }
     }
-    if let (Some(st), crate::outputs::Plan::Merge(t)) = (&staging, &plan) {
-        if !st.finish(&parts, &names, t, &wopts, args.inputs.len()) {
+    if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
+        if !crate::outputs::merge(&parts, &names, t, &wopts, args.inputs.len()) {
             failed += ok;
             ok = 0;
         }
     }
     crate::log::summary!(
         "{}",
-        crate::common::summary_line(
+        crate::commands::summary_line(
             "rough",
             ok,
             failed,
@@ -145,7 +148,7 @@ fn one(
             rough: &rough,
             levels: &levels,
         };
-        crate::export::write(format, &model, 0, content, out, wopts)?;
+        crate::outputs::export(format, &model, 0, content, out, wopts)?;
         return Ok(Done {
             line: None,
             warnings: model.warnings.len(),

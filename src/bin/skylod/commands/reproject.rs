@@ -25,7 +25,7 @@ pub struct Args {
     #[arg(long)]
     overwrite: bool,
     #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
+    shard: crate::args::shard::ShardArgs,
 }
 
 #[cfg(not(feature = "proj"))]
@@ -40,9 +40,9 @@ pub fn run(_args: Args) -> anyhow::Result<Outcome> {
 #[cfg(feature = "proj")]
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use anyhow::Context;
-    let (inputs, _spool) = crate::common::expand_inputs_relative(&args.inputs)?;
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
-    use crate::outputs::Targets;
+    use skylod::batch::outputs::{Plan, Targets};
     use skylod::citygml::reproject::{reproject_file, ReprojectError};
     use skylod::citygml::write::WriteOptions;
     use skylod::crs::CrsName;
@@ -69,15 +69,26 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     // Every target is checked before any work; a merge reprojects each input into a staging
     // directory, then merges them.
-    let Targets {
-        todo,
+    let (
+        Targets {
+            todo,
+            staging,
+            mirror,
+            write_opts,
+            ..
+        },
         refused,
-        staging,
-        mirror,
-        write_opts,
-    } = plan.targets(&args.inputs, &wopts, shard, "reproject", false, |e| {
-        crate::log::error!("{e}");
-    })?;
+    ) = crate::outputs::targets(
+        &plan,
+        &args.inputs,
+        &wopts,
+        shard,
+        "reproject",
+        false,
+        |e| {
+            crate::log::error!("{e}");
+        },
+    )?;
     let mut failed = refused;
     let total = todo.len() + refused;
     let target_name = args.output.as_path();
@@ -118,8 +129,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
         }
     }
-    if let (Some(st), crate::outputs::Plan::Merge(t)) = (&staging, &plan) {
-        if !st.finish(&parts, &names, t, &wopts, total) {
+    if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
+        if !crate::outputs::merge(&parts, &names, t, &wopts, total) {
             failed = total;
         }
     }

@@ -1,17 +1,20 @@
 //! `skylod fisheye`.
 
-use crate::common::{PoiArgs, RoughArgs, SilhouetteArgs, SiteArgs, DEFAULT_YEAR};
+use crate::args::crs::decimals;
+use crate::args::poi::PoiArgs;
+use crate::args::rough::RoughArgs;
+use crate::args::site::SiteArgs;
 use crate::Outcome;
 use anyhow::{bail, Context};
+use skylod::batch::outputs::per_poi;
 use skylod::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use skylod::lod::LodOptions;
 use skylod::model::AssetKind;
 use skylod::pipeline::{sky_pictures, SkyPictureOptions};
-use skylod::poi::Poi;
 use skylod::solar::fisheye::{cell_shares, fisheye_svg, sun_paths, FisheyeOptions, Projection};
 use skylod::solar::sky::{SkyPartition, SkyVariant};
 use skylod::solar::{Site, SkyBundles};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
 enum ProjectionArg {
@@ -33,9 +36,9 @@ pub struct Args {
     #[command(flatten)]
     pois: PoiArgs,
     #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
+    shard: crate::args::shard::ShardArgs,
     #[command(flatten)]
-    scene: crate::scene_args::SceneArgs,
+    scene: crate::args::scene::SceneArgs,
     /// Output SVG (`-` for standard output, one POI only). With several POIs, one file per
     /// POI: `<stem>-<id>.svg`.
     #[arg(short, long)]
@@ -54,7 +57,7 @@ pub struct Args {
     #[command(flatten)]
     site: SiteArgs,
     /// Year of the sun paths.
-    #[arg(long, default_value_t = DEFAULT_YEAR)]
+    #[arg(long, default_value_t = crate::args::sun::DEFAULT_YEAR)]
     year: i32,
     /// What hit cells are coloured by.
     #[arg(long, value_enum, default_value = "level")]
@@ -67,44 +70,19 @@ pub struct Args {
     seed: u64,
     /// `--threshold`, `--roof-tolerance` of the selection, as `skylod lod`.
     #[command(flatten)]
-    silhouette: SilhouetteArgs,
+    silhouette: crate::args::select::SilhouetteArgs,
     /// The rough model of the selection, as `skylod lod`.
     #[command(flatten)]
     rough: RoughArgs,
 }
 
-fn output_for(base: &Path, poi: &Poi, many: bool) -> PathBuf {
-    if !many {
-        return base.to_path_buf();
-    }
-    let stem = base
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "sky".into());
-    let id: String = poi
-        .id
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    base.with_file_name(format!("{stem}-{id}.svg"))
-}
-
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::common::expand_inputs(&mut args.pois.inputs)?;
+    let _spool = crate::inputs::expand_inputs(&mut args.pois.inputs)?;
     let shard = args.shard.resolve()?;
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
     let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
-    args.site.check("fisheye")?;
-    if let Some((lat, lon)) = args.site.given() {
-        crate::common::lat_lon(Some(lat), Some(lon), "fisheye")?;
-    }
+    args.site.check_given("fisheye")?;
     let lod_opts = LodOptions {
         rough: args.rough.options()?,
         select: args.silhouette.options(args.select_rays, args.seed),
@@ -113,10 +91,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let many = pois.len() > 1;
     args.scene
         .filter(&mut args.pois, &pois, shard, false, "fisheye")?;
-    let pois = crate::shard_args::pois(shard, pois, "fisheye");
+    let pois = crate::args::shard::pois(shard, pois, "fisheye");
     let outputs: Vec<PathBuf> = pois
         .iter()
-        .map(|p| output_for(&args.output, p, many))
+        .map(|p| per_poi(&args.output, &p.id, many))
         .collect();
     if many && is_stdout(&args.output) {
         bail!(
@@ -140,26 +118,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let framed = args
         .pois
         .frame_checked(&mut loaded.model, pois, "fisheye")?;
-    let site = match args.site.given() {
-        Some(s) => Some(s),
-        _ => {
-            let bbox = framed.source.bbox();
-            let site = (!bbox.is_empty())
-                .then(|| skylod::crs::site_lat_lon(&framed.crs, bbox.center()))
-                .flatten();
-            match site {
-                Some((a, o)) => crate::log::summary!(
-                    "fisheye: site lat {a:.5}, lon {o:.5}: the centre of the model in {}",
-                    framed.crs
-                ),
-                None => crate::log::summary!(
-                    "fisheye: no sun paths: the CRS ({}) is not one skylod converts; give --lat/--lon",
-                    framed.crs
-                ),
-            }
-            site
-        }
-    };
+    let site = args
+        .site
+        .for_sun_paths(framed.source, &framed.crs, "fisheye");
     let paths = match site {
         Some((lat, lon)) => sun_paths(&Site::new(lat, lon), args.year)?,
         None => Vec::new(),
@@ -174,18 +135,17 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         bundles: &bundles,
         levels: (args.colour_by == ColourBy::Level).then_some(lod_opts),
     };
-    let dp = if crate::frames::decimals(&framed.crs) == 8 {
-        8
-    } else {
-        2
-    };
+    let dp = if decimals(&framed.crs) == 8 { 8 } else { 2 };
     sky_pictures(
         &framed,
         &popts,
         &crate::log::reporter(),
         |k, pic| -> anyhow::Result<()> {
             let (poi, out) = (&framed.pois[k], &outputs[k]);
-            crate::common::warn_flags(std::slice::from_ref(poi), std::slice::from_ref(&pic.flags));
+            crate::commands::warn_flags(
+                std::slice::from_ref(poi),
+                std::slice::from_ref(&pic.flags),
+            );
             let p = poi.position;
             let mut caption = vec![format!(
                 "POI ({:.dp$}, {:.dp$}, {:.2}){}",

@@ -1,6 +1,6 @@
 //! `skylod stats`.
 
-use crate::frames::SourceCrsArgs;
+use crate::args::crs::SourceCrsArgs;
 use crate::Outcome;
 use rayon::prelude::*;
 use skylod::citygml::read_file;
@@ -24,16 +24,16 @@ pub struct Args {
     #[command(flatten)]
     crs: SourceCrsArgs,
     #[command(flatten)]
-    jobs: crate::common::JobsArgs,
+    jobs: crate::args::jobs::JobsArgs,
     #[command(flatten)]
-    shard: crate::shard_args::ShardArgs,
+    shard: crate::args::shard::ShardArgs,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let t0 = std::time::Instant::now();
     let shard = args.shard.resolve()?;
-    let _spool = crate::common::expand_inputs(&mut args.inputs)?;
-    args.inputs = crate::shard_args::files(shard, std::mem::take(&mut args.inputs), "stats");
+    let _spool = crate::inputs::expand_inputs(&mut args.inputs)?;
+    args.inputs = crate::args::shard::files(shard, std::mem::take(&mut args.inputs), "stats");
     if args.inputs.is_empty() {
         return Ok(Outcome::Ok);
     }
@@ -83,7 +83,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         let n_failed = args.inputs.len() - ok.len();
         crate::log::summary!(
             "{}",
-            crate::common::summary_line("stats", ok.len(), n_failed, total.warnings, None, t0)
+            crate::commands::summary_line("stats", ok.len(), n_failed, total.warnings, None, t0)
         );
     }
     let mut out = std::io::stdout().lock();

@@ -4,8 +4,8 @@ use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
 use skylod::citygml::WriteError;
-use skylod::synth::{generate, pois, write_pois_csv, Preset, SynthOptions};
-use std::path::{Path, PathBuf};
+use skylod::synth::{generate, pois, pois_path, write_pois_csv, Preset, SynthOptions};
+use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -46,21 +46,6 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     overwrite: bool,
-}
-
-/// `district.gml` / `district.gml.gz` -> `district.pois.csv`.
-pub fn pois_path(out: &Path) -> PathBuf {
-    let name = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let stem = name
-        .strip_suffix(".gz")
-        .unwrap_or(&name)
-        .trim_end_matches(".gml")
-        .trim_end_matches(".xml")
-        .to_string();
-    out.with_file_name(format!("{stem}.pois.csv"))
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
@@ -134,22 +119,4 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         );
     }
     Ok(Outcome::Ok)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn pois_beside_output() {
-        assert_eq!(
-            pois_path(Path::new("a/d.gml")),
-            PathBuf::from("a/d.pois.csv")
-        );
-        assert_eq!(
-            pois_path(Path::new("d.gml.gz")),
-            PathBuf::from("d.pois.csv")
-        );
-        assert_eq!(pois_path(Path::new("d")), PathBuf::from("d.pois.csv"));
-    }
 }

@@ -1,9 +1,8 @@
 //! `--scene-radius M`: read only the inputs within reach of the POIs ([`skylod::batch::scene_radius`]).
 
-use crate::common::PoiArgs;
+use crate::args::poi::PoiArgs;
 use anyhow::bail;
-use rayon::prelude::*;
-use skylod::batch::scene_radius::{file_extent, ExtentSource};
+use skylod::batch::scene_radius::{within_reach, Reach};
 use skylod::batch::shard::Shard;
 use skylod::poi::Poi;
 
@@ -14,7 +13,7 @@ pub struct SceneArgs {
     /// of their coordinates) comes within M (CRS units, metres for projected CRSs,
     /// horizontally) of a POI of this run; the others are not parsed. Needs the POIs from
     /// --poi/--pois in the model's CRS.
-    #[arg(long, value_name = "M", value_parser = crate::common::non_negative)]
+    #[arg(long, value_name = "M", value_parser = crate::args::non_negative)]
     pub scene_radius: Option<f64>,
 }
 
@@ -47,26 +46,12 @@ impl SceneArgs {
         };
         let at: Vec<glam::DVec3> = mine.iter().map(|p| p.position).collect();
         let total = args.inputs.len();
-        let keep: Vec<(bool, Option<ExtentSource>)> = args
-            .inputs
-            .par_iter()
-            .map(|p| match file_extent(p) {
-                Ok(Some((e, how))) => (e.within(&at, radius), Some(how)),
-                // No coordinate at all: nothing of it can occlude.
-                Ok(None) => (false, None),
-                // Unreadable: kept, so that the reader reports it.
-                Err(_) => (true, None),
-            })
-            .collect();
-        let scanned = keep
-            .iter()
-            .filter(|(_, h)| *h == Some(ExtentSource::Scan))
-            .count();
+        let Reach { keep, scanned } = within_reach(&args.inputs, &at, radius);
         let inputs: Vec<_> = args
             .inputs
             .drain(..)
             .zip(&keep)
-            .filter(|(_, (k, _))| *k)
+            .filter(|(_, k)| **k)
             .map(|(p, _)| p)
             .collect();
         let names: Vec<String> = inputs.iter().map(|p| p.display().to_string()).collect();

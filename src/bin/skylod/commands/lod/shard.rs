@@ -1,18 +1,15 @@
 //! `skylod lod` in an array job: a shard writes its levels ([`skylod::batch::shard_levels`]),
-//! `--reduce` writes the model from all shards' levels.
+//! `--reduce` writes the model from all shards' levels ([`skylod::batch::reduce`]).
 
-use crate::cmd_lod::Args;
-use crate::common::{ms, warn_flags};
+use crate::commands::lod::Args;
+use crate::commands::{ms, warn_flags};
 use crate::Outcome;
 use anyhow::{bail, Context};
+use skylod::batch::reduce::Reduce;
 use skylod::batch::shard::Shard;
-use skylod::batch::shard_levels::{self, Combined, LevelsFile};
-use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
-use skylod::lod::rough::rough_model;
-use skylod::lod::select::{roof_assets, Selection};
-use skylod::lod::{lod, LodOptions, LodResult};
-use skylod::model::CityModel;
-use skylod::poi::Poi;
+use skylod::batch::shard_levels;
+use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
+use skylod::lod::{lod, LodOptions};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -62,7 +59,7 @@ pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome
         return Ok(Outcome::SomeFailed);
     }
     let pois = args.region.extend(pois, &loaded.model)?;
-    let pois = crate::shard_args::pois(Some(s), pois, "lod");
+    let pois = crate::args::shard::pois(Some(s), pois, "lod");
     let opts = LodOptions {
         rough: args.rough.options()?,
         select: args.select.options(),
@@ -72,20 +69,15 @@ pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome
     warn_flags(&framed.pois, &result.flags);
     let header = shard_levels::header(s, framed.source, &opts, &result.selection, result.triangles);
     let out = std::mem::take(&mut args.out.output);
-    atomic_write(&out, |w| {
-        shard_levels::write_levels(
-            w,
-            &header,
-            framed.source,
-            &framed.pois,
-            &result.selection,
-            &result.flags,
-        )
-        .map_err(|source| skylod::citygml::WriteError::Io {
-            file: out.clone(),
-            source,
-        })
-    })
+    let (source, pois) = (framed.source, &framed.pois);
+    shard_levels::write_levels_file(
+        &out,
+        &header,
+        source,
+        pois,
+        &result.selection,
+        &result.flags,
+    )
     .with_context(|| format!("writing {}", out.display()))?;
     let [l0, l1, l2] = result.selection.level_counts();
     crate::log::summary!(
@@ -98,13 +90,6 @@ pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome
         ms(t_all)
     );
     Ok(loaded.outcome())
-}
-
-/// The levels files of `--reduce`, read before the inputs.
-pub struct Reduce {
-    files: Vec<LevelsFile>,
-    /// The POIs of all shards in shard order (model CRS).
-    pub pois: Vec<Poi>,
 }
 
 /// Read the `--reduce` files (none: `Ok(None)`), and take the options of the lod run from
@@ -120,65 +105,19 @@ pub fn read(args: &mut Args) -> anyhow::Result<Option<Reduce>> {
              and --region"
         );
     }
-    let files = args
-        .reduce
-        .iter()
-        .map(|p| shard_levels::read_levels(p))
-        .collect::<Result<Vec<_>, _>>()?;
-    let Some(first) = files.iter().min_by_key(|f| f.header.index) else {
-        bail!("--reduce needs the levels files of the shards");
-    };
-    let h = &first.header;
-    args.select.rays = h.rays;
-    args.select.seed = h.seed;
-    args.select.silhouette.threshold = Some(h.threshold_deg);
-    args.select.silhouette.roof_tolerance = h.roof_tolerance_m;
-    args.rough.angle = h.angle_deg;
-    args.rough.thickness = h.thickness_m;
-    args.rough.no_lod2 = !h.prefer_lod2;
-    let mut sorted: Vec<&LevelsFile> = files.iter().collect();
-    sorted.sort_by_key(|f| f.header.index);
-    let pois = sorted
-        .iter()
-        .flat_map(|f| &f.pois)
-        .map(|p| p.seen.poi())
-        .collect();
+    let r = Reduce::read(&args.reduce)?;
+    let LodOptions { rough, select } = r.options();
+    args.select.rays = select.rays;
+    args.select.seed = select.seed;
+    args.select.silhouette.threshold = select.threshold_deg;
+    args.select.silhouette.roof_tolerance = select.roof_tolerance_m;
+    args.rough.angle = rough.angle_deg;
+    args.rough.thickness = rough.thickness_m;
+    args.rough.no_lod2 = !rough.prefer_lod2;
     crate::log::summary!(
         "lod: reducing {} levels file(s) of a {}-shard run",
-        files.len(),
-        h.count
+        r.files(),
+        r.header().count
     );
-    Ok(Some(Reduce { files, pois }))
-}
-
-impl Reduce {
-    /// Combine the shards' levels for the model read from the inputs (source CRS).
-    pub fn combine(self, model: &CityModel) -> anyhow::Result<Combined> {
-        Ok(shard_levels::combine(self.files, model)?)
-    }
-}
-
-/// The [`LodResult`] of the combined levels on `model` (the local frame's copy): the rough
-/// model as `lod` makes it, the levels and figures of the shards.
-pub fn result(model: &CityModel, c: Combined, opts: &LodOptions) -> LodResult {
-    let t = Instant::now();
-    let rough = rough_model(model, &opts.rough);
-    let rough_s = t.elapsed().as_secs_f64();
-    let roof_asset = roof_assets(model, &rough, opts.select.roof_tolerance_m);
-    LodResult {
-        selection: Selection {
-            levels: c.levels,
-            hits: c.hits,
-            roof_asset,
-            pois: c.selections,
-            threshold_deg: c.header.threshold_deg,
-            rays: c.header.cells,
-        },
-        rough,
-        rough_s,
-        bvh_s: 0.0,
-        select_s: 0.0,
-        triangles: c.header.triangles,
-        flags: c.flags,
-    }
+    Ok(Some(r))
 }

@@ -1,7 +1,11 @@
 //! `skylod evaluate`: full vs LoD vs all-boxes model, the paper's Tables 1 and 2.
 
-use crate::common::{ms, out_err, warn_flags, RoughArgs, SelectArgs, SiteArgs, SunArgs};
-use crate::tracing_args::Prepared;
+use crate::args::rough::RoughArgs;
+use crate::args::select::SelectArgs;
+use crate::args::site::SiteArgs;
+use crate::args::sun::SunArgs;
+use crate::args::tracing::Prepared;
+use crate::commands::{ms, out_err, warn_flags};
 use crate::Outcome;
 use skylod::lod::LodOptions;
 use skylod::output::evaluate::{EvaluateOutput, EvaluateTimings};
@@ -15,7 +19,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    tracing: crate::tracing_args::TracingArgs,
+    tracing: crate::args::tracing::TracingArgs,
     #[command(flatten)]
     site: SiteArgs,
     /// Skip sun hours (then --lat/--lon are not needed).
@@ -104,7 +108,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             },
         );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
-    } else if crate::shard_args::header(shard) {
+    } else if crate::args::shard::header(shard) {
         out_err(writeln!(
             out,
             "{:<18} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",

@@ -69,21 +69,27 @@ pub struct CrsArgs {
 
 pub use skylod::pipeline::Framed;
 
-/// [`skylod::pipeline::frame`] with the flags: `--source-crs`, `--poi-crs`, `margin` (m)
-/// for POIs outside the scene; its warnings on stderr, prefixed by `cmd`.
-pub fn frame<'a>(
+impl CrsArgs {
+    /// The frame options of the flags: `--source-crs`, `--poi-crs`, and `margin` (m) for
+    /// POIs outside the scene.
+    pub fn frame_options(&self, margin: f64) -> FrameOptions {
+        FrameOptions {
+            source_crs: self.source.source_crs.clone(),
+            poi_crs: self.poi_crs.clone(),
+            poi_margin: margin,
+        }
+    }
+}
+
+/// Bring `model` and `pois` into the local metric frame ([`skylod::pipeline::frame`] with
+/// `opts`), saying its warnings and note on stderr, prefixed by `cmd`.
+pub fn to_local_frame<'a>(
     model: &'a mut CityModel,
-    args: &CrsArgs,
     pois: Vec<Poi>,
-    margin: f64,
+    opts: &FrameOptions,
     cmd: &str,
 ) -> anyhow::Result<Framed<'a>> {
-    let opts = FrameOptions {
-        source_crs: args.source.source_crs.clone(),
-        poi_crs: args.poi_crs.clone(),
-        poi_margin: margin,
-    };
-    let framed = skylod::pipeline::frame(model, pois, &opts)?;
+    let framed = skylod::pipeline::frame(model, pois, opts)?;
     for w in &framed.warnings {
         warning!("{cmd}: warning: {w}");
     }

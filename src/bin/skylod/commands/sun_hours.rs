@@ -1,7 +1,9 @@
 //! `skylod sun-hours`.
 
-use crate::common::{ms, out_err, polygons, s_to_ms, warn_flags, SiteArgs, SunArgs};
-use crate::tracing_args::Prepared;
+use crate::args::site::SiteArgs;
+use crate::args::sun::SunArgs;
+use crate::args::tracing::Prepared;
+use crate::commands::{ms, out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
 use skylod::output::sun_hours::{SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting};
 use skylod::solar::{Site, SunTable};
@@ -11,7 +13,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    tracing: crate::tracing_args::TracingArgs,
+    tracing: crate::args::tracing::TracingArgs,
     #[command(flatten)]
     site: SiteArgs,
     #[command(flatten)]
@@ -82,7 +84,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         for m in MONTHS {
             head.push_str(&format!(" {m:>6}"));
         }
-        if crate::shard_args::header(shard) {
+        if crate::args::shard::header(shard) {
             out_err(writeln!(out, "{head}"))?;
         }
         for (p, h) in pois.iter().zip(hours) {

@@ -1,8 +1,8 @@
 //! `skylod svf`.
 
-use crate::common::{out_err, polygons, s_to_ms, warn_flags};
-use crate::frames::decimals;
-use crate::tracing_args::Prepared;
+use crate::args::crs::decimals;
+use crate::args::tracing::Prepared;
+use crate::commands::{out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
 use skylod::output::svf::{SvfOutput, SvfPoi, TraceTimings};
 use skylod::solar::SkyBundles;
@@ -11,7 +11,7 @@ use std::io::Write;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    tracing: crate::tracing_args::TracingArgs,
+    tracing: crate::args::tracing::TracingArgs,
     /// Rays per bundle (cells of each Beckers sky partition).
     #[arg(long, default_value_t = 10_000)]
     rays: usize,
@@ -65,7 +65,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
-        if crate::shard_args::header(shard) {
+        if crate::args::shard::header(shard) {
             out_err(writeln!(
                 out,
                 "{:<20} {:>14} {:>14} {:>9} {:>8} {:>8} {:>8} {:>7} {:>12}",

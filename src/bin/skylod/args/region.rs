@@ -2,7 +2,8 @@
 //! or an area ([`skylod::poi::region`]), on `lod`, `svf`, `sun-hours` and `evaluate`. They are
 //! added after the `--poi`/`--pois` points, in the model's CRS.
 
-use crate::common::{positive, PoiArgs};
+use crate::args::poi::PoiArgs;
+use crate::args::positive;
 use anyhow::bail;
 use skylod::model::CityModel;
 use skylod::poi::region::{facade_pois, grid_pois};

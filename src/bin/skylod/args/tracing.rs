@@ -1,10 +1,11 @@
 //! The arguments every tracing command (svf, sun-hours, horizon, evaluate) shares — inputs
 //! and POIs, region, shard, scene radius — and the steps they take before tracing.
 
-use crate::common::{expand_inputs, Loaded, PoiArgs, Spool};
-use crate::region_args::RegionArgs;
-use crate::scene_args::SceneArgs;
-use crate::shard_args::ShardArgs;
+use crate::args::poi::PoiArgs;
+use crate::args::region::RegionArgs;
+use crate::args::scene::SceneArgs;
+use crate::args::shard::ShardArgs;
+use crate::inputs::{expand_inputs, Loaded, Spool};
 use skylod::batch::shard::Shard;
 use skylod::poi::Poi;
 
@@ -53,7 +54,7 @@ impl TracingArgs {
             return Ok(None);
         }
         let pois = self.region.extend(pois, &loaded.model)?;
-        let pois = crate::shard_args::pois(shard, pois, cmd);
+        let pois = crate::args::shard::pois(shard, pois, cmd);
         Ok(Some(Prepared {
             loaded,
             pois,

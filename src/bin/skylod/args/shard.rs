@@ -60,13 +60,18 @@ fn keep<T>(
         .skip(range.start)
         .take(range.len())
         .collect();
+    say(s, range, total, cmd, what);
+    mine
+}
+
+/// Say on stderr that shard `s` does `range` of `total` items.
+pub fn say(s: Shard, range: std::ops::Range<usize>, total: usize, cmd: &str, what: &str) {
+    let n = range.len().min(total.saturating_sub(range.start));
     crate::log::summary!(
-        "{cmd}: shard {s}: {what} {}..{} of {total} ({})",
+        "{cmd}: shard {s}: {what} {}..{} of {total} ({n})",
         range.start,
         range.end,
-        mine.len()
     );
-    mine
 }
 
 /// Whether this run prints a table's header: always without a shard, else shard 0 only, so

@@ -1,7 +1,9 @@
 //! `--max-svf-error` / `--max-sun-hours-error` of `skylod lod`: the error-bounded LoD
 //! ([`skylod::lod::bound`]) run between the selection and the writing.
 
-use crate::common::{non_negative, SiteArgs, SunArgs};
+use crate::args::non_negative;
+use crate::args::site::SiteArgs;
+use crate::args::sun::SunArgs;
 use skylod::lod::bound::{BoundOptions, BoundReport};
 use skylod::model::CityModel;
 use skylod::pipeline::BoundSpec;

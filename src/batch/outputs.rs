@@ -1,0 +1,433 @@
+//! Where a batch that writes one output per input puts its outputs (`convert`, `rough`,
+//! `lod`, `reproject` of the `skylod` program), decided once before any work:
+//!
+//! * an output directory (an existing directory, a name ending in `/`, or, for several
+//!   inputs, a name with no output ending) mirrors the input tree: each input goes to
+//!   `DIR/<relative>` ([`Input::relative`]), with the format's ending for formats other than
+//!   CityGML. Two inputs that map to one output are refused.
+//! * an output file with one input is that input's output (format from its ending or the
+//!   one named).
+//! * a CityGML file (or `-`, standard output) with several inputs merges them into one
+//!   document ([`crate::citygml::merge`]): each input is written to a [`Staging`] directory
+//!   beside the target, then merged into it.
+//!
+//! # Example
+//! ```
+//! use skylod::batch::inputs::Input;
+//! use skylod::batch::outputs::{plan, Plan};
+//! use skylod::export::Format;
+//! use std::path::{Path, PathBuf};
+//! let inputs = [
+//!     Input { path: "t/a/x.gml".into(), relative: "a/x.gml".into() },
+//!     Input { path: "t/b/y.gml".into(), relative: "b/y.gml".into() },
+//! ];
+//! let (p, format) = plan(&inputs, Path::new("out/"), Some(Format::Obj))?;
+//! assert_eq!(format, Format::Obj);
+//! assert_eq!(p, Plan::Mirror(vec![PathBuf::from("out/a/x.obj"), PathBuf::from("out/b/y.obj")]));
+//! assert_eq!(plan(&inputs, Path::new("all.gml"), None)?.0, Plan::Merge("all.gml".into()));
+//! # Ok::<(), skylod::batch::outputs::PlanError>(())
+//! ```
+
+use crate::batch::inputs::Input;
+use crate::batch::shard::Shard;
+use crate::citygml::merge::{check_mergeable, MergeError};
+use crate::citygml::write::{check_target, is_stdout, WriteOptions};
+use crate::citygml::WriteError;
+use crate::export::{Format, UnknownFormat};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Where the outputs of a batch go.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Plan {
+    /// One output per input, in input order.
+    PerInput(Vec<PathBuf>),
+    /// One output per input below a directory, in input order (parent directories are
+    /// created when the input is written: [`create_parent`]).
+    Mirror(Vec<PathBuf>),
+    /// All inputs merged into one CityGML document (a file or `-`).
+    Merge(PathBuf),
+}
+
+/// Why the outputs cannot be laid out.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    /// One input and an output name that tells no format.
+    #[error(transparent)]
+    Format(#[from] UnknownFormat),
+    /// Several inputs and an existing file that is not a merge target.
+    #[error(
+        "{}: is a file; {inputs} inputs are written to a directory or merged into one CityGML \
+         file",
+        .output.display()
+    )]
+    NotADirectory {
+        /// The output named.
+        output: PathBuf,
+        /// How many inputs.
+        inputs: usize,
+    },
+    /// Several inputs to merge into a format other than CityGML.
+    #[error("{inputs} inputs cannot be merged into one {format} file, only into CityGML")]
+    NotMergeable {
+        /// The format asked for.
+        format: Format,
+        /// How many inputs.
+        inputs: usize,
+    },
+    /// An input whose path has no file name to mirror.
+    #[error("{}: not a file name", .0.display())]
+    NotAFileName(PathBuf),
+    /// Two inputs that would be written to one output.
+    #[error("{} and {} would both be written to {}", .first.display(), .second.display(), .output.display())]
+    Collision {
+        /// The earlier input.
+        first: PathBuf,
+        /// The later input.
+        second: PathBuf,
+        /// Their common output.
+        output: PathBuf,
+    },
+    /// A merge asked of one shard (a merge needs every input).
+    #[error("shard {shard} cannot merge into {}: a merge needs every input", .target.display())]
+    ShardedMerge {
+        /// The shard.
+        shard: Shard,
+        /// The merge target.
+        target: PathBuf,
+    },
+    /// The merge target is refused.
+    #[error(transparent)]
+    Target(#[from] WriteError),
+    /// The inputs cannot be merged (CityGML versions, CRSs).
+    #[error(transparent)]
+    Merge(#[from] MergeError),
+    /// The staging directory of a merge cannot be made.
+    #[error("creating a staging directory for {}", .target.display())]
+    Staging {
+        /// The merge target.
+        target: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The parent directory of an output cannot be made.
+    #[error("creating {}", .dir.display())]
+    CreateDir {
+        /// The directory.
+        dir: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+}
+
+fn names_directory(out: &Path) -> bool {
+    out.is_dir() || out.as_os_str().to_string_lossy().ends_with('/')
+}
+
+/// The outputs of `inputs` for the output name `out` and the format written (see the module
+/// docs; `explicit`: the format named, if any).
+///
+/// # Errors
+/// An unknown ending for one file, a merge into a format other than CityGML, colliding
+/// outputs: before any input is read.
+pub fn plan(
+    inputs: &[Input],
+    out: &Path,
+    explicit: Option<Format>,
+) -> Result<(Plan, Format), PlanError> {
+    let several = inputs.len() > 1;
+    if is_stdout(out) {
+        let format = explicit.unwrap_or(Format::CityGml);
+        if several {
+            refuse_merge(format, inputs.len())?;
+            return Ok((Plan::Merge(out.to_path_buf()), format));
+        }
+        return Ok((Plan::PerInput(vec![out.to_path_buf()]), format));
+    }
+    if !names_directory(out) {
+        match Format::resolve(out, explicit) {
+            Ok(format) if !several => {
+                return Ok((Plan::PerInput(vec![out.to_path_buf()]), format));
+            }
+            Ok(format) if Format::from_path(out).is_some() => {
+                refuse_merge(format, inputs.len())?;
+                return Ok((Plan::Merge(out.to_path_buf()), format));
+            }
+            Err(e) if !several => return Err(e.into()),
+            // Several inputs and a name without an output ending: a directory.
+            _ => {}
+        }
+        if out.exists() {
+            return Err(PlanError::NotADirectory {
+                output: out.to_path_buf(),
+                inputs: inputs.len(),
+            });
+        }
+    }
+    let format = explicit.unwrap_or(Format::CityGml);
+    Ok((Plan::Mirror(mirror(inputs, out, format)?), format))
+}
+
+fn refuse_merge(format: Format, inputs: usize) -> Result<(), PlanError> {
+    if format != Format::CityGml {
+        return Err(PlanError::NotMergeable { format, inputs });
+    }
+    Ok(())
+}
+
+/// `dir/<relative>` per input, with the format's ending.
+///
+/// # Errors
+/// Colliding outputs, an input without a file name.
+pub fn mirror(inputs: &[Input], dir: &Path, format: Format) -> Result<Vec<PathBuf>, PlanError> {
+    let mut seen: HashMap<PathBuf, &Path> = HashMap::new();
+    let mut out = Vec::with_capacity(inputs.len());
+    for i in inputs {
+        let rel = if i.relative.as_os_str().is_empty() || i.relative.as_os_str() == "-" {
+            PathBuf::from("stdin.gml")
+        } else {
+            i.relative.clone()
+        };
+        let Some(name) = rel.file_name() else {
+            return Err(PlanError::NotAFileName(i.path.clone()));
+        };
+        let p = dir
+            .join(&rel)
+            .with_file_name(format.output_name(&name.to_string_lossy()));
+        if let Some(other) = seen.insert(p.clone(), &i.path) {
+            return Err(PlanError::Collision {
+                first: other.to_path_buf(),
+                second: i.path.clone(),
+                output: p,
+            });
+        }
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// The work of a batch that writes per input, laid out before any input is read: which
+/// inputs to do and where each goes (every target checked; a shard's part), the options to
+/// write them with, and the staging directory of a merge.
+#[derive(Debug)]
+pub struct Targets {
+    /// `(input index, output)` to do, in input order.
+    pub todo: Vec<(usize, PathBuf)>,
+    /// Targets refused, in input order: those inputs failed without being read.
+    pub refused: Vec<WriteError>,
+    /// The merge's staging directory (per-input documents go there), for [`Plan::Merge`].
+    pub staging: Option<Staging>,
+    /// Whether outputs mirror a tree (their parent directories are created as written).
+    pub mirror: bool,
+    /// How each output is written: the given options, or for a merge's staged parts the
+    /// same with `overwrite` (the merge target was checked instead).
+    pub write_opts: WriteOptions,
+}
+
+impl Plan {
+    /// Lay out the work for `inputs` (paths in input order) with the options `wopts`:
+    /// `shard`'s part of the per-input targets is kept ([`Shard::files`]: each file goes
+    /// where the serial run writes it), then each is checked (a refused one lands in
+    /// [`Targets::refused`]). A merge checks its target, refuses inputs that cannot be
+    /// merged (CityGML versions; CRSs when the outputs keep their input's, `keeps_crs`) from
+    /// their heads before any work, and makes its staging directory.
+    ///
+    /// # Errors
+    /// A merge under a shard (it needs every input), a refused merge target, inputs that
+    /// cannot be merged, a staging directory that cannot be made.
+    pub fn targets(
+        &self,
+        inputs: &[PathBuf],
+        wopts: &WriteOptions,
+        shard: Option<Shard>,
+        keeps_crs: bool,
+    ) -> Result<Targets, PlanError> {
+        let protect = || inputs.iter().map(PathBuf::as_path);
+        match self {
+            Plan::PerInput(outs) | Plan::Mirror(outs) => {
+                // Laid out for all inputs, then this shard's part; only that part is
+                // checked: other shards may have written theirs already.
+                let mine = shard.map_or(0..outs.len(), |s| s.files(outs.len()));
+                let mut todo = Vec::with_capacity(mine.len());
+                let mut refused = Vec::new();
+                for (k, out) in outs.iter().enumerate().skip(mine.start).take(mine.len()) {
+                    match check_target(out, wopts, protect()) {
+                        Ok(()) => todo.push((k, out.clone())),
+                        Err(e) => refused.push(e),
+                    }
+                }
+                Ok(Targets {
+                    todo,
+                    refused,
+                    staging: None,
+                    mirror: matches!(self, Plan::Mirror(_)),
+                    write_opts: wopts.clone(),
+                })
+            }
+            Plan::Merge(target) => {
+                if let Some(shard) = shard {
+                    return Err(PlanError::ShardedMerge {
+                        shard,
+                        target: target.clone(),
+                    });
+                }
+                check_target(target, wopts, protect())?;
+                check_mergeable(inputs, keeps_crs)?;
+                let staging = Staging::new(target)?;
+                Ok(Targets {
+                    todo: (0..inputs.len()).map(|k| (k, staging.part(k))).collect(),
+                    refused: Vec::new(),
+                    staging: Some(staging),
+                    mirror: false,
+                    write_opts: WriteOptions {
+                        overwrite: true,
+                        ..wopts.clone()
+                    },
+                })
+            }
+        }
+    }
+}
+
+/// Create the parent directory of an output path (nothing for `-`).
+///
+/// # Errors
+/// [`PlanError::CreateDir`].
+pub fn create_parent(out: &Path) -> Result<(), PlanError> {
+    if is_stdout(out) {
+        return Ok(());
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| PlanError::CreateDir {
+            dir: dir.to_path_buf(),
+            source,
+        })?;
+    }
+    Ok(())
+}
+
+/// A temporary directory for the per-input documents of a merge, beside the target (system
+/// temporary directory for `-`); removed when dropped.
+#[derive(Debug)]
+pub struct Staging {
+    dir: tempfile::TempDir,
+}
+
+impl Staging {
+    /// A staging directory for a merge into `target`.
+    ///
+    /// # Errors
+    /// [`PlanError::Staging`].
+    pub fn new(target: &Path) -> Result<Staging, PlanError> {
+        let mut b = tempfile::Builder::new();
+        b.prefix(".skylod-merge-");
+        let dir = match target.parent().filter(|d| !d.as_os_str().is_empty()) {
+            _ if is_stdout(target) => b.tempdir(),
+            Some(parent) => b.tempdir_in(parent),
+            None => b.tempdir_in("."),
+        }
+        .map_err(|source| PlanError::Staging {
+            target: target.to_path_buf(),
+            source,
+        })?;
+        Ok(Staging { dir })
+    }
+
+    /// Where the `k`-th input's document is written.
+    pub fn part(&self, k: usize) -> PathBuf {
+        self.dir.path().join(format!("{k:06}.gml"))
+    }
+}
+
+/// The name of the `k`-th of `n` per-POI outputs from the output name `base`: `base` itself
+/// for one, else `<stem>-<id>.svg` beside it (the id's characters other than ASCII letters,
+/// digits, `-` and `_` replaced by `_`).
+pub fn per_poi(base: &Path, id: &str, many: bool) -> PathBuf {
+    if !many {
+        return base.to_path_buf();
+    }
+    let stem = base
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "sky".into());
+    let id: String = id
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    base.with_file_name(format!("{stem}-{id}.svg"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn input(p: &str, rel: &str) -> Input {
+        Input {
+            path: PathBuf::from(p),
+            relative: PathBuf::from(rel),
+        }
+    }
+
+    #[test]
+    fn plans() {
+        let one = [input("a/x.gml", "x.gml")];
+        let two = [
+            input("t/a/x.gml", "a/x.gml"),
+            input("t/b/x.gml.gz", "b/x.gml.gz"),
+        ];
+        let p = |i: &[Input], o: &str, f| plan(i, Path::new(o), f).unwrap();
+        assert_eq!(
+            p(&one, "o.gml", None),
+            (Plan::PerInput(vec!["o.gml".into()]), Format::CityGml)
+        );
+        assert_eq!(
+            p(&one, "o.obj", None),
+            (Plan::PerInput(vec!["o.obj".into()]), Format::Obj)
+        );
+        assert!(plan(&one, Path::new("o.txt"), None).is_err());
+        assert_eq!(
+            p(&two, "m.gml.gz", None),
+            (Plan::Merge("m.gml.gz".into()), Format::CityGml)
+        );
+        assert_eq!(
+            p(&two, "-", None),
+            (Plan::Merge("-".into()), Format::CityGml)
+        );
+        assert!(plan(&two, Path::new("m.obj"), None).is_err());
+        assert_eq!(
+            p(&two, "outdir", None),
+            (
+                Plan::Mirror(vec!["outdir/a/x.gml".into(), "outdir/b/x.gml.gz".into()]),
+                Format::CityGml
+            )
+        );
+        assert_eq!(
+            p(&two, "outdir/", Some(Format::CityJson)).0,
+            Plan::Mirror(vec![
+                "outdir/a/x.city.json".into(),
+                "outdir/b/x.city.json".into()
+            ])
+        );
+        assert_eq!(
+            p(&one, "outdir/", None).0,
+            Plan::Mirror(vec!["outdir/x.gml".into()])
+        );
+    }
+
+    #[test]
+    fn colliding_outputs_are_refused() {
+        let two = [input("a/x.gml", "x.gml"), input("b/x.gml", "x.gml")];
+        let e = plan(&two, Path::new("outdir"), None).unwrap_err();
+        assert!(e.to_string().contains("would both be written"), "{e}");
+        // Different inputs, same output once the ending is replaced.
+        let two = [input("x.gml", "x.gml"), input("x.xml", "x.xml")];
+        assert!(plan(&two, Path::new("o/"), Some(Format::Obj)).is_err());
+        assert!(plan(&two, Path::new("o/"), None).is_ok());
+    }
+}

@@ -1,0 +1,92 @@
+//! Inputs and points of interest (`--poi`, `--pois`, `--poi-margin`, `--allow-mixed-crs`,
+//! with `--source-crs`, `--poi-crs` and `--jobs`), for the commands that trace POIs.
+
+use super::crs::{to_local_frame, CrsArgs, Framed};
+use super::jobs::JobsArgs;
+use super::non_negative;
+use crate::inputs::{load, Loaded};
+use anyhow::bail;
+use skylod::model::CityModel;
+use skylod::poi::checks::DEFAULT_POI_MARGIN;
+use skylod::poi::{check_unique_ids, parse_poi, read_pois_csv, Located, Poi};
+use std::path::PathBuf;
+
+/// Inputs and points of interest.
+#[derive(clap::Args, Debug)]
+pub struct PoiArgs {
+    /// CityGML files (.gml, .xml, .gz; gzip is recognised by content), directories (searched
+    /// recursively), glob patterns ('tiles/**/*.gml', quoted), or - for standard input; all
+    /// are merged into one scene.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Point of interest X,Y,Z or X,Y,Z,NX,NY,NZ (model CRS; the normal is the outward
+    /// normal of the surface the point lies on). Repeatable.
+    #[arg(
+        long = "poi",
+        value_name = "X,Y,Z[,NX,NY,NZ]",
+        allow_hyphen_values = true
+    )]
+    pub poi: Vec<String>,
+    /// CSV file of POIs (header `id,x,y,z[,nx,ny,nz]`, columns in any order; quoted
+    /// fields, a UTF-8 BOM and `#` comment lines are fine), read after the --poi points.
+    #[arg(long, value_name = "FILE.csv")]
+    pub pois: Option<PathBuf>,
+    /// Refuse POIs farther than this (m) outside the scene's bounding box: they are almost
+    /// always in another CRS or have x and y swapped.
+    #[arg(long, value_name = "M", default_value_t = DEFAULT_POI_MARGIN, value_parser = non_negative, allow_hyphen_values = true)]
+    pub poi_margin: f64,
+    /// Merge inputs whose srsName denote different CRSs into one scene anyway (only when
+    /// the names differ but the coordinates really are in one CRS).
+    #[arg(long)]
+    pub allow_mixed_crs: bool,
+    /// `--source-crs`, `--poi-crs`: applied by [`PoiArgs::frame_checked`] after reading.
+    #[command(flatten)]
+    pub crs: CrsArgs,
+    /// `--jobs`: threads reading the inputs and tracing the POIs.
+    #[command(flatten)]
+    pub jobs: JobsArgs,
+}
+
+impl PoiArgs {
+    /// The POIs in order (--poi first, then the CSV). No POI at all, or two with the same
+    /// id, is a usage error.
+    pub fn points(&self) -> anyhow::Result<Vec<Poi>> {
+        let mut out = Vec::new();
+        for (i, t) in self.poi.iter().enumerate() {
+            out.push(Located {
+                poi: parse_poi(t, i)?,
+                at: format!("--poi {t}"),
+            });
+        }
+        if let Some(f) = &self.pois {
+            out.extend(read_pois_csv(f)?);
+        }
+        if out.is_empty() {
+            bail!("no point of interest: give --poi X,Y,Z[,NX,NY,NZ] or --pois FILE.csv");
+        }
+        check_unique_ids(&out)?;
+        Ok(out.into_iter().map(|l| l.poi).collect())
+    }
+
+    /// Size the thread pool (`--jobs`), read the inputs ([`load`]) and refuse a model that would give a confidently wrong
+    /// answer whatever the POIs (`skylod::poi::checks`): inputs in different CRSs (unless
+    /// --allow-mixed-crs), a model without heights.
+    pub fn load_checked(&self) -> anyhow::Result<Loaded> {
+        self.jobs.global()?;
+        let loaded = load(&self.inputs)?;
+        loaded.check(self.allow_mixed_crs)?;
+        Ok(loaded)
+    }
+
+    /// Bring the model and `pois` into the local metric frame ([`to_local_frame`]:
+    /// `--source-crs`, `--poi-crs`) and refuse POIs farther than `--poi-margin` metres outside
+    /// the scene.
+    pub fn frame_checked<'a>(
+        &self,
+        model: &'a mut CityModel,
+        pois: Vec<Poi>,
+        cmd: &str,
+    ) -> anyhow::Result<Framed<'a>> {
+        to_local_frame(model, pois, &self.crs.frame_options(self.poi_margin), cmd)
+    }
+}

@@ -1,0 +1,142 @@
+//! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs, step by step:
+//! outputs laid out and checked ([`write::layout`]), inputs read, levels selected (or
+//! reduced from the shards' levels files, [`shard`]), the error bound, outputs written
+//! ([`write`]) and the report ([`report`]).
+
+pub mod report;
+pub mod shard;
+pub mod write;
+
+use crate::args::output::OutputArgs;
+use crate::args::poi::PoiArgs;
+use crate::args::rough::RoughArgs;
+use crate::args::select::SelectArgs;
+use crate::commands::{ms, warn_flags};
+use crate::log::{error, summary};
+use crate::Outcome;
+use skylod::lod::LodOptions;
+use skylod::pipeline::{levels, levels_of, Levels, LevelsOptions};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub(crate) pois: PoiArgs,
+    #[command(flatten)]
+    pub(crate) region: crate::args::region::RegionArgs,
+    #[command(flatten)]
+    pub(crate) out: OutputArgs,
+    #[command(flatten)]
+    pub(crate) select: SelectArgs,
+    #[command(flatten)]
+    pub(crate) rough: RoughArgs,
+    /// Write a JSON report (schemas/report.schema.json; `-` for standard output).
+    #[arg(long, value_name = "FILE.json")]
+    pub(crate) report: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) bound: crate::args::bound::BoundArgs,
+    /// With --shard (or a scheduler's index), -o names this shard's levels file (JSON lines,
+    /// `.jsonl`) instead of a model. Without: the model is written as usual.
+    #[command(flatten)]
+    pub(crate) shard: crate::args::shard::ShardArgs,
+    #[command(flatten)]
+    pub(crate) scene: crate::args::scene::SceneArgs,
+    /// Reduce step: write the model (and --report) from the levels files of all shards
+    /// (levels combine by maximum) instead of tracing; POIs and options come from the files,
+    /// the inputs must be the shards' inputs.
+    #[arg(long, value_name = "LEVELS.jsonl", num_args = 1..)]
+    pub(crate) reduce: Vec<PathBuf>,
+}
+
+pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.pois.inputs)?;
+    args.pois.inputs = inputs.iter().map(|i| i.path.clone()).collect();
+    let t_all = Instant::now();
+    args.bound.check()?;
+    if let Some(s) = args.shard.resolve()? {
+        return shard::shard(args, s, t_all);
+    }
+    let reduce = shard::read(&mut args)?;
+    let pois = match &reduce {
+        Some(r) => r.pois().to_vec(),
+        None => args.region.points(&args.pois)?,
+    };
+    let layout = write::layout(&args, &inputs)?;
+    let rough_opts = args.rough.options()?;
+    let select_opts = args.select.options();
+    // Outputs are laid out for every input; --scene-radius then leaves out the far ones.
+    let all_inputs = args.pois.inputs.clone();
+    let region = args.region.active();
+    args.scene
+        .filter(&mut args.pois, &pois, None, region, "lod")?;
+    let mut loaded = args.pois.load_checked()?;
+    if loaded.inputs.is_empty() {
+        return Ok(Outcome::SomeFailed);
+    }
+    let combined = match reduce {
+        Some(r) => Some(r.combine(&loaded.model)?),
+        None => None,
+    };
+    let pois = match &combined {
+        Some(_) => pois,
+        None => args.region.extend(pois, &loaded.model)?,
+    };
+    let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
+    let opts = LevelsOptions {
+        lod: LodOptions {
+            rough: rough_opts,
+            select: select_opts,
+        },
+        bound: args.bound.spec(framed.source, args.select.seed)?,
+    };
+    let progress = crate::log::reporter();
+    let lv = match combined {
+        Some(c) => {
+            let lod = skylod::batch::reduce::lod_result(&framed.model, c, &opts.lod);
+            levels_of(&framed, &opts, lod, &progress)?
+        }
+        None => levels(&framed, &opts, &progress)?,
+    };
+    warn_flags(&framed.pois, &lv.lod.flags);
+    if !bound_holds(&lv) {
+        return Ok(Outcome::SomeFailed);
+    }
+    // Written geometry and the report are in the input's CRS.
+    let t_write = Instant::now();
+    let (written, write_failed) =
+        write::outputs(framed.source, &all_inputs, &layout, &lv, &progress)?;
+    let timings = report::timings(&lv, loaded.read_ms, ms(t_write), t_all);
+    let report = report::report(&args, framed.source, &framed.pois, &lv, written, timings)?;
+    // The process ends here: handing a city's model back to the allocator piece by piece
+    // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
+    std::mem::forget(report);
+    std::mem::forget(lv);
+    std::mem::forget(framed);
+    let failed = loaded.failed || write_failed;
+    std::mem::forget(loaded);
+    Ok(if failed {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}
+
+/// The error bound's line, or why it cannot be met (nothing is written then): false.
+fn bound_holds(lv: &Levels) -> bool {
+    let Some(b) = &lv.bound else { return true };
+    summary!(
+        "error bound: {} promotion(s) in {} round(s), largest SVF error {:.3}%, {:.0} ms",
+        b.promotions.len(),
+        b.rounds,
+        100.0 * b.pois.iter().map(|p| p.svf_error).fold(0.0, f64::max),
+        lv.bound_s * 1e3
+    );
+    if !b.met {
+        error!(
+            "the error bound cannot be met at these POIs (nothing written):\n{}",
+            crate::args::bound::failing_lines(b)
+        );
+    }
+    b.met
+}

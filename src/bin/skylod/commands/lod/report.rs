@@ -1,0 +1,96 @@
+//! The closing lines of `skylod lod` and its `--report`.
+
+use super::write::Written;
+use super::Args;
+use crate::commands::ms;
+use crate::log::summary;
+use anyhow::Context;
+use skylod::citygml::write::atomic_write_bytes;
+use skylod::model::CityModel;
+use skylod::output::report::{Parameters, Report, Timings};
+use skylod::pipeline::Levels;
+use skylod::poi::Poi;
+use std::time::Instant;
+
+/// The timings of the report (ms): the stages of `lv`, reading, writing, the whole run.
+pub fn timings(lv: &Levels, read: f64, write: f64, t_all: Instant) -> Timings {
+    let result = &lv.lod;
+    Timings {
+        read,
+        rough: result.rough_s * 1e3,
+        bvh: result.bvh_s * 1e3,
+        select: result.select_s * 1e3,
+        write,
+        total: ms(t_all),
+    }
+}
+
+/// The closing lines and `--report`, from the model as read (`model`, `pois`: input CRS).
+pub fn report(
+    args: &Args,
+    model: &CityModel,
+    pois: &[Poi],
+    lv: &Levels,
+    written: Written,
+    timings: Timings,
+) -> anyhow::Result<Report> {
+    let result = &lv.lod;
+    let rough_opts = args.rough.options()?;
+    let mut report = Report::new(
+        model,
+        lv.rough_source(),
+        &result.selection,
+        pois,
+        Parameters::of(
+            &result.selection,
+            args.select.seed,
+            args.select.silhouette.roof_tolerance,
+            &rough_opts,
+        ),
+        timings,
+    );
+    report.set_flags(&result.flags);
+    report.bound = lv.bound.clone();
+    for (f, w) in written.into_iter().enumerate() {
+        if let Some((path, dropped)) = w {
+            let in_file = model.buildings.iter().filter(|b| b.file == f).count();
+            report.record_output(f, path, in_file, dropped);
+        }
+    }
+    let t = &report.totals;
+    summary!(
+        "{} POI(s), {} rays each: assets at level 0/1/2 = {}/{}/{}; polygons {} -> {} ({:.1}%); \
+         {} triangles traced; read {:.0} ms, rough {:.0} ms, bvh {:.0} ms, select {:.0} ms, write {:.0} ms",
+        pois.len(),
+        result.selection.rays,
+        t.levels[0],
+        t.levels[1],
+        t.levels[2],
+        t.polygons_in,
+        t.polygons_out,
+        100.0 * t.polygon_fraction,
+        result.triangles,
+        timings.read,
+        timings.rough,
+        timings.bvh,
+        timings.select,
+        timings.write
+    );
+    if args.region.active() {
+        summary!(
+            "region: one model of {} polygons for {} POIs; their own models hold {:.0} on average, \
+             {} at most ({:.2}x)",
+            t.polygons_out,
+            pois.len(),
+            t.single_poi_polygons_mean,
+            t.single_poi_polygons_max,
+            t.region_over_single_poi
+        );
+    }
+    if let Some(path) = &args.report {
+        let mut json = serde_json::to_vec_pretty(&report)?;
+        json.push(b'\n');
+        atomic_write_bytes(path, &json).context("writing the report")?;
+    }
+    Ok(report)
+}

@@ -1,0 +1,67 @@
+//! One module per subcommand: its arguments (the shared groups of [`crate::args`]
+//! flattened) and its `run`; below, what their messages and tables share.
+
+use crate::log::warning;
+use anyhow::Context;
+use skylod::model::CityModel;
+use skylod::poi::checks::PoiFlag;
+use skylod::poi::Poi;
+use std::time::Instant;
+
+pub mod completions;
+pub mod convert;
+pub mod evaluate;
+pub mod fisheye;
+pub mod horizon;
+pub mod lod;
+pub mod reproject;
+pub mod rough;
+pub mod stats;
+pub mod sun_hours;
+pub mod svf;
+pub mod synth;
+
+/// The closing line of a batch: files ok / failed, warnings, polygons in / out, wall time.
+pub fn summary_line(
+    cmd: &str,
+    ok: usize,
+    failed: usize,
+    warnings: usize,
+    polygons: Option<(usize, usize)>,
+    t: Instant,
+) -> String {
+    let polys = polygons.map_or(String::new(), |(i, o)| format!(", polygons {i} -> {o}"));
+    format!(
+        "{cmd}: {ok} file(s) ok, {failed} failed, {warnings} warning(s){polys}, {:.2} s",
+        t.elapsed().as_secs_f64()
+    )
+}
+
+/// Milliseconds since `t`, rounded to 0.1.
+pub fn ms(t: Instant) -> f64 {
+    (t.elapsed().as_secs_f64() * 1e4).round() / 10.0
+}
+
+/// Number of polygons at full detail.
+pub fn polygons(m: &CityModel) -> usize {
+    m.assets.iter().map(|a| a.detail_polygons().len()).sum()
+}
+
+/// Context helper for writing to stdout.
+pub fn out_err<T>(r: std::io::Result<T>) -> anyhow::Result<T> {
+    r.context("writing to stdout")
+}
+
+/// Seconds as milliseconds rounded to 0.1 (the timings of the reports).
+pub fn s_to_ms(s: f64) -> f64 {
+    (s * 1e4).round() / 10.0
+}
+
+/// Print each POI's flags as a warning on stderr.
+pub fn warn_flags(pois: &[Poi], flags: &[Vec<PoiFlag>]) {
+    for (p, fl) in pois.iter().zip(flags) {
+        for f in fl {
+            warning!("warning: {}", f.message(p));
+        }
+    }
+}
