@@ -3,9 +3,7 @@
 //! Batch), and under GNU parallel, give together the bytes of one serial run; `lod` shards'
 //! levels reduce to the serial model; `--scene-radius` reads only the nearby tiles.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

@@ -6,9 +6,7 @@
 //! with nothing (no output, no temporary file) left in the output directory. Hostile XML and
 //! big inputs are generated here; inputs over 100 MB only with `--ignored`.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use skylod::citygml::read::{read_bytes, read_file, read_from, ReadOptions};
 use skylod::citygml::ReadError;
 use skylod::model::CityModel;
