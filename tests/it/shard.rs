@@ -544,7 +544,7 @@ impl Drop for Daemons {
 /// `slurm-wlm` and `munge`, as root): `sbatch --array=0-1 --wait`, the shards' outputs
 /// concatenated equal the serial run.
 #[test]
-#[ignore = "brings up a one-node Slurm cluster (slurm-wlm, munge, root): cargo test --test shard -- --ignored"]
+#[ignore = "brings up a one-node Slurm cluster (slurm-wlm, munge, root): cargo test --test it shard:: -- --ignored"]
 fn slurm_job_array_for_real() {
     for tool in [
         "munged",
