@@ -10,7 +10,7 @@
 //! their ellipsoid), projected CRSs in US survey feet or international feet
 //! ([`super::feet`]), the projected CRSs in metres of [`PROJECTED_METRES`]; any other code is
 //! [`CrsKind::Unknown`] (traced as metres, with a warning). Every table is checked against
-//! pyproj's EPSG database by `tests/crs_frames.rs`.
+//! pyproj's EPSG database by `tests/it/crs_frames.rs`.
 
 use super::feet::{foot_unit, INTERNATIONAL_FOOT, US_SURVEY_FOOT};
 use std::fmt;

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Independent counter of CityGML assets (test oracle for tests/read_real.rs).
+"""Independent counter of CityGML assets (test oracle for tests/it/read.rs).
 
 Implements the asset mapping of DESIGN.md ("CityGML -> assets") from scratch, with the Python
 standard library only (xml.etree.ElementTree.iterparse, start/end events, gzip), matching

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """EPSG facts skylod's CRS tables claim, checked against pyproj's EPSG database (oracle of
-tests/crs_frames.rs), and the generator of the foot-unit table in src/crs/feet.rs.
+tests/it/crs_frames.rs), and the generator of the foot-unit table in src/crs/feet.rs.
 
   python3 crs_tables.py --emit-rust   # print the body of src/crs/feet.rs's two tables
   python3 crs_tables.py < claims.json # check claims; prints "ok N" or the mismatches, exit 1

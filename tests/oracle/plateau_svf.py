@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Independent SVF oracle for a PLATEAU (EPSG:6697: latitude, longitude, metres) CityGML
-file, oracle of tests/crs_frames.rs.
+file, oracle of tests/it/crs_frames.rs.
 
 The model's polygons are projected with pyproj to JGD2011 / Japan Plane Rectangular CS IX
 (EPSG:6677; easting, northing in metres with always_xy; heights unchanged), triangulated by

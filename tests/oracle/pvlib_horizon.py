@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Oracle for tests/horizon.rs: sun hours from pvlib's sun positions masked by a horizon profile.
+"""Oracle for tests/it/horizon.rs: sun hours from pvlib's sun positions masked by a horizon profile.
 
 This is how a pvlib user applies a PVGIS-style horizon file: the sun is blocked at a time step
 when its apparent elevation is below the profile's elevation at its azimuth (linear

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Oracle for tests/sun_pvlib.rs: apparent solar zenith and azimuth from pvlib's SPA.
+"""Oracle for tests/it/sun_pvlib.rs: apparent solar zenith and azimuth from pvlib's SPA.
 
 Reads JSON from stdin: {"cases": [{"time": RFC 3339 UTC, "latitude": deg, "longitude": deg,
 "elevation_m": m, "pressure_mbar": mbar, "temperature_c": C, "delta_t_s": s}, ...]}

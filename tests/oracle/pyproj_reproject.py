@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Oracle for tests/reproject.rs: checks a reprojected CityGML document against pyproj.
+"""Oracle for tests/it/reproject.rs: checks a reprojected CityGML document against pyproj.
 
 Usage: pyproj_reproject.py INPUT OUTPUT SOURCE_CRS TARGET_CRS
 

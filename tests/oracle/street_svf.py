@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Independent SVF oracle for LoD3 CityGML 2.0 files in a projected CRS (metres), oracle of
-tests/bound_real.rs: the SVF of the full model (the inputs) and of the mixed-LoD model
+tests/it/bound.rs: the SVF of the full model (the inputs) and of the mixed-LoD model
 (skylod's outputs) at facade POIs, with numpy, not with skylod's reader, triangulator or BVH.
 
 Polygons: every element with `lodN...` geometry properties as direct children (thematic

@@ -7,8 +7,6 @@
 //! bounded output is also checked by a numpy ray caster that shares no code with skylod
 //! (`tests/oracle/street_svf.py`, 2 304 cosine-weighted rays per POI).
 
-mod common;
-
 use glam::DVec3;
 use serde_json::Value;
 use skylod::citygml::read_file;
@@ -101,7 +99,7 @@ fn run_lod(inputs: &[PathBuf], pois: &[Poi], dir: &Path, extra: &[&str]) -> (Vec
         rep.as_os_str(),
     ]);
     args.extend(extra.iter().map(OsStr::new));
-    let o = common::run(&args);
+    let o = crate::util::run(&args);
     assert!(
         o.status.success(),
         "skylod lod {extra:?} failed: {}",
@@ -113,7 +111,7 @@ fn run_lod(inputs: &[PathBuf], pois: &[Poi], dir: &Path, extra: &[&str]) -> (Vec
     {
         eprintln!("{line}");
     }
-    common::check_json_schema("report.schema.json", &rep);
+    crate::util::check_json_schema("report.schema.json", &rep);
     let report: Value = serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
     if out.is_file() {
         return (vec![out], report);
@@ -154,7 +152,7 @@ fn numpy_oracle(
         .output()
         .is_ok_and(|o| o.status.success());
     if !has {
-        common::missing("python3 with numpy (oracle of the error bound)");
+        crate::util::missing("python3 with numpy (oracle of the error bound)");
         return None;
     }
     let csv = dir.join("pois.csv");
@@ -167,7 +165,7 @@ fn numpy_oracle(
         );
     }
     std::fs::write(&csv, text).unwrap();
-    let script = common::manifest_dir().join("tests/oracle/street_svf.py");
+    let script = crate::util::manifest_dir().join("tests/oracle/street_svf.py");
     let o = std::process::Command::new("python3")
         .arg(&script)
         .args(["48", "11"])
@@ -195,11 +193,11 @@ fn numpy_oracle(
 
 #[test]
 fn ingolstadt_street_within_one_percent() {
-    let Some(data) = common::shared_data() else {
-        common::missing("../shared/data");
+    let Some(data) = crate::util::shared_data() else {
+        crate::util::missing("../shared/data");
         return;
     };
-    let inputs = common::citygml_files(&data.join("ingolstadt-lod3"));
+    let inputs = crate::util::citygml_files(&data.join("ingolstadt-lod3"));
     assert!(inputs.len() >= 50, "{} Ingolstadt files", inputs.len());
     let full = merged(&inputs);
     let pois = low_facade_pois(&full, 12);
@@ -277,8 +275,8 @@ fn ingolstadt_street_within_one_percent() {
 
 #[test]
 fn sun_hours_bound_on_one_building() {
-    let Some(data) = common::shared_data() else {
-        common::missing("../shared/data");
+    let Some(data) = crate::util::shared_data() else {
+        crate::util::missing("../shared/data");
         return;
     };
     let inputs = vec![data.join("ingolstadt-lod3/4018115.xml.gz")];

@@ -1,9 +1,7 @@
 //! Batch inputs as users give them: directories, glob patterns expanded by skylod, and `-`
 //! (standard input, gzip recognised by content), on the shared Ingolstadt street.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use serde_json::Value;
 use std::ffi::OsStr;
 use std::io::Write;

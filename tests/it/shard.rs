@@ -3,9 +3,7 @@
 //! Batch), and under GNU parallel, give together the bytes of one serial run; `lod` shards'
 //! levels reduce to the serial model; `--scene-radius` reads only the nearby tiles.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -546,7 +544,7 @@ impl Drop for Daemons {
 /// `slurm-wlm` and `munge`, as root): `sbatch --array=0-1 --wait`, the shards' outputs
 /// concatenated equal the serial run.
 #[test]
-#[ignore = "brings up a one-node Slurm cluster (slurm-wlm, munge, root): cargo test --test shard -- --ignored"]
+#[ignore = "brings up a one-node Slurm cluster (slurm-wlm, munge, root): cargo test --test it shard:: -- --ignored"]
 fn slurm_job_array_for_real() {
     for tool in [
         "munged",

@@ -1,8 +1,7 @@
 //! Progress and logging on standard error: bars under a pseudo-terminal (`script -qc`),
 //! plain lines when stderr is a pipe (`--log-level`), nothing but errors with `--quiet`.
 
-mod common;
-use common::{fixture, os, run, stderr};
+use crate::util::{fixture, os, run, stderr};
 use std::path::Path;
 use std::process::Command;
 
@@ -31,7 +30,7 @@ fn run_strs(a: &[String]) -> std::process::Output {
 fn under_pty(args: &[String]) -> Option<(bool, String)> {
     let have = Command::new("script").arg("--version").output().is_ok();
     if !have {
-        common::missing("`script` (bsdutils) for a pseudo-terminal");
+        crate::util::missing("`script` (bsdutils) for a pseudo-terminal");
         return None;
     }
     let quote = |s: &str| format!("'{}'", s.replace('\'', r"'\''"));
@@ -144,7 +143,7 @@ fn quiet_keeps_errors() {
 /// file); or, should the run have ended before the signal, exit 0 with exactly the model.
 #[test]
 fn ctrl_c_leaves_nothing_partial() {
-    let Some(data) = common::shared_data() else {
+    let Some(data) = crate::util::shared_data() else {
         return;
     };
     let tiles = data.join("ingolstadt-lod3");

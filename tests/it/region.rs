@@ -1,8 +1,6 @@
 //! Region POIs on the command line: `--facade ID` and `--region WKT --height Z` with
 //! `--spacing`, on `svf` and `lod` (the same arguments serve `sun-hours` and `evaluate`).
 
-mod common;
-
 use serde_json::Value;
 use skylod::citygml::read_file;
 use skylod::poi::region::facade_pois;
@@ -11,7 +9,7 @@ use std::path::Path;
 
 fn synth_small(dir: &Path) -> std::path::PathBuf {
     let gml = dir.join("small.gml");
-    let o = common::run(&[
+    let o = crate::util::run(&[
         OsStr::new("synth"),
         OsStr::new("--preset"),
         OsStr::new("small"),
@@ -33,7 +31,7 @@ fn facade_and_region_pois() {
     let expected = facade_pois(&model, "B0_0_0_s0", 2.0, 0.05).unwrap();
     assert!(expected.len() > 10, "{} POIs", expected.len());
 
-    let o = common::run(&[
+    let o = crate::util::run(&[
         OsStr::new("svf"),
         gml.as_os_str(),
         OsStr::new("--facade"),
@@ -56,7 +54,7 @@ fn facade_and_region_pois() {
     // lod: a building's walls and a street grid in one model
     let out = dir.path().join("out.gml");
     let rep = dir.path().join("r.json");
-    let o = common::run(&[
+    let o = crate::util::run(&[
         OsStr::new("lod"),
         gml.as_os_str(),
         OsStr::new("--facade"),
@@ -76,7 +74,7 @@ fn facade_and_region_pois() {
     assert!(o.status.success(), "{err}");
     // party walls: no facade point may be left inside the neighbour
     assert!(!err.contains("inside a closed solid"), "{err}");
-    common::check_json_schema("report.schema.json", &rep);
+    crate::util::check_json_schema("report.schema.json", &rep);
     let r: Value = serde_json::from_str(&std::fs::read_to_string(&rep).unwrap()).unwrap();
     let walls = facade_pois(&model, "B0_0_0", 2.0, 0.05).unwrap().len();
     let n = r["pois"].as_array().unwrap().len();
@@ -112,7 +110,7 @@ fn facade_and_region_pois() {
         .collect();
     let one = dir.path().join("one.gml");
     let rep1 = dir.path().join("one.json");
-    let o = common::run(&[
+    let o = crate::util::run(&[
         OsStr::new("lod"),
         gml.as_os_str(),
         OsStr::new("--poi"),
@@ -153,7 +151,7 @@ fn region_errors() {
     ] {
         let mut a: Vec<&OsStr> = vec![OsStr::new("svf"), gml.as_os_str()];
         a.extend(args.iter().map(OsStr::new));
-        let o = common::run(&a);
+        let o = crate::util::run(&a);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
         assert!(err.contains(says), "{args:?}: {err}");
@@ -167,7 +165,7 @@ fn horizon_over_a_facade() {
     let gml = synth_small(dir.path());
     let model = read_file(&gml).unwrap();
     let expected = facade_pois(&model, "B0_0_0_s0", 2.0, 0.05).unwrap();
-    let o = common::run(&[
+    let o = crate::util::run(&[
         OsStr::new("horizon"),
         gml.as_os_str(),
         OsStr::new("--facade"),

@@ -1,11 +1,8 @@
 //! `skylod reproject` (feature `proj`): shared files reprojected and every coordinate checked
 //! against pyproj (`tests/oracle/pyproj_reproject.py`, which parses the files itself), heights
 //! kept, `srsName` and envelopes updated, XSD-valid output, and a round trip A -> B -> A.
-#![cfg(feature = "proj")]
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;

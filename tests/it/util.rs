@@ -2,7 +2,6 @@
 //!
 //! Rule for external resources (shared data, xmllint, python3): when missing, the test FAILS if
 //! the environment variable `CI` is `true`, and otherwise prints why it skips.
-#![allow(dead_code)]
 
 use std::collections::{BTreeMap, HashSet};
 use std::ffi::OsStr;

@@ -3,8 +3,6 @@
 //! polygons a reader finds in the written file are the same number, and `evaluate`'s LoD SVF is
 //! the SVF of the written file read back and traced with the same rays.
 
-mod common;
-
 use glam::DVec3;
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
@@ -30,8 +28,8 @@ const FILES: &[&str] = &[
 
 #[test]
 fn report_evaluate_writer_and_written_file_agree() {
-    let Some(data) = common::shared_data() else {
-        common::missing("../shared/data");
+    let Some(data) = crate::util::shared_data() else {
+        crate::util::missing("../shared/data");
         return;
     };
     let dir = tempfile::tempdir().unwrap();

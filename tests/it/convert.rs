@@ -1,9 +1,7 @@
 //! `skylod convert` on every shared file and every fixture: same stats, schema-valid output for
 //! schema-valid input, idempotent (byte-identical round trip), gzip output.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use skylod::citygml::read_file;
 use skylod::output::stats::Stats;
 use std::io::Read;

@@ -3,9 +3,7 @@
 //! files from `../shared/data` where the case exists there (Ingolstadt in UTM, FZK-Haus, its
 //! LoD0 footprint, PLATEAU in EPSG:6697), generated box scenes where it does not.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

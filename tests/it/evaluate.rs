@@ -1,9 +1,7 @@
 //! `skylod evaluate` on the command line: exit codes, the JSON shape, and figures against
 //! scenes with known answers (`fixtures/scenes/`, the committed synth fixture).
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use serde_json::Value;
 
 fn num(v: &Value) -> f64 {

@@ -6,9 +6,7 @@
 //! alone), on the synthetic district (small and paper presets) and on real Ingolstadt LoD3
 //! facades (all 53 tiles as one scene). Plus the file conventions of DESIGN.md, checked line by line.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::ffi::OsString;

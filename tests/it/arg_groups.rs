@@ -1,8 +1,7 @@
 //! The shared argument groups (rough model, selection, site, sun, output) are flattened into
 //! every command that needs them, with one help text: the commands cannot drift apart.
 
-mod common;
-use common::{os, run};
+use crate::util::{os, run};
 
 /// The first line of the help text of `flag` in `skylod <cmd> --help` (on the flag's line in
 /// short help, on the next line in long help), without its `[default: ...]`.
@@ -103,6 +102,6 @@ fn fisheye_site_flags_go_together() {
         os("41.4"),
     ]);
     assert_eq!(o.status.code(), Some(2));
-    let e = common::stderr(&o);
+    let e = crate::util::stderr(&o);
     assert!(e.contains("--lat") && e.contains("--lon"), "{e}");
 }

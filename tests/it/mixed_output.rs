@@ -3,9 +3,7 @@
 //! reference resolves, level attributes, counts consistent with the levels; building drop;
 //! appearance pruning.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use rand::{Rng, SeedableRng};
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
@@ -431,7 +429,7 @@ fn relation_to_a_dropped_object_is_removed() {
     // CityGML 3.0 XLink example 4: walls ts_p_w_2 and ts_b2_p_w_4 relate to each other
     // (core:relatedTo/CityObjectRelation/relatedTo). Dropping one must remove the other's
     // relation whole: a CityObjectRelation without its relatedTo is schema-invalid.
-    let Some(data) = common::shared_data() else {
+    let Some(data) = crate::util::shared_data() else {
         return;
     };
     let input =
@@ -453,8 +451,8 @@ fn relation_to_a_dropped_object_is_removed() {
         !text.contains("CityObjectRelation"),
         "the dangling relation is gone"
     );
-    assert!(common::unresolved_refs(&out).unwrap().is_empty());
-    if common::have_xmllint() {
-        common::xmllint_validate(&out, "3.0").unwrap_or_else(|e| panic!("{e}"));
+    assert!(crate::util::unresolved_refs(&out).unwrap().is_empty());
+    if crate::util::have_xmllint() {
+        crate::util::xmllint_validate(&out, "3.0").unwrap_or_else(|e| panic!("{e}"));
     }
 }

@@ -6,9 +6,7 @@
 //! with nothing (no output, no temporary file) left in the output directory. Hostile XML and
 //! big inputs are generated here; inputs over 100 MB only with `--ignored`.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use skylod::citygml::read::{read_bytes, read_file, read_from, ReadOptions};
 use skylod::citygml::ReadError;
 use skylod::model::CityModel;
@@ -722,7 +720,7 @@ fn coordinates_split_by_comments_count_towards_the_limit() {
     assert!(e.to_string().contains("[gml:id P1]"), "{e}");
 }
 
-/// Opt-in (`cargo test --test bad_input -- --ignored`): a 100 MB attribute value with the
+/// Opt-in (`cargo test --test it bad_input:: -- --ignored`): a 100 MB attribute value with the
 /// default limits.
 #[test]
 #[ignore = "writes a 100 MB input; run with --ignored"]

@@ -10,8 +10,8 @@
 //! those POIs and its peak resident set is reported (and bounded per MB of XML).
 //!
 //! ```sh
-//! cargo test --release --test soak -- --ignored --nocapture
-//! SKYLOD_SOAK_BLOCKS=4x4 cargo test --release --test soak -- --ignored --nocapture  # quick
+//! cargo test --release --test it soak:: -- --ignored --nocapture
+//! SKYLOD_SOAK_BLOCKS=4x4 cargo test --release --test it soak:: -- --ignored --nocapture  # quick
 //! ```
 
 use glam::DVec3;

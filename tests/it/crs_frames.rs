@@ -9,9 +9,7 @@
 //! Needs `../shared/data` and python3 with pyproj and numpy: missing, the test fails under
 //! `CI=true` and prints `SKIP: ...` otherwise.
 
-mod common;
-
-use common::{fixture, manifest_dir, missing, run, shared_data};
+use crate::util::{fixture, manifest_dir, missing, run, shared_data};
 use serde_json::Value;
 use std::f64::consts::FRAC_1_SQRT_2;
 use std::ffi::OsStr;

@@ -1,5 +1,5 @@
 //! Property tests across modules (the triangulation area property lives beside the code in
-//! `src/geom/triangulate.rs`):
+//! `src/model/triangulate.rs`):
 //! - `ray_aabb` agrees with a brute-force ray-triangle test over the box's 12 triangles;
 //! - `convert` (read + write) is idempotent on small generated documents;
 //! - reading is invariant under translating every coordinate by a UTM-sized offset.

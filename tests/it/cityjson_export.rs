@@ -4,9 +4,7 @@
 //! and surface counts equal to `skylod stats`. `rough` and `lod` outputs are checked the same
 //! way, with their `skylod_level`s against the levels the report gives.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use serde_json::Value;
 use skylod::citygml::read_file;
 use skylod::export::{write, Content, Format};

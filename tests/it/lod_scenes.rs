@@ -1,8 +1,6 @@
 //! Selection on the hand-made scenes of `fixtures/scenes/` (see its README): each scene has
 //! a known level for the named assets, seen from its POI.
 
-mod common;
-
 use glam::DVec3;
 use skylod::citygml::read_file;
 use skylod::lod::select::SelectOptions;
@@ -23,7 +21,7 @@ fn poi(x: f64, y: f64, z: f64) -> Poi {
 }
 
 fn levels(scene: &str, p: Poi, rays: usize) -> (CityModel, Vec<u8>) {
-    let path = common::fixture(&format!("scenes/{scene}"));
+    let path = crate::util::fixture(&format!("scenes/{scene}"));
     let model = read_file(&path).unwrap_or_else(|e| panic!("{e}"));
     let opts = LodOptions {
         select: SelectOptions {
@@ -128,7 +126,7 @@ fn levels_do_not_depend_on_the_thread_count() {
 fn levels_are_invariant_under_a_large_translation() {
     // The scenes sit at UTM-sized coordinates already; shift the whole scene and the POI
     // back to the origin and compare.
-    let path = common::fixture("scenes/roof-tanks.gml");
+    let path = crate::util::fixture("scenes/roof-tanks.gml");
     let mut model = read_file(&path).unwrap();
     let shift = DVec3::new(X0, Y0, 0.0);
     for a in &mut model.assets {

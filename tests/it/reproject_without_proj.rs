@@ -1,9 +1,6 @@
 //! `skylod reproject` in a build without the feature `proj`: a usage error naming the feature.
-#![cfg(not(feature = "proj"))]
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use std::ffi::OsStr;
 
 #[test]

@@ -4,8 +4,6 @@
 //! report follows `schemas/report.schema.json`, and the output depends only on the arguments
 //! (same seed, same bytes; any thread count).
 
-mod common;
-
 use glam::DVec3;
 use serde_json::Value;
 use skylod::citygml::read_file;
@@ -16,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn lod(args: &[&OsStr], threads: Option<usize>) -> Output {
-    let mut c = Command::new(common::BIN);
+    let mut c = Command::new(crate::util::BIN);
     c.arg("lod").args(args);
     if let Some(n) = threads {
         c.env("RAYON_NUM_THREADS", n.to_string());
@@ -35,7 +33,7 @@ fn ok(o: &Output) {
 
 /// Validate a report against `schemas/report.schema.json` (Python's `jsonschema`).
 fn check_report_schema(report: &Path) {
-    common::check_json_schema("report.schema.json", report);
+    crate::util::check_json_schema("report.schema.json", report);
 }
 
 fn report(path: &Path) -> Value {
@@ -100,7 +98,7 @@ fn check_output_against_input(input: &CityModel, out: &Path, levels: &HashMap<St
             "kept assets carry their level"
         );
     }
-    let unresolved = common::unresolved_refs(out).unwrap();
+    let unresolved = crate::util::unresolved_refs(out).unwrap();
     assert!(
         unresolved.is_empty(),
         "unresolved references: {unresolved:?}"
@@ -122,8 +120,8 @@ fn decompress(p: &Path) -> Vec<u8> {
 }
 
 fn xsd_valid(path: &Path, version: &str) {
-    if common::have_xmllint() {
-        if let Err(e) = common::xmllint_validate(path, version) {
+    if crate::util::have_xmllint() {
+        if let Err(e) = crate::util::xmllint_validate(path, version) {
             panic!("{} is not XSD-valid:\n{e}", path.display());
         }
     }
@@ -132,7 +130,7 @@ fn xsd_valid(path: &Path, version: &str) {
 #[test]
 fn scene_end_to_end() {
     let dir = tempfile::tempdir().unwrap();
-    let input = common::fixture("scenes/roof-tanks.gml");
+    let input = crate::util::fixture("scenes/roof-tanks.gml");
     let out = dir.path().join("tanks-lod.gml");
     let rep = dir.path().join("report.json");
     let o = lod(
@@ -190,8 +188,8 @@ fn scene_end_to_end() {
 #[test]
 fn same_seed_same_bytes_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
-    let input = common::fixture("synth-small.gml");
-    let pois = common::fixture("synth-small.pois.csv");
+    let input = crate::util::fixture("synth-small.gml");
+    let pois = crate::util::fixture("synth-small.pois.csv");
     let run = |name: &str, threads: usize, seed: &str| {
         let out = dir.path().join(name);
         let o = lod(
@@ -260,10 +258,10 @@ fn ingolstadt_pois(model: &CityModel) -> Vec<String> {
 
 #[test]
 fn ingolstadt_street_as_one_scene() {
-    let Some(data) = common::shared_data() else {
+    let Some(data) = crate::util::shared_data() else {
         return;
     };
-    let inputs: Vec<PathBuf> = common::citygml_files(&data.join("ingolstadt-lod3"));
+    let inputs: Vec<PathBuf> = crate::util::citygml_files(&data.join("ingolstadt-lod3"));
     assert!(inputs.len() >= 50, "{} Ingolstadt files", inputs.len());
     let mut model = CityModel::default();
     for i in &inputs {
@@ -317,8 +315,8 @@ fn ingolstadt_street_as_one_scene() {
 #[test]
 fn usage_and_input_errors() {
     let dir = tempfile::tempdir().unwrap();
-    let a = common::fixture("scenes/courtyard.gml");
-    let b = common::fixture("scenes/roof-tanks.gml");
+    let a = crate::util::fixture("scenes/courtyard.gml");
+    let b = crate::util::fixture("scenes/roof-tanks.gml");
     // No POI: usage error.
     let o = lod(
         &[
@@ -418,7 +416,7 @@ fn buildings_in_output(path: &Path) -> u64 {
 /// no new unresolved references, a schema-valid report, never a crash.
 #[test]
 fn lod_on_every_file() {
-    let inputs: Vec<PathBuf> = common::all_inputs()
+    let inputs: Vec<PathBuf> = crate::util::all_inputs()
         .into_iter()
         .filter(|p| !p.ends_with("val3dity/csol1b.gml")) // plain GML, not CityGML
         .collect();
@@ -450,7 +448,7 @@ fn lod_on_every_file() {
                 if o.status.code() != Some(1) || !err.contains(&name) || out.exists() {
                     problems.push(format!(
                         "{}: unreadable ({e}) but lod gave exit {:?}: {err}",
-                        common::short(input),
+                        crate::util::short(input),
                         o.status.code()
                     ));
                 }
@@ -486,7 +484,7 @@ fn lod_on_every_file() {
             if o.status.code() != Some(2) || !err.contains("no heights") || out.exists() {
                 problems.push(format!(
                     "{}: flat model but lod gave exit {:?}: {err}",
-                    common::short(input),
+                    crate::util::short(input),
                     o.status.code()
                 ));
             }
@@ -511,7 +509,7 @@ fn lod_on_every_file() {
         if !o.status.success() {
             problems.push(format!(
                 "{}: exit {:?}: {}",
-                common::short(input),
+                crate::util::short(input),
                 o.status.code(),
                 String::from_utf8_lossy(&o.stderr)
             ));
@@ -529,17 +527,17 @@ fn lod_on_every_file() {
         if held != said {
             problems.push(format!(
                 "{}: the report says {said} buildings out, the file holds {held}",
-                common::short(input)
+                crate::util::short(input)
             ));
         }
-        common::check_refs(input, &out, &mut problems);
+        crate::util::check_refs(input, &out, &mut problems);
         pairs.push((
             input.clone(),
             out,
             model.files[0].version.as_str().to_string(),
         ));
     }
-    common::check_xsd(&pairs, &mut problems);
+    crate::util::check_xsd(&pairs, &mut problems);
     eprintln!(
         "{} inputs, {} reports schema-checked; {unreadable} unreadable, {flat} flat and {empty} empty inputs refused",
         pairs.len(),
@@ -583,7 +581,7 @@ fn readme_first_command_prints_what_the_readme_shows() {
             _ => w.to_string(),
         })
         .collect();
-    let o = Command::new(common::BIN)
+    let o = Command::new(crate::util::BIN)
         .args(&args)
         .current_dir(root)
         .output()

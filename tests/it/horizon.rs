@@ -2,9 +2,7 @@
 //! sun hours from pvlib's sun positions masked by the profile (the pvlib/PVGIS workflow)
 //! against skylod's own traced `sun-hours` (oracle `tests/oracle/pvlib_horizon.py`).
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use serde_json::{json, Value};
 use skylod::synth::boxes::{boxes_citygml, BoxBuilding};
 use std::ffi::OsStr;

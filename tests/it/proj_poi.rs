@@ -7,11 +7,8 @@
 //!
 //! Needs `../shared/data` and python3 with pyproj: missing, the test fails under `CI=true`
 //! and prints `SKIP: ...` otherwise.
-#![cfg(feature = "proj")]
 
-mod common;
-
-use common::{fixture, missing, run, shared_data};
+use crate::util::{fixture, missing, run, shared_data};
 use serde_json::Value;
 use std::ffi::OsStr;
 use std::io::Write;

@@ -1,8 +1,6 @@
 //! The command line: exit codes, error messages, `stats --json`, `convert` safety.
 
-mod common;
-
-use common::*;
+use crate::util::*;
 use serde_json::Value;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -368,7 +366,7 @@ fn completions_and_man_page() {
         .output()
     {
         Ok(b) => assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr)),
-        Err(_) => common::missing("bash"),
+        Err(_) => crate::util::missing("bash"),
     }
     for shell in ["zsh", "fish"] {
         let o = run(&[os("completions"), os(shell)]);
