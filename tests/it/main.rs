@@ -32,6 +32,8 @@ mod evaluate;
 mod horizon;
 // One definition of a level's output: report, `evaluate`, writer and reader count alike.
 mod levels;
+// The house rules: no import cycle between folders of src/, what each stage may import.
+mod layout;
 // `lod` end to end: valid outputs, resolved references, the report schema, determinism.
 mod lod;
 // Selection on the hand-made scenes: the known level of each named asset.
