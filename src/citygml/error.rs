@@ -1,7 +1,7 @@
 //! Errors of the CityGML reader and writer.
 
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Where in a source document something happened.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -187,6 +187,20 @@ impl From<crate::io::TargetError> for WriteError {
         match e {
             crate::io::TargetError::Exists(p) => WriteError::Exists(p),
             crate::io::TargetError::IsInput(p) => WriteError::IsInput(p),
+        }
+    }
+}
+
+impl ReadError {
+    /// An XML error of `path` at byte offset `at` (no line known: the stream was read
+    /// without a line counter).
+    pub fn xml_at_byte(path: &Path, at: u64, message: impl std::fmt::Display) -> ReadError {
+        ReadError::Xml {
+            loc: Location {
+                file: path.to_path_buf(),
+                ..Default::default()
+            },
+            message: format!("at byte {at}: {message}"),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! The first pass over each input: its prolog, root start tag and namespace declarations,
 //! `srsName`, envelope (or coordinate bounds), `gml:id`s and member kinds.
 
-use crate::citygml::error::{Location, ReadError};
+use crate::citygml::error::ReadError;
 use crate::citygml::ns::{classify, Ns};
 use crate::citygml::source;
 use quick_xml::events::Event;
@@ -39,13 +39,7 @@ pub(super) struct Scan {
 }
 
 pub(super) fn xml_err(path: &Path, pos: u64, e: impl std::fmt::Display) -> ReadError {
-    ReadError::Xml {
-        loc: Location {
-            file: path.to_path_buf(),
-            ..Default::default()
-        },
-        message: format!("at byte {pos}: {e}"),
-    }
+    ReadError::xml_at_byte(path, pos, e)
 }
 
 pub(super) fn open(path: &Path) -> Result<NsReader<Box<dyn std::io::BufRead + Send>>, ReadError> {

@@ -69,7 +69,7 @@ pub use file::ReprojectError;
 #[cfg(feature = "proj")]
 pub use file::{reproject_file, ReprojectSummary};
 
-use super::error::{Location, ReadError, WriteError};
+use super::error::{ReadError, WriteError};
 use super::ns::{self, Module, Ns};
 use super::read_file;
 use super::source;
@@ -129,15 +129,7 @@ pub fn rewrite_file(
 }
 
 fn xml_err(path: &Path, at: u64, message: String) -> WriteError {
-    WriteError::Read(ReadError::Xml {
-        loc: Location {
-            file: path.to_path_buf(),
-            line: 0,
-            column: 0,
-            gml_id: None,
-        },
-        message: format!("at byte {at}: {message}"),
-    })
+    WriteError::Read(ReadError::xml_at_byte(path, at, message))
 }
 
 /// What the text of an element is.

@@ -27,7 +27,7 @@
 use super::content_ids::{gml_ids, is_end_tag, Prescan, Taken, CHUNK_BYTES};
 use super::doc::{Doc, Name, Node, NsKind, RefKind, NONE};
 use super::push_back::{PushBack, Source};
-use crate::citygml::error::{Location, ReadError, WriteError};
+use crate::citygml::error::{ReadError, WriteError};
 use crate::citygml::ns::{self, Module, Ns};
 use crate::citygml::read::ReadOptions;
 use crate::citygml::source::{self, Limited, SkipAhead, Stream};
@@ -51,15 +51,7 @@ fn ns_kind(uri: Option<&[u8]>) -> NsKind {
 }
 
 fn xml_err(path: &Path, at: u64, message: String) -> WriteError {
-    WriteError::Read(ReadError::Xml {
-        loc: Location {
-            file: path.to_path_buf(),
-            line: 0,
-            column: 0,
-            gml_id: None,
-        },
-        message: format!("at byte {at}: {message}"),
-    })
+    WriteError::Read(ReadError::xml_at_byte(path, at, message))
 }
 
 #[derive(Clone, Copy, PartialEq)]
