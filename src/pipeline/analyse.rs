@@ -19,6 +19,7 @@ use std::time::Instant;
 /// What [`trace`] (and [`svf`], [`sun_hours`], [`horizon`]) computed: one result per POI
 /// against the full-detail scene, in POI order.
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub struct Traced<T> {
     /// One result per POI, in the order of [`Framed::local_pois`].
     pub results: Vec<T>,

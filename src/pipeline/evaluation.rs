@@ -146,6 +146,7 @@ pub struct PoiEval {
 
 /// The whole evaluation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Evaluation {
     /// Per POI, in input order.
     pub pois: Vec<PoiEval>,

@@ -26,6 +26,7 @@ pub struct SkyPictureOptions<'o> {
 
 /// What a fisheye picture of one POI shows ([`sky_pictures`]).
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub struct SkyPicture {
     /// What each cell of the partition sees (sky, below the surface, or the asset hit).
     pub cells: Vec<CellClass>,

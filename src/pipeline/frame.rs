@@ -31,6 +31,7 @@ impl Default for FrameOptions {
 
 /// The model and POIs in the local metric frame, with what reports need.
 #[derive(Debug)]
+#[non_exhaustive]
 pub struct Framed<'a> {
     /// The model as read (CRS of the input): what outputs are written from.
     pub source: &'a CityModel,

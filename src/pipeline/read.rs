@@ -10,6 +10,7 @@ use std::time::Instant;
 
 /// The inputs that could be read, merged in input order.
 #[derive(Debug, Default)]
+#[non_exhaustive]
 pub struct Inputs {
     /// All inputs read, merged ([`CityModel::merge`]): `model.files[k]` is `read[k]`.
     pub model: CityModel,

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 /// What [`write_levels`] wrote.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub struct Written {
     /// Bytes written (before compression).
     pub bytes: u64,

@@ -122,6 +122,7 @@ pub enum MergeError {
 
 /// What was merged.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct MergeSummary {
     /// Input documents.
     pub files: usize,

@@ -88,6 +88,7 @@ pub type PointTransform<'a> = dyn Fn(&mut [DVec3]) -> Result<(), String> + 'a;
 
 /// What [`rewrite_file`] did.
 #[derive(Debug, Clone, PartialEq, Default)]
+#[non_exhaustive]
 pub struct RewriteSummary {
     /// Bytes written (before compression).
     pub bytes: u64,
