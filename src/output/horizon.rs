@@ -121,7 +121,7 @@ mod tests {
     #[test]
     fn csv_rows_and_quoting() {
         // Built by the parser, not as literals: the struct may gain fields.
-        let mut pois = vec![
+        let mut pois = [
             crate::poi::parse_poi("0,0,0", 0).unwrap(),
             crate::poi::parse_poi("0,0,0", 1).unwrap(),
         ];
