@@ -215,6 +215,35 @@ fn normalise(s: &str) -> String {
 }
 
 impl Crs {
+    /// Parse a CRS given by a user (a flag): any `srsName` spelling (`EPSG:n`,
+    /// `urn:ogc:def:crs:EPSG::n`, `http://www.opengis.net/def/crs/EPSG/0/n`, compound, AdV,
+    /// `OGC:CRS84`) that names a CRS; an error message saying so otherwise.
+    ///
+    /// ```
+    /// use skylod::crs::Crs;
+    /// assert_eq!(Crs::parse_named("EPSG:6697").unwrap().epsg, Some(6697));
+    /// assert!(Crs::parse_named("wgs84").is_err());
+    /// ```
+    pub fn parse_named(s: &str) -> Result<Crs, String> {
+        let c = Crs::parse(s);
+        if c.epsg.is_none() && c.kind == CrsKind::Unknown {
+            return Err(format!(
+                "{s:?} names no CRS: give EPSG:n (or urn:ogc:def:crs:EPSG::n, OGC:CRS84, ...)"
+            ));
+        }
+        Ok(c)
+    }
+
+    /// Decimals for writing plan coordinates in this CRS: 8 for degrees (~1 mm), 3
+    /// otherwise.
+    pub fn plan_decimals(&self) -> usize {
+        if matches!(self.kind, CrsKind::Geographic { .. }) {
+            8
+        } else {
+            3
+        }
+    }
+
     /// Parse an `srsName` (never fails: an unrecognised name is [`CrsKind::Unknown`]).
     ///
     /// ```

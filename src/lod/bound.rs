@@ -213,6 +213,28 @@ pub struct BoundReport {
 }
 
 impl BoundReport {
+    /// One line per POI over the bound (id, SVF of both models, the errors), for the
+    /// error message of a bound that cannot be met.
+    pub fn failing_lines(&self) -> String {
+        self.pois
+            .iter()
+            .filter(|p| !p.holds)
+            .map(|p| {
+                let sun = p.sun_hours_error.map_or(String::new(), |e| {
+                    format!(", sun hours error {:.2}%", 100.0 * e)
+                });
+                format!(
+                    "  {}: SVF {:.4} (full {:.4}), error {:.2}%{sun}",
+                    p.id,
+                    p.svf_lod,
+                    p.svf_full,
+                    100.0 * p.svf_error
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
     /// The report section of a result made with `opts`.
     pub fn new(b: &Bounded, opts: &BoundOptions) -> BoundReport {
         BoundReport {

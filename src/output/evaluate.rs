@@ -5,6 +5,7 @@ use super::sun_hours::SunSetting;
 use crate::pipeline::evaluation::PoiEval;
 use schemars::JsonSchema;
 use serde::Serialize;
+use std::io::Write;
 
 /// The whole `evaluate --json` document.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
@@ -67,4 +68,86 @@ pub struct EvaluateTimings {
     /// The whole command.
     #[schemars(range(min = 0))]
     pub total: f64,
+}
+
+/// A relative error as a percentage with two decimals, `inf` if not finite, `-` if none.
+fn pct(x: Option<f64>) -> String {
+    match x {
+        Some(v) if v.is_finite() => format!("{:.2}%", 100.0 * v),
+        Some(_) => "inf".into(),
+        None => "-".into(),
+    }
+}
+
+/// Hours with one decimal, `-` if none.
+fn hours(x: Option<f64>) -> String {
+    x.map_or("-".into(), |h| format!("{h:.1}"))
+}
+
+/// The table of `skylod evaluate` (the paper's Tables 1 and 2): a header line (if
+/// `header`), then per POI one line for each model (full, lod, boxes) with its polygons,
+/// reduction, sky view factor, sun hours, their errors against the full model and timings.
+pub fn write_table(out: &mut impl Write, pois: &[PoiEval], header: bool) -> std::io::Result<()> {
+    if header {
+        writeln!(
+            out,
+            "{:<18} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            "poi",
+            "model",
+            "polygons",
+            "reduction",
+            "svf",
+            "svf err",
+            "sky exp",
+            "sun h",
+            "sun err",
+            "bvh ms",
+            "trace ms",
+            "select ms"
+        )?;
+    }
+    for p in pois {
+        for (name, m, svf_err, sun_err, sel) in [
+            (
+                "full",
+                &p.full,
+                Some(0.0),
+                p.full.sun_hours.map(|_| 0.0),
+                None,
+            ),
+            (
+                "lod",
+                &p.lod,
+                Some(p.lod_svf_error),
+                p.lod_sun_error,
+                Some(p.select_ms),
+            ),
+            (
+                "boxes",
+                &p.boxes,
+                Some(p.boxes_svf_error),
+                p.boxes_sun_error,
+                None,
+            ),
+        ] {
+            let reduction = m.polygons as f64 / p.full.polygons.max(1) as f64;
+            writeln!(
+                out,
+                "{:<18} {:>7} {:>9} {:>8.2}% {:>9.4} {:>9} {:>9.4} {:>9} {:>9} {:>9.1} {:>9.1} {:>9}",
+                p.id,
+                name,
+                m.polygons,
+                100.0 * reduction,
+                m.svf,
+                pct(svf_err),
+                m.sky_exposure,
+                hours(m.sun_hours),
+                pct(sun_err),
+                m.bvh_ms,
+                m.trace_ms,
+                sel.map_or("-".into(), |s: f64| format!("{s:.1}"))
+            )?;
+        }
+    }
+    Ok(())
 }

@@ -82,3 +82,67 @@ impl HorizonPoi {
         }
     }
 }
+
+/// Degrees as written: three decimals (the profile is resolved to 0.01°), no trailing
+/// zeros, no negative zero.
+pub fn round_deg(x: f64) -> f64 {
+    let r = (x * 1000.0).round() / 1000.0;
+    if r == 0.0 {
+        0.0
+    } else {
+        r
+    }
+}
+
+/// The CSV of `skylod horizon`: `id,azimuth,elevation`, one row per POI and azimuth (the
+/// header line only if `header`); ids with a comma, quote or line break are quoted.
+pub fn write_csv(pois: &[HorizonPoi], header: bool) -> String {
+    let mut s = String::new();
+    if header {
+        s.push_str("id,azimuth,elevation\n");
+    }
+    for p in pois {
+        let id = if p.id.contains([',', '"', '\n', '\r']) {
+            format!("\"{}\"", p.id.replace('"', "\"\""))
+        } else {
+            p.id.clone()
+        };
+        for (a, e) in p.azimuth.iter().zip(&p.elevation) {
+            s.push_str(&format!("{id},{a},{e}\n"));
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_rows_and_quoting() {
+        // Built by the parser, not as literals: the struct may gain fields.
+        let mut pois = [
+            crate::poi::parse_poi("0,0,0", 0).unwrap(),
+            crate::poi::parse_poi("0,0,0", 1).unwrap(),
+        ];
+        pois[0].id = "a".into();
+        pois[1].id = "b,c".into();
+        let (azimuth, elevation) = (vec![0.0, 180.0], vec![12.34567, 0.0]);
+        let rows: Vec<_> = pois
+            .iter()
+            .map(|p| {
+                HorizonPoi::new(
+                    p,
+                    azimuth.iter().map(|a| round_deg(*a)).collect(),
+                    elevation.iter().map(|e| round_deg(*e)).collect(),
+                    &[],
+                )
+            })
+            .collect();
+        assert_eq!(
+            write_csv(&rows, true),
+            "id,azimuth,elevation\na,0,12.346\na,180,0\n\"b,c\",0,12.346\n\"b,c\",180,0\n"
+        );
+        assert_eq!(write_csv(&rows[..1], false), "a,0,12.346\na,180,0\n");
+    }
+}

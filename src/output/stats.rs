@@ -4,6 +4,7 @@ use crate::model::{AssetKind, Bbox, CityModel};
 use schemars::JsonSchema;
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet};
+use std::io::Write;
 
 /// The whole `stats --json` document: one shape whatever the number of inputs, so that a
 /// pipeline never has to test for it.
@@ -21,6 +22,20 @@ impl StatsOutput {
     /// The document of `files` and their `total`.
     pub fn new(files: Vec<FileStats>, total: Stats) -> Self {
         StatsOutput { files, total }
+    }
+
+    /// The text of `skylod stats`: per file its path and [`Stats::write_table`], then the
+    /// total when there are several files.
+    pub fn write_table(&self, out: &mut impl Write) -> std::io::Result<()> {
+        for f in &self.files {
+            writeln!(out, "{}", f.path)?;
+            f.stats.write_table(out)?;
+        }
+        if self.files.len() > 1 {
+            writeln!(out, "total ({} files)", self.files.len())?;
+            self.total.write_table(out)?;
+        }
+        Ok(())
     }
 }
 
@@ -98,6 +113,30 @@ pub struct Stats {
 }
 
 impl Stats {
+    /// The counts as an indented table, one `name value` line per field (`-` for none),
+    /// the counts per type under their field's name.
+    pub fn write_table(&self, out: &mut impl Write) -> std::io::Result<()> {
+        let v = serde_json::to_value(self).unwrap_or_default();
+        if let Some(obj) = v.as_object() {
+            for (k, v) in obj {
+                if let serde_json::Value::Object(types) = v {
+                    writeln!(out, "  {k}")?;
+                    for (t, n) in types {
+                        writeln!(out, "    {t:<22} {n}")?;
+                    }
+                    continue;
+                }
+                let shown = match v {
+                    serde_json::Value::String(s) => s.clone(),
+                    serde_json::Value::Null => "-".into(),
+                    other => other.to_string(),
+                };
+                writeln!(out, "  {k:<24} {shown}")?;
+            }
+        }
+        Ok(())
+    }
+
     /// Count a model.
     ///
     /// ```

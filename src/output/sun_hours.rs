@@ -6,6 +6,7 @@ use crate::poi::checks::PoiFlag;
 use crate::solar::SunHours;
 use schemars::JsonSchema;
 use serde::Serialize;
+use std::io::Write;
 
 /// The whole `sun-hours --json` document.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
@@ -119,6 +120,37 @@ impl SunHoursPoi {
             flags: flags.to_vec(),
         }
     }
+}
+
+const MONTHS: [&str; 12] = [
+    "Jan", "Feb", "Mar", "Apr", "May", "Jun", "Jul", "Aug", "Sep", "Oct", "Nov", "Dec",
+];
+
+/// The table of `skylod sun-hours`: a header line (if `header`), then one line per POI with
+/// its sun hours, the possible hours and the hours of each month.
+pub fn write_table(
+    out: &mut impl Write,
+    pois: &[SunHoursPoi],
+    header: bool,
+) -> std::io::Result<()> {
+    if header {
+        let mut head = format!("{:<20} {:>9} {:>9}", "id", "sun_h", "possible");
+        for m in MONTHS {
+            head.push_str(&format!(" {m:>6}"));
+        }
+        writeln!(out, "{head}")?;
+    }
+    for p in pois {
+        let mut line = format!(
+            "{:<20} {:>9.2} {:>9.2}",
+            p.id, p.sun_hours, p.possible_hours
+        );
+        for m in p.monthly {
+            line.push_str(&format!(" {m:>6.1}"));
+        }
+        writeln!(out, "{line}")?;
+    }
+    Ok(())
 }
 
 /// Milliseconds per stage of `sun-hours`.

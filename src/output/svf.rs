@@ -6,6 +6,7 @@ use crate::poi::checks::PoiFlag;
 use crate::solar::SkyView;
 use schemars::JsonSchema;
 use serde::Serialize;
+use std::io::Write;
 
 /// The whole `svf --json` document.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
@@ -45,6 +46,47 @@ impl SvfOutput {
             timings_ms,
         }
     }
+}
+
+/// The table of `skylod svf`: a header line (if `header`), then one line per POI with its
+/// position (`decimals` plan decimals, see [`crate::crs::Crs::plan_decimals`]), normal, sky
+/// view factor and sky exposure.
+pub fn write_table(
+    out: &mut impl Write,
+    pois: &[SvfPoi],
+    decimals: usize,
+    header: bool,
+) -> std::io::Result<()> {
+    if header {
+        writeln!(
+            out,
+            "{:<20} {:>14} {:>14} {:>9} {:>8} {:>8} {:>8} {:>7} {:>12}",
+            "id", "x", "y", "z", "nx", "ny", "nz", "svf", "sky_exposure"
+        )?;
+    }
+    let dp = decimals;
+    for p in pois {
+        let n = p
+            .normal
+            .map_or(["-".to_string(), "-".into(), "-".into()], |n| {
+                n.map(|c| format!("{c:.3}"))
+            });
+        writeln!(
+            out,
+            "{:<20} {:>14.dp$} {:>14.dp$} {:>9.3} {:>8} {:>8} {:>8} {:>7.4} {:>12.4}",
+            p.id,
+            p.poi[0],
+            p.poi[1],
+            p.poi[2],
+            n[0],
+            n[1],
+            n[2],
+            p.svf,
+            p.sky_exposure,
+            dp = dp
+        )?;
+    }
+    Ok(())
 }
 
 /// One POI of `svf --json`.

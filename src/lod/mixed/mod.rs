@@ -176,6 +176,28 @@ pub struct MixedSummary {
     pub appearance_targets_pruned: usize,
 }
 
+impl MixedSummary {
+    /// The line `skylod rough` says for the file `input` written to `out`: assets, polygons
+    /// in and out (and the share kept), references and appearance targets pruned.
+    pub fn rough_line(&self, input: &Path, out: &Path) -> String {
+        let pct = if self.polygons_in > 0 {
+            100.0 * self.polygons_out as f64 / self.polygons_in as f64
+        } else {
+            100.0
+        };
+        format!(
+            "{} -> {}: {} assets, polygons {} -> {} ({pct:.1}%), {} href(s) and {} appearance target(s) pruned",
+            input.display(),
+            out.display(),
+            self.levels[1],
+            self.polygons_in,
+            self.polygons_out,
+            self.hrefs_pruned,
+            self.appearance_targets_pruned,
+        )
+    }
+}
+
 /// Write file `file` of `model` to `out` with every asset at its level (see the module docs).
 ///
 /// `rough[i]` and `levels[i]` belong to `model.assets[i]`; only the assets of `file` are

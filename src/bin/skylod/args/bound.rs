@@ -4,7 +4,7 @@
 use crate::args::non_negative;
 use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
-use skylod::lod::bound::{BoundOptions, BoundReport};
+use skylod::lod::bound::BoundOptions;
 use skylod::model::CityModel;
 use skylod::pipeline::BoundSpec;
 use skylod::solar::{Site, SunTable};
@@ -67,25 +67,4 @@ impl BoundArgs {
         };
         Ok(Some(BoundSpec { options, sun }))
     }
-}
-
-/// One line per POI over the bound, for the error message.
-pub fn failing_lines(r: &BoundReport) -> String {
-    r.pois
-        .iter()
-        .filter(|p| !p.holds)
-        .map(|p| {
-            let sun = p.sun_hours_error.map_or(String::new(), |e| {
-                format!(", sun hours error {:.2}%", 100.0 * e)
-            });
-            format!(
-                "  {}: SVF {:.4} (full {:.4}), error {:.2}%{sun}",
-                p.id,
-                p.svf_lod,
-                p.svf_full,
-                100.0 * p.svf_error
-            )
-        })
-        .collect::<Vec<_>>()
-        .join("\n")
 }

@@ -3,30 +3,14 @@
 //! reports and outputs stay in the input's CRS.
 
 use crate::log::{summary, warning};
-use skylod::crs::{Crs, CrsKind};
+use skylod::crs::Crs;
 use skylod::model::CityModel;
 use skylod::pipeline::FrameOptions;
 use skylod::poi::Poi;
 
-/// Parse a CRS flag: any `srsName` spelling (`EPSG:n`, `urn:ogc:def:crs:EPSG::n`,
-/// `http://www.opengis.net/def/crs/EPSG/0/n`, compound, AdV, `OGC:CRS84`) that names a code.
+/// Parse a CRS flag: any `srsName` spelling that names a CRS ([`Crs::parse_named`]).
 pub fn parse_crs(s: &str) -> Result<Crs, String> {
-    let c = Crs::parse(s);
-    if c.epsg.is_none() && c.kind == CrsKind::Unknown {
-        return Err(format!(
-            "{s:?} names no CRS: give EPSG:n (or urn:ogc:def:crs:EPSG::n, OGC:CRS84, ...)"
-        ));
-    }
-    Ok(c)
-}
-
-/// Decimals for printing plan coordinates of `crs`: 8 for degrees (~1 mm), 3 otherwise.
-pub fn decimals(crs: &Crs) -> usize {
-    if matches!(crs.kind, CrsKind::Geographic { .. }) {
-        8
-    } else {
-        3
-    }
+    Crs::parse_named(s)
 }
 
 /// `--source-crs`, for every command that reads.

@@ -39,18 +39,6 @@ pub struct Args {
     json: bool,
 }
 
-fn pct(x: Option<f64>) -> String {
-    match x {
-        Some(v) if v.is_finite() => format!("{:.2}%", 100.0 * v),
-        Some(_) => "inf".into(),
-        None => "-".into(),
-    }
-}
-
-fn hours(x: Option<f64>) -> String {
-    x.map_or("-".into(), |h| format!("{h:.1}"))
-}
-
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.site.check("evaluate")?;
     let rough_opts = args.rough.options()?;
@@ -108,68 +96,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             },
         );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
-    } else if crate::args::shard::header(shard) {
-        out_err(writeln!(
-            out,
-            "{:<18} {:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
-            "poi",
-            "model",
-            "polygons",
-            "reduction",
-            "svf",
-            "svf err",
-            "sky exp",
-            "sun h",
-            "sun err",
-            "bvh ms",
-            "trace ms",
-            "select ms"
+    } else {
+        let header = crate::args::shard::header(shard);
+        out_err(skylod::output::evaluate::write_table(
+            &mut out, &e.pois, header,
         ))?;
-    }
-    if !args.json {
-        for p in &e.pois {
-            for (name, m, svf_err, sun_err, sel) in [
-                (
-                    "full",
-                    &p.full,
-                    Some(0.0),
-                    p.full.sun_hours.map(|_| 0.0),
-                    None,
-                ),
-                (
-                    "lod",
-                    &p.lod,
-                    Some(p.lod_svf_error),
-                    p.lod_sun_error,
-                    Some(p.select_ms),
-                ),
-                (
-                    "boxes",
-                    &p.boxes,
-                    Some(p.boxes_svf_error),
-                    p.boxes_sun_error,
-                    None,
-                ),
-            ] {
-                let reduction = m.polygons as f64 / p.full.polygons.max(1) as f64;
-                out_err(writeln!(
-                    out,
-                    "{:<18} {:>7} {:>9} {:>8.2}% {:>9.4} {:>9} {:>9.4} {:>9} {:>9} {:>9.1} {:>9.1} {:>9}",
-                    p.id,
-                    name,
-                    m.polygons,
-                    100.0 * reduction,
-                    m.svf,
-                    pct(svf_err),
-                    m.sky_exposure,
-                    hours(m.sun_hours),
-                    pct(sun_err),
-                    m.bvh_ms,
-                    m.trace_ms,
-                    sel.map_or("-".into(), |s| format!("{s:.1}"))
-                ))?;
-            }
-        }
         crate::log::summary!(
             "{} POI(s); selection {} rays, SVF {} rays; read {:.0} ms, rough {:.0} ms (shared), selection BVH {:.0} ms (shared), total {:.0} ms",
             e.pois.len(),

@@ -1,6 +1,5 @@
 //! `skylod fisheye`.
 
-use crate::args::crs::decimals;
 use crate::args::poi::PoiArgs;
 use crate::args::rough::RoughArgs;
 use crate::args::site::SiteArgs;
@@ -135,7 +134,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         bundles: &bundles,
         levels: (args.colour_by == ColourBy::Level).then_some(lod_opts),
     };
-    let dp = if decimals(&framed.crs) == 8 { 8 } else { 2 };
+    let dp = if framed.crs.plan_decimals() == 8 {
+        8
+    } else {
+        2
+    };
     sky_pictures(
         &framed,
         &popts,

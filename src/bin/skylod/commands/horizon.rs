@@ -5,10 +5,9 @@ use crate::commands::{out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
 use anyhow::Context;
 use skylod::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
-use skylod::output::horizon::{HorizonOutput, HorizonPoi};
+use skylod::output::horizon::{round_deg, write_csv, HorizonOutput, HorizonPoi};
 use skylod::output::svf::TraceTimings;
-use skylod::poi::Poi;
-use skylod::solar::{HorizonOptions, HorizonProfile};
+use skylod::solar::HorizonOptions;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -28,31 +27,6 @@ pub struct Args {
     /// Replace an existing output file.
     #[arg(long)]
     overwrite: bool,
-}
-
-/// Degrees as written: three decimals (the profile is resolved to 0.01°), no trailing zeros.
-fn deg(x: f64) -> f64 {
-    let r = (x * 1000.0).round() / 1000.0;
-    if r == 0.0 {
-        0.0
-    } else {
-        r
-    }
-}
-
-fn csv(pois: &[Poi], profiles: &[HorizonProfile]) -> String {
-    let mut s = String::from("id,azimuth,elevation\n");
-    for (p, h) in pois.iter().zip(profiles) {
-        let id = if p.id.contains([',', '"', '\n', '\r']) {
-            format!("\"{}\"", p.id.replace('"', "\"\""))
-        } else {
-            p.id.clone()
-        };
-        for (a, e) in h.azimuth.iter().zip(&h.elevation) {
-            s.push_str(&format!("{id},{},{}\n", deg(*a), deg(*e)));
-        }
-    }
-    s
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
@@ -85,20 +59,20 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
     let (profiles, flags) = (traced.results, traced.flags);
     let pois = &framed.pois;
+    let rows: Vec<_> = pois
+        .iter()
+        .zip(&profiles)
+        .zip(&flags)
+        .map(|((p, h), flags)| {
+            HorizonPoi::new(
+                p,
+                h.azimuth.iter().map(|a| round_deg(*a)).collect(),
+                h.elevation.iter().map(|e| round_deg(*e)).collect(),
+                flags,
+            )
+        })
+        .collect();
     let text = if args.json {
-        let rows: Vec<_> = pois
-            .iter()
-            .zip(&profiles)
-            .zip(&flags)
-            .map(|((p, h), flags)| {
-                HorizonPoi::new(
-                    p,
-                    h.azimuth.iter().map(|a| deg(*a)).collect(),
-                    h.elevation.iter().map(|e| deg(*e)).collect(),
-                    flags,
-                )
-            })
-            .collect();
         let doc = HorizonOutput::new(
             rows,
             args.step,
@@ -113,15 +87,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
         serde_json::to_string_pretty(&doc)? + "\n"
     } else {
-        let text = csv(pois, &profiles);
-        if crate::args::shard::header(shard) {
-            text
-        } else {
-            // Shards after the first leave out the header line: concatenated in shard
-            // order, the shards' files are the serial run's.
-            text.split_once('\n')
-                .map_or(String::new(), |(_, rows)| rows.to_string())
-        }
+        // Shards after the first leave out the header line: concatenated in shard order,
+        // the shards' files are the serial run's.
+        write_csv(&rows, crate::args::shard::header(shard))
     };
     match &args.output {
         Some(out) => {
@@ -155,29 +123,4 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         trace_ms
     );
     Ok(loaded.outcome())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn csv_rows_and_quoting() {
-        // Built by the parser, not as literals: the struct may gain fields.
-        let mut pois = vec![
-            skylod::poi::parse_poi("0,0,0", 0).unwrap(),
-            skylod::poi::parse_poi("0,0,0", 1).unwrap(),
-        ];
-        pois[0].id = "a".into();
-        pois[1].id = "b,c".into();
-        let h = HorizonProfile {
-            azimuth: vec![0.0, 180.0],
-            elevation: vec![12.34567, 0.0],
-        };
-        let s = csv(&pois, &[h.clone(), h]);
-        assert_eq!(
-            s,
-            "id,azimuth,elevation\na,0,12.346\na,180,0\n\"b,c\",0,12.346\n\"b,c\",180,0\n"
-        );
-    }
 }

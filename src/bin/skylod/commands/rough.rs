@@ -156,23 +156,8 @@ fn one(
         });
     }
     let s = write_mixed(&model, 0, &rough, &levels, out, wopts)?;
-    let pct = if s.polygons_in > 0 {
-        100.0 * s.polygons_out as f64 / s.polygons_in as f64
-    } else {
-        100.0
-    };
-    let line = format!(
-        "{} -> {}: {} assets, polygons {} -> {} ({pct:.1}%), {} href(s) and {} appearance target(s) pruned",
-        input.display(),
-        out.display(),
-        s.levels[1],
-        s.polygons_in,
-        s.polygons_out,
-        s.hrefs_pruned,
-        s.appearance_targets_pruned,
-    );
     Ok(Done {
-        line: Some(line),
+        line: Some(s.rough_line(input, out)),
         warnings: model.warnings.len(),
         polygons: (s.polygons_in, s.polygons_out),
     })

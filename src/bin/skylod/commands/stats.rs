@@ -86,50 +86,21 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             crate::commands::summary_line("stats", ok.len(), n_failed, total.warnings, None, t0)
         );
     }
+    let files = ok
+        .iter()
+        .map(|(p, s)| FileStats::new(p.display().to_string(), s.clone()))
+        .collect();
+    // One shape whatever the number of inputs: a pipeline never has to test for it.
+    let v = StatsOutput::new(files, total);
     let mut out = std::io::stdout().lock();
     if args.json {
-        let files = ok
-            .iter()
-            .map(|(p, s)| FileStats::new(p.display().to_string(), s.clone()))
-            .collect();
-        // One shape whatever the number of inputs: a pipeline never has to test for it.
-        let v = StatsOutput::new(files, total);
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
     } else {
-        for (p, s) in &ok {
-            writeln!(out, "{}", p.display())?;
-            print_table(&mut out, s)?;
-        }
-        if ok.len() > 1 {
-            writeln!(out, "total ({} files)", ok.len())?;
-            print_table(&mut out, &total)?;
-        }
+        v.write_table(&mut out)?;
     }
     Ok(if failed {
         Outcome::SomeFailed
     } else {
         Outcome::Ok
     })
-}
-
-fn print_table(out: &mut impl Write, s: &Stats) -> std::io::Result<()> {
-    let v = serde_json::to_value(s).unwrap_or_default();
-    if let Some(obj) = v.as_object() {
-        for (k, v) in obj {
-            if let serde_json::Value::Object(types) = v {
-                writeln!(out, "  {k}")?;
-                for (t, n) in types {
-                    writeln!(out, "    {t:<22} {n}")?;
-                }
-                continue;
-            }
-            let shown = match v {
-                serde_json::Value::String(s) => s.clone(),
-                serde_json::Value::Null => "-".into(),
-                other => other.to_string(),
-            };
-            writeln!(out, "  {k:<24} {shown}")?;
-        }
-    }
-    Ok(())
 }

@@ -5,7 +5,9 @@ use crate::args::sun::SunArgs;
 use crate::args::tracing::Prepared;
 use crate::commands::{ms, out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
-use skylod::output::sun_hours::{SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting};
+use skylod::output::sun_hours::{
+    write_table, SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting,
+};
 use skylod::solar::{Site, SunTable};
 use std::io::Write;
 use std::time::Instant;
@@ -26,10 +28,6 @@ pub struct Args {
     #[arg(long)]
     json: bool,
 }
-
-const MONTHS: [&str; 12] = [
-    "Jan", "Feb", "Mar", "Apr", "May", "Jun", "Jul", "Aug", "Sep", "Oct", "Nov", "Dec",
-];
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.site.check("sun-hours")?;
@@ -56,14 +54,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         s_to_ms(traced.trace_s),
     );
     let pois = &framed.pois;
+    let rows: Vec<_> = pois
+        .iter()
+        .zip(hours)
+        .zip(&traced.flags)
+        .map(|((p, h), flags)| SunHoursPoi::new(p, h, flags))
+        .collect();
     let mut out = std::io::stdout().lock();
     if args.json {
-        let rows: Vec<_> = pois
-            .iter()
-            .zip(hours)
-            .zip(&traced.flags)
-            .map(|((p, h), flags)| SunHoursPoi::new(p, h, flags))
-            .collect();
         let doc = SunHoursOutput::new(
             rows,
             SunSetting::new(lat, lon, args.sun.year, args.sun.step),
@@ -80,20 +78,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
-        let mut head = format!("{:<20} {:>9} {:>9}", "id", "sun_h", "possible");
-        for m in MONTHS {
-            head.push_str(&format!(" {m:>6}"));
-        }
-        if crate::args::shard::header(shard) {
-            out_err(writeln!(out, "{head}"))?;
-        }
-        for (p, h) in pois.iter().zip(hours) {
-            let mut line = format!("{:<20} {:>9.2} {:>9.2}", p.id, h.hours, h.possible_hours);
-            for m in h.monthly {
-                line.push_str(&format!(" {m:>6.1}"));
-            }
-            out_err(writeln!(out, "{line}"))?;
-        }
+        let header = crate::args::shard::header(shard);
+        out_err(write_table(&mut out, &rows, header))?;
         crate::log::summary!(
             "{} POI(s); {} steps of {} min in {} at ({lat}, {lon}), months in {}; {} polygons from {} input(s); read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),

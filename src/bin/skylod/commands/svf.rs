@@ -1,10 +1,9 @@
 //! `skylod svf`.
 
-use crate::args::crs::decimals;
 use crate::args::tracing::Prepared;
 use crate::commands::{out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
-use skylod::output::svf::{SvfOutput, SvfPoi, TraceTimings};
+use skylod::output::svf::{write_table, SvfOutput, SvfPoi, TraceTimings};
 use skylod::solar::SkyBundles;
 use std::io::Write;
 
@@ -43,14 +42,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         s_to_ms(traced.trace_s),
     );
     let pois = &framed.pois;
+    let rows: Vec<_> = pois
+        .iter()
+        .zip(views)
+        .zip(&traced.flags)
+        .map(|((p, v), flags)| SvfPoi::new(p, v, flags))
+        .collect();
     let mut out = std::io::stdout().lock();
     if args.json {
-        let rows: Vec<_> = pois
-            .iter()
-            .zip(views)
-            .zip(&traced.flags)
-            .map(|((p, v), flags)| SvfPoi::new(p, v, flags))
-            .collect();
         let doc = SvfOutput::new(
             rows,
             args.rays,
@@ -65,35 +64,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
-        if crate::args::shard::header(shard) {
-            out_err(writeln!(
-                out,
-                "{:<20} {:>14} {:>14} {:>9} {:>8} {:>8} {:>8} {:>7} {:>12}",
-                "id", "x", "y", "z", "nx", "ny", "nz", "svf", "sky_exposure"
-            ))?;
-        }
-        let dp = decimals(&framed.crs);
-        for (p, v) in pois.iter().zip(views) {
-            let n = p
-                .normal
-                .map_or(["-".to_string(), "-".into(), "-".into()], |n| {
-                    [n.x, n.y, n.z].map(|c| format!("{c:.3}"))
-                });
-            out_err(writeln!(
-                out,
-                "{:<20} {:>14.dp$} {:>14.dp$} {:>9.3} {:>8} {:>8} {:>8} {:>7.4} {:>12.4}",
-                p.id,
-                p.position.x,
-                p.position.y,
-                p.position.z,
-                n[0],
-                n[1],
-                n[2],
-                v.svf,
-                v.sky_exposure,
-                dp = dp
-            ))?;
-        }
+        let (dp, header) = (
+            framed.crs.plan_decimals(),
+            crate::args::shard::header(shard),
+        );
+        out_err(write_table(&mut out, &rows, dp, header))?;
         crate::log::summary!(
             "{} POI(s), {} rays per bundle, seed {}; {} polygons from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),

@@ -135,7 +135,7 @@ fn bound_holds(lv: &Levels) -> bool {
     if !b.met {
         error!(
             "the error bound cannot be met at these POIs (nothing written):\n{}",
-            crate::args::bound::failing_lines(b)
+            b.failing_lines()
         );
     }
     b.met
