@@ -69,7 +69,8 @@ impl Default for RoughOptions {
 /// of thousands of boxes.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RoughGeometry {
-    /// Polygons besides the box's faces, rings open: generalised planes (no holes, no id),
+    /// Polygons besides the box's faces, rings open: generalised planes (no id; no holes,
+    /// except a body's, which keeps them),
     /// LoD2 polygons used unchanged (holes and ids kept), or geometry brought back to the
     /// source CRS. Empty for a box; read them all with
     /// [`RoughGeometry::polygons()`](method@RoughGeometry::polygons).
