@@ -49,6 +49,12 @@ fn write(cmd: &str, input: &Path, pois: Option<&Path>, dir: &Path, name: &str) -
     args.extend([os("-o"), out.as_os_str()]);
     let o = run(&args);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // Before issue 21 the courtyard POI was blamed: "lies inside a closed solid".
+    assert!(
+        !stderr(&o).contains("inside a closed solid"),
+        "{}",
+        stderr(&o)
+    );
     out
 }
 
