@@ -11,6 +11,10 @@
 //! above the lowest edge of the building's roofs minus [`SelectOptions::roof_tolerance_m`]
 //! (a chimney, a water tank, an antenna, a stair tower).
 //!
+//! **Safety net**: an asset replaced by its box whose box holds a POI that the asset's full
+//! geometry does not ([`rough_holds_poi_full_not`]) is at level 2 for that POI: the box
+//! would hide sky that the full model has.
+//!
 //! **Silhouette test** (paper Fig. 4): the edges of the asset's rough outline (the four top
 //! edges of an installation's box; every edge of a roof's generalised polygons) are
 //! projected onto the unit sphere around the POI as great-circle arcs. The asset is on the
@@ -234,7 +238,19 @@ pub fn select_with(
     let mut levels = vec![0u8; n_assets];
     let mut hits = vec![0u64; n_assets];
     let mut out_pois = Vec::with_capacity(per_poi.len());
-    for (mut info, poi_hits, silhouette) in per_poi {
+    for (poi, (mut info, poi_hits, mut silhouette)) in pois.iter().zip(per_poi) {
+        // Safety net: a closed rough form (a box) that holds the POI while the full
+        // geometry does not hides sky the full model has; keep that asset in full.
+        for &(a, _) in &poi_hits {
+            let i = a as usize;
+            if let (Some(asset), Some(r)) = (model.assets.get(i), rough.get(i)) {
+                if rough_holds_poi_full_not(asset, r, poi.position) {
+                    silhouette.push(a);
+                }
+            }
+        }
+        silhouette.sort_unstable();
+        silhouette.dedup();
         info.polygons = own_polygons(model, rough, &poi_hits, &silhouette);
         for (a, h) in poi_hits {
             let a = a as usize;
@@ -363,6 +379,56 @@ fn select_one(
         polygons: 0,
     };
     (info, hits, silhouette)
+}
+
+/// Whether `p` lies inside the closed rough form of `asset` (its box) but not inside the
+/// asset's full geometry (the polygons of the rough stage's LoD, by ray parity: inside
+/// only when three rays in different directions each cross it an odd number of times).
+pub fn rough_holds_poi_full_not(
+    asset: &crate::model::Asset,
+    rough: &RoughGeometry,
+    p: DVec3,
+) -> bool {
+    let Some(b) = &rough.obb else { return false };
+    if !b.contains(p, 0.0) {
+        return false;
+    }
+    let mut tris = Vec::new();
+    for poly in asset.polygons_at(rough.lod) {
+        crate::model::triangulate(poly, &mut tris);
+    }
+    // generic directions: no ray along a triangulation diagonal of an axis-aligned face
+    let dirs = [
+        DVec3::new(0.012_3, 0.037_1, 1.0).normalize(),
+        DVec3::new(0.577_1, 0.301_3, 0.759_2).normalize(),
+        DVec3::new(-0.412_9, -0.703_7, -0.578_3).normalize(),
+    ];
+    !dirs
+        .iter()
+        .all(|&d| tris.iter().filter(|t| ray_crosses(p, d, t)).count() % 2 == 1)
+}
+
+/// Möller–Trumbore: whether the ray `o + t d` (t > 0) crosses triangle `t`.
+fn ray_crosses(o: DVec3, d: DVec3, t: &[DVec3; 3]) -> bool {
+    let [a, b, c] = *t;
+    let e1 = b - a;
+    let e2 = c - a;
+    let h = d.cross(e2);
+    let det = e1.dot(h);
+    if det.abs() < 1e-12 {
+        return false;
+    }
+    let s = o - a;
+    let u = s.dot(h) / det;
+    if !(0.0..=1.0).contains(&u) {
+        return false;
+    }
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    if v < 0.0 || u + v > 1.0 {
+        return false;
+    }
+    e2.dot(q) / det > 0.0
 }
 
 /// Which assets are roof assets (see the module docs).
@@ -744,5 +810,59 @@ mod tests {
         assert!(!idx.near_segment(o, [DVec3::new(0.5, 0.0, 1.0), DVec3::new(1.0, 0.0, 1.0)]));
         let idx = SkyIndex::new(&[DVec3::new(0.0, 0.05, 1.0).normalize()], 0.03);
         assert!(!idx.near_segment(o, [DVec3::new(-1.0, 0.0, 1.0), DVec3::new(1.0, 0.0, 1.0)]));
+    }
+
+    /// Issue 21's safety net: a POI between the two walls of a gate-like object lies inside
+    /// the object's box but outside its geometry: the object goes to level 2. A POI inside
+    /// a closed box-shaped object (both its box and its geometry hold it) does not promote it.
+    #[test]
+    fn poi_inside_the_box_but_outside_the_geometry_promotes_to_level_2() {
+        let wall = |x: f64| {
+            Polygon::new(vec![
+                DVec3::new(x, -5.0, 0.0),
+                DVec3::new(x, 5.0, 0.0),
+                DVec3::new(x, 5.0, 10.0),
+                DVec3::new(x, -5.0, 10.0),
+            ])
+        };
+        let mut m = CityModel::default();
+        m.assets.push(asset(
+            AssetKind::Other,
+            "gate",
+            None,
+            vec![wall(-5.0), wall(5.0)],
+        ));
+        let poi = Poi {
+            id: "between".into(),
+            position: DVec3::new(0.0, 0.0, 1.5),
+            normal: None,
+        };
+        let rough = rough_model(&m, &RoughOptions::default());
+        assert!(rough[0].obb.is_some_and(|b| b.contains(poi.position, 0.0)));
+        assert!(rough_holds_poi_full_not(
+            &m.assets[0],
+            &rough[0],
+            poi.position
+        ));
+        let sel = run(&m, poi.clone(), 2_000);
+        assert!(sel.hits[0] > 0);
+        assert!(!sel.roof_asset[0]);
+        assert_eq!(sel.levels, vec![2]);
+
+        // The same object closed into a box: the POI is inside both; level 1.
+        let mut closed = CityModel::default();
+        closed.assets.push(asset(
+            AssetKind::Other,
+            "cube",
+            None,
+            boxed(-5.0, -5.0, 0.0, 5.0, 5.0, 10.0),
+        ));
+        let rough = rough_model(&closed, &RoughOptions::default());
+        assert!(!rough_holds_poi_full_not(
+            &closed.assets[0],
+            &rough[0],
+            poi.position
+        ));
+        assert_eq!(run(&closed, poi, 2_000).levels, vec![1]);
     }
 }

@@ -61,6 +61,8 @@ mod reproject;
 mod reproject_without_proj;
 // Plane generalisation of the walls of a real LoD3 building.
 mod rough;
+// Issue 21: whole-building assets keep courtyards and inner corners open.
+mod rough_forms;
 // Shards (`--shard`, scheduler variables, GNU parallel) give together one serial run's bytes.
 mod shard;
 // Soak (ignored by default): `lod` over a generated 1 GB city with memory sampled.

@@ -22,7 +22,8 @@
 //! already coarser and describe the same object). The encoding follows the property's schema
 //! type: `lodNSolid` gets a `gml:Solid` whose exterior is a `gml:CompositeSurface` (GML 3.1.1,
 //! CityGML 1.0/2.0) or a `gml:Shell` (GML 3.2, CityGML 3.0) of the rough polygons (the six faces
-//! of an oriented box for installations, openings and bodies: a closed shell);
+//! of an oriented box for installations, openings and other objects: a closed shell; a body's
+//! polygons generalised to their planes);
 //! `lodNMultiSurface`, `lodNGeometry`, `lod0FootPrint`, `lod0RoofEdge` get a `gml:MultiSurface`;
 //! other `lodNSurface` properties (a `gml:_Surface`) get a `gml:CompositeSurface`. Properties
 //! whose type admits none of these (`lodNImplicitRepresentation`, relief `tin`/`grid`) are

@@ -1,12 +1,34 @@
 //! The rough model (paper 4.3): every asset reduced to simple geometry that the ray
 //! bundle is cast against and that level-1 assets are written with.
 //!
-//! * installations, openings (windows, doors), bodies and other objects become their
-//!   oriented bounding box ([`obb::Obb`], six quads);
+//! * installations, openings (windows, doors) and other objects become their oriented
+//!   bounding box ([`obb::Obb`], six quads);
+//! * a *body* (a building's own LoD1/LoD2 solid or multi-surface, without thematic
+//!   surfaces) is generalised to its planes keeping the holes
+//!   ([`plane::generalize_keeping_holes`]), see below;
 //! * shell surfaces (roof, wall, ground, closure, outer ceiling/floor) are generalised to
 //!   their planes ([`plane::generalize`]): openings closed, reveals and frames absorbed;
 //! * with [`RoughOptions::prefer_lod2`], an asset that also carries LoD2 geometry besides
 //!   a higher LoD takes the LoD2 geometry as input (shell surfaces use it unchanged).
+//!
+//! # Whole-building assets (issue 21)
+//!
+//! A body's box covers ground that the building leaves open: the courtyard of a ring
+//! block, the inner corner of an L or U. A POI standing there is then inside the rough
+//! model, every ray hits the box, the body is written rough and the written model has no
+//! sky. So a body's rough form is its own polygons united per plane (the grouping of
+//! [`plane::generalize`]: normals within [`RoughOptions::angle_deg`], vertices within
+//! [`RoughOptions::thickness_m`]) with every hole kept and nothing filled: it covers the
+//! same surfaces as the full geometry, up to the projection onto each plane. A LoD1 block
+//! stays itself (one polygon per face, a ring roof keeps its courtyard hole); a LoD2 body
+//! loses only coplanar splits and thin detail; it never fills a courtyard. Its rough
+//! polygons are written into the LoD property they came from ([`RoughGeometry::lod`]), as
+//! a shell surface's are. `Other` objects keep their box (they are mostly small: street
+//! furniture, vegetation, generic objects).
+//!
+//! As a safety net the selection promotes to level 2 any asset whose closed rough form
+//! (its box) holds a POI that its full geometry does not
+//! ([`crate::lod::select`]).
 
 pub mod obb;
 pub mod plane;
@@ -14,7 +36,7 @@ mod to_source;
 
 pub use to_source::rough_to_source;
 
-use crate::model::{Asset, CityModel, Polygon};
+use crate::model::{Asset, AssetKind, CityModel, Polygon};
 use obb::Obb;
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -47,7 +69,8 @@ impl Default for RoughOptions {
 /// of thousands of boxes.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RoughGeometry {
-    /// Polygons besides the box's faces, rings open: generalised planes (no holes, no id),
+    /// Polygons besides the box's faces, rings open: generalised planes (no id; no holes,
+    /// except a body's, which keeps them),
     /// LoD2 polygons used unchanged (holes and ids kept), or geometry brought back to the
     /// source CRS. Empty for a box; read them all with
     /// [`RoughGeometry::polygons()`](method@RoughGeometry::polygons).
@@ -136,6 +159,18 @@ pub fn rough_asset(asset: &Asset, opts: &RoughOptions) -> RoughGeometry {
             plane::generalize(asset.polygons_at(lod), opts.angle_deg, opts.thickness_m)
         };
         // a city's hundreds of thousands of rough surfaces: no room for polygons never added
+        polygons.shrink_to_fit();
+        RoughGeometry {
+            polygons,
+            obb: None,
+            lod,
+        }
+    } else if asset.kind == AssetKind::Body {
+        let mut polygons = plane::generalize_keeping_holes(
+            asset.polygons_at(lod),
+            opts.angle_deg,
+            opts.thickness_m,
+        );
         polygons.shrink_to_fit();
         RoughGeometry {
             polygons,
@@ -289,7 +324,7 @@ mod tests {
             assert_eq!(*r, rough_asset(a, &RoughOptions::default()));
             if a.geometries.is_empty() {
                 assert!(r.is_empty() && r.obb.is_none());
-            } else if a.kind.is_shell_surface() {
+            } else if a.kind.is_shell_surface() || a.kind == AssetKind::Body {
                 assert!(r.obb.is_none());
                 assert_eq!(r.polygons.len(), 1);
             } else {

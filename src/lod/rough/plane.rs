@@ -54,6 +54,44 @@ pub fn generalize<'a>(
     angle_deg: f64,
     thickness_m: f64,
 ) -> Vec<Polygon> {
+    generalize_with(polygons, angle_deg, thickness_m, false)
+}
+
+/// [`generalize`] that keeps the holes: the members' interior rings enter the union and
+/// the union's holes stay (a courtyard stays open), nothing is dropped as enclosed, and a
+/// group whose union comes out smaller than its largest member keeps its members as
+/// they are (projected). The generalised polygons cover the same ground as the input's:
+/// the rough form of a whole-building asset (see [`crate::lod::rough`]).
+///
+/// # Example
+/// ```rust
+/// use glam::DVec3;
+/// use skylod::model::Polygon;
+/// use skylod::lod::rough::plane::generalize_keeping_holes;
+/// let sq = |a: f64, b: f64| vec![
+///     DVec3::new(a, a, 15.0), DVec3::new(b, a, 15.0), DVec3::new(b, b, 15.0), DVec3::new(a, b, 15.0),
+/// ];
+/// let mut hole = sq(15.0, 45.0);
+/// hole.reverse();
+/// let roof = Polygon::from_rings(None, &sq(0.0, 60.0), &[hole]);
+/// let out = generalize_keeping_holes([&roof], 5.0, 0.3);
+/// assert_eq!((out.len(), out[0].interior_count()), (1, 1));
+/// assert!((out[0].area() - (3600.0 - 900.0)).abs() < 1e-6);
+/// ```
+pub fn generalize_keeping_holes<'a>(
+    polygons: impl IntoIterator<Item = &'a Polygon>,
+    angle_deg: f64,
+    thickness_m: f64,
+) -> Vec<Polygon> {
+    generalize_with(polygons, angle_deg, thickness_m, true)
+}
+
+fn generalize_with<'a>(
+    polygons: impl IntoIterator<Item = &'a Polygon>,
+    angle_deg: f64,
+    thickness_m: f64,
+    keep_holes: bool,
+) -> Vec<Polygon> {
     let cos_a = angle_deg.to_radians().cos();
     let thick = if thickness_m.is_finite() {
         thickness_m.max(0.0)
@@ -61,7 +99,7 @@ pub fn generalize<'a>(
         0.0
     };
 
-    let (items, origin) = prepare(polygons);
+    let (items, origin) = prepare(polygons, keep_holes);
     let mut order: Vec<usize> = (0..items.len()).collect();
     order.sort_by(|&a, &b| items[b].area.total_cmp(&items[a].area).then(a.cmp(&b)));
 
@@ -96,7 +134,11 @@ pub fn generalize<'a>(
 
     let mut out = Vec::new();
     for g in &groups {
-        flatten_group(g, &items, origin, &mut out);
+        if keep_holes {
+            flatten_group_keeping_holes(g, &items, origin, &mut out);
+        } else {
+            flatten_group(g, &items, origin, &mut out);
+        }
     }
     out
 }
@@ -105,6 +147,8 @@ pub fn generalize<'a>(
 struct Item {
     /// Exterior ring, local coordinates, finite points only.
     pts: Vec<DVec3>,
+    /// Interior rings, local coordinates, finite points only (empty unless holes are kept).
+    holes: Vec<Vec<DVec3>>,
     /// Unit normal.
     normal: DVec3,
     /// Area of the exterior ring.
@@ -123,7 +167,10 @@ struct Group {
 }
 
 /// Usable polygons relative to a local origin (the first finite point met), and the origin.
-fn prepare<'a>(polygons: impl IntoIterator<Item = &'a Polygon>) -> (Vec<Item>, DVec3) {
+fn prepare<'a>(
+    polygons: impl IntoIterator<Item = &'a Polygon>,
+    keep_holes: bool,
+) -> (Vec<Item>, DVec3) {
     let mut origin: Option<DVec3> = None;
     let mut items = Vec::new();
     for p in polygons {
@@ -147,7 +194,21 @@ fn prepare<'a>(polygons: impl IntoIterator<Item = &'a Polygon>) -> (Vec<Item>, D
             continue;
         }
         let centroid = pts.iter().sum::<DVec3>() / pts.len() as f64;
+        let holes = if keep_holes {
+            p.interiors()
+                .map(|r| {
+                    r.iter()
+                        .filter(|q| q.is_finite())
+                        .map(|q| *q - o)
+                        .collect::<Vec<_>>()
+                })
+                .filter(|r| r.len() >= 3)
+                .collect()
+        } else {
+            Vec::new()
+        };
         items.push(Item {
+            holes,
             normal: n / (2.0 * area),
             area,
             centroid,
@@ -252,6 +313,95 @@ fn flatten_group(g: &Group, items: &[Item], origin: DVec3, out: &mut Vec<Polygon
         out.push(Polygon::new(
             pts.iter().map(|q| base + u * q.x + v * q.y).collect(),
         ));
+    }
+}
+
+/// [`flatten_group`] keeping the holes (see [`generalize_keeping_holes`]).
+fn flatten_group_keeping_holes(g: &Group, items: &[Item], origin: DVec3, out: &mut Vec<Polygon>) {
+    let n = g.normal_sum.normalize_or_zero();
+    let n = if n == DVec3::ZERO { g.seed_normal } else { n };
+    let (u, v) = plane_basis(n);
+    let to2 = |p: &DVec3| {
+        let d = *p - g.point;
+        Coord {
+            x: d.dot(u),
+            y: d.dot(v),
+        }
+    };
+    let mut parts: Vec<GeoPolygon<f64>> = Vec::with_capacity(g.members.len());
+    let mut max_area = 0.0f64;
+    for &i in &g.members {
+        let Some(it) = items.get(i) else { continue };
+        let mut ring: Vec<Coord<f64>> = it.pts.iter().map(to2).collect();
+        let signed = signed_area(&ring);
+        if signed.abs() <= AREA_EPS {
+            continue;
+        }
+        if signed < 0.0 {
+            ring.reverse();
+        }
+        let holes: Vec<LineString<f64>> = it
+            .holes
+            .iter()
+            .map(|h| {
+                let mut r: Vec<Coord<f64>> = h.iter().map(to2).collect();
+                if signed_area(&r) > 0.0 {
+                    r.reverse();
+                }
+                LineString::new(r)
+            })
+            .collect();
+        let part = GeoPolygon::new(LineString::new(ring), holes);
+        max_area = max_area.max(part.unsigned_area());
+        parts.push(part);
+    }
+    if parts.is_empty() {
+        return;
+    }
+    let merged: Vec<GeoPolygon<f64>> = if parts.len() == 1 {
+        parts
+    } else {
+        let m = unary_union(&parts);
+        let area = m.unsigned_area();
+        if area.is_finite() && area >= max_area * (1.0 - 1e-6) {
+            m.0
+        } else {
+            // a union that lost area: keep the members as they are
+            parts
+        }
+    };
+    let base = origin + g.point;
+    let lift = |q: &DVec2| base + u * q.x + v * q.y;
+    for p in &merged {
+        let mut ext: Vec<DVec2> = p
+            .exterior()
+            .coords()
+            .map(|c| DVec2::new(c.x, c.y))
+            .collect();
+        simplify_ring(&mut ext);
+        if ext.len() < 3 {
+            continue;
+        }
+        if signed_area_v(&ext) < 0.0 {
+            ext.reverse();
+        }
+        let holes: Vec<Vec<DVec3>> = p
+            .interiors()
+            .iter()
+            .filter_map(|h| {
+                let mut r: Vec<DVec2> = h.coords().map(|c| DVec2::new(c.x, c.y)).collect();
+                simplify_ring(&mut r);
+                if r.len() < 3 || signed_area_v(&r).abs() <= AREA_EPS {
+                    return None;
+                }
+                if signed_area_v(&r) > 0.0 {
+                    r.reverse();
+                }
+                Some(r.iter().map(lift).collect())
+            })
+            .collect();
+        let ext3: Vec<DVec3> = ext.iter().map(lift).collect();
+        out.push(Polygon::from_rings(None, &ext3, &holes));
     }
 }
 
