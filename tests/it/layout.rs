@@ -272,3 +272,20 @@ fn the_path_reader_sees_imports() {
         .collect();
     assert_eq!(found, ["lod::rough", "trace::Scene"]);
 }
+
+#[test]
+fn each_command_of_the_binary_stays_short() {
+    let commands = src().join("bin/skylod/commands");
+    let mut long = Vec::new();
+    for p in rust_files(&commands) {
+        let lines = std::fs::read_to_string(&p).unwrap().lines().count();
+        if lines > 200 {
+            long.push(format!("{}: {lines} lines", p.display()));
+        }
+    }
+    assert!(!rust_files(&commands).is_empty(), "no commands found");
+    assert!(
+        long.is_empty(),
+        "a command maps flags to library calls: {long:?}"
+    );
+}

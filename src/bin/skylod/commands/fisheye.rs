@@ -134,11 +134,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         bundles: &bundles,
         levels: (args.colour_by == ColourBy::Level).then_some(lod_opts),
     };
-    let dp = if framed.crs.plan_decimals() == 8 {
-        8
-    } else {
-        2
-    };
+    let degrees = framed.crs.plan_decimals() == 8;
+    let dp = if degrees { 8 } else { 2 };
     sky_pictures(
         &framed,
         &popts,
