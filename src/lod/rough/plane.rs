@@ -231,27 +231,34 @@ fn plane_basis(n: DVec3) -> (DVec3, DVec3) {
     (u, n.cross(u))
 }
 
-fn flatten_group(g: &Group, items: &[Item], origin: DVec3, out: &mut Vec<Polygon>) {
+/// The group's plane basis `(u, v)`: from its summed normal, or its seed's when they cancel.
+fn group_basis(g: &Group) -> (DVec3, DVec3) {
     let n = g.normal_sum.normalize_or_zero();
-    let n = if n == DVec3::ZERO { g.seed_normal } else { n };
-    let (u, v) = plane_basis(n);
-    let to2 = |p: DVec3| {
-        let d = p - g.point;
-        DVec2::new(d.dot(u), d.dot(v))
-    };
+    plane_basis(if n == DVec3::ZERO { g.seed_normal } else { n })
+}
 
+/// The group's members projected into its plane (basis `u`, `v`, origin `g.point`), exterior
+/// rings counter-clockwise, members seen edge-on left out; with `keep_holes` their holes come
+/// along, clockwise. Also the largest member area (of the exterior alone without holes, as
+/// [`flatten_group`] compares it; of the polygon with its holes otherwise).
+fn projected_parts(
+    g: &Group,
+    items: &[Item],
+    (u, v): (DVec3, DVec3),
+    keep_holes: bool,
+) -> (Vec<GeoPolygon<f64>>, f64) {
+    let to2 = |p: &DVec3| {
+        let d = *p - g.point;
+        Coord {
+            x: d.dot(u),
+            y: d.dot(v),
+        }
+    };
     let mut parts: Vec<GeoPolygon<f64>> = Vec::with_capacity(g.members.len());
     let mut max_area = 0.0f64;
     for &i in &g.members {
         let Some(it) = items.get(i) else { continue };
-        let mut ring: Vec<Coord<f64>> = it
-            .pts
-            .iter()
-            .map(|p| {
-                let q = to2(*p);
-                Coord { x: q.x, y: q.y }
-            })
-            .collect();
+        let mut ring: Vec<Coord<f64>> = it.pts.iter().map(to2).collect();
         let signed = signed_area(&ring);
         if signed.abs() <= AREA_EPS {
             continue; // degenerate projection: a reveal seen edge-on
@@ -259,9 +266,32 @@ fn flatten_group(g: &Group, items: &[Item], origin: DVec3, out: &mut Vec<Polygon
         if signed < 0.0 {
             ring.reverse();
         }
-        max_area = max_area.max(signed.abs());
-        parts.push(GeoPolygon::new(LineString::new(ring), Vec::new()));
+        if !keep_holes {
+            max_area = max_area.max(signed.abs());
+            parts.push(GeoPolygon::new(LineString::new(ring), Vec::new()));
+            continue;
+        }
+        let holes: Vec<LineString<f64>> = it
+            .holes
+            .iter()
+            .map(|h| {
+                let mut r: Vec<Coord<f64>> = h.iter().map(to2).collect();
+                if signed_area(&r) > 0.0 {
+                    r.reverse();
+                }
+                LineString::new(r)
+            })
+            .collect();
+        let part = GeoPolygon::new(LineString::new(ring), holes);
+        max_area = max_area.max(part.unsigned_area());
+        parts.push(part);
     }
+    (parts, max_area)
+}
+
+fn flatten_group(g: &Group, items: &[Item], origin: DVec3, out: &mut Vec<Polygon>) {
+    let (u, v) = group_basis(g);
+    let (parts, max_area) = projected_parts(g, items, (u, v), false);
     if parts.is_empty() {
         return;
     }
@@ -318,43 +348,8 @@ fn flatten_group(g: &Group, items: &[Item], origin: DVec3, out: &mut Vec<Polygon
 
 /// [`flatten_group`] keeping the holes (see [`generalize_keeping_holes`]).
 fn flatten_group_keeping_holes(g: &Group, items: &[Item], origin: DVec3, out: &mut Vec<Polygon>) {
-    let n = g.normal_sum.normalize_or_zero();
-    let n = if n == DVec3::ZERO { g.seed_normal } else { n };
-    let (u, v) = plane_basis(n);
-    let to2 = |p: &DVec3| {
-        let d = *p - g.point;
-        Coord {
-            x: d.dot(u),
-            y: d.dot(v),
-        }
-    };
-    let mut parts: Vec<GeoPolygon<f64>> = Vec::with_capacity(g.members.len());
-    let mut max_area = 0.0f64;
-    for &i in &g.members {
-        let Some(it) = items.get(i) else { continue };
-        let mut ring: Vec<Coord<f64>> = it.pts.iter().map(to2).collect();
-        let signed = signed_area(&ring);
-        if signed.abs() <= AREA_EPS {
-            continue;
-        }
-        if signed < 0.0 {
-            ring.reverse();
-        }
-        let holes: Vec<LineString<f64>> = it
-            .holes
-            .iter()
-            .map(|h| {
-                let mut r: Vec<Coord<f64>> = h.iter().map(to2).collect();
-                if signed_area(&r) > 0.0 {
-                    r.reverse();
-                }
-                LineString::new(r)
-            })
-            .collect();
-        let part = GeoPolygon::new(LineString::new(ring), holes);
-        max_area = max_area.max(part.unsigned_area());
-        parts.push(part);
-    }
+    let (u, v) = group_basis(g);
+    let (parts, max_area) = projected_parts(g, items, (u, v), true);
     if parts.is_empty() {
         return;
     }
