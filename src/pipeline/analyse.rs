@@ -31,6 +31,18 @@ pub struct Traced<T> {
     pub trace_s: f64,
 }
 
+impl<T> Traced<T> {
+    /// One row per POI, in POI order: `row(poi, result, flags)` for each of `pois` (the
+    /// framed POIs the results were traced for).
+    pub fn rows<R>(&self, pois: &[Poi], row: impl Fn(&Poi, &T, &[PoiFlag]) -> R) -> Vec<R> {
+        pois.iter()
+            .zip(&self.results)
+            .zip(&self.flags)
+            .map(|((p, r), flags)| row(p, r, flags))
+            .collect()
+    }
+}
+
 /// `f` for every POI of `framed` (local frame, in parallel) against the full-detail scene of
 /// its model ([`Stage::Bvh`], then [`Stage::Trace`]: one item per POI, cancellable before
 /// each POI), with each POI's flags; `sky_rays` of a result, when it knows them, adds the

@@ -57,21 +57,16 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let traced = skylod::pipeline::horizon(&framed, &opts, &crate::log::reporter())?;
     warn_flags(&framed.pois, &traced.flags);
     let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
-    let (profiles, flags) = (traced.results, traced.flags);
     let pois = &framed.pois;
-    let rows: Vec<_> = pois
-        .iter()
-        .zip(&profiles)
-        .zip(&flags)
-        .map(|((p, h), flags)| {
-            HorizonPoi::new(
-                p,
-                h.azimuth.iter().map(|a| round_deg(*a)).collect(),
-                h.elevation.iter().map(|e| round_deg(*e)).collect(),
-                flags,
-            )
-        })
-        .collect();
+    let rows = traced.rows(pois, |p, h, flags| {
+        HorizonPoi::new(
+            p,
+            h.azimuth.iter().map(|a| round_deg(*a)).collect(),
+            h.elevation.iter().map(|e| round_deg(*e)).collect(),
+            flags,
+        )
+    });
+    let profiles = traced.results;
     let text = if args.json {
         let doc = HorizonOutput::new(
             rows,

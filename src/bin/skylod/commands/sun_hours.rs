@@ -48,18 +48,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let sun_ms = ms(t);
     let traced = skylod::pipeline::sun_hours(&framed, &table, &crate::log::reporter())?;
     warn_flags(&framed.pois, &traced.flags);
-    let (hours, bvh_ms, trace_ms) = (
-        &traced.results,
-        s_to_ms(traced.bvh_s),
-        s_to_ms(traced.trace_s),
-    );
+    let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
     let pois = &framed.pois;
-    let rows: Vec<_> = pois
-        .iter()
-        .zip(hours)
-        .zip(&traced.flags)
-        .map(|((p, h), flags)| SunHoursPoi::new(p, h, flags))
-        .collect();
+    let rows = traced.rows(pois, SunHoursPoi::new);
     let mut out = std::io::stdout().lock();
     if args.json {
         let doc = SunHoursOutput::new(

@@ -36,18 +36,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "svf")?;
     let traced = skylod::pipeline::svf(&framed, &bundles, &crate::log::reporter())?;
     warn_flags(&framed.pois, &traced.flags);
-    let (views, bvh_ms, trace_ms) = (
-        &traced.results,
-        s_to_ms(traced.bvh_s),
-        s_to_ms(traced.trace_s),
-    );
+    let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
     let pois = &framed.pois;
-    let rows: Vec<_> = pois
-        .iter()
-        .zip(views)
-        .zip(&traced.flags)
-        .map(|((p, v), flags)| SvfPoi::new(p, v, flags))
-        .collect();
+    let rows = traced.rows(pois, SvfPoi::new);
     let mut out = std::io::stdout().lock();
     if args.json {
         let doc = SvfOutput::new(
