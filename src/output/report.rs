@@ -55,11 +55,51 @@ pub struct Report {
     pub totals: Totals,
     /// Wall-clock milliseconds per stage.
     pub timings_ms: Timings,
-    /// The error bound check and its promotions (`--max-svf-error`,
-    /// `--max-sun-hours-error`), when asked for.
+    /// What the run guarantees at every POI: the errors bounded, and what is not and why.
+    pub guarantee: Guarantee,
+    /// The error bound check and its promotions (on by default; absent with `--no-bound`).
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(with = "crate::lod::bound::BoundReport")]
     pub bound: Option<crate::lod::bound::BoundReport>,
+}
+
+/// What the LoD model guarantees at every POI against the full model (the error bound).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Guarantee {
+    /// Largest relative SVF error at any POI, checked by tracing both models with the same
+    /// rays (null: not bounded).
+    #[schemars(range(min = 0))]
+    pub svf_error: Option<f64>,
+    /// Largest relative error of yearly sun hours at any POI (null: not bounded).
+    #[schemars(range(min = 0))]
+    pub sun_hours_error: Option<f64>,
+    /// What is not bounded and why (e.g. no site for the sun, or the bound turned off).
+    pub not_bounded: Vec<String>,
+}
+
+impl Guarantee {
+    /// One line for the run's summary: what holds at every POI, what does not and why.
+    pub fn line(&self) -> String {
+        let pct = |e: f64| format!("{}%", 100.0 * e);
+        let mut held = Vec::new();
+        if let Some(e) = self.svf_error {
+            held.push(format!("SVF within {}", pct(e)));
+        }
+        if let Some(e) = self.sun_hours_error {
+            held.push(format!("sun hours within {}", pct(e)));
+        }
+        let mut line = if held.is_empty() {
+            "guaranteed: nothing".to_string()
+        } else {
+            format!("guaranteed at every POI: {}", held.join(", "))
+        };
+        for why in &self.not_bounded {
+            line.push_str("; not bounded: ");
+            line.push_str(why);
+        }
+        line
+    }
 }
 
 /// One input file.
@@ -362,6 +402,7 @@ impl Report {
             assets,
             totals,
             timings_ms,
+            guarantee: Guarantee::default(),
             bound: None,
         }
     }

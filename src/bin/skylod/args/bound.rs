@@ -1,25 +1,33 @@
-//! `--max-svf-error` / `--max-sun-hours-error` of `skylod lod`: the error-bounded LoD
-//! ([`skylod::lod::bound`]) run between the selection and the writing.
+//! `--max-svf-error` / `--max-sun-hours-error` / `--no-bound` of `skylod lod`: the
+//! error-bounded LoD ([`skylod::lod::bound`]) run between the selection and the writing. On by
+//! default: SVF within 1 % at every POI, and sun hours within 1 % whenever the site is known.
 
 use crate::args::non_negative;
-use crate::args::site::SiteArgs;
+use crate::args::site::{model_site, SiteArgs};
 use crate::args::sun::SunArgs;
 use skylod::lod::bound::BoundOptions;
 use skylod::model::CityModel;
+use skylod::output::report::Guarantee;
 use skylod::pipeline::BoundSpec;
 use skylod::solar::{Site, SunTable};
 
+/// The relative error `lod` bounds by default (SVF, and sun hours where the site is known).
+pub const DEFAULT_MAX_ERROR: f64 = 0.01;
+
 #[derive(clap::Args, Debug)]
 pub struct BoundArgs {
-    /// Largest relative SVF error allowed at any POI (e.g. 0.01): after the selection, the LoD
-    /// model is traced against the full model with the same rays and assets are promoted
+    /// Largest relative SVF error allowed at any POI (default 0.01): after the selection, the
+    /// LoD model is traced against the full model with the same rays and assets are promoted
     /// (0 -> 1, 1 -> 2) until every POI holds; exit 1 naming the POIs when it cannot.
     #[arg(long, value_name = "E", value_parser = non_negative, allow_hyphen_values = true)]
     max_svf_error: Option<f64>,
-    /// Largest relative error of yearly sun hours allowed at any POI (as --max-svf-error; the
-    /// site comes from --lat/--lon or the model's CRS).
+    /// Largest relative error of yearly sun hours allowed at any POI (default 0.01 when the
+    /// site is known: --lat/--lon or the model's CRS; given without a site: an error).
     #[arg(long, value_name = "E", value_parser = non_negative, allow_hyphen_values = true)]
     max_sun_hours_error: Option<f64>,
+    /// No error bound: the selection alone decides the levels (faster; nothing guaranteed).
+    #[arg(long, conflicts_with_all = ["max_svf_error", "max_sun_hours_error"])]
+    no_bound: bool,
     /// Rays of the SVF bundle of the bound check.
     #[arg(long, default_value_t = 20_000, value_name = "N")]
     bound_rays: usize,
@@ -31,25 +39,51 @@ pub struct BoundArgs {
 }
 
 impl BoundArgs {
-    /// Whether a bound was asked for.
-    pub fn active(&self) -> bool {
+    /// Whether a bound was asked for explicitly (`--max-svf-error`, `--max-sun-hours-error`).
+    pub fn explicit(&self) -> bool {
         self.max_svf_error.is_some() || self.max_sun_hours_error.is_some()
     }
 
     /// Usage checks before any input is read.
     pub fn check(&self) -> anyhow::Result<()> {
-        self.site.check("lod")
+        self.site.check_given("lod")
     }
 
-    /// The bound to run after the selection ([`skylod::pipeline::levels`]), if one was
-    /// asked for; `source` (the model as read) gives the sun's site.
-    pub fn spec(&self, source: &CityModel, seed: u64) -> anyhow::Result<Option<BoundSpec>> {
-        if !self.active() {
-            return Ok(None);
+    /// The bound to run after the selection ([`skylod::pipeline::levels`]) and what it
+    /// guarantees; `source` (the model as read) gives the sun's site.
+    pub fn spec(
+        &self,
+        source: &CityModel,
+        seed: u64,
+    ) -> anyhow::Result<(Option<BoundSpec>, Guarantee)> {
+        let mut guarantee = Guarantee::default();
+        if self.no_bound {
+            guarantee
+                .not_bounded
+                .push("SVF and sun hours: no error bound (--no-bound)".into());
+            return Ok((None, guarantee));
         }
-        let sun = match self.max_sun_hours_error {
+        let svf = self.max_svf_error.unwrap_or(DEFAULT_MAX_ERROR);
+        guarantee.svf_error = Some(svf);
+        let sun_error = match (self.max_sun_hours_error, self.site.given()) {
+            (Some(e), _) => {
+                let _ = self.site.resolve(source, "lod --max-sun-hours-error")?;
+                Some(e)
+            }
+            (None, Some(_)) => Some(DEFAULT_MAX_ERROR),
+            (None, None) => match model_site(source) {
+                Ok(_) => Some(DEFAULT_MAX_ERROR),
+                Err(why) => {
+                    guarantee
+                        .not_bounded
+                        .push(format!("sun hours: no site ({why}; give --lat/--lon)"));
+                    None
+                }
+            },
+        };
+        let sun = match sun_error {
             Some(_) => {
-                let (lat, lon) = self.site.resolve(source, "lod --max-sun-hours-error")?;
+                let (lat, lon) = self.site.resolve(source, "lod")?;
                 Some(SunTable::year(
                     self.sun.year,
                     self.sun.step,
@@ -58,13 +92,14 @@ impl BoundArgs {
             }
             None => None,
         };
+        guarantee.sun_hours_error = sun_error;
         let options = BoundOptions {
-            max_svf_error: self.max_svf_error,
-            max_sun_error: self.max_sun_hours_error,
+            max_svf_error: Some(svf),
+            max_sun_error: sun_error,
             svf_rays: self.bound_rays,
             svf_seed: seed,
             ..Default::default()
         };
-        Ok(Some(BoundSpec { options, sun }))
+        Ok((Some(BoundSpec { options, sun }), guarantee))
     }
 }

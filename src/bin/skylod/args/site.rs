@@ -91,18 +91,29 @@ pub fn site_lat_lon(
     if lat.is_some() || lon.is_some() {
         return lat_lon(lat, lon, cmd);
     }
+    match model_site(model) {
+        Ok((a, o, srs)) => {
+            summary!("{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}");
+            Ok((a, o))
+        }
+        Err(why) => bail!("{cmd} needs the site's --lat and --lon (WGS84 degrees): {why}"),
+    }
+}
+
+/// The centre of `model` in WGS84 degrees (lat, lon) with the srsName it was converted from,
+/// or why there is none (no CRS, an empty model, a CRS skylod does not convert).
+pub fn model_site(model: &CityModel) -> Result<(f64, f64, &str), String> {
     let srs = model.files.iter().find_map(|f| f.srs_name.as_deref());
     let bbox = model.bbox();
     let centre = (!bbox.is_empty()).then(|| bbox.center());
     if let (Some(srs), Some(c)) = (srs, centre) {
         if let Some((a, o)) = skylod::crs::lat_lon(srs, c.x, c.y) {
-            summary!("{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}");
-            return Ok((a, o));
+            return Ok((a, o, srs));
         }
     }
-    bail!(
-        "{cmd} needs the site's --lat and --lon (WGS84 degrees): the input's CRS ({}) is not one \
-         skylod converts (geographic, or UTM zones of WGS 84, ETRS89, JGD2011, NAD83, GDA)",
+    Err(format!(
+        "the input's CRS ({}) is not one skylod converts (geographic, or UTM zones of WGS 84, \
+         ETRS89, JGD2011, NAD83, GDA)",
         srs.unwrap_or("none given")
-    )
+    ))
 }

@@ -15,6 +15,7 @@ use crate::commands::{ms, warn_flags};
 use crate::log::{error, summary};
 use crate::Outcome;
 use skylod::lod::LodOptions;
+use skylod::output::report::Guarantee;
 use skylod::pipeline::{levels, levels_of, Levels, LevelsOptions};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -83,12 +84,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         None => args.region.extend(pois, &loaded.model)?,
     };
     let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
+    let (bound, guarantee) = args.bound.spec(framed.source, args.select.seed)?;
     let opts = LevelsOptions {
         lod: LodOptions {
             rough: rough_opts,
             select: select_opts,
         },
-        bound: args.bound.spec(framed.source, args.select.seed)?,
+        bound,
     };
     let progress = crate::log::reporter();
     let lv = match combined {
@@ -99,7 +101,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         None => levels(&framed, &opts, &progress)?,
     };
     warn_flags(&framed.pois, &lv.lod.flags);
-    if !bound_holds(&lv) {
+    if !bound_holds(&lv, &guarantee) {
         return Ok(Outcome::SomeFailed);
     }
     // Written geometry and the report are in the input's CRS.
@@ -107,7 +109,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (written, write_failed) =
         write::outputs(framed.source, &all_inputs, &layout, &lv, &progress)?;
     let timings = report::timings(&lv, loaded.read_ms, ms(t_write), t_all);
-    let report = report::report(&args, framed.source, &framed.pois, &lv, written, timings)?;
+    let mut report = report::report(&args, framed.source, &framed.pois, &lv, written, timings)?;
+    report.guarantee = guarantee;
+    report::write(&args, &report)?;
     // The process ends here: handing a city's model back to the allocator piece by piece
     // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
     std::mem::forget(report);
@@ -122,8 +126,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     })
 }
 
-/// The error bound's line, or why it cannot be met (nothing is written then): false.
-fn bound_holds(lv: &Levels) -> bool {
+/// The error bound's lines, or why it cannot be met (nothing is written then): false.
+fn bound_holds(lv: &Levels, guarantee: &Guarantee) -> bool {
+    summary!("{}", guarantee.line());
     let Some(b) = &lv.bound else { return true };
     summary!(
         "error bound: {} promotion(s) in {} round(s), largest SVF error {:.3}%, {:.0} ms",

@@ -87,10 +87,15 @@ pub fn report(
             t.region_over_single_poi
         );
     }
+    Ok(report)
+}
+
+/// Write `--report`, when asked for.
+pub fn write(args: &Args, report: &Report) -> anyhow::Result<()> {
     if let Some(path) = &args.report {
-        let mut json = serde_json::to_vec_pretty(&report)?;
+        let mut json = serde_json::to_vec_pretty(report)?;
         json.push(b'\n');
         atomic_write_bytes(path, &json).context("writing the report")?;
     }
-    Ok(report)
+    Ok(())
 }

@@ -22,7 +22,7 @@ pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome
              AWS_BATCH_JOB_ARRAY_INDEX)"
         );
     }
-    if args.bound.active() {
+    if args.bound.explicit() {
         bail!(
             "the error bound (--max-svf-error, --max-sun-hours-error) needs every POI: give it \
              to the --reduce step, not to shard {s}"
