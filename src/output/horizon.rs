@@ -62,24 +62,36 @@ pub struct HorizonPoi {
     pub normal: Option<[f64; 3]>,
     /// Azimuths (degrees from north, clockwise), as written.
     pub azimuth: Vec<f64>,
-    /// Elevation of the horizon at each azimuth (degrees), as written.
+    /// Elevation of the horizon at each azimuth (degrees), as written: the lower edge of
+    /// the visible sky (90: no sky at that azimuth). The column pvlib and PVGIS read.
     pub elevation: Vec<f64>,
+    /// Per azimuth, where sky above the elevation is blocked again (an eave, a balcony, an
+    /// arcade): the elevation (degrees) at which that blocking starts; null when the sky is
+    /// open from the elevation to the zenith.
+    pub overhang: Vec<Option<f64>>,
     /// What makes this POI's result suspect.
     pub flags: Vec<PoiFlag>,
 }
 
 impl HorizonPoi {
     /// The entry of `poi` with its profile (`azimuth`, `elevation`, as they are to be
-    /// written: the command rounds them) and flags.
+    /// written: the command rounds them) and flags; no overhangs (see [`Self::with_overhang`]).
     pub fn new(poi: &Poi, azimuth: Vec<f64>, elevation: Vec<f64>, flags: &[PoiFlag]) -> Self {
+        let overhang = vec![None; azimuth.len()];
         HorizonPoi {
             id: poi.id.clone(),
             poi: poi.position.to_array(),
             normal: poi.normal.map(|n| n.to_array()),
             azimuth,
             elevation,
+            overhang,
             flags: flags.to_vec(),
         }
+    }
+
+    /// This entry with the overhang of each azimuth (as written).
+    pub fn with_overhang(self, overhang: Vec<Option<f64>>) -> Self {
+        HorizonPoi { overhang, ..self }
     }
 }
 

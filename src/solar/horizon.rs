@@ -2,27 +2,30 @@
 //! of PVGIS horizon files and pvlib (azimuth in degrees clockwise from north, elevation in
 //! degrees above the horizontal). Model +Y is north, +X east, +Z up.
 //!
-//! The skyline elevation at an azimuth is the **highest obstructed elevation** there: under
-//! an overhang (a balcony, a bridge, an arcade) the sky below it may be open, but the sun
-//! behind the overhang is blocked, so the band counts. It is found per azimuth by
+//! The skyline elevation at an azimuth is the **lower edge of the visible sky** there: going
+//! up from the horizontal, the first elevation at which the sky is open (what pvlib and
+//! PVGIS expect: the sun below it is blocked). Under an overhang (an eave, a balcony, an
+//! arcade) the sky above that visible band is blocked again; the profile reports where, as
+//! the `overhang` of the azimuth (`None` when the band is open to the zenith). Sky above an
+//! overhang (a second visible band) is not reported: the profile predicts it blocked. Both
+//! are found per azimuth by
 //!
-//! 1. marching down from the zenith in steps of [`HorizonOptions::march_deg`] (0.25° by
-//!    default) to the horizontal; the first blocked sample is the highest obstructed
-//!    sample (nothing blocked: the skyline is at 0°);
-//! 2. bisecting the open–blocked transition just above that sample until the bracket is
-//!    narrower than [`HorizonOptions::tolerance_deg`] (0.01° by default) and reporting its
-//!    middle.
+//! 1. marching up from the floor (0°, or the surface's plane, below) in steps of
+//!    [`HorizonOptions::march_deg`] (0.25° by default) to the first open sample, and on to
+//!    the first blocked sample above it;
+//! 2. bisecting each blocked–open transition until the bracket is narrower than
+//!    [`HorizonOptions::tolerance_deg`] (0.01° by default) and reporting its middle.
 //!
-//! An obstruction whose angular height is smaller than the march step, lying entirely
-//! above the first blocked sample (a thin mast above a roof line), can be missed; the
-//! bisection then bounds the error by one march step. Elevations below the horizontal are
-//! not searched: the profile is never negative.
+//! Nothing open up to the zenith: the skyline is 90° (no overhang). A visible gap or an
+//! obstruction narrower than the march step can be missed. Elevations below the horizontal
+//! are not searched: the profile is never negative.
 //!
 //! With a surface normal, directions behind the surface (`dot(n, d) < 0`) count as
 //! obstructed: the surface's own plane is part of the horizon (a wall sees nothing of the
 //! half-space behind it, a roof sloping south loses the low northern sky). That part is
 //! exact ([`plane_elevation`]); the march only searches above it. Sun hours masked by such a
-//! profile equal [`super::sun_hours()`] of the same point up to the resolution.
+//! profile ([`HorizonProfile::is_blocked`]) equal [`super::sun_hours()`] of the same point up
+//! to the resolution, except for sun in a second visible band above an overhang.
 //!
 //! # Example
 //! ```rust
@@ -96,8 +99,12 @@ impl HorizonOptions {
 pub struct HorizonProfile {
     /// Azimuths, degrees clockwise from north, increasing from 0, below 360.
     pub azimuth: Vec<f64>,
-    /// Skyline elevations in degrees above the horizontal, 0..=90.
+    /// Skyline elevations in degrees above the horizontal, 0..=90: the lower edge of the
+    /// first visible band of sky going up from the horizontal (90: no sky at this azimuth).
     pub elevation: Vec<f64>,
+    /// Where sky above the skyline is blocked again (an eave, a balcony, an arcade): the
+    /// elevation at which that blocking starts; `None` when the band is open to the zenith.
+    pub overhang: Vec<Option<f64>>,
 }
 
 impl HorizonProfile {
@@ -133,6 +140,31 @@ impl HorizonProfile {
         let (az, el) = azimuth_elevation(d);
         el < self.elevation_at(az)
     }
+
+    /// The overhang at any azimuth: the value of the nearest sample (no interpolation: an
+    /// overhang's edge is not continuous across azimuths the way a skyline is).
+    pub fn overhang_at(&self, azimuth_deg: f64) -> Option<f64> {
+        let n = self.azimuth.len().min(self.overhang.len());
+        if n == 0 {
+            return None;
+        }
+        let a = azimuth_deg.rem_euclid(360.0);
+        let dist = |x: f64| {
+            let d = (x - a).abs();
+            d.min(360.0 - d)
+        };
+        let k = (0..n)
+            .min_by(|&i, &j| dist(self.azimuth[i]).total_cmp(&dist(self.azimuth[j])))
+            .unwrap_or(0);
+        self.overhang[k]
+    }
+
+    /// True when the profile predicts the direction `d` blocked: below the skyline, or at
+    /// or above the overhang of its azimuth. Only the first visible band counts as sky.
+    pub fn is_blocked(&self, d: DVec3) -> bool {
+        let (az, el) = azimuth_elevation(d);
+        self.is_below(d) || self.overhang_at(az).is_some_and(|o| el >= o)
+    }
 }
 
 /// Unit direction of `azimuth_deg` (clockwise from north = +Y, east = +X) and
@@ -150,50 +182,69 @@ pub fn azimuth_elevation(d: DVec3) -> (f64, f64) {
     (az, el)
 }
 
-/// The skyline elevation (degrees) at one azimuth: the highest elevation at which
-/// `blocked(direction)` is true, found by the march-and-bisect of the module docs; 0 when
-/// nothing from the horizontal to the zenith is blocked, 90 when the zenith is.
+/// The skyline elevation (degrees) at one azimuth: the lowest elevation of visible sky,
+/// found by the march-and-bisect of the module docs; 0 when the horizontal is open, 90 when
+/// nothing from the horizontal to the zenith is.
 pub fn skyline_elevation(
     azimuth_deg: f64,
     opts: &HorizonOptions,
     blocked: impl Fn(DVec3) -> bool,
 ) -> f64 {
-    skyline_above(azimuth_deg, 0.0, opts, blocked)
+    band_above(azimuth_deg, 0.0, opts, blocked).0
 }
 
-/// [`skyline_elevation`] searched only above `floor` degrees (returned when nothing above it
-/// is blocked).
-fn skyline_above(
+/// The first visible band at one azimuth searched above `floor` degrees: its lower edge
+/// (the skyline; 90 when nothing is open) and, when sky above it is blocked again, the
+/// elevation where that blocking starts (the overhang; `None` when open to the zenith).
+pub fn band_above(
     azimuth_deg: f64,
     floor: f64,
     opts: &HorizonOptions,
     blocked: impl Fn(DVec3) -> bool,
-) -> f64 {
+) -> (f64, Option<f64>) {
+    let floor = floor.max(0.0);
     if floor >= 90.0 {
-        return 90.0;
+        return (90.0, None);
     }
     let at = |e: f64| blocked(direction(azimuth_deg, e));
     let n = (90.0 / opts.march_deg).ceil().max(1.0) as usize;
     let sample = |k: usize| (k as f64 * opts.march_deg).min(90.0);
-    // March down from the zenith (sample n = 90°) to the floor.
-    let lowest = (floor / opts.march_deg).floor().max(0.0) as usize;
-    let Some(k) = (lowest..=n).rev().find(|&k| at(sample(k))) else {
-        return floor.max(0.0);
-    };
-    if k == n {
-        return 90.0;
-    }
-    // Top transition inside (sample k: blocked, sample k + 1: open).
-    let (mut lo, mut hi) = (sample(k), sample(k + 1));
-    while hi - lo > opts.tolerance_deg {
-        let mid = 0.5 * (lo + hi);
-        if at(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
+    // Bisect a transition between `lo` (state `lo_blocked`) and `hi` (the other state).
+    let bisect = |mut lo: f64, mut hi: f64, lo_blocked: bool| {
+        while hi - lo > opts.tolerance_deg {
+            let mid = 0.5 * (lo + hi);
+            if at(mid) == lo_blocked {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
         }
-    }
-    (0.5 * (lo + hi)).max(floor)
+        0.5 * (lo + hi)
+    };
+    // March up from the floor to the first open sample: the skyline.
+    let first = (floor / opts.march_deg).ceil() as usize;
+    let skyline = if !at(floor) {
+        floor
+    } else {
+        let Some(k) = (first..=n).find(|&k| sample(k) > floor && !at(sample(k))) else {
+            return (90.0, None);
+        };
+        let below = if k == 0 {
+            floor
+        } else {
+            sample(k - 1).max(floor)
+        };
+        bisect(below, sample(k), true).max(floor)
+    };
+    // March on to the first blocked sample above the skyline: the overhang.
+    let start = (skyline / opts.march_deg).floor() as usize + 1;
+    let overhang = (start..=n)
+        .find(|&k| sample(k) > skyline && at(sample(k)))
+        .map(|k| {
+            let open = sample(k - 1).max(skyline);
+            bisect(open, sample(k), false)
+        });
+    (skyline, overhang)
 }
 
 /// The highest elevation (degrees, 0..=90) at `azimuth_deg` that lies behind the plane of a
@@ -230,14 +281,18 @@ pub fn horizon_profile(
     opts.validate()?;
     let n = normal.and_then(|n| n.try_normalize());
     let azimuth = opts.azimuths();
-    let elevation = azimuth
+    let (elevation, overhang) = azimuth
         .iter()
         .map(|&a| {
             let floor = n.map_or(0.0, |n| plane_elevation(n, a));
-            skyline_above(a, floor, opts, &blocked)
+            band_above(a, floor, opts, &blocked)
         })
-        .collect();
-    Ok(HorizonProfile { azimuth, elevation })
+        .unzip();
+    Ok(HorizonProfile {
+        azimuth,
+        elevation,
+        overhang,
+    })
 }
 
 #[cfg(test)]
@@ -319,22 +374,46 @@ mod tests {
     }
 
     #[test]
-    fn overhang_counts_above_open_sky() {
-        // A slab 8..9 m high spanning x in 4..12 (north of nothing, to the east): the sky
-        // below it is open, the skyline is its top front edge atan(9 / 4).
+    fn overhang_is_reported_above_open_sky() {
+        // A slab 8..9 m high spanning x in 4..12 to the east: the sky below it is open (the
+        // skyline is 0), the slab's far lower edge atan(8 / 12) starts the overhang, above its
+        // near top edge atan(9 / 4) a second band is open (not reported).
         let slab = |d: DVec3| ray_box(d, [4.0, -50.0, 8.0], [12.0, 50.0, 9.0]);
-        let e = skyline_elevation(90.0, &HorizonOptions::default(), slab);
-        assert!((e - (9.0f64 / 4.0).atan().to_degrees()).abs() <= TOL, "{e}");
-        // Below the band (under atan(8 / 12)) the sky is open.
-        assert!(!slab(direction(
-            90.0,
-            (8.0f64 / 12.0).atan().to_degrees() - 1.0
-        )));
-        // The far side sees nothing.
-        assert_eq!(
-            skyline_elevation(270.0, &HorizonOptions::default(), slab),
-            0.0
-        );
+        let o = HorizonOptions::default();
+        let (e, over) = band_above(90.0, 0.0, &o, slab);
+        assert_eq!(e, 0.0);
+        let expect = (8.0f64 / 12.0).atan().to_degrees();
+        let over = over.unwrap();
+        assert!((over - expect).abs() <= TOL, "{over} vs {expect}");
+        // The far side sees nothing, up to the zenith.
+        assert_eq!(band_above(270.0, 0.0, &o, slab), (0.0, None));
+        // The profile predicts the slab blocked and the sky under it open.
+        let p = horizon_profile(&o.with_step(90.0), None, slab).unwrap();
+        assert!(p.is_blocked(direction(90.0, 40.0)));
+        assert!(!p.is_blocked(direction(90.0, 20.0)));
+        assert!(!p.is_blocked(direction(270.0, 80.0)));
+    }
+
+    #[test]
+    fn eave_over_a_wall_foot() {
+        // Under an eave: a wall 1 m west of the point (x = -1, 6 m high), an eave 3 m up
+        // reaching 1.5 m east of the wall (x in -1..0.5). West: wall, no sky (90). East:
+        // open from 0 up to the eave's edge atan(3 / 0.5) = 80.54°.
+        let scene = |d: DVec3| {
+            ray_box(d, [-2.0, -20.0, -1.0], [-1.0, 20.0, 6.0])
+                || ray_box(d, [-1.0, -20.0, 3.0], [0.5, 20.0, 3.2])
+        };
+        let o = HorizonOptions::default();
+        assert_eq!(band_above(270.0, 0.0, &o, scene), (90.0, None));
+        let (e, over) = band_above(90.0, 0.0, &o, scene);
+        assert_eq!(e, 0.0);
+        let expect = (3.0f64 / 0.5).atan().to_degrees();
+        assert!((over.unwrap() - expect).abs() <= TOL, "{over:?}");
+        // A low wall to the east raises the skyline, the eave stays the overhang.
+        let walled = |d: DVec3| scene(d) || ray_box(d, [5.0, -20.0, -1.0], [6.0, 20.0, 1.0]);
+        let (e, over) = band_above(90.0, 0.0, &o, walled);
+        assert!((e - (1.0f64 / 5.0).atan().to_degrees()).abs() <= TOL, "{e}");
+        assert!((over.unwrap() - expect).abs() <= TOL);
     }
 
     #[test]
@@ -343,8 +422,10 @@ mod tests {
         let open = horizon_profile(&o, None, |_| false).unwrap();
         assert_eq!(open.azimuth.len(), 36);
         assert!(open.elevation.iter().all(|&e| e == 0.0));
+        assert!(open.overhang.iter().all(Option::is_none));
         let roofed = horizon_profile(&o, None, |_| true).unwrap();
         assert!(roofed.elevation.iter().all(|&e| e == 90.0));
+        assert!(roofed.overhang.iter().all(Option::is_none));
         // A south-facing wall (normal -Y) sees nothing northwards: 90° there, 0° south.
         let wall = horizon_profile(&o, Some(DVec3::NEG_Y), |_| false).unwrap();
         assert_eq!(wall.elevation_at(0.0), 90.0);
@@ -368,6 +449,7 @@ mod tests {
         let p = HorizonProfile {
             azimuth: vec![0.0, 90.0, 180.0, 270.0],
             elevation: vec![10.0, 20.0, 30.0, 40.0],
+            overhang: vec![None, Some(60.0), None, None],
         };
         assert_eq!(p.elevation_at(45.0), 15.0);
         assert_eq!(p.elevation_at(315.0), 25.0);
@@ -375,6 +457,11 @@ mod tests {
         assert_eq!(p.elevation_at(360.0), 10.0);
         assert!(p.is_below(direction(180.0, 29.0)));
         assert!(!p.is_below(direction(180.0, 31.0)));
+        assert_eq!(p.overhang_at(80.0), Some(60.0));
+        assert_eq!(p.overhang_at(140.0), None);
+        assert!(p.is_blocked(direction(95.0, 61.0)));
+        assert!(!p.is_blocked(direction(95.0, 59.0)));
+        assert!(!p.is_blocked(direction(0.0, 61.0)));
     }
 
     #[test]

@@ -151,9 +151,9 @@ fn canyons_match_closed_forms() {
 }
 
 #[test]
-fn overhang_band_counts() {
+fn overhang_band_is_reported() {
     // A slab on posts (an installation box 8..9 m up) east of the point: the sky under it is
-    // open, but the skyline at azimuth 90 is the slab's near top edge, atan(9 / 4).
+    // open (skyline 0 at azimuth 90), the slab's far lower edge atan(8 / 12) is the overhang.
     let dir = tempfile::tempdir().unwrap();
     let b = vec![BoxBuilding {
         id: "S".into(),
@@ -170,9 +170,137 @@ fn overhang_band_counts() {
         numbers(&v["pois"][0]["azimuth"]),
         vec![0.0, 90.0, 180.0, 270.0]
     );
-    let expect = (9.0f64 / 4.0).atan().to_degrees();
-    assert!((el[1] - expect).abs() <= 0.05, "{} vs {expect}", el[1]);
-    assert_eq!(el[3], 0.0);
+    assert_eq!(el, vec![0.0; 4]);
+    let over = &v["pois"][0]["overhang"];
+    let expect = (8.0f64 / 12.0).atan().to_degrees();
+    let east = over[1].as_f64().unwrap();
+    assert!((east - expect).abs() <= 0.05, "{east} vs {expect}");
+    assert!(
+        over[0].is_null() && over[2].is_null() && over[3].is_null(),
+        "{over}"
+    );
+}
+
+/// A house (x in -10..0, 6 m high) with an eave 3..3.2 m up reaching 1.5 m east of its east
+/// wall, along the whole wall.
+fn eave_house() -> Vec<BoxBuilding> {
+    vec![BoxBuilding {
+        id: "H".into(),
+        min: [-10.0, -10.0],
+        max: [0.0, 10.0],
+        height: 6.0,
+        installations: vec![[0.0, -10.0, 3.0, 1.5, 10.0, 3.2]],
+    }]
+}
+
+/// Run the pvlib oracle on `cfg` (see tests/oracle/pvlib_horizon.py).
+fn pvlib_oracle(cfg: &Value) -> Vec<Value> {
+    let script = manifest_dir().join("tests/oracle/pvlib_horizon.py");
+    let mut child = Command::new("python3")
+        .arg(&script)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("python3");
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(cfg.to_string().as_bytes())
+        .unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "oracle: {}", stderr(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn under_an_eave_the_profile_is_the_lower_edge_and_matches_sun_hours() {
+    let dir = tempfile::tempdir().unwrap();
+    let gml = write_scene(dir.path(), "eave.gml", &eave_house());
+    // Under the eave, 0.5 m above the ground and 1 m from the wall; and on the wall below
+    // the eave, facing east.
+    let pois = [
+        poi_arg([1.0, 0.0, 0.5], None),
+        poi_arg([0.0, 0.0, 1.0], Some([1.0, 0.0, 0.0])),
+    ];
+    let mut common = vec![os(&gml)];
+    for p in &pois {
+        common.extend([os("--poi"), os(p)]);
+    }
+    let prof = horizon_json(&common);
+    let free = &prof["pois"][0];
+    let el = numbers(&free["elevation"]);
+    // East: open from the horizontal up to the eave's edge atan(2.5 / 0.5).
+    assert_eq!(el[90], 0.0);
+    let edge = (2.5f64 / 0.5).atan().to_degrees();
+    let o90 = free["overhang"][90].as_f64().unwrap();
+    assert!((o90 - edge).abs() <= 0.05, "{o90} vs {edge}");
+    // South, along the wall: open below the eave's end, atan(2.5 / 10).
+    let o180 = free["overhang"][180].as_f64().unwrap();
+    let end = (2.5f64 / 10.0).atan().to_degrees();
+    assert!((o180 - end).abs() <= 0.05, "{o180} vs {end}");
+    // West: the wall, no sky.
+    assert_eq!(el[270], 90.0);
+    assert!(free["overhang"][270].is_null());
+    // The point sees sky: its SVF is positive, and so not every azimuth is blocked.
+    let mut svf_args = vec![os("svf")];
+    svf_args.extend_from_slice(&common);
+    svf_args.push(os("--json"));
+    let svf = json_out(&run(&svf_args));
+    let s = svf["pois"][0]["svf"].as_f64().unwrap();
+    assert!(s > 0.05, "svf {s}");
+    assert!(el.iter().any(|&e| e < 90.0));
+    if !pvlib_available() {
+        missing("python3 with pvlib (pip install pvlib)");
+        return;
+    }
+    let mut sun_args = vec![os("sun-hours")];
+    sun_args.extend_from_slice(&common);
+    sun_args.extend([
+        os("--lat"),
+        os("41.39"),
+        os("--lon"),
+        os("2.17"),
+        os("--step"),
+        os("15"),
+        os("--json"),
+    ]);
+    let sun = json_out(&run(&sun_args));
+    let profiles: Vec<Value> = prof["pois"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            json!({"id": r["id"], "azimuth": r["azimuth"], "elevation": r["elevation"],
+                   "normal": r["normal"], "overhang": r["overhang"]})
+        })
+        .collect();
+    let cfg = json!({
+        "latitude": 41.39, "longitude": 2.17, "elevation_m": 0.0, "pressure_mbar": 1013.25,
+        "temperature_c": 15.0, "delta_t_s": 69.0, "year": sun["year"], "step_minutes": 15,
+        "profiles": profiles,
+    });
+    let oracle = pvlib_oracle(&cfg);
+    for (i, name) in ["under the eave", "wall under the eave"].iter().enumerate() {
+        let traced = sun["pois"][i]["sun_hours"].as_f64().unwrap();
+        let masked = oracle[i]["sun_hours"].as_f64().unwrap();
+        eprintln!("{name}: skylod sun-hours {traced:.2} h, pvlib masked by the profile and overhang {masked:.2} h");
+        // The overhang is taken from the nearest 1° azimuth sample: within 2 % + 1 h.
+        assert!(
+            (traced - masked).abs() <= 0.02 * traced + 1.0,
+            "{name}: {traced} vs {masked}"
+        );
+        assert!(traced > 100.0, "{name}: {traced}");
+    }
+    // Ignoring the overhang (the old reading, or a pvlib user without it) overcounts.
+    let mut without = cfg.clone();
+    for p in without["profiles"].as_array_mut().unwrap() {
+        p["overhang"] = Value::Null;
+    }
+    let plain = pvlib_oracle(&without);
+    let traced = sun["pois"][0]["sun_hours"].as_f64().unwrap();
+    assert!(plain[0]["sun_hours"].as_f64().unwrap() > traced + 50.0);
 }
 
 #[test]

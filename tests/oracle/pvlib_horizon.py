@@ -12,8 +12,11 @@ tracing.
 Reads JSON from stdin:
   {"latitude", "longitude", "elevation_m", "pressure_mbar", "temperature_c", "delta_t_s",
    "year", "step_minutes",
-   "profiles": [{"id", "azimuth": [...], "elevation": [...], "normal": [nx, ny, nz] or null}]}
-(normal: outward surface normal, x east, y north, z up; null for a free point.)
+   "profiles": [{"id", "azimuth": [...], "elevation": [...], "normal": [nx, ny, nz] or null,
+                 "overhang": [... number or null] (optional)}]}
+(normal: outward surface normal, x east, y north, z up; null for a free point. overhang: where
+sky above the skyline is blocked again, per azimuth; the sun at or above the overhang of the
+nearest azimuth sample is blocked.)
 Time steps are those of skylod's SunTable: the UTC calendar year in steps of step_minutes,
 each evaluated at its middle. Writes JSON to stdout, one object per profile in input order:
   {"id", "sun_hours", "open_hours", "direct_kwh_m2", "open_direct_kwh_m2"}
@@ -65,6 +68,14 @@ def main():
         e = np.concatenate(([e[-1]], e, [e[0]]))
         skyline = np.interp(np.mod(az, 360.0), a, e)
         sunny = up & (elev > skyline)
+        if p.get("overhang") is not None:
+            ov = np.asarray([np.nan if v is None else float(v) for v in p["overhang"]])
+            a0 = np.asarray(p["azimuth"], dtype=float)
+            # Nearest azimuth sample, wrapping around north.
+            d = np.abs(np.mod(az, 360.0)[:, None] - a0[None, :])
+            nearest = np.argmin(np.minimum(d, 360.0 - d), axis=1)
+            o = ov[nearest]
+            sunny &= ~(~np.isnan(o) & (elev >= np.nan_to_num(o, nan=np.inf)))
         n = p.get("normal")
         if n is not None:
             nx, ny, nz = (float(v) for v in n)

@@ -65,6 +65,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             h.elevation.iter().map(|e| round_deg(*e)).collect(),
             flags,
         )
+        .with_overhang(h.overhang.iter().map(|o| o.map(round_deg)).collect())
     });
     let profiles = traced.results;
     let text = if args.json {
