@@ -14,6 +14,8 @@ mod util;
 mod arg_groups;
 // The reader and `convert`/`stats` against the bad-input corpus and hostile XML: exact errors.
 mod bad_input;
+// Faults: global options in every combination, errors in standard input named `<stdin>`.
+mod faults;
 // Batch inputs (directories, globs, `-` with gzip) on the shared Ingolstadt street.
 mod batch;
 // `lod --max-svf-error` keeps every POI within the bound, checked by independent ray casts.

@@ -21,10 +21,18 @@ pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
 /// [`expand_inputs`], keeping each input's path relative to its argument (for `-o DIR`; the
 /// spooled standard input is `stdin.gml`): [`skylod::batch::inputs::expand_spooled`].
 pub fn expand_inputs_relative(inputs: &[PathBuf]) -> anyhow::Result<(Vec<Input>, Spool)> {
-    Ok(skylod::batch::inputs::expand_spooled(
-        inputs,
-        &mut std::io::stdin().lock(),
-    )?)
+    let (expanded, spool) =
+        skylod::batch::inputs::expand_spooled(inputs, &mut std::io::stdin().lock())?;
+    if spool.is_used() {
+        if let Some(i) = expanded
+            .iter()
+            .find(|i| i.relative.as_os_str() == "stdin.gml" && i.path.ends_with("stdin"))
+        {
+            // Messages name the spool file `<stdin>`, never a deleted temporary path.
+            crate::log::name_stdin(&i.path);
+        }
+    }
+    Ok((expanded, spool))
 }
 
 /// The inputs that could be read, merged in input order ([`skylod::pipeline::Inputs`]).

@@ -14,13 +14,23 @@ pub struct JobsArgs {
 
 impl JobsArgs {
     /// Make rayon's global pool `--jobs` threads wide (for commands whose every parallel step,
-    /// in the binary and in the library, should use it). Call before any parallel work.
+    /// in the binary and in the library, should use it). Call before any parallel work; the
+    /// pool is built by the first call only (later calls, e.g. `--scene-radius` then the
+    /// loading, do nothing), so calling it twice is no error.
     pub fn global(&self) -> anyhow::Result<()> {
-        if let Some(n) = self.jobs {
+        static BUILT: std::sync::Mutex<bool> = std::sync::Mutex::new(false);
+        let Some(n) = self.jobs else {
+            return Ok(());
+        };
+        let mut built = BUILT
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if !*built {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(usize::from(n))
                 .build_global()
                 .context("starting the worker threads")?;
+            *built = true;
         }
         Ok(())
     }

@@ -46,6 +46,8 @@ impl SceneArgs {
         };
         let at: Vec<glam::DVec3> = mine.iter().map(|p| p.position).collect();
         let total = args.inputs.len();
+        // The pre-scan runs in rayon's global pool: size it (once) before it starts.
+        args.jobs.global()?;
         let Reach { keep, scanned } = within_reach(&args.inputs, &at, radius);
         let inputs: Vec<_> = args
             .inputs
