@@ -202,9 +202,11 @@ fn to_lat_lon(c: &Crs, p: DVec3) -> Result<(f64, f64), CrsError> {
 /// The `proj4rs` projection of a projected CRS in metres with an EPSG code that
 /// `crs-definitions` knows (and that is not a longitude/latitude definition).
 fn proj4_projected(c: &Crs) -> Option<(proj4rs::Proj, proj4rs::Proj)> {
-    match c.kind {
-        CrsKind::Projected { metres_per_unit } if metres_per_unit == 1.0 => {}
-        _ => return None,
+    let CrsKind::Projected { metres_per_unit } = c.kind else {
+        return None;
+    };
+    if metres_per_unit != 1.0 {
+        return None;
     }
     let code = u16::try_from(c.epsg?).ok()?;
     let def = proj4_definition(code)?;
@@ -290,8 +292,8 @@ pub fn build_transform() -> super::ProjTransform {
 }
 
 /// Site latitude and longitude (degrees) of the point `p` of a model in `crs`, when this
-/// build can convert it: geographic on GRS 1980/WGS 84 and their UTM zones in the default
-/// build, and with feature `proj` any CRS PROJ converts to WGS 84 (EPSG:4326).
+/// build can convert it: geographic on GRS 1980/WGS 84, their UTM zones and the projected
+/// CRSs of `proj4rs` in the default build, and with feature `proj` any CRS PROJ converts to WGS 84 (EPSG:4326).
 pub fn site_lat_lon(crs: &Crs, p: DVec3) -> Option<(f64, f64)> {
     let (lat, lon) = match to_lat_lon(crs, p) {
         Ok(ll) => ll,
