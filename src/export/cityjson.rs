@@ -829,7 +829,7 @@ mod tests {
                 Some(31466),
             ),
             ("urn:adv:crs:ETRS89_UTM33*DE_DHHN2016_NH", Some(25833)),
-            ("urn:adv:crs:DE_DHDN_3GK4*DE_DHHN92_NH", None),
+            ("urn:adv:crs:DE_DHDN_3GK4*DE_DHHN92_NH", Some(31468)),
             ("", None),
         ];
         for (srs, code) in t {
