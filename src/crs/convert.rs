@@ -13,8 +13,19 @@
 //! * those and the UTM CRSs of [`utm_zone`] (WGS 84, ETRS89, JGD2000/2011, NAD83, GDA; the
 //!   `utm` crate's series, centimetres within a zone).
 //!
+//! * every other EPSG projected CRS in metres that the pure-Rust `proj4rs` crate covers with the
+//!   proj4 definition of `crs-definitions` (national grids: MGI Austria GK 31254-31259, DHDN
+//!   Gauss-Krüger 31466-31469 and the AdV `DE_DHDN_3GK*` names, RD New 28992, Lambert-93 2154,
+//!   the CC zones 3942-3950, NTF Lambert II étendu 27572, CH1903+ LV95 2056, ...), through
+//!   WGS 84 longitude/latitude. The datum shift is the definition's `+towgs84` (3- or
+//!   7-parameter Helmert), not a grid: this agrees with pyproj given the same proj4 string to
+//!   well under 0.1 m (tests/it/national_crs.rs checks it), but EPSG's grid-based
+//!   transformations (NTv2 BETA2007 for DHDN, RDNAPTRANS for RD New, ntf_r93 for NTF) differ
+//!   from it by up to about a metre: plenty for a sun position and for POIs, not for survey
+//!   work (use the `proj` build and `skylod reproject` for that).
+//!
 //! Heights pass through unchanged: a POI's height is taken in the model's vertical datum.
-//! Anything else (State Plane feet, Bessel datums, national grids) is
+//! Anything else (State Plane feet, CRSs `crs-definitions` lacks) is
 //! [`CrsError::NotConvertible`].
 //!
 //! # Example
@@ -37,7 +48,7 @@ use glam::DVec3;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CrsError {
     /// This build cannot convert between the two CRSs.
-    #[error("cannot convert from {from} to {to} in this build (geographic CRSs on GRS 1980/WGS 84 and their UTM zones only; other CRSs need the `proj` feature)")]
+    #[error("cannot convert from {from} to {to} in this build (geographic CRSs on GRS 1980/WGS 84, UTM zones and the EPSG projected CRSs in metres of proj4rs/crs-definitions only; other CRSs need the `proj` feature)")]
     NotConvertible {
         /// Source CRS.
         from: String,
@@ -169,10 +180,51 @@ fn to_lat_lon(c: &Crs, p: DVec3) -> Result<(f64, f64), CrsError> {
             }
         });
     }
+    if let Some((proj, wgs84)) = proj4_projected(c) {
+        let mut q = (p.x, p.y, 0.0);
+        return match proj4rs::transform::transform(&proj, &wgs84, &mut q) {
+            Ok(()) if q.0.is_finite() && q.1.is_finite() => {
+                Ok((q.1.to_degrees(), q.0.to_degrees()))
+            }
+            _ => Err(CrsError::OutOfRange {
+                crs: c.to_string(),
+                x: p.x,
+                y: p.y,
+            }),
+        };
+    }
     Err(CrsError::NotConvertible {
         from: c.to_string(),
         to: "latitude/longitude".into(),
     })
+}
+
+/// The `proj4rs` projection of a projected CRS in metres with an EPSG code that
+/// `crs-definitions` knows (and that is not a longitude/latitude definition).
+fn proj4_projected(c: &Crs) -> Option<(proj4rs::Proj, proj4rs::Proj)> {
+    let CrsKind::Projected { metres_per_unit } = c.kind else {
+        return None;
+    };
+    if metres_per_unit != 1.0 {
+        return None;
+    }
+    let code = u16::try_from(c.epsg?).ok()?;
+    let def = proj4_definition(code)?;
+    let proj = proj4rs::Proj::from_proj_string(def).ok()?;
+    (!proj.is_latlong()).then_some((proj, wgs84()?))
+}
+
+/// The proj4 definition `crs-definitions` gives an EPSG code (metres only: a definition in
+/// other units is left to the `proj` build).
+pub fn proj4_definition(code: u16) -> Option<&'static str> {
+    let def = crs_definitions::from_code(code)?.proj4;
+    let metres = !def.contains("+units=") || def.contains("+units=m ") || def.ends_with("+units=m");
+    (metres && !def.contains("+to_meter")).then_some(def)
+}
+
+/// WGS 84 longitude/latitude (radians), the hub of the `proj4rs` conversions.
+fn wgs84() -> Option<proj4rs::Proj> {
+    proj4rs::Proj::from_proj_string("+proj=longlat +datum=WGS84 +no_defs").ok()
 }
 
 /// `p`'s horizontal position in `c` from latitude, longitude (degrees).
@@ -187,6 +239,17 @@ fn from_lat_lon(c: &Crs, lat: f64, lon: f64, z: f64) -> Result<DVec3, CrsError> 
     if let Some((zone, _north, prefix)) = c.epsg.and_then(utm_zone) {
         let (northing, easting, _) = utm::to_utm_wgs84(lat, lon, zone);
         return Ok(DVec3::new(easting + prefix, northing, z));
+    }
+    if let Some((proj, wgs84)) = proj4_projected(c) {
+        let mut q = (lon.to_radians(), lat.to_radians(), 0.0);
+        return match proj4rs::transform::transform(&wgs84, &proj, &mut q) {
+            Ok(()) if q.0.is_finite() && q.1.is_finite() => Ok(DVec3::new(q.0, q.1, z)),
+            _ => Err(CrsError::OutOfRange {
+                crs: c.to_string(),
+                x: lon,
+                y: lat,
+            }),
+        };
     }
     Err(CrsError::NotConvertible {
         from: "latitude/longitude".into(),
@@ -229,8 +292,8 @@ pub fn build_transform() -> super::ProjTransform {
 }
 
 /// Site latitude and longitude (degrees) of the point `p` of a model in `crs`, when this
-/// build can convert it: geographic on GRS 1980/WGS 84 and their UTM zones in the default
-/// build, and with feature `proj` any CRS PROJ converts to WGS 84 (EPSG:4326).
+/// build can convert it: geographic on GRS 1980/WGS 84, their UTM zones and the projected
+/// CRSs of `proj4rs` in the default build, and with feature `proj` any CRS PROJ converts to WGS 84 (EPSG:4326).
 pub fn site_lat_lon(crs: &Crs, p: DVec3) -> Option<(f64, f64)> {
     let (lat, lon) = match to_lat_lon(crs, p) {
         Ok(ll) => ll,

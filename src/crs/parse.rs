@@ -363,6 +363,26 @@ pub fn kind_of(code: u32) -> CrsKind {
             metres_per_unit: 1.0,
         };
     }
+    // Any other projected CRS in metres with a proj4 definition in `crs-definitions`
+    // (27572, 3942-3950, 2056, ...): converted by `proj4rs` in the default build.
+    let projected = u16::try_from(code)
+        .ok()
+        .and_then(super::convert::proj4_definition)
+        .is_some_and(|d| {
+            ![
+                "+proj=longlat",
+                "+proj=latlong",
+                "+proj=lonlat",
+                "+proj=geocent",
+            ]
+            .iter()
+            .any(|p| d.contains(p))
+        });
+    if projected {
+        return CrsKind::Projected {
+            metres_per_unit: 1.0,
+        };
+    }
     CrsKind::Unknown
 }
 

@@ -2,7 +2,9 @@
 //! for what converts; with feature `proj`, any CRS PROJ converts to WGS 84 as well). Without
 //! PROJ: geographic CRSs on GRS 1980/WGS 84 directly,
 //! the UTM CRSs of WGS 84, ETRS89, JGD2000/2011, NAD83 and GDA through the `utm` crate
-//! (the datums differ by a metre or two at most, far below what a sun position needs).
+//! (the datums differ by a metre or two at most, far below what a sun position needs), and
+//! the other EPSG projected CRSs in metres through `proj4rs` (national grids: see
+//! [`super::convert`]).
 //!
 //! Recognised UTM codes: EPSG:32601–32660 (WGS 84 north), 32701–32760 (south), 25828–25838
 //! (ETRS89 28N–38N), 3040–3049 (ETRS89 28N–37N, "N-E"), 4647/5649/5650 (zone-prefixed

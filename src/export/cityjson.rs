@@ -182,37 +182,20 @@ fn write_vertices(w: &mut dyn Write, list: &[[i64; 3]]) -> io::Result<()> {
 /// assert_eq!(reference_system("urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"), want);
 /// assert_eq!(reference_system("urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH"), want);
 /// assert_eq!(reference_system("http://www.opengis.net/def/crs/EPSG/0/25832"), want);
+/// let gk4 = Some("https://www.opengis.net/def/crs/EPSG/0/31468".to_string());
+/// assert_eq!(reference_system("urn:adv:crs:DE_DHDN_3GK4*DE_DHHN92_NH"), gk4);
+/// assert_eq!(reference_system("urn:adv:crs:DE_DHDN_3GK4_BY120*DE_DHHN92_NH"), gk4);
 /// assert_eq!(reference_system("#local-CRS-1"), None);
 /// ```
 pub fn reference_system(srs_name: &str) -> Option<String> {
     epsg_code(srs_name).map(|c| format!("https://www.opengis.net/def/crs/EPSG/0/{c}"))
 }
 
-/// The EPSG code of an `srsName` (see [`reference_system`]).
+/// The horizontal EPSG code of an `srsName` (see [`reference_system`]): the one parser
+/// [`crate::crs::Crs::parse`], so AdV names (`urn:adv:crs:DE_DHDN_3GK4*...` = EPSG:31468,
+/// `ETRS89_UTM32*...` = 25832) and compound names give their horizontal code.
 fn epsg_code(srs_name: &str) -> Option<u32> {
-    let upper = srs_name.to_ascii_uppercase();
-    let code = if let Some(i) = upper.find("ETRS89_UTM") {
-        let zone: String = upper[i + "ETRS89_UTM".len()..]
-            .chars()
-            .take_while(char::is_ascii_digit)
-            .collect();
-        zone.parse::<u32>()
-            .ok()
-            .filter(|z| (28..=38).contains(z))
-            .map(|z| 25800 + z)
-    } else {
-        upper.split("EPSG").nth(1).and_then(|rest| {
-            let token = rest
-                .split(|c: char| !(c.is_ascii_digit() || matches!(c, ':' | '/' | '.')))
-                .next()?;
-            token
-                .rsplit(|c: char| !c.is_ascii_digit())
-                .find(|d| !d.is_empty())?
-                .parse::<u32>()
-                .ok()
-        })
-    }?;
-    Some(code)
+    crate::crs::Crs::parse(srs_name).epsg
 }
 
 /// Scale per axis for a CRS: millimetres, or about a millimetre in degrees for the horizontal
@@ -846,7 +829,7 @@ mod tests {
                 Some(31466),
             ),
             ("urn:adv:crs:ETRS89_UTM33*DE_DHHN2016_NH", Some(25833)),
-            ("urn:adv:crs:DE_DHDN_3GK4*DE_DHHN92_NH", None),
+            ("urn:adv:crs:DE_DHDN_3GK4*DE_DHHN92_NH", Some(31468)),
             ("", None),
         ];
         for (srs, code) in t {

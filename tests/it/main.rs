@@ -28,6 +28,7 @@ mod cli;
 mod convert;
 // Geographic and foot CRSs, WGS 84 POIs and the EPSG tables agree with pyproj and numpy.
 mod crs_frames;
+mod national_crs;
 // `evaluate`: exit codes, the JSON shape and figures on scenes with known answers.
 mod evaluate;
 // `horizon`: profiles against closed forms, and pvlib's masked sun hours against `sun-hours`.
