@@ -9,4 +9,4 @@ pub mod source;
 pub mod write;
 
 pub use error::{Location, ReadError, WriteError};
-pub use read::{read_file, read_file_with, ReadOptions};
+pub use read::{read_file, read_file_observed, read_file_with, ReadOptions};

@@ -1,11 +1,12 @@
 //! Step 1: the inputs read and merged, and the checks of the model alone.
 
-use crate::citygml::{read_file, ReadError};
+use crate::citygml::{read_file_observed, ReadError, ReadOptions};
 use crate::model::CityModel;
 use crate::poi::checks::{self, TrustError};
 use crate::runtime::progress::{check, Cancelled, Progress, Stage};
 use rayon::prelude::*;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 /// The inputs that could be read, merged in input order.
@@ -65,8 +66,14 @@ pub fn read_inputs(paths: &[PathBuf], progress: &dyn Progress) -> Result<Inputs,
         .zip(&sizes)
         .map(|(p, size)| {
             check(progress, Stage::Read)?;
-            let r = read_file(p);
-            progress.advance(Stage::Read, 1, *size, Some(&p.display().to_string()));
+            // bytes move while a large file is read; the rest when it is done
+            let seen = AtomicU64::new(0);
+            let r = read_file_observed(p, &ReadOptions::default(), &|n| {
+                seen.fetch_add(n, Ordering::Relaxed);
+                progress.advance(Stage::Read, 0, n, None);
+            });
+            let rest = size.saturating_sub(seen.load(Ordering::Relaxed));
+            progress.advance(Stage::Read, 1, rest, Some(&p.display().to_string()));
             Ok(r)
         })
         .collect();

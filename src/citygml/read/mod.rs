@@ -112,6 +112,88 @@ pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, Read
     }
 }
 
+/// [`read_file_with`] that reports its way through the file: `passed(n)` is called, from
+/// any of the reading threads, each time `n` more bytes of an uncompressed document have been
+/// parsed (every few MiB, see the reader's release step), so that progress moves while one
+/// large file is read. The calls add up to at most the file's size, also when a split read
+/// falls back to one core; a gzip-compressed file is not reported (`passed` is never
+/// called). The model is the same as [`read_file_with`]'s.
+pub fn read_file_observed(
+    path: &Path,
+    opts: &ReadOptions,
+    passed: &(dyn Fn(u64) + Sync),
+) -> Result<CityModel, ReadError> {
+    match source::load(path)? {
+        source::Document::Plain(doc) => {
+            let seen = Seen::new(doc.len() as u64, passed);
+            let release = |from, upto| {
+                seen.part_at(from, upto);
+                doc.release_range(from, upto);
+            };
+            if let Some(model) = split::read_split(&doc, path, opts, &release) {
+                return Ok(model);
+            }
+            seen.restart();
+            events::read_slice(&doc, path, false, opts, &|upto| {
+                seen.part_at(0, upto);
+                doc.release_before(upto);
+            })
+        }
+        source::Document::Gzip(reader, compressed) => {
+            let hint = compressed.saturating_mul(8);
+            events::read_sized(reader, path, true, opts, hint)
+        }
+    }
+}
+
+/// The bytes [`read_file_observed`] has reported: how far each part (keyed by its first byte)
+/// has been parsed, and the total reported, capped at the document's length.
+struct Seen<'a> {
+    parts: std::sync::Mutex<std::collections::HashMap<usize, usize>>,
+    total: std::sync::atomic::AtomicU64,
+    len: u64,
+    passed: &'a (dyn Fn(u64) + Sync),
+}
+
+impl<'a> Seen<'a> {
+    fn new(len: u64, passed: &'a (dyn Fn(u64) + Sync)) -> Self {
+        Seen {
+            parts: std::sync::Mutex::new(std::collections::HashMap::new()),
+            total: std::sync::atomic::AtomicU64::new(0),
+            len,
+            passed,
+        }
+    }
+
+    /// The part that starts at `from` has been parsed up to `upto`.
+    fn part_at(&self, from: usize, upto: usize) {
+        let Ok(mut parts) = self.parts.lock() else {
+            return;
+        };
+        let last = parts.entry(from).or_insert(from);
+        if upto <= *last {
+            return;
+        }
+        let mut n = (upto - *last) as u64;
+        *last = upto;
+        drop(parts);
+        use std::sync::atomic::Ordering;
+        let before = self.total.fetch_add(n, Ordering::Relaxed);
+        n = n.min(self.len.saturating_sub(before));
+        if n > 0 {
+            (self.passed)(n);
+        }
+    }
+
+    /// A new read of the whole document begins: parts start over, the total stays (so the
+    /// bytes of a declined split read are not reported again).
+    fn restart(&self) {
+        if let Ok(mut parts) = self.parts.lock() {
+            parts.clear();
+        }
+    }
+}
+
 /// The split read of [`read_file_with`] alone (one document read by several cores, see
 /// [`ReadOptions::split_min_bytes`]): `Ok(None)` where `read_file_with` reads by one core
 /// instead (gzip, a small document, one thread, a document the split declines, and every
