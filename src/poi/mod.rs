@@ -124,10 +124,21 @@ pub fn read_pois_csv(path: &Path) -> Result<Vec<Located>, PoiError> {
 }
 
 /// Parse POI CSV text (`name` is used in messages) with the `csv` crate: a header naming at
-/// least `x,y,z` (and optionally `id`, `nx,ny,nz`) in any order and any case, then one
+/// least `x,y,z` (or `lat,lon,z`: see below; and optionally `id`, `nx,ny,nz`) in any order
+/// and any case, then one
 /// point per record. A UTF-8 byte-order mark is skipped, fields may be quoted, lines starting
 /// with `#` and empty lines are skipped, surrounding spaces are trimmed. Without an `id`
 /// column the points are named `poi-1`, `poi-2`, … in file order. Errors name `name:line`.
+///
+/// Columns `lat` and `lon` (or `latitude`, `longitude`; the height `z` or `height`) give
+/// points in degrees for `--poi-crs EPSG:4326` (or another latitude-first geographic CRS):
+/// the point's first coordinate is the latitude, as in `--poi LAT,LON,H`.
+///
+/// ```
+/// let text = "longitude,latitude,height\n11.42,48.77,380\n";
+/// let p = skylod::poi::parse_pois_csv(text.as_bytes(), "p.csv").unwrap();
+/// assert_eq!(p[0].poi.position.to_array(), [48.77, 11.42, 380.0]);
+/// ```
 ///
 /// ```
 /// let text = "\u{feff}# facade points\nZ,\"Id\",x,y\n12.5,\"w,1\",430000,4581000\n";
@@ -176,11 +187,8 @@ pub fn parse_pois_csv(bytes: &[u8], name: &str) -> Result<Vec<Located>, PoiError
             continue;
         };
         let find = |n: &str| cols.iter().position(|c| c == n);
-        let (Some(x), Some(y), Some(z)) = (find("x"), find("y"), find("z")) else {
-            return Err(syntax(
-                *hl,
-                "header must name the columns x, y and z (and optionally id, nx, ny, nz)".into(),
-            ));
+        let Some((x, y, z)) = position_columns(cols) else {
+            return Err(syntax(*hl, HEADER.into()));
         };
         let at = format!("{name}:{line}");
         if rec.len() != cols.len() {
@@ -209,14 +217,27 @@ pub fn parse_pois_csv(bytes: &[u8], name: &str) -> Result<Vec<Located>, PoiError
         });
     }
     if let Some((cols, hl)) = &cols {
-        if !["x", "y", "z"].iter().all(|n| cols.iter().any(|c| c == n)) {
-            return Err(syntax(
-                *hl,
-                "header must name the columns x, y and z (and optionally id, nx, ny, nz)".into(),
-            ));
+        if position_columns(cols).is_none() {
+            return Err(syntax(*hl, HEADER.into()));
         }
     }
     Ok(out)
+}
+
+/// What a POI CSV header must name.
+const HEADER: &str = "header must name the columns x, y and z, or lat, lon and z (latitude, \
+                      longitude, height also do; optionally id, nx, ny, nz)";
+
+/// The columns of a point's three coordinates in a lower-cased header: `x,y,z`, or
+/// `lat,lon` (`latitude,longitude`) with `z` (or `height`), read in the axis order of
+/// `--poi-crs EPSG:4326` (latitude first, as [`parse_poi`] reads `--poi LAT,LON,H`).
+fn position_columns(cols: &[String]) -> Option<(usize, usize, usize)> {
+    let find = |names: &[&str]| cols.iter().position(|c| names.contains(&c.as_str()));
+    let z = find(&["z"]).or_else(|| find(&["height"]))?;
+    match (find(&["x"]), find(&["y"])) {
+        (Some(x), Some(y)) => Some((x, y, z)),
+        _ => Some((find(&["lat", "latitude"])?, find(&["lon", "longitude"])?, z)),
+    }
 }
 
 /// Refuse two POIs with the same id, naming the id and where each was given.

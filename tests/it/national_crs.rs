@@ -257,3 +257,52 @@ fn bavarian_cityjson_has_reference_system() {
         "https://www.opengis.net/def/crs/EPSG/0/31468"
     );
 }
+
+/// `--pois` CSV with `lon`/`lat` columns (any order, with `height`) and `--poi-crs
+/// EPSG:4326` gives the same POI and sun hours as `--poi LAT,LON,H` (Rotterdam, RD New).
+#[test]
+fn pois_csv_with_lat_lon_columns() {
+    let Some(model) = shared(RD) else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("p.csv");
+    std::fs::write(
+        &csv,
+        "id,longitude,latitude,height\nstreet,4.500976389444784,51.879786660234466,5\n",
+    )
+    .unwrap();
+    let by_flag = sun_hours(
+        &model,
+        "51.879786660234466,4.500976389444784,5",
+        &["--poi-crs", "EPSG:4326"],
+    );
+    let o = run(&[
+        os("sun-hours"),
+        model.as_os_str(),
+        os("--pois"),
+        csv.as_os_str(),
+        os("--step"),
+        os("60"),
+        os("--json"),
+        os("--poi-crs"),
+        os("EPSG:4326"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let by_csv = json(&o);
+    let (a, b) = (&by_flag["pois"][0], &by_csv["pois"][0]);
+    assert_eq!(a["poi"], b["poi"]);
+    assert_eq!(a["sun_hours"], b["sun_hours"]);
+    assert_eq!(b["id"], "street");
+    // without --poi-crs the degrees are refused as far outside the model
+    let o = run(&[
+        os("sun-hours"),
+        model.as_os_str(),
+        os("--pois"),
+        csv.as_os_str(),
+        os("--lat"),
+        os("51.88"),
+        os("--lon"),
+        os("4.5"),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--poi-crs EPSG:4326"), "{}", stderr(&o));
+}
