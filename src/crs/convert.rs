@@ -200,8 +200,13 @@ fn to_lat_lon(c: &Crs, p: DVec3) -> Result<(f64, f64), CrsError> {
 }
 
 /// The `proj4rs` projection of a projected CRS in metres with an EPSG code that
-/// `crs-definitions` knows (and that is not a longitude/latitude definition).
+/// `crs-definitions` knows (and that is not a longitude/latitude definition). Not with
+/// feature `proj`: PROJ converts these then, with the operation pyproj picks (e.g. a regional
+/// ED50 shift instead of the definition's `+towgs84`: 4 m apart in Barcelona).
 fn proj4_projected(c: &Crs) -> Option<(proj4rs::Proj, proj4rs::Proj)> {
+    if cfg!(feature = "proj") {
+        return None;
+    }
     let CrsKind::Projected { metres_per_unit } = c.kind else {
         return None;
     };
