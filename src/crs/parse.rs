@@ -25,36 +25,23 @@ pub struct Ellipsoid {
 }
 
 impl Ellipsoid {
+    /// The ellipsoid of semi-major axis `a` (metres) and inverse flattening `inv_f`.
+    pub const fn new(a: f64, inv_f: f64) -> Ellipsoid {
+        Ellipsoid { a, inv_f }
+    }
+
     /// GRS 1980 (ETRS89, JGD2000/2011, NAD83, GDA, CGCS2000 to well below a millimetre).
-    pub const GRS80: Ellipsoid = Ellipsoid {
-        a: 6_378_137.0,
-        inv_f: 298.257_222_101,
-    };
+    pub const GRS80: Ellipsoid = Ellipsoid::new(6_378_137.0, 298.257_222_101);
     /// WGS 84.
-    pub const WGS84: Ellipsoid = Ellipsoid {
-        a: 6_378_137.0,
-        inv_f: 298.257_223_563,
-    };
+    pub const WGS84: Ellipsoid = Ellipsoid::new(6_378_137.0, 298.257_223_563);
     /// Bessel 1841 (DHDN, Tokyo, MGI).
-    pub const BESSEL1841: Ellipsoid = Ellipsoid {
-        a: 6_377_397.155,
-        inv_f: 299.152_812_8,
-    };
+    pub const BESSEL1841: Ellipsoid = Ellipsoid::new(6_377_397.155, 299.152_812_8);
     /// Airy 1830 (OSGB36).
-    pub const AIRY1830: Ellipsoid = Ellipsoid {
-        a: 6_377_563.396,
-        inv_f: 299.324_964_6,
-    };
+    pub const AIRY1830: Ellipsoid = Ellipsoid::new(6_377_563.396, 299.324_964_6);
     /// International 1924 (ED50).
-    pub const INTL1924: Ellipsoid = Ellipsoid {
-        a: 6_378_388.0,
-        inv_f: 297.0,
-    };
+    pub const INTL1924: Ellipsoid = Ellipsoid::new(6_378_388.0, 297.0);
     /// Clarke 1866 (NAD27).
-    pub const CLARKE1866: Ellipsoid = Ellipsoid {
-        a: 6_378_206.4,
-        inv_f: 294.978_698_213_898_2,
-    };
+    pub const CLARKE1866: Ellipsoid = Ellipsoid::new(6_378_206.4, 294.978_698_213_898_2);
 
     /// Flattening.
     pub fn f(&self) -> f64 {

@@ -708,39 +708,21 @@ pub fn fisheye_svg(
     }
     let mut y = top + 40.0 + 24.0 * legend_keys.len() as f64;
     if !opts.sun_paths.is_empty() {
-        legend = legend
-            .add(
-                Line::new()
-                    .set("x1", px(lx))
-                    .set("y1", px(y))
-                    .set("x2", px(lx + 16.0))
-                    .set("y2", px(y))
-                    .set("stroke", "#d4ac0d")
-                    .set("stroke-width", 2),
-            )
-            .add(
-                Text::new("sun path (solstices, equinox)")
-                    .set("x", px(lx + 24.0))
-                    .set("y", px(y + 4.0))
-                    .set("font-size", 13),
-            );
+        legend = line_key(
+            legend,
+            lx,
+            y,
+            ("#d4ac0d", "stroke-width", "2"),
+            "sun path (solstices, equinox)",
+        );
         y += 22.0;
-        legend = legend
-            .add(
-                Line::new()
-                    .set("x1", px(lx))
-                    .set("y1", px(y))
-                    .set("x2", px(lx + 16.0))
-                    .set("y2", px(y))
-                    .set("stroke", "#b9770e")
-                    .set("stroke-dasharray", "4 2"),
-            )
-            .add(
-                Text::new("hour (local mean solar time)")
-                    .set("x", px(lx + 24.0))
-                    .set("y", px(y + 4.0))
-                    .set("font-size", 13),
-            );
+        legend = line_key(
+            legend,
+            lx,
+            y,
+            ("#b9770e", "stroke-dasharray", "4 2"),
+            "hour (local mean solar time)",
+        );
         y += 22.0;
     }
     legend = legend.add(
@@ -790,6 +772,32 @@ pub fn cell_shares(
         .into_iter()
         .map(|(k, n)| (k.label(), n as f64 / total))
         .collect()
+}
+
+/// A legend key: a 16 px line in `stroke` (with one more style attribute) and its label.
+fn line_key(
+    legend: Group,
+    lx: f64,
+    y: f64,
+    (stroke, attr, value): (&str, &str, &str),
+    label: &str,
+) -> Group {
+    legend
+        .add(
+            Line::new()
+                .set("x1", px(lx))
+                .set("y1", px(y))
+                .set("x2", px(lx + 16.0))
+                .set("y2", px(y))
+                .set("stroke", stroke)
+                .set(attr, value),
+        )
+        .add(
+            Text::new(label)
+                .set("x", px(lx + 24.0))
+                .set("y", px(y + 4.0))
+                .set("font-size", 13),
+        )
 }
 
 #[cfg(test)]

@@ -147,12 +147,7 @@ fn numpy_oracle(
     written: &[PathBuf],
     pois: &[Poi],
 ) -> Option<Vec<(f64, f64)>> {
-    let has = std::process::Command::new("python3")
-        .args(["-c", "import numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has {
-        crate::util::missing("python3 with numpy (oracle of the error bound)");
+    if !crate::util::python_has("numpy", "pip install numpy") {
         return None;
     }
     let csv = dir.join("pois.csv");

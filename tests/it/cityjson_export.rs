@@ -32,18 +32,6 @@ fn cjval() -> Option<PathBuf> {
     None
 }
 
-/// True when python3 can import cjio (skip rule otherwise).
-fn have_cjio() -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", "import cjio"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        missing("the Python package cjio (pip install cjio)");
-    }
-    ok
-}
-
 /// cjval's verdict on a CityJSON file, or on a CityJSONSeq stream (every line must be valid).
 /// `Err` holds the failed checks.
 fn validate(cjval: &Path, file: &Path) -> Result<(), String> {
@@ -205,7 +193,7 @@ fn compare(name: &str, counts: &Value, s: &Stats, problems: &mut Vec<String>) {
 #[test]
 fn every_file_valid_and_counted() {
     let Some(cjval) = cjval() else { return };
-    if !have_cjio() {
+    if !python_has("cjio", "pip install cjio") {
         return;
     }
     let inputs: Vec<PathBuf> = all_inputs()
@@ -364,7 +352,7 @@ fn cli(args: &[&str]) -> std::process::Output {
 #[test]
 fn lod_and_rough_outputs_carry_levels() {
     let Some(cjval) = cjval() else { return };
-    if !have_cjio() {
+    if !python_has("cjio", "pip install cjio") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -498,7 +486,7 @@ fn format_from_the_name() {
 #[test]
 fn lod_ingolstadt_tiles_levels() {
     let Some(cjval) = cjval() else { return };
-    if !have_cjio() {
+    if !python_has("cjio", "pip install cjio") {
         return;
     }
     let Some(data) = shared_data() else { return };

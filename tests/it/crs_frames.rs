@@ -9,34 +9,13 @@
 //! Needs `../shared/data` and python3 with pyproj and numpy: missing, the test fails under
 //! `CI=true` and prints `SKIP: ...` otherwise.
 
-use crate::util::{fixture, manifest_dir, missing, run, shared_data};
+use crate::util::{fixture, manifest_dir, missing, os, python_has, run, shared_data, stderr};
 use serde_json::Value;
 use std::f64::consts::FRAC_1_SQRT_2;
 use std::ffi::OsStr;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-
-fn os(s: &str) -> &OsStr {
-    OsStr::new(s)
-}
-
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// python3 with pyproj and numpy, or a skip (failure under CI).
-fn python_oracle() -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", "import pyproj, numpy"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        missing("python3 with pyproj and numpy (pip install pyproj numpy)");
-    }
-    ok
-}
 
 fn plateau_2022() -> Option<PathBuf> {
     let f = shared_data()?.join("plateau/tokyo23ku-2022/53392633_bldg_6697_2_op.gml.gz");
@@ -142,13 +121,13 @@ fn pyproj(from: &str, to: &str, always_xy: bool, pts: &[[f64; 2]]) -> Vec<[f64; 
 #[test]
 fn plateau_svf_matches_oracle() {
     let Some(f) = plateau_2022() else { return };
-    if !python_oracle() {
+    if !python_has("pyproj, numpy", "pip install pyproj numpy") {
         return;
     }
     let fs = f.display().to_string();
     let mut args: Vec<String> = vec![fs.clone(), "--rays".into(), "40000".into()];
     args.extend(poi_args(&STREET));
-    let a: Vec<&OsStr> = args.iter().map(|s| os(s)).collect();
+    let a: Vec<&OsStr> = args.iter().map(os).collect();
     let (svf, _, err) = svf_json(&a);
     assert!(
         err.contains("local east-north-up frame"),
@@ -166,7 +145,7 @@ fn plateau_svf_matches_oracle() {
     // Degrees as metres (the old behaviour), forced by declaring a metric CRS.
     let mut bad = args.clone();
     bad.extend(["--source-crs".into(), "EPSG:32654".into()]);
-    let b: Vec<&OsStr> = bad.iter().map(|s| os(s)).collect();
+    let b: Vec<&OsStr> = bad.iter().map(os).collect();
     let (degrees, _, _) = svf_json(&b);
     for i in 0..STREET.len() {
         eprintln!(
@@ -195,7 +174,7 @@ fn plateau_svf_matches_oracle() {
 /// transformation, like skylod's) and for a UTM model (pyproj gives the latitude/longitude).
 #[test]
 fn latlon_poi_equals_model_poi() {
-    if !python_oracle() {
+    if !python_has("pyproj, numpy", "pip install pyproj numpy") {
         return;
     }
     // UTM (EPSG:25831): the facade POIs of the committed fixture (the third one sees the
@@ -241,7 +220,7 @@ fn latlon_poi_equals_model_poi() {
             &pois.iter().map(|s| s.as_str()).collect::<Vec<_>>(),
         ));
         v.extend(extra.iter().map(|s| s.to_string()));
-        let a: Vec<&OsStr> = v.iter().map(|s| os(s)).collect();
+        let a: Vec<&OsStr> = v.iter().map(os).collect();
         svf_json(&a)
     };
     let (s_model, p_model, _) = run_pois(&as_model, &[]);
@@ -296,8 +275,8 @@ fn latlon_poi_equals_model_poi() {
     a2.extend(poi_args(
         &as_wgs.iter().map(|s| s.as_str()).collect::<Vec<_>>(),
     ));
-    let (s1, p1, _) = svf_json(&a1.iter().map(|s| os(s)).collect::<Vec<_>>());
-    let (s2, p2, _) = svf_json(&a2.iter().map(|s| os(s)).collect::<Vec<_>>());
+    let (s1, p1, _) = svf_json(&a1.iter().map(os).collect::<Vec<_>>());
+    let (s2, p2, _) = svf_json(&a2.iter().map(os).collect::<Vec<_>>());
     for i in 0..pts.len() {
         // 1e-8 degree is ~1 mm.
         assert!(
@@ -394,7 +373,7 @@ fn feet_model_same_svf() {
             os("--rays"),
             os("4000"),
         ];
-        a.extend(extra.iter().map(|s| os(s)));
+        a.extend(extra.iter().map(os));
         svf_json(&a)
     };
     let (metres, _, _) = svf_of(&g, &m_pois, &[]);
@@ -448,7 +427,7 @@ fn plateau_lod_output_in_input_crs() {
         "4000".into(),
     ];
     a.extend(poi_args(&STREET));
-    let o = run(&a.iter().map(|s| os(s)).collect::<Vec<_>>());
+    let o = run(&a.iter().map(os).collect::<Vec<_>>());
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let rough = dir.path().join("rough.gml");
     let o = run(&[os("rough"), f.as_os_str(), os("-o"), rough.as_os_str()]);
@@ -490,8 +469,8 @@ fn plateau_lod_output_in_input_crs() {
     full.extend(poi_args(&STREET));
     let mut lod = vec![out.display().to_string(), "--rays".into(), "20000".into()];
     lod.extend(poi_args(&STREET));
-    let (s_full, _, _) = svf_json(&full.iter().map(|s| os(s)).collect::<Vec<_>>());
-    let (s_lod, _, _) = svf_json(&lod.iter().map(|s| os(s)).collect::<Vec<_>>());
+    let (s_full, _, _) = svf_json(&full.iter().map(os).collect::<Vec<_>>());
+    let (s_lod, _, _) = svf_json(&lod.iter().map(os).collect::<Vec<_>>());
     for (a, b) in s_full.iter().zip(&s_lod) {
         eprintln!("PLATEAU LoD output: full {a:.4}, lod {b:.4}");
         assert!((a - b).abs() < 0.02, "full {a} vs lod {b}");
@@ -588,7 +567,7 @@ fn no_crs_warns_and_source_crs_overrides() {
 /// against pyproj's EPSG database.
 #[test]
 fn crs_tables_match_pyproj() {
-    if !python_oracle() {
+    if !python_has("pyproj, numpy", "pip install pyproj numpy") {
         return;
     }
     use skylod::crs::feet::{foot_codes, US_SURVEY_FOOT};

@@ -251,8 +251,7 @@ fn under_an_eave_the_profile_is_the_lower_edge_and_matches_sun_hours() {
     let s = svf["pois"][0]["svf"].as_f64().unwrap();
     assert!(s > 0.05, "svf {s}");
     assert!(el.iter().any(|&e| e < 90.0));
-    if !pvlib_available() {
-        missing("python3 with pvlib (pip install pvlib)");
+    if !python_has("pvlib", "pip install pvlib") {
         return;
     }
     let mut sun_args = vec![os("sun-hours")];
@@ -358,20 +357,9 @@ fn csv_output_file_and_usage_errors() {
     }
 }
 
-fn pvlib_available() -> bool {
-    Command::new("python3")
-        .args(["-c", "import pvlib"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .map(|s| s.success())
-        .unwrap_or(false)
-}
-
 #[test]
 fn pvlib_sun_hours_masked_by_the_profile_match_sun_hours() {
-    if !pvlib_available() {
-        missing("python3 with pvlib (pip install pvlib)");
+    if !python_has("pvlib", "pip install pvlib") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -13,7 +13,7 @@
 //! Needs python3 with pyproj and `../shared/data`: missing, the test fails under `CI=true` and
 //! prints `SKIP: ...` otherwise.
 
-use crate::util::{json, missing, os, run, shared_data, stderr};
+use crate::util::{json, missing, os, python_has, run, shared_data, stderr};
 use glam::DVec3;
 use skylod::crs::convert::proj4_definition;
 use skylod::crs::{Builtin, Crs, PointTransform};
@@ -50,21 +50,9 @@ fn ground_metres(a: (f64, f64), b: (f64, f64)) -> f64 {
     dx.hypot(dy)
 }
 
-fn have_pyproj() -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", "import pyproj"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        missing("python3 with pyproj (pip install pyproj)");
-    }
-    ok
-}
-
 #[test]
 fn national_crs_match_pyproj() {
-    if !have_pyproj() {
+    if !python_has("pyproj", "pip install pyproj") {
         return;
     }
     let wgs = Crs::epsg(4326); // latitude first

@@ -8,31 +8,11 @@
 //! Needs `../shared/data` and python3 with pyproj: missing, the test fails under `CI=true`
 //! and prints `SKIP: ...` otherwise.
 
-use crate::util::{fixture, missing, run, shared_data};
+use crate::util::{fixture, missing, os, python_has, run, shared_data, stderr};
 use serde_json::Value;
 use std::ffi::OsStr;
 use std::io::Write;
 use std::process::{Command, Output, Stdio};
-
-fn os(s: &str) -> &OsStr {
-    OsStr::new(s)
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn pyproj_available() -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", "import pyproj"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        missing("python3 with pyproj (pip install pyproj)");
-    }
-    ok
-}
 
 /// Run python3 `code` with `input` on stdin, its stdout as JSON.
 fn python_json(code: &str, input: &str) -> Value {
@@ -109,7 +89,7 @@ fn gauss_kruger_and_wgs84_pois_into_gauss_kruger_model() {
         missing(&model.display().to_string());
         return;
     }
-    if !pyproj_available() {
+    if !python_has("pyproj", "pip install pyproj") {
         return;
     }
     let m = model.display().to_string();
@@ -196,7 +176,7 @@ fn gauss_kruger_and_wgs84_pois_into_gauss_kruger_model() {
 /// centre, and not the site of the same numbers read as ETRS89 / UTM 31N.
 #[test]
 fn sun_site_from_ed50_model() {
-    if !pyproj_available() {
+    if !python_has("pyproj", "pip install pyproj") {
         return;
     }
     let src = fixture("synth-small.gml");

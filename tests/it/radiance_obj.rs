@@ -16,17 +16,6 @@ use std::process::Command;
 /// Relative tolerance between Radiance and skylod.
 const TOL: f64 = 0.01;
 
-fn have_pyradiance() -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", "import pyradiance"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        missing("the Python package pyradiance (pip install pyradiance)");
-    }
-    ok
-}
-
 fn skylod(args: &[OsString]) -> String {
     let a: Vec<&std::ffi::OsStr> = args.iter().map(|s| s.as_os_str()).collect();
     let o = run(&a);
@@ -118,7 +107,7 @@ fn objs_in(dir: &Path) -> Vec<PathBuf> {
 
 #[test]
 fn synth_small_lod_and_full() {
-    if !have_pyradiance() {
+    if !python_has("pyradiance", "pip install pyradiance") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -137,7 +126,7 @@ fn synth_small_lod_and_full() {
 /// polygons) against the full model.
 #[test]
 fn synth_paper_lod() {
-    if !have_pyradiance() {
+    if !python_has("pyradiance", "pip install pyradiance") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -154,7 +143,7 @@ fn synth_paper_lod() {
 /// (`-o DIR --format obj`), each with its own origin; Radiance assembles them by their origins.
 #[test]
 fn ingolstadt_facades() {
-    if !have_pyradiance() {
+    if !python_has("pyradiance", "pip install pyradiance") {
         return;
     }
     let Some(data) = shared_data() else { return };

@@ -7,18 +7,6 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn pyproj_available() -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", "import pyproj"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        missing("python3 with pyproj (pip install pyproj)");
-    }
-    ok
-}
-
 fn reproject(input: &Path, out: &Path, target: &str, source: Option<&str>) {
     let mut args = vec![
         os("reproject"),
@@ -117,7 +105,7 @@ const CASES: [Case; 5] = [
 #[test]
 fn shared_files_match_pyproj() {
     let Some(data) = shared_data() else { return };
-    if !pyproj_available() {
+    if !python_has("pyproj", "pip install pyproj") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -164,7 +152,7 @@ fn shared_files_match_pyproj() {
 #[test]
 fn round_trip_within_a_millimetre() {
     let Some(data) = shared_data() else { return };
-    if !pyproj_available() {
+    if !python_has("pyproj", "pip install pyproj") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -298,7 +286,7 @@ fn numbers_of(text: &str, tag: &str) -> Vec<f64> {
 #[test]
 fn implicit_geometry_follows_pyproj() {
     let Some(data) = shared_data() else { return };
-    if !pyproj_available() {
+    if !python_has("pyproj", "pip install pyproj") {
         return;
     }
     // Two implicit geometries (a template and an xlink to it) in DHDN / Gauss-Kruger + DHHN92,

@@ -73,12 +73,7 @@ fn xsd_valid(paths: &[PathBuf]) {
 /// The numpy oracle's full-model SVF (`tests/oracle/street_svf.py`, 48 x 48 cosine-weighted
 /// rays, normal up) at one POI, or `None` (skip) without python3 + numpy.
 fn oracle_svf(input: &Path, p: [f64; 3], dir: &Path) -> Option<f64> {
-    let has = std::process::Command::new("python3")
-        .args(["-c", "import numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has {
-        crate::util::missing("python3 with numpy (SVF oracle)");
+    if !crate::util::python_has("numpy", "pip install numpy") {
         return None;
     }
     let csv = dir.join("oracle.csv");

@@ -11,16 +11,6 @@ use skylod::solar::{sun_position, Site};
 use std::io::Write;
 use std::process::{Command, Stdio};
 
-fn pvlib_available() -> bool {
-    Command::new("python3")
-        .args(["-c", "import pvlib"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .map(|s| s.success())
-        .unwrap_or(false)
-}
-
 /// (name, latitude, longitude, elevation m, pressure mbar, temperature C, delta T s)
 const PLACES: [(&str, f64, f64, f64, f64, f64, f64); 12] = [
     ("Barcelona", 41.39, 2.17, 12.0, 1013.25, 15.0, 69.0),
@@ -66,11 +56,7 @@ fn times_for(i: usize) -> [DateTime<Utc>; 2] {
 
 #[test]
 fn sun_position_matches_pvlib_spa() {
-    if !pvlib_available() {
-        if std::env::var("CI").is_ok_and(|v| v == "true") {
-            panic!("pvlib is not installed (python3 -c 'import pvlib' failed) and CI=true");
-        }
-        eprintln!("skipping sun_position_matches_pvlib_spa: python3 with pvlib not available");
+    if !crate::util::python_has("pvlib", "pip install pvlib") {
         return;
     }
     let mut cases = Vec::new();

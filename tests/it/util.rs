@@ -139,6 +139,20 @@ pub fn xsd(schemas: &Path, version: &str) -> PathBuf {
 }
 
 /// True when `xmllint` and the shared schemas are usable (skip/fail rule otherwise).
+/// True when python3 imports every module of `modules` (e.g. `"pyproj, numpy"`); otherwise
+/// the oracle is `missing` (a failure under `CI=true`, a printed skip elsewhere); `install`
+/// says how to get it.
+pub fn python_has(modules: &str, install: &str) -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", &format!("import {modules}")])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        missing(&format!("python3 with {modules} ({install})"));
+    }
+    ok
+}
+
 pub fn have_xmllint() -> bool {
     if shared_schemas().is_none() {
         return false;
@@ -393,12 +407,7 @@ pub fn check_json_schema(schema: &str, doc: &Path) {
         s=json.load(open(sys.argv[1])); d=json.load(open(sys.argv[2]))\n\
         jsonschema.Draft202012Validator.check_schema(s)\n\
         jsonschema.Draft202012Validator(s).validate(d)\n";
-    let has = Command::new("python3")
-        .args(["-c", "import jsonschema"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has {
-        missing("python3 with jsonschema (pip install jsonschema)");
+    if !python_has("jsonschema", "pip install jsonschema") {
         return;
     }
     let o = Command::new("python3")
