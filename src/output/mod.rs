@@ -4,6 +4,7 @@
 
 pub mod evaluate;
 pub mod horizon;
+pub mod irradiance;
 pub mod report;
 pub mod schema;
 pub mod stats;

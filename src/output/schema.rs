@@ -54,6 +54,12 @@ pub fn stats() -> Schema {
     root::<super::stats::StatsOutput>()
 }
 
+/// `schemas/irradiance.schema.json`: `skylod irradiance --json`
+/// ([`super::irradiance::IrradianceOutput`]).
+pub fn irradiance() -> Schema {
+    root::<super::irradiance::IrradianceOutput>()
+}
+
 /// Every committed schema: its file name under `schemas/` and the schema.
 pub fn all() -> Vec<(&'static str, Schema)> {
     vec![
@@ -63,6 +69,7 @@ pub fn all() -> Vec<(&'static str, Schema)> {
         ("horizon.schema.json", horizon()),
         ("evaluate.schema.json", evaluate()),
         ("stats.schema.json", stats()),
+        ("irradiance.schema.json", irradiance()),
     ]
 }
 

@@ -49,6 +49,7 @@ mod error;
 pub mod evaluation;
 mod fisheye;
 mod frame;
+mod irradiance;
 mod levels;
 mod read;
 #[cfg(test)]
@@ -59,6 +60,7 @@ pub use analyse::{evaluate, horizon, sun_hours, svf, trace, EvaluateOptions, Tra
 pub use error::PipelineError;
 pub use fisheye::{sky_pictures, SkyPicture, SkyPictureOptions};
 pub use frame::{frame, FrameOptions, Framed};
+pub use irradiance::{irradiance, PoiIrradiance};
 pub use levels::{levels, levels_of, BoundSpec, Levels, LevelsOptions};
 pub use read::{check_model, read_inputs, Inputs};
 pub use write::{buildings_without_kept_assets, write_all, write_levels, Written};

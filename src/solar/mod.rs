@@ -1,16 +1,19 @@
 //! Solar analysis beside the LoD pipeline (paper 3, 5): the sky partition into ray bundles
 //! ([`sky`], shared with the selection), sun positions ([`sun`]), sky view factor and sky
-//! exposure ([`mod@svf`]), sun hours ([`mod@sun_hours`]) and horizon profiles ([`horizon`]).
+//! exposure ([`mod@svf`]), sun hours ([`mod@sun_hours`]), horizon profiles ([`horizon`]) and
+//! irradiation from hourly weather ([`weather`], [`mod@irradiance`]).
 //!
 //! All three take the scene only through an occlusion predicate (`true` = blocked), so
 //! they work with any ray caster; parallelism over points of interest is the caller's.
 
 pub mod fisheye;
 pub mod horizon;
+pub mod irradiance;
 pub mod sky;
 pub mod sun;
 pub mod sun_hours;
 pub mod svf;
+pub mod weather;
 
 pub use horizon::{horizon_profile, HorizonOptions, HorizonProfile};
 pub use sun::{sun_position, Site, SiteTimeZone, SunPosition, SunStep, SunTable};
@@ -40,6 +43,23 @@ pub fn poi_sun_hours(scene: &Scene, poi: &Poi, table: &SunTable) -> SunHours {
     sun_hours(table, poi.normal, |d| {
         scene.occluded(origin, d, POI_OFFSET, f64::INFINITY)
     })
+}
+
+/// [`irradiance::irradiance_hourly`] of a POI against a scene: its plane view from the
+/// POI's own bundle ([`SkyBundles::for_poi`], as [`poi_sky_view`]) and one ray per sunlit
+/// hour, with the same ray origin and `tmin` as [`poi_sky_view`].
+pub fn poi_irradiance(
+    scene: &Scene,
+    poi: &Poi,
+    bundles: &SkyBundles,
+    table: &irradiance::IrradianceTable,
+    opts: &irradiance::IrradianceOptions,
+    hourly: Option<&mut Vec<f64>>,
+) -> irradiance::Irradiance {
+    let origin = poi.ray_origin();
+    let blocked = |d| scene.occluded(origin, d, POI_OFFSET, f64::INFINITY);
+    let view = irradiance::plane_view(poi.normal, &bundles.for_poi(poi), blocked);
+    irradiance::irradiance_hourly(table, poi.normal, view, blocked, opts, hourly)
 }
 
 /// [`horizon_profile()`] of a POI against a scene, with the same ray origin and `tmin` as

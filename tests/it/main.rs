@@ -33,6 +33,7 @@ mod national_crs;
 mod evaluate;
 // `horizon`: profiles against closed forms, and pvlib's masked sun hours against `sun-hours`.
 mod horizon;
+mod irradiance;
 // One definition of a level's output: report, `evaluate`, writer and reader count alike.
 mod levels;
 // The house rules: no import cycle between folders of src/, what each stage may import.

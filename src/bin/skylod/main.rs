@@ -39,6 +39,8 @@ enum Command {
     Svf(commands::svf::Args),
     /// Direct-sun hours per year and per month of points of interest.
     SunHours(commands::sun_hours::Args),
+    /// Annual irradiation (kWh/m²) on the plane of points from EPW or TMY3 weather (direct, diffuse, reflected).
+    Irradiance(commands::irradiance::Args),
     /// Fisheye picture (SVG) of the sky hemisphere seen from a point, with sun paths.
     Fisheye(commands::fisheye::Args),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
@@ -81,6 +83,7 @@ fn main() -> ExitCode {
         Command::Evaluate(a) => commands::evaluate::run(a),
         Command::Svf(a) => commands::svf::run(a),
         Command::SunHours(a) => commands::sun_hours::run(a),
+        Command::Irradiance(a) => commands::irradiance::run(a),
         Command::Fisheye(a) => commands::fisheye::run(a),
         Command::Completions(a) => commands::completions::completions(a),
         Command::Man(a) => commands::completions::man(a),

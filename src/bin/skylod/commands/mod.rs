@@ -13,6 +13,7 @@ pub mod convert;
 pub mod evaluate;
 pub mod fisheye;
 pub mod horizon;
+pub mod irradiance;
 pub mod lod;
 pub mod reproject;
 pub mod rough;
