@@ -64,6 +64,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     let t = Instant::now();
     let weather = read_weather(&args.weather)?;
+    let weather_ms = ms(t);
     let bundles = SkyBundles::new(args.rays, args.seed)?;
     let Some(Prepared {
         mut loaded,
@@ -76,13 +77,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "irradiance")?;
     let (lat, lon) = site(&args.site, framed.source, &weather)?;
-    let sky = args.sky;
-    let opts = IrradianceOptions {
-        sky,
-        albedo: args.albedo,
-    };
+    let (sky, albedo) = (args.sky, args.albedo);
+    let opts = IrradianceOptions { sky, albedo };
+    let t = Instant::now();
     let table = IrradianceTable::new(&weather, &Site::new(lat, lon), sky)?;
-    let sun_ms = ms(t);
+    let sun_ms = weather_ms + ms(t);
     let traced = skylod::pipeline::irradiance(
         &framed,
         &bundles,
