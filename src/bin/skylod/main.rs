@@ -1,5 +1,6 @@
 //! `skylod`: the command-line front end. The library does the work; this binary owns the
-//! terminal, the exit codes (0 ok, 1 some inputs failed, 2 usage or fatal) and progress.
+//! terminal, the exit codes (0 ok, 1 some inputs failed, 2 usage or fatal, 143 / 129 stopped
+//! by SIGTERM / SIGHUP) and progress.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -87,6 +88,14 @@ fn main() -> ExitCode {
         Command::Horizon(a) => commands::horizon::run(a),
         Command::Reproject(a) => commands::reproject::run(a),
     };
+    // SIGTERM or SIGHUP: the command stopped at its next file or POI (or had finished);
+    // every output in place is complete. The exit code says which signal (143, 129).
+    if let Some(code) = log::signal_exit_code() {
+        if let Err(e) = &result {
+            log::line(log::Level::Error, &format!("skylod: error: {}", message(e)));
+        }
+        return ExitCode::from(code);
+    }
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,
         Ok(Outcome::SomeFailed) => ExitCode::from(1),

@@ -135,6 +135,9 @@ fn one(
     opts: &WriteOptions,
     mirror: bool,
 ) -> anyhow::Result<Done> {
+    if crate::log::cancelled() {
+        anyhow::bail!("{}: cancelled before reading", input.display());
+    }
     let model = read_file(input)?;
     let polygons = crate::commands::polygons(&model);
     let warnings = model.warnings.len();
