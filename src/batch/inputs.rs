@@ -80,7 +80,9 @@ pub fn sniff_other_xml(path: &Path) -> Option<String> {
     let file = std::fs::File::open(path).ok()?;
     let mut head = Vec::with_capacity(SNIFF_BYTES);
     let mut r = std::io::BufReader::new(file);
-    let gz = std::io::BufRead::fill_buf(&mut r).ok().is_some_and(crate::io::is_gzip);
+    let gz = std::io::BufRead::fill_buf(&mut r)
+        .ok()
+        .is_some_and(crate::io::is_gzip);
     if gz {
         flate2::read::MultiGzDecoder::new(r)
             .take(SNIFF_BYTES as u64)
@@ -106,9 +108,8 @@ fn root_name(head: &[u8]) -> Option<String> {
     loop {
         let skip = rest.iter().take_while(|b| b.is_ascii_whitespace()).count();
         rest = &rest[skip..];
-        let end_of = |rest: &[u8], close: &[u8]| {
-            memchr::memmem::find(rest, close).map(|i| i + close.len())
-        };
+        let end_of =
+            |rest: &[u8], close: &[u8]| memchr::memmem::find(rest, close).map(|i| i + close.len());
         if rest.starts_with(b"<?") {
             rest = &rest[end_of(rest, b"?>")?..];
         } else if rest.starts_with(b"<!--") {
@@ -437,7 +438,8 @@ mod tests {
             Some("MD_Metadata")
         );
         // CityGML declared on the root of a WFS collection, or a CityModel without prefixes.
-        let wfs = "<wfs:FeatureCollection xmlns:bldg=\"http://www.opengis.net/citygml/building/2.0\">";
+        let wfs =
+            "<wfs:FeatureCollection xmlns:bldg=\"http://www.opengis.net/citygml/building/2.0\">";
         assert_eq!(other_xml_root(wfs.as_bytes()), None);
         assert_eq!(other_xml_root(b"<CityModel>"), None);
         // What the start cannot tell is kept (reading it says what is wrong).
@@ -473,7 +475,9 @@ mod tests {
             assert_eq!(paths, [t.join("a.gml")], "{arg:?}");
             let skipped: Vec<_> = got.skipped.iter().map(|s| s.path.clone()).collect();
             assert_eq!(skipped, [t.join("meta2.xml.gz"), t.join("metadata.xml")]);
-            assert!(got.skipped[1].to_string().contains("root element MD_Metadata"));
+            assert!(got.skipped[1]
+                .to_string()
+                .contains("root element MD_Metadata"));
         }
         let named = expand_all(&[t.join("metadata.xml")]).unwrap();
         assert_eq!(named.inputs.len(), 1);

@@ -125,7 +125,11 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 fn message(e: &anyhow::Error) -> String {
     let mut out = String::new();
     for cause in e.chain() {
-        let text = cause.to_string();
+        // A full disk in plain words, as the library's file errors say it.
+        let text = match cause.downcast_ref::<std::io::Error>() {
+            Some(io) => skylod::io::describe_io(io),
+            None => cause.to_string(),
+        };
         if text.is_empty() || out.contains(&text) {
             continue;
         }
@@ -156,6 +160,19 @@ mod tests {
         })
         .context("reading POIs");
         assert_eq!(message(&e), "reading POIs: nope.csv: No such file");
+    }
+
+    #[test]
+    fn a_full_disk_is_said_once_in_plain_words() {
+        let full = std::io::Error::from_raw_os_error(28);
+        let e = anyhow::Error::new(skylod::io::FileError::new("out.gml", full));
+        assert_eq!(message(&e), "out.gml: no space left on device");
+        let e = anyhow::Error::new(std::io::Error::from_raw_os_error(28))
+            .context("writing to standard output");
+        assert_eq!(
+            message(&e),
+            "writing to standard output: no space left on device"
+        );
     }
 
     #[test]

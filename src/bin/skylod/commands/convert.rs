@@ -104,7 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 names.push(paths[k].clone());
             }
             Err(e) => {
-                error!("{e:#}");
+                error!("{}", crate::message(&e));
                 failed += 1;
             }
         }
