@@ -157,3 +157,75 @@ fn a_walk_skips_xml_that_is_not_citygml() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("not a CityGML document"), "{err}");
 }
+
+/// A full disk (a 16 KiB tmpfs; mounting needs privileges: fails under `CI=true` without
+/// them, skips otherwise) for every output format of `convert` and for `rough`: exit 1, the
+/// error names the output and says "no space left on device" once, nothing is left behind.
+#[test]
+fn a_full_disk_in_every_format_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let mnt = dir.path().join("small");
+    std::fs::create_dir(&mnt).unwrap();
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=16k", "tmpfs"])
+        .arg(&mnt)
+        .stderr(Stdio::piped())
+        .output();
+    match &mounted {
+        Ok(o) if o.status.success() => {}
+        Ok(o) => {
+            crate::util::missing(&format!(
+                "mount privileges for a 16 KiB tmpfs (full disk): {}",
+                String::from_utf8_lossy(&o.stderr).trim()
+            ));
+            return;
+        }
+        Err(e) => {
+            crate::util::missing(&format!("the mount command (full disk): {e}"));
+            return;
+        }
+    }
+    struct Unmount(std::path::PathBuf);
+    impl Drop for Unmount {
+        fn drop(&mut self) {
+            let _ = Command::new("umount").arg(&self.0).status();
+        }
+    }
+    let _guard = Unmount(mnt.clone());
+    let input = fixture("synth-small.gml");
+    for name in [
+        "out.obj",
+        "out.city.json",
+        "out.city.jsonl",
+        "out.gml.gz",
+        "rough.gml",
+    ] {
+        let out = mnt.join(name);
+        let cmd = if name == "rough.gml" {
+            "rough"
+        } else {
+            "convert"
+        };
+        let o = run(&[os(cmd), input.as_os_str(), os("-o"), out.as_os_str()]);
+        let err = stderr(&o);
+        let code = 1;
+        // A gzip output of the small fixture may fit in 16 KiB.
+        if name.ends_with(".gz") && o.status.success() {
+            std::fs::remove_file(&out).unwrap();
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(code), "{name}: {err}");
+        assert!(
+            err.contains(&format!("{}: no space left on device", out.display())),
+            "{name}: {err}"
+        );
+        assert_eq!(
+            err.matches(&out.display().to_string()).count(),
+            1,
+            "{name}: {err}"
+        );
+        assert_eq!(err.matches("o space left").count(), 1, "{name}: {err}");
+        let left: Vec<_> = std::fs::read_dir(&mnt).unwrap().collect();
+        assert!(left.is_empty(), "{name}: left behind: {left:?}");
+    }
+}

@@ -145,8 +145,8 @@ fn one(
         outputs::create_parent(out)?;
     }
     if format != Format::CityGml {
-        outputs::export(format, &model, 0, Content::Full, out, opts)
-            .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?;
+        // The export's errors name the output.
+        outputs::export(format, &model, 0, Content::Full, out, opts)?;
         return Ok(Done {
             line: None,
             warnings,
