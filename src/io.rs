@@ -51,7 +51,7 @@ pub fn is_stdout(out: &Path) -> bool {
 
 /// I/O on a file failed.
 #[derive(Debug, thiserror::Error)]
-#[error("{file}: {source}", file = .file.display())]
+#[error("{file}: {}", describe_io(.source), file = .file.display())]
 pub struct FileError {
     /// The file concerned.
     pub file: PathBuf,
@@ -66,6 +66,98 @@ impl FileError {
             file: file.into(),
             source,
         }
+    }
+}
+
+/// The text of an I/O error, with a full disk said in plain words: `no space left on device`
+/// (ENOSPC) rather than the system's capitalised message and number.
+///
+/// ```
+/// let full = std::io::Error::from_raw_os_error(28);
+/// assert_eq!(skylod::io::describe_io(&full), "no space left on device");
+/// ```
+pub fn describe_io(e: &std::io::Error) -> String {
+    match e.kind() {
+        std::io::ErrorKind::StorageFull => "no space left on device".into(),
+        _ => e.to_string(),
+    }
+}
+
+/// The name standard output is given in errors.
+pub const STDOUT_NAME: &str = "standard output";
+
+/// A writer that keeps the first error of the writer inside: when the function writing
+/// through it fails, [`atomic_write`] reports that error against the target it was writing.
+struct Recording<W> {
+    inner: W,
+    first: Option<(std::io::ErrorKind, Option<i32>, String)>,
+}
+
+impl<W: Write> Recording<W> {
+    fn record<T>(&mut self, r: std::io::Result<T>) -> std::io::Result<T> {
+        if let (Err(e), None) = (&r, &self.first) {
+            self.first = Some((e.kind(), e.raw_os_error(), e.to_string()));
+        }
+        r
+    }
+
+    fn error(&self) -> Option<std::io::Error> {
+        let (kind, os, text) = self.first.as_ref()?;
+        Some(match os {
+            Some(code) => std::io::Error::from_raw_os_error(*code),
+            None => std::io::Error::new(*kind, text.clone()),
+        })
+    }
+}
+
+impl<W: Write> Write for Recording<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let r = self.inner.write(buf);
+        self.record(r)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        let r = self.inner.flush();
+        self.record(r)
+    }
+}
+
+/// Write through `f` into `w` (gzip when `gz`) and flush: a failure of `w` (a full disk) is
+/// reported as a [`FileError`] of `out` whatever `f` made of it.
+fn write_through<W: Write, E, F>(w: W, out: &Path, gz: bool, f: F) -> Result<u64, E>
+where
+    F: FnOnce(&mut dyn Write) -> Result<u64, E>,
+    E: From<FileError>,
+{
+    let name = if is_stdout(out) {
+        Path::new(STDOUT_NAME)
+    } else {
+        out
+    };
+    let io = |source| E::from(FileError::new(name, source));
+    let bw = BufWriter::with_capacity(256 * 1024, w);
+    if gz {
+        let mut rec = Recording {
+            inner: flate2::write::GzEncoder::new(bw, flate2::Compression::default()),
+            first: None,
+        };
+        let n = match f(&mut rec) {
+            Ok(n) => n,
+            Err(e) => return Err(rec.error().map_or(e, io)),
+        };
+        let mut bw = rec.inner.finish().map_err(io)?;
+        bw.flush().map_err(io)?;
+        Ok(n)
+    } else {
+        let mut rec = Recording {
+            inner: bw,
+            first: None,
+        };
+        let n = match f(&mut rec) {
+            Ok(n) => n,
+            Err(e) => return Err(rec.error().map_or(e, io)),
+        };
+        rec.flush().map_err(io)?;
+        Ok(n)
     }
 }
 
@@ -119,7 +211,8 @@ fn canonical_target(out: &Path) -> Option<PathBuf> {
 }
 
 /// Write through `f` into a temporary file beside `out`, gzip when `out` ends in `.gz`,
-/// then rename it into place. On any error the temporary file is removed. The file is created
+/// then rename it into place. On any error the temporary file is removed; a write that fails
+/// (a full disk: "no space left on device") is reported against `out`. The file is created
 /// with mode 0666 minus the process umask, as `open(2)` would create it.
 ///
 /// `out` = `-` ([`is_stdout`]) streams to standard output instead (uncompressed; a closed
@@ -131,11 +224,7 @@ where
 {
     let io = |source| E::from(FileError::new(out, source));
     if is_stdout(out) {
-        let stdout = std::io::stdout();
-        let mut bw = BufWriter::with_capacity(256 * 1024, stdout.lock());
-        let n = f(&mut bw)?;
-        bw.flush().map_err(io)?;
-        return Ok(n);
+        return write_through(std::io::stdout().lock(), out, false, f);
     }
     let dir = out
         .parent()
@@ -155,21 +244,8 @@ where
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
     let file = tmp.as_file().try_clone().map_err(io)?;
-    let n = if gz {
-        let mut enc = flate2::write::GzEncoder::new(
-            BufWriter::with_capacity(256 * 1024, file),
-            flate2::Compression::default(),
-        );
-        let n = f(&mut enc)?;
-        let mut bw = enc.finish().map_err(io)?;
-        bw.flush().map_err(io)?;
-        n
-    } else {
-        let mut bw = BufWriter::with_capacity(256 * 1024, file);
-        let n = f(&mut bw)?;
-        bw.flush().map_err(io)?;
-        n
-    };
+    // On an error `tmp` is dropped here, which removes the temporary file.
+    let n = write_through(file, out, gz, f)?;
     tmp.as_file().sync_all().map_err(io)?;
     tmp.persist(out).map_err(|e| io(e.error))?;
     Ok(n)
@@ -227,6 +303,88 @@ mod tests {
         assert!(check_target(Path::new("-"), [input.as_path()], false).is_ok());
         let new = dir.path().join("new.gml");
         assert!(check_target(&new, [input.as_path()], false).is_ok());
+    }
+
+    /// A disk that takes `room` bytes, then fails with ENOSPC (write or flush).
+    struct Full {
+        room: usize,
+    }
+
+    impl Write for Full {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if self.room == 0 {
+                return Err(std::io::Error::from_raw_os_error(28));
+            }
+            let k = buf.len().min(self.room);
+            self.room -= k;
+            Ok(k)
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    /// A writer as a stage writes: its own error type, naming something else than the target.
+    #[derive(Debug)]
+    enum StageError {
+        File(FileError),
+    }
+    impl From<FileError> for StageError {
+        fn from(e: FileError) -> Self {
+            StageError::File(e)
+        }
+    }
+
+    #[test]
+    fn a_full_disk_names_the_target_and_says_no_space() {
+        let out = Path::new("city/out.gml");
+        for gz in [false, true] {
+            // In a write inside the function (more than the buffer) and at the final flush.
+            for (room, len) in [(1000, 1 << 20), (10, 100)] {
+                let r = write_through(Full { room }, out, gz, |w| -> Result<u64, StageError> {
+                    let data = vec![b'x'; len];
+                    w.write_all(&data)
+                        .map_err(|e| FileError::new("a chunk of somewhere else", e))?;
+                    Ok(len as u64)
+                });
+                let Err(StageError::File(e)) = r else {
+                    panic!("gz {gz}, room {room}: a full disk must fail");
+                };
+                if gz && len == 100 {
+                    // 100 compressible bytes fit in 10: the disk fills, or not, in finish.
+                    continue;
+                }
+                assert_eq!(e.file, out, "gz {gz}, room {room}");
+                assert_eq!(
+                    e.to_string(),
+                    "city/out.gml: no space left on device",
+                    "gz {gz}, room {room}"
+                );
+            }
+        }
+        let e = write_through(Full { room: 0 }, Path::new("-"), false, |w| {
+            w.write_all(b"{}").map_err(|e| FileError::new("x", e))?;
+            Ok::<u64, FileError>(2)
+        })
+        .unwrap_err();
+        assert_eq!(e.to_string(), "standard output: no space left on device");
+    }
+
+    #[test]
+    fn a_full_disk_leaves_no_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.gml");
+        let r = atomic_write(&out, |w| -> Result<u64, FileError> {
+            w.write_all(&[b'x'; 300 * 1024])
+                .map_err(|e| FileError::new("out", e))?;
+            Err(FileError::new(
+                "elsewhere",
+                std::io::Error::from_raw_os_error(28),
+            ))
+        });
+        let e = r.unwrap_err();
+        assert!(e.to_string().ends_with("no space left on device"), "{e}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 
     #[test]

@@ -36,6 +36,109 @@ pub struct Input {
     pub relative: PathBuf,
 }
 
+/// A file a directory or a pattern found that is XML but not CityGML (a `metadata.xml`
+/// sidecar): left out of the inputs, said as a warning by the caller.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Skipped {
+    /// The file.
+    pub path: PathBuf,
+    /// The local name of its root element (`MD_Metadata`).
+    pub root: String,
+}
+
+impl std::fmt::Display for Skipped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}: skipped: XML but not CityGML (root element {}, no CityGML namespace)",
+            self.path.display(),
+            self.root
+        )
+    }
+}
+
+/// The inputs found, and the files found but skipped.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Expanded {
+    /// The files to read.
+    pub inputs: Vec<Input>,
+    /// XML files of a directory or a pattern that are not CityGML, in the order found.
+    pub skipped: Vec<Skipped>,
+}
+
+/// How many bytes of a file (decompressed) [`sniff_other_xml`] looks at.
+pub const SNIFF_BYTES: usize = 4096;
+
+/// The root element's local name when the start of the file shows XML that is not CityGML:
+/// the root's start tag complete within the first [`SNIFF_BYTES`] bytes (gzip decompressed),
+/// its local name not `CityModel`, and no CityGML namespace (`http://www.opengis.net/citygml/`)
+/// anywhere in those bytes. `None` for CityGML, and whenever the start cannot tell (not XML,
+/// a root tag longer than the window, a file that cannot be read): reading the file reports
+/// what is wrong with it.
+pub fn sniff_other_xml(path: &Path) -> Option<String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).ok()?;
+    let mut head = Vec::with_capacity(SNIFF_BYTES);
+    let mut r = std::io::BufReader::new(file);
+    let gz = std::io::BufRead::fill_buf(&mut r)
+        .ok()
+        .is_some_and(crate::io::is_gzip);
+    if gz {
+        flate2::read::MultiGzDecoder::new(r)
+            .take(SNIFF_BYTES as u64)
+            .read_to_end(&mut head)
+            .ok()?;
+    } else {
+        r.take(SNIFF_BYTES as u64).read_to_end(&mut head).ok()?;
+    }
+    other_xml_root(&head)
+}
+
+/// [`sniff_other_xml`] on the first bytes of a document.
+fn other_xml_root(head: &[u8]) -> Option<String> {
+    let name = root_name(head)?;
+    let local = name.rsplit(':').next().unwrap_or(&name).to_owned();
+    let citygml = memchr::memmem::find(head, b"opengis.net/citygml").is_some();
+    (local != "CityModel" && !citygml).then_some(local)
+}
+
+/// The qualified name of the root element, when its start tag is complete in `head`.
+fn root_name(head: &[u8]) -> Option<String> {
+    let mut rest = head.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(head);
+    loop {
+        let skip = rest.iter().take_while(|b| b.is_ascii_whitespace()).count();
+        rest = &rest[skip..];
+        let end_of =
+            |rest: &[u8], close: &[u8]| memchr::memmem::find(rest, close).map(|i| i + close.len());
+        if rest.starts_with(b"<?") {
+            rest = &rest[end_of(rest, b"?>")?..];
+        } else if rest.starts_with(b"<!--") {
+            rest = &rest[end_of(rest, b"-->")?..];
+        } else if rest.starts_with(b"<!") {
+            // DOCTYPE, with or without an internal subset
+            let gt = memchr::memchr(b'>', rest)?;
+            let bracket = memchr::memchr(b'[', &rest[..gt]);
+            rest = match bracket {
+                Some(_) => &rest[end_of(rest, b"]>")?..],
+                None => &rest[gt + 1..],
+            };
+        } else if rest.first() == Some(&b'<') {
+            let name_len = rest[1..]
+                .iter()
+                .take_while(|b| !b.is_ascii_whitespace() && **b != b'>' && **b != b'/')
+                .count();
+            if name_len == 0 {
+                return None;
+            }
+            let name = std::str::from_utf8(&rest[1..1 + name_len]).ok()?.to_owned();
+            memchr::memchr(b'>', rest)?;
+            return Some(name);
+        } else {
+            return None;
+        }
+    }
+}
+
 /// Why the inputs cannot be listed.
 #[derive(Debug, thiserror::Error)]
 pub enum InputError {
@@ -112,7 +215,7 @@ fn relative_to(path: &Path, base: &Path) -> PathBuf {
         .unwrap_or_else(|_| path.file_name().map(PathBuf::from).unwrap_or_default())
 }
 
-fn walk(dir: &Path, base: &Path, out: &mut Vec<Input>) -> Result<(), InputError> {
+fn walk(dir: &Path, base: &Path, out: &mut Expanded) -> Result<(), InputError> {
     let mut found = Vec::new();
     for entry in walkdir::WalkDir::new(dir)
         .follow_links(true)
@@ -131,18 +234,37 @@ fn walk(dir: &Path, base: &Path, out: &mut Vec<Input>) -> Result<(), InputError>
             });
         }
     }
-    out.extend(found);
+    keep_citygml(found, out);
     Ok(())
 }
 
+/// Append the files of a walk or a pattern to `out`, those that are XML but not CityGML to
+/// its skipped files.
+fn keep_citygml(found: Vec<Input>, out: &mut Expanded) {
+    for i in found {
+        match sniff_other_xml(&i.path) {
+            Some(root) => out.skipped.push(Skipped { path: i.path, root }),
+            None => out.inputs.push(i),
+        }
+    }
+}
+
 /// Expand the arguments of a command into input files (see the module docs). A path that
-/// does not exist and holds no pattern is kept: reading it reports the error per file.
+/// does not exist and holds no pattern is kept: reading it reports the error per file. Files
+/// found in a directory or by a pattern that are XML but not CityGML ([`sniff_other_xml`])
+/// are left out: [`expand_all`] lists them.
 pub fn expand(args: &[PathBuf]) -> Result<Vec<Input>, InputError> {
-    let mut out: Vec<Input> = Vec::new();
+    expand_all(args).map(|e| e.inputs)
+}
+
+/// [`expand`], with the files it skipped. A directory or a pattern whose every CityGML-named
+/// file was skipped is an error ([`InputError::Empty`]), as one that named none.
+pub fn expand_all(args: &[PathBuf]) -> Result<Expanded, InputError> {
+    let mut out = Expanded::default();
     for a in args {
         let text = a.to_string_lossy();
         if a.as_os_str() == "-" || a.is_file() || (!a.exists() && !has_glob_chars(&text)) {
-            out.push(Input {
+            out.inputs.push(Input {
                 path: a.clone(),
                 relative: a
                     .file_name()
@@ -150,9 +272,9 @@ pub fn expand(args: &[PathBuf]) -> Result<Vec<Input>, InputError> {
                     .unwrap_or_else(|| a.clone()),
             });
         } else if a.is_dir() {
-            let before = out.len();
+            let before = out.inputs.len();
             walk(a, a, &mut out)?;
-            if out.len() == before {
+            if out.inputs.len() == before {
                 return Err(InputError::Empty(text.to_string()));
             }
         } else {
@@ -161,7 +283,7 @@ pub fn expand(args: &[PathBuf]) -> Result<Vec<Input>, InputError> {
                 message: e.msg.to_string(),
             })?;
             let base = fixed_prefix(&text);
-            let mut found = Vec::new();
+            let mut found = Expanded::default();
             for p in paths {
                 let p = p.map_err(|e| InputError::Io {
                     path: e.path().to_path_buf(),
@@ -169,24 +291,27 @@ pub fn expand(args: &[PathBuf]) -> Result<Vec<Input>, InputError> {
                 })?;
                 if p.is_file() {
                     if is_citygml_name(&p.file_name().unwrap_or_default().to_string_lossy()) {
-                        found.push(Input {
+                        let i = Input {
                             relative: relative_to(&p, &base),
                             path: p,
-                        });
+                        };
+                        keep_citygml(vec![i], &mut found);
                     }
                 } else if p.is_dir() {
                     walk(&p, &base, &mut found)?;
                 }
             }
-            if found.is_empty() {
+            if found.inputs.is_empty() {
                 return Err(InputError::Empty(text.to_string()));
             }
-            found.sort_by(|x, y| x.path.cmp(&y.path));
-            out.extend(found);
+            found.inputs.sort_by(|x, y| x.path.cmp(&y.path));
+            out.inputs.extend(found.inputs);
+            out.skipped.extend(found.skipped);
         }
     }
     let mut seen = std::collections::HashSet::new();
-    out.retain(|i| i.path.as_os_str() == "-" || seen.insert(i.path.clone()));
+    out.inputs
+        .retain(|i| i.path.as_os_str() == "-" || seen.insert(i.path.clone()));
     Ok(out)
 }
 
@@ -201,7 +326,7 @@ impl Spool {
     }
 }
 
-/// [`expand`], with `-` read from `stdin` into a temporary file (the input is that file,
+/// [`expand_all`], with `-` read from `stdin` into a temporary file (the input is that file,
 /// its relative path `stdin.gml`). Keep the returned [`Spool`] alive while the inputs are
 /// read and written.
 ///
@@ -210,8 +335,11 @@ impl Spool {
 pub fn expand_spooled(
     args: &[PathBuf],
     stdin: &mut dyn std::io::Read,
-) -> Result<(Vec<Input>, Spool), InputError> {
-    let expanded = expand(args)?;
+) -> Result<(Expanded, Spool), InputError> {
+    let Expanded {
+        inputs: expanded,
+        skipped,
+    } = expand_all(args)?;
     let mut spool = None;
     let mut out = Vec::with_capacity(expanded.len());
     for i in expanded {
@@ -238,7 +366,13 @@ pub fn expand_spooled(
         });
         spool = Some(dir);
     }
-    Ok((out, Spool(spool)))
+    Ok((
+        Expanded {
+            inputs: out,
+            skipped,
+        },
+        Spool(spool),
+    ))
 }
 
 #[cfg(test)]
@@ -289,6 +423,65 @@ mod tests {
         let paths: Vec<_> = got.iter().map(|i| i.path.clone()).collect();
         assert_eq!(paths, [a, PathBuf::from("-"), missing]);
         assert_eq!(got[0].relative, PathBuf::from("a.gml"));
+    }
+
+    const CITYGML: &str = "<?xml version=\"1.0\"?>\n<!-- tile -->\n<core:CityModel \
+        xmlns:core=\"http://www.opengis.net/citygml/2.0\"></core:CityModel>";
+    const METADATA: &str = "\u{feff}<?xml version=\"1.0\"?>\n<!DOCTYPE x [<!ENTITY a \"b\">]>\n\
+        <gmd:MD_Metadata xmlns:gmd=\"http://www.isotc211.org/2005/gmd\"><x/></gmd:MD_Metadata>";
+
+    #[test]
+    fn the_root_element_tells_citygml_from_other_xml() {
+        assert_eq!(other_xml_root(CITYGML.as_bytes()), None);
+        assert_eq!(
+            other_xml_root(METADATA.as_bytes()).as_deref(),
+            Some("MD_Metadata")
+        );
+        // CityGML declared on the root of a WFS collection, or a CityModel without prefixes.
+        let wfs =
+            "<wfs:FeatureCollection xmlns:bldg=\"http://www.opengis.net/citygml/building/2.0\">";
+        assert_eq!(other_xml_root(wfs.as_bytes()), None);
+        assert_eq!(other_xml_root(b"<CityModel>"), None);
+        // What the start cannot tell is kept (reading it says what is wrong).
+        assert_eq!(other_xml_root(b""), None);
+        assert_eq!(other_xml_root(b"not xml"), None);
+        assert_eq!(other_xml_root(b"<root a=\"unfinished"), None);
+        assert_eq!(other_xml_root(b"<!-- never closed"), None);
+    }
+
+    #[test]
+    fn walks_skip_xml_that_is_not_citygml_but_named_files_are_kept() {
+        use std::io::Write;
+        let d = tempfile::tempdir().unwrap();
+        let t = d.path().join("t");
+        std::fs::create_dir(&t).unwrap();
+        std::fs::write(t.join("a.gml"), CITYGML).unwrap();
+        std::fs::write(t.join("metadata.xml"), METADATA).unwrap();
+        let mut gz = flate2::write::GzEncoder::new(
+            std::fs::File::create(t.join("meta2.xml.gz")).unwrap(),
+            flate2::Compression::default(),
+        );
+        gz.write_all(METADATA.as_bytes()).unwrap();
+        gz.finish().unwrap();
+        for arg in [t.clone(), t.join("*.xml*"), t.join("*")] {
+            let got = expand_all(std::slice::from_ref(&arg));
+            if arg.ends_with("*.xml*") {
+                // Every match skipped: nothing to read.
+                assert!(matches!(got, Err(InputError::Empty(_))), "{got:?}");
+                continue;
+            }
+            let got = got.unwrap();
+            let paths: Vec<_> = got.inputs.iter().map(|i| i.path.clone()).collect();
+            assert_eq!(paths, [t.join("a.gml")], "{arg:?}");
+            let skipped: Vec<_> = got.skipped.iter().map(|s| s.path.clone()).collect();
+            assert_eq!(skipped, [t.join("meta2.xml.gz"), t.join("metadata.xml")]);
+            assert!(got.skipped[1]
+                .to_string()
+                .contains("root element MD_Metadata"));
+        }
+        let named = expand_all(&[t.join("metadata.xml")]).unwrap();
+        assert_eq!(named.inputs.len(), 1);
+        assert!(named.skipped.is_empty());
     }
 
     #[test]

@@ -149,7 +149,7 @@ impl ReadError {
 #[derive(Debug, thiserror::Error)]
 pub enum WriteError {
     /// I/O on the output or on re-reading the source.
-    #[error("{file}: {source}", file = .file.display())]
+    #[error("{file}: {}", crate::io::describe_io(.source), file = .file.display())]
     Io {
         /// File concerned.
         file: PathBuf,

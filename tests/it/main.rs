@@ -16,6 +16,8 @@ mod arg_groups;
 mod bad_input;
 // Faults: global options in every combination, errors in standard input named `<stdin>`.
 mod faults;
+// SIGTERM and SIGHUP: exit 143 / 129, nothing partial or temporary left behind.
+mod signals;
 // Batch inputs (directories, globs, `-` with gzip) on the shared Ingolstadt street.
 mod batch;
 // `lod --max-svf-error` keeps every POI within the bound, checked by independent ray casts.

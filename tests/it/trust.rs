@@ -216,11 +216,13 @@ fn inputs_in_different_crs_are_refused_unless_allowed() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("different CRSs"), "{err}");
     assert!(
-        err.contains("fzk_haus_lod2_v2.gml (urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH)"),
+        err.contains("urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH: 1 file (")
+            && err.contains("fzk_haus_lod2_v2.gml)"),
         "{err}"
     );
     assert!(
-        err.contains("52397519_bldg_6697_op.gml (http://www.opengis.net/def/crs/EPSG/0/6697)"),
+        err.contains("http://www.opengis.net/def/crs/EPSG/0/6697: 1 file (")
+            && err.contains("52397519_bldg_6697_op.gml)"),
         "{err}"
     );
     // An explicit override merges them (here two metric CRSs: FZK-Haus in UTM 32 and an OGC

@@ -1,7 +1,7 @@
 //! The inputs of a command: arguments expanded (standard input spooled to a file), read and
 //! merged into one model, failures reported.
 
-use crate::log::error;
+use crate::log::{error, warning};
 use crate::Outcome;
 use skylod::batch::inputs::Input;
 use skylod::model::CityModel;
@@ -21,8 +21,13 @@ pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
 /// [`expand_inputs`], keeping each input's path relative to its argument (for `-o DIR`; the
 /// spooled standard input is `stdin.gml`): [`skylod::batch::inputs::expand_spooled`].
 pub fn expand_inputs_relative(inputs: &[PathBuf]) -> anyhow::Result<(Vec<Input>, Spool)> {
-    let (expanded, spool) =
+    let (found, spool) =
         skylod::batch::inputs::expand_spooled(inputs, &mut std::io::stdin().lock())?;
+    // A `metadata.xml` beside the tiles of a municipal download is not an input.
+    for s in &found.skipped {
+        warning!("warning: {s}");
+    }
+    let expanded = found.inputs;
     if spool.is_used() {
         if let Some(i) = expanded
             .iter()

@@ -13,8 +13,8 @@ use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use skylod::runtime::progress::{Progress, Stage};
 use std::collections::HashMap;
 use std::io::IsTerminal;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Mutex, OnceLock};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 /// How much is said on standard error.
@@ -57,18 +57,52 @@ struct Logger {
 
 static LOGGER: OnceLock<Logger> = OnceLock::new();
 
-/// Set by the first Ctrl-C (SIGINT): the library's long loops stop at their next
-/// item ([`Progress::is_cancelled`]), outputs not yet renamed into place are removed.
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// Set by the first SIGINT (Ctrl-C), SIGTERM or SIGHUP: the library's long loops stop at
+/// their next item ([`Progress::is_cancelled`]), outputs not yet renamed into place are removed.
+static INTERRUPTED: OnceLock<Arc<AtomicBool>> = OnceLock::new();
 
-/// Ctrl-C asks the running command to stop at its next file or POI, so that no partial or
-/// temporary file is left behind; a second Ctrl-C ends the process at once (exit 2).
+/// The number of the last of those signals received (0: none).
+static SIGNAL: OnceLock<Arc<AtomicUsize>> = OnceLock::new();
+
+fn interrupted() -> &'static Arc<AtomicBool> {
+    INTERRUPTED.get_or_init(|| Arc::new(AtomicBool::new(false)))
+}
+
+/// SIGINT (Ctrl-C), SIGTERM and SIGHUP ask the running command to stop at its next file or
+/// POI, so that no partial or temporary file is left behind; a second one ends the process at
+/// once (exit 2 after Ctrl-C, 128 + the signal's number otherwise).
 pub fn on_interrupt() {
-    let _ = ctrlc::set_handler(|| {
-        if INTERRUPTED.swap(true, Ordering::SeqCst) {
-            std::process::exit(2);
+    #[cfg(unix)]
+    {
+        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+        use signal_hook::flag;
+        let signal = SIGNAL.get_or_init(|| Arc::new(AtomicUsize::new(0)));
+        for sig in [SIGINT, SIGTERM, SIGHUP] {
+            let second = if sig == SIGINT { 2 } else { 128 + sig };
+            // Registered first: it runs before the flag is set, so only on the second signal.
+            let _ = flag::register_conditional_shutdown(sig, second, Arc::clone(interrupted()));
+            let _ = flag::register_usize(sig, Arc::clone(signal), sig as usize);
+            let _ = flag::register(sig, Arc::clone(interrupted()));
         }
-    });
+    }
+}
+
+/// Whether a signal asked the run to stop (commands that loop over files check it per file).
+pub fn cancelled() -> bool {
+    interrupted().load(Ordering::Relaxed)
+}
+
+/// The exit code a command stopped by a signal ends with: 128 + the signal's number for
+/// SIGTERM (143) and SIGHUP (129), as a shell reports a process the signal killed; `None` when
+/// no signal came or it was Ctrl-C (whose cancellation is a fatal error, exit 2).
+pub fn signal_exit_code() -> Option<u8> {
+    let sig = SIGNAL.get()?.load(Ordering::SeqCst);
+    #[cfg(unix)]
+    if sig != 0 && sig != signal_hook::consts::SIGINT as usize {
+        return u8::try_from(128 + sig).ok();
+    }
+    let _ = sig;
+    None
 }
 
 /// Set up messages and progress from the global flags (once, before any command runs).
@@ -202,7 +236,7 @@ impl Reporter {
 
 impl Progress for Reporter {
     fn is_cancelled(&self) -> bool {
-        INTERRUPTED.load(Ordering::Relaxed)
+        interrupted().load(Ordering::Relaxed)
     }
 
     fn start(&self, stage: Stage, items: u64, bytes: u64) {

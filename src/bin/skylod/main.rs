@@ -1,5 +1,6 @@
 //! `skylod`: the command-line front end. The library does the work; this binary owns the
-//! terminal, the exit codes (0 ok, 1 some inputs failed, 2 usage or fatal) and progress.
+//! terminal, the exit codes (0 ok, 1 some inputs failed, 2 usage or fatal, 143 / 129 stopped
+//! by SIGTERM / SIGHUP) and progress.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -90,6 +91,14 @@ fn main() -> ExitCode {
         Command::Horizon(a) => commands::horizon::run(a),
         Command::Reproject(a) => commands::reproject::run(a),
     };
+    // SIGTERM or SIGHUP: the command stopped at its next file or POI (or had finished);
+    // every output in place is complete. The exit code says which signal (143, 129).
+    if let Some(code) = log::signal_exit_code() {
+        if let Err(e) = &result {
+            log::line(log::Level::Error, &format!("skylod: error: {}", message(e)));
+        }
+        return ExitCode::from(code);
+    }
     match result {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,
         Ok(Outcome::SomeFailed) => ExitCode::from(1),
@@ -119,7 +128,11 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 fn message(e: &anyhow::Error) -> String {
     let mut out = String::new();
     for cause in e.chain() {
-        let text = cause.to_string();
+        // A full disk in plain words, as the library's file errors say it.
+        let text = match cause.downcast_ref::<std::io::Error>() {
+            Some(io) => skylod::io::describe_io(io),
+            None => cause.to_string(),
+        };
         if text.is_empty() || out.contains(&text) {
             continue;
         }
@@ -150,6 +163,19 @@ mod tests {
         })
         .context("reading POIs");
         assert_eq!(message(&e), "reading POIs: nope.csv: No such file");
+    }
+
+    #[test]
+    fn a_full_disk_is_said_once_in_plain_words() {
+        let full = std::io::Error::from_raw_os_error(28);
+        let e = anyhow::Error::new(skylod::io::FileError::new("out.gml", full));
+        assert_eq!(message(&e), "out.gml: no space left on device");
+        let e = anyhow::Error::new(std::io::Error::from_raw_os_error(28))
+            .context("writing to standard output");
+        assert_eq!(
+            message(&e),
+            "writing to standard output: no space left on device"
+        );
     }
 
     #[test]

@@ -48,7 +48,7 @@ pub enum TrustError {
          the CRS is the same"
     )]
     MixedCrs {
-        /// `file (srs)` per CRS, `; ` separated.
+        /// `srs: n files (e.g. file)` per CRS, `; ` separated.
         listing: String,
     },
 }

@@ -21,32 +21,78 @@ pub use crate::crs::same_crs;
 use crate::crs::srs_key as key;
 use crate::model::CityModel;
 
-/// Refuse a model merged from files in different CRSs, naming one file per CRS.
+/// Refuse a model merged from files in different CRSs, naming each CRS once with its number
+/// of files and one of them: `EPSG:28992: 3 files (e.g. a.gml); EPSG:32632: 1 file (b.gml)`.
 pub fn check_same_crs(model: &CityModel) -> Result<(), TrustError> {
-    let mut seen: Vec<(String, &str, String)> = Vec::new();
+    // (key, the first spelling, files, the first file)
+    let mut seen: Vec<(String, &str, usize, String)> = Vec::new();
     for f in &model.files {
         let Some(srs) = f.srs_name.as_deref() else {
             continue;
         };
         let k = key(srs);
-        if !seen.iter().any(|(sk, _, _)| *sk == k) {
-            seen.push((k, srs, f.path.display().to_string()));
+        match seen.iter_mut().find(|(sk, ..)| *sk == k) {
+            Some((_, _, n, _)) => *n += 1,
+            None => seen.push((k, srs, 1, f.path.display().to_string())),
         }
     }
     if seen.len() < 2 {
         return Ok(());
     }
-    let listing = seen
-        .iter()
-        .map(|(_, srs, file)| format!("{file} ({srs})"))
+    Err(TrustError::MixedCrs {
+        listing: listing(&seen),
+    })
+}
+
+fn listing(seen: &[(String, &str, usize, String)]) -> String {
+    seen.iter()
+        .map(|(_, srs, n, file)| match n {
+            1 => format!("{srs}: 1 file ({file})"),
+            _ => format!("{srs}: {n} files (e.g. {file})"),
+        })
         .collect::<Vec<_>>()
-        .join("; ");
-    Err(TrustError::MixedCrs { listing })
+        .join("; ")
 }
 
 #[cfg(test)]
 mod tests {
-    use super::same_crs;
+    use super::{check_same_crs, same_crs};
+    use crate::model::{CityGmlVersion, CityModel, SourceFile};
+
+    #[test]
+    fn each_crs_is_named_once_with_its_files() {
+        let mut model = CityModel::default();
+        for (name, srs) in [
+            ("a.gml", Some("EPSG:28992")),
+            ("b.gml", Some("urn:ogc:def:crs:EPSG::28992")),
+            ("c.gml", None),
+            ("d.gml", Some("EPSG:32632")),
+            ("e.gml", Some("EPSG:28992")),
+        ] {
+            model.files.push(SourceFile {
+                path: name.into(),
+                version: CityGmlVersion::V2_0,
+                srs_name: srs.map(Into::into),
+                gzip: false,
+                len: 0,
+                gml_prefix: "gml:".into(),
+                envelopes: Vec::new(),
+                implicit_geometries: 0,
+                library_objects: Vec::new(),
+                objects_without_geometry: 0,
+                polygon_elements: 0,
+                features: Default::default(),
+            });
+        }
+        let e = check_same_crs(&model).unwrap_err().to_string();
+        assert!(
+            e.contains("EPSG:28992: 3 files (e.g. a.gml); EPSG:32632: 1 file (d.gml)"),
+            "{e}"
+        );
+        assert_eq!(e.matches("28992").count(), 1, "{e}");
+        model.files.truncate(3);
+        assert!(check_same_crs(&model).is_ok());
+    }
 
     #[test]
     fn spellings_of_one_crs_agree() {

@@ -104,7 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 names.push(paths[k].clone());
             }
             Err(e) => {
-                error!("{e:#}");
+                error!("{}", crate::message(&e));
                 failed += 1;
             }
         }
@@ -135,6 +135,9 @@ fn one(
     opts: &WriteOptions,
     mirror: bool,
 ) -> anyhow::Result<Done> {
+    if crate::log::cancelled() {
+        anyhow::bail!("{}: cancelled before reading", input.display());
+    }
     let model = read_file(input)?;
     let polygons = crate::commands::polygons(&model);
     let warnings = model.warnings.len();
@@ -142,8 +145,8 @@ fn one(
         outputs::create_parent(out)?;
     }
     if format != Format::CityGml {
-        outputs::export(format, &model, 0, Content::Full, out, opts)
-            .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?;
+        // The export's errors name the output.
+        outputs::export(format, &model, 0, Content::Full, out, opts)?;
         return Ok(Done {
             line: None,
             warnings,

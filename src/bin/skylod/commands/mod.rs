@@ -50,7 +50,7 @@ pub fn polygons(m: &CityModel) -> usize {
 
 /// Context helper for writing to stdout.
 pub fn out_err<T>(r: std::io::Result<T>) -> anyhow::Result<T> {
-    r.context("writing to stdout")
+    r.context("writing to standard output")
 }
 
 /// Seconds as milliseconds rounded to 0.1 (the timings of the reports).

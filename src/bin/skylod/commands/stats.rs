@@ -1,6 +1,7 @@
 //! `skylod stats`.
 
 use crate::args::crs::SourceCrsArgs;
+use crate::commands::out_err;
 use crate::Outcome;
 use rayon::prelude::*;
 use skylod::citygml::read_file;
@@ -94,9 +95,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let v = StatsOutput::new(files, total);
     let mut out = std::io::stdout().lock();
     if args.json {
-        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+        let json = serde_json::to_string_pretty(&v)?;
+        out_err(writeln!(out, "{json}").and_then(|()| out.flush()))?;
     } else {
-        v.write_table(&mut out)?;
+        out_err(v.write_table(&mut out).and_then(|()| out.flush()))?;
     }
     Ok(if failed {
         Outcome::SomeFailed
