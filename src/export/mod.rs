@@ -182,13 +182,13 @@ pub fn write(
     Ok(summary)
 }
 
-/// [`write`] of the whole file at `input` as OBJ from a streamed read
+/// [`write()`] of the whole file at `input` as OBJ from a streamed read
 /// ([`obj::write_obj_streamed`]: chunks of `chunk_bytes`, memory follows the chunk, the same
-/// bytes as [`write`] of the whole model with [`Content::Full`]), atomically. `Ok(None)`,
-/// nothing written, where the stream declines: read the whole file and [`write`] it then.
+/// bytes as [`write()`] of the whole model with [`Content::Full`]), atomically. `Ok(None)`,
+/// nothing written, where the stream declines: read the whole file and [`write()`] it then.
 ///
 /// # Errors
-/// As [`write`].
+/// As [`write()`].
 pub fn write_obj_streamed(
     input: &Path,
     read: &crate::citygml::read::ReadOptions,

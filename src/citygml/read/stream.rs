@@ -22,7 +22,7 @@
 //!
 //! A gml:id repeated in a later chunk is warned about there, as the serial read does: the
 //! hashes of the ids read so far are kept, sorted (8 bytes an id: the one part of memory that
-//! grows with the document, 20 MB for 1 GB of LoD3).
+//! grows with the document: 31 MB for the 3.9 million ids of 1 GB of LoD3).
 //!
 //! A chunk's model is the serial read's restricted to its members, with two differences its
 //! user must know: a building's body asset (a building without thematic surfaces, made after
