@@ -182,22 +182,69 @@ pub fn write(
     Ok(summary)
 }
 
+/// [`write()`] of the whole file at `input` as OBJ from a streamed read
+/// ([`obj::write_obj_streamed`]: chunks of `chunk_bytes`, memory follows the chunk, the same
+/// bytes as [`write()`] of the whole model with [`Content::Full`]), atomically. `Ok(None)`,
+/// nothing written, where the stream declines: read the whole file and [`write()`] it then.
+///
+/// # Errors
+/// As [`write()`].
+pub fn write_obj_streamed(
+    input: &Path,
+    read: &crate::citygml::read::ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(usize, u64),
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<Option<(ExportSummary, crate::citygml::read::StreamSummary)>, WriteError> {
+    crate::citygml::write::check_target(out, opts, std::iter::once(input))?;
+    let io = |e| WriteError::Io {
+        file: out.to_path_buf(),
+        source: e,
+    };
+    let mut done = None;
+    let r = crate::citygml::write::atomic_write(out, |w| {
+        let mut cw = crate::io::CountingWriter::new(w);
+        match obj::write_obj_streamed(input, read, chunk_bytes, passed, &mut cw).map_err(io)? {
+            Some(d) => done = Some(d),
+            // nothing is kept of a declined stream's output
+            None => return Err(WriteError::Invalid("declined".into())),
+        }
+        Ok(cw.count())
+    });
+    match (r, done) {
+        (Ok(bytes), Some((mut s, sum))) => {
+            s.bytes = bytes;
+            Ok(Some((s, sum)))
+        }
+        (Err(WriteError::Invalid(_)), None) => Ok(None),
+        (Err(e), _) => Err(e),
+        (Ok(_), None) => Ok(None),
+    }
+}
+
 /// Name of asset `i` in an export: its `gml:id`, else its building's id and its index among
 /// the building's assets (`B1_3`), else `asset_<i>`.
 pub fn asset_name(model: &CityModel, i: usize) -> String {
+    asset_name_as(model, i, i)
+}
+
+/// [`asset_name`] of asset `i` of `model` that is asset `global` of the whole document (a
+/// chunk of a streamed read): `asset_<global>` when it has no name.
+pub fn asset_name_as(model: &CityModel, i: usize, global: usize) -> String {
     let Some(a) = model.assets.get(i) else {
-        return format!("asset_{i}");
+        return format!("asset_{global}");
     };
     if let Some(id) = &a.id {
         return id.to_string();
     }
     if let Some(b) = a.building.and_then(|b| model.buildings.get(b)) {
         if let Some(bid) = &b.id {
-            let k = b.assets.iter().position(|&x| x == i).unwrap_or(i);
+            let k = b.assets.iter().position(|&x| x == i).unwrap_or(global);
             return format!("{bid}_{k}");
         }
     }
-    format!("asset_{i}")
+    format!("asset_{global}")
 }
 
 /// Assets of file `file`, with their indices.

@@ -38,11 +38,12 @@
 //! assert_eq!((s.objects, s.triangles, s.vertices), (1, 2, 4));
 //! ```
 
-use super::{asset_name, assets_of, Content, ExportSummary};
+use super::{asset_name, asset_name_as, assets_of, Content, ExportSummary};
+use crate::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
 use crate::lod::level::traced as level_polygons;
 use crate::model::triangulate;
-use crate::model::{Bbox, CityModel};
-use foldhash::{HashMap, HashMapExt};
+use crate::model::{Bbox, CityModel, Polygon};
+use foldhash::HashMap;
 use glam::DVec3;
 use std::io::{self, Write};
 
@@ -69,74 +70,213 @@ pub fn write_obj(
     } else {
         bbox.center().round()
     };
-    writeln!(w, "# origin {} {} {}", origin.x, origin.y, origin.z)?;
     let src = model.files.get(file);
+    write_header(
+        w,
+        origin,
+        src.map(|f| f.path.as_path()),
+        src.and_then(|f| f.srs_name.as_deref()),
+    )?;
+    let mut s = ExportSummary::default();
+    let mut scratch = Scratch::default();
+    for (i, a) in assets_of(model, file) {
+        let name = asset_name(model, i);
+        let level = content.level(i);
+        let polys = level_polygons(a, content.rough(i), level);
+        write_asset(
+            w,
+            a.kind.as_str(),
+            &name,
+            level,
+            &polys,
+            origin,
+            &mut s,
+            &mut scratch,
+        )?;
+    }
+    Ok(s)
+}
+
+/// The origin line and the comment line of an OBJ of the file at `path` in CRS `srs_name`.
+fn write_header(
+    w: &mut dyn Write,
+    origin: DVec3,
+    path: Option<&std::path::Path>,
+    srs_name: Option<&str>,
+) -> io::Result<()> {
+    writeln!(w, "# origin {} {} {}", origin.x, origin.y, origin.z)?;
     writeln!(
         w,
         "# skylod {} OBJ of {}; CRS {}; metres, Z up, vertices relative to the origin",
         env!("CARGO_PKG_VERSION"),
-        src.map_or_else(String::new, |f| f.path.display().to_string()),
-        src.and_then(|f| f.srs_name.as_deref()).unwrap_or("unknown"),
-    )?;
-    let mut s = ExportSummary::default();
-    let mut tris: Vec<[DVec3; 3]> = Vec::new();
-    let mut index: HashMap<[u64; 3], usize> = HashMap::new();
-    let mut faces: Vec<[usize; 3]> = Vec::new();
-    let mut line = String::with_capacity(96);
-    for (i, a) in assets_of(model, file) {
-        let level = content.level(i);
-        let polys = level_polygons(a, content.rough(i), level);
-        tris.clear();
-        for p in polys.iter() {
-            triangulate(p, &mut tris);
-        }
-        if tris.is_empty() {
-            continue;
-        }
-        let name: String = asset_name(model, i)
-            .chars()
-            .map(|c| if c.is_whitespace() { '_' } else { c })
-            .collect();
-        writeln!(w, "o {name}\nusemtl {}_l{level}", a.kind.as_str())?;
-        index.clear();
-        faces.clear();
-        let first = s.vertices + 1;
-        for t in &tris {
-            let mut f = [0usize; 3];
-            for (k, v) in t.iter().enumerate() {
-                let key = [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
-                let n = index.len();
-                let id = *index.entry(key).or_insert(n);
-                if id == n {
-                    line.clear();
-                    line.push('v');
-                    for c in (*v - origin).to_array() {
-                        line.push(' ');
-                        push_coord(&mut line, c);
-                    }
-                    line.push('\n');
-                    w.write_all(line.as_bytes())?;
-                }
-                f[k] = id;
-            }
-            faces.push(f);
-        }
-        for f in &faces {
-            line.clear();
-            line.push('f');
-            for k in f {
-                line.push(' ');
-                line.push_str(&(first + k).to_string());
-            }
-            line.push('\n');
-            w.write_all(line.as_bytes())?;
-        }
-        s.vertices += index.len();
-        s.objects += 1;
-        s.polygons += polys.len();
-        s.triangles += tris.len();
+        path.map_or_else(String::new, |p| p.display().to_string()),
+        srs_name.unwrap_or("unknown"),
+    )
+}
+
+/// Buffers reused from one asset to the next.
+#[derive(Default)]
+struct Scratch {
+    tris: Vec<[DVec3; 3]>,
+    index: HashMap<[u64; 3], usize>,
+    faces: Vec<[usize; 3]>,
+    line: String,
+}
+
+/// One asset as an OBJ object (nothing when its polygons give no triangle); `s` counts what
+/// was written (its vertices number the next object's).
+#[allow(clippy::too_many_arguments)]
+fn write_asset(
+    w: &mut dyn Write,
+    kind: &str,
+    name: &str,
+    level: u8,
+    polys: &[Polygon],
+    origin: DVec3,
+    s: &mut ExportSummary,
+    scratch: &mut Scratch,
+) -> io::Result<()> {
+    let Scratch {
+        tris,
+        index,
+        faces,
+        line,
+    } = scratch;
+    tris.clear();
+    for p in polys.iter() {
+        triangulate(p, tris);
     }
-    Ok(s)
+    if tris.is_empty() {
+        return Ok(());
+    }
+    let name: String = name
+        .chars()
+        .map(|c| if c.is_whitespace() { '_' } else { c })
+        .collect();
+    writeln!(w, "o {name}\nusemtl {kind}_l{level}")?;
+    index.clear();
+    faces.clear();
+    let first = s.vertices + 1;
+    for t in tris.iter() {
+        let mut f = [0usize; 3];
+        for (k, v) in t.iter().enumerate() {
+            let key = [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+            let n = index.len();
+            let id = *index.entry(key).or_insert(n);
+            if id == n {
+                line.clear();
+                line.push('v');
+                for c in (*v - origin).to_array() {
+                    line.push(' ');
+                    push_coord(line, c);
+                }
+                line.push('\n');
+                w.write_all(line.as_bytes())?;
+            }
+            f[k] = id;
+        }
+        faces.push(f);
+    }
+    for f in faces.iter() {
+        line.clear();
+        line.push('f');
+        for k in f {
+            line.push(' ');
+            line.push_str(&(first + k).to_string());
+        }
+        line.push('\n');
+        w.write_all(line.as_bytes())?;
+    }
+    s.vertices += index.len();
+    s.objects += 1;
+    s.polygons += polys.len();
+    s.triangles += tris.len();
+    Ok(())
+}
+
+/// [`write_obj`] of the whole file at `path` (with [`Content::Full`], as `convert` writes
+/// it) from a streamed read ([`crate::citygml::read::stream`], chunks of `chunk_bytes`):
+/// memory follows the chunk, the bytes are [`write_obj`]'s of the whole model. Passes over
+/// the file: one for the origin (the centre of all the geometry), one writing the assets,
+/// and, for a file with body assets (buildings without thematic surfaces, last in the whole
+/// model), one more writing them. `passed(k, n)`: `n` more bytes read in pass `k` (0: the origin,
+/// 1: the assets, 2: the bodies).
+///
+/// With what was written, the stream's summary (of the first pass). `Ok(None)` where the
+/// stream declines ([`Streamed::Declined`]): read the whole file then.
+///
+/// # Errors
+/// I/O errors of `w`.
+pub fn write_obj_streamed(
+    path: &std::path::Path,
+    opts: &ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(usize, u64),
+    w: &mut dyn Write,
+) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
+    let mut bbox = Bbox::EMPTY;
+    let pass = |k: usize, each: &mut dyn FnMut(Chunk) -> io::Result<()>| {
+        stream(path, opts, chunk_bytes, &|n| passed(k, n), each).map(|r| match r {
+            Streamed::Done(s) => Some(s),
+            Streamed::Declined(_) => None,
+        })
+    };
+    let Some(sum) = pass(0, &mut |c: Chunk| {
+        for a in &c.model.assets {
+            for p in level_polygons(a, None, 2).iter() {
+                for q in p.points() {
+                    bbox.add(*q);
+                }
+            }
+        }
+        Ok(())
+    })?
+    else {
+        return Ok(None);
+    };
+    let origin = if bbox.is_empty() {
+        DVec3::ZERO
+    } else {
+        bbox.center().round()
+    };
+    write_header(w, origin, Some(path), sum.srs_name.as_deref())?;
+    let mut s = ExportSummary::default();
+    let mut scratch = Scratch::default();
+    for bodies in [false, true] {
+        if bodies && sum.bodies == 0 {
+            break;
+        }
+        let done = pass(1 + usize::from(bodies), &mut |c: Chunk| {
+            let nb = c.non_body_assets();
+            for (i, a) in c.model.assets.iter().enumerate() {
+                if (i >= nb) != bodies {
+                    continue;
+                }
+                let global = if bodies {
+                    sum.assets + c.bodies_before + (i - nb)
+                } else {
+                    c.assets_before + i
+                };
+                let name = asset_name_as(&c.model, i, global);
+                let polys = level_polygons(a, None, 2);
+                write_asset(
+                    w,
+                    a.kind.as_str(),
+                    &name,
+                    2,
+                    &polys,
+                    origin,
+                    &mut s,
+                    &mut scratch,
+                )?;
+            }
+            Ok(())
+        })?;
+        if done.is_none() {
+            return Ok(None);
+        }
+    }
+    Ok(Some((s, sum)))
 }
 
 /// A coordinate with 0.1 mm resolution, without trailing zeros (`-5`, `12.25`).

@@ -189,6 +189,15 @@ impl Stats {
         s
     }
 
+    /// Add the counts of `other` (a further chunk of the same document, see
+    /// [`crate::citygml::read::stream`]): sums, LoDs and features merged, boxes joined; the
+    /// version and CRS are left to the caller (the document's, not a chunk's).
+    pub fn add(&mut self, other: &Stats) {
+        let (version, srs) = (self.citygml_version.take(), self.srs_name.take());
+        *self = Stats::total([&*self, other]);
+        (self.citygml_version, self.srs_name) = (version, srs);
+    }
+
     /// Sum of several files' stats.
     pub fn total<'a>(all: impl IntoIterator<Item = &'a Stats>) -> Stats {
         let mut t = Stats::default();

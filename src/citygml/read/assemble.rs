@@ -158,7 +158,7 @@ impl Parser<'_> {
                 has_root_env = true;
             }
         }
-        if !has_root_env && self.root_is_model {
+        if !has_root_env && self.root_is_model && !self.streamed {
             self.warnings.push(Warning {
                 file: self.shared_path.clone(),
                 line: 1,

@@ -14,7 +14,7 @@
 use super::position::newlines;
 use super::state::{IdRec, LineMark, Parser, NO_REC};
 use crate::model::Warning;
-use foldhash::{HashSet, HashSetExt};
+use foldhash::HashSet;
 use quick_xml::events::Event;
 use rayon::slice::ParallelSliceMut;
 
@@ -38,6 +38,9 @@ impl Parser<'_> {
     /// After the last event (of the whole document, parts merged): the last invalid id
     /// listed tells how many more there are.
     pub(super) fn invalid_id_summary(&mut self) {
+        if self.streamed {
+            return;
+        }
         let listed = self.invalid_listed.len() as u64;
         let more = self.invalid_ids.saturating_sub(listed);
         if more == 0 {
@@ -100,21 +103,25 @@ impl Parser<'_> {
     /// after its first), after the last event.
     pub(super) fn duplicate_warnings(&mut self) {
         let log = std::mem::take(&mut self.id_log);
-        if log.len() < 2 {
+        let before = std::mem::take(&mut self.dup_before);
+        if log.len() < 2 && before.is_empty() {
             return;
         }
         let mut hashes: Vec<u64> = log.iter().map(|r| r.hash).collect();
         hashes.par_sort_unstable();
-        let repeated: HashSet<u64> = hashes
+        let mut repeated: HashSet<u64> = hashes
             .windows(2)
             .filter(|w| w[0] == w[1])
             .map(|w| w[0])
             .collect();
         drop(hashes);
+        repeated.extend(before.iter().copied());
         if repeated.is_empty() {
             return;
         }
-        let mut met = HashSet::with_capacity(repeated.len());
+        // an id met in an earlier chunk of a streamed read: every occurrence repeats it
+        let mut met = before;
+        met.reserve(repeated.len());
         let marks = std::mem::take(self.marks.get_mut());
         let mut lines = LineMark {
             line: 1,
@@ -140,7 +147,10 @@ impl Parser<'_> {
                 lines.line_start = lines.counted_to + last as u64 + 1;
             }
             lines.counted_to = r.pos.max(lines.counted_to);
-            let gml_id = log.get(r.parent as usize).and_then(|p| self.id_text(p));
+            let gml_id = match r.parent {
+                NO_REC if self.stream_tail => self.root_id.clone(),
+                p => log.get(p as usize).and_then(|p| self.id_text(p)),
+            };
             let id = self.id_text(r).unwrap_or_default();
             dups.push((
                 r.warnings,
@@ -167,7 +177,7 @@ impl Parser<'_> {
 
     /// The text of a logged gml:id: the attribute of the element's start tag whose value has
     /// the logged hash.
-    fn id_text(&self, r: &IdRec) -> Option<String> {
+    pub(super) fn id_text(&self, r: &IdRec) -> Option<String> {
         let tag = self.doc.get(usize::try_from(r.pos).ok()?..)?;
         let mut reader = quick_xml::Reader::from_reader(tag);
         let e = match reader.read_event().ok()? {

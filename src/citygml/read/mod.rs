@@ -42,9 +42,11 @@ mod ids;
 mod position;
 mod split;
 mod state;
+mod stream;
 mod xlink;
 
 pub use events::read_from;
+pub use stream::{stream, Chunk, StreamSummary, Streamed, CHUNK_BYTES};
 
 use crate::citygml::error::ReadError;
 use crate::citygml::source;

@@ -173,7 +173,7 @@ pub(super) fn read_split(
 /// cut points of `body[from..]`, increasing, each followed by more of the document. A
 /// candidate is confirmed by parsing: the part before it must end between two children of
 /// the root.
-fn cuts(body: &[u8], from: usize, n: usize) -> Vec<usize> {
+pub(super) fn cuts(body: &[u8], from: usize, n: usize) -> Vec<usize> {
     const NAME: &[u8] = b"cityObjectMember>";
     let finder = memchr::memmem::Finder::new(NAME);
     let span = body.len().saturating_sub(from);
@@ -199,7 +199,7 @@ fn cuts(body: &[u8], from: usize, n: usize) -> Vec<usize> {
 }
 
 /// True when the local name at `m` is preceded by `</` or `</prefix:`.
-fn is_end_tag(body: &[u8], m: usize) -> bool {
+pub(super) fn is_end_tag(body: &[u8], m: usize) -> bool {
     let before = &body[..m];
     if before.ends_with(b"</") {
         return true;
@@ -274,7 +274,7 @@ impl LineFix {
 impl Parser<'_> {
     /// Forget what reading the root's start tag produced besides the state every part needs
     /// (the first part keeps it); `None` if it produced more than a `CityModel` root can.
-    fn forget_root_start(&mut self) -> Option<()> {
+    pub(super) fn forget_root_start(&mut self) -> Option<()> {
         let clean = self.buildings.is_empty()
             && self.assets.is_empty()
             && self.envelopes.is_empty()

@@ -238,6 +238,17 @@ pub(super) struct Parser<'d> {
     pub(super) relief_default_used: bool,
     /// The root's envelope set [`Parser::srs_name`] (over any earlier `srsName`).
     pub(super) root_srs_set: bool,
+    /// A chunk of a streamed read (see `stream`): the invalid-id summary and the warning
+    /// about a root without envelope are the stream's.
+    pub(super) streamed: bool,
+    /// A chunk after the first of a streamed read.
+    pub(super) stream_tail: bool,
+    /// A chunk of a streamed read: hashes of its gml:ids met in earlier chunks (each of
+    /// their occurrences here is a duplicate).
+    pub(super) dup_before: HashSet<u64>,
+    /// A chunk after the first of a streamed read: the root's gml:id, the nearest enclosing
+    /// id of a top-level member.
+    pub(super) root_id: Option<String>,
     /// Every gml:id met, in document order, when the document is in memory (none while
     /// streaming): duplicates are found once after the last event, by sorting the hashes,
     /// cheaper than one insert per id into a hash set of every id (random access to a table
@@ -260,7 +271,7 @@ pub(super) struct Attrs<'e> {
 
 /// Where the line counter stands: `line` is the line of offset `counted_to`, which lies after
 /// the newline at `line_start - 1`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub(super) struct LineMark {
     pub(super) line: u64,
     pub(super) line_start: u64,
@@ -328,6 +339,10 @@ impl<'d> Parser<'d> {
             relief_lod_set: false,
             relief_default_used: false,
             root_srs_set: false,
+            streamed: false,
+            stream_tail: false,
+            dup_before: HashSet::new(),
+            root_id: None,
             id_log: Vec::new(),
         }
     }

@@ -13,6 +13,7 @@ pub mod scene;
 pub mod select;
 pub mod shard;
 pub mod site;
+pub mod stream;
 pub mod sun;
 pub mod tracing;
 

@@ -9,9 +9,10 @@ use crate::outputs;
 use crate::Outcome;
 use rayon::prelude::*;
 use skylod::batch::outputs::{Plan, Targets};
-use skylod::citygml::read_file;
 use skylod::citygml::write::{write_document, WriteOptions};
+use skylod::citygml::{read_file_observed, ReadOptions};
 use skylod::export::{Content, Format};
+use skylod::runtime::progress::{Progress, Stage};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -37,13 +38,15 @@ pub struct Args {
     jobs: JobsArgs,
     #[command(flatten)]
     shard: crate::args::shard::ShardArgs,
+    #[command(flatten)]
+    stream: crate::args::stream::StreamArgs,
 }
 
 /// What one input gave.
-struct Done {
-    line: Option<String>,
-    warnings: usize,
-    polygons: usize,
+pub(crate) struct Done {
+    pub(crate) line: Option<String>,
+    pub(crate) warnings: usize,
+    pub(crate) polygons: usize,
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
@@ -78,14 +81,33 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         format
     };
     // Files in parallel; messages in input order whatever finished first.
+    let progress = crate::log::reporter();
+    let size = |k: usize| paths[k].metadata().map_or(0, |m| m.len());
+    let bytes: u64 = todo.iter().map(|(k, _)| size(*k)).sum();
+    progress.start(Stage::Read, todo.len() as u64, bytes);
     let results: Vec<(usize, PathBuf, anyhow::Result<Done>)> = args.jobs.install(|| {
         todo.into_par_iter()
             .map(|(k, out)| {
-                let r = one(&paths[k], &out, fmt, &write_opts, mirror);
+                let chunk = args
+                    .stream
+                    .chunk_for(&paths[k])
+                    .filter(|_| fmt == Format::Obj);
+                let r = match chunk.map(|c| {
+                    crate::commands::stream::obj(&paths[k], &out, c, &write_opts, mirror, &progress)
+                }) {
+                    Some(Ok(Some(done))) => Ok(done),
+                    Some(Err(e)) => Err(e),
+                    _ => {
+                        let passed = |n| progress.advance(Stage::Read, 0, n, None);
+                        one(&paths[k], &out, fmt, &write_opts, mirror, &passed)
+                    }
+                };
+                progress.advance(Stage::Read, 1, 0, None);
                 (k, out, r)
             })
             .collect()
     })?;
+    progress.finish(Stage::Read);
     let (mut ok, mut warnings, mut polygons) = (0usize, 0usize, 0usize);
     let mut parts = Vec::new();
     let mut names = Vec::new();
@@ -134,11 +156,12 @@ fn one(
     format: Format,
     opts: &WriteOptions,
     mirror: bool,
+    passed: &(dyn Fn(u64) + Sync),
 ) -> anyhow::Result<Done> {
     if crate::log::cancelled() {
         anyhow::bail!("{}: cancelled before reading", input.display());
     }
-    let model = read_file(input)?;
+    let model = read_file_observed(input, &ReadOptions::default(), passed)?;
     let polygons = crate::commands::polygons(&model);
     let warnings = model.warnings.len();
     if mirror {

@@ -18,6 +18,7 @@ pub mod lod;
 pub mod reproject;
 pub mod rough;
 pub mod stats;
+pub mod stream;
 pub mod sun_hours;
 pub mod svf;
 pub mod synth;

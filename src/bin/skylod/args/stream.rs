@@ -1,0 +1,25 @@
+//! `--stream-chunk`: how `stats` and `convert` read a large file (hidden: for tests and
+//! measurements; the default suits every file).
+
+use skylod::citygml::read::CHUNK_BYTES;
+use std::path::Path;
+
+/// `--stream-chunk BYTES`.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct StreamArgs {
+    /// An uncompressed file of at least four chunks is read one chunk of whole top-level
+    /// members at a time (memory follows the chunk, not the file; the same output); 0: read
+    /// every file whole.
+    #[arg(long, hide = true, value_name = "BYTES", default_value_t = CHUNK_BYTES)]
+    pub stream_chunk: u64,
+}
+
+impl StreamArgs {
+    /// The chunk size to stream `path` with, or `None` to read it whole (small files, gzip,
+    /// standard input are read whole; the stream declines gzip by itself).
+    pub fn chunk_for(&self, path: &Path) -> Option<u64> {
+        let len = std::fs::metadata(path).ok()?.len();
+        (self.stream_chunk > 0 && len >= self.stream_chunk.saturating_mul(4))
+            .then_some(self.stream_chunk)
+    }
+}

@@ -1,0 +1,87 @@
+//! `stats` and `convert` on a large file: read a chunk of whole top-level members at a time
+//! ([`skylod::citygml::read::stream`]), the same output as from the whole model, memory that
+//! follows the chunk. Where the stream declines, the commands read the file whole.
+
+use crate::args::crs::SourceCrsArgs;
+use crate::commands::convert::Done;
+use crate::log::summary;
+use skylod::citygml::read::{stream, Streamed};
+use skylod::citygml::write::WriteOptions;
+use skylod::citygml::ReadOptions;
+use skylod::export::Format;
+use skylod::model::Warning;
+use skylod::output::stats::Stats;
+use skylod::runtime::progress::{Progress, Stage};
+use std::path::Path;
+
+/// The stats and warnings of `path` read a chunk at a time (the whole read's, see
+/// [`skylod::citygml::read::stream`]); `None` where the stream declines. Warnings are kept
+/// for `--verbose` only (else counted).
+pub fn stats(
+    path: &Path,
+    crs: &SourceCrsArgs,
+    verbose: bool,
+    chunk: u64,
+    passed: &(dyn Fn(u64) + Sync),
+) -> Option<(Stats, Vec<Warning>)> {
+    let mut total = Stats::default();
+    let mut warnings = Vec::new();
+    let end = stream(path, &ReadOptions::default(), chunk, passed, |mut c| {
+        total.add(&Stats::of(&c.model));
+        if verbose {
+            warnings.append(&mut c.model.warnings);
+        }
+        Ok::<(), ()>(())
+    })
+    .ok()?;
+    let sum = match end {
+        Streamed::Done(sum) => sum,
+        Streamed::Declined(why) => {
+            crate::log::info!("{}: read whole ({why})", path.display());
+            return None;
+        }
+    };
+    sum.patch_warnings(&mut warnings);
+    total.warnings += sum.trailing.len();
+    total.citygml_version = sum.version.map(|v| v.to_string());
+    total.srs_name = match &crs.source_crs {
+        Some(c) => Some(c.name.clone()),
+        None => sum.srs_name,
+    };
+    Some((total, warnings))
+}
+
+/// `input` written as OBJ to `out` from a streamed read ([`skylod::export::write_obj_streamed`]:
+/// the same bytes, memory that follows a chunk); `Ok(None)` where the stream declines. The
+/// bar's bytes move through the origin pass and the writing pass.
+pub fn obj(
+    input: &Path,
+    out: &Path,
+    chunk: u64,
+    opts: &WriteOptions,
+    mirror: bool,
+    progress: &crate::log::Reporter,
+) -> anyhow::Result<Option<Done>> {
+    // half the bar for the pass that finds the origin, half for the one that writes
+    let passed = |pass, n: u64| match pass {
+        0 => progress.advance(Stage::Read, 0, n.div_ceil(2), None),
+        1 => progress.advance(Stage::Read, 0, n / 2, None),
+        _ => {}
+    };
+    if mirror {
+        crate::outputs::create_parent(out)?;
+    }
+    let ropts = ReadOptions::default();
+    let Some((s, sum)) =
+        skylod::export::write_obj_streamed(input, &ropts, chunk, &passed, out, opts)
+            .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?
+    else {
+        return Ok(None);
+    };
+    summary!("{}", s.describe(Format::Obj, input, out));
+    Ok(Some(Done {
+        line: None,
+        warnings: sum.warnings,
+        polygons: 0,
+    }))
+}

@@ -1,0 +1,465 @@
+//! One document read a chunk of whole top-level members at a time ([`stream`]): memory follows
+//! the chunk, not the file.
+//!
+//! The bytes after the root's start tag are cut at the ends of top-level `cityObjectMember`
+//! elements (any prefix, CityGML 1.0 to 3.0: the cuts of the split read) about every
+//! `chunk_bytes`; each chunk is parsed by its own [`Parser`] seeded with the root's start tag
+//! and with the document-wide state the serial read would have reached there (version, CRS,
+//! `gml:` prefix, relief LoD, the foreign namespaces and unknown prefixes already warned
+//! about, how many invalid gml:ids were listed, the line the chunk starts on), assembled
+//! into a [`CityModel`] of its own, handed over and dropped.
+//!
+//! What one chunk cannot know, the stream checks, and declines ([`Streamed::Declined`]: the
+//! caller reads the whole document instead, which reports errors as always) where a chunk
+//! could differ from the serial read's:
+//!
+//! * an `xlink:href` whose target is in another chunk: the chunk's resolution fails (as any
+//!   read error, and any chunk that does not end between two children of the root, declines);
+//! * an `xlink:href` to a gml:id that is also in an earlier chunk (the serial read resolves it
+//!   to the first);
+//! * a DOCTYPE (entities), a root that is no `CityModel`, a gzip-compressed file (its bytes
+//!   are not in memory to cut).
+//!
+//! A gml:id repeated in a later chunk is warned about there, as the serial read does: the
+//! hashes of the ids read so far are kept, sorted (8 bytes an id: the one part of memory that
+//! grows with the document: 31 MB for the 3.9 million ids of 1 GB of LoD3).
+//!
+//! A chunk's model is the serial read's restricted to its members, with two differences its
+//! user must know: a building's body asset (a building without thematic surfaces, made after
+//! the last event) comes after the chunk's other assets, where the serial read puts every
+//! body after all the document's other assets ([`Chunk`] counts both kinds); and the root's
+//! envelope is computed over the chunk. The summary of invalid gml:ids ("N more ...") is the
+//! stream's: [`StreamSummary::patch_warnings`].
+
+use super::events::{configure, finish, parse_events, BOM, RELEASE_STEP};
+use super::ids::INVALID_IDS_LISTED;
+use super::state::{EnvOwner, LineMark, Parser, NO_REC};
+use super::ReadOptions;
+use crate::citygml::source;
+use crate::model::{AssetKind, CityGmlVersion, CityModel, Warning};
+use quick_xml::NsReader;
+use std::path::Path;
+
+/// Default bytes of document per chunk of [`stream`]: 16 MiB (a chunk's model of LoD3 is
+/// about its size again).
+pub const CHUNK_BYTES: u64 = 16 << 20;
+
+/// One chunk of a streamed document: its model and what came before it.
+#[derive(Debug)]
+pub struct Chunk {
+    /// The chunk's members as a model of one file (path and CRS of the document).
+    pub model: CityModel,
+    /// Position of the chunk in the document (0 for the first).
+    pub index: usize,
+    /// Buildings (and parts) in earlier chunks: the index of this chunk's building `b` in
+    /// the whole document's model is `buildings_before + b`.
+    pub buildings_before: usize,
+    /// Assets other than bodies in earlier chunks: this chunk's non-body asset `i` is asset
+    /// `assets_before + i` of the whole document's model (its bodies come after all the
+    /// document's other assets there).
+    pub assets_before: usize,
+    /// Body assets in earlier chunks.
+    pub bodies_before: usize,
+    /// Warnings in earlier chunks.
+    pub warnings_before: usize,
+    /// First and last byte (exclusive) of the chunk in the document.
+    pub bytes: (u64, u64),
+}
+
+impl Chunk {
+    /// Assets of the chunk other than bodies (they come first in the chunk's model).
+    pub fn non_body_assets(&self) -> usize {
+        self.model
+            .assets
+            .iter()
+            .filter(|a| a.kind != AssetKind::Body)
+            .count()
+    }
+}
+
+/// What the whole document held, after the last chunk.
+#[derive(Debug, Clone, Default)]
+pub struct StreamSummary {
+    /// Chunks handed over.
+    pub chunks: usize,
+    /// CityGML version, as the serial read finds it.
+    pub version: Option<CityGmlVersion>,
+    /// `srsName` of the model, as the serial read finds it.
+    pub srs_name: Option<String>,
+    /// Buildings and parts.
+    pub buildings: usize,
+    /// Assets other than bodies.
+    pub assets: usize,
+    /// Body assets.
+    pub bodies: usize,
+    /// Warnings.
+    pub warnings: usize,
+    /// The serial read appends "N more gml:ids ..." to the last invalid gml:id it lists: its
+    /// index among all the chunks' warnings, and the text.
+    pub invalid_note: Option<(usize, String)>,
+    /// Warnings the serial read gives after the last event ("CityModel has no
+    /// gml:boundedBy envelope"), counted in [`StreamSummary::warnings`].
+    pub trailing: Vec<Warning>,
+}
+
+impl StreamSummary {
+    /// Make `warnings` (every chunk's, in order) the serial read's: the invalid-id note, the
+    /// trailing warnings.
+    pub fn patch_warnings(&self, warnings: &mut Vec<Warning>) {
+        if let Some((i, note)) = &self.invalid_note {
+            if let Some(w) = warnings.get_mut(*i) {
+                w.message.push_str(note);
+            }
+        }
+        warnings.extend(self.trailing.iter().cloned());
+    }
+}
+
+/// How a streamed read ended.
+#[derive(Debug)]
+pub enum Streamed {
+    /// Every chunk was handed over; the document as a whole.
+    Done(StreamSummary),
+    /// The stream could differ from the serial read (see the module docs), or the document
+    /// failed to read: read it whole ([`super::read_file_with`]) instead, which also reports
+    /// any error. Chunks may have been handed over before: their results are to be dropped.
+    Declined(String),
+}
+
+/// Read `path` one chunk of about `chunk_bytes` bytes of whole top-level members at a time
+/// (see the module docs), handing each to `each` in document order and dropping it after;
+/// `passed(n)` is called as bytes of the document have been read (they add up to the
+/// document's size when the stream is done).
+///
+/// # Errors
+/// Errors of `each` (the stream stops at the first). A document that cannot be read is
+/// [`Streamed::Declined`]: the whole read reports its error as always.
+pub fn stream<E>(
+    path: &Path,
+    opts: &ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(u64),
+    mut each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<Streamed, E> {
+    let decline = |why: &str| Ok(Streamed::Declined(why.to_string()));
+    let doc = match source::load(path) {
+        Ok(source::Document::Plain(doc)) => doc,
+        Ok(source::Document::Gzip(..)) => return decline("gzip-compressed"),
+        Err(e) => return decline(&e.to_string()),
+    };
+    let bom = if doc.starts_with(&BOM) { 3 } else { 0 };
+    let body = &doc[bom..];
+    // the prolog and the root's start tag
+    let mut head = Parser::new(path, opts.clone(), &doc);
+    let mut reader = NsReader::from_reader(body);
+    configure(&mut reader);
+    let mut saw_root = false;
+    let started = parse_events(
+        &mut head,
+        &mut reader,
+        bom as u64,
+        &mut saw_root,
+        (&|_| {}, RELEASE_STEP),
+        true,
+    );
+    if !matches!(started, Ok(true)) || head.stack.len() != 1 || !head.root_is_model {
+        return decline("no CityModel root");
+    }
+    let Ok(root_end) = usize::try_from(reader.buffer_position()) else {
+        return decline("no CityModel root");
+    };
+    let prolog = &body[..root_end];
+    if memchr::memmem::find(prolog, b"<!DOCTYPE").is_some() {
+        return decline("a DOCTYPE");
+    }
+    drop(head);
+    let mut state = DocState {
+        line: LineMark {
+            line: 1,
+            line_start: 0,
+            counted_to: 0,
+        },
+        ..DocState::default()
+    };
+    let mut ids = SeenIds::default();
+    let mut sum = StreamSummary::default();
+    let mut from = 0usize; // body offset of the chunk (0: from the prolog on)
+    let step = usize::try_from(chunk_bytes.max(1)).unwrap_or(usize::MAX);
+    let mut index = 0;
+    loop {
+        let first = index == 0;
+        let start = if first { root_end } else { from };
+        let at = start.saturating_add(step);
+        let to = if at >= body.len() {
+            body.len()
+        } else {
+            next_cut(body, at).unwrap_or(body.len())
+        };
+        let last = to == body.len();
+        let Some(p) = parse_chunk(&doc, bom, prolog, from, to, first, &state, path, opts) else {
+            return decline("a chunk that does not read alone");
+        };
+        if p.stack.len() != usize::from(!last) {
+            return decline("a chunk that does not end between members");
+        }
+        state.absorb(&p);
+        if first && p.root_is_model && !p.env_owners.iter().any(|o| matches!(o, EnvOwner::Root)) {
+            sum.trailing.push(Warning {
+                file: p.shared_path.clone(),
+                line: 1,
+                column: 1,
+                gml_id: None,
+                message: "CityModel has no gml:boundedBy envelope".into(),
+            });
+        }
+        let mut p = p;
+        let before = ids.check_and_add(&p);
+        if !before.is_empty() {
+            // a reference to such an id means its first occurrence, in another chunk
+            if p.href_targets().iter().any(|t| before.contains(t)) {
+                return decline("a reference to a gml:id of two chunks");
+            }
+            p.dup_before = before;
+        }
+        let listed = p.invalid_listed.clone();
+        let invalid = p.invalid_ids;
+        let end = (to + bom) as u64;
+        p.stack.clear();
+        p.event_pos = end;
+        state.line = {
+            let (line, line_start) = p.line_mark();
+            LineMark {
+                line,
+                line_start,
+                counted_to: end,
+            }
+        };
+        let model = match finish(p, doc.len() as u64, true, false) {
+            Ok(m) => m,
+            Err(e) => return decline(&e.to_string()),
+        };
+        doc.release_range(from + bom, to + bom);
+        // invalid gml:ids: listed up to INVALID_IDS_LISTED per document
+        for &w in listed.iter().filter(|&&w| w != usize::MAX) {
+            state.invalid_last = Some(sum.warnings + w);
+        }
+        state.invalid_ids += invalid;
+        let bodies = model
+            .assets
+            .iter()
+            .filter(|a| a.kind == AssetKind::Body)
+            .count();
+        let chunk = Chunk {
+            index,
+            buildings_before: sum.buildings,
+            assets_before: sum.assets,
+            bodies_before: sum.bodies,
+            warnings_before: sum.warnings,
+            bytes: (if first { 0 } else { (from + bom) as u64 }, end),
+            model,
+        };
+        sum.buildings += chunk.model.buildings.len();
+        sum.assets += chunk.model.assets.len() - bodies;
+        sum.bodies += bodies;
+        sum.warnings += chunk.model.warnings.len();
+        passed(chunk.bytes.1 - chunk.bytes.0);
+        each(chunk)?;
+        index += 1;
+        from = to;
+        if last {
+            break;
+        }
+    }
+    sum.chunks = index;
+    sum.warnings += sum.trailing.len();
+    sum.version = state.version;
+    sum.srs_name = state.srs_name;
+    let listed = state.invalid_listed as u64;
+    let more = state.invalid_ids.saturating_sub(listed);
+    if let (true, Some(i)) = (more > 0, state.invalid_last) {
+        sum.invalid_note = Some((
+            i,
+            format!(
+                "; {more} more gml:ids after it are not valid xs:IDs either (not listed one by one)"
+            ),
+        ));
+    }
+    Ok(Streamed::Done(sum))
+}
+
+/// The end (after `>`) of the first top-level member end tag at or after `at`; `None` at the
+/// document's end.
+fn next_cut(body: &[u8], at: usize) -> Option<usize> {
+    const NAME: &[u8] = b"cityObjectMember>";
+    let finder = memchr::memmem::Finder::new(NAME);
+    let mut at = at;
+    while let Some(hit) = body.get(at..).and_then(|b| finder.find(b)) {
+        let m = at + hit;
+        at = m + 1;
+        if super::split::is_end_tag(body, m) {
+            let cut = m + NAME.len();
+            return (cut < body.len()).then_some(cut);
+        }
+    }
+    None
+}
+
+/// The document-wide state the serial read has reached at a chunk's start.
+#[derive(Default)]
+struct DocState {
+    line: LineMark,
+    version: Option<CityGmlVersion>,
+    srs_name: Option<String>,
+    root_srs_set: bool,
+    gml_prefix: Option<String>,
+    relief_lod: Option<u8>,
+    ade_namespaces: Vec<Vec<u8>>,
+    unknown_prefixes: Vec<Vec<u8>>,
+    invalid_listed: usize,
+    invalid_ids: u64,
+    invalid_last: Option<usize>,
+}
+
+impl DocState {
+    /// The state after chunk `p`.
+    fn absorb(&mut self, p: &Parser<'_>) {
+        self.version = p.version;
+        self.srs_name = p.srs_name.clone();
+        self.root_srs_set = p.root_srs_set;
+        self.gml_prefix = p.gml_prefix.clone();
+        if p.relief_lod_set {
+            self.relief_lod = Some(p.relief_lod);
+        }
+        for k in p.ade_namespaces.keys() {
+            if !self.ade_namespaces.contains(k) {
+                self.ade_namespaces.push(k.clone());
+            }
+        }
+        for k in p.unknown_prefixes.keys() {
+            if !self.unknown_prefixes.contains(k) {
+                self.unknown_prefixes.push(k.clone());
+            }
+        }
+        self.invalid_listed = p.invalid_listed.len().min(INVALID_IDS_LISTED);
+    }
+}
+
+/// Parse `body[from..to]` (body offsets; the first chunk from the prolog on) with a parser
+/// seeded as the serial read stands there; `None` on any error.
+#[allow(clippy::too_many_arguments)]
+fn parse_chunk<'d>(
+    doc: &'d [u8],
+    bom: usize,
+    prolog: &'d [u8],
+    from: usize,
+    to: usize,
+    first: bool,
+    state: &DocState,
+    path: &Path,
+    opts: &ReadOptions,
+) -> Option<Parser<'d>> {
+    let body = doc.get(bom..)?;
+    let mut p = Parser::new(path, opts.clone(), doc);
+    p.streamed = true;
+    p.expect_bytes((to - from) as u64);
+    let mut reader = NsReader::from_reader(if first { body.get(..to)? } else { prolog });
+    configure(&mut reader);
+    let mut saw_root = false;
+    let release = |_: usize| {};
+    if first {
+        parse_events(
+            &mut p,
+            &mut reader,
+            bom as u64,
+            &mut saw_root,
+            (&release, u64::MAX / 2),
+            false,
+        )
+        .ok()?;
+        return Some(p);
+    }
+    let started = parse_events(
+        &mut p,
+        &mut reader,
+        bom as u64,
+        &mut saw_root,
+        (&release, u64::MAX / 2),
+        true,
+    );
+    if !matches!(started, Ok(true)) {
+        return None;
+    }
+    let root = p.stack.first().map(|f| f.rec).filter(|&r| r != NO_REC);
+    let root_id = root.and_then(|r| p.id_log.get(r as usize).and_then(|r| p.id_text(r)));
+    p.forget_root_start()?;
+    p.root_id = root_id;
+    p.stream_tail = true;
+    p.lines.set(state.line);
+    // lines of duplicate gml:ids are counted from here, not from the document's start
+    p.marks.get_mut().push(state.line);
+    p.version = state.version.or(p.version);
+    p.srs_name = state.srs_name.clone();
+    p.root_srs_set = state.root_srs_set;
+    p.gml_prefix = state.gml_prefix.clone();
+    if let Some(l) = state.relief_lod {
+        p.relief_lod = l;
+        p.relief_lod_set = true;
+    }
+    for k in &state.ade_namespaces {
+        p.ade_namespaces.insert(k.clone(), usize::MAX);
+    }
+    for k in &state.unknown_prefixes {
+        p.unknown_prefixes.insert(k.clone(), usize::MAX);
+    }
+    p.invalid_listed = vec![usize::MAX; state.invalid_listed];
+    let from_doc = (from + bom) as u64;
+    let base = from_doc.checked_sub(reader.buffer_position())?;
+    *reader.get_mut() = body.get(from..to)?;
+    parse_events(
+        &mut p,
+        &mut reader,
+        base,
+        &mut saw_root,
+        (&release, u64::MAX / 2),
+        false,
+    )
+    .ok()?;
+    Some(p)
+}
+
+/// The gml:id hashes of the chunks read so far, sorted, 8 bytes an id: which ids of the next
+/// chunk repeat an earlier one.
+#[derive(Default)]
+struct SeenIds {
+    sorted: Vec<u64>,
+}
+
+impl SeenIds {
+    /// The ids of chunk `p` met in earlier chunks; `p`'s ids are then added.
+    fn check_and_add(&mut self, p: &Parser<'_>) -> foldhash::HashSet<u64> {
+        let mut h: Vec<u64> = p.id_log.iter().map(|r| r.hash).collect();
+        h.sort_unstable();
+        h.dedup();
+        let before: foldhash::HashSet<u64> = h
+            .iter()
+            .copied()
+            .filter(|x| self.sorted.binary_search(x).is_ok())
+            .collect();
+        // merge in place from the end (a large vector grows by remapping, not copying)
+        let old = self.sorted.len();
+        self.sorted.reserve_exact(h.len());
+        self.sorted.resize(old + h.len(), 0);
+        let (mut i, mut j, mut k) = (old, h.len(), old + h.len());
+        while j > 0 {
+            if i > 0 && self.sorted[i - 1] > h[j - 1] {
+                self.sorted[k - 1] = self.sorted[i - 1];
+                i -= 1;
+            } else {
+                self.sorted[k - 1] = h[j - 1];
+                j -= 1;
+            }
+            k -= 1;
+        }
+        before
+    }
+}
