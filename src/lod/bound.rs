@@ -45,12 +45,12 @@
 //! ```
 
 use crate::lod::rough::RoughGeometry;
-use crate::lod::scene::{full_scene, mixed_scene};
-use crate::model::CityModel;
+use crate::lod::scene::{detail_boxes, full_scene_part, mixed_scene};
+use crate::model::{Bbox, CityModel};
 use crate::poi::{Poi, POI_OFFSET};
 use crate::solar::sky::{Frame, SkyError};
 use crate::solar::{SkyBundles, SunTable};
-use crate::trace::Scene;
+use crate::trace::{BoxIndex, Scene};
 use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -173,6 +173,19 @@ pub struct Bounded {
     pub rounds: usize,
     /// Whether every POI holds.
     pub met: bool,
+    /// What tracing the full model took.
+    pub reference: Reference,
+}
+
+/// What tracing the full model took ([`Bounded::reference`]): how much of it was built.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Reference {
+    /// Assets whose full geometry was built into the reference scene.
+    pub assets: usize,
+    /// Of the model's assets with geometry.
+    pub of: usize,
+    /// Scenes built (rounds of the lazy reference trace).
+    pub rounds: usize,
 }
 
 impl Bounded {
@@ -297,6 +310,133 @@ fn probe(poi: &Poi, bundles: &SkyBundles, table: Option<&SunTable>) -> Probe {
     }
 }
 
+impl Probe {
+    fn len(&self) -> usize {
+        self.svf_dirs.len() + self.sun_dirs.len()
+    }
+
+    /// Ray `j`: SVF rays, then sun rays.
+    fn dir(&self, j: usize) -> DVec3 {
+        match self.svf_dirs.get(j) {
+            Some(&d) => d,
+            None => self
+                .sun_dirs
+                .get(j - self.svf_dirs.len())
+                .copied()
+                .unwrap_or(DVec3::ZERO),
+        }
+    }
+}
+
+/// Rounds of the reference trace after which a ray that hits nothing checks every asset
+/// box it crosses at once; before, the `4^round` nearest ones not yet built.
+const UNCAPPED_ROUND: u32 = 4;
+
+/// First-hit tags of every ray of every probe in the full model, as [`tags`] on
+/// [`crate::lod::scene::full_scene`] gives them, from a scene built only of the assets the
+/// rays can reach (see [`full_tags`] in the module docs, "Reference").
+fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Reference) {
+    let (hits, reference) = full_hits(model, probes);
+    let tags = hits
+        .into_iter()
+        .map(|v| v.into_iter().map(|h| h.map(|h| h.0)).collect())
+        .collect();
+    (tags, reference)
+}
+
+/// [`full_tags`] with the distance of each hit.
+#[allow(clippy::type_complexity)]
+fn full_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
+    let mut out: Vec<Vec<Option<(u32, f64)>>> = probes.iter().map(|p| vec![None; p.len()]).collect();
+    let boxes = detail_boxes(model);
+    let mut frame = Bbox::EMPTY;
+    boxes.iter().for_each(|b| frame.union(b));
+    let mut reference = Reference {
+        of: boxes.iter().filter(|b| !b.is_empty()).count(),
+        ..Default::default()
+    };
+    if frame.is_empty() {
+        return (out, reference);
+    }
+    // Far above the f32 rounding of the scene (its node growth): a triangle's hit point
+    // lies inside its asset's grown box.
+    let far = (frame.max - frame.center())
+        .abs()
+        .max_element()
+        .max(1.0);
+    let margin = far / 32768.0 + 1e-3;
+    let index = BoxIndex::new(boxes, margin);
+    let mut include = vec![false; model.assets.len()];
+    let mut pending: Vec<(usize, usize)> = probes
+        .iter()
+        .enumerate()
+        .flat_map(|(k, p)| (0..p.len()).map(move |j| (k, j)))
+        .collect();
+    // seed: the nearest box of every ray
+    let seed: Vec<u32> = pending
+        .par_iter()
+        .with_min_len(512)
+        .map_init(Vec::new, |v, &(k, j)| {
+            v.clear();
+            index.crossed(probes[k].origin, probes[k].dir(j), f64::INFINITY, v);
+            v.first().map_or(u32::MAX, |x| x.1)
+        })
+        .collect();
+    for a in seed {
+        if let Some(x) = include.get_mut(a as usize) {
+            *x = true;
+        }
+    }
+    loop {
+        reference.rounds += 1;
+        let scene = full_scene_part(model, &include, frame, pending.len());
+        let cap = if reference.rounds as u32 >= UNCAPPED_ROUND {
+            usize::MAX
+        } else {
+            1 << (2 * reference.rounds)
+        };
+        let include_ref = &include;
+        let results: Vec<(Option<(u32, f64)>, Vec<u32>)> = pending
+            .par_iter()
+            .with_min_len(256)
+            .map_init(Vec::new, |v, &(k, j)| {
+                let (o, d) = (probes[k].origin, probes[k].dir(j));
+                let h = scene.first_hit(o, d, POI_OFFSET, f64::INFINITY);
+                // every asset a triangle of which the ray may hit as close as `h`
+                let limit = h.map_or(f64::INFINITY, |h| {
+                    h.t + 2e-3 * (1.0 + h.t.abs()) + margin
+                });
+                v.clear();
+                index.crossed(o, d, limit, v);
+                let missing = v
+                    .iter()
+                    .map(|x| x.1)
+                    .filter(|&a| !include_ref.get(a as usize).copied().unwrap_or(true))
+                    .take(if h.is_some() { usize::MAX } else { cap })
+                    .collect();
+                (h.map(|h| (h.tag, h.t)), missing)
+            })
+            .collect();
+        drop(scene);
+        let mut next = Vec::new();
+        for (&(k, j), (tag, missing)) in pending.iter().zip(results) {
+            if missing.is_empty() {
+                out[k][j] = tag;
+            } else {
+                next.push((k, j));
+                for a in missing {
+                    include[a as usize] = true;
+                }
+            }
+        }
+        if next.is_empty() {
+            reference.assets = include.iter().filter(|&&x| x).count();
+            return (out, reference);
+        }
+        pending = next;
+    }
+}
+
 /// First-hit tags of every ray of a probe (SVF rays, then sun rays).
 fn tags(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
     p.svf_dirs
@@ -360,8 +500,7 @@ pub fn bound(
         None
     };
     let probes: Vec<Probe> = pois.iter().map(|p| probe(p, &bundles, table)).collect();
-    let full = full_scene(model);
-    let full_tags: Vec<Vec<Option<u32>>> = probes.iter().map(|p| tags(&full, p)).collect();
+    let (full_tags, reference) = full_tags(model, &probes);
 
     let mut levels: Vec<u8> = levels.iter().map(|&l| l.min(2)).collect();
     let mut promotions = Vec::new();
@@ -421,6 +560,7 @@ pub fn bound(
                 pois: figures,
                 promotions,
                 rounds,
+                reference,
             });
         }
         let mut promoted_any = false;
@@ -481,6 +621,7 @@ pub fn bound(
                 pois: figures,
                 promotions,
                 rounds,
+                reference,
             });
         }
     }
@@ -490,6 +631,7 @@ pub fn bound(
 mod tests {
     use super::*;
     use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
+    use crate::lod::scene::full_scene;
     use crate::solar::poi_sky_view;
 
     fn quad(x0: f64, x1: f64, y0: f64, y1: f64, z: f64) -> Polygon {
@@ -646,5 +788,64 @@ mod tests {
         let p = &b.pois[0];
         assert_eq!(p.sun_hours_error, Some(0.0));
         assert!(p.sun_hours_full.unwrap() > 0.0);
+    }
+
+    /// The lazy reference trace gives every ray the answer of the whole-model scene (same
+    /// asset, same distance to the bit) on a synth district with low sun rays, while it
+    /// builds only part of the model.
+    #[test]
+    fn restricted_full_scene_answers_as_the_whole_model() {
+        use crate::synth::{generate, pois, Preset};
+        let mut opts = Preset::Paper.defaults();
+        (opts.blocks_x, opts.blocks_y) = (3, 2);
+        let mut xml = Vec::new();
+        generate(&opts, &mut xml).unwrap();
+        let model = crate::citygml::read::read_bytes(&xml, "paper.gml").unwrap();
+        let mut ps: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
+        // and a POI on the ground in the open, facing up
+        ps.push(Poi {
+            id: "open".into(),
+            position: ps[0].position + DVec3::new(3.0, -2.0, 0.0),
+            normal: None,
+        });
+        assert!(ps.len() >= 3);
+        let site = crate::solar::Site::new(48.76, 11.42);
+        let table = SunTable::year(2025, 30, &site).unwrap();
+        let bundles = SkyBundles::new(3000, 7).unwrap();
+        let probes: Vec<Probe> = ps.iter().map(|p| probe(p, &bundles, Some(&table))).collect();
+        let (hits, reference) = full_hits(&model, &probes);
+        let whole = full_scene(&model);
+        let (mut compared, mut hit) = (0, 0);
+        for (p, got) in probes.iter().zip(&hits) {
+            assert_eq!(got.len(), p.len());
+            for (j, g) in got.iter().enumerate() {
+                let want = whole
+                    .first_hit(p.origin, p.dir(j), POI_OFFSET, f64::INFINITY)
+                    .map(|h| (h.tag, h.t));
+                match (g, want) {
+                    (Some((a, t)), Some((b, u))) => {
+                        assert_eq!((*a, t.to_bits()), (b, u.to_bits()), "ray {j}");
+                        hit += 1;
+                    }
+                    (a, b) => assert_eq!(a.map(|x| x.0), b.map(|x| x.0), "ray {j}"),
+                }
+                compared += 1;
+            }
+        }
+        assert!(hit > 100 && hit < compared, "{hit} of {compared} rays hit");
+        assert!(
+            reference.assets > 0 && reference.assets < reference.of,
+            "{reference:?}"
+        );
+        assert!(reference.rounds >= 2, "{reference:?}");
+        // the tags `bound` uses are these
+        let (tags, _) = full_tags(&model, &probes);
+        for (p, t) in probes.iter().zip(&tags) {
+            assert_eq!(t, &tags_of(&whole, p));
+        }
+    }
+
+    fn tags_of(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
+        tags(scene, p)
     }
 }

@@ -23,7 +23,7 @@
 
 use crate::lod::rough::RoughGeometry;
 use crate::model::triangulate;
-use crate::model::CityModel;
+use crate::model::{Bbox, CityModel};
 use crate::trace::{Scene, SceneBuilder};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -76,6 +76,44 @@ pub fn full_scene(model: &CityModel) -> Scene {
         }
     });
     b.build()
+}
+
+/// Per asset, the bounding box of the triangles [`full_scene`] holds for it (empty when
+/// none): their union is the full scene's [`Scene::bbox`].
+pub fn detail_boxes(model: &CityModel) -> Vec<Bbox> {
+    model
+        .assets
+        .par_iter()
+        .with_min_len(CHUNK)
+        .map_init(Vec::new, |scratch, a| {
+            scratch.clear();
+            for p in a.detail_polygons() {
+                triangulate(p, scratch);
+            }
+            let mut b = Bbox::EMPTY;
+            for t in scratch.iter().filter(|t| SceneBuilder::accepts(t)) {
+                t.iter().for_each(|&p| b.add(p));
+            }
+            b
+        })
+        .collect()
+}
+
+/// The part of [`full_scene`] made of the assets `i` with `include[i]`, built in the
+/// frame of the full scene's box `frame` (the union of [`detail_boxes`]) and for about
+/// `rays` rays ([`SceneBuilder::for_rays`]): its triangles have the full scene's f32
+/// coordinates and order, so a ray's [`Scene::first_hit`] is the full scene's whenever
+/// no left-out asset holds a triangle the ray hits as close ([`SceneBuilder::with_frame`]).
+pub fn full_scene_part(model: &CityModel, include: &[bool], frame: Bbox, rays: usize) -> Scene {
+    let mut b = SceneBuilder::new().with_frame(frame);
+    add_assets(&mut b, model.assets.len(), |i, out| {
+        if include.get(i).copied().unwrap_or(false) {
+            for p in model.assets[i].detail_polygons() {
+                triangulate(p, out);
+            }
+        }
+    });
+    b.for_rays(rays).build()
 }
 
 /// Every asset as its rough geometry (`rough[i]` belongs to asset `i`).
