@@ -9,6 +9,25 @@
 //! ray is traced to its first hit in both models: the full model once, the LoD model
 //! ([`crate::lod::scene::mixed_scene`], the model `lod` writes) once per round.
 //!
+//! **Reference.** The full model is not built whole (its BVH was most of the bound's time
+//! and memory: 805K triangles on the paper district, ~6 M on a 1 GB city), only the full
+//! geometry of the assets the rays can reach, found lazily on one box per asset (the box of
+//! its full-detail triangles, grown by a margin far above the f32 rounding,
+//! [`crate::trace::BoxIndex`]). First the nearest box of every ray is built; then, round
+//! after round, each pending ray is traced in the part built so far, and if a box it
+//! crosses before its hit (any box, when it hits nothing; the `4^round` nearest until
+//! round 4) is not built yet, those assets are added and the ray waits for the next round;
+//! otherwise its answer is final. The part is built in the frame of the whole model
+//! ([`crate::trace::SceneBuilder::with_frame`]: same origin, same f32 triangles, same node
+//! growth) with its triangles in the whole model's order, so the f32 distances are those of
+//! the whole model and ties go to the same triangle; and since every triangle a ray may hit
+//! at or before its answer lies in a box the ray enters before that answer (with a slack of
+//! 2e-3 relative plus the margin), no left-out triangle can win: every answer is the
+//! whole model's, asset and distance to the bit
+//! (`restricted_full_scene_answers_as_the_whole_model` checks it ray by ray). A part's
+//! answer is never nearer than the whole model's, so the limits only shrink and each round
+//! ends rays or adds assets. Measured (BENCHMARKS.md, "The default error bound"): ASSETS.
+//!
 //! **Promotion.** At a POI over the bound, the rays whose answers differ tell which assets
 //! are to blame. When the LoD model sees *less* sky than the full one, the culprits are the
 //! assets the LoD model hits on rays that reach the sky in the full model (a rough box or
@@ -46,7 +65,7 @@
 
 use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{detail_boxes, full_scene_part, mixed_scene};
-use crate::model::{Bbox, CityModel};
+use crate::model::CityModel;
 use crate::poi::{Poi, POI_OFFSET};
 use crate::solar::sky::{Frame, SkyError};
 use crate::solar::{SkyBundles, SunTable};
@@ -347,10 +366,9 @@ fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Ref
 /// [`full_tags`] with the distance of each hit.
 #[allow(clippy::type_complexity)]
 fn full_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
-    let mut out: Vec<Vec<Option<(u32, f64)>>> = probes.iter().map(|p| vec![None; p.len()]).collect();
-    let boxes = detail_boxes(model);
-    let mut frame = Bbox::EMPTY;
-    boxes.iter().for_each(|b| frame.union(b));
+    let mut out: Vec<Vec<Option<(u32, f64)>>> =
+        probes.iter().map(|p| vec![None; p.len()]).collect();
+    let (boxes, frame) = detail_boxes(model);
     let mut reference = Reference {
         of: boxes.iter().filter(|b| !b.is_empty()).count(),
         ..Default::default()
@@ -360,26 +378,23 @@ fn full_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
     }
     // Far above the f32 rounding of the scene (its node growth): a triangle's hit point
     // lies inside its asset's grown box.
-    let far = (frame.max - frame.center())
-        .abs()
-        .max_element()
-        .max(1.0);
+    let far = (frame.max - frame.center()).abs().max_element().max(1.0);
     let margin = far / 32768.0 + 1e-3;
     let index = BoxIndex::new(boxes, margin);
     let mut include = vec![false; model.assets.len()];
-    let mut pending: Vec<(usize, usize)> = probes
+    let mut pending: Vec<Pending> = probes
         .iter()
         .enumerate()
-        .flat_map(|(k, p)| (0..p.len()).map(move |j| (k, j)))
+        .flat_map(|(k, p)| (0..p.len()).map(move |j| (k, j, None)))
         .collect();
     // seed: the nearest box of every ray
     let seed: Vec<u32> = pending
         .par_iter()
         .with_min_len(512)
-        .map_init(Vec::new, |v, &(k, j)| {
-            v.clear();
-            index.crossed(probes[k].origin, probes[k].dir(j), f64::INFINITY, v);
-            v.first().map_or(u32::MAX, |x| x.1)
+        .map(|&(k, j, _)| {
+            index
+                .nearest(probes[k].origin, probes[k].dir(j))
+                .unwrap_or(u32::MAX)
         })
         .collect();
     for a in seed {
@@ -396,34 +411,51 @@ fn full_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
             1 << (2 * reference.rounds)
         };
         let include_ref = &include;
-        let results: Vec<(Option<(u32, f64)>, Vec<u32>)> = pending
-            .par_iter()
+        let results: Vec<(Pending, Option<(u32, f64)>, Vec<u32>)> = pending
+            .into_par_iter()
             .with_min_len(256)
-            .map_init(Vec::new, |v, &(k, j)| {
+            .map_init(Vec::new, |v, (k, j, mut all)| {
                 let (o, d) = (probes[k].origin, probes[k].dir(j));
                 let h = scene.first_hit(o, d, POI_OFFSET, f64::INFINITY);
                 // every asset a triangle of which the ray may hit as close as `h`
-                let limit = h.map_or(f64::INFINITY, |h| {
-                    h.t + 2e-3 * (1.0 + h.t.abs()) + margin
-                });
-                v.clear();
-                index.crossed(o, d, limit, v);
-                let missing = v
-                    .iter()
-                    .map(|x| x.1)
-                    .filter(|&a| !include_ref.get(a as usize).copied().unwrap_or(true))
-                    .take(if h.is_some() { usize::MAX } else { cap })
-                    .collect();
-                (h.map(|h| (h.tag, h.t)), missing)
+                let limit = h.map_or(f64::INFINITY, |h| h.t + 2e-3 * (1.0 + h.t.abs()) + margin);
+                let missing_of = |it: &mut dyn Iterator<Item = u32>| -> Vec<u32> {
+                    it.filter(|&a| !include_ref.get(a as usize).copied().unwrap_or(true))
+                        .take(if h.is_some() { usize::MAX } else { cap })
+                        .collect()
+                };
+                let missing = match &all {
+                    // every box the ray crosses, known from an earlier round
+                    Some(list) => missing_of(
+                        &mut list
+                            .iter()
+                            .take_while(|x| f64::from(x.0) <= limit)
+                            .map(|x| x.1),
+                    ),
+                    None => {
+                        v.clear();
+                        index.crossed(o, d, limit, v);
+                        if h.is_none() {
+                            // entries rounded down: a later limit keeps every box it must
+                            all = Some(
+                                v.iter()
+                                    .map(|&(t, i)| ((t * (1.0 - 1e-6) - 1e-3) as f32, i))
+                                    .collect(),
+                            );
+                        }
+                        missing_of(&mut v.iter().map(|x| x.1))
+                    }
+                };
+                ((k, j, all), h.map(|h| (h.tag, h.t)), missing)
             })
             .collect();
         drop(scene);
         let mut next = Vec::new();
-        for (&(k, j), (tag, missing)) in pending.iter().zip(results) {
+        for (p, hit, missing) in results {
             if missing.is_empty() {
-                out[k][j] = tag;
+                out[p.0][p.1] = hit;
             } else {
-                next.push((k, j));
+                next.push(p);
                 for a in missing {
                     include[a as usize] = true;
                 }
@@ -436,6 +468,10 @@ fn full_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
         pending = next;
     }
 }
+
+/// A ray of the reference trace still open: probe, ray, and every box it crosses (entry
+/// rounded down, nearest first) once it was seen to hit nothing.
+type Pending = (usize, usize, Option<Vec<(f32, u32)>>);
 
 /// First-hit tags of every ray of a probe (SVF rays, then sun rays).
 fn tags(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
@@ -630,8 +666,8 @@ pub fn bound(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
     use crate::lod::scene::full_scene;
+    use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
     use crate::solar::poi_sky_view;
 
     fn quad(x0: f64, x1: f64, y0: f64, y1: f64, z: f64) -> Polygon {
@@ -812,7 +848,10 @@ mod tests {
         let site = crate::solar::Site::new(48.76, 11.42);
         let table = SunTable::year(2025, 30, &site).unwrap();
         let bundles = SkyBundles::new(3000, 7).unwrap();
-        let probes: Vec<Probe> = ps.iter().map(|p| probe(p, &bundles, Some(&table))).collect();
+        let probes: Vec<Probe> = ps
+            .iter()
+            .map(|p| probe(p, &bundles, Some(&table)))
+            .collect();
         let (hits, reference) = full_hits(&model, &probes);
         let whole = full_scene(&model);
         let (mut compared, mut hit) = (0, 0);

@@ -5,6 +5,7 @@
 use crate::model::Bbox;
 use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
 use obvhs::ploc::PlocBuilder;
 use obvhs::ray::{Ray, RayHit};
@@ -34,7 +35,11 @@ impl BoxIndex {
     /// Index `boxes` (empty boxes are never crossed), each grown by `margin` on every
     /// side (in metres, at least zero).
     pub fn new(boxes: Vec<Bbox>, margin: f64) -> BoxIndex {
-        let margin = if margin.is_finite() { margin.max(0.0) } else { 0.0 };
+        let margin = if margin.is_finite() {
+            margin.max(0.0)
+        } else {
+            0.0
+        };
         let mut all = Bbox::EMPTY;
         for b in &boxes {
             if b.min.is_finite() && b.max.is_finite() {
@@ -62,14 +67,15 @@ impl BoxIndex {
             ids.push(i as u32);
         }
         let bvh = (!aabbs.is_empty()).then(|| {
-            let p = BvhBuildParams::fastest_build();
-            let bvh = PlocBuilder::with_capacity(aabbs.len()).build(
+            let p = BvhBuildParams::fast_build();
+            let mut bvh = PlocBuilder::with_capacity(aabbs.len()).build(
                 p.ploc_search_distance,
                 &aabbs,
                 (0..aabbs.len() as u32).collect(),
                 p.sort_precision,
                 p.search_depth_threshold,
             );
+            ReinsertionOptimizer::default().run(&mut bvh, p.reinsertion_batch_ratio, None);
             (bvh, ids)
         });
         BoxIndex {
@@ -85,6 +91,52 @@ impl BoxIndex {
         self.margin
     }
 
+    /// A box (grown by the margin) that the ray `origin + t dir` (`t >= 0`) crosses first, or
+    /// one crossed nearly as soon (the search prunes in f32); `None` when it crosses none.
+    pub fn nearest(&self, origin: DVec3, dir: DVec3) -> Option<u32> {
+        let (bvh, ids) = self.bvh.as_ref()?;
+        let ray = self.local_ray(origin, dir, f64::INFINITY)?;
+        let g = DVec3::splat(self.margin);
+        let mut best: Option<(f64, u32)> = None;
+        let mut hit = RayHit::none();
+        bvh.ray_traverse(ray, &mut hit, |_, slot| {
+            let Some((i, b)) = self.slot_box(bvh, ids, slot) else {
+                return f32::INFINITY;
+            };
+            match super::ray::ray_aabb(origin, dir, b.min - g, b.max + g, 0.0, f64::INFINITY) {
+                Some((t0, _)) if best.is_none_or(|(bt, _)| t0 < bt) => {
+                    best = Some((t0, i));
+                    // prune a little beyond: f32 node entries are rounded
+                    (t0 * (1.0 + 1e-6) + 1e-3) as f32
+                }
+                _ => f32::INFINITY,
+            }
+        });
+        best.map(|(_, i)| i)
+    }
+
+    fn slot_box<'a>(&'a self, bvh: &Bvh2, ids: &[u32], slot: usize) -> Option<(u32, &'a Bbox)> {
+        let k = *bvh.primitive_indices.get(slot)?;
+        let i = *ids.get(k as usize)?;
+        Some((i, self.boxes.get(i as usize)?))
+    }
+
+    /// The f32 ray of a traversal up to about `tmax`, `None` for an invalid ray.
+    fn local_ray(&self, origin: DVec3, dir: DVec3, tmax: f64) -> Option<Ray> {
+        let o = (origin - self.origin).as_vec3();
+        let d = dir.as_vec3();
+        if !o.is_finite() || !d.is_finite() || d.length_squared() == 0.0 || tmax.is_nan() {
+            return None;
+        }
+        let tmax32 = (tmax * (1.0 + 1e-6) + 1e-3) as f32;
+        Some(Ray::new(
+            Vec3A::from(o),
+            Vec3A::from(d) + Vec3A::ZERO,
+            0.0,
+            tmax32,
+        ))
+    }
+
     /// Every box (grown by the margin) that the ray `origin + t dir` crosses with
     /// `0 <= t <= tmax`, as (entry distance, box index) appended to `out`, nearest first
     /// (ties by box index). The entry distance is 0 for a box around the origin. The
@@ -93,29 +145,14 @@ impl BoxIndex {
         let Some((bvh, ids)) = &self.bvh else {
             return;
         };
-        let o = (origin - self.origin).as_vec3();
-        let d = dir.as_vec3();
-        if !o.is_finite() || !d.is_finite() || d.length_squared() == 0.0 || tmax.is_nan() {
+        let Some(ray) = self.local_ray(origin, dir, tmax) else {
             return;
-        }
+        };
         let start = out.len();
         let g = DVec3::splat(self.margin);
-        let tmax32 = (tmax * (1.0 + 1e-6) + 1e-3) as f32;
-        let ray = Ray::new(
-            Vec3A::from(o),
-            Vec3A::from(d) + Vec3A::ZERO,
-            0.0,
-            if tmax32.is_nan() { f32::INFINITY } else { tmax32 },
-        );
         let mut hit = RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |_, slot| {
-            let Some(&k) = bvh.primitive_indices.get(slot) else {
-                return f32::INFINITY;
-            };
-            let Some((&i, b)) = ids
-                .get(k as usize)
-                .and_then(|i| Some((i, self.boxes.get(*i as usize)?)))
-            else {
+            let Some((i, b)) = self.slot_box(bvh, ids, slot) else {
                 return f32::INFINITY;
             };
             if let Some((t0, _)) =
@@ -194,6 +231,14 @@ mod tests {
             want.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             assert_eq!(got, want, "ray {r}");
             assert!(got.windows(2).all(|w| w[0].0 <= w[1].0));
+            let near = index.nearest(p, d);
+            if tmax.is_infinite() {
+                assert_eq!(near.is_some(), !got.is_empty(), "ray {r}");
+                if let (Some(n), Some(first)) = (near, got.first()) {
+                    let e = got.iter().find(|x| x.1 == n).map(|x| x.0);
+                    assert!(e.is_some_and(|e| e <= first.0 + 1e-2), "ray {r}");
+                }
+            }
             seen += got.len();
         }
         assert!(seen > 400, "{seen} crossings");
