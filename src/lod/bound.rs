@@ -360,38 +360,11 @@ const UNCAPPED_ROUND: u32 = 4;
 /// [`crate::lod::scene::full_scene`] gives them, from a scene built only of the assets the
 /// rays can reach (see [`full_tags`] in the module docs, "Reference").
 fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Reference) {
-    let (hits, reference) = full_hits(model, probes);
-    let tags = hits
-        .into_iter()
-        .map(|v| v.into_iter().map(|h| h.map(|h| h.0)).collect())
-        .collect();
-    (tags, reference)
-}
-
-/// [`full_tags`] with the distance of each hit.
-#[allow(clippy::type_complexity)]
-fn full_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
-    let mut out: Vec<Vec<Option<(u32, f64)>>> =
-        probes.iter().map(|p| vec![None; p.len()]).collect();
     let rays: usize = probes.iter().map(Probe::len).sum();
     let polygons: usize = model.assets.iter().map(|a| a.detail_polygons().len()).sum();
     if rays > polygons {
         // many rays, a small model: the lazy rounds would cost more than the whole BVH
         let whole = full_scene(model);
-        let hits = probes
-            .iter()
-            .map(|p| {
-                (0..p.len())
-                    .into_par_iter()
-                    .with_min_len(512)
-                    .map(|j| {
-                        whole
-                            .first_hit(p.origin, p.dir(j), POI_OFFSET, f64::INFINITY)
-                            .map(|h| (h.tag, h.t))
-                    })
-                    .collect()
-            })
-            .collect();
         let of = model
             .assets
             .iter()
@@ -403,8 +376,22 @@ fn full_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
             rounds: 1,
             whole: true,
         };
-        return (hits, reference);
+        return (probes.iter().map(|p| tags(&whole, p)).collect(), reference);
     }
+    let (hits, reference) = lazy_hits(model, probes);
+    let tags = hits
+        .into_iter()
+        .map(|v| v.into_iter().map(|h| h.map(|h| h.0)).collect())
+        .collect();
+    (tags, reference)
+}
+
+/// [`full_tags`] through the lazy rounds (see the module docs, "Reference"), with the
+/// distance of each hit.
+#[allow(clippy::type_complexity)]
+fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
+    let mut out: Vec<Vec<Option<(u32, f64)>>> =
+        probes.iter().map(|p| vec![None; p.len()]).collect();
     let (boxes, frame) = detail_boxes(model);
     let mut reference = Reference {
         of: boxes.iter().filter(|b| !b.is_empty()).count(),
@@ -895,7 +882,7 @@ mod tests {
             .iter()
             .map(|p| probe(p, &bundles, Some(&table)))
             .collect();
-        let (hits, reference) = full_hits(&model, &probes);
+        let (hits, reference) = lazy_hits(&model, &probes);
         let whole = full_scene(&model);
         let (mut compared, mut hit) = (0, 0);
         for (p, got) in probes.iter().zip(&hits) {
@@ -920,10 +907,12 @@ mod tests {
             "{reference:?}"
         );
         assert!(reference.rounds >= 2 && !reference.whole, "{reference:?}");
-        // the tags `bound` uses are these
-        let (tags, _) = full_tags(&model, &probes);
-        for (p, t) in probes.iter().zip(&tags) {
+        // `bound` uses these tags, or (more rays than polygons here) the whole model's
+        let (tags, r) = full_tags(&model, &probes);
+        assert!(r.whole, "{r:?}");
+        for (p, (t, h)) in probes.iter().zip(tags.iter().zip(&hits)) {
             assert_eq!(t, &tags_of(&whole, p));
+            assert_eq!(t, &h.iter().map(|h| h.map(|h| h.0)).collect::<Vec<_>>());
         }
     }
 
