@@ -12,8 +12,8 @@
 //! **Reference.** The full model is not built whole (its BVH was most of the bound's time
 //! and memory: 805K triangles on the paper district, ~6 M on a 1 GB city), only the full
 //! geometry of the assets the rays can reach, found lazily on one box per asset (the box of
-//! its full-detail triangles, grown by a margin far above the f32 rounding,
-//! [`crate::trace::BoxIndex`]). First the nearest box of every ray is built; then, round
+//! its full-detail polygons, which holds its triangles, grown by a margin far above the f32
+//! rounding, [`crate::trace::BoxIndex`]). First the nearest box of every ray is built; then, round
 //! after round, each pending ray is traced in the part built so far, and if a box it
 //! crosses before its hit (any box, when it hits nothing; the `4^round` nearest until
 //! round 4) is not built yet, those assets are added and the ray waits for the next round;
