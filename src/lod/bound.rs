@@ -9,6 +9,28 @@
 //! ray is traced to its first hit in both models: the full model once, the LoD model
 //! ([`crate::lod::scene::mixed_scene`], the model `lod` writes) once per round.
 //!
+//! **Reference.** The full model is not built whole (its BVH was most of the bound's time
+//! and memory: 805K triangles on the paper district, ~6 M on a 1 GB city), only the full
+//! geometry of the assets the rays can reach, found lazily on one box per asset (the box of
+//! its full-detail polygons, which holds its triangles, grown by a margin far above the f32
+//! rounding, [`crate::trace::BoxIndex`]). First the nearest box of every ray is built; then, round
+//! after round, each pending ray is traced in the part built so far, and if a box it
+//! crosses before its hit (any box, when it hits nothing; the `4^round` nearest until
+//! round 4) is not built yet, those assets are added and the ray waits for the next round;
+//! otherwise its answer is final. The part is built in the frame of the whole model
+//! ([`crate::trace::SceneBuilder::with_frame`]: same origin, same f32 triangles, same node
+//! growth) with its triangles in the whole model's order, so the f32 distances are those of
+//! the whole model and ties go to the same triangle; and since every triangle a ray may hit
+//! at or before its answer lies in a box the ray enters before that answer (with a slack of
+//! 2e-3 relative plus the margin), no left-out triangle can win: every answer is the
+//! whole model's, asset and distance to the bit
+//! (`restricted_full_scene_answers_as_the_whole_model` checks it ray by ray). A part's
+//! answer is never nearer than the whole model's, so the limits only shrink and each round
+//! ends rays or adds assets. When the rays outnumber the model's full-detail polygons (many
+//! POIs on a small model), the rounds would cost more than the BVH they avoid, and the whole
+//! model is built at once, as before ([`Reference::whole`]). Measured (BENCHMARKS.md, "The
+//! default error bound"): on the paper district, 6 POIs reach 2,951 of 57,530 assets.
+//!
 //! **Promotion.** At a POI over the bound, the rays whose answers differ tell which assets
 //! are to blame. When the LoD model sees *less* sky than the full one, the culprits are the
 //! assets the LoD model hits on rays that reach the sky in the full model (a rough box or
@@ -45,12 +67,12 @@
 //! ```
 
 use crate::lod::rough::RoughGeometry;
-use crate::lod::scene::{full_scene, mixed_scene};
+use crate::lod::scene::{detail_boxes, full_scene, full_scene_part, mixed_scene};
 use crate::model::CityModel;
 use crate::poi::{Poi, POI_OFFSET};
 use crate::solar::sky::{Frame, SkyError};
 use crate::solar::{SkyBundles, SunTable};
-use crate::trace::Scene;
+use crate::trace::{BoxIndex, Scene};
 use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -173,6 +195,21 @@ pub struct Bounded {
     pub rounds: usize,
     /// Whether every POI holds.
     pub met: bool,
+    /// What tracing the full model took.
+    pub reference: Reference,
+}
+
+/// What tracing the full model took ([`Bounded::reference`]): how much of it was built.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Reference {
+    /// Assets whose full geometry was built into the reference scene.
+    pub assets: usize,
+    /// Of the model's assets with geometry.
+    pub of: usize,
+    /// Scenes built (rounds of the lazy reference trace).
+    pub rounds: usize,
+    /// Whether the whole model was built at once (more rays than full-detail polygons).
+    pub whole: bool,
 }
 
 impl Bounded {
@@ -297,6 +334,169 @@ fn probe(poi: &Poi, bundles: &SkyBundles, table: Option<&SunTable>) -> Probe {
     }
 }
 
+impl Probe {
+    fn len(&self) -> usize {
+        self.svf_dirs.len() + self.sun_dirs.len()
+    }
+
+    /// Ray `j`: SVF rays, then sun rays.
+    fn dir(&self, j: usize) -> DVec3 {
+        match self.svf_dirs.get(j) {
+            Some(&d) => d,
+            None => self
+                .sun_dirs
+                .get(j - self.svf_dirs.len())
+                .copied()
+                .unwrap_or(DVec3::ZERO),
+        }
+    }
+}
+
+/// Rounds of the reference trace after which a ray that hits nothing checks every asset
+/// box it crosses at once; before, the `4^round` nearest ones not yet built.
+const UNCAPPED_ROUND: u32 = 4;
+
+/// First-hit tags of every ray of every probe in the full model, as [`tags`] on
+/// [`crate::lod::scene::full_scene`] gives them, from a scene built only of the assets the
+/// rays can reach (see [`full_tags`] in the module docs, "Reference").
+fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Reference) {
+    let rays: usize = probes.iter().map(Probe::len).sum();
+    let polygons: usize = model.assets.iter().map(|a| a.detail_polygons().len()).sum();
+    if rays > polygons {
+        // many rays, a small model: the lazy rounds would cost more than the whole BVH
+        let whole = full_scene(model);
+        let of = model
+            .assets
+            .iter()
+            .filter(|a| !a.detail_polygons().is_empty())
+            .count();
+        let reference = Reference {
+            assets: of,
+            of,
+            rounds: 1,
+            whole: true,
+        };
+        return (probes.iter().map(|p| tags(&whole, p)).collect(), reference);
+    }
+    let (hits, reference) = lazy_hits(model, probes);
+    let tags = hits
+        .into_iter()
+        .map(|v| v.into_iter().map(|h| h.map(|h| h.0)).collect())
+        .collect();
+    (tags, reference)
+}
+
+/// [`full_tags`] through the lazy rounds (see the module docs, "Reference"), with the
+/// distance of each hit.
+#[allow(clippy::type_complexity)]
+fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
+    let mut out: Vec<Vec<Option<(u32, f64)>>> =
+        probes.iter().map(|p| vec![None; p.len()]).collect();
+    let (boxes, frame) = detail_boxes(model);
+    let mut reference = Reference {
+        of: boxes.iter().filter(|b| !b.is_empty()).count(),
+        ..Default::default()
+    };
+    if frame.is_empty() {
+        return (out, reference);
+    }
+    // Far above the f32 rounding of the scene (its node growth): a triangle's hit point
+    // lies inside its asset's grown box.
+    let far = (frame.max - frame.center()).abs().max_element().max(1.0);
+    let margin = far / 32768.0 + 1e-3;
+    let index = BoxIndex::new(boxes, margin);
+    let mut include = vec![false; model.assets.len()];
+    let mut pending: Vec<Pending> = probes
+        .iter()
+        .enumerate()
+        .flat_map(|(k, p)| (0..p.len()).map(move |j| (k, j, None)))
+        .collect();
+    // seed: the nearest box of every ray
+    let seed: Vec<u32> = pending
+        .par_iter()
+        .with_min_len(512)
+        .map(|&(k, j, _)| {
+            index
+                .nearest(probes[k].origin, probes[k].dir(j))
+                .unwrap_or(u32::MAX)
+        })
+        .collect();
+    for a in seed {
+        if let Some(x) = include.get_mut(a as usize) {
+            *x = true;
+        }
+    }
+    loop {
+        reference.rounds += 1;
+        let scene = full_scene_part(model, &include, frame, pending.len());
+        let cap = if reference.rounds as u32 >= UNCAPPED_ROUND {
+            usize::MAX
+        } else {
+            1 << (2 * reference.rounds)
+        };
+        let include_ref = &include;
+        let results: Vec<(Pending, Option<(u32, f64)>, Vec<u32>)> = pending
+            .into_par_iter()
+            .with_min_len(256)
+            .map_init(Vec::new, |v, (k, j, mut all)| {
+                let (o, d) = (probes[k].origin, probes[k].dir(j));
+                let h = scene.first_hit(o, d, POI_OFFSET, f64::INFINITY);
+                // every asset a triangle of which the ray may hit as close as `h`
+                let limit = h.map_or(f64::INFINITY, |h| h.t + 2e-3 * (1.0 + h.t.abs()) + margin);
+                let missing_of = |it: &mut dyn Iterator<Item = u32>| -> Vec<u32> {
+                    it.filter(|&a| !include_ref.get(a as usize).copied().unwrap_or(true))
+                        .take(if h.is_some() { usize::MAX } else { cap })
+                        .collect()
+                };
+                let missing = match &all {
+                    // every box the ray crosses, known from an earlier round
+                    Some(list) => missing_of(
+                        &mut list
+                            .iter()
+                            .take_while(|x| f64::from(x.0) <= limit)
+                            .map(|x| x.1),
+                    ),
+                    None => {
+                        v.clear();
+                        index.crossed(o, d, limit, v);
+                        if h.is_none() {
+                            // entries rounded down: a later limit keeps every box it must
+                            all = Some(
+                                v.iter()
+                                    .map(|&(t, i)| ((t * (1.0 - 1e-6) - 1e-3) as f32, i))
+                                    .collect(),
+                            );
+                        }
+                        missing_of(&mut v.iter().map(|x| x.1))
+                    }
+                };
+                ((k, j, all), h.map(|h| (h.tag, h.t)), missing)
+            })
+            .collect();
+        drop(scene);
+        let mut next = Vec::new();
+        for (p, hit, missing) in results {
+            if missing.is_empty() {
+                out[p.0][p.1] = hit;
+            } else {
+                next.push(p);
+                for a in missing {
+                    include[a as usize] = true;
+                }
+            }
+        }
+        if next.is_empty() {
+            reference.assets = include.iter().filter(|&&x| x).count();
+            return (out, reference);
+        }
+        pending = next;
+    }
+}
+
+/// A ray of the reference trace still open: probe, ray, and every box it crosses (entry
+/// rounded down, nearest first) once it was seen to hit nothing.
+type Pending = (usize, usize, Option<Vec<(f32, u32)>>);
+
 /// First-hit tags of every ray of a probe (SVF rays, then sun rays).
 fn tags(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
     p.svf_dirs
@@ -360,8 +560,7 @@ pub fn bound(
         None
     };
     let probes: Vec<Probe> = pois.iter().map(|p| probe(p, &bundles, table)).collect();
-    let full = full_scene(model);
-    let full_tags: Vec<Vec<Option<u32>>> = probes.iter().map(|p| tags(&full, p)).collect();
+    let (full_tags, reference) = full_tags(model, &probes);
 
     let mut levels: Vec<u8> = levels.iter().map(|&l| l.min(2)).collect();
     let mut promotions = Vec::new();
@@ -421,6 +620,7 @@ pub fn bound(
                 pois: figures,
                 promotions,
                 rounds,
+                reference,
             });
         }
         let mut promoted_any = false;
@@ -481,6 +681,7 @@ pub fn bound(
                 pois: figures,
                 promotions,
                 rounds,
+                reference,
             });
         }
     }
@@ -489,6 +690,7 @@ pub fn bound(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lod::scene::full_scene;
     use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
     use crate::solar::poi_sky_view;
 
@@ -563,6 +765,12 @@ mod tests {
         };
         let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
         assert!(b.met && b.promotions.is_empty() && b.rounds == 1);
+        // 3 polygons, thousands of rays: the whole model at once
+        assert!(
+            b.reference.whole && b.reference.assets == 2,
+            "{:?}",
+            b.reference
+        );
         let bundles = SkyBundles::new(4000, 7).unwrap();
         let full = poi_sky_view(&full_scene(&m), &poi(), &bundles).svf;
         let lod = poi_sky_view(&mixed_scene(&m, &rough, &levels), &poi(), &bundles).svf;
@@ -646,5 +854,69 @@ mod tests {
         let p = &b.pois[0];
         assert_eq!(p.sun_hours_error, Some(0.0));
         assert!(p.sun_hours_full.unwrap() > 0.0);
+    }
+
+    /// The lazy reference trace gives every ray the answer of the whole-model scene (same
+    /// asset, same distance to the bit) on a synth district with low sun rays, while it
+    /// builds only part of the model.
+    #[test]
+    fn restricted_full_scene_answers_as_the_whole_model() {
+        use crate::synth::{generate, pois, Preset};
+        let mut opts = Preset::Paper.defaults();
+        (opts.blocks_x, opts.blocks_y) = (3, 2);
+        let mut xml = Vec::new();
+        generate(&opts, &mut xml).unwrap();
+        let model = crate::citygml::read::read_bytes(&xml, "paper.gml").unwrap();
+        let mut ps: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
+        // and a POI on the ground in the open, facing up
+        ps.push(Poi {
+            id: "open".into(),
+            position: ps[0].position + DVec3::new(3.0, -2.0, 0.0),
+            normal: None,
+        });
+        assert!(ps.len() >= 3);
+        let site = crate::solar::Site::new(48.76, 11.42);
+        let table = SunTable::year(2025, 30, &site).unwrap();
+        let bundles = SkyBundles::new(3000, 7).unwrap();
+        let probes: Vec<Probe> = ps
+            .iter()
+            .map(|p| probe(p, &bundles, Some(&table)))
+            .collect();
+        let (hits, reference) = lazy_hits(&model, &probes);
+        let whole = full_scene(&model);
+        let (mut compared, mut hit) = (0, 0);
+        for (p, got) in probes.iter().zip(&hits) {
+            assert_eq!(got.len(), p.len());
+            for (j, g) in got.iter().enumerate() {
+                let want = whole
+                    .first_hit(p.origin, p.dir(j), POI_OFFSET, f64::INFINITY)
+                    .map(|h| (h.tag, h.t));
+                match (g, want) {
+                    (Some((a, t)), Some((b, u))) => {
+                        assert_eq!((*a, t.to_bits()), (b, u.to_bits()), "ray {j}");
+                        hit += 1;
+                    }
+                    (a, b) => assert_eq!(a.map(|x| x.0), b.map(|x| x.0), "ray {j}"),
+                }
+                compared += 1;
+            }
+        }
+        assert!(hit > 100 && hit < compared, "{hit} of {compared} rays hit");
+        assert!(
+            reference.assets > 0 && reference.assets < reference.of,
+            "{reference:?}"
+        );
+        assert!(reference.rounds >= 2 && !reference.whole, "{reference:?}");
+        // `bound` uses these tags, or (more rays than polygons here) the whole model's
+        let (tags, r) = full_tags(&model, &probes);
+        assert!(r.whole, "{r:?}");
+        for (p, (t, h)) in probes.iter().zip(tags.iter().zip(&hits)) {
+            assert_eq!(t, &tags_of(&whole, p));
+            assert_eq!(t, &h.iter().map(|h| h.map(|h| h.0)).collect::<Vec<_>>());
+        }
+    }
+
+    fn tags_of(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
+        tags(scene, p)
     }
 }

@@ -23,7 +23,7 @@
 
 use crate::lod::rough::RoughGeometry;
 use crate::model::triangulate;
-use crate::model::CityModel;
+use crate::model::{Bbox, CityModel};
 use crate::trace::{Scene, SceneBuilder};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -76,6 +76,88 @@ pub fn full_scene(model: &CityModel) -> Scene {
         }
     });
     b.build()
+}
+
+/// Per asset, the bounding box of the finite points of its full-detail polygons (empty
+/// when none), which holds every triangle [`full_scene`] makes of it; and the box of all
+/// of [`full_scene`]'s triangles ([`Scene::bbox`], its frame), found exactly while
+/// triangulating only the assets that reach the edges.
+pub fn detail_boxes(model: &CityModel) -> (Vec<Bbox>, Bbox) {
+    let boxes: Vec<Bbox> = model
+        .assets
+        .par_iter()
+        .with_min_len(CHUNK)
+        .map(|a| {
+            let mut b = Bbox::EMPTY;
+            for p in a.detail_polygons() {
+                p.points().filter(|q| q.is_finite()).for_each(|&q| b.add(q));
+            }
+            b
+        })
+        .collect();
+    let frame = triangles_box(model, &boxes);
+    (boxes, frame)
+}
+
+/// The box of [`full_scene`]'s triangles, `boxes` from [`detail_boxes`]: on each side, the
+/// assets in the order of their box's reach, triangulated until the next cannot reach
+/// farther than the triangles found so far.
+fn triangles_box(model: &CityModel, boxes: &[Bbox]) -> Bbox {
+    let mut exact: Vec<Option<Bbox>> = vec![None; boxes.len()];
+    let mut scratch = Vec::new();
+    let mut tri_box = |i: usize, exact: &mut Vec<Option<Bbox>>| -> Bbox {
+        if let Some(b) = exact[i] {
+            return b;
+        }
+        scratch.clear();
+        for p in model.assets[i].detail_polygons() {
+            triangulate(p, &mut scratch);
+        }
+        let mut b = Bbox::EMPTY;
+        for t in scratch.iter().filter(|t| SceneBuilder::accepts(t)) {
+            t.iter().for_each(|&p| b.add(p));
+        }
+        exact[i] = Some(b);
+        b
+    };
+    let mut order: Vec<usize> = (0..boxes.len()).filter(|&i| !boxes[i].is_empty()).collect();
+    let mut out = Bbox::EMPTY;
+    for axis in 0..3 {
+        for high in [false, true] {
+            // reach of a box on this side, larger is farther out
+            let reach = |b: &Bbox| if high { b.max[axis] } else { -b.min[axis] };
+            order.sort_unstable_by(|&a, &b| reach(&boxes[b]).total_cmp(&reach(&boxes[a])));
+            let mut best = f64::NEG_INFINITY;
+            for &i in &order {
+                if reach(&boxes[i]) <= best {
+                    break;
+                }
+                let b = tri_box(i, &mut exact);
+                if !b.is_empty() {
+                    best = best.max(reach(&b));
+                    out.union(&b);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The part of [`full_scene`] made of the assets `i` with `include[i]`, built in the
+/// frame of the full scene's box `frame` (the union of [`detail_boxes`]) and for about
+/// `rays` rays ([`SceneBuilder::for_rays`]): its triangles have the full scene's f32
+/// coordinates and order, so a ray's [`Scene::first_hit`] is the full scene's whenever
+/// no left-out asset holds a triangle the ray hits as close ([`SceneBuilder::with_frame`]).
+pub fn full_scene_part(model: &CityModel, include: &[bool], frame: Bbox, rays: usize) -> Scene {
+    let mut b = SceneBuilder::new().with_frame(frame);
+    add_assets(&mut b, model.assets.len(), |i, out| {
+        if include.get(i).copied().unwrap_or(false) {
+            for p in model.assets[i].detail_polygons() {
+                triangulate(p, out);
+            }
+        }
+    });
+    b.for_rays(rays).build()
 }
 
 /// Every asset as its rough geometry (`rough[i]` belongs to asset `i`).

@@ -43,11 +43,13 @@
 //! All queries take `&self`; a [`Scene`] is `Send + Sync`, so callers parallelise over
 //! rays with rayon. Results do not depend on the thread count.
 
+mod boxes;
 mod polygons;
 mod query;
 pub mod ray;
 mod scene;
 
+pub use boxes::BoxIndex;
 pub use polygons::scene_of;
 pub use query::Hit;
 pub use scene::{BuildQuality, BvhLayout, Scene, SceneBuilder};

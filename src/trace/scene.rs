@@ -61,6 +61,7 @@ pub struct SceneBuilder {
     layout: BvhLayout,
     quality: BuildQuality,
     scratch: Vec<[DVec3; 3]>,
+    frame: Option<Bbox>,
 }
 
 impl SceneBuilder {
@@ -102,6 +103,24 @@ impl SceneBuilder {
         }
     }
 
+    /// Build in the frame of `bbox` (the box of a larger scene holding these triangles):
+    /// the local origin is its centre and the node boxes are grown as for it, so every
+    /// triangle gets the same f32 coordinates, and every ray the same f32 distances, as in
+    /// that scene. A scene made of part of another's triangles, added in the same order,
+    /// then answers [`Scene::first_hit`] exactly as the whole would for every ray whose
+    /// answer there is one of its triangles and that no left-out triangle hits as close.
+    /// Ignored when `bbox` is empty.
+    pub fn with_frame(mut self, bbox: Bbox) -> Self {
+        self.frame = (!bbox.is_empty()).then_some(bbox);
+        self
+    }
+
+    /// Whether [`SceneBuilder::add_triangle`] keeps `tri` (finite, non-zero area).
+    pub fn accepts(tri: &[DVec3; 3]) -> bool {
+        tri.iter().all(|p| p.is_finite())
+            && (tri[1] - tri[0]).cross(tri[2] - tri[0]).length_squared() != 0.0
+    }
+
     /// Number of triangles collected so far.
     pub fn len(&self) -> usize {
         self.tris.len()
@@ -129,11 +148,7 @@ impl SceneBuilder {
     /// Add one triangle with `tag`. Returns false (and adds nothing) when a vertex is
     /// not finite or the triangle has zero area.
     pub fn add_triangle(&mut self, tag: u32, tri: [DVec3; 3]) -> bool {
-        if !tri.iter().all(|p| p.is_finite()) {
-            return false;
-        }
-        let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-        if n.length_squared() == 0.0 {
+        if !Self::accepts(&tri) {
             return false;
         }
         self.tris.push(tri);
@@ -144,10 +159,10 @@ impl SceneBuilder {
     /// Build the BVH. An empty builder gives an empty scene in which every ray is free.
     pub fn build(mut self) -> Scene {
         let bbox = Bbox::of_points(self.tris.iter().flatten());
-        let origin = if bbox.is_empty() {
-            DVec3::ZERO
-        } else {
-            bbox.center()
+        let origin = match self.frame {
+            Some(f) => f.center(),
+            None if bbox.is_empty() => DVec3::ZERO,
+            None => bbox.center(),
         };
         // The f64 triangles go before the BVH is built (its peak): a city's rough scene
         // holds millions.
@@ -173,7 +188,16 @@ impl SceneBuilder {
                 accel: Accel::Empty,
             };
         }
-        let pad = node_pad(&local);
+        let mut pad = node_pad(&local);
+        if let Some(f) = self.frame {
+            // the pad of the frame's scene: its largest local coordinate is a corner's
+            let corners = [to_local(f.min, origin), to_local(f.max, origin)];
+            pad = pad.max(node_pad(&[Triangle {
+                v0: corners[0],
+                v1: corners[1],
+                v2: corners[1],
+            }]));
+        }
         let (accel, indices) = build_accel(&local, self.layout, self.quality.params(), pad);
         // Lay the triangles out in BVH leaf order so traversal reads them directly.
         let mut tris = Vec::with_capacity(indices.len());
