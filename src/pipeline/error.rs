@@ -5,13 +5,18 @@ use crate::lod::bound::BoundError;
 use crate::lod::select::SelectError;
 use crate::pipeline::evaluation::EvalError;
 use crate::poi::checks::TrustError;
+use crate::poi::PoiError;
 use crate::runtime::progress::Cancelled;
 use crate::solar::SolarError;
 
 /// Errors of the pipeline that stop it (a file that cannot be read does not: see
 /// [`Inputs::failures`](super::Inputs::failures)).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PipelineError {
+    /// A POI is invalid (not finite, zero normal, a duplicate id: [`crate::poi::check_poi_list`]).
+    #[error(transparent)]
+    Poi(#[from] PoiError),
     /// The model or the POIs would give a confidently wrong answer.
     #[error(transparent)]
     Trust(#[from] TrustError),

@@ -22,6 +22,7 @@ pub use same_crs::check_same_crs;
 
 /// An input that would give a confidently wrong answer.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum TrustError {
     /// POIs lie farther than the margin outside the scene's bounding box.
     #[error("{message}")]
@@ -50,5 +51,11 @@ pub enum TrustError {
     MixedCrs {
         /// `file (srs)` per CRS, `; ` separated.
         listing: String,
+    },
+    /// No input could be read: there is no scene, every POI would see the whole sky.
+    #[error("no input could be read ({failed} failed): there is no scene to trace")]
+    NoInput {
+        /// Inputs that failed.
+        failed: usize,
     },
 }
