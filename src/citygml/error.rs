@@ -157,7 +157,7 @@ pub enum WriteError {
         source: std::io::Error,
     },
     /// The output exists and overwriting was not allowed.
-    #[error("{}: output exists (use --overwrite)", .0.display())]
+    #[error("{}: output exists (overwriting not allowed)", .0.display())]
     Exists(PathBuf),
     /// The output would replace an input.
     #[error("{}: output path is one of the inputs; refusing to overwrite an input", .0.display())]

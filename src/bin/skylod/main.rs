@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 mod args;
 mod commands;
+mod errors;
 mod inputs;
 mod log;
 mod outputs;
@@ -116,7 +117,7 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 fn message(e: &anyhow::Error) -> String {
     let mut out = String::new();
     for cause in e.chain() {
-        let text = cause.to_string();
+        let text = errors::cli_text(cause);
         if text.is_empty() || out.contains(&text) {
             continue;
         }

@@ -16,7 +16,9 @@ pub mod heights;
 pub mod same_crs;
 
 pub use enclosure::{poi_flags, PoiFlag};
-pub use extent::{check_pois_near, check_pois_near_in_frame, DEFAULT_POI_MARGIN};
+pub use extent::{
+    check_pois_near, check_pois_near_in_frame, FarPoi, OutsideHint, PoisOutside, DEFAULT_POI_MARGIN,
+};
 pub use heights::check_heights;
 pub use same_crs::check_same_crs;
 
@@ -24,12 +26,9 @@ pub use same_crs::check_same_crs;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum TrustError {
-    /// POIs lie farther than the margin outside the scene's bounding box.
-    #[error("{message}")]
-    PoiOutside {
-        /// The full explanation: which POIs, how far, and what to try.
-        message: String,
-    },
+    /// POIs lie farther than the margin outside the scene's bounding box: which, how far.
+    #[error("{0}")]
+    PoiOutside(Box<PoisOutside>),
     /// The model has no heights.
     #[error(
         "{files}: the model has no heights ({reason}); tracing a flat model would give \
@@ -45,8 +44,8 @@ pub enum TrustError {
     /// Inputs in different CRSs.
     #[error(
         "the inputs are in different CRSs and would be merged into one scene: {listing}. \
-         Reproject them to one CRS first, or give --allow-mixed-crs if the names differ but \
-         the CRS is the same"
+         Reproject them to one CRS first, or allow mixed CRSs if the names differ but the \
+         CRS is the same"
     )]
     MixedCrs {
         /// `file (srs)` per CRS, `; ` separated.
