@@ -76,11 +76,27 @@ pub mod trace;
 // The facade: read → POIs → levels → write, and the solar numbers, from the root.
 pub use citygml::{read_file, ReadError, WriteError};
 pub use export::Format;
+/// The vector types of positions and normals ([`glam::DVec3`]), so that a program needs no
+/// `glam` dependency of its own.
+pub use glam;
 pub use model::{Asset, AssetKind, CityModel, Poi};
 pub use pipeline::{
-    frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, FrameOptions, Framed,
-    Inputs, Levels, LevelsOptions, PipelineError, Written,
+    frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, Error, EvaluateOptions,
+    FrameOptions, Framed, Inputs, Levels, LevelsOptions, PipelineError, Result, Scene,
+    SceneOptions, Study, SunOptions, Traced, Written,
 };
+pub use solar::{HorizonOptions, Site, SkyBundles, SkyView, SunHours};
+
+/// What a program embedding skylod needs, in one `use skylod::prelude::*;`: the session
+/// ([`Scene`] → [`Study`]), its options and results, POIs, formats, progress and errors.
+pub mod prelude {
+    pub use crate::glam::DVec3;
+    pub use crate::{
+        read_pois_csv, CityModel, Error, EvaluateOptions, Format, HorizonOptions, Levels,
+        LevelsOptions, Poi, Progress, Result, Scene, SceneOptions, Silent, Site, SkyBundles,
+        SkyView, Study, SunHours, SunOptions, Traced, Written,
+    };
+}
 pub use poi::{read_pois_csv, PoiError};
 pub use runtime::progress::{Cancelled, Progress, Silent};
 
