@@ -218,7 +218,7 @@ impl Study {
             source: &self.source,
             model: Cow::Borrowed(self.local.as_ref().unwrap_or(&self.source)),
             crs: self.crs.clone(),
-            frame: self.frame.clone(),
+            frame: self.frame,
             pois: self.pois.clone(),
             local_pois: self.local_pois.clone(),
             warnings: self.warnings.clone(),

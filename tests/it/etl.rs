@@ -42,7 +42,10 @@ fn etl_example_gives_the_cli_s_figures_in_a_short_program() {
     let rows = rows.as_array().unwrap();
     let svf = cli_json("svf", &tiles, &csv);
     let sun = cli_json("sun-hours", &tiles, &csv);
-    let (svf, sun) = (svf["pois"].as_array().unwrap(), sun["pois"].as_array().unwrap());
+    let (svf, sun) = (
+        svf["pois"].as_array().unwrap(),
+        sun["pois"].as_array().unwrap(),
+    );
     assert_eq!(rows.len(), 3);
     assert_eq!((svf.len(), sun.len()), (3, 3));
     for ((r, v), s) in rows.iter().zip(svf).zip(sun) {
