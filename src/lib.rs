@@ -66,6 +66,8 @@ pub mod pipeline;
 pub mod poi;
 // Progress, cancellation, memory given back between stages.
 pub mod runtime;
+// The owned session (Scene -> Study) and the one error of the library.
+pub mod session;
 // Solar analysis: sky partition, sun positions, SVF, sun hours, horizons, fisheye pictures.
 pub mod solar;
 // Deterministic synthetic districts (the paper's Eixample) and box scenes.
@@ -81,10 +83,10 @@ pub use export::Format;
 pub use glam;
 pub use model::{Asset, AssetKind, CityModel, Poi};
 pub use pipeline::{
-    frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, Error, EvaluateOptions,
-    FrameOptions, Framed, Inputs, Levels, LevelsOptions, PipelineError, Result, Scene,
-    SceneOptions, Study, SunOptions, Traced, Written,
+    frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, EvaluateOptions,
+    FrameOptions, Framed, Inputs, Levels, LevelsOptions, PipelineError, Traced, Written,
 };
+pub use session::{Error, Result, Scene, SceneOptions, Study, SunOptions};
 pub use solar::{HorizonOptions, Site, SkyBundles, SkyView, SunHours};
 
 /// What a program embedding skylod needs, in one `use skylod::prelude::*;`: the session

@@ -38,6 +38,7 @@ pub struct Input {
 
 /// Why the inputs cannot be listed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum InputError {
     /// A glob pattern that does not parse.
     #[error("{pattern}: not a valid pattern: {message}")]

@@ -31,6 +31,7 @@ impl fmt::Display for Location {
 
 /// Everything that can go wrong while reading a CityGML document.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReadError {
     /// The file could not be opened or read.
     #[error("{file}: cannot read: {source}", file = .file.display())]
@@ -147,6 +148,7 @@ impl ReadError {
 
 /// Everything that can go wrong while writing.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum WriteError {
     /// I/O on the output or on re-reading the source.
     #[error("{file}: {source}", file = .file.display())]

@@ -51,17 +51,15 @@ mod fisheye;
 mod frame;
 mod levels;
 mod read;
-mod session;
 #[cfg(test)]
-mod test_support;
+pub(crate) mod test_support;
 mod write;
 
 pub(crate) use analyse::trace_in;
 pub use analyse::{evaluate, horizon, sun_hours, svf, trace, EvaluateOptions, Traced};
-pub use error::{Error, PipelineError, Result};
+pub use error::PipelineError;
 pub use fisheye::{sky_pictures, SkyPicture, SkyPictureOptions};
 pub use frame::{frame, FrameOptions, Framed};
 pub use levels::{levels, levels_of, BoundSpec, Levels, LevelsOptions};
 pub use read::{check_model, read_inputs, Inputs};
-pub use session::{Scene, SceneOptions, Study, SunOptions};
 pub use write::{buildings_without_kept_assets, write_all, write_levels, Written};

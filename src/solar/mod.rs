@@ -62,6 +62,7 @@ pub fn poi_horizon(
 
 /// Errors of the solar analysis.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SolarError {
     /// The solar position algorithm rejected its input (coordinates, atmosphere, date).
     #[error("solar position: {0}")]

@@ -4,8 +4,9 @@
 
 use skylod::citygml::WriteError;
 use skylod::io::TargetError;
-use skylod::pipeline::{Error, PipelineError};
+use skylod::pipeline::PipelineError;
 use skylod::poi::checks::TrustError;
+use skylod::Error;
 use std::error::Error as StdError;
 
 /// The text of `e` with the CLI's flags named where the library has a flag's equivalent.

@@ -17,9 +17,10 @@
 //! # Ok::<(), skylod::Error>(())
 //! ```
 
-use super::{evaluate, frame, horizon, levels, read_inputs, trace_in, write_all};
-use super::{Error, Result};
-use super::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsOptions, Traced, Written};
+mod error;
+
+pub use error::{Error, Result};
+
 use crate::batch::inputs::{expand, Input};
 use crate::batch::outputs::{create_parent, plan, Plan};
 use crate::citygml::write::WriteOptions;
@@ -29,6 +30,9 @@ use crate::export::Format;
 use crate::lod::scene::full_scene;
 use crate::model::{CityModel, Poi};
 use crate::pipeline::evaluation::Evaluation;
+use crate::pipeline::{evaluate, frame, horizon, levels, read_inputs, trace_in, write_all};
+use crate::pipeline::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsOptions};
+use crate::pipeline::{Traced, Written};
 use crate::runtime::progress::{check, Progress, Stage};
 use crate::solar::{poi_horizon, poi_sky_view, poi_sun_hours, HorizonOptions, HorizonProfile};
 use crate::solar::{Site, SkyBundles, SkyView, SunHours, SunTable, DEFAULT_STEP_MIN, DEFAULT_YEAR};
@@ -90,7 +94,7 @@ impl SunOptions {
     }
 }
 
-/// Inputs read and merged into one model, checked ([`super::Inputs::check`]).
+/// Inputs read and merged into one model, checked ([`crate::pipeline::Inputs::check`]).
 #[derive(Debug)]
 pub struct Scene {
     inputs: Vec<Input>,
@@ -158,7 +162,7 @@ impl Scene {
     }
 
     /// Check `pois` ([`crate::poi::check_poi_list`]) and bring them and the model into the
-    /// local metric frame ([`super::frame`]), refusing POIs far outside the scene.
+    /// local metric frame ([`crate::pipeline::frame`]), refusing POIs far outside the scene.
     ///
     /// # Errors
     /// [`Error::Poi`], [`Error::PoiCrs`], [`Error::UnknownModelCrs`], [`Error::Trust`].
@@ -264,7 +268,7 @@ impl Study {
         Ok(model_site(&self.source, &self.crs)?)
     }
 
-    /// Levels of every asset ([`super::levels`]).
+    /// Levels of every asset ([`crate::pipeline::levels`]).
     ///
     /// # Errors
     /// [`Error::Select`], [`Error::Bound`], [`Error::Cancelled`].
@@ -355,7 +359,7 @@ impl Study {
         })
     }
 
-    /// Full vs LoD vs all-boxes model at every POI ([`super::evaluate`]).
+    /// Full vs LoD vs all-boxes model at every POI ([`crate::pipeline::evaluate`]).
     ///
     /// # Errors
     /// [`Error::Eval`], [`Error::Cancelled`].
@@ -438,7 +442,7 @@ impl Study {
         let dir = tempfile::tempdir().map_err(io(PathBuf::from("(temporary directory)")))?;
         let tmp = dir.path().join(format.output_name("out.gml"));
         let wopts = WriteOptions::default();
-        let s = super::write_levels(&self.source, file, levels, &tmp, format, &wopts)?;
+        let s = crate::pipeline::write_levels(&self.source, file, levels, &tmp, format, &wopts)?;
         let mut f = std::fs::File::open(&tmp).map_err(io(tmp.clone()))?;
         std::io::copy(&mut f, w).map_err(io(PathBuf::from("(writer)")))?;
         Ok(s)
@@ -485,11 +489,11 @@ mod tests {
         let table = SunTable::year(DEFAULT_YEAR, 120, &Site::new(site.lat, site.lon)).unwrap();
         assert_eq!(
             v.results,
-            super::super::svf(&framed, &bundles, &Silent)
+            crate::pipeline::svf(&framed, &bundles, &Silent)
                 .unwrap()
                 .results
         );
-        let direct = super::super::sun_hours(&framed, &table, &Silent).unwrap();
+        let direct = crate::pipeline::sun_hours(&framed, &table, &Silent).unwrap();
         assert_eq!(h.results, direct.results);
         assert_eq!(v.flags.len(), 4);
         // Results serialise for a program's JSON.
