@@ -66,6 +66,8 @@ pub mod pipeline;
 pub mod poi;
 // Progress, cancellation, memory given back between stages.
 pub mod runtime;
+// The owned session (Scene -> Study) and the one error of the library.
+pub mod session;
 // Solar analysis: sky partition, sun positions, SVF, sun hours, horizons, fisheye pictures.
 pub mod solar;
 // Deterministic synthetic districts (the paper's Eixample) and box scenes.
@@ -76,11 +78,27 @@ pub mod trace;
 // The facade: read → POIs → levels → write, and the solar numbers, from the root.
 pub use citygml::{read_file, ReadError, WriteError};
 pub use export::Format;
+/// The vector types of positions and normals ([`glam::DVec3`]), so that a program needs no
+/// `glam` dependency of its own.
+pub use glam;
 pub use model::{Asset, AssetKind, CityModel, Poi};
 pub use pipeline::{
-    frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, FrameOptions, Framed,
-    Inputs, Levels, LevelsOptions, PipelineError, Written,
+    frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, EvaluateOptions,
+    FrameOptions, Framed, Inputs, Levels, LevelsOptions, PipelineError, Traced, Written,
 };
+pub use session::{Error, Result, Scene, SceneOptions, Study, SunOptions};
+pub use solar::{HorizonOptions, Site, SkyBundles, SkyView, SunHours};
+
+/// What a program embedding skylod needs, in one `use skylod::prelude::*;`: the session
+/// ([`Scene`] → [`Study`]), its options and results, POIs, formats, progress and errors.
+pub mod prelude {
+    pub use crate::glam::DVec3;
+    pub use crate::{
+        read_pois_csv, CityModel, Error, EvaluateOptions, Format, HorizonOptions, Levels,
+        LevelsOptions, Poi, Progress, Result, Scene, SceneOptions, Silent, Site, SkyBundles,
+        SkyView, Study, SunHours, SunOptions, Traced, Written,
+    };
+}
 pub use poi::{read_pois_csv, PoiError};
 pub use runtime::progress::{Cancelled, Progress, Silent};
 

@@ -141,6 +141,7 @@ fn root_name(head: &[u8]) -> Option<String> {
 
 /// Why the inputs cannot be listed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum InputError {
     /// A glob pattern that does not parse.
     #[error("{pattern}: not a valid pattern: {message}")]

@@ -51,6 +51,7 @@ pub enum Plan {
 
 /// Why the outputs cannot be laid out.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PlanError {
     /// One input and an output name that tells no format.
     #[error(transparent)]

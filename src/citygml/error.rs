@@ -31,6 +31,7 @@ impl fmt::Display for Location {
 
 /// Everything that can go wrong while reading a CityGML document.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReadError {
     /// The file could not be opened or read.
     #[error("{file}: cannot read: {source}", file = .file.display())]
@@ -147,6 +148,7 @@ impl ReadError {
 
 /// Everything that can go wrong while writing.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum WriteError {
     /// I/O on the output or on re-reading the source.
     #[error("{file}: {}", crate::io::describe_io(.source), file = .file.display())]
@@ -157,7 +159,7 @@ pub enum WriteError {
         source: std::io::Error,
     },
     /// The output exists and overwriting was not allowed.
-    #[error("{}: output exists (use --overwrite)", .0.display())]
+    #[error("{}: output exists (overwriting not allowed)", .0.display())]
     Exists(PathBuf),
     /// The output would replace an input.
     #[error("{}: output path is one of the inputs; refusing to overwrite an input", .0.display())]

@@ -46,6 +46,7 @@ use glam::DVec3;
 
 /// Errors converting between CRSs.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum CrsError {
     /// This build cannot convert between the two CRSs.
     #[error("cannot convert from {from} to {to} in this build (geographic CRSs on GRS 1980/WGS 84, UTM zones and the EPSG projected CRSs in metres of proj4rs/crs-definitions only; other CRSs need the `proj` feature)")]

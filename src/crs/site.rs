@@ -41,6 +41,55 @@ pub fn lat_lon(srs_name: &str, x: f64, y: f64) -> Option<(f64, f64)> {
     site_lat_lon(&Crs::parse(srs_name), DVec3::new(x, y, 0.0))
 }
 
+/// Where the sun is seen from for a model: the centre of its bounding box in WGS 84, with
+/// the CRS it was converted from ([`model_site`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct ModelSite {
+    /// Latitude, degrees north.
+    pub lat: f64,
+    /// Longitude, degrees east (-180..180).
+    pub lon: f64,
+    /// The model's CRS the centre was converted from.
+    pub crs: Crs,
+}
+
+/// Why a model gives no site ([`model_site`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "the input's CRS ({}) is not one skylod converts (geographic, or UTM zones of WGS 84, \
+     ETRS89, JGD2011, NAD83, GDA)",
+    .crs.as_deref().unwrap_or("none given")
+)]
+#[non_exhaustive]
+pub struct NoSite {
+    /// The CRS as named (`None`: no file names one), or the model is empty.
+    pub crs: Option<String>,
+}
+
+/// The site of the sun for `model` in `crs` (the model's, [`super::model_crs`]): the centre
+/// of its bounding box converted to latitude/longitude. The one place the CLI and the library
+/// take a site from a model.
+///
+/// # Errors
+/// [`NoSite`] for an empty model or a CRS the build does not convert.
+pub fn model_site(model: &crate::model::CityModel, crs: &Crs) -> Result<ModelSite, NoSite> {
+    let bbox = model.bbox();
+    let no = || NoSite {
+        crs: (!crs.name.is_empty()).then(|| crs.name.clone()),
+    };
+    if bbox.is_empty() {
+        return Err(no());
+    }
+    let c = bbox.center();
+    let (lat, lon) = site_lat_lon(crs, DVec3::new(c.x, c.y, 0.0)).ok_or_else(no)?;
+    Ok(ModelSite {
+        lat,
+        lon,
+        crs: crs.clone(),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -107,5 +156,25 @@ mod tests {
                 "{lat} {lon}"
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod site_tests {
+    use super::*;
+
+    #[test]
+    fn site_of_a_model_is_the_centre_of_its_box() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml");
+        let m = crate::citygml::read_file(&path).unwrap();
+        let crs = super::super::model_crs(&m, None);
+        let s = model_site(&m, &crs).unwrap();
+        let c = m.bbox().center();
+        assert_eq!(Some((s.lat, s.lon)), lat_lon(&crs.name, c.x, c.y));
+        let e = model_site(&m, &Crs::parse("")).unwrap_err();
+        assert!(e.to_string().contains("(none given)"), "{e}");
+        let empty = crate::model::CityModel::default();
+        assert!(model_site(&empty, &crs).is_err());
     }
 }

@@ -108,6 +108,7 @@ impl Default for BoundOptions {
 
 /// Errors of [`bound`].
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BoundError {
     /// The SVF bundle could not be made.
     #[error("SVF bundle: {0}")]

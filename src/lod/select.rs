@@ -91,6 +91,7 @@ impl Default for SelectOptions {
 
 /// Errors of the selection stage.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SelectError {
     /// The ray count is not usable.
     #[error("sky bundle: {0}")]

@@ -22,6 +22,28 @@ pub struct Poi {
 pub const POI_OFFSET: f64 = 0.01;
 
 impl Poi {
+    /// A free point (no normal) `id` at `position` (`[x, y, z]`, the model's CRS).
+    ///
+    /// ```
+    /// let p = skylod::Poi::at("w1", [430000.0, 4581000.0, 12.0]).facing([0.0, -2.0, 0.0]);
+    /// assert_eq!(p.normal, Some(glam::DVec3::new(0.0, -1.0, 0.0)));
+    /// ```
+    pub fn at(id: impl Into<String>, position: [f64; 3]) -> Poi {
+        Poi {
+            id: id.into(),
+            position: DVec3::from_array(position),
+            normal: None,
+        }
+    }
+
+    /// The same point on a surface facing `normal` (normalised; a zero or non-finite normal
+    /// is kept as given and refused by [`crate::poi::check_poi`]'s callers, never traced).
+    pub fn facing(mut self, normal: [f64; 3]) -> Poi {
+        let n = DVec3::from_array(normal);
+        self.normal = Some(n.try_normalize().unwrap_or(n));
+        self
+    }
+
     /// Where its rays start: moved [`POI_OFFSET`] along its normal when it has one.
     pub fn ray_origin(&self) -> DVec3 {
         match self.normal {

@@ -18,7 +18,7 @@ use std::time::Instant;
 
 /// What [`trace`] (and [`svf`], [`sun_hours`], [`horizon`]) computed: one result per POI
 /// against the full-detail scene, in POI order.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 #[non_exhaustive]
 pub struct Traced<T> {
     /// One result per POI, in the order of [`Framed::local_pois`].
@@ -56,20 +56,40 @@ pub fn trace<T: Send>(
     sky_rays: impl Fn(&T) -> Option<usize> + Sync,
     progress: &dyn Progress,
 ) -> Result<Traced<T>, Cancelled> {
-    let model: &CityModel = &framed.model;
-    let pois = &framed.local_pois;
     check(progress, Stage::Bvh)?;
     let t = Instant::now();
-    let scene = crate::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || full_scene(model));
-    let bvh_s = t.elapsed().as_secs_f64();
+    let scene = crate::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || {
+        let s = full_scene(&framed.model);
+        progress.advance(Stage::Bvh, 1, 0, None);
+        s
+    });
+    let mut traced = trace_in(framed, &scene, f, sky_rays, progress)?;
+    traced.bvh_s = t.elapsed().as_secs_f64() - traced.trace_s;
+    Ok(traced)
+}
+
+/// [`trace`] against a full-detail `scene` already built (of `framed.model`): no
+/// [`Stage::Bvh`], `bvh_s` 0.
+///
+/// # Errors
+/// [`Cancelled`] when `progress` asks to stop.
+pub(crate) fn trace_in<T: Send>(
+    framed: &Framed<'_>,
+    scene: &Scene,
+    f: impl Fn(&Scene, &Poi) -> T + Sync,
+    sky_rays: impl Fn(&T) -> Option<usize> + Sync,
+    progress: &dyn Progress,
+) -> Result<Traced<T>, Cancelled> {
+    let model: &CityModel = &framed.model;
+    let pois = &framed.local_pois;
     let t = Instant::now();
     let traced: Result<Vec<(T, Vec<PoiFlag>)>, Cancelled> =
         crate::runtime::progress::stage(progress, Stage::Trace, pois.len() as u64, 0, || {
             pois.par_iter()
                 .map(|p| {
                     check(progress, Stage::Trace)?;
-                    let r = f(&scene, p);
-                    let flags = checks::poi_flags(&scene, model, p, sky_rays(&r));
+                    let r = f(scene, p);
+                    let flags = checks::poi_flags(scene, model, p, sky_rays(&r));
                     // No name: many cheap POIs in parallel (a log line each would drown the log).
                     progress.advance(Stage::Trace, 1, 0, None);
                     Ok((r, flags))
@@ -80,7 +100,7 @@ pub fn trace<T: Send>(
     Ok(Traced {
         results,
         flags,
-        bvh_s,
+        bvh_s: 0.0,
         trace_s: t.elapsed().as_secs_f64(),
     })
 }
@@ -200,6 +220,8 @@ mod tests {
         assert_eq!(tally.sum(Stage::Trace, "start").0, 3 * 24);
         assert_eq!(tally.sum(Stage::Trace, "advance").0, 3 * 24);
         assert_eq!(tally.sum(Stage::Bvh, "start").0, 3);
+        // The scene stage advances as far as it announced.
+        assert_eq!(tally.sum(Stage::Bvh, "advance").0, 3);
         for (k, p) in framed.local_pois.iter().enumerate() {
             assert_eq!(v.results[k], poi_sky_view(&scene, p, &bundles), "{}", p.id);
             assert_eq!(h.results[k], poi_sun_hours(&scene, p, &table), "{}", p.id);

@@ -5,18 +5,23 @@ use crate::lod::bound::BoundError;
 use crate::lod::select::SelectError;
 use crate::pipeline::evaluation::EvalError;
 use crate::poi::checks::TrustError;
+use crate::poi::PoiError;
 use crate::runtime::progress::Cancelled;
 use crate::solar::SolarError;
 
 /// Errors of the pipeline that stop it (a file that cannot be read does not: see
 /// [`Inputs::failures`](super::Inputs::failures)).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PipelineError {
+    /// A POI is invalid (not finite, zero normal, a duplicate id: [`crate::poi::check_poi_list`]).
+    #[error(transparent)]
+    Poi(#[from] PoiError),
     /// The model or the POIs would give a confidently wrong answer.
     #[error(transparent)]
     Trust(#[from] TrustError),
     /// The POIs could not be converted from their CRS to the model's.
-    #[error("--poi-crs {from}: {source}")]
+    #[error("POIs in {from}: {source}")]
     PoiCrs {
         /// The POIs' CRS.
         from: String,
@@ -24,7 +29,7 @@ pub enum PipelineError {
         source: CrsError,
     },
     /// The POIs are in another CRS but the model's is not known.
-    #[error("--poi-crs {from}: the model's CRS ({model}) is not known, so POIs cannot be converted to it (give --source-crs)")]
+    #[error("POIs in {from}: the model's CRS ({model}) is not known, so POIs cannot be converted to it (give the model's CRS)")]
     UnknownModelCrs {
         /// The POIs' CRS.
         from: String,

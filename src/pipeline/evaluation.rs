@@ -62,6 +62,7 @@ impl Default for EvalOptions {
 
 /// Errors of [`evaluate`].
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum EvalError {
     /// The selection failed.
     #[error(transparent)]

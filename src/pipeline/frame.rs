@@ -4,7 +4,7 @@ use super::PipelineError;
 use crate::crs::{build_transform, model_crs, Crs, LocalFrame, PointTransform};
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::poi::checks;
+use crate::poi::{check_poi, check_poi_list, checks};
 use std::borrow::Cow;
 
 /// How the model and the POIs are brought into the tracing frame ([`frame`]).
@@ -52,16 +52,19 @@ pub struct Framed<'a> {
     pub note: Option<String>,
 }
 
-/// Apply `source_crs`, choose the frame, convert `pois` from `poi_crs` to the model's CRS
-/// and everything into the frame; refuse POIs farther than `poi_margin` outside the scene.
+/// Check `pois` ([`check_poi_list`]: finite, non-zero normals, unique ids), apply
+/// `source_crs`, choose the frame, convert `pois` from `poi_crs` to the model's CRS and
+/// everything into the frame; refuse POIs farther than `poi_margin` outside the scene.
 ///
 /// # Errors
-/// [`PipelineError::PoiCrs`], [`PipelineError::UnknownModelCrs`], [`PipelineError::Trust`].
+/// [`PipelineError::Poi`], [`PipelineError::PoiCrs`], [`PipelineError::UnknownModelCrs`],
+/// [`PipelineError::Trust`].
 pub fn frame<'a>(
     model: &'a mut CityModel,
     pois: Vec<Poi>,
     opts: &FrameOptions,
 ) -> Result<Framed<'a>, PipelineError> {
+    check_poi_list(&pois)?;
     if let Some(c) = &opts.source_crs {
         for f in &mut model.files {
             f.srs_name = Some(c.name.clone());
@@ -108,6 +111,10 @@ pub fn frame<'a>(
         None => pois,
     };
     let local_pois: Vec<Poi> = pois.iter().map(|p| frame.poi_to_local(p)).collect();
+    // a conversion can leave a POI without finite coordinates (outside a CRS's domain)
+    for (k, p) in local_pois.iter().enumerate() {
+        check_poi(p, &format!("POI {} in the tracing frame", k + 1))?;
+    }
     let local = frame.model_to_local(source);
     let local_bbox = match &local {
         Cow::Borrowed(_) => source_bbox,
@@ -130,4 +137,48 @@ pub fn frame<'a>(
         warnings,
         note,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::test_support::*;
+    use crate::pipeline::{read_inputs, svf};
+    use crate::poi::PoiError;
+    use crate::runtime::progress::Silent;
+    use crate::solar::SkyBundles;
+    use glam::DVec3;
+
+    /// Each POI that used to be traced to a clean-looking SVF 1 (a NaN position, a zero
+    /// normal) or to two rows under one id is refused by `frame`, so by every path after it.
+    #[test]
+    fn invalid_pois_are_refused_before_any_tracing() {
+        let mut inputs = read_inputs(&[fixture()], &Silent).unwrap();
+        let good = grid_pois(&inputs.model, 2);
+        let bundles = SkyBundles::new(100, 1).unwrap();
+        let mut nan = good.clone();
+        nan[1].position.x = f64::NAN;
+        let r = frame(&mut inputs.model, nan, &FrameOptions::default());
+        assert!(
+            matches!(&r, Err(PipelineError::Poi(PoiError::NotFinite { at, .. })) if at == "POI 2"),
+            "{r:?}"
+        );
+        let mut flat = good.clone();
+        flat[0].normal = Some(DVec3::ZERO);
+        let r = frame(&mut inputs.model, flat, &FrameOptions::default());
+        assert!(
+            matches!(&r, Err(PipelineError::Poi(PoiError::ZeroNormal { .. }))),
+            "{r:?}"
+        );
+        let mut twice = good.clone();
+        twice[1].id = twice[0].id.clone();
+        let r = frame(&mut inputs.model, twice, &FrameOptions::default());
+        assert!(
+            matches!(&r, Err(PipelineError::Poi(PoiError::DuplicateId { .. }))),
+            "{r:?}"
+        );
+        // The same POIs, valid, are traced.
+        let framed = frame(&mut inputs.model, good, &FrameOptions::default()).unwrap();
+        assert_eq!(svf(&framed, &bundles, &Silent).unwrap().results.len(), 2);
+    }
 }

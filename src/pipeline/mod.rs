@@ -53,9 +53,10 @@ mod irradiance;
 mod levels;
 mod read;
 #[cfg(test)]
-mod test_support;
+pub(crate) mod test_support;
 mod write;
 
+pub(crate) use analyse::trace_in;
 pub use analyse::{evaluate, horizon, sun_hours, svf, trace, EvaluateOptions, Traced};
 pub use error::PipelineError;
 pub use fisheye::{sky_pictures, SkyPicture, SkyPictureOptions};

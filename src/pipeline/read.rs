@@ -24,15 +24,17 @@ pub struct Inputs {
 }
 
 impl Inputs {
-    /// Refuse a model that would give a confidently wrong answer whatever the POIs: inputs
-    /// whose CRSs differ (unless `allow_mixed_crs`), a model without heights. Nothing read
-    /// passes.
+    /// Refuse a model that would give a confidently wrong answer whatever the POIs: no
+    /// input read at all ([`TrustError::NoInput`]), inputs whose CRSs differ (unless
+    /// `allow_mixed_crs`), a model without heights.
     ///
     /// # Errors
     /// [`TrustError`].
     pub fn check(&self, allow_mixed_crs: bool) -> Result<(), TrustError> {
         if self.read.is_empty() {
-            return Ok(());
+            return Err(TrustError::NoInput {
+                failed: self.failures.len(),
+            });
         }
         check_model(&self.model, allow_mixed_crs)
     }
@@ -110,5 +112,16 @@ mod tests {
         assert_eq!(inputs.read, vec![fixture()]);
         assert_eq!(inputs.failures.len(), 1);
         assert!(inputs.failures[0].to_string().contains("bad.gml"));
+        assert!(inputs.check(false).is_ok());
+        // Nothing read: refused here, not later as a POI far outside an empty scene.
+        let none = read_inputs(&[bad], &crate::runtime::progress::Silent).unwrap();
+        assert!(matches!(
+            none.check(false),
+            Err(TrustError::NoInput { failed: 1 })
+        ));
+        assert!(matches!(
+            Inputs::default().check(true),
+            Err(TrustError::NoInput { failed: 0 })
+        ));
     }
 }

@@ -29,7 +29,7 @@ pub struct Written {
 }
 
 /// Write file `file` of `model` (as read, [`Framed::source`](super::Framed::source)) to `out` in `format` with
-/// every asset at its level.
+/// every asset at its level; `out`'s missing parent folders are created.
 ///
 /// # Errors
 /// [`WriteError`] (the target is checked first; nothing partial is left behind).
@@ -41,6 +41,18 @@ pub fn write_levels(
     format: Format,
     wopts: &WriteOptions,
 ) -> Result<Written, WriteError> {
+    // a missing folder is made, not reported as a failed temporary file inside it
+    if let Some(dir) = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty() && !d.exists())
+    {
+        if !crate::io::is_stdout(out) {
+            std::fs::create_dir_all(dir).map_err(|source| WriteError::Io {
+                file: dir.to_path_buf(),
+                source,
+            })?;
+        }
+    }
     if format == Format::CityGml {
         let s = write_mixed(
             model,
@@ -161,6 +173,18 @@ mod tests {
         )
         .unwrap();
         assert!(w.iter().all(Result::is_ok));
+        // A missing folder is created (it used to fail naming a temporary file in it).
+        let deep = dir.path().join("x/y/c.gml");
+        write_levels(
+            framed.source,
+            0,
+            &lv,
+            &deep,
+            Format::CityGml,
+            &WriteOptions::default(),
+        )
+        .unwrap();
+        assert!(deep.is_file());
         assert_eq!(tally.sum(Stage::Write, "start").0, 2);
         assert_eq!(tally.sum(Stage::Write, "advance").0, 2);
     }

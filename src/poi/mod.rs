@@ -3,14 +3,18 @@
 
 pub mod checks;
 pub mod region;
+mod validate;
+
+pub use validate::{check_poi, check_poi_list, check_pois, MIN_NORMAL_LENGTH};
 
 pub use crate::model::poi::{Poi, POI_OFFSET};
 
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
-/// Errors reading POIs.
+/// Errors reading or checking POIs.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PoiError {
     /// A `--poi` argument or CSV row that does not parse.
     #[error("{at}: {message}")]
@@ -29,6 +33,22 @@ pub enum PoiError {
         first: String,
         /// Where it is given again.
         second: String,
+    },
+    /// A POI's position or normal is NaN or infinite.
+    #[error("{at}: POI {id:?} has a coordinate that is not finite")]
+    NotFinite {
+        /// The POI's id.
+        id: String,
+        /// Where it was given (`file:line`, `--poi …`, or `POI k` in a list).
+        at: String,
+    },
+    /// A POI's normal has zero length (it would count as a horizontal surface).
+    #[error("{at}: POI {id:?}: normal has zero length")]
+    ZeroNormal {
+        /// The POI's id.
+        id: String,
+        /// Where it was given.
+        at: String,
     },
     /// The CSV file cannot be read.
     #[error("{}: {source}", .file.display())]

@@ -13,10 +13,24 @@
 /// assets: 47 MiB off its peak).
 pub const GIVE_BACK_MIN_ASSETS: usize = 200_000;
 
+static ENABLED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+
+/// Whether the pipeline gives pages back between stages ([`give_back_for`]); on by
+/// default. A program whose own heap should not be trimmed turns it off (it is process-wide:
+/// `malloc_trim` acts on the whole process's heap).
+pub fn set_give_back(enabled: bool) {
+    ENABLED.store(enabled, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Whether [`give_back_for`] trims ([`set_give_back`]).
+pub fn gives_back() -> bool {
+    ENABLED.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// [`give_back`] when a model of `assets` assets is large enough for it to pay
-/// ([`GIVE_BACK_MIN_ASSETS`]).
+/// ([`GIVE_BACK_MIN_ASSETS`]) and giving back is on ([`set_give_back`]).
 pub fn give_back_for(assets: usize) {
-    if assets >= GIVE_BACK_MIN_ASSETS {
+    if assets >= GIVE_BACK_MIN_ASSETS && gives_back() {
         give_back();
     }
 }

@@ -95,7 +95,7 @@ impl HorizonOptions {
 }
 
 /// A horizon profile: `elevation[k]` is the skyline elevation at `azimuth[k]` (degrees).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct HorizonProfile {
     /// Azimuths, degrees clockwise from north, increasing from 0, below 360.
     pub azimuth: Vec<f64>,

@@ -18,7 +18,12 @@ pub mod weather;
 pub use horizon::{horizon_profile, HorizonOptions, HorizonProfile};
 pub use sun::{sun_position, Site, SiteTimeZone, SunPosition, SunStep, SunTable};
 pub use sun_hours::{sun_hours, visible_steps, SunHours};
-pub use svf::{sky_view, SkyBundles, SkyView};
+pub use svf::{sky_view, SkyBundles, SkyView, DEFAULT_SKY_RAYS, DEFAULT_SKY_SEED};
+
+/// Default simulated year of the sun hours: a fixed year, so that results are reproducible.
+pub const DEFAULT_YEAR: i32 = 2025;
+/// Default time step (minutes) of the sun hours; the sun is evaluated at the middle of each.
+pub const DEFAULT_STEP_MIN: u32 = 15;
 
 use crate::model::Poi;
 use crate::model::POI_OFFSET;
@@ -77,6 +82,7 @@ pub fn poi_horizon(
 
 /// Errors of the solar analysis.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SolarError {
     /// The solar position algorithm rejected its input (coordinates, atmosphere, date).
     #[error("solar position: {0}")]

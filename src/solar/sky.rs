@@ -45,6 +45,7 @@ pub const MAX_CELLS: usize = 100_000_000;
 
 /// Errors of the sky partition.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SkyError {
     /// The number of cells was zero.
     #[error("sky partition needs at least one cell")]

@@ -23,7 +23,7 @@ use super::sun::SunTable;
 use glam::DVec3;
 
 /// Result of [`sun_hours`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SunHours {
     /// Hours of direct sun over the table.
     pub hours: f64,

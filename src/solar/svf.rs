@@ -48,6 +48,22 @@ pub struct SkyBundles {
     seed: u64,
 }
 
+/// Default rays per bundle (cells of each Beckers partition), as `skylod svf`.
+pub const DEFAULT_SKY_RAYS: usize = 10_000;
+/// Default seed of the ray jitter, as `skylod svf`.
+pub const DEFAULT_SKY_SEED: u64 = 1;
+
+impl Default for SkyBundles {
+    /// [`DEFAULT_SKY_RAYS`] per bundle, seed [`DEFAULT_SKY_SEED`] (what `skylod svf` uses).
+    fn default() -> Self {
+        match SkyBundles::new(DEFAULT_SKY_RAYS, DEFAULT_SKY_SEED) {
+            Ok(b) => b,
+            // a constant ray count within 1..=MAX_CELLS (tested)
+            Err(_) => unreachable!("the default ray count is valid"),
+        }
+    }
+}
+
 impl SkyBundles {
     /// Both bundles with `n` cells each, jittered from `seed` (the projected-area bundle
     /// with `seed`, the solid-angle bundle with `seed ^ 0x9E3779B97F4A7C15`).
@@ -122,7 +138,7 @@ impl SkyBundles {
 }
 
 /// Result of [`sky_view`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SkyView {
     /// Sky view factor, cosine-weighted to the normal, in `[0, 1]`.
     pub svf: f64,
@@ -171,6 +187,15 @@ pub fn sky_view(
 mod tests {
     use super::*;
     use std::f64::consts::{FRAC_PI_2, PI};
+
+    #[test]
+    fn default_bundles_are_the_cli_s() {
+        let d = SkyBundles::default();
+        let n = SkyBundles::new(10_000, 1).unwrap();
+        assert_eq!(d.seed(), 1);
+        assert_eq!(d.projected_dirs, n.projected_dirs);
+        assert_eq!(d.solid_dirs, n.solid_dirs);
+    }
 
     /// Infinite (along y) vertical wall in the plane x = `x`, from z = 0 up to `h`.
     /// Blocks a ray that reaches the plane (strictly ahead) below the wall top.

@@ -22,6 +22,8 @@ mod signals;
 mod batch;
 // `lod --max-svf-error` keeps every POI within the bound, checked by independent ray casts.
 mod bound;
+// examples/etl.rs, the README's library program, run against the CLI.
+mod etl;
 // CityJSON and CityJSONSeq output is valid for `cjval` and read by `cjio` with skylod's counts.
 mod cityjson_export;
 // The command line: exit codes, error messages, `stats --json`, `convert` safety.

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 mod args;
 mod commands;
+mod errors;
 mod inputs;
 mod log;
 mod outputs;
@@ -128,11 +129,7 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 fn message(e: &anyhow::Error) -> String {
     let mut out = String::new();
     for cause in e.chain() {
-        // A full disk in plain words, as the library's file errors say it.
-        let text = match cause.downcast_ref::<std::io::Error>() {
-            Some(io) => skylod::io::describe_io(io),
-            None => cause.to_string(),
-        };
+        let text = errors::cli_text(cause);
         if text.is_empty() || out.contains(&text) {
             continue;
         }

@@ -65,7 +65,7 @@ pub fn targets(
     }
     let n = t.refused.len();
     for e in std::mem::take(&mut t.refused) {
-        refused(&e.into());
+        refused(&anyhow!("{}", crate::errors::cli_text(&e)));
     }
     Ok((t, n))
 }

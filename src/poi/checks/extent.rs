@@ -12,8 +12,10 @@
 //! let near = Poi { id: "a".into(), position: DVec3::new(430100.0, 4581100.0, 2.0), normal: None };
 //! assert!(check_pois_near(&scene, &[near], 1000.0).is_ok());
 //! let latlon = Poi { id: "b".into(), position: DVec3::new(41.38, 2.16, 2.0), normal: None };
-//! let e = check_pois_near(&scene, &[latlon], 1000.0).unwrap_err().to_string();
-//! assert!(e.contains("--poi-crs"), "{e}");
+//! let e = check_pois_near(&scene, &[latlon], 1000.0).unwrap_err();
+//! let skylod::poi::checks::TrustError::PoiOutside(far) = e else { panic!("{e}") };
+//! assert_eq!(far.pois[0].id, "b");
+//! assert_eq!(far.pois[0].hint, Some(skylod::poi::checks::OutsideHint::Degrees));
 //! ```
 
 use super::TrustError;
@@ -63,43 +65,118 @@ pub fn check_pois_near_in_frame(
     if far.is_empty() {
         return Ok(());
     }
-    let b = shown_scene;
-    let mut message = format!(
-        "{} of {} POI(s) lie more than {margin} m outside the scene (x {:.1}..{:.1}, y {:.1}..{:.1}, z {:.1}..{:.1}):",
-        far.len(),
-        local.len(),
-        b.min.x,
-        b.max.x,
-        b.min.y,
-        b.max.y,
-        b.min.z,
-        b.max.z
-    );
-    for (l, p, d) in far.iter().take(5) {
-        let q = p.position;
+    let pois = far
+        .iter()
+        .map(|(l, p, d)| {
+            let l = l.position;
+            let q = p.position;
+            let hint = if distance(scene, DVec3::new(l.y, l.x, l.z)) <= margin {
+                Some(OutsideHint::SwappedAxes)
+            } else if q.x.abs() <= 180.0 && q.y.abs() <= 180.0 {
+                Some(OutsideHint::Degrees)
+            } else {
+                None
+            };
+            FarPoi {
+                id: p.id.clone(),
+                position: q,
+                distance_m: *d,
+                hint,
+            }
+        })
+        .collect();
+    Err(TrustError::PoiOutside(Box::new(PoisOutside {
+        pois,
+        total: local.len(),
+        margin,
+        scene: *shown_scene,
+    })))
+}
+
+/// Why a POI far outside the scene probably is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum OutsideHint {
+    /// Swapping x and y brings it within the margin.
+    SwappedAxes,
+    /// Its x and y look like degrees (both within ±180).
+    Degrees,
+}
+
+/// One POI farther than the margin outside the scene.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct FarPoi {
+    /// The POI's id.
+    pub id: String,
+    /// Its position as given (the model's CRS).
+    pub position: DVec3,
+    /// Its distance (m, in the tracing frame) to the scene's bounding box.
+    pub distance_m: f64,
+    /// What it looks like.
+    pub hint: Option<OutsideHint>,
+}
+
+/// The refusal of [`check_pois_near_in_frame`], as data: which POIs, how far, the scene.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct PoisOutside {
+    /// Every POI outside, in POI order.
+    pub pois: Vec<FarPoi>,
+    /// POIs checked.
+    pub total: usize,
+    /// The margin (m).
+    pub margin: f64,
+    /// The scene's bounding box as the user sees it (the model's CRS).
+    pub scene: Bbox,
+}
+
+impl PoisOutside {
+    /// The explanation, up to five POIs named with their distance and hint, ending in
+    /// `crs_hint` (what to give for POIs in latitude/longitude).
+    pub fn message(&self, crs_hint: &str) -> String {
+        let b = &self.scene;
+        let mut message = format!(
+            "{} of {} POI(s) lie more than {} m outside the scene (x {:.1}..{:.1}, y {:.1}..{:.1}, z {:.1}..{:.1}):",
+            self.pois.len(),
+            self.total,
+            self.margin,
+            b.min.x,
+            b.max.x,
+            b.min.y,
+            b.max.y,
+            b.min.z,
+            b.max.z
+        );
+        for p in self.pois.iter().take(5) {
+            let q = p.position;
+            let _ = write!(
+                message,
+                " {} at ({}, {}, {}) is {:.0} m away",
+                p.id, q.x, q.y, q.z, p.distance_m
+            );
+            message.push_str(match p.hint {
+                Some(OutsideHint::SwappedAxes) => " (x and y look swapped);",
+                Some(OutsideHint::Degrees) => " (looks like degrees);",
+                None => ";",
+            });
+        }
+        if self.pois.len() > 5 {
+            let _ = write!(message, " and {} more;", self.pois.len() - 5);
+        }
         let _ = write!(
             message,
-            " {} at ({}, {}, {}) is {:.0} m away",
-            p.id, q.x, q.y, q.z, d
+            " POIs are in the model's CRS and axis order: check the CRS ({crs_hint} for \
+             latitude/longitude) and the order of x and y"
         );
-        let l = l.position;
-        let swapped = DVec3::new(l.y, l.x, l.z);
-        if distance(scene, swapped) <= margin {
-            message.push_str(" (x and y look swapped);");
-        } else if q.x.abs() <= 180.0 && q.y.abs() <= 180.0 {
-            message.push_str(" (looks like degrees);");
-        } else {
-            message.push(';');
-        }
+        message
     }
-    if far.len() > 5 {
-        let _ = write!(message, " and {} more;", far.len() - 5);
+}
+
+impl std::fmt::Display for PoisOutside {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message("POIs given in EPSG:4326"))
     }
-    message.push_str(
-        " POIs are in the model's CRS and axis order: check the CRS (--poi-crs EPSG:4326 for \
-         latitude/longitude) and the order of x and y",
-    );
-    Err(TrustError::PoiOutside { message })
 }
 
 #[cfg(test)]
@@ -143,6 +220,7 @@ mod tests {
             .to_string();
         assert!(e.contains("x and y look swapped"), "{e}");
         assert!(e.contains("1 of 1 POI"), "{e}");
+        assert!(e.contains("EPSG:4326 for latitude/longitude"), "{e}");
     }
 
     #[test]

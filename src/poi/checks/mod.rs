@@ -16,19 +16,19 @@ pub mod heights;
 pub mod same_crs;
 
 pub use enclosure::{poi_flags, PoiFlag};
-pub use extent::{check_pois_near, check_pois_near_in_frame, DEFAULT_POI_MARGIN};
+pub use extent::{
+    check_pois_near, check_pois_near_in_frame, FarPoi, OutsideHint, PoisOutside, DEFAULT_POI_MARGIN,
+};
 pub use heights::check_heights;
 pub use same_crs::check_same_crs;
 
 /// An input that would give a confidently wrong answer.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum TrustError {
-    /// POIs lie farther than the margin outside the scene's bounding box.
-    #[error("{message}")]
-    PoiOutside {
-        /// The full explanation: which POIs, how far, and what to try.
-        message: String,
-    },
+    /// POIs lie farther than the margin outside the scene's bounding box: which, how far.
+    #[error("{0}")]
+    PoiOutside(Box<PoisOutside>),
     /// The model has no heights.
     #[error(
         "{files}: the model has no heights ({reason}); tracing a flat model would give \
@@ -44,11 +44,17 @@ pub enum TrustError {
     /// Inputs in different CRSs.
     #[error(
         "the inputs are in different CRSs and would be merged into one scene: {listing}. \
-         Reproject them to one CRS first, or give --allow-mixed-crs if the names differ but \
-         the CRS is the same"
+         Reproject them to one CRS first, or allow mixed CRSs if the names differ but the \
+         CRS is the same"
     )]
     MixedCrs {
         /// `srs: n files (e.g. file)` per CRS, `; ` separated.
         listing: String,
+    },
+    /// No input could be read: there is no scene, every POI would see the whole sky.
+    #[error("no input could be read ({failed} failed): there is no scene to trace")]
+    NoInput {
+        /// Inputs that failed.
+        failed: usize,
     },
 }

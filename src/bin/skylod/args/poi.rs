@@ -8,7 +8,7 @@ use crate::inputs::{load, Loaded};
 use anyhow::bail;
 use skylod::model::CityModel;
 use skylod::poi::checks::DEFAULT_POI_MARGIN;
-use skylod::poi::{check_unique_ids, parse_poi, read_pois_csv, Located, Poi};
+use skylod::poi::{check_pois, parse_poi, read_pois_csv, Located, Poi};
 use std::path::PathBuf;
 
 /// Inputs and points of interest.
@@ -64,7 +64,7 @@ impl PoiArgs {
         if out.is_empty() {
             bail!("no point of interest: give --poi X,Y,Z[,NX,NY,NZ] or --pois FILE.csv");
         }
-        check_unique_ids(&out)?;
+        check_pois(&out)?;
         Ok(out.into_iter().map(|l| l.poi).collect())
     }
 

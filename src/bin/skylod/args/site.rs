@@ -53,25 +53,27 @@ impl SiteArgs {
         Ok(())
     }
 
-    /// The site of the sun paths: the flags, or else the centre of `model` in `crs` when
-    /// skylod converts it (said on stderr, prefixed by `cmd`); `None` when neither gives one.
+    /// The site of the sun paths: the flags, or else the centre of `model` in `crs`
+    /// ([`skylod::crs::model_site`], said on stderr, prefixed by `cmd`); `None` when neither
+    /// gives one.
     pub fn for_sun_paths(&self, model: &CityModel, crs: &Crs, cmd: &str) -> Option<(f64, f64)> {
         if let Some(s) = self.given() {
             return Some(s);
         }
-        let bbox = model.bbox();
-        let site = (!bbox.is_empty())
-            .then(|| skylod::crs::site_lat_lon(crs, bbox.center()))
-            .flatten();
-        match site {
-            Some((a, o)) => {
-                summary!("{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {crs}")
+        match skylod::crs::model_site(model, crs) {
+            Ok(s) => {
+                summary!(
+                    "{cmd}: site lat {:.5}, lon {:.5}: the centre of the model in {crs}",
+                    s.lat,
+                    s.lon
+                );
+                Some((s.lat, s.lon))
             }
-            None => summary!(
-                "{cmd}: no sun paths: the CRS ({crs}) is not one skylod converts; give --lat/--lon"
-            ),
+            Err(_) => {
+                summary!("{cmd}: no sun paths: the CRS ({crs}) is not one skylod converts; give --lat/--lon");
+                None
+            }
         }
-        site
     }
 
     /// The site, from the flags or from `model` ([`site_lat_lon`]).
@@ -101,19 +103,8 @@ pub fn site_lat_lon(
 }
 
 /// The centre of `model` in WGS84 degrees (lat, lon) with the srsName it was converted from,
-/// or why there is none (no CRS, an empty model, a CRS skylod does not convert).
-pub fn model_site(model: &CityModel) -> Result<(f64, f64, &str), String> {
-    let srs = model.files.iter().find_map(|f| f.srs_name.as_deref());
-    let bbox = model.bbox();
-    let centre = (!bbox.is_empty()).then(|| bbox.center());
-    if let (Some(srs), Some(c)) = (srs, centre) {
-        if let Some((a, o)) = skylod::crs::lat_lon(srs, c.x, c.y) {
-            return Ok((a, o, srs));
-        }
-    }
-    Err(format!(
-        "the input's CRS ({}) is not one skylod converts (geographic, or UTM zones of WGS 84, \
-         ETRS89, JGD2011, NAD83, GDA)",
-        srs.unwrap_or("none given")
-    ))
+/// or why there is none ([`skylod::crs::model_site`]).
+pub fn model_site(model: &CityModel) -> Result<(f64, f64, String), skylod::crs::NoSite> {
+    let s = skylod::crs::model_site(model, &skylod::crs::model_crs(model, None))?;
+    Ok((s.lat, s.lon, s.crs.name))
 }

@@ -1,7 +1,6 @@
 //! `--year`, `--step`: the simulated year of the sun.
 
-/// Default year of `--year`: a fixed year so that results are reproducible.
-pub const DEFAULT_YEAR: i32 = 2025;
+use skylod::solar::{DEFAULT_STEP_MIN, DEFAULT_YEAR};
 
 /// The simulated year of the sun (`sun-hours`, `evaluate`, `lod --max-sun-hours-error`).
 #[derive(clap::Args, Debug, Clone, Copy)]
@@ -10,6 +9,6 @@ pub struct SunArgs {
     #[arg(long, default_value_t = DEFAULT_YEAR)]
     pub year: i32,
     /// Time step in minutes (the sun is evaluated at the middle of each step).
-    #[arg(long, default_value_t = 15)]
+    #[arg(long, default_value_t = DEFAULT_STEP_MIN)]
     pub step: u32,
 }

@@ -56,7 +56,7 @@ pub struct Args {
     #[command(flatten)]
     site: SiteArgs,
     /// Year of the sun paths.
-    #[arg(long, default_value_t = crate::args::sun::DEFAULT_YEAR)]
+    #[arg(long, default_value_t = skylod::solar::DEFAULT_YEAR)]
     year: i32,
     /// What hit cells are coloured by.
     #[arg(long, value_enum, default_value = "level")]

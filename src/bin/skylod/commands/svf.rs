@@ -12,10 +12,10 @@ pub struct Args {
     #[command(flatten)]
     tracing: crate::args::tracing::TracingArgs,
     /// Rays per bundle (cells of each Beckers sky partition).
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = skylod::solar::DEFAULT_SKY_RAYS)]
     rays: usize,
     /// Seed of the ray jitter inside each cell.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = skylod::solar::DEFAULT_SKY_SEED)]
     seed: u64,
     /// Print JSON instead of a table.
     #[arg(long)]

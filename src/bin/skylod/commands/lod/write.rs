@@ -114,7 +114,7 @@ pub fn outputs(
         let s = match r {
             Ok(s) => s,
             Err(e) => {
-                error!("{e}");
+                error!("{}", crate::errors::cli_text(&e));
                 failed = true;
                 continue;
             }

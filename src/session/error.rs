@@ -1,0 +1,147 @@
+//! The one error of the library ([`Error`], [`Result`]): every stage's error converts into it.
+
+use crate::crs::CrsError;
+use crate::lod::bound::BoundError;
+use crate::lod::select::SelectError;
+use crate::pipeline::evaluation::EvalError;
+use crate::pipeline::PipelineError;
+use crate::poi::checks::TrustError;
+use crate::poi::PoiError;
+use crate::runtime::progress::Cancelled;
+use crate::solar::SolarError;
+
+/// The one error of the library ([`crate::Error`]): every sub-error converts into
+/// it (`?` works on all of them), and a [`PipelineError`] is flattened into its cause, so a
+/// program matches one enum. Messages are in the library's terms (no command-line flags).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// An input could not be read (file, line:column, gml:id where known).
+    #[error(transparent)]
+    Read(#[from] crate::citygml::ReadError),
+    /// The input arguments name no file (a pattern or directory without CityGML).
+    #[error(transparent)]
+    Input(#[from] crate::batch::inputs::InputError),
+    /// A POI could not be read or is invalid.
+    #[error(transparent)]
+    Poi(#[from] PoiError),
+    /// POIs of a region could not be made.
+    #[error(transparent)]
+    Region(#[from] crate::poi::region::RegionError),
+    /// The model or the POIs would give a confidently wrong answer (structured:
+    /// [`TrustError::PoiOutside`] names each POI and its distance).
+    #[error(transparent)]
+    Trust(#[from] TrustError),
+    /// The POIs could not be converted from their CRS to the model's.
+    #[error("POIs in {from}: {source}")]
+    PoiCrs {
+        /// The POIs' CRS.
+        from: String,
+        /// Why.
+        source: CrsError,
+    },
+    /// The POIs are in another CRS but the model's is not known.
+    #[error("POIs in {from}: the model's CRS ({model}) is not known, so POIs cannot be converted to it (give the model's CRS)")]
+    UnknownModelCrs {
+        /// The POIs' CRS.
+        from: String,
+        /// The model's CRS as named.
+        model: String,
+    },
+    /// A CRS could not be used.
+    #[error(transparent)]
+    Crs(#[from] CrsError),
+    /// Invalid sky bundles (ray count).
+    #[error(transparent)]
+    Sky(#[from] crate::solar::sky::SkyError),
+    /// Invalid solar options (site, time zone, step, horizon step).
+    #[error(transparent)]
+    Solar(#[from] SolarError),
+    /// The selection failed.
+    #[error(transparent)]
+    Select(#[from] SelectError),
+    /// The error bound could not be computed.
+    #[error(transparent)]
+    Bound(#[from] BoundError),
+    /// The evaluation could not be made.
+    #[error(transparent)]
+    Eval(#[from] EvalError),
+    /// The outputs could not be planned (mirror, merge).
+    #[error(transparent)]
+    Plan(#[from] crate::batch::outputs::PlanError),
+    /// An output could not be written (the target is named).
+    #[error(transparent)]
+    Write(#[from] crate::citygml::WriteError),
+    /// Per-input outputs could not be merged into one document.
+    #[error(transparent)]
+    Merge(Box<crate::citygml::merge::MergeError>),
+    /// The model gives no site for the sun (empty, or a CRS not converted).
+    #[error(transparent)]
+    Site(#[from] crate::crs::NoSite),
+    /// I/O on something that is not a named file (a caller's writer).
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    /// The caller asked to stop.
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
+}
+
+/// `Result` with the library's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl From<PipelineError> for Error {
+    fn from(e: PipelineError) -> Self {
+        match e {
+            PipelineError::Poi(e) => Error::Poi(e),
+            PipelineError::Trust(e) => Error::Trust(e),
+            PipelineError::PoiCrs { from, source } => Error::PoiCrs { from, source },
+            PipelineError::UnknownModelCrs { from, model } => {
+                Error::UnknownModelCrs { from, model }
+            }
+            PipelineError::Select(SelectError::Cancelled(c)) => Error::Cancelled(c),
+            PipelineError::Select(e) => Error::Select(e),
+            PipelineError::Bound(e) => Error::Bound(e),
+            PipelineError::Eval(EvalError::Cancelled(c)) => Error::Cancelled(c),
+            PipelineError::Eval(e) => Error::Eval(e),
+            PipelineError::Solar(e) => Error::Solar(e),
+            PipelineError::Cancelled(c) => Error::Cancelled(c),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::runtime::progress::Stage;
+
+    #[test]
+    fn pipeline_errors_flatten_and_keep_their_message() {
+        let c = Cancelled {
+            stage: Stage::Select,
+        };
+        let e: Error = PipelineError::Select(SelectError::Cancelled(c)).into();
+        assert!(matches!(
+            e,
+            Error::Cancelled(Cancelled {
+                stage: Stage::Select
+            })
+        ));
+        let p = PipelineError::UnknownModelCrs {
+            from: "EPSG:4326".into(),
+            model: "none".into(),
+        };
+        let text = p.to_string();
+        let e: Error = p.into();
+        assert_eq!(e.to_string(), text);
+        // Library terms: no command-line flag in the message.
+        assert!(!text.contains("--"), "{text}");
+        fn q() -> Result<()> {
+            Err(TrustError::NoInput { failed: 2 })?;
+            Ok(())
+        }
+        assert!(matches!(
+            q(),
+            Err(Error::Trust(TrustError::NoInput { failed: 2 }))
+        ));
+    }
+}

@@ -1,0 +1,538 @@
+//! An owned session over the pipeline: [`Scene::load`] (inputs read, merged, checked) →
+//! [`Scene::frame`] (POIs checked and framed) → a [`Study`] that owns its model and answers
+//! [`Study::levels`], [`Study::svf`], [`Study::sun_hours`], [`Study::horizon`],
+//! [`Study::evaluate`] and [`Study::write_levels`], with the CLI's defaults (sky bundles, site
+//! from the model's CRS, year and step) and the full-detail scene and the sun table built
+//! once and reused. Nothing borrowed: a function can build a [`Study`] and return it.
+//!
+//! ```
+//! use skylod::prelude::*;
+//! let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+//! let scene = Scene::load(&[dir.join("synth-small.gml")], &SceneOptions::default(), &Silent)?;
+//! let c = scene.model().bbox().center();
+//! let study = scene.frame(vec![Poi::at("street", [c.x, c.y, 1.5])])?;
+//! let svf = study.svf(&SkyBundles::default(), &Silent)?;
+//! let sun = study.sun_hours(&SunOptions::default(), &Silent)?; // site from the CRS
+//! assert!(svf.results[0].svf <= 1.0 && sun.results[0].hours >= 0.0);
+//! # Ok::<(), skylod::Error>(())
+//! ```
+
+mod error;
+
+pub use error::{Error, Result};
+
+use crate::batch::inputs::{expand, Input};
+use crate::batch::outputs::{create_parent, plan, Plan};
+use crate::citygml::write::WriteOptions;
+use crate::citygml::ReadError;
+use crate::crs::{model_site, Crs, LocalFrame, ModelSite};
+use crate::export::Format;
+use crate::lod::scene::full_scene;
+use crate::model::{CityModel, Poi};
+use crate::pipeline::evaluation::Evaluation;
+use crate::pipeline::{evaluate, frame, horizon, levels, read_inputs, trace_in, write_all};
+use crate::pipeline::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsOptions};
+use crate::pipeline::{Traced, Written};
+use crate::runtime::progress::{check, Progress, Stage};
+use crate::solar::{poi_horizon, poi_sky_view, poi_sun_hours, HorizonOptions, HorizonProfile};
+use crate::solar::{Site, SkyBundles, SkyView, SunHours, SunTable, DEFAULT_STEP_MIN, DEFAULT_YEAR};
+use std::borrow::Cow;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// How a [`Scene`] is read and framed.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct SceneOptions {
+    /// CRSs of the inputs and the POIs, the margin around the scene ([`FrameOptions`]).
+    pub frame: FrameOptions,
+    /// Merge inputs whose `srsName`s name different CRSs anyway.
+    pub allow_mixed_crs: bool,
+    /// Give free heap pages back to the system between stages for large models
+    /// (`malloc_trim`, process-wide: [`crate::runtime::mem::set_give_back`]).
+    pub trim_memory: bool,
+}
+
+impl Default for SceneOptions {
+    fn default() -> Self {
+        SceneOptions {
+            frame: FrameOptions::default(),
+            allow_mixed_crs: false,
+            trim_memory: true,
+        }
+    }
+}
+
+/// The sun of [`Study::sun_hours`]: the site (`None`: the centre of the model from its CRS,
+/// [`Study::site`]), the simulated year and the step, with the CLI's defaults.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct SunOptions {
+    /// Where the sun is seen from; `None`: from the model's CRS.
+    pub site: Option<Site>,
+    /// Calendar year (UTC).
+    pub year: i32,
+    /// Minutes per step.
+    pub step_min: u32,
+}
+
+impl Default for SunOptions {
+    fn default() -> Self {
+        SunOptions {
+            site: None,
+            year: DEFAULT_YEAR,
+            step_min: DEFAULT_STEP_MIN,
+        }
+    }
+}
+
+impl SunOptions {
+    /// The same at `site`.
+    pub fn at(mut self, site: Site) -> Self {
+        self.site = Some(site);
+        self
+    }
+}
+
+/// Inputs read and merged into one model, checked ([`crate::pipeline::Inputs::check`]).
+#[derive(Debug)]
+pub struct Scene {
+    inputs: Vec<Input>,
+    model: CityModel,
+    failures: Vec<ReadError>,
+    options: SceneOptions,
+}
+
+impl Scene {
+    /// Read `paths` (files, directories searched recursively, glob patterns:
+    /// [`crate::batch::inputs::expand`]) in parallel and merge them ([`Scene::load_inputs`]).
+    ///
+    /// # Errors
+    /// [`Error::Input`] (nothing found), then as [`Scene::load_inputs`].
+    pub fn load<P: AsRef<Path>>(
+        paths: &[P],
+        options: &SceneOptions,
+        progress: &dyn Progress,
+    ) -> Result<Scene> {
+        let args: Vec<PathBuf> = paths.iter().map(|p| p.as_ref().to_path_buf()).collect();
+        Scene::load_inputs(expand(&args)?, options, progress)
+    }
+
+    /// Read `inputs` (with the paths outputs mirror) and refuse a model that would give a
+    /// confidently wrong answer: nothing read, mixed CRSs, no heights. An input that cannot
+    /// be read is kept in [`Scene::failures`] while the others are used.
+    ///
+    /// # Errors
+    /// [`Error::Trust`], [`Error::Cancelled`].
+    pub fn load_inputs(
+        inputs: Vec<Input>,
+        options: &SceneOptions,
+        progress: &dyn Progress,
+    ) -> Result<Scene> {
+        crate::runtime::mem::set_give_back(options.trim_memory);
+        let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
+        let read = read_inputs(&paths, progress)?;
+        read.check(options.allow_mixed_crs)?;
+        let mut left = read.read.iter().peekable();
+        let inputs = inputs
+            .into_iter()
+            .filter(|i| left.next_if(|p| **p == i.path).is_some())
+            .collect();
+        Ok(Scene {
+            inputs,
+            model: read.model,
+            failures: read.failures,
+            options: options.clone(),
+        })
+    }
+
+    /// The merged model, as read.
+    pub fn model(&self) -> &CityModel {
+        &self.model
+    }
+
+    /// The inputs read, in order (`model.files[k]` is `inputs()[k]`).
+    pub fn inputs(&self) -> &[Input] {
+        &self.inputs
+    }
+
+    /// The inputs that could not be read.
+    pub fn failures(&self) -> &[ReadError] {
+        &self.failures
+    }
+
+    /// Check `pois` ([`crate::poi::check_poi_list`]) and bring them and the model into the
+    /// local metric frame ([`crate::pipeline::frame`]), refusing POIs far outside the scene.
+    ///
+    /// # Errors
+    /// [`Error::Poi`], [`Error::PoiCrs`], [`Error::UnknownModelCrs`], [`Error::Trust`].
+    pub fn frame(self, pois: Vec<Poi>) -> Result<Study> {
+        let Scene {
+            inputs,
+            mut model,
+            failures,
+            options,
+        } = self;
+        let f = frame(&mut model, pois, &options.frame)?;
+        let local = match f.model {
+            Cow::Owned(m) => Some(m),
+            Cow::Borrowed(_) => None,
+        };
+        let (crs, lframe, pois, local_pois) = (f.crs, f.frame, f.pois, f.local_pois);
+        let (warnings, note) = (f.warnings, f.note);
+        Ok(Study {
+            inputs,
+            source: model,
+            local,
+            crs,
+            frame: lframe,
+            pois,
+            local_pois,
+            warnings,
+            note,
+            failures,
+            full: OnceLock::new(),
+            sun: Mutex::new(None),
+        })
+    }
+}
+
+/// A framed scene with its POIs, owning its model: levels, solar figures and outputs
+/// ([`Scene::frame`]). The full-detail scene and the sun table are built on first use.
+#[derive(Debug)]
+pub struct Study {
+    inputs: Vec<Input>,
+    source: CityModel,
+    local: Option<CityModel>,
+    crs: Crs,
+    frame: LocalFrame,
+    pois: Vec<Poi>,
+    local_pois: Vec<Poi>,
+    warnings: Vec<String>,
+    note: Option<String>,
+    failures: Vec<ReadError>,
+    full: OnceLock<crate::trace::Scene>,
+    sun: Mutex<Option<(SunOptions, Arc<SunTable>)>>,
+}
+
+impl Study {
+    /// The borrowed view the pipeline's functions take.
+    pub fn framed(&self) -> Framed<'_> {
+        Framed {
+            source: &self.source,
+            model: Cow::Borrowed(self.local.as_ref().unwrap_or(&self.source)),
+            crs: self.crs.clone(),
+            frame: self.frame,
+            pois: self.pois.clone(),
+            local_pois: self.local_pois.clone(),
+            warnings: self.warnings.clone(),
+            note: self.note.clone(),
+        }
+    }
+
+    /// The model as read (the input's CRS).
+    pub fn source(&self) -> &CityModel {
+        &self.source
+    }
+
+    /// The POIs in the model's CRS, in order.
+    pub fn pois(&self) -> &[Poi] {
+        &self.pois
+    }
+
+    /// The model's CRS.
+    pub fn crs(&self) -> &Crs {
+        &self.crs
+    }
+
+    /// The inputs read, in order.
+    pub fn inputs(&self) -> &[Input] {
+        &self.inputs
+    }
+
+    /// The inputs that could not be read.
+    pub fn failures(&self) -> &[ReadError] {
+        &self.failures
+    }
+
+    /// What to tell the user: other CRSs named by the inputs, the frame's accuracy.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// The site of the sun from the model's CRS: the centre of the model in WGS 84.
+    ///
+    /// # Errors
+    /// [`Error::Site`] for an empty model or a CRS the build does not convert.
+    pub fn site(&self) -> Result<ModelSite> {
+        Ok(model_site(&self.source, &self.crs)?)
+    }
+
+    /// Levels of every asset ([`crate::pipeline::levels`]).
+    ///
+    /// # Errors
+    /// [`Error::Select`], [`Error::Bound`], [`Error::Cancelled`].
+    pub fn levels(&self, opts: &LevelsOptions, progress: &dyn Progress) -> Result<Levels> {
+        Ok(levels(&self.framed(), opts, progress)?)
+    }
+
+    fn full(&self, progress: &dyn Progress) -> Result<&crate::trace::Scene> {
+        if let Some(s) = self.full.get() {
+            return Ok(s);
+        }
+        check(progress, Stage::Bvh)?;
+        let model = self.local.as_ref().unwrap_or(&self.source);
+        let s = crate::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || {
+            let s = full_scene(model);
+            progress.advance(Stage::Bvh, 1, 0, None);
+            s
+        });
+        Ok(self.full.get_or_init(|| s))
+    }
+
+    /// The sun table of `sun` (built once per options and kept).
+    ///
+    /// # Errors
+    /// [`Error::Site`] without a site, [`Error::Solar`] for invalid options.
+    pub fn sun_table(&self, sun: &SunOptions) -> Result<Arc<SunTable>> {
+        let mut cached = self.sun.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((o, t)) = cached.as_ref() {
+            if o == sun {
+                return Ok(t.clone());
+            }
+        }
+        let site = match sun.site {
+            Some(s) => s,
+            None => {
+                let s = self.site()?;
+                Site::new(s.lat, s.lon)
+            }
+        };
+        let t = Arc::new(SunTable::year(sun.year, sun.step_min, &site)?);
+        *cached = Some((*sun, t.clone()));
+        Ok(t)
+    }
+
+    /// SVF and sky exposure of every POI against the full-detail scene.
+    ///
+    /// # Errors
+    /// [`Error::Cancelled`].
+    pub fn svf(&self, bundles: &SkyBundles, progress: &dyn Progress) -> Result<Traced<SkyView>> {
+        let scene = self.full(progress)?;
+        let f = |s: &_, p: &Poi| poi_sky_view(s, p, bundles);
+        let no_sky = |v: &SkyView| (v.sky_exposure == 0.0).then_some(0);
+        Ok(trace_in(&self.framed(), scene, f, no_sky, progress)?)
+    }
+
+    /// Hours of direct sun of every POI over the year of `sun`.
+    ///
+    /// # Errors
+    /// As [`Study::sun_table`], [`Error::Cancelled`].
+    pub fn sun_hours(&self, sun: &SunOptions, progress: &dyn Progress) -> Result<Traced<SunHours>> {
+        let table = self.sun_table(sun)?;
+        let scene = self.full(progress)?;
+        let f = |s: &_, p: &Poi| poi_sun_hours(s, p, &table);
+        Ok(trace_in(&self.framed(), scene, f, |_| None, progress)?)
+    }
+
+    /// Horizon profile of every POI.
+    ///
+    /// # Errors
+    /// [`Error::Solar`] for invalid options, [`Error::Cancelled`].
+    pub fn horizon(
+        &self,
+        opts: &HorizonOptions,
+        progress: &dyn Progress,
+    ) -> Result<Traced<HorizonProfile>> {
+        if self.full.get().is_none() {
+            return Ok(horizon(&self.framed(), opts, progress)?);
+        }
+        opts.validate()?;
+        let scene = self.full(progress)?;
+        let f = |s: &_, p: &Poi| poi_horizon(s, p, opts);
+        let t = trace_in(&self.framed(), scene, f, |_| None, progress)?;
+        Ok(Traced {
+            results: t.results.into_iter().collect::<Result<_, _>>()?,
+            flags: t.flags,
+            bvh_s: t.bvh_s,
+            trace_s: t.trace_s,
+        })
+    }
+
+    /// Full vs LoD vs all-boxes model at every POI ([`crate::pipeline::evaluate`]).
+    ///
+    /// # Errors
+    /// [`Error::Eval`], [`Error::Cancelled`].
+    pub fn evaluate(&self, opts: &EvaluateOptions, progress: &dyn Progress) -> Result<Evaluation> {
+        Ok(evaluate(&self.framed(), opts, progress)?)
+    }
+
+    /// Write every input at `levels` to `out` in `format` (`None`: from `out`'s ending, else
+    /// CityGML): one input to a file, several mirrored below a directory (parent folders
+    /// created) or merged into one CityGML file ([`crate::batch::outputs::plan`]). An
+    /// existing output is replaced only with `overwrite`. The outputs written, in input order.
+    ///
+    /// # Errors
+    /// [`Error::Plan`] (before anything is written), [`Error::Write`] (the first output
+    /// that failed; the others are written), [`Error::Cancelled`].
+    pub fn write_levels(
+        &self,
+        levels: &Levels,
+        out: &Path,
+        format: Option<Format>,
+        overwrite: bool,
+        progress: &dyn Progress,
+    ) -> Result<Vec<(PathBuf, Written)>> {
+        let (plan, format) = plan(&self.inputs, out, format)?;
+        let paths: Vec<PathBuf> = self.inputs.iter().map(|i| i.path.clone()).collect();
+        let wopts = WriteOptions {
+            overwrite,
+            protect: paths.clone(),
+            ..WriteOptions::default()
+        };
+        let targets = plan.targets(&paths, &wopts, None, true)?;
+        if let Some(e) = targets.refused.into_iter().next() {
+            return Err(e.into());
+        }
+        for (_, p) in &targets.todo {
+            create_parent(p)?;
+        }
+        let results = write_all(
+            &self.source,
+            &targets.todo,
+            levels,
+            format,
+            &targets.write_opts,
+            progress,
+        )?;
+        let mut written = Vec::with_capacity(results.len());
+        for ((_, p), r) in targets.todo.iter().zip(results) {
+            written.push((p.clone(), r?));
+        }
+        if let (Plan::Merge(target), Some(staging)) = (&plan, &targets.staging) {
+            let parts: Vec<PathBuf> = (0..paths.len()).map(|k| staging.part(k)).collect();
+            crate::citygml::merge::merge_named(&parts, &paths, target, &wopts)
+                .map_err(|e| Error::Merge(Box::new(e)))?;
+            let total = written.iter().fold(Written::default(), |mut a, (_, w)| {
+                a.bytes += w.bytes;
+                a.polygons_in += w.polygons_in;
+                a.polygons_out += w.polygons_out;
+                a
+            });
+            return Ok(vec![(target.clone(), total)]);
+        }
+        Ok(written)
+    }
+
+    /// Write input `file` at `levels` in `format` to `w` (e.g. a buffer or a socket): written
+    /// to a temporary file first, then copied.
+    ///
+    /// # Errors
+    /// [`Error::Write`].
+    pub fn write_levels_to(
+        &self,
+        levels: &Levels,
+        file: usize,
+        format: Format,
+        w: &mut dyn std::io::Write,
+    ) -> Result<Written> {
+        let io = |file: PathBuf| {
+            move |source| Error::Write(crate::citygml::WriteError::Io { file, source })
+        };
+        let dir = tempfile::tempdir().map_err(io(PathBuf::from("(temporary directory)")))?;
+        let tmp = dir.path().join(format.output_name("out.gml"));
+        let wopts = WriteOptions::default();
+        let s = crate::pipeline::write_levels(&self.source, file, levels, &tmp, format, &wopts)?;
+        let mut f = std::fs::File::open(&tmp).map_err(io(tmp.clone()))?;
+        std::io::copy(&mut f, w).map_err(io(PathBuf::from("(writer)")))?;
+        Ok(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::test_support::*;
+    use crate::poi::checks::TrustError;
+    use crate::runtime::progress::Silent;
+
+    /// A study built in a function and returned: nothing borrowed.
+    fn study(n: usize) -> Study {
+        let scene = Scene::load(&[fixture()], &SceneOptions::default(), &Silent).unwrap();
+        let pois = grid_pois(scene.model(), n);
+        scene.frame(pois).unwrap()
+    }
+
+    #[test]
+    fn full_scene_and_sun_table_are_built_once_and_give_the_pipeline_s_answers() {
+        let s = study(4);
+        let tally = Tally::default();
+        let bundles = SkyBundles::new(300, 2).unwrap();
+        let sun = SunOptions {
+            step_min: 120,
+            ..SunOptions::default()
+        };
+        let v = s.svf(&bundles, &tally).unwrap();
+        let h = s.sun_hours(&sun, &tally).unwrap();
+        let z = s.horizon(&HorizonOptions::default().with_step(10.0), &tally);
+        assert!(z.is_ok());
+        assert_eq!(tally.sum(Stage::Bvh, "start").0, 1);
+        assert_eq!(tally.sum(Stage::Bvh, "advance").0, 1);
+        assert_eq!(tally.sum(Stage::Trace, "advance").0, 3 * 4);
+        assert!(Arc::ptr_eq(
+            &s.sun_table(&sun).unwrap(),
+            &s.sun_table(&sun).unwrap()
+        ));
+        // The same figures as the borrowed pipeline, site from the CRS, default year.
+        let framed = s.framed();
+        let site = s.site().unwrap();
+        let table = SunTable::year(DEFAULT_YEAR, 120, &Site::new(site.lat, site.lon)).unwrap();
+        assert_eq!(
+            v.results,
+            crate::pipeline::svf(&framed, &bundles, &Silent)
+                .unwrap()
+                .results
+        );
+        let direct = crate::pipeline::sun_hours(&framed, &table, &Silent).unwrap();
+        assert_eq!(h.results, direct.results);
+        assert_eq!(v.flags.len(), 4);
+        // Results serialise for a program's JSON.
+        let j = serde_json::to_value(&v).unwrap();
+        assert!(j["results"][0]["svf"].is_number(), "{j}");
+        assert!(serde_json::to_value(&h).unwrap()["results"][0]["hours"].is_number());
+    }
+
+    #[test]
+    fn writes_create_folders_and_reach_a_writer() {
+        let s = study(2);
+        let lv = s.levels(&LevelsOptions::default(), &Silent).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a/b/lod.gml");
+        let w = s.write_levels(&lv, &out, None, false, &Silent).unwrap();
+        assert_eq!(w.len(), 1);
+        assert_eq!(w[0].0, out);
+        let on_disk = std::fs::read(&out).unwrap();
+        assert_eq!(w[0].1.bytes, on_disk.len() as u64);
+        // Again without overwrite: refused, naming the output.
+        let e = s.write_levels(&lv, &out, None, false, &Silent).unwrap_err();
+        assert!(matches!(&e, Error::Write(crate::citygml::WriteError::Exists(p)) if *p == out));
+        let mut buf = Vec::new();
+        let w = s
+            .write_levels_to(&lv, 0, Format::CityGml, &mut buf)
+            .unwrap();
+        assert_eq!(buf, on_disk);
+        assert_eq!(w.bytes, buf.len() as u64);
+    }
+
+    #[test]
+    fn nothing_read_is_refused_at_load() {
+        let dir = tempfile::tempdir().unwrap();
+        let bad = dir.path().join("bad.gml");
+        std::fs::write(&bad, "<CityModel").unwrap();
+        let r = Scene::load(&[&bad], &SceneOptions::default(), &Silent);
+        assert!(
+            matches!(r, Err(Error::Trust(TrustError::NoInput { failed: 1 }))),
+            "{r:?}"
+        );
+    }
+}
