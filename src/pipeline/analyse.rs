@@ -61,6 +61,7 @@ pub fn trace<T: Send>(
     check(progress, Stage::Bvh)?;
     let t = Instant::now();
     let scene = crate::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || full_scene(model));
+    let around = checks::Surroundings::new(model);
     let bvh_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let traced: Result<Vec<(T, Vec<PoiFlag>)>, Cancelled> =
@@ -69,7 +70,7 @@ pub fn trace<T: Send>(
                 .map(|p| {
                     check(progress, Stage::Trace)?;
                     let r = f(&scene, p);
-                    let flags = checks::poi_flags(&scene, model, p, sky_rays(&r));
+                    let flags = checks::poi_flags_around(&scene, model, &around, p, sky_rays(&r));
                     // No name: many cheap POIs in parallel (a log line each would drown the log).
                     progress.advance(Stage::Trace, 1, 0, None);
                     Ok((r, flags))
