@@ -173,8 +173,8 @@ fn fixture_exact_counts() {
             s.assets,
         );
         assert_eq!(got, (1, 0, 1, 4, 1, 0, 1, 1, 1, 0, 0, 9), "{name}: {s:?}");
-        assert_eq!(s.polygons, 14, "{name}: polygon elements");
-        assert_eq!(s.asset_polygons, 14, "{name}: asset polygons");
+        assert_eq!(s.polygon_elements, 14, "{name}: polygon elements");
+        assert_eq!(s.polygons, 14, "{name}: polygons");
         assert_eq!(s.lods, vec![3], "{name}");
         assert_eq!(s.implicit_geometries, 0, "{name}");
         assert_eq!(s.warnings, 0, "{name}: {:?}", m.warnings);
