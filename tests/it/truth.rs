@@ -186,3 +186,146 @@ fn lon_lat_in_the_wrong_order_is_refused() {
         stderr(&far)
     );
 }
+
+/// Issue 21 item 5, one polygon count, on a PLATEAU tile (13 buildings with LoD0 footprints,
+/// LoD1 solids and, for some, LoD2 roof / wall / ground surfaces whose polygons their
+/// `lod2Solid` references by xlink). Counted independently in Python:
+/// - *polygon elements*: every `gml:Polygon` once (811);
+/// - *polygons*: those of the assets, i.e. of the thematic surfaces, plus all LoDs of the
+///   buildings and parts that have no thematic surface (their own geometry is their body);
+///   a building's own LoD0/LoD1 geometry beside its surfaces belongs to no asset (745);
+/// - *traced polygons*: the same with each body at its highest LoD only (734).
+///
+/// `stats`, `convert`, `svf` and the `lod` report then all say *polygons*.
+#[test]
+fn one_polygon_count_on_a_plateau_tile() {
+    let Some(data) = crate::util::shared_data() else {
+        return;
+    };
+    let input = data.join("plateau/yokosuka/52397519_bldg_6697_op.gml");
+    let oracle = std::process::Command::new("python3")
+        .arg("-c")
+        .arg(
+            r#"
+import sys, xml.etree.ElementTree as ET
+r = ET.parse(sys.argv[1]).getroot()
+loc = lambda e: e.tag.rsplit('}', 1)[-1]
+par = {c: p for p in r.iter() for c in p}
+def owner(e):
+    lods = []
+    while e in par:
+        e = par[e]
+        if loc(e).startswith('lod'):
+            lods.append(int(loc(e)[3]))
+        if loc(e).endswith('Surface') and loc(e) != 'CompositeSurface' and not loc(e).startswith('Multi') or loc(e) in ('Building', 'BuildingPart'):
+            return e, lods[-1]
+    return None, None
+polys = [p for p in r.iter() if loc(p) == 'Polygon']
+has_surfaces = set(par[par[s]] for s in r.iter() if loc(s) in ('RoofSurface', 'WallSurface', 'GroundSurface'))
+asset = [(o, l) for o, l in map(owner, polys) if o is not None and (loc(o).endswith('Surface') or o not in has_surfaces)]
+top = {}
+for o, l in asset:
+    top[o] = max(top.get(o, 0), l)
+print(len(polys), len(asset), sum(1 for o, l in asset if l == top[o]))
+"#,
+        )
+        .arg(&input)
+        .output()
+        .expect("python3");
+    assert!(oracle.status.success(), "{}", stderr(&oracle));
+    let want: Vec<u64> = String::from_utf8_lossy(&oracle.stdout)
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let o = run(&[os("stats"), input.as_os_str(), os("--json")]);
+    let t = json(&o)["total"].clone();
+    let got = [
+        &t["polygon_elements"],
+        &t["polygons"],
+        &t["traced_polygons"],
+    ]
+    .map(|v| v.as_u64().unwrap());
+    assert_eq!(got.to_vec(), want, "stats {t}");
+    assert!(
+        got[0] != got[1] && got[1] != got[2],
+        "the tile shows all three: {got:?}"
+    );
+    let polygons = got[1];
+
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.gml");
+    let o = run(&[os("convert"), input.as_os_str(), os("-o"), out.as_os_str()]);
+    assert!(
+        stderr(&o).contains(&format!("polygons {polygons} -> {polygons}")),
+        "{}",
+        stderr(&o)
+    );
+    // A POI 5 m above the tile's centre (EPSG:6697: latitude, longitude, height).
+    let b: Vec<f64> = t["bbox"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let poi = format!(
+        "{},{},{}",
+        (b[0] + b[3]) / 2.0,
+        (b[1] + b[4]) / 2.0,
+        b[5] + 5.0
+    );
+    let o = run(&[
+        os("svf"),
+        input.as_os_str(),
+        os("--poi"),
+        os(&poi),
+        os("--json"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(json(&o)["polygons"].as_u64(), Some(polygons));
+    let o = run(&[os("svf"), input.as_os_str(), os("--poi"), os(&poi)]);
+    assert!(
+        stderr(&o).contains(&format!("{polygons} polygons ({} traced)", got[2])),
+        "{}",
+        stderr(&o)
+    );
+    let (lod, report) = (dir.path().join("l.gml"), dir.path().join("r.json"));
+    let o = run(&[
+        os("lod"),
+        input.as_os_str(),
+        os("--poi"),
+        os(&poi),
+        os("--no-bound"),
+        os("-o"),
+        lod.as_os_str(),
+        os("--report"),
+        report.as_os_str(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let r: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(r["totals"]["polygons_in"].as_u64(), Some(polygons), "{r}");
+}
+
+/// A `.gz` output's size is its size on disk (compressed), the uncompressed bytes beside it.
+#[test]
+fn gz_output_size_is_the_compressed_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.gml.gz");
+    let o = run(&[
+        os("convert"),
+        courtyard().as_os_str(),
+        os("-o"),
+        out.as_os_str(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let on_disk = std::fs::metadata(&out).unwrap().len();
+    let mut plain = Vec::new();
+    let gz = std::fs::File::open(&out).unwrap();
+    std::io::Read::read_to_end(&mut flate2::read::GzDecoder::new(gz), &mut plain).unwrap();
+    let plain = plain.len();
+    assert!(on_disk < plain as u64);
+    assert!(
+        stderr(&o).contains(&format!("{on_disk} bytes ({plain} uncompressed)")),
+        "{}",
+        stderr(&o)
+    );
+}
