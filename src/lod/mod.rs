@@ -65,7 +65,8 @@ pub struct LodResult {
     pub select_s: f64,
     /// Triangles of the selection scene.
     pub triangles: usize,
-    /// Per POI, what makes its result suspect ([`poi_flags`] against the selection scene).
+    /// Per POI, what makes its result suspect ([`poi_flags_around`]: inside a building judged
+    /// on the full geometry of the buildings whose box holds the POI, not on the selection scene).
     pub flags: Vec<Vec<PoiFlag>>,
 }
 
