@@ -3,6 +3,10 @@
 //! "correct" for the geometry and wrong for the user, so they are flagged: a warning naming
 //! the POI and the building, and a flag per POI in the JSON outputs and the report.
 //!
+//! [`poi_flags_around`] adds two flags that need the POI's surroundings
+//! ([`Surroundings`]): far below every building around it ([`PoiFlag::FarBelow`]) and a
+//! normal into the surface it lies on ([`PoiFlag::NormalIntoSurface`]).
+//!
 //! Inside a solid means that rays in every direction of the whole sphere (not only the
 //! hemisphere the bundle covers) hit something; the building named is the one most of them
 //! hit.
