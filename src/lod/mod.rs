@@ -34,8 +34,10 @@ use crate::lod::scene::selection_scene_for_rays;
 use crate::lod::select::{select_with, SelectError, SelectOptions, Selection};
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::poi::checks::{poi_flags, PoiFlag};
+use crate::poi::checks::enclosure::ON_SURFACE;
+use crate::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::runtime::progress::{check, stage, Progress, Stage};
+use glam::DVec3;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -63,7 +65,8 @@ pub struct LodResult {
     pub select_s: f64,
     /// Triangles of the selection scene.
     pub triangles: usize,
-    /// Per POI, what makes its result suspect ([`poi_flags`] against the selection scene).
+    /// Per POI, what makes its result suspect ([`poi_flags_around`]: inside a building judged
+    /// on the full geometry of the buildings whose box holds the POI, not on the selection scene).
     pub flags: Vec<Vec<PoiFlag>>,
 }
 
@@ -107,10 +110,15 @@ pub fn lod_with(
         select_with(model, &rough, &scene, pois, &opts.select, progress)
     })?;
     let select_s = t.elapsed().as_secs_f64();
+    // Inside a building is judged on the full geometry (the rough model may close what the
+    // full one leaves open): the buildings whose box holds a POI.
+    let around = Surroundings::new(model);
+    let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+    let full_near = around.scene_holding(model, &points, ON_SURFACE);
     let flags = pois
         .par_iter()
         .zip(&selection.pois)
-        .map(|(p, s)| poi_flags(&scene, model, p, Some(s.sky_rays)))
+        .map(|(p, s)| poi_flags_around(&full_near, model, &around, p, Some(s.sky_rays)))
         .collect();
     Ok(LodResult {
         flags,

@@ -3,6 +3,17 @@
 //! The reader ([`crate::citygml::read`]) fills a [`CityModel`]; every later stage
 //! (rough, trace, select, solar, write) works on it. Coordinates are `f64`
 //! ([`glam::DVec3`]) in the model's CRS.
+//!
+//! # Polygon counts
+//!
+//! *Polygons* of a model ([`CityModel::polygon_count`]) are the polygons of its assets over
+//! every LoD and geometry property, a polygon reused by xlink counted at each use: what the
+//! writers copy and what `stats`, `convert`, the `lod` report and the tracing commands
+//! report. Two other numbers have their own names: *traced polygons*
+//! ([`CityModel::traced_polygon_count`], each asset's highest LoD only: what the full-detail
+//! scene traces) and *polygon elements* ([`SourceFile::polygon_elements`], `gml:Polygon` and
+//! kin in the document, each once, including those of no asset such as rooms or a
+//! building's own geometry beside its surfaces).
 
 pub mod poi;
 pub mod triangulate;
@@ -471,7 +482,8 @@ impl Asset {
             .flat_map(|g| g.polygons.iter())
     }
 
-    /// Number of polygons over all LoDs.
+    /// Number of polygons over all LoDs and properties: the asset's share of
+    /// [`CityModel::polygon_count`].
     pub fn polygon_count(&self) -> usize {
         self.geometries.iter().map(|g| g.polygons.len()).sum()
     }
@@ -621,9 +633,17 @@ impl CityModel {
             )
     }
 
-    /// Total number of asset polygons over all LoDs.
+    /// The model's *polygons*: those of every asset over all LoDs and properties, an
+    /// xlinked polygon counted at each use (see the module's "Polygon counts").
     pub fn polygon_count(&self) -> usize {
         self.assets.iter().map(|a| a.polygon_count()).sum()
+    }
+
+    /// *Traced polygons*: each asset's highest LoD ([`Asset::detail_polygons`]), what the
+    /// full-detail scene of `svf`, `sun-hours` and `horizon` traces; at most
+    /// [`CityModel::polygon_count`].
+    pub fn traced_polygon_count(&self) -> usize {
+        self.assets.iter().map(|a| a.detail_polygons().len()).sum()
     }
 
     /// The top-level building of a building or part.

@@ -22,7 +22,7 @@ pub struct HorizonOutput {
     pub tolerance_deg: f64,
     /// Paths read.
     pub inputs: Vec<String>,
-    /// Polygons of the scene at full detail.
+    /// Polygons of the model (all LoDs, as `stats` counts them: `CityModel::polygon_count`).
     pub polygons: usize,
     /// Wall-clock milliseconds per stage.
     pub timings_ms: TraceTimings,

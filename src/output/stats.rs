@@ -94,10 +94,17 @@ pub struct Stats {
     pub other_objects: usize,
     /// All assets.
     pub assets: usize,
-    /// Polygon elements in the documents (each counted once).
+    /// Polygons of the assets over all LoDs and properties, an xlinked polygon counted at
+    /// each use ([`CityModel::polygon_count`]): the number `convert`, `lod` and the tracing
+    /// commands report.
     pub polygons: usize,
-    /// Polygons over all assets with references resolved (xlinked ones counted per use).
-    pub asset_polygons: usize,
+    /// Of those, each asset's highest LoD only: what `svf`, `sun-hours` and `horizon` trace
+    /// ([`CityModel::traced_polygon_count`]).
+    pub traced_polygons: usize,
+    /// Polygon elements in the documents, each counted once however often it is referenced,
+    /// including those of no asset (rooms, interior surfaces, a building's own geometry
+    /// beside its thematic surfaces).
+    pub polygon_elements: usize,
     /// LoDs present.
     pub lods: Vec<u8>,
     /// `ImplicitGeometry` elements.
@@ -171,11 +178,12 @@ impl Stats {
                 AssetKind::Body => s.bodies += 1,
                 AssetKind::Other => s.other_objects += 1,
             }
-            s.asset_polygons += a.polygon_count();
+            s.polygons += a.polygon_count();
+            s.traced_polygons += a.detail_polygons().len();
             lods.extend(a.geometries.iter().map(|g| g.lod));
         }
         s.lods = lods.into_iter().collect();
-        s.polygons = model.files.iter().map(|f| f.polygon_elements).sum();
+        s.polygon_elements = model.files.iter().map(|f| f.polygon_elements).sum();
         s.implicit_geometries = model.files.iter().map(|f| f.implicit_geometries).sum();
         s.warnings = model.warnings.len();
         s.bbox = model.bbox().to_array();
@@ -221,7 +229,8 @@ impl Stats {
             t.other_objects += s.other_objects;
             t.assets += s.assets;
             t.polygons += s.polygons;
-            t.asset_polygons += s.asset_polygons;
+            t.traced_polygons += s.traced_polygons;
+            t.polygon_elements += s.polygon_elements;
             t.implicit_geometries += s.implicit_geometries;
             t.warnings += s.warnings;
             lods.extend(s.lods.iter().copied());

@@ -24,7 +24,7 @@ pub struct SunHoursOutput {
     pub steps: usize,
     /// Paths read.
     pub inputs: Vec<String>,
-    /// Polygons of the scene at full detail.
+    /// Polygons of the model (all LoDs, as `stats` counts them: `CityModel::polygon_count`).
     pub polygons: usize,
     /// Wall-clock milliseconds per stage.
     pub timings_ms: SunHoursTimings,

@@ -21,7 +21,7 @@ pub struct SvfOutput {
     pub seed: u64,
     /// Paths read.
     pub inputs: Vec<String>,
-    /// Polygons of the scene at full detail.
+    /// Polygons of the model (all LoDs, as `stats` counts them: `CityModel::polygon_count`).
     pub polygons: usize,
     /// Wall-clock milliseconds per stage.
     pub timings_ms: TraceTimings,

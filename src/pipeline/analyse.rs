@@ -82,6 +82,7 @@ pub(crate) fn trace_in<T: Send>(
 ) -> Result<Traced<T>, Cancelled> {
     let model: &CityModel = &framed.model;
     let pois = &framed.local_pois;
+    let around = checks::Surroundings::new(model);
     let t = Instant::now();
     let traced: Result<Vec<(T, Vec<PoiFlag>)>, Cancelled> =
         crate::runtime::progress::stage(progress, Stage::Trace, pois.len() as u64, 0, || {
@@ -89,7 +90,7 @@ pub(crate) fn trace_in<T: Send>(
                 .map(|p| {
                     check(progress, Stage::Trace)?;
                     let r = f(scene, p);
-                    let flags = checks::poi_flags(scene, model, p, sky_rays(&r));
+                    let flags = checks::poi_flags_around(scene, model, &around, p, sky_rays(&r));
                     // No name: many cheap POIs in parallel (a log line each would drown the log).
                     progress.advance(Stage::Trace, 1, 0, None);
                     Ok((r, flags))

@@ -31,7 +31,7 @@ use crate::lod::select::{select, SelectError};
 use crate::lod::LodOptions;
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::poi::checks::{poi_flags, PoiFlag};
+use crate::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::runtime::progress::{check, stage, Cancelled, Progress, Silent, Stage};
 use crate::solar::sky::SkyError;
 use crate::solar::{poi_sky_view, poi_sun_hours, SkyBundles, SunTable};
@@ -230,6 +230,7 @@ pub fn evaluate_with(
     let t = Instant::now();
     let full = full_scene(model);
     let full_bvh = ms(t);
+    let around = Surroundings::new(model);
     let full_polys = model.polygon_count();
     progress.advance(Stage::Bvh, 1, 0, Some("full scene"));
     let t = Instant::now();
@@ -265,7 +266,7 @@ pub fn evaluate_with(
             let sky_rays = (f.sky_exposure == 0.0).then_some(0);
             let e = PoiEval {
                 id: poi.id.clone(),
-                flags: poi_flags(&full, model, poi, sky_rays),
+                flags: poi_flags_around(&full, model, &around, poi, sky_rays),
                 lod_svf_error: l.svf_rel_error(&f),
                 boxes_svf_error: b.svf_rel_error(&f),
                 lod_sun_error: l.sun_rel_error(&f),

@@ -58,6 +58,7 @@ pub fn sky_pictures<E: From<PipelineError>>(
     let n = if opts.levels.is_some() { 2 } else { 1 };
     progress.start(Stage::Bvh, n, 0);
     let scene = full_scene(model);
+    let around = checks::Surroundings::new(model);
     progress.advance(Stage::Bvh, 1, 0, Some("full scene"));
     let selection = opts.levels.map(|lod| {
         let rough = rough_model(model, &lod.rough);
@@ -81,8 +82,8 @@ pub fn sky_pictures<E: From<PipelineError>>(
                 POI_OFFSET,
             );
             let view = poi_sky_view(&scene, poi, opts.bundles);
-            let flags =
-                checks::poi_flags(&scene, model, poi, (view.sky_exposure == 0.0).then_some(0));
+            let no_sky = (view.sky_exposure == 0.0).then_some(0);
+            let flags = checks::poi_flags_around(&scene, model, &around, poi, no_sky);
             let levels = match &selection {
                 None => None,
                 Some((lod, rough, sel_scene)) => {

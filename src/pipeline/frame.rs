@@ -1,10 +1,12 @@
 //! Step 2: the model and the POIs in the local metric frame the tracing works in.
 
 use super::PipelineError;
-use crate::crs::{build_transform, model_crs, Crs, LocalFrame, PointTransform};
+use crate::crs::{build_transform, model_crs, Crs, CrsKind, LocalFrame, PointTransform};
 use crate::model::CityModel;
 use crate::model::Poi;
+use crate::poi::checks::extent::distance_to_box;
 use crate::poi::{check_poi, check_poi_list, checks};
+use glam::DVec3;
 use std::borrow::Cow;
 
 /// How the model and the POIs are brought into the tracing frame ([`frame`]).
@@ -93,6 +95,11 @@ pub fn frame<'a>(
     let (frame, warning) = LocalFrame::new(&crs, &source_bbox);
     warnings.extend(warning.map(|w| w.to_string()));
     let note = (!frame.is_identity()).then(|| format!("{crs}: tracing in {}", frame.describe()));
+    let local = frame.model_to_local(source);
+    let local_bbox = match &local {
+        Cow::Borrowed(_) => source_bbox,
+        Cow::Owned(m) => m.bbox(),
+    };
     let pois = match &opts.poi_crs {
         Some(pc) => {
             if !crs.is_known() {
@@ -101,12 +108,23 @@ pub fn frame<'a>(
                     model: crs.to_string(),
                 });
             }
-            build_transform()
-                .pois(pc, &crs, &pois)
-                .map_err(|source| PipelineError::PoiCrs {
-                    from: pc.to_string(),
-                    source,
-                })?
+            let t = build_transform();
+            let converted = t.pois(pc, &crs, &pois);
+            if let CrsKind::Geographic {
+                lat_first: true, ..
+            } = pc.kind
+            {
+                let near = |p: DVec3| {
+                    t.position(pc, &crs, p).is_ok_and(|q| {
+                        distance_to_box(&local_bbox, frame.to_local(q)) <= opts.poi_margin
+                    })
+                };
+                checks::check_lat_lon_order(&pc.to_string(), &pois, &source_bbox, near)?;
+            }
+            converted.map_err(|source| PipelineError::PoiCrs {
+                from: pc.to_string(),
+                source,
+            })?
         }
         None => pois,
     };
@@ -115,11 +133,6 @@ pub fn frame<'a>(
     for (k, p) in local_pois.iter().enumerate() {
         check_poi(p, &format!("POI {} in the tracing frame", k + 1))?;
     }
-    let local = frame.model_to_local(source);
-    let local_bbox = match &local {
-        Cow::Borrowed(_) => source_bbox,
-        Cow::Owned(m) => m.bbox(),
-    };
     checks::check_pois_near_in_frame(
         &local_bbox,
         &local_pois,

@@ -22,8 +22,11 @@ pub struct Written {
     pub polygons_in: usize,
     /// Asset polygons written (CityGML only).
     pub polygons_out: usize,
-    /// Buildings and building parts left out because nothing of them was kept.
+    /// Buildings (top-level) left out because nothing of them was kept.
     pub buildings_dropped: usize,
+    /// Building parts left out because nothing of them was kept (CityGML: a part removed
+    /// with its dropped building is not counted; other formats: every such part).
+    pub parts_dropped: usize,
     /// What the OBJ / CityJSON writer wrote (formats other than CityGML).
     pub export: Option<crate::export::ExportSummary>,
 }
@@ -68,6 +71,7 @@ pub fn write_levels(
             polygons_in: s.polygons_in,
             polygons_out: s.polygons_out,
             buildings_dropped: s.buildings_dropped,
+            parts_dropped: s.parts_dropped,
             export: None,
         });
     }
@@ -76,9 +80,12 @@ pub fn write_levels(
         levels: levels.levels(),
     };
     let s = crate::export::write(format, model, file, content, out, wopts)?;
+    let (buildings_dropped, parts_dropped) =
+        buildings_without_kept_assets(model, file, levels.levels());
     Ok(Written {
         bytes: s.bytes,
-        buildings_dropped: buildings_without_kept_assets(model, file, levels.levels()),
+        buildings_dropped,
+        parts_dropped,
         export: Some(s),
         ..Written::default()
     })
@@ -113,8 +120,9 @@ pub fn write_all(
 }
 
 /// Buildings and parts of file `f` that keep no asset (through any part below them): what
-/// the OBJ and CityJSON writers leave out.
-pub fn buildings_without_kept_assets(model: &CityModel, f: usize, levels: &[u8]) -> usize {
+/// the OBJ and CityJSON writers leave out, as `(buildings, parts)` (top-level buildings, then
+/// building parts).
+pub fn buildings_without_kept_assets(model: &CityModel, f: usize, levels: &[u8]) -> (usize, usize) {
     let mut kept = vec![false; model.buildings.len()];
     for (a, l) in model.assets.iter().zip(levels) {
         if *l == 0 {
@@ -133,12 +141,15 @@ pub fn buildings_without_kept_assets(model: &CityModel, f: usize, levels: &[u8])
             }
         }
     }
-    model
-        .buildings
-        .iter()
-        .zip(&kept)
-        .filter(|(b, k)| b.file == f && !**k)
-        .count()
+    let dropped = |part: bool| {
+        model
+            .buildings
+            .iter()
+            .zip(&kept)
+            .filter(|(b, k)| b.file == f && !**k && b.is_part == part)
+            .count()
+    };
+    (dropped(false), dropped(true))
 }
 
 #[cfg(test)]

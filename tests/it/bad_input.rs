@@ -198,11 +198,7 @@ fn warnings_with(m: &CityModel, category: &str) -> Vec<String> {
 fn ok_baseline_reads_and_converts_cleanly() {
     let m = read_ok(&bad("ok.gml"));
     let s = Stats::of(&m);
-    assert_eq!(
-        (s.buildings, s.asset_polygons, s.warnings),
-        (1, 1, 0),
-        "{s:?}"
-    );
+    assert_eq!((s.buildings, s.polygons, s.warnings), (1, 1, 0), "{s:?}");
     let out = convert_ok(&bad("ok.gml"));
     assert!(String::from_utf8_lossy(&out).contains("gml:id=\"P1\""));
 }
@@ -350,7 +346,7 @@ error_case!(
 // ---------------------------------------------------------------------------------------------
 // rings: counted warnings; degenerate rings drop their polygon, odd ones are kept
 
-fn ring_case(file: &str, category: &str, expected_warning: &str, asset_polygons: usize) {
+fn ring_case(file: &str, category: &str, expected_warning: &str, polygons: usize) {
     let path = bad(file);
     let m = read_ok(&path);
     let w = warnings_with(&m, category);
@@ -362,8 +358,8 @@ fn ring_case(file: &str, category: &str, expected_warning: &str, asset_polygons:
     );
     let s = Stats::of(&m);
     assert_eq!(s.warnings, 1, "{file}: {:?}", m.warnings);
-    assert_eq!(s.asset_polygons, asset_polygons, "{file}");
-    assert_eq!(s.polygons, 1, "{file}: polygon elements");
+    assert_eq!(s.polygons, polygons, "{file}");
+    assert_eq!(s.polygon_elements, 1, "{file}: polygon elements");
     assert!(m.warnings[0].file.ends_with(file));
     convert_ok(&path);
 }
@@ -464,7 +460,7 @@ fn duplicate_id() {
         warnings_with(&m, "duplicate"),
         vec!["16:20 [MS1] duplicate gml:id \"P1\""]
     );
-    assert_eq!(Stats::of(&m).asset_polygons, 2);
+    assert_eq!(Stats::of(&m).polygons, 2);
     convert_ok(&bad("duplicate-id.gml"));
 }
 
@@ -497,7 +493,7 @@ fn one_polygon_referenced_10000_times() {
     assert!(t.elapsed() < Duration::from_secs(20), "{:?}", t.elapsed());
     let s = Stats::of(&m);
     assert_eq!(
-        (s.polygons, s.asset_polygons, s.warnings),
+        (s.polygon_elements, s.polygons, s.warnings),
         (1, 10_001, 0),
         "{s:?}"
     );
@@ -574,7 +570,7 @@ fn billion_laughs_is_not_expanded() {
     let input = dir.path().join("laughs.gml");
     std::fs::write(&input, doctype_doc(&billion_laughs(), "&lol9;", RECT)).unwrap();
     let m = read_ok(&input);
-    assert_eq!(Stats::of(&m).asset_polygons, 1);
+    assert_eq!(Stats::of(&m).polygons, 1);
     let out = convert_ok(&input);
     assert!(out.len() < 10_000, "{} bytes", out.len());
     let text = String::from_utf8_lossy(&out);
@@ -794,7 +790,7 @@ fn long_single_line() {
     );
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     assert!(
-        r.stdout.contains(&format!("\"asset_polygons\": {n}")),
+        r.stdout.contains(&format!("\"polygons\": {n}")),
         "{}",
         r.stdout
     );

@@ -107,10 +107,7 @@ fn standard_input_in_standard_output_out_is_byte_identical_to_files() {
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let file = stats(&[out.as_os_str()]);
     assert_eq!(v["total"]["features"], file["total"]["features"]);
-    assert_eq!(
-        v["total"]["asset_polygons"],
-        file["total"]["asset_polygons"]
-    );
+    assert_eq!(v["total"]["polygons"], file["total"]["polygons"]);
 }
 
 /// `rough` over a directory: the same bytes whatever `--jobs`; a broken file among them is
@@ -519,10 +516,7 @@ fn merged_ingolstadt_tiles_keep_every_feature() {
     let mut features = each["total"]["features"].clone();
     features["CityModel"] = 1.into();
     assert_eq!(merged["total"]["features"], features);
-    assert_eq!(
-        merged["total"]["asset_polygons"],
-        each["total"]["asset_polygons"]
-    );
+    assert_eq!(merged["total"]["polygons"], each["total"]["polygons"]);
     let text = String::from_utf8(gunzip(&std::fs::read(&out).unwrap())).unwrap();
     assert!(ids_unique(&text) > 1000);
     assert_eq!(unresolved_refs(&out).unwrap(), Vec::<String>::new());

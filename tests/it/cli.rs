@@ -151,7 +151,7 @@ fn single_missing_input_exits_1() {
     assert!(stderr(&o).contains("/nonexistent/skylod/x.gml"));
 }
 
-const KEYS: [&str; 17] = [
+const KEYS: [&str; 19] = [
     "citygml_version",
     "srs_name",
     "buildings",
@@ -165,6 +165,8 @@ const KEYS: [&str; 17] = [
     "doors",
     "other_objects",
     "polygons",
+    "traced_polygons",
+    "polygon_elements",
     "lods",
     "implicit_geometries",
     "warnings",

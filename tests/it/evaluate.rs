@@ -47,7 +47,7 @@ fn json_shape_and_consistent_figures() {
     // Polygons of the full model: what `stats` counts.
     let s = run(&[os("stats"), os("--json"), gml.as_os_str()]);
     let sv = json(&s);
-    let full_polys = sv["total"]["asset_polygons"].as_u64().unwrap();
+    let full_polys = sv["total"]["polygons"].as_u64().unwrap();
     for p in pois {
         for m in ["full", "lod", "boxes"] {
             for k in [

@@ -85,3 +85,6 @@ mod sun_pvlib;
 mod synth;
 // Inputs that would give a confidently wrong answer are refused or flagged.
 mod trust;
+// Issue 21 item 3: inside a building judged on the full geometry, far below, normal into
+// the surface, latitude and longitude swapped.
+mod truth;

@@ -148,12 +148,24 @@ pub fn merge(
 fn merge_line(s: &MergeSummary, target: &Path) -> String {
     format!(
         "merged {} file(s) into {}: {} member(s), {} gml:id(s) renamed, {} reference(s) \
-         rewritten, {} bytes",
+         rewritten, {}",
         s.files,
         target.display(),
         s.members,
         s.ids_renamed,
         s.refs_rewritten,
-        s.bytes
+        size_note(target, s.bytes)
     )
+}
+
+/// `N bytes` of a written file `out`: its size on disk, so the compressed size of a `.gz`,
+/// with the `written` (uncompressed) bytes in brackets when they differ; `written` alone for
+/// stdout or a file that cannot be read back.
+pub fn size_note(out: &Path, written: u64) -> String {
+    match std::fs::metadata(out).map(|m| m.len()) {
+        Ok(n) if n != written && !skylod::citygml::write::is_stdout(out) => {
+            format!("{n} bytes ({written} uncompressed)")
+        }
+        _ => format!("{written} bytes"),
+    }
 }

@@ -167,8 +167,11 @@ pub struct MixedSummary {
     pub polygons_in: usize,
     /// Asset polygons written (kept verbatim plus rough; references counted per use).
     pub polygons_out: usize,
-    /// Buildings and building parts removed because nothing of them was kept.
+    /// Buildings (top-level, not parts) removed because nothing of them was kept.
     pub buildings_dropped: usize,
+    /// Building parts removed because nothing of them was kept (a part removed with its
+    /// dropped building is not counted).
+    pub parts_dropped: usize,
     /// `xlink:href` references found pointing into removed or replaced content (each one
     /// pruned; references that vanish with a structure such a pruning removed, e.g. the other
     /// faces of a broken `gml:Solid`, are not counted again).

@@ -409,7 +409,11 @@ impl<'a> Plan<'a> {
             });
             if !asset_kept && !part_kept && !geom_alive(&bd.geometries) {
                 self.remove(n);
-                self.summary.buildings_dropped += 1;
+                if bd.is_part {
+                    self.summary.parts_dropped += 1;
+                } else {
+                    self.summary.buildings_dropped += 1;
+                }
                 changed = true;
             }
         }

@@ -30,6 +30,10 @@ use std::fmt::Write as _;
 pub const DEFAULT_POI_MARGIN: f64 = 1000.0;
 
 /// Distance from `p` to the box (0 inside).
+pub fn distance_to_box(b: &Bbox, p: DVec3) -> f64 {
+    distance(b, p)
+}
+
 fn distance(b: &Bbox, p: DVec3) -> f64 {
     let d = (b.min - p).max(p - b.max).max(DVec3::ZERO);
     d.length()
@@ -177,6 +181,72 @@ impl std::fmt::Display for PoisOutside {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(&self.message("POIs given in EPSG:4326"))
     }
+}
+
+/// Refuse POIs given in a latitude-first geographic CRS (`--poi-crs EPSG:4326`, named
+/// `crs`) whose first two coordinates look exchanged: `near(p)` (the point `p` in `crs`
+/// converted lies within the margin of the scene) is false as given and true with the first
+/// two coordinates swapped. `shown_scene` is the scene's box in the model's CRS, for the
+/// message.
+///
+/// ```
+/// use glam::DVec3;
+/// use skylod::model::Bbox;
+/// use skylod::poi::checks::check_lat_lon_order;
+/// use skylod::poi::Poi;
+/// let scene = Bbox::of_points(&[DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 1.0)]);
+/// // a "scene" near latitude 48.77, longitude 11.42
+/// let near = |p: DVec3| (p.x - 48.77).abs() < 0.01 && (p.y - 11.42).abs() < 0.01;
+/// let good = Poi { id: "a".into(), position: DVec3::new(48.77, 11.42, 380.0), normal: None };
+/// assert!(check_lat_lon_order("EPSG:4326", &[good], &scene, near).is_ok());
+/// let swapped = Poi { id: "b".into(), position: DVec3::new(11.42, 48.77, 380.0), normal: None };
+/// let e = check_lat_lon_order("EPSG:4326", &[swapped], &scene, near).unwrap_err().to_string();
+/// assert!(e.contains("latitude, longitude"), "{e}");
+/// ```
+pub fn check_lat_lon_order(
+    crs: &str,
+    pois: &[Poi],
+    shown_scene: &Bbox,
+    near: impl Fn(DVec3) -> bool,
+) -> Result<(), TrustError> {
+    let swapped: Vec<&Poi> = pois
+        .iter()
+        .filter(|p| {
+            let q = p.position;
+            !near(q) && near(DVec3::new(q.y, q.x, q.z))
+        })
+        .collect();
+    if swapped.is_empty() {
+        return Ok(());
+    }
+    let b = shown_scene;
+    let mut message = format!(
+        "{} of {} POI(s) given in {crs} lie outside the model (x {:.1}..{:.1}, y {:.1}..{:.1}) \
+         as latitude, longitude but inside it with the two exchanged:",
+        swapped.len(),
+        pois.len(),
+        b.min.x,
+        b.max.x,
+        b.min.y,
+        b.max.y,
+    );
+    for p in swapped.iter().take(5) {
+        let q = p.position;
+        let _ = write!(
+            message,
+            " {} (latitude {}, longitude {}: try {}, {});",
+            p.id, q.x, q.y, q.y, q.x
+        );
+    }
+    if swapped.len() > 5 {
+        let _ = write!(message, " and {} more;", swapped.len() - 5);
+    }
+    let _ = write!(
+        message,
+        " the order is probably swapped: {crs}'s axis order is latitude, longitude (--poi \
+         LAT,LON,H; CSV columns lat, lon), not longitude, latitude"
+    );
+    Err(TrustError::LatLonSwapped { message })
 }
 
 #[cfg(test)]

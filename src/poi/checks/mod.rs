@@ -3,9 +3,12 @@
 //! answer"). One check per file:
 //!
 //! - [`extent::check_pois_near`]: a POI far outside the scene (a wrong CRS, swapped axes);
+//! - [`extent::check_lat_lon_order`]: `--poi-crs EPSG:4326` POIs given longitude first;
 //! - [`heights::check_heights`]: a model without heights (2D footprints) cannot be traced;
 //! - [`same_crs::check_same_crs`]: inputs in different CRSs are not merged into one scene;
-//! - [`enclosure::poi_flags`]: a POI inside a closed building, or with every ray blocked.
+//! - [`enclosure::poi_flags_around`]: a POI inside a closed building (judged on the full
+//!   geometry), far below the buildings around it, with its normal into the surface it lies
+//!   on, or with every ray blocked.
 //!
 //! The refusals are [`TrustError`]s; the flags are data ([`PoiFlag`]) that the commands
 //! print as warnings and write into their JSON outputs.
@@ -14,13 +17,16 @@ pub mod enclosure;
 pub mod extent;
 pub mod heights;
 pub mod same_crs;
+pub mod surroundings;
 
-pub use enclosure::{poi_flags, PoiFlag};
+pub use enclosure::{poi_flags, poi_flags_around, OutwardRule, PoiFlag};
 pub use extent::{
-    check_pois_near, check_pois_near_in_frame, FarPoi, OutsideHint, PoisOutside, DEFAULT_POI_MARGIN,
+    check_lat_lon_order, check_pois_near, check_pois_near_in_frame, FarPoi, OutsideHint,
+    PoisOutside, DEFAULT_POI_MARGIN,
 };
 pub use heights::check_heights;
 pub use same_crs::check_same_crs;
+pub use surroundings::Surroundings;
 
 /// An input that would give a confidently wrong answer.
 #[derive(Debug, thiserror::Error)]
@@ -29,6 +35,12 @@ pub enum TrustError {
     /// POIs lie farther than the margin outside the scene's bounding box: which, how far.
     #[error("{0}")]
     PoiOutside(Box<PoisOutside>),
+    /// POIs in a latitude-first geographic CRS given longitude first.
+    #[error("{message}")]
+    LatLonSwapped {
+        /// The full explanation: which POIs, and the axis order expected.
+        message: String,
+    },
     /// The model has no heights.
     #[error(
         "{files}: the model has no heights ({reason}); tracing a flat model would give \

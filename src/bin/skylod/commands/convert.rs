@@ -181,10 +181,10 @@ fn one(
     let s = write_document(&model, 0, Vec::new(), out, opts)?;
     Ok(Done {
         line: Some(format!(
-            "{} -> {}: {} bytes, {} envelope(s) recomputed, {} warning(s)",
+            "{} -> {}: {}, {} envelope(s) recomputed, {} warning(s)",
             input.display(),
             out.display(),
-            s.bytes,
+            outputs::size_note(out, s.bytes),
             s.edits,
             warnings
         )),

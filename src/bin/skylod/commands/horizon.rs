@@ -108,11 +108,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
     }
     crate::log::summary!(
-        "{} POI(s), {} azimuths each (step {}°); {} polygons from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+        "{} POI(s), {} azimuths each (step {}°); {} from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
         pois.len(),
         opts.azimuths().len(),
         args.step,
-        polygons(framed.source),
+        crate::commands::polygons_traced(framed.source),
         loaded.inputs.len(),
         loaded.read_ms,
         bvh_ms,

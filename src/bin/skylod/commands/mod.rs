@@ -44,9 +44,18 @@ pub fn ms(t: Instant) -> f64 {
     (t.elapsed().as_secs_f64() * 1e4).round() / 10.0
 }
 
-/// Number of polygons at full detail.
+/// The model's polygons ([`CityModel::polygon_count`]: all LoDs, as `stats` counts them).
 pub fn polygons(m: &CityModel) -> usize {
-    m.assets.iter().map(|a| a.detail_polygons().len()).sum()
+    m.polygon_count()
+}
+
+/// `N polygons (T traced)` for the summary lines of the tracing commands.
+pub fn polygons_traced(m: &CityModel) -> String {
+    format!(
+        "{} polygons ({} traced)",
+        m.polygon_count(),
+        m.traced_polygon_count()
+    )
 }
 
 /// Context helper for writing to stdout.

@@ -72,13 +72,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         let header = crate::args::shard::header(shard);
         out_err(write_table(&mut out, &rows, header))?;
         crate::log::summary!(
-            "{} POI(s); {} steps of {} min in {} at ({lat}, {lon}), months in {}; {} polygons from {} input(s); read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            "{} POI(s); {} steps of {} min in {} at ({lat}, {lon}), months in {}; {} from {} input(s); read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),
             table.len(),
             args.sun.step,
             args.sun.year,
             args.timezone,
-            polygons(framed.source),
+            crate::commands::polygons_traced(framed.source),
             loaded.inputs.len(),
             loaded.read_ms,
             sun_ms,

@@ -61,11 +61,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
         out_err(write_table(&mut out, &rows, dp, header))?;
         crate::log::summary!(
-            "{} POI(s), {} rays per bundle, seed {}; {} polygons from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            "{} POI(s), {} rays per bundle, seed {}; {} from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),
             args.rays,
             args.seed,
-            polygons(framed.source),
+            crate::commands::polygons_traced(framed.source),
             loaded.inputs.len(),
             loaded.read_ms,
             bvh_ms,

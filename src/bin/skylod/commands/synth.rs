@@ -105,13 +105,18 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let dt = t.elapsed().as_secs_f64();
     if let Some(s) = summary {
         crate::log::summary!(
-            "{}: {} buildings, {} polygons, {} windows, {} installations, {:.1} MB in {:.2} s; {} POIs -> {}",
+            "{}: {} buildings, {} polygons, {} windows, {} installations, {:.1} MB{} in {:.2} s; {} POIs -> {}",
             args.output.display(),
             s.buildings,
             s.polygons,
             s.windows,
             s.installations_total(),
-            s.bytes as f64 / 1e6,
+            std::fs::metadata(&args.output).map_or(s.bytes, |m| m.len()) as f64 / 1e6,
+            if args.output.extension().is_some_and(|e| e == "gz") {
+                " (compressed)"
+            } else {
+                ""
+            },
             dt,
             points.len(),
             csv.as_ref()

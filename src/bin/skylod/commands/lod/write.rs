@@ -122,7 +122,7 @@ pub fn outputs(
         match &s.export {
             Some(e) => summary!("{}", crate::outputs::describe(e, format, model, *f, out)),
             None => summary!(
-                "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) dropped",
+                "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) and {} part(s) dropped",
                 model.files[*f].path.display(),
                 shown(out),
                 s.levels[0],
@@ -130,11 +130,12 @@ pub fn outputs(
                 s.levels[2],
                 s.polygons_in,
                 s.polygons_out,
-                s.buildings_dropped
+                s.buildings_dropped,
+                s.parts_dropped
             ),
         }
         if let Some(w) = written.get_mut(*f) {
-            *w = Some((shown(out), s.buildings_dropped));
+            *w = Some((shown(out), s.buildings_dropped + s.parts_dropped));
         }
     }
     if let (Some(_), Plan::Merge(t)) = (&layout.targets.staging, &layout.plan) {
