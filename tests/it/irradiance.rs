@@ -2,7 +2,9 @@
 //! and its bundled TMY3 file of Greensboro, NC): unobstructed horizontal and vertical planes
 //! against pvlib's `get_total_irradiance` (Perez and isotropic), the floor of an H = W street
 //! canyon against the closed form, the same weather as EPW and TMY3, the site rules, the
-//! `--hourly` and `--csv` outputs.
+//! `--hourly` and `--csv` outputs. The issue asks for 1 % (horizontal), 3 % (walls), 2 %
+//! (canyon) and 0.5 % (EPW vs TMY3); measured: 0.02 %, 0.06 %, 0.4 % and identical, so the
+//! tests hold 0.2 %, 0.5 %, 1 % and 1e-9.
 
 use crate::util::*;
 use serde_json::{json, Value};
@@ -167,7 +169,7 @@ fn unobstructed_planes_match_pvlib() {
             &format!("{sky} horizontal"),
             up["global_kwh_m2"].as_f64().unwrap(),
             h,
-            0.01,
+            0.002,
         );
         for (id, az, _) in planes {
             let w = &want[format!("90/{az}/{sky}")];
@@ -179,7 +181,7 @@ fn unobstructed_planes_match_pvlib() {
                     &what,
                     g[&key].as_f64().unwrap(),
                     w[part].as_f64().unwrap(),
-                    0.03,
+                    0.005,
                 );
             }
         }
@@ -223,13 +225,13 @@ fn canyon_floor_matches_the_closed_form_and_epw_equals_tmy3() {
         "canyon direct",
         f["direct_kwh_m2"].as_f64().unwrap(),
         c["direct"].as_f64().unwrap(),
-        0.02,
+        0.01,
     );
     close(
         "canyon diffuse",
         f["diffuse_kwh_m2"].as_f64().unwrap(),
         c["diffuse"].as_f64().unwrap(),
-        0.02,
+        0.01,
     );
     assert_eq!(f["reflected_kwh_m2"].as_f64(), Some(0.0));
     // The same hours written as an EPW (by Python's csv, not by skylod) give the same result.
@@ -267,7 +269,7 @@ with open(dst, "w", newline="") as f:
             f[k].as_f64().unwrap(),
             from_epw["pois"][0][k].as_f64().unwrap(),
         );
-        close(&format!("EPW vs TMY3 {k}"), b, a, 0.005);
+        close(&format!("EPW vs TMY3 {k}"), b, a, 1e-9);
     }
 }
 
