@@ -138,14 +138,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             crate::args::shard::header(shard),
         ))?;
         crate::log::summary!(
-            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({lat:.4}, {lon:.4}), {sky:?} sky, albedo {}; {} polygons from {} input(s); read {:.0} ms, weather and sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({lat:.4}, {lon:.4}), {sky:?} sky, albedo {}; {} from {} input(s); read {:.0} ms, weather and sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),
             weather.hours.len(),
             summary.station,
             summary.format,
             summary.ghi_kwh_m2,
             args.albedo,
-            polygons(framed.source),
+            crate::commands::polygons_traced(framed.source),
             loaded.inputs.len(),
             timings.read,
             timings.sun,
