@@ -84,6 +84,23 @@ fn an_error_in_standard_input_names_it() {
     assert!(!err.contains("/tmp/"), "{err}");
 }
 
+/// JSON outputs name standard input `-`, never the spool file: `stats --json`'s file path
+/// and the `inputs` of `svf --json`.
+#[test]
+fn json_names_standard_input_dash() {
+    let gml = std::fs::read(crate::util::fixture("synth-small.gml")).unwrap();
+    let o = with_stdin(&["stats", "-", "--json"], &gml);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["files"][0]["path"], "-", "{v}");
+    let poi = "430032.4,4581009.95,16.6";
+    let o = with_stdin(&["svf", "-", "--poi", poi, "--rays", "100", "--json"], &gml);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["inputs"], serde_json::json!(["-"]), "{v}");
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("skylod-stdin-"));
+}
+
 /// Standard output on a full disk (`/dev/full`): exit 2 (or 1 for the per-file `convert`),
 /// the error names standard output and says "no space left on device", once.
 #[test]

@@ -80,7 +80,7 @@ pub fn load(inputs: &[PathBuf]) -> anyhow::Result<Loaded> {
     }
     Ok(Loaded {
         model: r.model,
-        inputs: r.read.iter().map(|p| p.display().to_string()).collect(),
+        inputs: r.read.iter().map(|p| crate::log::input_name(p)).collect(),
         failed: !r.failures.is_empty(),
         read_ms: (r.read_s * 1e4).round() / 10.0,
     })

@@ -142,6 +142,15 @@ pub fn name_stdin(path: &std::path::Path) {
     let _ = STDIN_SPOOL.set(path.display().to_string());
 }
 
+/// An input's name in JSON outputs: `-` for the spool file of standard input, else its path.
+pub fn input_name(path: &std::path::Path) -> String {
+    let text = path.display().to_string();
+    match STDIN_SPOOL.get() {
+        Some(spool) if *spool == text => "-".to_owned(),
+        _ => text,
+    }
+}
+
 /// Write `text` on standard error when `level` is enabled, above the bars when there are.
 pub fn line(level: Level, text: &str) {
     let l = logger();
