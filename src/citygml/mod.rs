@@ -1,5 +1,6 @@
 //! CityGML 1.0 / 2.0 / 3.0: streaming reader into the model, span-preserving writer.
 
+pub mod edit;
 pub mod error;
 pub mod merge;
 pub mod ns;

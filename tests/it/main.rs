@@ -24,6 +24,8 @@ mod batch;
 mod bound;
 // examples/etl.rs, the README's library program, run against the CLI.
 mod etl;
+// `subset` and `filter-lods` against an independent reader and the XSDs.
+mod edit;
 // CityJSON and CityJSONSeq output is valid for `cjval` and read by `cjio` with skylod's counts.
 mod cityjson_export;
 // The command line: exit codes, error messages, `stats --json`, `convert` safety.

@@ -53,6 +53,10 @@ enum Command {
     Horizon(commands::horizon::Args),
     /// Transform every coordinate into another CRS through PROJ (needs the cargo feature `proj`).
     Reproject(commands::reproject::Args),
+    /// Keep the city objects that match a box, ids or types (streamed).
+    Subset(commands::subset::Args),
+    /// Keep or remove LoD representations of city objects (streamed).
+    FilterLods(commands::filter_lods::Args),
 }
 
 /// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
@@ -91,6 +95,8 @@ fn main() -> ExitCode {
         Command::Man(a) => commands::completions::man(a),
         Command::Horizon(a) => commands::horizon::run(a),
         Command::Reproject(a) => commands::reproject::run(a),
+        Command::Subset(a) => commands::subset::run(a),
+        Command::FilterLods(a) => commands::filter_lods::run(a),
     };
     // SIGTERM or SIGHUP: the command stopped at its next file or POI (or had finished);
     // every output in place is complete. The exit code says which signal (143, 129).

@@ -169,3 +169,74 @@ pub fn size_note(out: &Path, written: u64) -> String {
         _ => format!("{written} bytes"),
     }
 }
+
+/// Arguments of the commands that rewrite each CityGML input as CityGML (`subset`,
+/// `filter-lods`).
+#[derive(clap::Args, Debug)]
+pub struct PerInputArgs {
+    /// CityGML files (.gml, .xml, .gz), directories, glob patterns, or - for standard input.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Output file for one input (.gz to compress; `-` for standard output); a directory that
+    /// mirrors the input tree; or, for several inputs, one CityGML file that merges them.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Replace existing output files.
+    #[arg(long)]
+    pub overwrite: bool,
+    #[command(flatten)]
+    pub shard: crate::args::shard::ShardArgs,
+}
+
+/// The summary line of one input written to `out`, named `shown` (the merge target for a
+/// staged part of a merge).
+pub type Edit<'a> =
+    dyn Fn(&Path, &Path, &Path, &WriteOptions) -> Result<String, skylod::citygml::WriteError> + 'a;
+
+/// Run `edit` on every input of `a` as `cmd`: targets checked before any work, an error per
+/// input does not stop the batch, several inputs into one file merged.
+pub fn per_input(a: &PerInputArgs, cmd: &str, edit: &Edit<'_>) -> anyhow::Result<crate::Outcome> {
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&a.inputs)?;
+    let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
+    let shard = a.shard.resolve()?;
+    let (plan, _) = plan(&inputs, &a.output, Some(Format::CityGml))?;
+    let wopts = WriteOptions {
+        overwrite: a.overwrite,
+        protect: paths.clone(),
+        keep_envelopes: true,
+    };
+    let (t, refused) = targets(&plan, &paths, &wopts, shard, cmd, false, |e| error!("{e}"))?;
+    let (mut failed, total) = (refused, t.todo.len() + refused);
+    let (mut parts, mut names) = (Vec::new(), Vec::new());
+    for (k, out) in &t.todo {
+        let input = &paths[*k];
+        if t.mirror {
+            create_parent(out)?;
+        }
+        let shown = match (&t.staging, &plan) {
+            (Some(_), Plan::Merge(target)) => target.as_path(),
+            _ => out.as_path(),
+        };
+        match edit(input, out, shown, &t.write_opts) {
+            Ok(line) => {
+                parts.push(out.clone());
+                names.push(input.clone());
+                summary!("{line}");
+            }
+            Err(e) => {
+                error!("{}", crate::errors::cli_text(&e));
+                failed += 1;
+            }
+        }
+    }
+    if let (Some(_), Plan::Merge(target)) = (&t.staging, &plan) {
+        if !merge(&parts, &names, target, &wopts, total) {
+            failed = total;
+        }
+    }
+    if failed > 0 {
+        summary!("{failed} of {total} input(s) failed");
+        return Ok(crate::Outcome::SomeFailed);
+    }
+    Ok(crate::Outcome::Ok)
+}

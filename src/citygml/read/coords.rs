@@ -296,6 +296,38 @@ pub(super) fn parse_pos(text: &[u8], out: &mut Vec<DVec3>) -> Result<(), CoordEr
     push_tuple(&vals, n, out)
 }
 
+/// The points of one GML coordinate element's text, for readers outside the model read
+/// (`citygml::edit`): `posList` with its `srsDimension` (`dim`), `pos`, or `coordinates` with
+/// GML's default separators; the error names the bad token or count.
+pub(crate) fn parse_gml_points(
+    local: &[u8],
+    text: &[u8],
+    dim: u8,
+    out: &mut Vec<DVec3>,
+) -> Result<(), String> {
+    let r = match local {
+        b"posList" => parse_pos_list(text, dim, out),
+        b"pos" => parse_pos(text, out),
+        b"coordinates" => parse_coordinates(
+            text,
+            CoordAttrs {
+                dim: None,
+                cs: b',',
+                ts: b' ',
+                decimal: b'.',
+            },
+            out,
+        ),
+        _ => Ok(()),
+    };
+    r.map_err(|e| match e {
+        CoordError::Token(t) => format!("bad coordinate {t:?}"),
+        CoordError::Count { count, dimension } => {
+            format!("{count} coordinate values are not a multiple of srsDimension {dimension}")
+        }
+    })
+}
+
 /// One tuple of 2 or 3 values (`n` of `vals`) as a point (z 0 for 2); fewer than 2 values are
 /// an error (more are refused while parsing).
 fn push_tuple(vals: &[f64; 3], n: usize, out: &mut Vec<DVec3>) -> Result<(), CoordError> {

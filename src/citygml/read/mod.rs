@@ -34,7 +34,7 @@
 mod assemble;
 mod attrs;
 mod classify;
-mod coords;
+pub(crate) mod coords;
 mod element;
 mod events;
 mod geometry;

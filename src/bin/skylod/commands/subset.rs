@@ -1,0 +1,68 @@
+//! `skylod subset`: keep the top-level city objects of CityGML documents that match a box,
+//! ids or types (citygml-tools' `subset`), streamed: memory follows the largest city object.
+
+use crate::outputs::PerInputArgs;
+use crate::Outcome;
+use anyhow::Context;
+use skylod::citygml::edit::{subset, BboxMode, Subset};
+use skylod::crs::Crs;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    io: PerInputArgs,
+    /// Keep city objects whose box meets X0,Y0,X1,Y1 (in the document's CRS, or --bbox-crs).
+    #[arg(
+        long,
+        value_name = "X0,Y0,X1,Y1",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    bbox: Option<Vec<f64>>,
+    /// How a city object's box is tested against --bbox.
+    #[arg(long, value_enum, default_value_t = BboxMode::Intersects, requires = "bbox")]
+    bbox_mode: BboxMode,
+    /// CRS of --bbox (EPSG:n, in that CRS's axis order), converted into each document's CRS.
+    #[arg(long, value_name = "CRS", requires = "bbox")]
+    bbox_crs: Option<String>,
+    /// Keep the top-level city objects with these gml:ids.
+    #[arg(long, value_name = "ID", num_args = 1.., value_delimiter = ',')]
+    id: Vec<String>,
+    /// Keep the top-level city objects of these types (local names: Building, CityFurniture, ...).
+    #[arg(long = "type", value_name = "TYPE", num_args = 1.., value_delimiter = ',')]
+    types: Vec<String>,
+    /// Keep what does not match instead.
+    #[arg(long)]
+    invert: bool,
+    /// Keep at most N city objects per input (the first N that match, in document order).
+    #[arg(long, value_name = "N")]
+    limit: Option<usize>,
+}
+
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let bbox_crs = match &args.bbox_crs {
+        Some(s) => Some(
+            Crs::parse_named(s)
+                .map_err(anyhow::Error::msg)
+                .context("--bbox-crs")?,
+        ),
+        None => None,
+    };
+    let bbox = match args.bbox.as_deref() {
+        Some(&[x0, y0, x1, y1]) if x0 <= x1 && y0 <= y1 => Some([x0, y0, x1, y1]),
+        Some(_) => anyhow::bail!("--bbox: X0,Y0,X1,Y1 with X0 <= X1 and Y0 <= Y1"),
+        None => None,
+    };
+    let rule = Subset {
+        bbox,
+        mode: args.bbox_mode,
+        bbox_crs,
+        ids: args.id,
+        types: args.types,
+        invert: args.invert,
+        limit: args.limit,
+    };
+    crate::outputs::per_input(&args.io, "subset", &|input, out, shown, opts| {
+        Ok(subset(input, out, &rule, opts)?.describe(input, shown))
+    })
+}

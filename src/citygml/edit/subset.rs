@@ -1,0 +1,166 @@
+//! `subset`: keep the top-level city objects that match a box, ids and types (citygml-tools'
+//! `subset`), streamed (see [`super`]).
+//!
+//! A member matches when every filter given holds: its feature's `gml:id` is one of
+//! [`Subset::ids`]; its feature's type (local name: `Building`, `CityFurniture`, ...) is one of
+//! [`Subset::types`]; its box (of its coordinates, x and y) intersects or lies within
+//! [`Subset::bbox`]. A member without coordinates never matches a box. [`Subset::invert`]
+//! keeps what does not match; [`Subset::limit`] keeps the first N kept, in document order.
+//!
+//! # Example
+//! ```
+//! use skylod::citygml::edit::{BboxMode, Subset};
+//! let s = Subset { bbox: Some([0.0, 0.0, 10.0, 10.0]), mode: BboxMode::Within, ..Subset::default() };
+//! assert!(s.bbox_matches(&[1.0, 1.0, 9.0, 9.0]) && !s.bbox_matches(&[5.0, 5.0, 11.0, 9.0]));
+//! ```
+
+use super::tree::Tree;
+use super::{run, Context, Decision, EditSummary, Rule};
+use crate::citygml::write::WriteOptions;
+use crate::citygml::WriteError;
+use crate::crs::{build_transform, Crs, PointTransform};
+use glam::DVec3;
+use std::path::Path;
+
+/// How a member's box is tested against [`Subset::bbox`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum BboxMode {
+    /// The boxes share a point.
+    #[default]
+    Intersects,
+    /// The member's box lies inside.
+    Within,
+}
+
+/// What [`subset`] keeps.
+#[derive(Debug, Clone, Default)]
+pub struct Subset {
+    /// `[x0, y0, x1, y1]`, in the document's CRS or in [`Subset::bbox_crs`].
+    pub bbox: Option<[f64; 4]>,
+    /// How the box is tested.
+    pub mode: BboxMode,
+    /// The CRS of [`Subset::bbox`] (its axis order), when not the document's: the box's
+    /// corners are converted into the document's CRS (the box of the four converted corners).
+    pub bbox_crs: Option<Crs>,
+    /// Top-level `gml:id`s to keep (none: any).
+    pub ids: Vec<String>,
+    /// Top-level feature types to keep, by local name (none: any).
+    pub types: Vec<String>,
+    /// Keep what does not match instead.
+    pub invert: bool,
+    /// Keep at most this many.
+    pub limit: Option<usize>,
+}
+
+impl Subset {
+    /// Whether the box `b` (`[x0, y0, x1, y1]` in the box's CRS) passes the box test.
+    pub fn bbox_matches(&self, b: &[f64; 4]) -> bool {
+        self.bbox.is_none_or(|q| box_test(self.mode, &q, b))
+    }
+
+    /// The box in the document's CRS `srs_name`.
+    fn box_in(&self, srs_name: Option<&str>) -> Result<Option<[f64; 4]>, String> {
+        let (Some(q), Some(from)) = (self.bbox, &self.bbox_crs) else {
+            return Ok(self.bbox);
+        };
+        let Some(to) = srs_name.map(Crs::parse).filter(Crs::is_known) else {
+            return Err(format!(
+                "the box is given in {from}, but the document names no CRS to convert it into"
+            ));
+        };
+        let t = build_transform();
+        let mut out = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for (x, y) in [(q[0], q[1]), (q[2], q[1]), (q[0], q[3]), (q[2], q[3])] {
+            let p = t
+                .position(from, &to, DVec3::new(x, y, 0.0))
+                .map_err(|e| e.to_string())?;
+            out = [
+                out[0].min(p.x),
+                out[1].min(p.y),
+                out[2].max(p.x),
+                out[3].max(p.y),
+            ];
+        }
+        Ok(Some(out))
+    }
+}
+
+fn box_test(mode: BboxMode, q: &[f64; 4], b: &[f64; 4]) -> bool {
+    match mode {
+        BboxMode::Intersects => b[0] <= q[2] && b[2] >= q[0] && b[1] <= q[3] && b[3] >= q[1],
+        BboxMode::Within => b[0] >= q[0] && b[2] <= q[2] && b[1] >= q[1] && b[3] <= q[3],
+    }
+}
+
+struct SubsetRule<'a> {
+    s: &'a Subset,
+    /// The box in the document's CRS, once known.
+    bbox: Option<Option<[f64; 4]>>,
+    kept: usize,
+}
+
+impl Rule for SubsetRule<'_> {
+    fn member(
+        &mut self,
+        tree: &Tree,
+        ctx: &Context<'_>,
+        _counts: &mut EditSummary,
+    ) -> Result<Decision, String> {
+        let q = match self.bbox {
+            Some(q) => q,
+            None => *self.bbox.insert(self.s.box_in(ctx.srs_name)?),
+        };
+        let id_ok = self.s.ids.is_empty()
+            || tree
+                .feature_id
+                .as_deref()
+                .is_some_and(|id| self.s.ids.iter().any(|i| i == id));
+        let type_ok = self.s.types.is_empty()
+            || tree
+                .feature_type()
+                .is_some_and(|t| self.s.types.iter().any(|x| x == t));
+        let box_ok = q.is_none_or(|q| {
+            let mut b = crate::model::Bbox::EMPTY;
+            for n in &tree.nodes {
+                if !n.bbox.is_empty() {
+                    b.add(n.bbox.min);
+                    b.add(n.bbox.max);
+                }
+            }
+            !b.is_empty() && box_test(self.s.mode, &q, &[b.min.x, b.min.y, b.max.x, b.max.y])
+        });
+        let matches = (id_ok && type_ok && box_ok) != self.s.invert;
+        if !matches || self.s.limit.is_some_and(|l| self.kept >= l) {
+            return Ok(Decision::Drop);
+        }
+        self.kept += 1;
+        Ok(Decision::Keep(Vec::new()))
+    }
+}
+
+/// Write the members of the document at `input` that `rule` keeps to `out` (atomically;
+/// `-` for standard output; gzip for a name ending in `.gz`), streamed (see [`super`]).
+///
+/// # Errors
+/// A refused target, a source that cannot be read or is not CityGML, a box that cannot be
+/// converted into the document's CRS, I/O errors.
+pub fn subset(
+    input: &Path,
+    out: &Path,
+    rule: &Subset,
+    opts: &WriteOptions,
+) -> Result<EditSummary, WriteError> {
+    run(input, out, opts, &|| {
+        Box::new(SubsetRule {
+            s: rule,
+            bbox: None,
+            kept: 0,
+        })
+    })
+}
