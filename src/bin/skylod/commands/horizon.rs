@@ -1,7 +1,6 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::args::tracing::Prepared;
-use crate::commands::{out_err, polygons, s_to_ms, warn_flags};
+use crate::commands::{out_err, polygons, s_to_ms};
 use crate::Outcome;
 use anyhow::Context;
 use skylod::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
@@ -33,12 +32,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let opts = HorizonOptions::default().with_step(args.step);
     opts.validate().context("--step")?;
     let (output, overwrite) = (args.output.clone(), args.overwrite);
-    let Some(Prepared {
-        mut loaded,
-        pois,
-        shard,
-        ..
-    }) = args.tracing.prepare("horizon", |poi_args| {
+    let Some(s) = args.tracing.study("horizon", |poi_args| {
         if let Some(out) = &output {
             let w = WriteOptions {
                 overwrite,
@@ -53,11 +47,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         return Ok(Outcome::SomeFailed);
     };
     // Traced in the local metric frame (y = north): azimuths are from north there.
-    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "horizon")?;
-    let traced = skylod::pipeline::horizon(&framed, &opts, &crate::log::reporter())?;
-    warn_flags(&framed.pois, &traced.flags);
+    let traced = s.study.horizon(&opts, &crate::log::reporter())?;
+    s.warn_flags(&traced.flags);
     let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
-    let pois = &framed.pois;
+    let pois = s.study.pois();
     let rows = traced.rows(pois, |p, h, flags| {
         HorizonPoi::new(
             p,
@@ -73,10 +66,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             rows,
             args.step,
             opts.tolerance_deg,
-            loaded.inputs.clone(),
-            polygons(framed.source),
+            s.inputs.clone(),
+            polygons(s.study.source()),
             TraceTimings {
-                read: loaded.read_ms,
+                read: s.read_ms,
                 bvh: bvh_ms,
                 trace: trace_ms,
             },
@@ -85,7 +78,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     } else {
         // Shards after the first leave out the header line: concatenated in shard order,
         // the shards' files are the serial run's.
-        write_csv(&rows, crate::args::shard::header(shard))
+        write_csv(&rows, s.header())
     };
     match &args.output {
         Some(out) => {
@@ -112,11 +105,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         pois.len(),
         opts.azimuths().len(),
         args.step,
-        crate::commands::polygons_traced(framed.source),
-        loaded.inputs.len(),
-        loaded.read_ms,
+        crate::commands::polygons_traced(s.study.source()),
+        s.inputs.len(),
+        s.read_ms,
         bvh_ms,
         trace_ms
     );
-    Ok(loaded.outcome())
+    Ok(s.outcome())
 }

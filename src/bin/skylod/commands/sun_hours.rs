@@ -2,13 +2,13 @@
 
 use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
-use crate::args::tracing::Prepared;
-use crate::commands::{ms, out_err, polygons, s_to_ms, warn_flags};
+use crate::commands::{ms, out_err, polygons, s_to_ms};
 use crate::Outcome;
 use skylod::output::sun_hours::{
     write_table, SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting,
 };
-use skylod::solar::{Site, SunTable};
+use skylod::session::SunOptions;
+use skylod::solar::Site;
 use std::io::Write;
 use std::time::Instant;
 
@@ -31,25 +31,19 @@ pub struct Args {
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.site.check("sun-hours")?;
-    let Some(Prepared {
-        mut loaded,
-        pois,
-        shard,
-        ..
-    }) = args.tracing.prepare("sun-hours", |_| Ok(()))?
-    else {
+    let Some(s) = args.tracing.study("sun-hours", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);
     };
-    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "sun-hours")?;
-    let (lat, lon) = args.site.resolve(framed.source, "sun-hours")?;
+    let (lat, lon) = args.site.resolve(s.study.source(), "sun-hours")?;
     let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
+    let sun = SunOptions::new(Some(site), args.sun.year, args.sun.step);
     let t = Instant::now();
-    let table = SunTable::year(args.sun.year, args.sun.step, &site)?;
+    let table = s.study.sun_table(&sun)?;
     let sun_ms = ms(t);
-    let traced = skylod::pipeline::sun_hours(&framed, &table, &crate::log::reporter())?;
-    warn_flags(&framed.pois, &traced.flags);
+    let traced = s.study.sun_hours(&sun, &crate::log::reporter())?;
+    s.warn_flags(&traced.flags);
     let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
-    let pois = &framed.pois;
+    let pois = s.study.pois();
     let rows = traced.rows(pois, SunHoursPoi::new);
     let mut out = std::io::stdout().lock();
     if args.json {
@@ -58,10 +52,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             SunSetting::new(lat, lon, args.sun.year, args.sun.step),
             args.timezone.clone(),
             table.len(),
-            loaded.inputs.clone(),
-            polygons(framed.source),
+            s.inputs.clone(),
+            polygons(s.study.source()),
             SunHoursTimings {
-                read: loaded.read_ms,
+                read: s.read_ms,
                 sun: sun_ms,
                 bvh: bvh_ms,
                 trace: trace_ms,
@@ -69,8 +63,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
-        let header = crate::args::shard::header(shard);
-        out_err(write_table(&mut out, &rows, header))?;
+        out_err(write_table(&mut out, &rows, s.header()))?;
         crate::log::summary!(
             "{} POI(s); {} steps of {} min in {} at ({lat}, {lon}), months in {}; {} from {} input(s); read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),
@@ -78,13 +71,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             args.sun.step,
             args.sun.year,
             args.timezone,
-            crate::commands::polygons_traced(framed.source),
-            loaded.inputs.len(),
-            loaded.read_ms,
+            crate::commands::polygons_traced(s.study.source()),
+            s.inputs.len(),
+            s.read_ms,
             sun_ms,
             bvh_ms,
             trace_ms
         );
     }
-    Ok(loaded.outcome())
+    Ok(s.outcome())
 }

@@ -1,7 +1,6 @@
 //! `skylod svf`.
 
-use crate::args::tracing::Prepared;
-use crate::commands::{out_err, polygons, s_to_ms, warn_flags};
+use crate::commands::{out_err, polygons, s_to_ms};
 use crate::Outcome;
 use skylod::output::svf::{write_table, SvfOutput, SvfPoi, TraceTimings};
 use skylod::solar::SkyBundles;
@@ -24,20 +23,13 @@ pub struct Args {
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let bundles = SkyBundles::new(args.rays, args.seed)?;
-    let Some(Prepared {
-        mut loaded,
-        pois,
-        shard,
-        ..
-    }) = args.tracing.prepare("svf", |_| Ok(()))?
-    else {
+    let Some(s) = args.tracing.study("svf", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);
     };
-    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "svf")?;
-    let traced = skylod::pipeline::svf(&framed, &bundles, &crate::log::reporter())?;
-    warn_flags(&framed.pois, &traced.flags);
+    let traced = s.study.svf(&bundles, &crate::log::reporter())?;
+    s.warn_flags(&traced.flags);
     let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
-    let pois = &framed.pois;
+    let pois = s.study.pois();
     let rows = traced.rows(pois, SvfPoi::new);
     let mut out = std::io::stdout().lock();
     if args.json {
@@ -45,32 +37,29 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             rows,
             args.rays,
             args.seed,
-            loaded.inputs.clone(),
-            polygons(framed.source),
+            s.inputs.clone(),
+            polygons(s.study.source()),
             TraceTimings {
-                read: loaded.read_ms,
+                read: s.read_ms,
                 bvh: bvh_ms,
                 trace: trace_ms,
             },
         );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
-        let (dp, header) = (
-            framed.crs.plan_decimals(),
-            crate::args::shard::header(shard),
-        );
-        out_err(write_table(&mut out, &rows, dp, header))?;
+        let dp = s.study.crs().plan_decimals();
+        out_err(write_table(&mut out, &rows, dp, s.header()))?;
         crate::log::summary!(
             "{} POI(s), {} rays per bundle, seed {}; {} from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
             pois.len(),
             args.rays,
             args.seed,
-            crate::commands::polygons_traced(framed.source),
-            loaded.inputs.len(),
-            loaded.read_ms,
+            crate::commands::polygons_traced(s.study.source()),
+            s.inputs.len(),
+            s.read_ms,
             bvh_ms,
             trace_ms
         );
     }
-    Ok(loaded.outcome())
+    Ok(s.outcome())
 }
