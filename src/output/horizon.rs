@@ -2,6 +2,7 @@
 //! convention: azimuths from north, elevations in degrees), the step, the inputs and the
 //! timings.
 
+use super::row::PoiRow;
 use super::svf::TraceTimings;
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
@@ -50,16 +51,13 @@ impl HorizonOutput {
 }
 
 /// One POI of `horizon --json`.
+pub type HorizonPoi = PoiRow<HorizonValues>;
+
+/// What `horizon` computed for one POI ([`HorizonPoi`]).
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 #[non_exhaustive]
-pub struct HorizonPoi {
-    /// Id.
-    pub id: String,
-    /// Position in the model's CRS.
-    pub poi: [f64; 3],
-    /// Surface normal, if given.
-    pub normal: Option<[f64; 3]>,
+pub struct HorizonValues {
     /// Azimuths (degrees from north, clockwise), as written.
     pub azimuth: Vec<f64>,
     /// Elevation of the horizon at each azimuth (degrees), as written: the lower edge of
@@ -69,8 +67,6 @@ pub struct HorizonPoi {
     /// arcade): the elevation (degrees) at which that blocking starts; null when the sky is
     /// open from the elevation to the zenith.
     pub overhang: Vec<Option<f64>>,
-    /// What makes this POI's result suspect.
-    pub flags: Vec<PoiFlag>,
 }
 
 impl HorizonPoi {
@@ -78,20 +74,18 @@ impl HorizonPoi {
     /// written: the command rounds them) and flags; no overhangs (see [`Self::with_overhang`]).
     pub fn new(poi: &Poi, azimuth: Vec<f64>, elevation: Vec<f64>, flags: &[PoiFlag]) -> Self {
         let overhang = vec![None; azimuth.len()];
-        HorizonPoi {
-            id: poi.id.clone(),
-            poi: poi.position.to_array(),
-            normal: poi.normal.map(|n| n.to_array()),
+        let values = HorizonValues {
             azimuth,
             elevation,
             overhang,
-            flags: flags.to_vec(),
-        }
+        };
+        PoiRow::of(poi, values, flags)
     }
 
     /// This entry with the overhang of each azimuth (as written).
-    pub fn with_overhang(self, overhang: Vec<Option<f64>>) -> Self {
-        HorizonPoi { overhang, ..self }
+    pub fn with_overhang(mut self, overhang: Vec<Option<f64>>) -> Self {
+        self.values.overhang = overhang;
+        self
     }
 }
 

@@ -6,6 +6,7 @@ pub mod evaluate;
 pub mod horizon;
 pub mod irradiance;
 pub mod report;
+pub mod row;
 pub mod schema;
 pub mod stats;
 pub mod sun_hours;

@@ -1,6 +1,7 @@
 //! The JSON of `skylod sun-hours --json`: per POI its hours of direct sun (over the year and
 //! per month), the sun table, the inputs and the timings.
 
+use super::row::PoiRow;
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::SunHours;
@@ -85,16 +86,13 @@ impl SunSetting {
 }
 
 /// One POI of `sun-hours --json`.
+pub type SunHoursPoi = PoiRow<SunHoursValues>;
+
+/// What `sun-hours` computed for one POI ([`SunHoursPoi`]).
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 #[non_exhaustive]
-pub struct SunHoursPoi {
-    /// Id.
-    pub id: String,
-    /// Position in the model's CRS.
-    pub poi: [f64; 3],
-    /// Surface normal, if given.
-    pub normal: Option<[f64; 3]>,
+pub struct SunHoursValues {
     /// Hours of direct sun over the table.
     #[schemars(range(min = 0))]
     pub sun_hours: f64,
@@ -103,22 +101,17 @@ pub struct SunHoursPoi {
     /// Hours the sun is above the horizon and in front of the surface, blocked or not.
     #[schemars(range(min = 0))]
     pub possible_hours: f64,
-    /// What makes this POI's result suspect.
-    pub flags: Vec<PoiFlag>,
 }
 
 impl SunHoursPoi {
     /// The entry of `poi` with its sun hours and flags.
     pub fn new(poi: &Poi, hours: &SunHours, flags: &[PoiFlag]) -> Self {
-        SunHoursPoi {
-            id: poi.id.clone(),
-            poi: poi.position.to_array(),
-            normal: poi.normal.map(|n| n.to_array()),
+        let values = SunHoursValues {
             sun_hours: hours.hours,
             monthly: hours.monthly,
             possible_hours: hours.possible_hours,
-            flags: flags.to_vec(),
-        }
+        };
+        PoiRow::of(poi, values, flags)
     }
 }
 
