@@ -225,7 +225,7 @@ impl Scene {
     /// local metric frame ([`crate::pipeline::frame`]), refusing POIs far outside the scene.
     ///
     /// # Errors
-    /// [`Error::Poi`], [`Error::PoiCrs`], [`Error::UnknownModelCrs`], [`Error::Trust`].
+    /// [`Error::Poi`], [`Error::PoiCrs`], [`Error::Trust`].
     pub fn frame(self, pois: Vec<Poi>) -> Result<Study> {
         let Scene {
             inputs,
