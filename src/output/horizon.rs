@@ -4,10 +4,13 @@
 
 use super::row::PoiRow;
 use super::svf::TraceTimings;
+use super::text::{model_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
+use crate::solar::{HorizonOptions, HorizonProfile};
 use schemars::JsonSchema;
 use serde::Serialize;
+use std::io::Write;
 
 /// The whole `horizon --json` document.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
@@ -82,6 +85,14 @@ impl HorizonPoi {
         PoiRow::of(poi, values, flags)
     }
 
+    /// The entry of `poi` with its profile `h` as written (degrees rounded: [`round_deg`]).
+    pub fn from_profile(poi: &Poi, h: &HorizonProfile, flags: &[PoiFlag]) -> Self {
+        let azimuth = h.azimuth.iter().map(|a| round_deg(*a)).collect();
+        let elevation = h.elevation.iter().map(|e| round_deg(*e)).collect();
+        HorizonPoi::new(poi, azimuth, elevation, flags)
+            .with_overhang(h.overhang.iter().map(|o| o.map(round_deg)).collect())
+    }
+
     /// This entry with the overhang of each azimuth (as written).
     pub fn with_overhang(mut self, overhang: Vec<Option<f64>>) -> Self {
         self.values.overhang = overhang;
@@ -118,6 +129,43 @@ pub fn write_csv(pois: &[HorizonPoi], header: bool) -> String {
         }
     }
     s
+}
+
+impl super::text::Document for HorizonOutput {
+    /// The CSV `id,azimuth,elevation` ([`write_csv`]).
+    fn write_table(&self, out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
+        out.write_all(write_csv(&self.pois, cx.header).as_bytes())
+    }
+
+    fn summary(&self, cx: &TextContext) -> Vec<String> {
+        let azimuths = HorizonOptions::default()
+            .with_step(self.step_deg)
+            .azimuths();
+        let t = &self.timings_ms;
+        vec![format!(
+            "{} POI(s), {} azimuths each (step {}°); {}; read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            self.pois.len(),
+            azimuths.len(),
+            self.step_deg,
+            model_part(self.polygons, cx, self.inputs.len()),
+            t.read,
+            t.bvh,
+            t.trace
+        )]
+    }
+}
+
+/// The summary line of one POI's profile (`id`): its mean elevation and its highest, with
+/// the azimuth of the first highest.
+pub fn profile_summary(id: &str, h: &HorizonProfile) -> String {
+    let (mut max, mut at) = (0.0, 0.0);
+    for (a, e) in h.azimuth.iter().zip(&h.elevation) {
+        if *e > max {
+            (max, at) = (*e, *a);
+        }
+    }
+    let mean = h.elevation.iter().sum::<f64>() / h.elevation.len().max(1) as f64;
+    format!("{id}: mean elevation {mean:.2}°, highest {max:.2}° at azimuth {at}°")
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 //! and the timings.
 
 use super::row::PoiRow;
+use super::text::{model_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::irradiance::{Irradiance, SkyModel};
@@ -286,4 +287,31 @@ pub struct IrradianceTimings {
     /// Tracing.
     #[schemars(range(min = 0))]
     pub trace: f64,
+}
+
+impl super::text::Document for IrradianceOutput {
+    fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
+        write_table(&mut out, &self.pois, cx.header)
+    }
+
+    fn summary(&self, cx: &TextContext) -> Vec<String> {
+        let (w, t) = (&self.weather, &self.timings_ms);
+        vec![format!(
+            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {:?} sky, albedo {}; {}; read {:.0} ms, weather and sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            self.pois.len(),
+            w.hours,
+            w.station,
+            w.format,
+            w.ghi_kwh_m2,
+            self.site[0],
+            self.site[1],
+            self.sky,
+            self.albedo,
+            model_part(self.polygons, cx, self.inputs.len()),
+            t.read,
+            t.sun,
+            t.bvh,
+            t.trace
+        )]
+    }
 }

@@ -11,3 +11,4 @@ pub mod schema;
 pub mod stats;
 pub mod sun_hours;
 pub mod svf;
+pub mod text;

@@ -2,6 +2,7 @@
 //! per month), the sun table, the inputs and the timings.
 
 use super::row::PoiRow;
+use super::text::{model_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::SunHours;
@@ -162,4 +163,29 @@ pub struct SunHoursTimings {
     /// Tracing.
     #[schemars(range(min = 0))]
     pub trace: f64,
+}
+
+impl super::text::Document for SunHoursOutput {
+    fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
+        write_table(&mut out, &self.pois, cx.header)
+    }
+
+    fn summary(&self, cx: &TextContext) -> Vec<String> {
+        let (s, t) = (&self.sun, &self.timings_ms);
+        vec![format!(
+            "{} POI(s); {} steps of {} min in {} at ({}, {}), months in {}; {}; read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            self.pois.len(),
+            self.steps,
+            s.step_minutes,
+            s.year,
+            s.lat,
+            s.lon,
+            self.timezone,
+            model_part(self.polygons, cx, self.inputs.len()),
+            t.read,
+            t.sun,
+            t.bvh,
+            t.trace
+        )]
+    }
 }

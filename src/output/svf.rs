@@ -2,6 +2,7 @@
 //! bundle, the inputs and the timings.
 
 use super::row::PoiRow;
+use super::text::{model_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::SkyView;
@@ -133,4 +134,24 @@ pub struct TraceTimings {
     /// Tracing.
     #[schemars(range(min = 0))]
     pub trace: f64,
+}
+
+impl super::text::Document for SvfOutput {
+    fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
+        write_table(&mut out, &self.pois, cx.decimals, cx.header)
+    }
+
+    fn summary(&self, cx: &TextContext) -> Vec<String> {
+        let t = &self.timings_ms;
+        vec![format!(
+            "{} POI(s), {} rays per bundle, seed {}; {}; read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            self.pois.len(),
+            self.rays,
+            self.seed,
+            model_part(self.polygons, cx, self.inputs.len()),
+            t.read,
+            t.bvh,
+            t.trace
+        )]
+    }
 }

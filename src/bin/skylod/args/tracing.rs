@@ -10,6 +10,7 @@ use crate::args::shard::ShardArgs;
 use crate::inputs::{expand_inputs, Spool};
 use crate::Outcome;
 use skylod::batch::shard::Shard;
+use skylod::output::text::TextContext;
 use skylod::poi::checks::PoiFlag;
 use skylod::session::Study;
 
@@ -53,6 +54,13 @@ impl Session {
     /// Whether this run prints a table's header ([`crate::args::shard::header`]).
     pub fn header(&self) -> bool {
         crate::args::shard::header(self.shard)
+    }
+
+    /// What the text of the command's document says beyond its JSON.
+    pub fn text(&self) -> TextContext {
+        let source = self.study.source();
+        let decimals = self.study.crs().plan_decimals();
+        TextContext::new(source.traced_polygon_count(), decimals, self.header())
     }
 
     /// Say each POI's flags as a warning on stderr.

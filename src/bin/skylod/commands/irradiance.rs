@@ -1,12 +1,11 @@
 //! `skylod irradiance`.
 
 use crate::args::site::{model_site, SiteArgs};
-use crate::commands::{ms, out_err, polygons, s_to_ms};
+use crate::commands::{emit, ms, polygons, s_to_ms};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::output::irradiance::{
-    write_csv, write_hourly_csv, write_table, IrradianceOutput, IrradiancePoi, IrradianceTimings,
-    WeatherSummary,
+    write_csv, write_hourly_csv, IrradianceOutput, IrradiancePoi, IrradianceTimings, WeatherSummary,
 };
 use skylod::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
 use skylod::solar::weather::{read_weather, Weather};
@@ -106,39 +105,21 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         bvh: s_to_ms(traced.bvh_s),
         trace: s_to_ms(traced.trace_s),
     };
-    let mut out = std::io::stdout().lock();
-    if args.json {
-        let doc = IrradianceOutput::new(
-            rows,
-            summary,
-            [lat, lon],
-            sky,
-            args.albedo,
-            args.rays,
-            s.inputs.clone(),
-            polygons(s.study.source()),
-            timings,
-        );
-        out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
-    } else if args.csv {
-        write_csv(&mut out, &rows).context("writing to stdout")?;
+    let doc = IrradianceOutput::new(
+        rows,
+        summary,
+        [lat, lon],
+        sky,
+        args.albedo,
+        args.rays,
+        s.inputs.clone(),
+        polygons(s.study.source()),
+        timings,
+    );
+    if args.csv {
+        write_csv(std::io::stdout().lock(), &doc.pois).context("writing to stdout")?;
     } else {
-        out_err(write_table(&mut out, &rows, s.header()))?;
-        crate::log::summary!(
-            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({lat:.4}, {lon:.4}), {sky:?} sky, albedo {}; {} from {} input(s); read {:.0} ms, weather and sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
-            pois.len(),
-            weather.hours.len(),
-            summary.station,
-            summary.format,
-            summary.ghi_kwh_m2,
-            args.albedo,
-            crate::commands::polygons_traced(s.study.source()),
-            s.inputs.len(),
-            timings.read,
-            timings.sun,
-            timings.bvh,
-            timings.trace
-        );
+        emit(&doc, args.json, &s.text())?;
     }
     Ok(s.outcome())
 }

@@ -2,14 +2,11 @@
 
 use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
-use crate::commands::{ms, out_err, polygons, s_to_ms};
+use crate::commands::{emit, ms, polygons, s_to_ms};
 use crate::Outcome;
-use skylod::output::sun_hours::{
-    write_table, SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting,
-};
+use skylod::output::sun_hours::{SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting};
 use skylod::session::SunOptions;
 use skylod::solar::Site;
-use std::io::Write;
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
@@ -42,42 +39,21 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let sun_ms = ms(t);
     let traced = s.study.sun_hours(&sun, &crate::log::reporter())?;
     s.warn_flags(&traced.flags);
-    let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
-    let pois = s.study.pois();
-    let rows = traced.rows(pois, SunHoursPoi::new);
-    let mut out = std::io::stdout().lock();
-    if args.json {
-        let doc = SunHoursOutput::new(
-            rows,
-            SunSetting::new(lat, lon, args.sun.year, args.sun.step),
-            args.timezone.clone(),
-            table.len(),
-            s.inputs.clone(),
-            polygons(s.study.source()),
-            SunHoursTimings {
-                read: s.read_ms,
-                sun: sun_ms,
-                bvh: bvh_ms,
-                trace: trace_ms,
-            },
-        );
-        out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
-    } else {
-        out_err(write_table(&mut out, &rows, s.header()))?;
-        crate::log::summary!(
-            "{} POI(s); {} steps of {} min in {} at ({lat}, {lon}), months in {}; {} from {} input(s); read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
-            pois.len(),
-            table.len(),
-            args.sun.step,
-            args.sun.year,
-            args.timezone,
-            crate::commands::polygons_traced(s.study.source()),
-            s.inputs.len(),
-            s.read_ms,
-            sun_ms,
-            bvh_ms,
-            trace_ms
-        );
-    }
+    let timings = SunHoursTimings {
+        read: s.read_ms,
+        sun: sun_ms,
+        bvh: s_to_ms(traced.bvh_s),
+        trace: s_to_ms(traced.trace_s),
+    };
+    let doc = SunHoursOutput::new(
+        traced.rows(s.study.pois(), SunHoursPoi::new),
+        SunSetting::new(lat, lon, args.sun.year, args.sun.step),
+        args.timezone.clone(),
+        table.len(),
+        s.inputs.clone(),
+        polygons(s.study.source()),
+        timings,
+    );
+    emit(&doc, args.json, &s.text())?;
     Ok(s.outcome())
 }
