@@ -169,3 +169,102 @@ pub fn size_note(out: &Path, written: u64) -> String {
         _ => format!("{written} bytes"),
     }
 }
+
+/// The outputs of a command that writes per input (`convert`, `rough`): laid out for `-o`
+/// and `--format`, every target checked before any work (a refused one reported: its input
+/// fails without being read), this shard's files said on stderr.
+pub struct Batch {
+    pub plan: Plan,
+    pub format: Format,
+    /// The options the user gave (the merge is written with them).
+    pub wopts: WriteOptions,
+    pub targets: Targets,
+    /// Inputs whose target was refused.
+    pub refused: usize,
+}
+
+/// What one input gave: its line (printed in input order unless merged), its warnings and
+/// polygons in and out.
+pub struct Done {
+    pub line: Option<String>,
+    pub warnings: usize,
+    pub polygons: (usize, usize),
+}
+
+impl Batch {
+    /// Plan `cmd`'s outputs of `inputs` to `-o out`, `--format`, `--overwrite` ([`plan`],
+    /// [`targets`]).
+    pub fn new(
+        cmd: &str,
+        inputs: &[Input],
+        (out, format, overwrite): (&Path, Option<Format>, bool),
+        keep_envelopes: bool,
+        shard: Option<Shard>,
+    ) -> anyhow::Result<Batch> {
+        let (plan, format) = plan(inputs, out, format)?;
+        let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
+        let wopts = WriteOptions {
+            overwrite,
+            protect: paths.clone(),
+            keep_envelopes,
+        };
+        let (targets, refused) =
+            self::targets(&plan, &paths, &wopts, shard, cmd, true, |e| error!("{e}"))?;
+        Ok(Batch {
+            plan,
+            format,
+            wopts,
+            targets,
+            refused,
+        })
+    }
+
+    /// The results of the inputs done (`(input, output, result)` in input order): each
+    /// line printed (none when merged), each failure with `failure`, the merge made, then
+    /// `cmd`'s closing line (polygons when the outputs are CityGML). The exit outcome.
+    pub fn finish(
+        &self,
+        cmd: &str,
+        results: Vec<(PathBuf, PathBuf, anyhow::Result<Done>)>,
+        failure: impl Fn(&anyhow::Error) -> String,
+        inputs: usize,
+        t0: std::time::Instant,
+    ) -> crate::Outcome {
+        let staged = self.targets.staging.is_some();
+        let (mut ok, mut failed, mut warnings, mut polys) = (0, self.refused, 0, (0, 0));
+        let (mut parts, mut names) = (Vec::new(), Vec::new());
+        for (input, out, r) in results {
+            match r {
+                Ok(d) => {
+                    if let Some(line) = d.line.filter(|_| !staged) {
+                        summary!("{line}");
+                    }
+                    ok += 1;
+                    warnings += d.warnings;
+                    polys.0 += d.polygons.0;
+                    polys.1 += d.polygons.1;
+                    parts.push(out);
+                    names.push(input);
+                }
+                Err(e) => {
+                    error!("{}", failure(&e));
+                    failed += 1;
+                }
+            }
+        }
+        if let (true, Plan::Merge(target)) = (staged, &self.plan) {
+            if !merge(&parts, &names, target, &self.wopts, inputs) {
+                failed += ok;
+                ok = 0;
+            }
+        }
+        let polys = (self.format == Format::CityGml).then_some(polys);
+        let line = crate::commands::summary_line(cmd, ok, failed, warnings, polys, t0);
+        summary!("{line}");
+        if failed > 0 {
+            crate::Outcome::SomeFailed
+        } else {
+            crate::Outcome::Ok
+        }
+    }
+}
