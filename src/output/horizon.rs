@@ -4,7 +4,7 @@
 
 use super::row::PoiRow;
 use super::svf::TraceTimings;
-use super::text::{model_part, TextContext};
+use super::text::{run_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::{HorizonOptions, HorizonProfile};
@@ -143,14 +143,16 @@ impl super::text::Document for HorizonOutput {
             .azimuths();
         let t = &self.timings_ms;
         vec![format!(
-            "{} POI(s), {} azimuths each (step {}°); {}; read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            "{} POI(s), {} azimuths each (step {}°); {}",
             self.pois.len(),
             azimuths.len(),
             self.step_deg,
-            model_part(self.polygons, cx, self.inputs.len()),
-            t.read,
-            t.bvh,
-            t.trace
+            run_part(
+                self.polygons,
+                cx,
+                self.inputs.len(),
+                &[("read", t.read), ("bvh", t.bvh), ("trace", t.trace)]
+            )
         )]
     }
 }

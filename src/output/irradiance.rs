@@ -3,7 +3,7 @@
 //! and the timings.
 
 use super::row::PoiRow;
-use super::text::{model_part, TextContext};
+use super::text::{run_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::irradiance::{Irradiance, SkyModel};
@@ -289,6 +289,19 @@ pub struct IrradianceTimings {
     pub trace: f64,
 }
 
+impl IrradianceTimings {
+    /// The timings `t` of a traced command with `sun` milliseconds placing the sun.
+    pub fn new(t: super::svf::TraceTimings, sun: f64) -> Self {
+        let super::svf::TraceTimings { read, bvh, trace } = t;
+        IrradianceTimings {
+            read,
+            sun,
+            bvh,
+            trace,
+        }
+    }
+}
+
 impl super::text::Document for IrradianceOutput {
     fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
         write_table(&mut out, &self.pois, cx.header)
@@ -297,7 +310,7 @@ impl super::text::Document for IrradianceOutput {
     fn summary(&self, cx: &TextContext) -> Vec<String> {
         let (w, t) = (&self.weather, &self.timings_ms);
         vec![format!(
-            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {:?} sky, albedo {}; {}; read {:.0} ms, weather and sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {:?} sky, albedo {}; {}",
             self.pois.len(),
             w.hours,
             w.station,
@@ -307,11 +320,7 @@ impl super::text::Document for IrradianceOutput {
             self.site[1],
             self.sky,
             self.albedo,
-            model_part(self.polygons, cx, self.inputs.len()),
-            t.read,
-            t.sun,
-            t.bvh,
-            t.trace
+            run_part(self.polygons, cx, self.inputs.len(), &[("read", t.read), ("weather and sun", t.sun), ("bvh", t.bvh), ("trace", t.trace)])
         )]
     }
 }

@@ -2,7 +2,7 @@
 //! per month), the sun table, the inputs and the timings.
 
 use super::row::PoiRow;
-use super::text::{model_part, TextContext};
+use super::text::{run_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::SunHours;
@@ -165,6 +165,19 @@ pub struct SunHoursTimings {
     pub trace: f64,
 }
 
+impl SunHoursTimings {
+    /// The timings `t` of a traced command with `sun` milliseconds placing the sun.
+    pub fn new(t: super::svf::TraceTimings, sun: f64) -> Self {
+        let super::svf::TraceTimings { read, bvh, trace } = t;
+        SunHoursTimings {
+            read,
+            sun,
+            bvh,
+            trace,
+        }
+    }
+}
+
 impl super::text::Document for SunHoursOutput {
     fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
         write_table(&mut out, &self.pois, cx.header)
@@ -173,7 +186,7 @@ impl super::text::Document for SunHoursOutput {
     fn summary(&self, cx: &TextContext) -> Vec<String> {
         let (s, t) = (&self.sun, &self.timings_ms);
         vec![format!(
-            "{} POI(s); {} steps of {} min in {} at ({}, {}), months in {}; {}; read {:.0} ms, sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            "{} POI(s); {} steps of {} min in {} at ({}, {}), months in {}; {}",
             self.pois.len(),
             self.steps,
             s.step_minutes,
@@ -181,11 +194,17 @@ impl super::text::Document for SunHoursOutput {
             s.lat,
             s.lon,
             self.timezone,
-            model_part(self.polygons, cx, self.inputs.len()),
-            t.read,
-            t.sun,
-            t.bvh,
-            t.trace
+            run_part(
+                self.polygons,
+                cx,
+                self.inputs.len(),
+                &[
+                    ("read", t.read),
+                    ("sun", t.sun),
+                    ("bvh", t.bvh),
+                    ("trace", t.trace)
+                ]
+            )
         )]
     }
 }

@@ -2,7 +2,7 @@
 //! bundle, the inputs and the timings.
 
 use super::row::PoiRow;
-use super::text::{model_part, TextContext};
+use super::text::{run_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::SkyView;
@@ -136,6 +136,19 @@ pub struct TraceTimings {
     pub trace: f64,
 }
 
+impl TraceTimings {
+    /// `read_ms` with the seconds building the scene and tracing, as milliseconds rounded
+    /// to 0.1.
+    pub fn new(read_ms: f64, bvh_s: f64, trace_s: f64) -> Self {
+        let ms = |s: f64| (s * 1e4).round() / 10.0;
+        TraceTimings {
+            read: read_ms,
+            bvh: ms(bvh_s),
+            trace: ms(trace_s),
+        }
+    }
+}
+
 impl super::text::Document for SvfOutput {
     fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
         write_table(&mut out, &self.pois, cx.decimals, cx.header)
@@ -144,14 +157,16 @@ impl super::text::Document for SvfOutput {
     fn summary(&self, cx: &TextContext) -> Vec<String> {
         let t = &self.timings_ms;
         vec![format!(
-            "{} POI(s), {} rays per bundle, seed {}; {}; read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
+            "{} POI(s), {} rays per bundle, seed {}; {}",
             self.pois.len(),
             self.rays,
             self.seed,
-            model_part(self.polygons, cx, self.inputs.len()),
-            t.read,
-            t.bvh,
-            t.trace
+            run_part(
+                self.polygons,
+                cx,
+                self.inputs.len(),
+                &[("read", t.read), ("bvh", t.bvh), ("trace", t.trace)]
+            )
         )]
     }
 }

@@ -41,11 +41,19 @@ pub trait Document: Serialize {
     fn summary(&self, cx: &TextContext) -> Vec<String>;
 }
 
-/// `N polygons (T traced) from K input(s)`: the model part of a summary line.
-pub(crate) fn model_part(polygons: usize, cx: &TextContext, inputs: usize) -> String {
+/// `N polygons (T traced) from K input(s); read 1 ms, bvh 2 ms, ...`: the model and the
+/// timings (`(stage, ms)`) that close a summary line.
+pub(crate) fn run_part(
+    polygons: usize,
+    cx: &TextContext,
+    inputs: usize,
+    ms: &[(&str, f64)],
+) -> String {
+    let stages: Vec<String> = ms.iter().map(|(s, t)| format!("{s} {t:.0} ms")).collect();
     format!(
-        "{polygons} polygons ({} traced) from {inputs} input(s)",
-        cx.traced_polygons
+        "{polygons} polygons ({} traced) from {inputs} input(s); {}",
+        cx.traced_polygons,
+        stages.join(", ")
     )
 }
 

@@ -261,10 +261,6 @@ impl Batch {
         let polys = (self.format == Format::CityGml).then_some(polys);
         let line = crate::commands::summary_line(cmd, ok, failed, warnings, polys, t0);
         summary!("{line}");
-        if failed > 0 {
-            crate::Outcome::SomeFailed
-        } else {
-            crate::Outcome::Ok
-        }
+        crate::Outcome::failed_if(failed > 0)
     }
 }

@@ -10,7 +10,9 @@ use crate::args::shard::ShardArgs;
 use crate::inputs::{expand_inputs, Spool};
 use crate::Outcome;
 use skylod::batch::shard::Shard;
+use skylod::output::svf::TraceTimings;
 use skylod::output::text::TextContext;
+use skylod::pipeline::Traced;
 use skylod::poi::checks::PoiFlag;
 use skylod::session::Study;
 
@@ -44,11 +46,7 @@ pub struct Session {
 impl Session {
     /// Exit outcome: some inputs failed, or all were read.
     pub fn outcome(&self) -> Outcome {
-        if self.failed {
-            Outcome::SomeFailed
-        } else {
-            Outcome::Ok
-        }
+        Outcome::failed_if(self.failed)
     }
 
     /// Whether this run prints a table's header ([`crate::args::shard::header`]).
@@ -61,6 +59,11 @@ impl Session {
         let source = self.study.source();
         let decimals = self.study.crs().plan_decimals();
         TextContext::new(source.traced_polygon_count(), decimals, self.header())
+    }
+
+    /// The read, BVH and trace milliseconds of `traced`.
+    pub fn timings<T>(&self, traced: &Traced<T>) -> TraceTimings {
+        TraceTimings::new(self.read_ms, traced.bvh_s, traced.trace_s)
     }
 
     /// Say each POI's flags as a warning on stderr.

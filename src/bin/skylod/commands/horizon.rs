@@ -1,11 +1,10 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::commands::{out_err, polygons, s_to_ms};
+use crate::commands::{out_err, polygons};
 use crate::Outcome;
 use anyhow::Context;
 use skylod::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
 use skylod::output::horizon::{profile_summary, HorizonOutput, HorizonPoi};
-use skylod::output::svf::TraceTimings;
 use skylod::output::text::Document;
 use skylod::solar::HorizonOptions;
 use std::io::Write;
@@ -50,11 +49,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // Traced in the local metric frame (y = north): azimuths are from north there.
     let traced = s.study.horizon(&opts, &crate::log::reporter())?;
     s.warn_flags(&traced.flags);
-    let timings = TraceTimings {
-        read: s.read_ms,
-        bvh: s_to_ms(traced.bvh_s),
-        trace: s_to_ms(traced.trace_s),
-    };
+    let timings = s.timings(&traced);
     let doc = HorizonOutput::new(
         traced.rows(s.study.pois(), HorizonPoi::from_profile),
         args.step,

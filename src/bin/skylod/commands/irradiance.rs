@@ -1,7 +1,7 @@
 //! `skylod irradiance`.
 
 use crate::args::site::{model_site, SiteArgs};
-use crate::commands::{emit, ms, polygons, s_to_ms};
+use crate::commands::{emit, ms, polygons};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::output::irradiance::{
@@ -99,12 +99,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         weather.hours.len(),
         weather.totals_kwh_m2(),
     );
-    let timings = IrradianceTimings {
-        read: s.read_ms,
-        sun: sun_ms,
-        bvh: s_to_ms(traced.bvh_s),
-        trace: s_to_ms(traced.trace_s),
-    };
+    let timings = IrradianceTimings::new(s.timings(&traced), sun_ms);
     let doc = IrradianceOutput::new(
         rows,
         summary,

@@ -56,11 +56,6 @@ pub fn out_err<T>(r: std::io::Result<T>) -> anyhow::Result<T> {
     r.context("writing to standard output")
 }
 
-/// Seconds as milliseconds rounded to 0.1 (the timings of the reports).
-pub fn s_to_ms(s: f64) -> f64 {
-    (s * 1e4).round() / 10.0
-}
-
 /// A tracing command's document on standard output: its JSON with `json`, else its table,
 /// with its summary lines on stderr.
 pub fn emit(doc: &impl Document, json: bool, cx: &TextContext) -> anyhow::Result<()> {

@@ -2,7 +2,7 @@
 
 use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
-use crate::commands::{emit, ms, polygons, s_to_ms};
+use crate::commands::{emit, ms, polygons};
 use crate::Outcome;
 use skylod::output::sun_hours::{SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting};
 use skylod::session::SunOptions;
@@ -39,12 +39,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let sun_ms = ms(t);
     let traced = s.study.sun_hours(&sun, &crate::log::reporter())?;
     s.warn_flags(&traced.flags);
-    let timings = SunHoursTimings {
-        read: s.read_ms,
-        sun: sun_ms,
-        bvh: s_to_ms(traced.bvh_s),
-        trace: s_to_ms(traced.trace_s),
-    };
+    let timings = SunHoursTimings::new(s.timings(&traced), sun_ms);
     let doc = SunHoursOutput::new(
         traced.rows(s.study.pois(), SunHoursPoi::new),
         SunSetting::new(lat, lon, args.sun.year, args.sun.step),

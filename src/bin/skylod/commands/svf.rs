@@ -1,8 +1,8 @@
 //! `skylod svf`.
 
-use crate::commands::{emit, polygons, s_to_ms};
+use crate::commands::{emit, polygons};
 use crate::Outcome;
-use skylod::output::svf::{SvfOutput, SvfPoi, TraceTimings};
+use skylod::output::svf::{SvfOutput, SvfPoi};
 use skylod::solar::SkyBundles;
 
 #[derive(clap::Args, Debug)]
@@ -27,11 +27,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     let traced = s.study.svf(&bundles, &crate::log::reporter())?;
     s.warn_flags(&traced.flags);
-    let timings = TraceTimings {
-        read: s.read_ms,
-        bvh: s_to_ms(traced.bvh_s),
-        trace: s_to_ms(traced.trace_s),
-    };
+    let timings = s.timings(&traced);
     let rows = traced.rows(s.study.pois(), SvfPoi::new);
     let polygons = polygons(s.study.source());
     let doc = SvfOutput::new(
