@@ -271,36 +271,8 @@ pub fn write_hourly_csv(
     Ok(())
 }
 
-/// Milliseconds per stage of `irradiance`.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, JsonSchema)]
-#[schemars(deny_unknown_fields)]
-pub struct IrradianceTimings {
-    /// Reading the inputs.
-    #[schemars(range(min = 0))]
-    pub read: f64,
-    /// Reading the weather and placing the sun.
-    #[schemars(range(min = 0))]
-    pub sun: f64,
-    /// Triangulation and BVH build of the scene.
-    #[schemars(range(min = 0))]
-    pub bvh: f64,
-    /// Tracing.
-    #[schemars(range(min = 0))]
-    pub trace: f64,
-}
-
-impl IrradianceTimings {
-    /// The timings `t` of a traced command with `sun` milliseconds placing the sun.
-    pub fn new(t: super::svf::TraceTimings, sun: f64) -> Self {
-        let super::svf::TraceTimings { read, bvh, trace } = t;
-        IrradianceTimings {
-            read,
-            sun,
-            bvh,
-            trace,
-        }
-    }
-}
+/// Milliseconds per stage of `irradiance` (`sun`: reading the weather and placing the sun).
+pub type IrradianceTimings = super::sun_hours::SunHoursTimings;
 
 impl super::text::Document for IrradianceOutput {
     fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {

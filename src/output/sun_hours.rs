@@ -147,14 +147,14 @@ pub fn write_table(
     Ok(())
 }
 
-/// Milliseconds per stage of `sun-hours`.
+/// Milliseconds per stage of `sun-hours` and `irradiance`.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 pub struct SunHoursTimings {
     /// Reading the inputs.
     #[schemars(range(min = 0))]
     pub read: f64,
-    /// The sun table.
+    /// The sun table (`irradiance`: reading the weather and placing the sun).
     #[schemars(range(min = 0))]
     pub sun: f64,
     /// Triangulation and BVH build of the scene.
