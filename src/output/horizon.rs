@@ -2,11 +2,15 @@
 //! convention: azimuths from north, elevations in degrees), the step, the inputs and the
 //! timings.
 
+use super::row::PoiRow;
 use super::svf::TraceTimings;
+use super::text::{run_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
+use crate::solar::{HorizonOptions, HorizonProfile};
 use schemars::JsonSchema;
 use serde::Serialize;
+use std::io::Write;
 
 /// The whole `horizon --json` document.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
@@ -50,16 +54,13 @@ impl HorizonOutput {
 }
 
 /// One POI of `horizon --json`.
+pub type HorizonPoi = PoiRow<HorizonValues>;
+
+/// What `horizon` computed for one POI ([`HorizonPoi`]).
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 #[non_exhaustive]
-pub struct HorizonPoi {
-    /// Id.
-    pub id: String,
-    /// Position in the model's CRS.
-    pub poi: [f64; 3],
-    /// Surface normal, if given.
-    pub normal: Option<[f64; 3]>,
+pub struct HorizonValues {
     /// Azimuths (degrees from north, clockwise), as written.
     pub azimuth: Vec<f64>,
     /// Elevation of the horizon at each azimuth (degrees), as written: the lower edge of
@@ -69,8 +70,6 @@ pub struct HorizonPoi {
     /// arcade): the elevation (degrees) at which that blocking starts; null when the sky is
     /// open from the elevation to the zenith.
     pub overhang: Vec<Option<f64>>,
-    /// What makes this POI's result suspect.
-    pub flags: Vec<PoiFlag>,
 }
 
 impl HorizonPoi {
@@ -78,20 +77,26 @@ impl HorizonPoi {
     /// written: the command rounds them) and flags; no overhangs (see [`Self::with_overhang`]).
     pub fn new(poi: &Poi, azimuth: Vec<f64>, elevation: Vec<f64>, flags: &[PoiFlag]) -> Self {
         let overhang = vec![None; azimuth.len()];
-        HorizonPoi {
-            id: poi.id.clone(),
-            poi: poi.position.to_array(),
-            normal: poi.normal.map(|n| n.to_array()),
+        let values = HorizonValues {
             azimuth,
             elevation,
             overhang,
-            flags: flags.to_vec(),
-        }
+        };
+        PoiRow::of(poi, values, flags)
+    }
+
+    /// The entry of `poi` with its profile `h` as written (degrees rounded: [`round_deg`]).
+    pub fn from_profile(poi: &Poi, h: &HorizonProfile, flags: &[PoiFlag]) -> Self {
+        let azimuth = h.azimuth.iter().map(|a| round_deg(*a)).collect();
+        let elevation = h.elevation.iter().map(|e| round_deg(*e)).collect();
+        HorizonPoi::new(poi, azimuth, elevation, flags)
+            .with_overhang(h.overhang.iter().map(|o| o.map(round_deg)).collect())
     }
 
     /// This entry with the overhang of each azimuth (as written).
-    pub fn with_overhang(self, overhang: Vec<Option<f64>>) -> Self {
-        HorizonPoi { overhang, ..self }
+    pub fn with_overhang(mut self, overhang: Vec<Option<f64>>) -> Self {
+        self.values.overhang = overhang;
+        self
     }
 }
 
@@ -124,6 +129,45 @@ pub fn write_csv(pois: &[HorizonPoi], header: bool) -> String {
         }
     }
     s
+}
+
+impl super::text::Document for HorizonOutput {
+    /// The CSV `id,azimuth,elevation` ([`write_csv`]).
+    fn write_table(&self, out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
+        out.write_all(write_csv(&self.pois, cx.header).as_bytes())
+    }
+
+    fn summary(&self, cx: &TextContext) -> Vec<String> {
+        let azimuths = HorizonOptions::default()
+            .with_step(self.step_deg)
+            .azimuths();
+        let t = &self.timings_ms;
+        vec![format!(
+            "{} POI(s), {} azimuths each (step {}°); {}",
+            self.pois.len(),
+            azimuths.len(),
+            self.step_deg,
+            run_part(
+                self.polygons,
+                cx,
+                self.inputs.len(),
+                &[("read", t.read), ("bvh", t.bvh), ("trace", t.trace)]
+            )
+        )]
+    }
+}
+
+/// The summary line of one POI's profile (`id`): its mean elevation and its highest, with
+/// the azimuth of the first highest.
+pub fn profile_summary(id: &str, h: &HorizonProfile) -> String {
+    let (mut max, mut at) = (0.0, 0.0);
+    for (a, e) in h.azimuth.iter().zip(&h.elevation) {
+        if *e > max {
+            (max, at) = (*e, *a);
+        }
+    }
+    let mean = h.elevation.iter().sum::<f64>() / h.elevation.len().max(1) as f64;
+    format!("{id}: mean elevation {mean:.2}°, highest {max:.2}° at azimuth {at}°")
 }
 
 #[cfg(test)]

@@ -2,6 +2,8 @@
 //! plane (global, direct, diffuse, reflected, kWh/m²), the weather and sky model, the inputs
 //! and the timings.
 
+use super::row::PoiRow;
+use super::text::{run_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::irradiance::{Irradiance, SkyModel};
@@ -132,16 +134,13 @@ impl WeatherSummary {
 }
 
 /// One POI of `irradiance --json`.
+pub type IrradiancePoi = PoiRow<IrradianceValues>;
+
+/// What `irradiance` computed for one POI ([`IrradiancePoi`]).
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 #[non_exhaustive]
-pub struct IrradiancePoi {
-    /// Id.
-    pub id: String,
-    /// Position in the model's CRS.
-    pub poi: [f64; 3],
-    /// Surface normal, if given (horizontal plane otherwise).
-    pub normal: Option<[f64; 3]>,
+pub struct IrradianceValues {
     /// Direct + diffuse + reflected, kWh/m² over the weather's hours.
     #[schemars(range(min = 0))]
     pub global_kwh_m2: f64,
@@ -161,17 +160,12 @@ pub struct IrradiancePoi {
     pub sun_hours: u32,
     /// Hours the sun was above the horizon and in front of the plane.
     pub possible_sun_hours: u32,
-    /// What makes this POI's result suspect.
-    pub flags: Vec<PoiFlag>,
 }
 
 impl IrradiancePoi {
     /// The entry of `poi`.
     pub fn new(poi: &Poi, r: &Irradiance, flags: &[PoiFlag]) -> Self {
-        IrradiancePoi {
-            id: poi.id.clone(),
-            poi: poi.position.to_array(),
-            normal: poi.normal.map(|n| n.to_array()),
+        let values = IrradianceValues {
             global_kwh_m2: r.global_kwh_m2,
             direct_kwh_m2: r.direct_kwh_m2,
             diffuse_kwh_m2: r.diffuse_kwh_m2,
@@ -179,8 +173,8 @@ impl IrradiancePoi {
             svf: r.svf,
             sun_hours: r.sun_hours,
             possible_sun_hours: r.sun_hours_possible,
-            flags: flags.to_vec(),
-        }
+        };
+        PoiRow::of(poi, values, flags)
     }
 }
 
@@ -277,20 +271,28 @@ pub fn write_hourly_csv(
     Ok(())
 }
 
-/// Milliseconds per stage of `irradiance`.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, JsonSchema)]
-#[schemars(deny_unknown_fields)]
-pub struct IrradianceTimings {
-    /// Reading the inputs.
-    #[schemars(range(min = 0))]
-    pub read: f64,
-    /// Reading the weather and placing the sun.
-    #[schemars(range(min = 0))]
-    pub sun: f64,
-    /// Triangulation and BVH build of the scene.
-    #[schemars(range(min = 0))]
-    pub bvh: f64,
-    /// Tracing.
-    #[schemars(range(min = 0))]
-    pub trace: f64,
+/// Milliseconds per stage of `irradiance` (`sun`: reading the weather and placing the sun).
+pub type IrradianceTimings = super::sun_hours::SunHoursTimings;
+
+impl super::text::Document for IrradianceOutput {
+    fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
+        write_table(&mut out, &self.pois, cx.header)
+    }
+
+    fn summary(&self, cx: &TextContext) -> Vec<String> {
+        let (w, t) = (&self.weather, &self.timings_ms);
+        vec![format!(
+            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {:?} sky, albedo {}; {}",
+            self.pois.len(),
+            w.hours,
+            w.station,
+            w.format,
+            w.ghi_kwh_m2,
+            self.site[0],
+            self.site[1],
+            self.sky,
+            self.albedo,
+            run_part(self.polygons, cx, self.inputs.len(), &[("read", t.read), ("weather and sun", t.sun), ("bvh", t.bvh), ("trace", t.trace)])
+        )]
+    }
 }

@@ -1,6 +1,8 @@
 //! The JSON of `skylod sun-hours --json`: per POI its hours of direct sun (over the year and
 //! per month), the sun table, the inputs and the timings.
 
+use super::row::PoiRow;
+use super::text::{run_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::SunHours;
@@ -85,16 +87,13 @@ impl SunSetting {
 }
 
 /// One POI of `sun-hours --json`.
+pub type SunHoursPoi = PoiRow<SunHoursValues>;
+
+/// What `sun-hours` computed for one POI ([`SunHoursPoi`]).
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 #[non_exhaustive]
-pub struct SunHoursPoi {
-    /// Id.
-    pub id: String,
-    /// Position in the model's CRS.
-    pub poi: [f64; 3],
-    /// Surface normal, if given.
-    pub normal: Option<[f64; 3]>,
+pub struct SunHoursValues {
     /// Hours of direct sun over the table.
     #[schemars(range(min = 0))]
     pub sun_hours: f64,
@@ -103,22 +102,17 @@ pub struct SunHoursPoi {
     /// Hours the sun is above the horizon and in front of the surface, blocked or not.
     #[schemars(range(min = 0))]
     pub possible_hours: f64,
-    /// What makes this POI's result suspect.
-    pub flags: Vec<PoiFlag>,
 }
 
 impl SunHoursPoi {
     /// The entry of `poi` with its sun hours and flags.
     pub fn new(poi: &Poi, hours: &SunHours, flags: &[PoiFlag]) -> Self {
-        SunHoursPoi {
-            id: poi.id.clone(),
-            poi: poi.position.to_array(),
-            normal: poi.normal.map(|n| n.to_array()),
+        let values = SunHoursValues {
             sun_hours: hours.hours,
             monthly: hours.monthly,
             possible_hours: hours.possible_hours,
-            flags: flags.to_vec(),
-        }
+        };
+        PoiRow::of(poi, values, flags)
     }
 }
 
@@ -153,14 +147,14 @@ pub fn write_table(
     Ok(())
 }
 
-/// Milliseconds per stage of `sun-hours`.
+/// Milliseconds per stage of `sun-hours` and `irradiance`.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 pub struct SunHoursTimings {
     /// Reading the inputs.
     #[schemars(range(min = 0))]
     pub read: f64,
-    /// The sun table.
+    /// The sun table (`irradiance`: reading the weather and placing the sun).
     #[schemars(range(min = 0))]
     pub sun: f64,
     /// Triangulation and BVH build of the scene.
@@ -169,4 +163,48 @@ pub struct SunHoursTimings {
     /// Tracing.
     #[schemars(range(min = 0))]
     pub trace: f64,
+}
+
+impl SunHoursTimings {
+    /// The timings `t` of a traced command with `sun` milliseconds placing the sun.
+    pub fn new(t: super::svf::TraceTimings, sun: f64) -> Self {
+        let super::svf::TraceTimings { read, bvh, trace } = t;
+        SunHoursTimings {
+            read,
+            sun,
+            bvh,
+            trace,
+        }
+    }
+}
+
+impl super::text::Document for SunHoursOutput {
+    fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
+        write_table(&mut out, &self.pois, cx.header)
+    }
+
+    fn summary(&self, cx: &TextContext) -> Vec<String> {
+        let (s, t) = (&self.sun, &self.timings_ms);
+        vec![format!(
+            "{} POI(s); {} steps of {} min in {} at ({}, {}), months in {}; {}",
+            self.pois.len(),
+            self.steps,
+            s.step_minutes,
+            s.year,
+            s.lat,
+            s.lon,
+            self.timezone,
+            run_part(
+                self.polygons,
+                cx,
+                self.inputs.len(),
+                &[
+                    ("read", t.read),
+                    ("sun", t.sun),
+                    ("bvh", t.bvh),
+                    ("trace", t.trace)
+                ]
+            )
+        )]
+    }
 }

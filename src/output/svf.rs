@@ -1,6 +1,8 @@
 //! The JSON of `skylod svf --json`: per POI its sky view factor and sky exposure, the sky
 //! bundle, the inputs and the timings.
 
+use super::row::PoiRow;
+use super::text::{run_part, TextContext};
 use crate::model::Poi;
 use crate::poi::checks::PoiFlag;
 use crate::solar::SkyView;
@@ -90,16 +92,13 @@ pub fn write_table(
 }
 
 /// One POI of `svf --json`.
+pub type SvfPoi = PoiRow<SkyValues>;
+
+/// What `svf` computed for one POI ([`SvfPoi`]).
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 #[non_exhaustive]
-pub struct SvfPoi {
-    /// Id.
-    pub id: String,
-    /// Position in the model's CRS.
-    pub poi: [f64; 3],
-    /// Surface normal, if given.
-    pub normal: Option<[f64; 3]>,
+pub struct SkyValues {
     /// Sky view factor, cosine-weighted to the normal.
     #[schemars(range(min = 0, max = 1))]
     pub svf: f64,
@@ -108,22 +107,17 @@ pub struct SvfPoi {
     pub sky_exposure: f64,
     /// Rays cast (in front of the surface, above the horizon).
     pub rays: usize,
-    /// What makes this POI's result suspect.
-    pub flags: Vec<PoiFlag>,
 }
 
 impl SvfPoi {
     /// The entry of `poi` with its sky view and flags.
     pub fn new(poi: &Poi, view: &SkyView, flags: &[PoiFlag]) -> Self {
-        SvfPoi {
-            id: poi.id.clone(),
-            poi: poi.position.to_array(),
-            normal: poi.normal.map(|n| n.to_array()),
+        let values = SkyValues {
             svf: view.svf,
             sky_exposure: view.sky_exposure,
             rays: view.rays,
-            flags: flags.to_vec(),
-        }
+        };
+        PoiRow::of(poi, values, flags)
     }
 }
 
@@ -140,4 +134,39 @@ pub struct TraceTimings {
     /// Tracing.
     #[schemars(range(min = 0))]
     pub trace: f64,
+}
+
+impl TraceTimings {
+    /// `read_ms` with the seconds building the scene and tracing, as milliseconds rounded
+    /// to 0.1.
+    pub fn new(read_ms: f64, bvh_s: f64, trace_s: f64) -> Self {
+        let ms = |s: f64| (s * 1e4).round() / 10.0;
+        TraceTimings {
+            read: read_ms,
+            bvh: ms(bvh_s),
+            trace: ms(trace_s),
+        }
+    }
+}
+
+impl super::text::Document for SvfOutput {
+    fn write_table(&self, mut out: &mut dyn Write, cx: &TextContext) -> std::io::Result<()> {
+        write_table(&mut out, &self.pois, cx.decimals, cx.header)
+    }
+
+    fn summary(&self, cx: &TextContext) -> Vec<String> {
+        let t = &self.timings_ms;
+        vec![format!(
+            "{} POI(s), {} rays per bundle, seed {}; {}",
+            self.pois.len(),
+            self.rays,
+            self.seed,
+            run_part(
+                self.polygons,
+                cx,
+                self.inputs.len(),
+                &[("read", t.read), ("bvh", t.bvh), ("trace", t.trace)]
+            )
+        )]
+    }
 }

@@ -9,20 +9,14 @@ use crate::poi::PoiError;
 use crate::runtime::progress::Cancelled;
 use crate::solar::SolarError;
 
-/// Errors of the pipeline that stop it (a file that cannot be read does not: see
-/// [`Inputs::failures`](super::Inputs::failures)).
+/// The POIs could not be brought from their CRS to the model's (one definition for
+/// [`PipelineError::PoiCrs`] and [`crate::Error::PoiCrs`]).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum PipelineError {
-    /// A POI is invalid (not finite, zero normal, a duplicate id: [`crate::poi::check_poi_list`]).
-    #[error(transparent)]
-    Poi(#[from] PoiError),
-    /// The model or the POIs would give a confidently wrong answer.
-    #[error(transparent)]
-    Trust(#[from] TrustError),
-    /// The POIs could not be converted from their CRS to the model's.
+pub enum PoiCrsError {
+    /// The conversion failed.
     #[error("POIs in {from}: {source}")]
-    PoiCrs {
+    Convert {
         /// The POIs' CRS.
         from: String,
         /// Why.
@@ -36,6 +30,22 @@ pub enum PipelineError {
         /// The model's CRS as named.
         model: String,
     },
+}
+
+/// Errors of the pipeline that stop it (a file that cannot be read does not: see
+/// [`Inputs::failures`](super::Inputs::failures)).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PipelineError {
+    /// A POI is invalid (not finite, zero normal, a duplicate id: [`crate::poi::check_poi_list`]).
+    #[error(transparent)]
+    Poi(#[from] PoiError),
+    /// The model or the POIs would give a confidently wrong answer.
+    #[error(transparent)]
+    Trust(#[from] TrustError),
+    /// The POIs could not be brought from their CRS to the model's.
+    #[error(transparent)]
+    PoiCrs(#[from] PoiCrsError),
     /// The selection failed (or was cancelled).
     #[error(transparent)]
     Select(#[from] SelectError),

@@ -1,6 +1,6 @@
 //! Step 2: the model and the POIs in the local metric frame the tracing works in.
 
-use super::PipelineError;
+use super::{PipelineError, PoiCrsError};
 use crate::crs::{build_transform, model_crs, Crs, CrsKind, LocalFrame, PointTransform};
 use crate::model::CityModel;
 use crate::model::Poi;
@@ -59,7 +59,7 @@ pub struct Framed<'a> {
 /// everything into the frame; refuse POIs farther than `poi_margin` outside the scene.
 ///
 /// # Errors
-/// [`PipelineError::Poi`], [`PipelineError::PoiCrs`], [`PipelineError::UnknownModelCrs`],
+/// [`PipelineError::Poi`], [`PipelineError::PoiCrs`],
 /// [`PipelineError::Trust`].
 pub fn frame<'a>(
     model: &'a mut CityModel,
@@ -103,10 +103,11 @@ pub fn frame<'a>(
     let pois = match &opts.poi_crs {
         Some(pc) => {
             if !crs.is_known() {
-                return Err(PipelineError::UnknownModelCrs {
+                return Err(PoiCrsError::UnknownModelCrs {
                     from: pc.to_string(),
                     model: crs.to_string(),
-                });
+                }
+                .into());
             }
             let t = build_transform();
             let converted = t.pois(pc, &crs, &pois);
@@ -121,7 +122,7 @@ pub fn frame<'a>(
                 };
                 checks::check_lat_lon_order(&pc.to_string(), &pois, &source_bbox, near)?;
             }
-            converted.map_err(|source| PipelineError::PoiCrs {
+            converted.map_err(|source| PoiCrsError::Convert {
                 from: pc.to_string(),
                 source,
             })?

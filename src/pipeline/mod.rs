@@ -58,7 +58,7 @@ mod write;
 
 pub(crate) use analyse::trace_in;
 pub use analyse::{evaluate, horizon, sun_hours, svf, trace, EvaluateOptions, Traced};
-pub use error::PipelineError;
+pub use error::{PipelineError, PoiCrsError};
 pub use fisheye::{sky_pictures, SkyPicture, SkyPictureOptions};
 pub use frame::{frame, FrameOptions, Framed};
 pub use irradiance::{irradiance, PoiIrradiance};

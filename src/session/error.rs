@@ -4,7 +4,7 @@ use crate::crs::CrsError;
 use crate::lod::bound::BoundError;
 use crate::lod::select::SelectError;
 use crate::pipeline::evaluation::EvalError;
-use crate::pipeline::PipelineError;
+use crate::pipeline::{PipelineError, PoiCrsError};
 use crate::poi::checks::TrustError;
 use crate::poi::PoiError;
 use crate::runtime::progress::Cancelled;
@@ -32,22 +32,9 @@ pub enum Error {
     /// [`TrustError::PoiOutside`] names each POI and its distance).
     #[error(transparent)]
     Trust(#[from] TrustError),
-    /// The POIs could not be converted from their CRS to the model's.
-    #[error("POIs in {from}: {source}")]
-    PoiCrs {
-        /// The POIs' CRS.
-        from: String,
-        /// Why.
-        source: CrsError,
-    },
-    /// The POIs are in another CRS but the model's is not known.
-    #[error("POIs in {from}: the model's CRS ({model}) is not known, so POIs cannot be converted to it (give the model's CRS)")]
-    UnknownModelCrs {
-        /// The POIs' CRS.
-        from: String,
-        /// The model's CRS as named.
-        model: String,
-    },
+    /// The POIs could not be brought from their CRS to the model's.
+    #[error(transparent)]
+    PoiCrs(#[from] PoiCrsError),
     /// A CRS could not be used.
     #[error(transparent)]
     Crs(#[from] CrsError),
@@ -94,10 +81,7 @@ impl From<PipelineError> for Error {
         match e {
             PipelineError::Poi(e) => Error::Poi(e),
             PipelineError::Trust(e) => Error::Trust(e),
-            PipelineError::PoiCrs { from, source } => Error::PoiCrs { from, source },
-            PipelineError::UnknownModelCrs { from, model } => {
-                Error::UnknownModelCrs { from, model }
-            }
+            PipelineError::PoiCrs(e) => Error::PoiCrs(e),
             PipelineError::Select(SelectError::Cancelled(c)) => Error::Cancelled(c),
             PipelineError::Select(e) => Error::Select(e),
             PipelineError::Bound(e) => Error::Bound(e),
@@ -126,10 +110,10 @@ mod tests {
                 stage: Stage::Select
             })
         ));
-        let p = PipelineError::UnknownModelCrs {
+        let p = PipelineError::from(PoiCrsError::UnknownModelCrs {
             from: "EPSG:4326".into(),
             model: "none".into(),
-        };
+        });
         let text = p.to_string();
         let e: Error = p.into();
         assert_eq!(e.to_string(), text);

@@ -30,10 +30,12 @@ use crate::export::Format;
 use crate::lod::scene::full_scene;
 use crate::model::{CityModel, Poi};
 use crate::pipeline::evaluation::Evaluation;
+use crate::pipeline::{check_model, PoiIrradiance, Traced, Written};
 use crate::pipeline::{evaluate, frame, horizon, levels, read_inputs, trace_in, write_all};
 use crate::pipeline::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsOptions};
-use crate::pipeline::{Traced, Written};
+use crate::poi::checks::TrustError;
 use crate::runtime::progress::{check, Progress, Stage};
+use crate::solar::irradiance::{IrradianceOptions, IrradianceTable};
 use crate::solar::{poi_horizon, poi_sky_view, poi_sun_hours, HorizonOptions, HorizonProfile};
 use crate::solar::{Site, SkyBundles, SkyView, SunHours, SunTable, DEFAULT_STEP_MIN, DEFAULT_YEAR};
 use std::borrow::Cow;
@@ -87,10 +89,31 @@ impl Default for SunOptions {
 }
 
 impl SunOptions {
+    /// The sun at `site` over `year` in steps of `step_min` minutes.
+    pub fn new(site: Option<Site>, year: i32, step_min: u32) -> Self {
+        SunOptions {
+            site,
+            year,
+            step_min,
+        }
+    }
+
     /// The same at `site`.
     pub fn at(mut self, site: Site) -> Self {
         self.site = Some(site);
         self
+    }
+}
+
+impl SceneOptions {
+    /// Inputs framed with `frame`, merged across CRSs with `allow_mixed_crs`, memory given
+    /// back between stages.
+    pub fn new(frame: FrameOptions, allow_mixed_crs: bool) -> Self {
+        SceneOptions {
+            frame,
+            allow_mixed_crs,
+            ..SceneOptions::default()
+        }
     }
 }
 
@@ -101,6 +124,7 @@ pub struct Scene {
     model: CityModel,
     failures: Vec<ReadError>,
     options: SceneOptions,
+    read_s: f64,
 }
 
 impl Scene {
@@ -119,8 +143,8 @@ impl Scene {
     }
 
     /// Read `inputs` (with the paths outputs mirror) and refuse a model that would give a
-    /// confidently wrong answer: nothing read, mixed CRSs, no heights. An input that cannot
-    /// be read is kept in [`Scene::failures`] while the others are used.
+    /// confidently wrong answer: nothing read, mixed CRSs, no heights ([`Scene::check`]). An
+    /// input that cannot be read is kept in [`Scene::failures`] while the others are used.
     ///
     /// # Errors
     /// [`Error::Trust`], [`Error::Cancelled`].
@@ -129,10 +153,24 @@ impl Scene {
         options: &SceneOptions,
         progress: &dyn Progress,
     ) -> Result<Scene> {
+        let scene = Scene::read(inputs, options, progress)?;
+        scene.check()?;
+        Ok(scene)
+    }
+
+    /// [`Scene::load_inputs`] without its checks: a caller that reports the failures
+    /// itself (as the CLI does, each on its own) then calls [`Scene::check`].
+    ///
+    /// # Errors
+    /// [`Error::Cancelled`].
+    pub fn read(
+        inputs: Vec<Input>,
+        options: &SceneOptions,
+        progress: &dyn Progress,
+    ) -> Result<Scene> {
         crate::runtime::mem::set_give_back(options.trim_memory);
         let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
         let read = read_inputs(&paths, progress)?;
-        read.check(options.allow_mixed_crs)?;
         let mut left = read.read.iter().peekable();
         let inputs = inputs
             .into_iter()
@@ -143,7 +181,29 @@ impl Scene {
             model: read.model,
             failures: read.failures,
             options: options.clone(),
+            read_s: read.read_s,
         })
+    }
+
+    /// Refuse a model that would give a confidently wrong answer whatever the POIs: nothing
+    /// read, inputs in different CRSs (unless [`SceneOptions::allow_mixed_crs`]), no heights
+    /// ([`crate::pipeline::Inputs::check`]).
+    ///
+    /// # Errors
+    /// [`Error::Trust`].
+    pub fn check(&self) -> Result<()> {
+        if self.inputs.is_empty() {
+            return Err(TrustError::NoInput {
+                failed: self.failures.len(),
+            }
+            .into());
+        }
+        Ok(check_model(&self.model, self.options.allow_mixed_crs)?)
+    }
+
+    /// Seconds spent reading the inputs.
+    pub fn read_s(&self) -> f64 {
+        self.read_s
     }
 
     /// The merged model, as read.
@@ -165,13 +225,14 @@ impl Scene {
     /// local metric frame ([`crate::pipeline::frame`]), refusing POIs far outside the scene.
     ///
     /// # Errors
-    /// [`Error::Poi`], [`Error::PoiCrs`], [`Error::UnknownModelCrs`], [`Error::Trust`].
+    /// [`Error::Poi`], [`Error::PoiCrs`], [`Error::Trust`].
     pub fn frame(self, pois: Vec<Poi>) -> Result<Study> {
         let Scene {
             inputs,
             mut model,
             failures,
             options,
+            read_s,
         } = self;
         let f = frame(&mut model, pois, &options.frame)?;
         let local = match f.model {
@@ -191,6 +252,7 @@ impl Scene {
             warnings,
             note,
             failures,
+            read_s,
             full: OnceLock::new(),
             sun: Mutex::new(None),
         })
@@ -211,6 +273,7 @@ pub struct Study {
     warnings: Vec<String>,
     note: Option<String>,
     failures: Vec<ReadError>,
+    read_s: f64,
     full: OnceLock<crate::trace::Scene>,
     sun: Mutex<Option<(SunOptions, Arc<SunTable>)>>,
 }
@@ -260,6 +323,21 @@ impl Study {
         &self.warnings
     }
 
+    /// A note on the frame when it is not the identity ("tracing in ...").
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// Seconds spent reading the inputs ([`Scene::read_s`]).
+    pub fn read_s(&self) -> f64 {
+        self.read_s
+    }
+
+    /// The model in the local metric frame: what is traced.
+    pub fn local_model(&self) -> &CityModel {
+        self.local.as_ref().unwrap_or(&self.source)
+    }
+
     /// The site of the sun from the model's CRS: the centre of the model in WGS 84.
     ///
     /// # Errors
@@ -276,18 +354,34 @@ impl Study {
         Ok(levels(&self.framed(), opts, progress)?)
     }
 
-    fn full(&self, progress: &dyn Progress) -> Result<&crate::trace::Scene> {
+    /// The full-detail scene (built on first use) and the seconds this call spent building it.
+    fn full(&self, progress: &dyn Progress) -> Result<(&crate::trace::Scene, f64)> {
         if let Some(s) = self.full.get() {
-            return Ok(s);
+            return Ok((s, 0.0));
         }
         check(progress, Stage::Bvh)?;
-        let model = self.local.as_ref().unwrap_or(&self.source);
+        let t = std::time::Instant::now();
+        let model = self.local_model();
         let s = crate::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || {
             let s = full_scene(model);
             progress.advance(Stage::Bvh, 1, 0, None);
             s
         });
-        Ok(self.full.get_or_init(|| s))
+        let s = self.full.get_or_init(|| s);
+        Ok((s, t.elapsed().as_secs_f64()))
+    }
+
+    /// `f` for every POI against the full-detail scene, with the seconds of building it.
+    fn trace<T: Send>(
+        &self,
+        f: impl Fn(&crate::trace::Scene, &Poi) -> T + Sync,
+        sky_rays: impl Fn(&T) -> Option<usize> + Sync,
+        progress: &dyn Progress,
+    ) -> Result<Traced<T>> {
+        let (scene, bvh_s) = self.full(progress)?;
+        let mut t = trace_in(&self.framed(), scene, f, sky_rays, progress)?;
+        t.bvh_s = bvh_s;
+        Ok(t)
     }
 
     /// The sun table of `sun` (built once per options and kept).
@@ -318,10 +412,9 @@ impl Study {
     /// # Errors
     /// [`Error::Cancelled`].
     pub fn svf(&self, bundles: &SkyBundles, progress: &dyn Progress) -> Result<Traced<SkyView>> {
-        let scene = self.full(progress)?;
         let f = |s: &_, p: &Poi| poi_sky_view(s, p, bundles);
         let no_sky = |v: &SkyView| (v.sky_exposure == 0.0).then_some(0);
-        Ok(trace_in(&self.framed(), scene, f, no_sky, progress)?)
+        self.trace(f, no_sky, progress)
     }
 
     /// Hours of direct sun of every POI over the year of `sun`.
@@ -330,9 +423,8 @@ impl Study {
     /// As [`Study::sun_table`], [`Error::Cancelled`].
     pub fn sun_hours(&self, sun: &SunOptions, progress: &dyn Progress) -> Result<Traced<SunHours>> {
         let table = self.sun_table(sun)?;
-        let scene = self.full(progress)?;
         let f = |s: &_, p: &Poi| poi_sun_hours(s, p, &table);
-        Ok(trace_in(&self.framed(), scene, f, |_| None, progress)?)
+        self.trace(f, |_| None, progress)
     }
 
     /// Horizon profile of every POI.
@@ -348,15 +440,33 @@ impl Study {
             return Ok(horizon(&self.framed(), opts, progress)?);
         }
         opts.validate()?;
-        let scene = self.full(progress)?;
         let f = |s: &_, p: &Poi| poi_horizon(s, p, opts);
-        let t = trace_in(&self.framed(), scene, f, |_| None, progress)?;
+        let t = self.trace(f, |_| None, progress)?;
         Ok(Traced {
             results: t.results.into_iter().collect::<Result<_, _>>()?,
             flags: t.flags,
             bvh_s: t.bvh_s,
             trace_s: t.trace_s,
         })
+    }
+
+    /// Annual irradiation of every POI under `table`'s weather
+    /// ([`crate::pipeline::irradiance`]); `hourly` keeps each hour's value.
+    ///
+    /// # Errors
+    /// [`Error::Cancelled`].
+    pub fn irradiance(
+        &self,
+        bundles: &SkyBundles,
+        table: &IrradianceTable,
+        opts: &IrradianceOptions,
+        hourly: bool,
+        progress: &dyn Progress,
+    ) -> Result<Traced<PoiIrradiance>> {
+        let f = self.framed();
+        Ok(crate::pipeline::irradiance(
+            &f, bundles, table, opts, hourly, progress,
+        )?)
     }
 
     /// Full vs LoD vs all-boxes model at every POI ([`crate::pipeline::evaluate`]).
@@ -474,6 +584,9 @@ mod tests {
         };
         let v = s.svf(&bundles, &tally).unwrap();
         let h = s.sun_hours(&sun, &tally).unwrap();
+        // The scene's building time goes to the call that built it.
+        assert!(v.bvh_s > 0.0 && h.bvh_s == 0.0, "{} {}", v.bvh_s, h.bvh_s);
+        assert!(s.read_s() > 0.0);
         let z = s.horizon(&HorizonOptions::default().with_step(10.0), &tally);
         assert!(z.is_ok());
         assert_eq!(tally.sum(Stage::Bvh, "start").0, 1);
@@ -534,5 +647,17 @@ mod tests {
             matches!(r, Err(Error::Trust(TrustError::NoInput { failed: 1 }))),
             "{r:?}"
         );
+        // Read without the checks: the failure is kept for the caller to report.
+        let input = Input {
+            path: bad.clone(),
+            relative: "bad.gml".into(),
+        };
+        let scene = Scene::read(vec![input], &SceneOptions::default(), &Silent).unwrap();
+        assert!(scene.inputs().is_empty());
+        assert_eq!(scene.failures().len(), 1);
+        assert!(matches!(
+            scene.check(),
+            Err(Error::Trust(TrustError::NoInput { failed: 1 }))
+        ));
     }
 }

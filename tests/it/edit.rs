@@ -346,7 +346,7 @@ fn a_batch_goes_on_after_a_bad_input_and_merges_into_one_file() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
-        err.contains("bad.gml:1:") && err.contains("1 of 2 input(s) failed"),
+        err.contains("bad.gml:1:") && err.contains("1 file(s) ok, 1 failed"),
         "{err}"
     );
     // several inputs into one CityGML file: merged

@@ -4,7 +4,7 @@
 
 use skylod::citygml::WriteError;
 use skylod::io::TargetError;
-use skylod::pipeline::PipelineError;
+use skylod::pipeline::{PipelineError, PoiCrsError};
 use skylod::poi::checks::TrustError;
 use skylod::Error;
 use std::error::Error as StdError;
@@ -14,8 +14,7 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
     if let Some(e) = e.downcast_ref::<Error>() {
         return match e {
             Error::Trust(t) => trust(t),
-            Error::PoiCrs { from, source } => poi_crs(from, source),
-            Error::UnknownModelCrs { from, model } => unknown_model(from, model),
+            Error::PoiCrs(e) => poi_crs(e),
             Error::Write(w) => write(w),
             e => e.to_string(),
         };
@@ -23,8 +22,7 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
     if let Some(e) = e.downcast_ref::<PipelineError>() {
         return match e {
             PipelineError::Trust(t) => trust(t),
-            PipelineError::PoiCrs { from, source } => poi_crs(from, source),
-            PipelineError::UnknownModelCrs { from, model } => unknown_model(from, model),
+            PipelineError::PoiCrs(e) => poi_crs(e),
             e => e.to_string(),
         };
     }
@@ -44,15 +42,15 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
     e.to_string()
 }
 
-fn poi_crs(from: &str, source: &dyn std::fmt::Display) -> String {
-    format!("--poi-crs {from}: {source}")
-}
-
-fn unknown_model(from: &str, model: &str) -> String {
-    format!(
-        "--poi-crs {from}: the model's CRS ({model}) is not known, so POIs cannot be converted \
-         to it (give --source-crs)"
-    )
+fn poi_crs(e: &PoiCrsError) -> String {
+    match e {
+        PoiCrsError::Convert { from, source } => format!("--poi-crs {from}: {source}"),
+        PoiCrsError::UnknownModelCrs { from, model } => format!(
+            "--poi-crs {from}: the model's CRS ({model}) is not known, so POIs cannot be \
+             converted to it (give --source-crs)"
+        ),
+        e => e.to_string(),
+    }
 }
 
 fn trust(t: &TrustError) -> String {
@@ -85,10 +83,10 @@ mod tests {
         assert_eq!(cli_text(&w), "out.gml: output exists (use --overwrite)");
         let e = Error::from(WriteError::Exists("o.gml".into()));
         assert!(cli_text(&e).ends_with("(use --overwrite)"));
-        let p = PipelineError::UnknownModelCrs {
+        let p = PipelineError::from(PoiCrsError::UnknownModelCrs {
             from: "EPSG:4326".into(),
             model: "none".into(),
-        };
+        });
         assert!(cli_text(&p).starts_with("--poi-crs EPSG:4326: "));
         assert!(cli_text(&p).ends_with("(give --source-crs)"));
         let m = TrustError::MixedCrs {

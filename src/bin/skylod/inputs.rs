@@ -63,11 +63,7 @@ impl Loaded {
 impl Loaded {
     /// Exit outcome: some inputs failed, or all were read.
     pub fn outcome(&self) -> Outcome {
-        if self.failed {
-            Outcome::SomeFailed
-        } else {
-            Outcome::Ok
-        }
+        Outcome::failed_if(self.failed)
     }
 }
 

@@ -65,6 +65,17 @@ pub enum Outcome {
     SomeFailed,
 }
 
+impl Outcome {
+    /// Some inputs failed when `failed`, else all went well.
+    pub fn failed_if(failed: bool) -> Outcome {
+        if failed {
+            Outcome::SomeFailed
+        } else {
+            Outcome::Ok
+        }
+    }
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(c) => c,

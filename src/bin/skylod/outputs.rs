@@ -170,73 +170,146 @@ pub fn size_note(out: &Path, written: u64) -> String {
     }
 }
 
-/// Arguments of the commands that rewrite each CityGML input as CityGML (`subset`,
-/// `filter-lods`).
-#[derive(clap::Args, Debug)]
-pub struct PerInputArgs {
-    /// CityGML files (.gml, .xml, .gz), directories, glob patterns, or - for standard input.
-    #[arg(required = true)]
-    pub inputs: Vec<PathBuf>,
-    /// Output file for one input (.gz to compress; `-` for standard output); a directory that
-    /// mirrors the input tree; or, for several inputs, one CityGML file that merges them.
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Replace existing output files.
-    #[arg(long)]
-    pub overwrite: bool,
-    #[command(flatten)]
-    pub shard: crate::args::shard::ShardArgs,
+/// The outputs of a command that writes per input (`convert`, `rough`): laid out for `-o`
+/// and `--format`, every target checked before any work (a refused one reported: its input
+/// fails without being read), this shard's files said on stderr.
+pub struct Batch {
+    pub plan: Plan,
+    pub format: Format,
+    /// The options the user gave (the merge is written with them).
+    pub wopts: WriteOptions,
+    pub targets: Targets,
+    /// Inputs whose target was refused.
+    pub refused: usize,
+    /// Whether the closing line counts polygons (CityGML outputs of `convert`, `rough`).
+    pub counts_polygons: bool,
+}
+
+/// What one input gave: its line (printed in input order unless merged), its warnings and
+/// polygons in and out.
+pub struct Done {
+    pub line: Option<String>,
+    pub warnings: usize,
+    pub polygons: (usize, usize),
+}
+
+impl Batch {
+    /// Plan `cmd`'s outputs of `inputs` to `-o out`, `--format`, `--overwrite` ([`plan`],
+    /// [`targets`]).
+    pub fn new(
+        cmd: &str,
+        inputs: &[Input],
+        (out, format, overwrite): (&Path, Option<Format>, bool),
+        keep_envelopes: bool,
+        shard: Option<Shard>,
+    ) -> anyhow::Result<Batch> {
+        let (plan, format) = plan(inputs, out, format)?;
+        let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
+        let wopts = WriteOptions {
+            overwrite,
+            protect: paths.clone(),
+            keep_envelopes,
+        };
+        let (targets, refused) =
+            self::targets(&plan, &paths, &wopts, shard, cmd, true, |e| error!("{e}"))?;
+        Ok(Batch {
+            counts_polygons: format == Format::CityGml,
+            plan,
+            format,
+            wopts,
+            targets,
+            refused,
+        })
+    }
+
+    /// The results of the inputs done (`(input, output, result)` in input order): each
+    /// line printed (none when merged), each failure with `failure`, the merge made, then
+    /// `cmd`'s closing line (polygons when the outputs are CityGML). The exit outcome.
+    pub fn finish(
+        &self,
+        cmd: &str,
+        results: Vec<(PathBuf, PathBuf, anyhow::Result<Done>)>,
+        failure: impl Fn(&anyhow::Error) -> String,
+        inputs: usize,
+        t0: std::time::Instant,
+    ) -> crate::Outcome {
+        let staged = self.targets.staging.is_some();
+        let (mut ok, mut failed, mut warnings, mut polys) = (0, self.refused, 0, (0, 0));
+        let (mut parts, mut names) = (Vec::new(), Vec::new());
+        for (input, out, r) in results {
+            match r {
+                Ok(d) => {
+                    if let Some(line) = d.line.filter(|_| !staged) {
+                        summary!("{line}");
+                    }
+                    ok += 1;
+                    warnings += d.warnings;
+                    polys.0 += d.polygons.0;
+                    polys.1 += d.polygons.1;
+                    parts.push(out);
+                    names.push(input);
+                }
+                Err(e) => {
+                    error!("{}", failure(&e));
+                    failed += 1;
+                }
+            }
+        }
+        if let (true, Plan::Merge(target)) = (staged, &self.plan) {
+            if !merge(&parts, &names, target, &self.wopts, inputs) {
+                failed += ok;
+                ok = 0;
+            }
+        }
+        let polys = self.counts_polygons.then_some(polys);
+        let line = crate::commands::summary_line(cmd, ok, failed, warnings, polys, t0);
+        summary!("{line}");
+        crate::Outcome::failed_if(failed > 0)
+    }
 }
 
 /// The summary line of one input written to `out`, named `shown` (the merge target for a
 /// staged part of a merge).
-pub type Edit<'a> =
-    dyn Fn(&Path, &Path, &Path, &WriteOptions) -> Result<String, skylod::citygml::WriteError> + 'a;
+pub type Edit<'a> = dyn Fn(&Path, &Path, &Path, &WriteOptions) -> Result<String, skylod::citygml::WriteError>
+    + Sync
+    + 'a;
 
-/// Run `edit` on every input of `a` as `cmd`: targets checked before any work, an error per
-/// input does not stop the batch, several inputs into one file merged.
-pub fn per_input(a: &PerInputArgs, cmd: &str, edit: &Edit<'_>) -> anyhow::Result<crate::Outcome> {
-    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&a.inputs)?;
-    let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
+/// Run `edit` on every input of `a` as `cmd`, CityGML in and out (`subset`, `filter-lods`):
+/// a [`Batch`] (targets checked before any work, an error per input does not stop it,
+/// several inputs into one file merged).
+pub fn per_input(
+    a: &crate::args::citygml_io::CityGmlIoArgs,
+    cmd: &str,
+    edit: &Edit<'_>,
+) -> anyhow::Result<crate::Outcome> {
+    let t0 = std::time::Instant::now();
     let shard = a.shard.resolve()?;
-    let (plan, _) = plan(&inputs, &a.output, Some(Format::CityGml))?;
-    let wopts = WriteOptions {
-        overwrite: a.overwrite,
-        protect: paths.clone(),
-        keep_envelopes: true,
-    };
-    let (t, refused) = targets(&plan, &paths, &wopts, shard, cmd, false, |e| error!("{e}"))?;
-    let (mut failed, total) = (refused, t.todo.len() + refused);
-    let (mut parts, mut names) = (Vec::new(), Vec::new());
-    for (k, out) in &t.todo {
-        let input = &paths[*k];
-        if t.mirror {
-            create_parent(out)?;
-        }
-        let shown = match (&t.staging, &plan) {
-            (Some(_), Plan::Merge(target)) => target.as_path(),
-            _ => out.as_path(),
-        };
-        match edit(input, out, shown, &t.write_opts) {
-            Ok(line) => {
-                parts.push(out.clone());
-                names.push(input.clone());
-                summary!("{line}");
-            }
-            Err(e) => {
-                error!("{}", crate::errors::cli_text(&e));
-                failed += 1;
-            }
-        }
-    }
-    if let (Some(_), Plan::Merge(target)) = (&t.staging, &plan) {
-        if !merge(&parts, &names, target, &wopts, total) {
-            failed = total;
-        }
-    }
-    if failed > 0 {
-        summary!("{failed} of {total} input(s) failed");
-        return Ok(crate::Outcome::SomeFailed);
-    }
-    Ok(crate::Outcome::Ok)
+    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&a.inputs)?;
+    let out = (a.output.as_path(), Some(Format::CityGml), a.overwrite);
+    let mut batch = Batch::new(cmd, &inputs, out, true, shard)?;
+    batch.counts_polygons = false;
+    let t = &batch.targets;
+    let results = t
+        .todo
+        .iter()
+        .map(|(k, out)| {
+            let input = inputs[*k].path.clone();
+            let shown = match (&t.staging, &batch.plan) {
+                (Some(_), Plan::Merge(target)) => target.as_path(),
+                _ => out.as_path(),
+            };
+            let parent = if t.mirror { create_parent(out) } else { Ok(()) };
+            let r = parent.and_then(|()| {
+                let line = edit(&input, out, shown, &t.write_opts)
+                    .map_err(|e| anyhow!(crate::errors::cli_text(&e)))?;
+                Ok(Done {
+                    line: Some(line),
+                    warnings: 0,
+                    polygons: (0, 0),
+                })
+            });
+            (input, out.clone(), r)
+        })
+        .collect();
+    Ok(batch.finish(cmd, results, |e| e.to_string(), inputs.len(), t0))
 }

@@ -3,6 +3,7 @@
 //! apart).
 
 pub mod bound;
+pub mod citygml_io;
 pub mod crs;
 pub mod jobs;
 pub mod output;

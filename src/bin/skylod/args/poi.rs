@@ -4,11 +4,16 @@
 use super::crs::{to_local_frame, CrsArgs, Framed};
 use super::jobs::JobsArgs;
 use super::non_negative;
-use crate::inputs::{load, Loaded};
+use crate::args::tracing::Session;
+use crate::inputs::{load, Loaded, Spool};
+use crate::log::{error, input_name, summary, warning};
 use anyhow::bail;
+use skylod::batch::inputs::Input;
+use skylod::batch::shard::Shard;
 use skylod::model::CityModel;
 use skylod::poi::checks::DEFAULT_POI_MARGIN;
 use skylod::poi::{check_pois, parse_poi, read_pois_csv, Located, Poi};
+use skylod::session::{Scene, SceneOptions};
 use std::path::PathBuf;
 
 /// Inputs and points of interest.
@@ -76,6 +81,57 @@ impl PoiArgs {
         let loaded = load(&self.inputs)?;
         loaded.check(self.allow_mixed_crs)?;
         Ok(loaded)
+    }
+
+    /// Size the thread pool (`--jobs`) and read the inputs into a [`Scene`] (with progress),
+    /// each failure said on stderr; `None` when nothing could be read, else the scene checked
+    /// ([`Scene::check`]: inputs in different CRSs unless --allow-mixed-crs, no heights).
+    pub fn scene(&self) -> anyhow::Result<Option<Scene>> {
+        self.jobs.global()?;
+        let inputs = self.inputs.iter().map(|p| Input {
+            path: p.clone(),
+            relative: p.clone(),
+        });
+        let frame = self.crs.frame_options(self.poi_margin);
+        let options = SceneOptions::new(frame, self.allow_mixed_crs);
+        let scene = Scene::read(inputs.collect(), &options, &crate::log::reporter())?;
+        for e in scene.failures() {
+            error!("{e}");
+        }
+        if scene.inputs().is_empty() {
+            return Ok(None);
+        }
+        scene.check()?;
+        Ok(Some(scene))
+    }
+
+    /// Frame `pois` in `scene` ([`Scene::frame`]: `--source-crs`, `--poi-crs`, POIs farther
+    /// than `--poi-margin` metres outside the scene refused), the frame's warnings and note
+    /// said on stderr, prefixed by `cmd`.
+    pub fn study(
+        &self,
+        scene: Scene,
+        pois: Vec<Poi>,
+        shard: Option<Shard>,
+        spool: Spool,
+        cmd: &str,
+    ) -> anyhow::Result<Session> {
+        let failed = !scene.failures().is_empty();
+        let study = scene.frame(pois)?;
+        for w in study.warnings() {
+            warning!("{cmd}: warning: {w}");
+        }
+        if let Some(n) = study.note() {
+            summary!("{cmd}: {n}");
+        }
+        Ok(Session {
+            inputs: study.inputs().iter().map(|i| input_name(&i.path)).collect(),
+            read_ms: (study.read_s() * 1e4).round() / 10.0,
+            study,
+            shard,
+            failed,
+            _spool: spool,
+        })
     }
 
     /// Bring the model and `pois` into the local metric frame ([`to_local_frame`]:

@@ -1,13 +1,20 @@
-//! The arguments every tracing command (svf, sun-hours, horizon, evaluate) shares — inputs
-//! and POIs, region, shard, scene radius — and the steps they take before tracing.
+//! The arguments every tracing command (svf, sun-hours, horizon, evaluate, irradiance)
+//! shares — inputs and POIs, region, shard, scene radius — and the steps they take before
+//! tracing: the library's [`skylod::session`] (`Scene` → `Study`) with what stays CLI-only
+//! (failures and warnings on stderr, the shard said, the spooled standard input kept).
 
 use crate::args::poi::PoiArgs;
 use crate::args::region::RegionArgs;
 use crate::args::scene::SceneArgs;
 use crate::args::shard::ShardArgs;
-use crate::inputs::{expand_inputs, Loaded, Spool};
+use crate::inputs::{expand_inputs, Spool};
+use crate::Outcome;
 use skylod::batch::shard::Shard;
-use skylod::poi::Poi;
+use skylod::output::svf::TraceTimings;
+use skylod::output::text::TextContext;
+use skylod::pipeline::Traced;
+use skylod::poi::checks::PoiFlag;
+use skylod::session::Study;
 
 #[derive(clap::Args, Debug)]
 pub struct TracingArgs {
@@ -21,27 +28,61 @@ pub struct TracingArgs {
     pub scene: SceneArgs,
 }
 
-/// What a tracing command has once its inputs are read: the model (checked), this shard's
-/// POIs (not yet in the local frame: [`PoiArgs::frame_checked`]) and the shard.
-pub struct Prepared {
-    pub loaded: Loaded,
-    pub pois: Vec<Poi>,
+/// A tracing command's [`Study`] (model read and checked, this shard's POIs framed) with
+/// what the CLI says about it.
+pub struct Session {
+    pub study: Study,
     pub shard: Option<Shard>,
+    /// The inputs read, as reports name them (`-` for standard input).
+    pub inputs: Vec<String>,
+    /// Milliseconds reading, rounded to 0.1.
+    pub read_ms: f64,
+    /// Some input could not be read (each was reported).
+    pub failed: bool,
     /// Standard input spooled to a file lives as long as the command needs its inputs.
-    _spool: Spool,
+    pub _spool: Spool,
+}
+
+impl Session {
+    /// Exit outcome: some inputs failed, or all were read.
+    pub fn outcome(&self) -> Outcome {
+        Outcome::failed_if(self.failed)
+    }
+
+    /// Whether this run prints a table's header ([`crate::args::shard::header`]).
+    pub fn header(&self) -> bool {
+        crate::args::shard::header(self.shard)
+    }
+
+    /// What the text of the command's document says beyond its JSON.
+    pub fn text(&self) -> TextContext {
+        let source = self.study.source();
+        let decimals = self.study.crs().plan_decimals();
+        TextContext::new(source.traced_polygon_count(), decimals, self.header())
+    }
+
+    /// The read, BVH and trace milliseconds of `traced`.
+    pub fn timings<T>(&self, traced: &Traced<T>) -> TraceTimings {
+        TraceTimings::new(self.read_ms, traced.bvh_s, traced.trace_s)
+    }
+
+    /// Say each POI's flags as a warning on stderr.
+    pub fn warn_flags(&self, flags: &[Vec<PoiFlag>]) {
+        crate::commands::warn_flags(self.study.pois(), flags);
+    }
 }
 
 impl TracingArgs {
     /// Inputs expanded (directories, lists, `-`), the shard resolved, the POIs made (a
     /// region's grid too), inputs beyond `--scene-radius` left out, `before_read` (checks
     /// that must refuse before any work, e.g. an output target), then the inputs read and
-    /// checked and this shard's POIs kept. `None` when no input could be read (each failure
-    /// was reported).
-    pub fn prepare(
+    /// checked, this shard's POIs kept and framed. `None` when no input could be read (each
+    /// failure was reported).
+    pub fn study(
         &mut self,
         cmd: &str,
         before_read: impl FnOnce(&PoiArgs) -> anyhow::Result<()>,
-    ) -> anyhow::Result<Option<Prepared>> {
+    ) -> anyhow::Result<Option<Session>> {
         let spool = expand_inputs(&mut self.pois.inputs)?;
         let shard = self.shard.resolve()?;
         let pois = self.region.points(&self.pois)?;
@@ -49,17 +90,11 @@ impl TracingArgs {
         self.scene
             .filter(&mut self.pois, &pois, shard, region, cmd)?;
         before_read(&self.pois)?;
-        let loaded = self.pois.load_checked()?;
-        if loaded.inputs.is_empty() {
+        let Some(scene) = self.pois.scene()? else {
             return Ok(None);
-        }
-        let pois = self.region.extend(pois, &loaded.model)?;
+        };
+        let pois = self.region.extend(pois, scene.model())?;
         let pois = crate::args::shard::pois(shard, pois, cmd);
-        Ok(Some(Prepared {
-            loaded,
-            pois,
-            shard,
-            _spool: spool,
-        }))
+        self.pois.study(scene, pois, shard, spool, cmd).map(Some)
     }
 }

@@ -3,12 +3,10 @@
 //! ([`crate::outputs`]), files in parallel (`--jobs`), the same bytes whatever the number.
 
 use crate::args::jobs::JobsArgs;
-use crate::commands::summary_line;
-use crate::log::{error, summary};
-use crate::outputs;
+use crate::outputs::{self, Batch, Done};
 use crate::Outcome;
 use rayon::prelude::*;
-use skylod::batch::outputs::{Plan, Targets};
+use skylod::batch::outputs::Targets;
 use skylod::citygml::write::{write_document, WriteOptions};
 use skylod::citygml::{read_file_observed, ReadOptions};
 use skylod::export::{Content, Format};
@@ -42,39 +40,22 @@ pub struct Args {
     stream: crate::args::stream::StreamArgs,
 }
 
-/// What one input gave.
-pub(crate) struct Done {
-    pub(crate) line: Option<String>,
-    pub(crate) warnings: usize,
-    pub(crate) polygons: usize,
-}
-
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let t0 = Instant::now();
     // `-` (standard input) is spooled to a file: the writer re-reads its source.
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     let shard = args.shard.resolve()?;
-    let (plan, format) = outputs::plan(&inputs, &args.output, args.format)?;
+    let out = (args.output.as_path(), args.format, args.overwrite);
+    let batch = Batch::new("convert", &inputs, out, false, shard)?;
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
-    let wopts = WriteOptions {
-        overwrite: args.overwrite,
-        protect: paths.clone(),
-        keep_envelopes: false,
-    };
-    // Every target is refused or accepted before any input is read.
-    let (
-        Targets {
-            todo,
-            staging,
-            mirror,
-            write_opts,
-            ..
-        },
-        refused,
-    ) = outputs::targets(&plan, &paths, &wopts, shard, "convert", true, |e| {
-        error!("{e}")
-    })?;
-    let mut failed = refused;
+    let Targets {
+        todo,
+        staging,
+        mirror,
+        write_opts,
+        ..
+    } = &batch.targets;
+    let (format, mirror) = (batch.format, *mirror);
     let fmt = if staging.is_some() {
         Format::CityGml
     } else {
@@ -85,68 +66,32 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let size = |k: usize| paths[k].metadata().map_or(0, |m| m.len());
     let bytes: u64 = todo.iter().map(|(k, _)| size(*k)).sum();
     progress.start(Stage::Read, todo.len() as u64, bytes);
-    let results: Vec<(usize, PathBuf, anyhow::Result<Done>)> = args.jobs.install(|| {
-        todo.into_par_iter()
+    let results = args.jobs.install(|| {
+        todo.par_iter()
             .map(|(k, out)| {
+                let (k, out) = (*k, out.clone());
                 let chunk = args
                     .stream
                     .chunk_for(&paths[k])
                     .filter(|_| fmt == Format::Obj);
                 let r = match chunk.map(|c| {
-                    crate::commands::stream::obj(&paths[k], &out, c, &write_opts, mirror, &progress)
+                    crate::commands::stream::obj(&paths[k], &out, c, write_opts, mirror, &progress)
                 }) {
                     Some(Ok(Some(done))) => Ok(done),
                     Some(Err(e)) => Err(e),
                     _ => {
                         let passed = |n| progress.advance(Stage::Read, 0, n, None);
-                        one(&paths[k], &out, fmt, &write_opts, mirror, &passed)
+                        one(&paths[k], &out, fmt, write_opts, mirror, &passed)
                     }
                 };
                 progress.advance(Stage::Read, 1, 0, None);
-                (k, out, r)
+                (paths[k].clone(), out, r)
             })
             .collect()
     })?;
     progress.finish(Stage::Read);
-    let (mut ok, mut warnings, mut polygons) = (0usize, 0usize, 0usize);
-    let mut parts = Vec::new();
-    let mut names = Vec::new();
-    for (k, out, r) in results {
-        match r {
-            Ok(d) => {
-                if staging.is_none() {
-                    if let Some(line) = d.line {
-                        summary!("{line}");
-                    }
-                }
-                ok += 1;
-                warnings += d.warnings;
-                polygons += d.polygons;
-                parts.push(out);
-                names.push(paths[k].clone());
-            }
-            Err(e) => {
-                error!("{}", crate::message(&e));
-                failed += 1;
-            }
-        }
-    }
-    if let (Some(_), Plan::Merge(target)) = (&staging, &plan) {
-        if !outputs::merge(&parts, &names, target, &wopts, paths.len()) {
-            failed += ok;
-            ok = 0;
-        }
-    }
-    let polys = (format == Format::CityGml).then_some((polygons, polygons));
-    summary!(
-        "{}",
-        summary_line("convert", ok, failed, warnings, polys, t0)
-    );
-    Ok(if failed > 0 {
-        Outcome::SomeFailed
-    } else {
-        Outcome::Ok
-    })
+    let failure = |e: &anyhow::Error| crate::message(e);
+    Ok(batch.finish("convert", results, failure, paths.len(), t0))
 }
 
 /// Read `input` and write it to `out`.
@@ -173,7 +118,7 @@ fn one(
         return Ok(Done {
             line: None,
             warnings,
-            polygons,
+            polygons: (polygons, polygons),
         });
     }
     // A failed write (refused target, unwritable directory, disk full) fails this input like
@@ -189,6 +134,6 @@ fn one(
             warnings
         )),
         warnings,
-        polygons,
+        polygons: (polygons, polygons),
     })
 }

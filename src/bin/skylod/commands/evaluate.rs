@@ -4,8 +4,7 @@ use crate::args::rough::RoughArgs;
 use crate::args::select::SelectArgs;
 use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
-use crate::args::tracing::Prepared;
-use crate::commands::{ms, out_err, warn_flags};
+use crate::commands::{ms, out_err};
 use crate::Outcome;
 use skylod::lod::LodOptions;
 use skylod::output::evaluate::{EvaluateOutput, EvaluateTimings};
@@ -43,22 +42,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.site.check("evaluate")?;
     let rough_opts = args.rough.options()?;
     let t_all = Instant::now();
-    let Some(Prepared {
-        mut loaded,
-        pois,
-        shard,
-        ..
-    }) = args.tracing.prepare("evaluate", |_| Ok(()))?
-    else {
+    let Some(s) = args.tracing.study("evaluate", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);
     };
-    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "evaluate")?;
     let site = if args.no_sun {
         None
     } else {
         let (lat, lon) = args
             .site
-            .resolve(framed.source, "evaluate (or give --no-sun)")?;
+            .resolve(s.study.source(), "evaluate (or give --no-sun)")?;
         Some(Site::new(lat, lon))
     };
     let table = match &site {
@@ -76,20 +68,20 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         },
         sun: table,
     };
-    let e = skylod::pipeline::evaluate(&framed, &opts, &crate::log::reporter())?;
+    let e = s.study.evaluate(&opts, &crate::log::reporter())?;
     let flags: Vec<_> = e.pois.iter().map(|p| p.flags.clone()).collect();
-    warn_flags(&framed.pois, &flags);
+    s.warn_flags(&flags);
     let mut out = std::io::stdout().lock();
     if args.json {
         let doc = EvaluateOutput::new(
-            loaded.inputs.clone(),
+            s.inputs.clone(),
             args.select.rays,
             args.svf_rays,
             args.select.seed,
             site.map(|s| SunSetting::new(s.latitude, s.longitude, args.sun.year, args.sun.step)),
             e.pois.clone(),
             EvaluateTimings {
-                read: loaded.read_ms,
+                read: s.read_ms,
                 rough: e.rough_ms,
                 selection_bvh: e.selection_bvh_ms,
                 total: ms(t_all),
@@ -97,20 +89,21 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
-        let header = crate::args::shard::header(shard);
         out_err(skylod::output::evaluate::write_table(
-            &mut out, &e.pois, header,
+            &mut out,
+            &e.pois,
+            s.header(),
         ))?;
         crate::log::summary!(
             "{} POI(s); selection {} rays, SVF {} rays; read {:.0} ms, rough {:.0} ms (shared), selection BVH {:.0} ms (shared), total {:.0} ms",
             e.pois.len(),
             args.select.rays,
             args.svf_rays,
-            loaded.read_ms,
+            s.read_ms,
             e.rough_ms,
             e.selection_bvh_ms,
             ms(t_all)
         );
     }
-    Ok(loaded.outcome())
+    Ok(s.outcome())
 }

@@ -1,14 +1,14 @@
 //! `skylod filter-lods`: keep or remove LoD representations of the city objects of CityGML
 //! documents (citygml-tools' `filter-lods`), streamed: memory follows the largest city object.
 
-use crate::outputs::PerInputArgs;
+use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
 use skylod::citygml::edit::{filter_lods, LodMode, Lods};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    io: PerInputArgs,
+    io: CityGmlIoArgs,
     /// LoDs (0 to 4) the mode applies to.
     #[arg(short, long, required = true, num_args = 1.., value_delimiter = ',',
           value_parser = clap::value_parser!(u8).range(0..=4))]

@@ -76,7 +76,7 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let _spool = crate::inputs::expand_inputs(&mut args.pois.inputs)?;
+    let spool = crate::inputs::expand_inputs(&mut args.pois.inputs)?;
     let shard = args.shard.resolve()?;
     let pois = args.pois.points()?;
     let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
@@ -110,13 +110,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     for o in &outputs {
         check_target(o, &wopts, args.pois.inputs.iter().map(PathBuf::as_path))?;
     }
-    let mut loaded = args.pois.load_checked()?;
-    if loaded.inputs.is_empty() {
+    let Some(scene) = args.pois.scene()? else {
         return Ok(Outcome::SomeFailed);
-    }
-    let framed = args
-        .pois
-        .frame_checked(&mut loaded.model, pois, "fisheye")?;
+    };
+    let s = args.pois.study(scene, pois, shard, spool, "fisheye")?;
+    let framed = s.study.framed();
     let site = args
         .site
         .for_sun_paths(framed.source, &framed.crs, "fisheye");
@@ -163,7 +161,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 pic.view.svf,
                 pic.view.sky_exposure,
                 bundles.len(),
-                loaded.inputs.join(", ")
+                s.inputs.join(", ")
             ));
             if let Some((lat, lon)) = site {
                 caption.push(format!("sun paths {} at lat {lat}, lon {lon}", args.year));
@@ -186,7 +184,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             crate::log::summary!(
                 "{}: {} -> {} ({} cells, {:.1} % sky, SVF {:.3})",
                 poi.id,
-                loaded.inputs.join(", "),
+                s.inputs.join(", "),
                 out.display(),
                 partition.len(),
                 sky * 100.0,
@@ -195,5 +193,5 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             Ok(())
         },
     )?;
-    Ok(loaded.outcome())
+    Ok(s.outcome())
 }

@@ -1,12 +1,11 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::args::tracing::Prepared;
-use crate::commands::{out_err, polygons, s_to_ms, warn_flags};
+use crate::commands::{out_err, polygons};
 use crate::Outcome;
 use anyhow::Context;
 use skylod::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
-use skylod::output::horizon::{round_deg, write_csv, HorizonOutput, HorizonPoi};
-use skylod::output::svf::TraceTimings;
+use skylod::output::horizon::{profile_summary, HorizonOutput, HorizonPoi};
+use skylod::output::text::Document;
 use skylod::solar::HorizonOptions;
 use std::io::Write;
 use std::path::PathBuf;
@@ -33,12 +32,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let opts = HorizonOptions::default().with_step(args.step);
     opts.validate().context("--step")?;
     let (output, overwrite) = (args.output.clone(), args.overwrite);
-    let Some(Prepared {
-        mut loaded,
-        pois,
-        shard,
-        ..
-    }) = args.tracing.prepare("horizon", |poi_args| {
+    let Some(s) = args.tracing.study("horizon", |poi_args| {
         if let Some(out) = &output {
             let w = WriteOptions {
                 overwrite,
@@ -53,70 +47,36 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         return Ok(Outcome::SomeFailed);
     };
     // Traced in the local metric frame (y = north): azimuths are from north there.
-    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "horizon")?;
-    let traced = skylod::pipeline::horizon(&framed, &opts, &crate::log::reporter())?;
-    warn_flags(&framed.pois, &traced.flags);
-    let (bvh_ms, trace_ms) = (s_to_ms(traced.bvh_s), s_to_ms(traced.trace_s));
-    let pois = &framed.pois;
-    let rows = traced.rows(pois, |p, h, flags| {
-        HorizonPoi::new(
-            p,
-            h.azimuth.iter().map(|a| round_deg(*a)).collect(),
-            h.elevation.iter().map(|e| round_deg(*e)).collect(),
-            flags,
-        )
-        .with_overhang(h.overhang.iter().map(|o| o.map(round_deg)).collect())
-    });
-    let profiles = traced.results;
-    let text = if args.json {
-        let doc = HorizonOutput::new(
-            rows,
-            args.step,
-            opts.tolerance_deg,
-            loaded.inputs.clone(),
-            polygons(framed.source),
-            TraceTimings {
-                read: loaded.read_ms,
-                bvh: bvh_ms,
-                trace: trace_ms,
-            },
-        );
-        serde_json::to_string_pretty(&doc)? + "\n"
+    let traced = s.study.horizon(&opts, &crate::log::reporter())?;
+    s.warn_flags(&traced.flags);
+    let timings = s.timings(&traced);
+    let doc = HorizonOutput::new(
+        traced.rows(s.study.pois(), HorizonPoi::from_profile),
+        args.step,
+        opts.tolerance_deg,
+        s.inputs.clone(),
+        polygons(s.study.source()),
+        timings,
+    );
+    let (cx, mut text) = (s.text(), Vec::new());
+    if args.json {
+        text = (serde_json::to_string_pretty(&doc)? + "\n").into_bytes();
     } else {
         // Shards after the first leave out the header line: concatenated in shard order,
         // the shards' files are the serial run's.
-        write_csv(&rows, crate::args::shard::header(shard))
-    };
+        doc.write_table(&mut text, &cx)?;
+    }
     match &args.output {
         Some(out) => {
-            atomic_write_bytes(out, text.as_bytes())
-                .with_context(|| format!("writing {}", out.display()))?;
+            atomic_write_bytes(out, &text).with_context(|| format!("writing {}", out.display()))?;
         }
-        None => out_err(std::io::stdout().lock().write_all(text.as_bytes()))?,
+        None => out_err(std::io::stdout().lock().write_all(&text))?,
     }
-    for (p, h) in pois.iter().zip(&profiles) {
-        let (mut max, mut at) = (0.0, 0.0);
-        for (a, e) in h.azimuth.iter().zip(&h.elevation) {
-            if *e > max {
-                (max, at) = (*e, *a);
-            }
-        }
-        let mean = h.elevation.iter().sum::<f64>() / h.elevation.len().max(1) as f64;
-        crate::log::summary!(
-            "{}: mean elevation {mean:.2}°, highest {max:.2}° at azimuth {at}°",
-            p.id
-        );
+    for (p, h) in s.study.pois().iter().zip(&traced.results) {
+        crate::log::summary!("{}", profile_summary(&p.id, h));
     }
-    crate::log::summary!(
-        "{} POI(s), {} azimuths each (step {}°); {} from {} input(s); read {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
-        pois.len(),
-        opts.azimuths().len(),
-        args.step,
-        crate::commands::polygons_traced(framed.source),
-        loaded.inputs.len(),
-        loaded.read_ms,
-        bvh_ms,
-        trace_ms
-    );
-    Ok(loaded.outcome())
+    for line in doc.summary(&cx) {
+        crate::log::summary!("{line}");
+    }
+    Ok(s.outcome())
 }

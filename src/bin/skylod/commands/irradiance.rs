@@ -1,13 +1,11 @@
 //! `skylod irradiance`.
 
 use crate::args::site::{model_site, SiteArgs};
-use crate::args::tracing::Prepared;
-use crate::commands::{ms, out_err, polygons, s_to_ms, warn_flags};
+use crate::commands::{emit, ms, polygons};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::output::irradiance::{
-    write_csv, write_hourly_csv, write_table, IrradianceOutput, IrradiancePoi, IrradianceTimings,
-    WeatherSummary,
+    write_csv, write_hourly_csv, IrradianceOutput, IrradiancePoi, IrradianceTimings, WeatherSummary,
 };
 use skylod::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
 use skylod::solar::weather::{read_weather, Weather};
@@ -66,32 +64,24 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let weather = read_weather(&args.weather)?;
     let weather_ms = ms(t);
     let bundles = SkyBundles::new(args.rays, args.seed)?;
-    let Some(Prepared {
-        mut loaded,
-        pois,
-        shard,
-        ..
-    }) = args.tracing.prepare("irradiance", |_| Ok(()))?
-    else {
+    let Some(s) = args.tracing.study("irradiance", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);
     };
-    let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "irradiance")?;
-    let (lat, lon) = site(&args.site, framed.source, &weather)?;
+    let (lat, lon) = site(&args.site, s.study.source(), &weather)?;
     let (sky, albedo) = (args.sky, args.albedo);
     let opts = IrradianceOptions { sky, albedo };
     let t = Instant::now();
     let table = IrradianceTable::new(&weather, &Site::new(lat, lon), sky)?;
     let sun_ms = weather_ms + ms(t);
-    let traced = skylod::pipeline::irradiance(
-        &framed,
+    let traced = s.study.irradiance(
         &bundles,
         &table,
         &opts,
         args.hourly.is_some(),
         &crate::log::reporter(),
     )?;
-    warn_flags(&framed.pois, &traced.flags);
-    let pois = &framed.pois;
+    s.warn_flags(&traced.flags);
+    let pois = s.study.pois();
     let rows = traced.rows(pois, |p, r, f| IrradiancePoi::new(p, &r.annual, f));
     if let Some(path) = &args.hourly {
         let ids: Vec<&str> = pois.iter().map(|p| p.id.as_str()).collect();
@@ -109,51 +99,24 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         weather.hours.len(),
         weather.totals_kwh_m2(),
     );
-    let timings = IrradianceTimings {
-        read: loaded.read_ms,
-        sun: sun_ms,
-        bvh: s_to_ms(traced.bvh_s),
-        trace: s_to_ms(traced.trace_s),
-    };
-    let mut out = std::io::stdout().lock();
-    if args.json {
-        let doc = IrradianceOutput::new(
-            rows,
-            summary,
-            [lat, lon],
-            sky,
-            args.albedo,
-            args.rays,
-            loaded.inputs.clone(),
-            polygons(framed.source),
-            timings,
-        );
-        out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
-    } else if args.csv {
-        write_csv(&mut out, &rows).context("writing to stdout")?;
+    let timings = IrradianceTimings::new(s.timings(&traced), sun_ms);
+    let doc = IrradianceOutput::new(
+        rows,
+        summary,
+        [lat, lon],
+        sky,
+        args.albedo,
+        args.rays,
+        s.inputs.clone(),
+        polygons(s.study.source()),
+        timings,
+    );
+    if args.csv {
+        write_csv(std::io::stdout().lock(), &doc.pois).context("writing to stdout")?;
     } else {
-        out_err(write_table(
-            &mut out,
-            &rows,
-            crate::args::shard::header(shard),
-        ))?;
-        crate::log::summary!(
-            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({lat:.4}, {lon:.4}), {sky:?} sky, albedo {}; {} from {} input(s); read {:.0} ms, weather and sun {:.0} ms, bvh {:.0} ms, trace {:.0} ms",
-            pois.len(),
-            weather.hours.len(),
-            summary.station,
-            summary.format,
-            summary.ghi_kwh_m2,
-            args.albedo,
-            crate::commands::polygons_traced(framed.source),
-            loaded.inputs.len(),
-            timings.read,
-            timings.sun,
-            timings.bvh,
-            timings.trace
-        );
+        emit(&doc, args.json, &s.text())?;
     }
-    Ok(loaded.outcome())
+    Ok(s.outcome())
 }
 
 /// The sun's site: --lat/--lon; else the model's centre (refused when the weather station

@@ -4,8 +4,10 @@
 use crate::log::warning;
 use anyhow::Context;
 use skylod::model::CityModel;
+use skylod::output::text::{Document, TextContext};
 use skylod::poi::checks::PoiFlag;
 use skylod::poi::Poi;
+use std::io::Write;
 use std::time::Instant;
 
 pub mod completions;
@@ -51,23 +53,24 @@ pub fn polygons(m: &CityModel) -> usize {
     m.polygon_count()
 }
 
-/// `N polygons (T traced)` for the summary lines of the tracing commands.
-pub fn polygons_traced(m: &CityModel) -> String {
-    format!(
-        "{} polygons ({} traced)",
-        m.polygon_count(),
-        m.traced_polygon_count()
-    )
-}
-
 /// Context helper for writing to stdout.
 pub fn out_err<T>(r: std::io::Result<T>) -> anyhow::Result<T> {
     r.context("writing to standard output")
 }
 
-/// Seconds as milliseconds rounded to 0.1 (the timings of the reports).
-pub fn s_to_ms(s: f64) -> f64 {
-    (s * 1e4).round() / 10.0
+/// A tracing command's document on standard output: its JSON with `json`, else its table,
+/// with its summary lines on stderr.
+pub fn emit(doc: &impl Document, json: bool, cx: &TextContext) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    if json {
+        out_err(writeln!(out, "{}", serde_json::to_string_pretty(doc)?))?;
+    } else {
+        out_err(doc.write_table(&mut out, cx))?;
+        for line in doc.summary(cx) {
+            crate::log::summary!("{line}");
+        }
+    }
+    Ok(())
 }
 
 /// Print each POI's flags as a warning on stderr.

@@ -1,9 +1,10 @@
 //! `skylod rough`: the rough model (every asset at level 1) written as CityGML.
 
 use crate::args::crs::SourceCrsArgs;
+use crate::outputs::{Batch, Done};
 use crate::Outcome;
 use rayon::prelude::*;
-use skylod::batch::outputs::{Plan, Targets};
+use skylod::batch::outputs::Targets;
 use skylod::citygml::read_file;
 use skylod::citygml::write::WriteOptions;
 use skylod::crs::{model_crs, LocalFrame};
@@ -36,91 +37,39 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let opts = args.rough.options()?;
-    let (plan, format) = crate::outputs::plan(&inputs, &args.out.output, args.out.format)?;
-    let wopts = WriteOptions {
-        overwrite: args.out.overwrite,
-        protect: args.inputs.clone(),
-        keep_envelopes: false,
-    };
+    let out = (
+        args.out.output.as_path(),
+        args.out.format,
+        args.out.overwrite,
+    );
     // Every target is checked before any work: an input whose output is refused fails
     // (exit 1) without being read; the others are done. A merge writes every input to a
     // staging directory, then merges them into the target.
-    let (
-        Targets {
-            todo,
-            staging,
-            mirror,
-            write_opts,
-            ..
-        },
-        refused,
-    ) = crate::outputs::targets(&plan, &args.inputs, &wopts, shard, "rough", true, |e| {
-        crate::log::error!("{e}")
-    })?;
-    let mut failed = refused;
+    let batch = Batch::new("rough", &inputs, out, false, shard)?;
+    let Targets {
+        todo,
+        mirror,
+        write_opts,
+        ..
+    } = &batch.targets;
     // Files in parallel (--jobs); messages in input order, whatever finished first.
-    let results: Vec<anyhow::Result<(Done, PathBuf, PathBuf)>> = args.jobs.install(|| {
+    let results = args.jobs.install(|| {
         todo.par_iter()
             .map(|(k, out)| {
                 let input = &args.inputs[*k];
-                if mirror {
-                    crate::outputs::create_parent(out)?;
-                }
-                one(input, out, format, &opts, &write_opts, &args.crs)
-                    .map(|d| (d, out.clone(), input.clone()))
+                let r = if *mirror {
+                    crate::outputs::create_parent(out)
+                } else {
+                    Ok(())
+                };
+                let r =
+                    r.and_then(|()| one(input, out, batch.format, &opts, write_opts, &args.crs));
+                (input.clone(), out.clone(), r)
             })
             .collect()
     })?;
-    let (mut ok, mut warnings, mut polys) = (0, 0, (0, 0));
-    let (mut parts, mut names) = (Vec::new(), Vec::new());
-    for r in results {
-        match r {
-            Ok((d, out, input)) => {
-                parts.push(out);
-                names.push(input);
-                if let Some(line) = d.line.filter(|_| staging.is_none()) {
-                    crate::log::summary!("{line}");
-                }
-                ok += 1;
-                warnings += d.warnings;
-                polys.0 += d.polygons.0;
-                polys.1 += d.polygons.1;
-            }
-            Err(e) => {
-                crate::log::error!("{e}");
-                failed += 1;
-            }
-        }
-    }
-    if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
-        if !crate::outputs::merge(&parts, &names, t, &wopts, args.inputs.len()) {
-            failed += ok;
-            ok = 0;
-        }
-    }
-    crate::log::summary!(
-        "{}",
-        crate::commands::summary_line(
-            "rough",
-            ok,
-            failed,
-            warnings,
-            (format == Format::CityGml).then_some(polys),
-            t0
-        )
-    );
-    Ok(if failed > 0 {
-        Outcome::SomeFailed
-    } else {
-        Outcome::Ok
-    })
-}
-
-/// What one input gave: its summary line (printed in input order), warnings, polygons in/out.
-struct Done {
-    line: Option<String>,
-    warnings: usize,
-    polygons: (usize, usize),
+    let failure = |e: &anyhow::Error| e.to_string();
+    Ok(batch.finish("rough", results, failure, args.inputs.len(), t0))
 }
 
 fn one(

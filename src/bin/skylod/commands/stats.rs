@@ -122,9 +122,5 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     } else {
         out_err(v.write_table(&mut out).and_then(|()| out.flush()))?;
     }
-    Ok(if failed {
-        Outcome::SomeFailed
-    } else {
-        Outcome::Ok
-    })
+    Ok(Outcome::failed_if(failed))
 }

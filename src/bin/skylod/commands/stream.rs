@@ -3,8 +3,8 @@
 //! follows the chunk. Where the stream declines, the commands read the file whole.
 
 use crate::args::crs::SourceCrsArgs;
-use crate::commands::convert::Done;
 use crate::log::summary;
+use crate::outputs::Done;
 use skylod::citygml::read::{stream, Streamed};
 use skylod::citygml::write::WriteOptions;
 use skylod::citygml::ReadOptions;
@@ -82,6 +82,6 @@ pub fn obj(
     Ok(Some(Done {
         line: None,
         warnings: sum.warnings,
-        polygons: 0,
+        polygons: (0, 0),
     }))
 }

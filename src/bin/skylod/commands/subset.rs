@@ -1,7 +1,7 @@
 //! `skylod subset`: keep the top-level city objects of CityGML documents that match a box,
 //! ids or types (citygml-tools' `subset`), streamed: memory follows the largest city object.
 
-use crate::outputs::PerInputArgs;
+use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
 use anyhow::Context;
 use skylod::citygml::edit::{subset, BboxMode, Subset};
@@ -10,7 +10,7 @@ use skylod::crs::Crs;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    io: PerInputArgs,
+    io: CityGmlIoArgs,
     /// Keep city objects whose box meets X0,Y0,X1,Y1 (in the document's CRS, or --bbox-crs).
     #[arg(
         long,
