@@ -17,7 +17,7 @@ const ORIGIN: [f64; 3] = [430000.0, 4581000.0, 10.0];
 const GREENSBORO: (f64, f64) = (36.1, -79.95);
 
 /// pvlib's bundled TMY3 file, or `None` (a skip, a failure under CI) without pvlib.
-fn tmy3() -> Option<PathBuf> {
+pub(crate) fn tmy3() -> Option<PathBuf> {
     if !python_has("pvlib", "pip install pvlib") {
         return None;
     }

@@ -16,6 +16,7 @@ pub mod site;
 pub mod stream;
 pub mod sun;
 pub mod tracing;
+pub mod weather;
 
 /// A clap value parser: a finite number ≥ 0.
 pub fn non_negative(s: &str) -> Result<f64, String> {

@@ -1,7 +1,8 @@
 //! `skylod irradiance`.
 
-use crate::args::site::{model_site, SiteArgs};
+use crate::args::site::SiteArgs;
 use crate::args::tracing::Prepared;
+use crate::args::weather::weather_site;
 use crate::commands::{ms, out_err, polygons, s_to_ms, warn_flags};
 use crate::Outcome;
 use anyhow::{bail, Context};
@@ -10,14 +11,11 @@ use skylod::output::irradiance::{
     WeatherSummary,
 };
 use skylod::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
-use skylod::solar::weather::{read_weather, Weather};
+use skylod::solar::weather::read_weather;
 use skylod::solar::{Site, SkyBundles};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// Farthest a weather station may be from the model's site (km) unless --lat/--lon are given.
-const MAX_STATION_KM: f64 = 50.0;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -76,7 +74,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         return Ok(Outcome::SomeFailed);
     };
     let framed = (args.tracing.pois).frame_checked(&mut loaded.model, pois, "irradiance")?;
-    let (lat, lon) = site(&args.site, framed.source, &weather)?;
+    let (lat, lon) = weather_site(&args.site, framed.source, &weather, "irradiance")?;
     let (sky, albedo) = (args.sky, args.albedo);
     let opts = IrradianceOptions { sky, albedo };
     let t = Instant::now();
@@ -154,45 +152,4 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         );
     }
     Ok(loaded.outcome())
-}
-
-/// The sun's site: --lat/--lon; else the model's centre (refused when the weather station
-/// is farther than [`MAX_STATION_KM`]); else the weather station's.
-fn site(
-    args: &SiteArgs,
-    model: &skylod::model::CityModel,
-    weather: &Weather,
-) -> anyhow::Result<(f64, f64)> {
-    if let Some(s) = args.given() {
-        return Ok(s);
-    }
-    let w = &weather.site;
-    match model_site(model) {
-        Ok((a, o, srs)) => {
-            let km = w.distance_km(a, o);
-            if km > MAX_STATION_KM {
-                bail!(
-                    "irradiance: the model (lat {a:.4}, lon {o:.4} in {srs}) is {km:.0} km from \
-                     the weather station {:?} (lat {}, lon {}); give --lat/--lon to use this \
-                     weather anyway",
-                    w.name,
-                    w.latitude,
-                    w.longitude
-                );
-            }
-            crate::log::summary!(
-                "irradiance: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}"
-            );
-            Ok((a, o))
-        }
-        Err(why) => {
-            crate::log::summary!(
-                "irradiance: site of the weather station {:?} (lat {}, lon {}): {why}",
-                w.name,
-                w.latitude,
-                w.longitude
-            );
-            Ok((w.latitude, w.longitude))
-        }
-    }
 }
