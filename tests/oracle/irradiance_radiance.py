@@ -4,7 +4,7 @@
 dctimestep), the oracle of `skylod irradiance` in tests/it/irradiance.rs.
 
 Usage: irradiance_radiance.py TMY3.csv POIS.csv MODEL.obj [MODEL.obj ...]
-  -> {"id": {"global_kwh_m2": ..}, ..} (JSON)
+  -> {"id": {"global_kwh_m2": .., "direct_kwh_m2": .., "diffuse_kwh_m2": ..}, ..} (JSON)
 
 The weather: the TMY3 file (pvlib's bundled Greensboro year) written as an EPW by Python's
 csv (as tests/it/irradiance.rs does), then epw2wea. The sky: `gendaymtx -m 4 -O1 -g 0 -r 0`
@@ -12,7 +12,7 @@ csv (as tests/it/irradiance.rs does), then epw2wea. The sky: `gendaymtx -m 4 -O1
 shared among the patches around it; solar radiance in W/sr/m2; ground reflectance 0; no
 rotation). The daylight coefficients: every surface black (plastic, reflectance 0), one
 glow source over the whole sphere binned by reinhart.cal (`rcontrib -I+ -ab 1 -e MF:4`,
-262 144 hemisphere samples per point along its normal, bin 0 the ground), so each point sees
+65 536 hemisphere samples per point along its normal, bin 0 the ground), so each point sees
 each patch exactly where the model does not hide it; dctimestep multiplies them by the sky
 of every hour (W/m2) and the hours are summed (Wh/m2, one hour each).
 
@@ -35,7 +35,7 @@ import numpy as np
 from radiance_svf import BIN, LIB, POI_OFFSET, materials, origin_of, read_pois, tool
 
 MF = "4"
-AMBIENT = ["-ab", "1", "-ad", "262144", "-lw", "1e-8"]
+AMBIENT = ["-ab", "1", "-ad", "65536", "-lw", "1e-8"]
 
 
 def epw_from_tmy3(src, dst):
@@ -88,10 +88,14 @@ def main():
         epw_from_tmy3(tmy3, epw)
         wea = os.path.join(tmp, "w.wea")
         run([tool("epw2wea"), epw, wea])
-        sky = run([tool("gendaymtx"), "-m", MF, "-O1", "-g", "0", "0", "0", "-r", "0", wea]).stdout
-        smx = os.path.join(tmp, "sky.smx")
-        with open(smx, "wb") as f:
-            f.write(sky)
+        # the whole sky, the sun alone (-d), the sky without the sun (-s)
+        skies = {}
+        for part, flag in (("global", []), ("direct", ["-d"]), ("diffuse", ["-s"])):
+            sky = run([tool("gendaymtx"), "-m", MF, "-O1", *flag, "-g", "0", "0", "0", "-r", "0",
+                       wea]).stdout
+            skies[part] = os.path.join(tmp, f"{part}.smx")
+            with open(skies[part], "wb") as f:
+                f.write(sky)
         scene, mats = [], set()
         for k, obj in enumerate(objs):
             mats |= materials(obj)
@@ -127,11 +131,13 @@ def main():
         dcm = os.path.join(tmp, "dc.mtx")
         with open(dcm, "wb") as f:
             f.write(dc)
-        hourly = run([tool("dctimestep"), "-oa", dcm, smx]).stdout.decode()
-        m = read_matrix(hourly)
-        # rows: points, columns: hours; R = G = B for the solar (-O1) sky
-        wh = m.mean(axis=2).sum(axis=1)
-        result = {pid: {"global_kwh_m2": float(wh[k]) / 1000.0} for k, (pid, _, _) in enumerate(pois)}
+        result = {pid: {} for pid, _, _ in pois}
+        for part, smx in skies.items():
+            m = read_matrix(run([tool("dctimestep"), "-oa", dcm, smx]).stdout.decode())
+            # rows: points, columns: hours; R = G = B for the solar (-O1) sky
+            wh = m.mean(axis=2).sum(axis=1)
+            for k, (pid, _, _) in enumerate(pois):
+                result[pid][f"{part}_kwh_m2"] = float(wh[k]) / 1000.0
     print(json.dumps(result))
 
 
