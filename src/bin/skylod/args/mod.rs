@@ -2,6 +2,7 @@
 //! flattened into the commands that take it (never copied, so the commands cannot drift
 //! apart).
 
+pub mod attributes;
 pub mod bound;
 pub mod crs;
 pub mod jobs;

@@ -47,9 +47,11 @@ pub struct Args {
     /// Also write every hour's global irradiation (Wh/m²) per POI to this CSV file.
     #[arg(long, value_name = "FILE")]
     hourly: Option<PathBuf>,
-    /// Overwrite the --hourly file if it exists.
+    /// Overwrite the --hourly (or -o) file if it exists.
     #[arg(long)]
     overwrite: bool,
+    #[command(flatten)]
+    attributes: crate::args::attributes::AttributeArgs,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
@@ -60,6 +62,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if let Some(h) = &args.hourly {
         skylod::io::check_target(h, [], args.overwrite)?;
     }
+    let region = args.tracing.region.active();
+    args.attributes.check(region, args.overwrite)?;
     let t = Instant::now();
     let weather = read_weather(&args.weather)?;
     let weather_ms = ms(t);
@@ -91,6 +95,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     warn_flags(&framed.pois, &traced.flags);
     let pois = &framed.pois;
     let rows = traced.rows(pois, |p, r, f| IrradiancePoi::new(p, &r.annual, f));
+    let values: Vec<f64> = traced
+        .results
+        .iter()
+        .map(|r| r.annual.global_kwh_m2)
+        .collect();
+    if let Some(n) = args.attributes.write(&framed, &values, args.overwrite)? {
+        crate::log::summary!("irradiance: {n} surface(s) given skylodAnnualIrradiation");
+    }
     if let Some(path) = &args.hourly {
         let ids: Vec<&str> = pois.iter().map(|p| p.id.as_str()).collect();
         let series: Vec<&[f64]> = traced.results.iter().map(|r| r.hourly.as_slice()).collect();
