@@ -86,7 +86,23 @@ pub fn write_cityjson(
     content: Content<'_>,
     w: &mut dyn Write,
 ) -> io::Result<ExportSummary> {
-    let plan = Plan::new(model, file, content);
+    write_cityjson_with(model, file, content, None, w)
+}
+
+/// [`write_cityjson`] with extra attributes on the semantic surface objects of some assets
+/// (asset index → attributes; `irradiance --output-attributes`).
+///
+/// # Errors
+/// I/O errors of `w`.
+pub fn write_cityjson_with(
+    model: &CityModel,
+    file: usize,
+    content: Content<'_>,
+    surface_attributes: Option<&BTreeMap<usize, Map<String, Value>>>,
+    w: &mut dyn Write,
+) -> io::Result<ExportSummary> {
+    let mut plan = Plan::new(model, file, content);
+    plan.surface_attributes = surface_attributes;
     let mut s = ExportSummary::default();
     let mut verts = Vertices::new(plan.translate, plan.scale);
     let mut head = plan.header();
@@ -360,6 +376,8 @@ struct Plan<'a> {
     translate: DVec3,
     scale: DVec3,
     bbox: Bbox,
+    /// Extra attributes of the semantic surface objects of some assets.
+    surface_attributes: Option<&'a BTreeMap<usize, Map<String, Value>>>,
 }
 
 impl<'a> Plan<'a> {
@@ -376,6 +394,7 @@ impl<'a> Plan<'a> {
             translate: DVec3::ZERO,
             scale: scale_for(model.files.get(file).and_then(|f| f.srs_name.as_deref())),
             bbox: Bbox::EMPTY,
+            surface_attributes: None,
         };
         let mut used: HashSet<String> = HashSet::new();
         let mut unique = |cand: String| {
@@ -595,6 +614,12 @@ impl<'a> Plan<'a> {
             for (lod, polys) in lods {
                 let g = geoms.entry(lod).or_default();
                 let sem = g.semantic(model, self.content, i);
+                let extra = self.surface_attributes.and_then(|m| m.get(&i));
+                if let (Some(k), Some(extra)) = (sem, extra) {
+                    if let Some(surface) = g.surfaces.get_mut(k) {
+                        surface.extend(extra.clone());
+                    }
+                }
                 s.polygons += g.add(verts, &polys, sem);
             }
         }

@@ -1,7 +1,7 @@
 //! Error-bounded LoD (DESIGN.md "Regions and error bounds"): after the selection, compare the
 //! mixed-LoD model with the full model at every POI with the *same* rays, and promote assets
-//! (level 0 → 1, 1 → 2) where a POI's relative SVF or sun-hours error is over the bound,
-//! until every POI holds.
+//! (level 0 → 1, 1 → 2) where a POI's relative SVF, sun-hours or annual-irradiation error is
+//! over the bound, until every POI holds.
 //!
 //! **Rays.** SVF uses the equal-projected-area bundle of [`SkyBundles`] in the POI's frame
 //! (exactly as [`crate::solar::poi_sky_view`]: the figures here equal it); sun hours use every
@@ -30,6 +30,14 @@
 //! POIs on a small model), the rounds would cost more than the BVH they avoid, and the whole
 //! model is built at once, as before ([`Reference::whole`]). Measured (BENCHMARKS.md, "The
 //! default error bound"): on the paper district, 6 POIs reach 2,951 of 57,530 assets.
+//!
+//! **Irradiance** ([`bound_with`] and a weather year): the annual global irradiation of the
+//! POI's plane ([`crate::solar::irradiance`]) from the SVF rays above and one sun ray per
+//! hour the sun is up in front of the plane ([`PlaneRays`]); both models' figures equal
+//! [`crate::solar::poi_irradiance`] with the same bundle. Its rays weigh what they bring
+//! ([`PlaneRays::weights`]: Wh/m² of diffuse light per sky ray, of beam and circumsolar
+//! light per sun ray), so the culprits below are ranked by the irradiation they take away
+//! or add, not by their rays.
 //!
 //! **Promotion.** At a POI over the bound, the rays whose answers differ tell which assets
 //! are to blame. When the LoD model sees *less* sky than the full one, the culprits are the
@@ -70,6 +78,7 @@ use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{detail_boxes, full_scene, full_scene_part, mixed_scene};
 use crate::model::CityModel;
 use crate::poi::{Poi, POI_OFFSET};
+use crate::solar::irradiance::{IrradianceSetting, PlaneRays};
 use crate::solar::sky::{Frame, SkyError};
 use crate::solar::{SkyBundles, SunTable};
 use crate::trace::{BoxIndex, Scene};
@@ -77,6 +86,8 @@ use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
+
+pub use super::bound_report::{BoundReport, PoiBound, Promotion};
 
 /// Options of [`bound`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -92,6 +103,9 @@ pub struct BoundOptions {
     pub svf_seed: u64,
     /// Most rounds of promotions before giving up.
     pub max_rounds: usize,
+    /// Largest relative error of the annual global irradiation allowed at any POI (`None`:
+    /// not bounded; needs a weather year, [`bound_with`]).
+    pub max_irradiance_error: Option<f64>,
 }
 
 impl Default for BoundOptions {
@@ -102,6 +116,7 @@ impl Default for BoundOptions {
             svf_rays: 20_000,
             svf_seed: 7,
             max_rounds: 64,
+            max_irradiance_error: None,
         }
     }
 }
@@ -116,6 +131,9 @@ pub enum BoundError {
     /// A sun-hours bound without a sun table.
     #[error("a sun-hours error bound needs a sun table (site and year)")]
     NoSunTable,
+    /// An irradiance bound without a weather year.
+    #[error("an irradiance error bound needs a weather year (--weather)")]
+    NoWeather,
     /// A bound that is negative or not a number.
     #[error("error bound {0} is not a non-negative number")]
     BadBound(f64),
@@ -129,58 +147,6 @@ pub enum BoundError {
         /// Rough geometries given.
         rough: usize,
     },
-}
-
-/// Achieved figures at one POI.
-#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
-#[schemars(deny_unknown_fields)]
-pub struct PoiBound {
-    /// POI id.
-    pub id: String,
-    /// SVF of the full model.
-    #[schemars(range(min = 0, max = 1))]
-    pub svf_full: f64,
-    /// SVF of the LoD model.
-    #[schemars(range(min = 0, max = 1))]
-    pub svf_lod: f64,
-    /// Relative SVF error (0 when both are 0); infinite (written `null`) when the full SVF
-    /// is 0 and the LoD SVF is not.
-    #[schemars(with = "Option<f64>", range(min = 0))]
-    pub svf_error: f64,
-    /// Sun hours of the full model (with a sun table).
-    #[schemars(range(min = 0))]
-    pub sun_hours_full: Option<f64>,
-    /// Sun hours of the LoD model.
-    #[schemars(range(min = 0))]
-    pub sun_hours_lod: Option<f64>,
-    /// Relative sun-hours error.
-    #[schemars(range(min = 0))]
-    pub sun_hours_error: Option<f64>,
-    /// Whether the POI is within every bound.
-    pub holds: bool,
-}
-
-/// One promotion.
-#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
-#[schemars(deny_unknown_fields)]
-pub struct Promotion {
-    /// Round (1-based) in which it was made.
-    #[schemars(range(min = 1))]
-    pub round: usize,
-    /// Index of the asset in the model.
-    pub asset: usize,
-    /// `gml:id` of the asset, if any.
-    pub id: Option<String>,
-    /// Level before.
-    #[schemars(range(max = 1))]
-    pub from: u8,
-    /// Level after.
-    #[schemars(range(min = 1, max = 2))]
-    pub to: u8,
-    /// The POI whose error asked for it.
-    pub poi: String,
-    /// Rays of that POI whose answer differed on this asset.
-    pub rays: usize,
 }
 
 /// What [`bound`] made.
@@ -224,70 +190,6 @@ impl Bounded {
     }
 }
 
-/// The `bound` section of the `lod` report (`schemas/report.schema.json`).
-#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
-#[schemars(deny_unknown_fields)]
-pub struct BoundReport {
-    /// The SVF bound asked for (relative).
-    #[schemars(range(min = 0))]
-    pub max_svf_error: Option<f64>,
-    /// The sun-hours bound asked for (relative).
-    #[schemars(range(min = 0))]
-    pub max_sun_hours_error: Option<f64>,
-    /// Rays of the SVF bundle.
-    #[schemars(range(min = 1))]
-    pub rays: usize,
-    /// Seed of the SVF bundle.
-    pub seed: u64,
-    /// Rounds of tracing the LoD model (1: nothing promoted).
-    #[schemars(range(min = 1))]
-    pub rounds: usize,
-    /// Whether every POI holds.
-    pub met: bool,
-    /// Achieved figures per POI.
-    pub pois: Vec<PoiBound>,
-    /// Promotions in the order made.
-    pub promotions: Vec<Promotion>,
-}
-
-impl BoundReport {
-    /// One line per POI over the bound (id, SVF of both models, the errors), for the
-    /// error message of a bound that cannot be met.
-    pub fn failing_lines(&self) -> String {
-        self.pois
-            .iter()
-            .filter(|p| !p.holds)
-            .map(|p| {
-                let sun = p.sun_hours_error.map_or(String::new(), |e| {
-                    format!(", sun hours error {:.2}%", 100.0 * e)
-                });
-                format!(
-                    "  {}: SVF {:.4} (full {:.4}), error {:.2}%{sun}",
-                    p.id,
-                    p.svf_lod,
-                    p.svf_full,
-                    100.0 * p.svf_error
-                )
-            })
-            .collect::<Vec<_>>()
-            .join("\n")
-    }
-
-    /// The report section of a result made with `opts`.
-    pub fn new(b: &Bounded, opts: &BoundOptions) -> BoundReport {
-        BoundReport {
-            max_svf_error: opts.max_svf_error,
-            max_sun_hours_error: opts.max_sun_error,
-            rays: opts.svf_rays,
-            seed: opts.svf_seed,
-            rounds: b.rounds,
-            met: b.met,
-            pois: b.pois.clone(),
-            promotions: b.promotions.clone(),
-        }
-    }
-}
-
 /// Relative error of `a` against `b` (0 when both are 0, infinite when only `b` is).
 fn rel(a: f64, b: f64) -> f64 {
     if b == 0.0 {
@@ -301,26 +203,39 @@ fn rel(a: f64, b: f64) -> f64 {
     }
 }
 
-/// The rays of one POI: SVF directions then sun directions (world frame).
+/// The rays of one POI: SVF directions, sun directions, then the sun directions of the
+/// irradiance hours (world frame).
 struct Probe {
     origin: DVec3,
     svf_dirs: Vec<DVec3>,
     sun_dirs: Vec<DVec3>,
+    irr_dirs: Vec<DVec3>,
+    plane: Option<PlaneRays>,
 }
 
-fn probe(poi: &Poi, bundles: &SkyBundles, table: Option<&SunTable>) -> Probe {
+fn probe(
+    poi: &Poi,
+    bundles: &SkyBundles,
+    table: Option<&SunTable>,
+    irr: Option<&IrradianceSetting>,
+) -> Probe {
     let n = poi
         .normal
         .and_then(|n| n.try_normalize())
         .unwrap_or(DVec3::Z);
     let frame = Frame::from_normal(n);
-    let svf_dirs = bundles
+    let svf_dirs: Vec<DVec3> = bundles
         .for_poi(poi)
         .projected_dirs()
         .iter()
         .map(|&l| frame.to_world(l))
         .filter(|d| d.z > 0.0)
         .collect();
+    let plane = irr.map(|w| PlaneRays::new(&w.table, poi.normal, &svf_dirs, bundles.len()));
+    let irr_dirs = match (irr, &plane) {
+        (Some(w), Some(p)) => p.sun_dirs(&w.table),
+        _ => Vec::new(),
+    };
     let sun_dirs = table.map_or_else(Vec::new, |t| {
         t.steps()
             .iter()
@@ -332,24 +247,27 @@ fn probe(poi: &Poi, bundles: &SkyBundles, table: Option<&SunTable>) -> Probe {
         origin: poi.ray_origin(),
         svf_dirs,
         sun_dirs,
+        irr_dirs,
+        plane,
     }
 }
 
 impl Probe {
     fn len(&self) -> usize {
-        self.svf_dirs.len() + self.sun_dirs.len()
+        self.svf_dirs.len() + self.sun_dirs.len() + self.irr_dirs.len()
     }
 
-    /// Ray `j`: SVF rays, then sun rays.
+    /// Ray `j`: SVF rays, then sun rays, then irradiance sun rays.
     fn dir(&self, j: usize) -> DVec3 {
-        match self.svf_dirs.get(j) {
-            Some(&d) => d,
-            None => self
-                .sun_dirs
-                .get(j - self.svf_dirs.len())
-                .copied()
-                .unwrap_or(DVec3::ZERO),
-        }
+        let (ns, nu) = (self.svf_dirs.len(), self.sun_dirs.len());
+        let d = if j < ns {
+            self.svf_dirs.get(j)
+        } else if j < ns + nu {
+            self.sun_dirs.get(j - ns)
+        } else {
+            self.irr_dirs.get(j - ns - nu)
+        };
+        d.copied().unwrap_or(DVec3::ZERO)
     }
 }
 
@@ -498,11 +416,12 @@ fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
 /// rounded down, nearest first) once it was seen to hit nothing.
 type Pending = (usize, usize, Option<Vec<(f32, u32)>>);
 
-/// First-hit tags of every ray of a probe (SVF rays, then sun rays).
+/// First-hit tags of every ray of a probe (SVF rays, sun rays, irradiance sun rays).
 fn tags(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
     p.svf_dirs
         .par_iter()
         .chain(p.sun_dirs.par_iter())
+        .chain(p.irr_dirs.par_iter())
         .with_min_len(512)
         .map(|&d| {
             scene
@@ -510,6 +429,26 @@ fn tags(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
                 .map(|h| h.tag)
         })
         .collect()
+}
+
+/// A POI over a bound: its index, the range of its rays that measure the metric, the
+/// excess over the bound (in rays, or in Wh/m² with weights), whether the LoD model gives
+/// less than the full one, and the weights of all its rays (irradiance only).
+type Over<'a> = (usize, std::ops::Range<usize>, f64, bool, Option<&'a [f64]>);
+
+/// What each ray of a probe brings to the irradiation ([`PlaneRays::weights`]): SVF rays
+/// and irradiance sun rays; 0 for the sun-hours rays.
+fn irradiance_weights(p: &Probe, w: &IrradianceSetting) -> Vec<f64> {
+    let Some(plane) = &p.plane else {
+        return vec![0.0; p.len()];
+    };
+    let pw = plane.weights(&w.table, &w.opts);
+    let ns = p.svf_dirs.len();
+    let mut out = Vec::with_capacity(p.len());
+    out.extend_from_slice(&pw[..ns.min(pw.len())]);
+    out.extend(std::iter::repeat_n(0.0, p.sun_dirs.len()));
+    out.extend_from_slice(pw.get(ns..).unwrap_or(&[]));
+    out
 }
 
 /// Sky rays among `tags[range]`.
@@ -533,6 +472,24 @@ pub fn bound(
     opts: &BoundOptions,
     table: Option<&SunTable>,
 ) -> Result<Bounded, BoundError> {
+    bound_with(model, rough, levels, pois, opts, table, None)
+}
+
+/// [`bound`], and with `irradiance` (a weather year) the annual-irradiation bound of
+/// [`BoundOptions::max_irradiance_error`] (see the module docs, "Irradiance").
+///
+/// # Errors
+/// As [`bound`], and [`BoundError::NoWeather`] for an irradiance bound without
+/// `irradiance`.
+pub fn bound_with(
+    model: &CityModel,
+    rough: &[RoughGeometry],
+    levels: &[u8],
+    pois: &[Poi],
+    opts: &BoundOptions,
+    table: Option<&SunTable>,
+    irradiance: Option<&IrradianceSetting>,
+) -> Result<Bounded, BoundError> {
     let n = model.assets.len();
     if levels.len() != n || rough.len() != n {
         return Err(BoundError::Mismatch {
@@ -541,7 +498,8 @@ pub fn bound(
             rough: rough.len(),
         });
     }
-    for b in [opts.max_svf_error, opts.max_sun_error]
+    let max_irr = opts.max_irradiance_error;
+    for b in [opts.max_svf_error, opts.max_sun_error, max_irr]
         .into_iter()
         .flatten()
     {
@@ -552,6 +510,10 @@ pub fn bound(
     if opts.max_sun_error.is_some() && table.is_none() {
         return Err(BoundError::NoSunTable);
     }
+    if max_irr.is_some() && irradiance.is_none() {
+        return Err(BoundError::NoWeather);
+    }
+    let irr = if max_irr.is_some() { irradiance } else { None };
     let bundles = SkyBundles::new(opts.svf_rays, opts.svf_seed)?;
     let total = bundles.len().max(1) as f64;
     let step_h = table.map_or(0.0, SunTable::step_hours);
@@ -560,7 +522,14 @@ pub fn bound(
     } else {
         None
     };
-    let probes: Vec<Probe> = pois.iter().map(|p| probe(p, &bundles, table)).collect();
+    let probes: Vec<Probe> = (pois.iter())
+        .map(|p| probe(p, &bundles, table, irr))
+        .collect();
+    // per POI, what each of its rays brings to the irradiation (all rays, 0 but for the
+    // SVF and irradiance ones)
+    let weights: Vec<Option<Vec<f64>>> = (probes.iter())
+        .map(|p| Some(irradiance_weights(p, irr?)))
+        .collect();
     let (full_tags, reference) = full_tags(model, &probes);
 
     let mut levels: Vec<u8> = levels.iter().map(|&l| l.min(2)).collect();
@@ -571,8 +540,8 @@ pub fn bound(
         let scene = mixed_scene(model, rough, &levels);
         let lod_tags: Vec<Vec<Option<u32>>> = probes.iter().map(|p| tags(&scene, p)).collect();
         let mut figures = Vec::with_capacity(pois.len());
-        // (poi, metric range, excess rays, lod sees less sky)
-        let mut over: Vec<(usize, std::ops::Range<usize>, f64, bool)> = Vec::new();
+        // (poi, metric range, excess (rays, or weight), lod sees less sky, ray weights)
+        let mut over: Vec<Over> = Vec::new();
         for (k, poi) in pois.iter().enumerate() {
             let ns = probes[k].svf_dirs.len();
             let (f, l) = (&full_tags[k], &lod_tags[k]);
@@ -585,12 +554,13 @@ pub fn bound(
                 if svf_error > b {
                     holds = false;
                     let excess = sf.abs_diff(sl) as f64 - b * sf as f64;
-                    over.push((k, 0..ns, excess, sl < sf));
+                    over.push((k, 0..ns, excess, sl < sf, None));
                 }
             }
             let (mut sun_full, mut sun_lod, mut sun_err) = (None, None, None);
+            let sun_end = ns + probes[k].sun_dirs.len();
             if table.is_some() {
-                let (uf, ul) = (sky(&f[ns..]), sky(&l[ns..]));
+                let (uf, ul) = (sky(&f[ns..sun_end]), sky(&l[ns..sun_end]));
                 let e = rel(ul as f64, uf as f64);
                 sun_full = Some(uf as f64 * step_h);
                 sun_lod = Some(ul as f64 * step_h);
@@ -599,8 +569,26 @@ pub fn bound(
                     if e > b {
                         holds = false;
                         let excess = uf.abs_diff(ul) as f64 - b * uf as f64;
-                        over.push((k, ns..f.len(), excess, ul < uf));
+                        over.push((k, ns..sun_end, excess, ul < uf, None));
                     }
+                }
+            }
+            let (mut irr_full, mut irr_lod, mut irr_err) = (None, None, None);
+            if let (Some(w), Some(plane), Some(b)) = (irr, &probes[k].plane, max_irr) {
+                let at = |t: &[Option<u32>]| {
+                    let sky_free = |j: usize| t.get(j).is_some_and(Option::is_none);
+                    let sun_free = |i: usize| t.get(sun_end + i).is_some_and(Option::is_none);
+                    plane
+                        .irradiance(&w.table, &w.opts, sky_free, sun_free)
+                        .global_kwh_m2
+                };
+                let (gf, gl) = (at(f), at(l));
+                let e = rel(gl, gf);
+                (irr_full, irr_lod, irr_err) = (Some(gf), Some(gl), Some(e));
+                if e > b {
+                    holds = false;
+                    let excess = 1000.0 * ((gf - gl).abs() - b * gf.abs());
+                    over.push((k, 0..f.len(), excess, gl < gf, weights[k].as_deref()));
                 }
             }
             figures.push(PoiBound {
@@ -611,6 +599,9 @@ pub fn bound(
                 sun_hours_full: sun_full,
                 sun_hours_lod: sun_lod,
                 sun_hours_error: sun_err,
+                irradiance_full_kwh_m2: irr_full,
+                irradiance_lod_kwh_m2: irr_lod,
+                irradiance_error: irr_err,
                 holds,
             });
         }
@@ -626,37 +617,49 @@ pub fn bound(
         }
         let mut promoted_any = false;
         let mut promoted: Vec<bool> = vec![false; n];
-        for (k, range, excess, lod_less) in over {
+        for (k, range, excess, lod_less, weights) in over {
+            let start = range.start;
             let (f, l) = (&full_tags[k][range.clone()], &lod_tags[k][range]);
-            // culprits: rays that move the metric in the direction of the error
-            let mut culprit: HashMap<u32, usize> = HashMap::new();
-            let mut other: HashMap<u32, usize> = HashMap::new();
-            for (a, b) in f.iter().zip(l) {
+            // culprits: rays that move the metric in the direction of the error, with
+            // their weight (1 per ray but for irradiance) and their rays
+            let mut culprit: HashMap<u32, (f64, usize)> = HashMap::new();
+            let mut other: HashMap<u32, (f64, usize)> = HashMap::new();
+            let add = |m: &mut HashMap<u32, (f64, usize)>, t: u32, w: f64| {
+                let e = m.entry(t).or_insert((0.0, 0));
+                e.0 += w.abs();
+                e.1 += 1;
+            };
+            for (j, (a, b)) in f.iter().zip(l).enumerate() {
+                let w = weights.map_or(1.0, |w| w.get(start + j).copied().unwrap_or(0.0));
+                if w == 0.0 {
+                    continue;
+                }
+                // a free ray adds `w`: a ray free in the full model only takes it away
                 match (a, b) {
-                    (None, Some(t)) if lod_less => *culprit.entry(*t).or_insert(0) += 1,
-                    (Some(t), None) if !lod_less => *culprit.entry(*t).or_insert(0) += 1,
+                    (None, Some(t)) if lod_less == (w > 0.0) => add(&mut culprit, *t, w),
+                    (Some(t), None) if lod_less == (w < 0.0) => add(&mut culprit, *t, w),
                     (x, y) if x != y => {
                         for t in [x, y].into_iter().flatten() {
-                            *other.entry(*t).or_insert(0) += 1;
+                            add(&mut other, *t, w);
                         }
                     }
                     _ => {}
                 }
             }
             let promotable = |t: &u32| levels.get(*t as usize).is_some_and(|&l| l < 2);
-            let mut ranked: Vec<(u32, usize)> =
+            let mut ranked: Vec<(u32, (f64, usize))> =
                 culprit.into_iter().filter(|(t, _)| promotable(t)).collect();
             if ranked.is_empty() {
                 ranked = other.into_iter().filter(|(t, _)| promotable(t)).collect();
             }
-            ranked.sort_unstable_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+            ranked.sort_unstable_by(|a, b| b.1 .0.total_cmp(&a.1 .0).then(a.0.cmp(&b.0)));
             let mut covered = 0.0;
-            for (t, rays) in ranked {
+            for (t, (weight, rays)) in ranked {
                 if covered >= excess && promoted_any {
                     break;
                 }
                 let i = t as usize;
-                covered += rays as f64;
+                covered += weight;
                 if promoted[i] {
                     continue;
                 }
@@ -881,7 +884,7 @@ mod tests {
         let bundles = SkyBundles::new(3000, 7).unwrap();
         let probes: Vec<Probe> = ps
             .iter()
-            .map(|p| probe(p, &bundles, Some(&table)))
+            .map(|p| probe(p, &bundles, Some(&table), None))
             .collect();
         let (hits, reference) = lazy_hits(&model, &probes);
         let whole = full_scene(&model);

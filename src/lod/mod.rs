@@ -19,6 +19,7 @@
 //! ```
 
 pub mod bound;
+mod bound_report;
 pub mod level;
 pub mod mixed;
 pub mod rough;

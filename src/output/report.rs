@@ -74,6 +74,11 @@ pub struct Guarantee {
     /// Largest relative error of yearly sun hours at any POI (null: not bounded).
     #[schemars(range(min = 0))]
     pub sun_hours_error: Option<f64>,
+    /// Largest relative error of the annual global irradiation at any POI, for the weather
+    /// year of `--weather` (absent without it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
+    pub irradiance_error: Option<f64>,
     /// What is not bounded and why (e.g. no site for the sun, or the bound turned off).
     pub not_bounded: Vec<String>,
 }
@@ -88,6 +93,9 @@ impl Guarantee {
         }
         if let Some(e) = self.sun_hours_error {
             held.push(format!("sun hours within {}", pct(e)));
+        }
+        if let Some(e) = self.irradiance_error {
+            held.push(format!("annual irradiation within {}", pct(e)));
         }
         let mut line = if held.is_empty() {
             "guaranteed: nothing".to_string()

@@ -5,7 +5,7 @@ use super::{Framed, PipelineError};
 use crate::lod::scene::full_scene;
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::pipeline::evaluation::{evaluate_with, EvalError, EvalOptions, Evaluation};
+use crate::pipeline::evaluation::{evaluate_irradiance, EvalError, EvalOptions, Evaluation};
 use crate::poi::checks::{self, PoiFlag};
 use crate::runtime::progress::{check, Cancelled, Progress, Stage};
 use crate::solar::{
@@ -168,9 +168,11 @@ pub struct EvaluateOptions {
     pub eval: EvalOptions,
     /// The sun positions of the sun hours; `None` skips sun hours.
     pub sun: Option<SunTable>,
+    /// A weather year for each model's annual irradiation; `None` skips it.
+    pub irradiance: Option<crate::solar::irradiance::IrradianceSetting>,
 }
 
-/// Full vs LoD vs all-boxes model at every POI of `framed` ([`evaluation::evaluate_with`](super::evaluation::evaluate_with)): rough
+/// Full vs LoD vs all-boxes model at every POI of `framed` ([`evaluation::evaluate_irradiance`](super::evaluation::evaluate_irradiance)): rough
 /// model ([`Stage::Rough`]), scenes ([`Stage::Bvh`]), then each POI selected and traced
 /// ([`Stage::Trace`], cancellable before each POI).
 ///
@@ -181,11 +183,12 @@ pub fn evaluate(
     opts: &EvaluateOptions,
     progress: &dyn Progress,
 ) -> Result<Evaluation, PipelineError> {
-    evaluate_with(
+    evaluate_irradiance(
         &framed.model,
         &framed.local_pois,
         &opts.eval,
         opts.sun.as_ref(),
+        opts.irradiance.as_ref(),
         progress,
     )
     .map_err(|e| match e {
@@ -279,6 +282,7 @@ mod tests {
                 ..Default::default()
             },
             sun: Some(SunTable::year(2025, 120, &site).unwrap()),
+            irradiance: None,
         };
         let tally = Tally::default();
         let e = evaluate(&framed, &opts, &tally).unwrap();

@@ -4,7 +4,9 @@
 //! the paper's baseline), with relative errors against the full model and polygon counts.
 //!
 //! The three models are traced with the *same* ray bundles and sun table, so the errors
-//! measure the models, not sampling noise.
+//! measure the models, not sampling noise. With a weather year ([`evaluate_irradiance`]),
+//! each model's annual global irradiation ([`crate::solar::poi_irradiance`], the same SVF
+//! bundle and the weather's hours) and its error against the full model are added.
 //!
 //! # Example
 //! ```
@@ -33,8 +35,9 @@ use crate::model::CityModel;
 use crate::model::Poi;
 use crate::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::runtime::progress::{check, stage, Cancelled, Progress, Silent, Stage};
+use crate::solar::irradiance::IrradianceSetting;
 use crate::solar::sky::SkyError;
-use crate::solar::{poi_sky_view, poi_sun_hours, SkyBundles, SunTable};
+use crate::solar::{poi_irradiance, poi_sky_view, poi_sun_hours, SkyBundles, SunTable};
 use crate::trace::Scene;
 use serde::Serialize;
 use std::time::Instant;
@@ -90,6 +93,11 @@ pub struct ModelFigures {
     pub bvh_ms: f64,
     /// Milliseconds of the SVF and sun-hours tracing.
     pub trace_ms: f64,
+    /// Annual global irradiation on the POI's plane (kWh/m²), with a weather year
+    /// (`evaluate --weather`); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
+    pub global_kwh_m2: Option<f64>,
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -112,6 +120,15 @@ impl ModelFigures {
     /// Relative sun-hours error against `full` (`None` without sun hours).
     pub fn sun_rel_error(&self, full: &ModelFigures) -> Option<f64> {
         Some(rel(self.sun_hours?, full.sun_hours?))
+    }
+    /// Relative annual-irradiation error against `full` (`None` without a weather year).
+    pub fn irradiance_rel_error(&self, full: &ModelFigures) -> Option<f64> {
+        Some(rel(self.global_kwh_m2?, full.global_kwh_m2?))
+    }
+    /// Signed annual-irradiation error against `full`, kWh/m² (`None` without a weather
+    /// year).
+    pub fn irradiance_abs_error(&self, full: &ModelFigures) -> Option<f64> {
+        Some(self.global_kwh_m2? - full.global_kwh_m2?)
     }
 }
 
@@ -141,6 +158,19 @@ pub struct PoiEval {
     pub lod_sun_error: Option<f64>,
     /// Relative sun-hours error of the all-boxes model.
     pub boxes_sun_error: Option<f64>,
+    /// Relative annual-irradiation error of the LoD model (with a weather year; infinite,
+    /// written `null`, when the full model's is 0 and this one's is not).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lod_irradiance_error: Option<f64>,
+    /// LoD minus full annual irradiation, kWh/m² (with a weather year).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lod_irradiance_abs_error_kwh_m2: Option<f64>,
+    /// Relative annual-irradiation error of the all-boxes model (with a weather year).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub boxes_irradiance_error: Option<f64>,
+    /// All-boxes minus full annual irradiation, kWh/m² (with a weather year).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub boxes_irradiance_abs_error_kwh_m2: Option<f64>,
     /// What makes this POI's figures suspect (inside a building, no sky), from the full model.
     pub flags: Vec<PoiFlag>,
 }
@@ -167,11 +197,14 @@ fn figures(
     poi: &Poi,
     bundles: &SkyBundles,
     table: Option<&SunTable>,
+    irr: Option<&IrradianceSetting>,
     bvh_ms: f64,
 ) -> ModelFigures {
     let t = Instant::now();
     let v = poi_sky_view(scene, poi, bundles);
     let sun = table.map(|tb| poi_sun_hours(scene, poi, tb).hours);
+    let global =
+        irr.map(|w| poi_irradiance(scene, poi, bundles, &w.table, &w.opts, None).global_kwh_m2);
     ModelFigures {
         polygons,
         svf: v.svf,
@@ -179,6 +212,7 @@ fn figures(
         sun_hours: sun,
         bvh_ms,
         trace_ms: ms(t),
+        global_kwh_m2: global,
     }
 }
 
@@ -208,6 +242,23 @@ pub fn evaluate_with(
     pois: &[Poi],
     opts: &EvalOptions,
     table: Option<&SunTable>,
+    progress: &dyn Progress,
+) -> Result<Evaluation, EvalError> {
+    evaluate_irradiance(model, pois, opts, table, None, progress)
+}
+
+/// [`evaluate_with`], and with `irradiance` each model's annual global irradiation
+/// ([`ModelFigures::global_kwh_m2`]) and the LoD and all-boxes models' errors against the
+/// full one (traced with the SVF bundle and the weather's hours).
+///
+/// # Errors
+/// As [`evaluate_with`].
+pub fn evaluate_irradiance(
+    model: &CityModel,
+    pois: &[Poi],
+    opts: &EvalOptions,
+    table: Option<&SunTable>,
+    irradiance: Option<&IrradianceSetting>,
     progress: &dyn Progress,
 ) -> Result<Evaluation, EvalError> {
     let bundles = SkyBundles::new(opts.svf_rays, opts.svf_seed)?;
@@ -260,9 +311,10 @@ pub fn evaluate_with(
             let lod_scene = mixed_scene(model, &rough, &sel.levels);
             let lod_bvh = ms(t);
             let lod_polys = crate::lod::level::model_polygon_count(model, &rough, &sel.levels);
-            let f = figures(&full, full_polys, poi, &bundles, table, full_bvh);
-            let l = figures(&lod_scene, lod_polys, poi, &bundles, table, lod_bvh);
-            let b = figures(&boxes, boxes_polys, poi, &bundles, table, boxes_bvh);
+            let irr = irradiance;
+            let f = figures(&full, full_polys, poi, &bundles, table, irr, full_bvh);
+            let l = figures(&lod_scene, lod_polys, poi, &bundles, table, irr, lod_bvh);
+            let b = figures(&boxes, boxes_polys, poi, &bundles, table, irr, boxes_bvh);
             let sky_rays = (f.sky_exposure == 0.0).then_some(0);
             let e = PoiEval {
                 id: poi.id.clone(),
@@ -271,6 +323,10 @@ pub fn evaluate_with(
                 boxes_svf_error: b.svf_rel_error(&f),
                 lod_sun_error: l.sun_rel_error(&f),
                 boxes_sun_error: b.sun_rel_error(&f),
+                lod_irradiance_error: l.irradiance_rel_error(&f),
+                lod_irradiance_abs_error_kwh_m2: l.irradiance_abs_error(&f),
+                boxes_irradiance_error: b.irradiance_rel_error(&f),
+                boxes_irradiance_abs_error_kwh_m2: b.irradiance_abs_error(&f),
                 full: f,
                 lod: l,
                 boxes: b,

@@ -1,7 +1,7 @@
 //! Step 3: rough model, selection scene, selection and error bound.
 
 use super::{Framed, PipelineError};
-use crate::lod::bound::{bound, BoundOptions, BoundReport};
+use crate::lod::bound::{bound_with, BoundOptions, BoundReport};
 use crate::lod::rough::RoughGeometry;
 use crate::lod::{lod_with, LodOptions, LodResult};
 use crate::model::CityModel;
@@ -17,6 +17,8 @@ pub struct BoundSpec {
     pub options: BoundOptions,
     /// The sun positions of the sun-hours bound.
     pub sun: Option<SunTable>,
+    /// The weather year of the irradiance bound.
+    pub irradiance: Option<crate::solar::irradiance::IrradianceSetting>,
 }
 
 /// Options of [`levels`].
@@ -96,13 +98,14 @@ pub fn levels_of(
         check(progress, Stage::Trace)?;
         let b =
             crate::runtime::progress::stage(progress, Stage::Trace, pois.len() as u64, 0, || {
-                bound(
+                bound_with(
                     model,
                     &lod.rough,
                     &lod.selection.levels,
                     pois,
                     &spec.options,
                     spec.sun.as_ref(),
+                    spec.irradiance.as_ref(),
                 )
             })?;
         bound_report = Some(BoundReport::new(&b, &spec.options));

@@ -45,6 +45,7 @@
 //! ```
 
 mod analyse;
+pub mod attributes;
 mod error;
 pub mod evaluation;
 mod fisheye;

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 /// Low facade POIs: per building (first `n`), its largest wall polygon, 1.5 m above the
 /// polygon's foot at its centroid's plan position, 0.2 m out along the normal.
-fn low_facade_pois(model: &CityModel, n: usize) -> Vec<Poi> {
+pub(crate) fn low_facade_pois(model: &CityModel, n: usize) -> Vec<Poi> {
     let mut out = Vec::new();
     let mut seen = std::collections::HashSet::new();
     for a in &model.assets {

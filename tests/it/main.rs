@@ -40,6 +40,9 @@ mod evaluate;
 // `horizon`: profiles against closed forms, and pvlib's masked sun hours against `sun-hours`.
 mod horizon;
 mod irradiance;
+// `evaluate --weather`, `lod --max-irradiance-error`, `irradiance --output-attributes` on the
+// Ingolstadt street.
+mod irradiance_lod;
 // One definition of a level's output: report, `evaluate`, writer and reader count alike.
 mod levels;
 // The house rules: no import cycle between folders of src/, what each stage may import.

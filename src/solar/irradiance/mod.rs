@@ -92,6 +92,16 @@ impl Default for IrradianceOptions {
     }
 }
 
+/// A weather year ready to trace: its [`IrradianceTable`] and the [`IrradianceOptions`] to
+/// use with it (what `evaluate --weather` and the irradiance bound of `lod` take).
+#[derive(Debug, Clone, PartialEq)]
+pub struct IrradianceSetting {
+    /// The weather's hours with the sun placed.
+    pub table: IrradianceTable,
+    /// Sky model and albedo.
+    pub opts: IrradianceOptions,
+}
+
 /// One hour of a [`IrradianceTable`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SkyHour {
@@ -248,6 +258,21 @@ pub fn irradiance_hourly(
     view: PlaneView,
     blocked: impl Fn(DVec3) -> bool,
     opts: &IrradianceOptions,
+    hourly: Option<&mut Vec<f64>>,
+) -> Irradiance {
+    let hours = &table.hours;
+    let blocked_hour = |i: usize| hours.get(i).is_none_or(|h| blocked(h.sun));
+    irradiance_of_hours(table, normal, view, blocked_hour, opts, hourly)
+}
+
+/// [`irradiance_hourly`] with `blocked_hour(i)` telling whether the sun's ray of hour `i`
+/// of `table` is blocked (asked only for the hours the sun is up in front of the plane).
+fn irradiance_of_hours(
+    table: &IrradianceTable,
+    normal: Option<DVec3>,
+    view: PlaneView,
+    blocked_hour: impl Fn(usize) -> bool,
+    opts: &IrradianceOptions,
     mut hourly: Option<&mut Vec<f64>>,
 ) -> Irradiance {
     let n = normal.and_then(|n| n.try_normalize()).unwrap_or(DVec3::Z);
@@ -255,10 +280,10 @@ pub fn irradiance_hourly(
     let cos85 = 85f64.to_radians().cos();
     let (mut direct, mut diffuse, mut reflected) = (0.0, 0.0, 0.0);
     let (mut possible, mut seen) = (0u32, 0u32);
-    for h in &table.hours {
+    for (i, h) in table.hours.iter().enumerate() {
         let cos_inc = n.dot(h.sun);
         let facing = h.sun_up() && cos_inc > 0.0;
-        let free = facing && !blocked(h.sun);
+        let free = facing && !blocked_hour(i);
         possible += u32::from(facing);
         seen += u32::from(free);
         let dir = if free { h.dni * cos_inc } else { 0.0 };
@@ -302,6 +327,120 @@ pub fn irradiance(
     opts: &IrradianceOptions,
 ) -> Irradiance {
     irradiance_hourly(table, normal, view, blocked, opts, None)
+}
+
+/// The rays that decide a plane's irradiation, for computing it from ray answers traced
+/// elsewhere (the irradiance bound of [`crate::lod::bound`]): the plane's sky rays (the
+/// directions of [`plane_view`], in its order, those above the horizon) and the sun's rays
+/// of the hours the sun is up in front of the plane ([`PlaneRays::sun_dirs`]).
+/// [`PlaneRays::irradiance`] with the answers of the rays traced in a scene equals
+/// [`irradiance`] on that scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlaneRays {
+    normal: Option<DVec3>,
+    /// Rays of the bundle (the SVF's denominator).
+    bundle_len: usize,
+    /// Per sky ray: whether it is in Perez's horizon band.
+    band: Vec<bool>,
+    /// Hours (indices into the table) the sun is up in front of the plane, ascending.
+    hours: Vec<usize>,
+}
+
+impl PlaneRays {
+    /// The rays of a plane with `normal` (horizontal when `None`) whose sky rays are
+    /// `sky_dirs` (world frame, above the horizon, from a bundle of `bundle_len` rays).
+    pub fn new(
+        table: &IrradianceTable,
+        normal: Option<DVec3>,
+        sky_dirs: &[DVec3],
+        bundle_len: usize,
+    ) -> Self {
+        let n = normal.and_then(|n| n.try_normalize()).unwrap_or(DVec3::Z);
+        let band = HORIZON_BAND_DEG.to_radians().sin();
+        let hours = (table.hours.iter().enumerate())
+            .filter(|(_, h)| h.sun_up() && n.dot(h.sun) > 0.0)
+            .map(|(i, _)| i)
+            .collect();
+        PlaneRays {
+            normal,
+            bundle_len,
+            band: sky_dirs.iter().map(|d| d.z <= band).collect(),
+            hours,
+        }
+    }
+
+    /// Directions to the sun of the hours it shines on the plane (when nothing blocks it).
+    pub fn sun_dirs(&self, table: &IrradianceTable) -> Vec<DVec3> {
+        self.hours.iter().map(|&i| table.hours[i].sun).collect()
+    }
+
+    /// The irradiation with `sky_free(j)` telling whether sky ray `j` reaches the sky and
+    /// `sun_free(k)` whether the `k`-th ray of [`PlaneRays::sun_dirs`] does.
+    pub fn irradiance(
+        &self,
+        table: &IrradianceTable,
+        opts: &IrradianceOptions,
+        sky_free: impl Fn(usize) -> bool,
+        sun_free: impl Fn(usize) -> bool,
+    ) -> Irradiance {
+        let (mut sky, mut in_band, mut band_sky) = (0usize, 0usize, 0usize);
+        for (j, &b) in self.band.iter().enumerate() {
+            let free = usize::from(sky_free(j));
+            sky += free;
+            in_band += usize::from(b);
+            band_sky += free * usize::from(b);
+        }
+        let view = PlaneView {
+            svf: sky as f64 / self.bundle_len.max(1) as f64,
+            horizon: if in_band == 0 {
+                1.0
+            } else {
+                band_sky as f64 / in_band as f64
+            },
+        };
+        let blocked_hour = |i: usize| self.hours.binary_search(&i).map_or(true, |k| !sun_free(k));
+        irradiance_of_hours(table, self.normal, view, blocked_hour, opts, None)
+    }
+
+    /// What each ray adds to the annual irradiation (Wh/m²) when it is free rather than
+    /// blocked, to first order: per sky ray (in the order of `sky_dirs`), then per sun ray.
+    /// Sky rays bring the isotropic diffuse part less what they no longer reflect (and, in
+    /// the horizon band, Perez's band); sun rays the beam and the circumsolar part. (The
+    /// clamp of a negative Perez hour at 0 is left out: the weights rank culprits.)
+    pub fn weights(&self, table: &IrradianceTable, opts: &IrradianceOptions) -> Vec<f64> {
+        let n = self
+            .normal
+            .and_then(|n| n.try_normalize())
+            .unwrap_or(DVec3::Z);
+        let sin_tilt = (1.0 - n.z * n.z).max(0.0).sqrt();
+        let cos85 = 85f64.to_radians().cos();
+        let perez = opts.sky == SkyModel::Perez;
+        let (mut iso, mut band) = (0.0, 0.0);
+        for h in &table.hours {
+            let f1 = if perez { h.f1 } else { 0.0 };
+            iso += h.dhi * (1.0 - f1) - opts.albedo * h.ghi;
+            if perez {
+                band += h.dhi * h.f2 * sin_tilt;
+            }
+        }
+        let in_band = self.band.iter().filter(|&&b| b).count().max(1) as f64;
+        let per_ray = iso / self.bundle_len.max(1) as f64;
+        let sky = self
+            .band
+            .iter()
+            .map(|&b| per_ray + if b { band / in_band } else { 0.0 });
+        let sun = self.hours.iter().map(|&i| {
+            let h = &table.hours[i];
+            let cos_inc = n.dot(h.sun);
+            let circ = if perez {
+                h.dhi * h.f1 * cos_inc / h.zenith_deg.to_radians().cos().max(cos85)
+            } else {
+                0.0
+            };
+            h.dni * cos_inc + circ
+        });
+        sky.chain(sun).collect()
+    }
 }
 
 #[cfg(test)]
@@ -378,6 +517,40 @@ mod tests {
         let (ghi, _, _) = w.totals_kwh_m2();
         assert!((r.reflected_kwh_m2 - 0.2 * ghi).abs() < 1e-9);
         assert!(r.sun_hours_possible > 1000);
+    }
+
+    #[test]
+    fn plane_rays_give_what_tracing_gives() {
+        // A wall facing south-east with a blocker over a third of its sky rays and every
+        // third hour's sun: the same figures from the rays' answers as from `irradiance`.
+        let (w, site) = year();
+        let b = SkyBundles::new(1500, 5).unwrap();
+        let n = DVec3::new(0.6, -0.8, 0.0);
+        let blocked = |d: DVec3| d.x > 0.5 * d.z;
+        for sky in [SkyModel::Perez, SkyModel::Isotropic] {
+            let t = IrradianceTable::new(&w, &site, sky).unwrap();
+            let o = IrradianceOptions { sky, albedo: 0.3 };
+            let want = irradiance(&t, Some(n), plane_view(Some(n), &b, blocked), blocked, &o);
+            let frame = Frame::from_normal(n);
+            let dirs: Vec<DVec3> = (b.projected_dirs().iter())
+                .map(|&l| frame.to_world(l))
+                .filter(|d| d.z > 0.0)
+                .collect();
+            let rays = PlaneRays::new(&t, Some(n), &dirs, b.len());
+            let sun = rays.sun_dirs(&t);
+            assert_eq!(sun.len() as u32, want.sun_hours_possible);
+            let got = rays.irradiance(&t, &o, |j| !blocked(dirs[j]), |k| !blocked(sun[k]));
+            assert_eq!(got, want, "{sky:?}");
+            // The weights: all free minus all blocked, to first order.
+            let wsum: f64 = rays.weights(&t, &o).iter().sum();
+            let free = rays.irradiance(&t, &o, |_| true, |_| true);
+            let none = rays.irradiance(&t, &o, |_| false, |_| false);
+            let span = (free.global_kwh_m2 - none.global_kwh_m2) * 1000.0;
+            assert!(
+                (wsum / span - 1.0).abs() < 0.05,
+                "{sky:?}: {wsum} vs {span}"
+            );
+        }
     }
 
     #[test]

@@ -1,10 +1,13 @@
 //! `--max-svf-error` / `--max-sun-hours-error` / `--no-bound` of `skylod lod`: the
 //! error-bounded LoD ([`skylod::lod::bound`]) run between the selection and the writing. On by
-//! default: SVF within 1 % at every POI, and sun hours within 1 % whenever the site is known.
+//! default: SVF within 1 % at every POI, and sun hours within 1 % whenever the site is known;
+//! with `--weather`, the annual irradiation within 1 % (`--max-irradiance-error`).
 
 use crate::args::non_negative;
 use crate::args::site::{model_site, SiteArgs};
 use crate::args::sun::SunArgs;
+use crate::args::weather::WeatherArgs;
+use anyhow::bail;
 use skylod::lod::bound::BoundOptions;
 use skylod::model::CityModel;
 use skylod::output::report::Guarantee;
@@ -25,8 +28,12 @@ pub struct BoundArgs {
     /// site is known: --lat/--lon or the model's CRS; given without a site: an error).
     #[arg(long, value_name = "E", value_parser = non_negative, allow_hyphen_values = true)]
     max_sun_hours_error: Option<f64>,
+    /// Largest relative error of the annual global irradiation on each POI's plane allowed
+    /// at any POI (default 0.01 when --weather is given; needs --weather).
+    #[arg(long, value_name = "E", value_parser = non_negative, allow_hyphen_values = true)]
+    max_irradiance_error: Option<f64>,
     /// No error bound: the selection alone decides the levels (faster; nothing guaranteed).
-    #[arg(long, conflicts_with_all = ["max_svf_error", "max_sun_hours_error"])]
+    #[arg(long, conflicts_with_all = ["max_svf_error", "max_sun_hours_error", "max_irradiance_error", "weather"])]
     no_bound: bool,
     /// Rays of the SVF bundle of the bound check.
     #[arg(long, default_value_t = 20_000, value_name = "N")]
@@ -36,17 +43,30 @@ pub struct BoundArgs {
     /// `--year`, `--step` of the sun-hours bound.
     #[command(flatten)]
     sun: SunArgs,
+    /// `--weather`, `--sky`, `--albedo` of the irradiance bound.
+    #[command(flatten)]
+    weather: WeatherArgs,
 }
 
 impl BoundArgs {
     /// Whether a bound was asked for explicitly (`--max-svf-error`, `--max-sun-hours-error`).
     pub fn explicit(&self) -> bool {
-        self.max_svf_error.is_some() || self.max_sun_hours_error.is_some()
+        self.max_svf_error.is_some()
+            || self.max_sun_hours_error.is_some()
+            || self.max_irradiance_error.is_some()
+            || self.weather.weather.is_some()
     }
 
     /// Usage checks before any input is read.
     pub fn check(&self) -> anyhow::Result<()> {
-        self.site.check_given("lod")
+        self.site.check_given("lod")?;
+        self.weather.check()?;
+        if self.max_irradiance_error.is_some() && self.weather.weather.is_none() {
+            bail!(
+                "lod --max-irradiance-error needs --weather FILE: the hourly weather year                  (EPW or TMY3) whose annual irradiation is bounded"
+            );
+        }
+        Ok(())
     }
 
     /// The bound to run after the selection ([`skylod::pipeline::levels`]) and what it
@@ -93,13 +113,24 @@ impl BoundArgs {
             None => None,
         };
         guarantee.sun_hours_error = sun_error;
+        let year = self.weather.year(&self.site, source, "lod")?;
+        let irradiance_error =
+            (year.as_ref()).map(|_| self.max_irradiance_error.unwrap_or(DEFAULT_MAX_ERROR));
+        guarantee.irradiance_error = irradiance_error;
         let options = BoundOptions {
             max_svf_error: Some(svf),
             max_sun_error: sun_error,
+            max_irradiance_error: irradiance_error,
             svf_rays: self.bound_rays,
             svf_seed: seed,
             ..Default::default()
         };
-        Ok((Some(BoundSpec { options, sun }), guarantee))
+        let irradiance = year.map(|y| y.setting);
+        let spec = BoundSpec {
+            options,
+            sun,
+            irradiance,
+        };
+        Ok((Some(spec), guarantee))
     }
 }

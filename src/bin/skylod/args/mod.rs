@@ -2,6 +2,7 @@
 //! flattened into the commands that take it (never copied, so the commands cannot drift
 //! apart).
 
+pub mod attributes;
 pub mod bound;
 pub mod citygml_io;
 pub mod crs;
@@ -17,6 +18,7 @@ pub mod site;
 pub mod stream;
 pub mod sun;
 pub mod tracing;
+pub mod weather;
 
 /// A clap value parser: a finite number ≥ 0.
 pub fn non_negative(s: &str) -> Result<f64, String> {

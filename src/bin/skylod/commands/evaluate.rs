@@ -7,7 +7,7 @@ use crate::args::sun::SunArgs;
 use crate::commands::{ms, out_err};
 use crate::Outcome;
 use skylod::lod::LodOptions;
-use skylod::output::evaluate::{EvaluateOutput, EvaluateTimings};
+use skylod::output::evaluate::{EvaluateOutput, EvaluateTimings, EvaluateWeather};
 use skylod::output::sun_hours::SunSetting;
 use skylod::pipeline::evaluation::EvalOptions;
 use skylod::pipeline::EvaluateOptions;
@@ -36,10 +36,13 @@ pub struct Args {
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    weather: crate::args::weather::WeatherArgs,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.site.check("evaluate")?;
+    args.weather.check()?;
     let rough_opts = args.rough.options()?;
     let t_all = Instant::now();
     let Some(s) = args.tracing.study("evaluate", |_| Ok(()))? else {
@@ -67,6 +70,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             ..Default::default()
         },
         sun: table,
+        irradiance: None,
+    };
+    let year = (args.weather).year(&args.site, s.study.source(), "evaluate --weather")?;
+    let opts = EvaluateOptions {
+        irradiance: year.as_ref().map(|y| y.setting.clone()),
+        ..opts
     };
     let e = s.study.evaluate(&opts, &crate::log::reporter())?;
     let flags: Vec<_> = e.pois.iter().map(|p| p.flags.clone()).collect();
@@ -87,6 +96,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 total: ms(t_all),
             },
         );
+        let doc = match &year {
+            Some(y) => doc.with_weather(EvaluateWeather {
+                weather: y.summary.clone(),
+                sky: y.sky(),
+                albedo: y.setting.opts.albedo,
+                site: y.site,
+            }),
+            None => doc,
+        };
         out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
     } else {
         out_err(skylod::output::evaluate::write_table(
@@ -104,6 +122,28 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             e.selection_bvh_ms,
             ms(t_all)
         );
+        if let Some(y) = &year {
+            crate::log::summary!(
+                "irradiance: {} hours of {} (GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {:?} sky, albedo {}; largest LoD error {}",
+                y.setting.table.len(),
+                y.summary.station,
+                y.summary.ghi_kwh_m2,
+                y.site[0],
+                y.site[1],
+                y.setting.opts.sky,
+                y.setting.opts.albedo,
+                largest_irradiance_error(&e.pois)
+            );
+        }
     }
     Ok(s.outcome())
+}
+
+/// The largest relative irradiance error of the LoD model over the POIs, as a percentage.
+fn largest_irradiance_error(pois: &[skylod::pipeline::evaluation::PoiEval]) -> String {
+    let e = pois
+        .iter()
+        .filter_map(|p| p.lod_irradiance_error)
+        .fold(0.0, f64::max);
+    format!("{:.3}%", 100.0 * e)
 }

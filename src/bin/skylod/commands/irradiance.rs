@@ -1,6 +1,7 @@
 //! `skylod irradiance`.
 
-use crate::args::site::{model_site, SiteArgs};
+use crate::args::site::SiteArgs;
+use crate::args::weather::weather_site;
 use crate::commands::{emit, ms, polygons};
 use crate::Outcome;
 use anyhow::{bail, Context};
@@ -8,14 +9,11 @@ use skylod::output::irradiance::{
     write_csv, write_hourly_csv, IrradianceOutput, IrradiancePoi, IrradianceTimings, WeatherSummary,
 };
 use skylod::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
-use skylod::solar::weather::{read_weather, Weather};
+use skylod::solar::weather::read_weather;
 use skylod::solar::{Site, SkyBundles};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// Farthest a weather station may be from the model's site (km) unless --lat/--lon are given.
-const MAX_STATION_KM: f64 = 50.0;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -47,9 +45,11 @@ pub struct Args {
     /// Also write every hour's global irradiation (Wh/m²) per POI to this CSV file.
     #[arg(long, value_name = "FILE")]
     hourly: Option<PathBuf>,
-    /// Overwrite the --hourly file if it exists.
+    /// Overwrite the --hourly (or -o) file if it exists.
     #[arg(long)]
     overwrite: bool,
+    #[command(flatten)]
+    attributes: crate::args::attributes::AttributeArgs,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
@@ -60,6 +60,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if let Some(h) = &args.hourly {
         skylod::io::check_target(h, [], args.overwrite)?;
     }
+    let region = args.tracing.region.active();
+    args.attributes.check(region, args.overwrite)?;
     let t = Instant::now();
     let weather = read_weather(&args.weather)?;
     let weather_ms = ms(t);
@@ -67,7 +69,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let Some(s) = args.tracing.study("irradiance", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);
     };
-    let (lat, lon) = site(&args.site, s.study.source(), &weather)?;
+    let (lat, lon) = weather_site(&args.site, s.study.source(), &weather, "irradiance")?;
     let (sky, albedo) = (args.sky, args.albedo);
     let opts = IrradianceOptions { sky, albedo };
     let t = Instant::now();
@@ -83,6 +85,17 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     s.warn_flags(&traced.flags);
     let pois = s.study.pois();
     let rows = traced.rows(pois, |p, r, f| IrradiancePoi::new(p, &r.annual, f));
+    let values: Vec<f64> = traced
+        .results
+        .iter()
+        .map(|r| r.annual.global_kwh_m2)
+        .collect();
+    if let Some(n) = args
+        .attributes
+        .write(&s.study.framed(), &values, args.overwrite)?
+    {
+        crate::log::summary!("irradiance: {n} surface(s) given skylodAnnualIrradiation");
+    }
     if let Some(path) = &args.hourly {
         let ids: Vec<&str> = pois.iter().map(|p| p.id.as_str()).collect();
         let series: Vec<&[f64]> = traced.results.iter().map(|r| r.hourly.as_slice()).collect();
@@ -117,45 +130,4 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         emit(&doc, args.json, &s.text())?;
     }
     Ok(s.outcome())
-}
-
-/// The sun's site: --lat/--lon; else the model's centre (refused when the weather station
-/// is farther than [`MAX_STATION_KM`]); else the weather station's.
-fn site(
-    args: &SiteArgs,
-    model: &skylod::model::CityModel,
-    weather: &Weather,
-) -> anyhow::Result<(f64, f64)> {
-    if let Some(s) = args.given() {
-        return Ok(s);
-    }
-    let w = &weather.site;
-    match model_site(model) {
-        Ok((a, o, srs)) => {
-            let km = w.distance_km(a, o);
-            if km > MAX_STATION_KM {
-                bail!(
-                    "irradiance: the model (lat {a:.4}, lon {o:.4} in {srs}) is {km:.0} km from \
-                     the weather station {:?} (lat {}, lon {}); give --lat/--lon to use this \
-                     weather anyway",
-                    w.name,
-                    w.latitude,
-                    w.longitude
-                );
-            }
-            crate::log::summary!(
-                "irradiance: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}"
-            );
-            Ok((a, o))
-        }
-        Err(why) => {
-            crate::log::summary!(
-                "irradiance: site of the weather station {:?} (lat {}, lon {}): {why}",
-                w.name,
-                w.latitude,
-                w.longitude
-            );
-            Ok((w.latitude, w.longitude))
-        }
-    }
 }

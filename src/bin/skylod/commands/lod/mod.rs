@@ -137,6 +137,10 @@ fn bound_holds(lv: &Levels, guarantee: &Guarantee) -> bool {
         100.0 * b.pois.iter().map(|p| p.svf_error).fold(0.0, f64::max),
         lv.bound_s * 1e3
     );
+    let irr = b.pois.iter().filter_map(|p| p.irradiance_error);
+    if let Some(e) = irr.reduce(f64::max) {
+        summary!("error bound: largest irradiation error {:.3}%", 100.0 * e);
+    }
     if !b.met {
         error!(
             "the error bound cannot be met at these POIs (nothing written):\n{}",

@@ -24,7 +24,8 @@ pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome
     }
     if args.bound.explicit() {
         bail!(
-            "the error bound (--max-svf-error, --max-sun-hours-error) needs every POI: give it \
+            "the error bound (--max-svf-error, --max-sun-hours-error, --max-irradiance-error, \
+             --weather) needs every POI: give it \
              to the --reduce step, not to shard {s}"
         );
     }

@@ -1,0 +1,96 @@
+//! `--output-attributes -o OUT` of `irradiance`: with `--facade` or `--region`, the model
+//! written again with each thematic surface that holds POIs given the mean annual irradiation
+//! of its POIs ([`skylod::pipeline::attributes`]): CityGML by span edits (a generic attribute
+//! `skylodAnnualIrradiation`, everything else byte for byte), or CityJSON (an attribute of
+//! the surface's semantic object).
+
+use anyhow::{bail, Context};
+use serde_json::{Map, Value};
+use skylod::citygml::write::WriteOptions;
+use skylod::export::{cityjson::write_cityjson_with, Content, Format};
+use skylod::pipeline::attributes::{
+    holding_surfaces, surface_means, write_attributes, IRRADIATION_ATTRIBUTE,
+};
+use skylod::pipeline::Framed;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct AttributeArgs {
+    /// With --facade or --region: write the model (one input) to -o with the mean annual
+    /// irradiation (kWh/m²) of the POIs of each wall, roof or other thematic surface that
+    /// holds POIs, as its attribute skylodAnnualIrradiation (CityGML: a generic attribute
+    /// added in place; CityJSON: on the surface's semantic object).
+    #[arg(long, requires = "output")]
+    pub output_attributes: bool,
+    /// The model written by --output-attributes: .gml, .xml (.gz) or .city.json.
+    #[arg(short = 'o', long, value_name = "OUT", requires = "output_attributes")]
+    pub output: Option<PathBuf>,
+}
+
+impl AttributeArgs {
+    /// Usage checks before any input is read: a region, a format that takes attributes, a
+    /// target that may be written (`overwrite`).
+    pub fn check(&self, region: bool, overwrite: bool) -> anyhow::Result<()> {
+        let Some(out) = &self.output else {
+            return Ok(());
+        };
+        if !region {
+            bail!("--output-attributes needs --facade or --region: the POIs of surfaces");
+        }
+        match Format::from_path(out) {
+            Some(Format::CityGml | Format::CityJson) | None => {}
+            Some(f) => bail!(
+                "--output-attributes writes CityGML or CityJSON (.city.json), not {f:?}: {}",
+                out.display()
+            ),
+        }
+        skylod::io::check_target(out, [], overwrite)?;
+        Ok(())
+    }
+
+    /// Write the model of `framed` (its one input) with the mean of `values` (one per POI)
+    /// per surface; the number of surfaces given it.
+    pub fn write(
+        &self,
+        framed: &Framed<'_>,
+        values: &[f64],
+        overwrite: bool,
+    ) -> anyhow::Result<Option<usize>> {
+        let Some(out) = &self.output else {
+            return Ok(None);
+        };
+        let model = framed.source;
+        if model.files.len() != 1 {
+            bail!(
+                "--output-attributes writes one model: give one input (got {})",
+                model.files.len()
+            );
+        }
+        let means = surface_means(&holding_surfaces(framed), values);
+        let means: BTreeMap<usize, f64> = means.into_iter().map(|(i, (m, _))| (i, m)).collect();
+        let inputs = model.files.iter().map(|f| f.path.as_path());
+        skylod::io::check_target(out, inputs, overwrite)?;
+        if Format::from_path(out) == Some(Format::CityJson) {
+            let attrs: BTreeMap<usize, Map<String, Value>> = (means.iter())
+                .map(|(&i, &m)| {
+                    let mut a = Map::new();
+                    a.insert(IRRADIATION_ATTRIBUTE.into(), m.into());
+                    (i, a)
+                })
+                .collect();
+            skylod::io::atomic_write(out, |w| -> anyhow::Result<u64> {
+                write_cityjson_with(model, 0, Content::Full, Some(&attrs), w)?;
+                Ok(0)
+            })
+            .with_context(|| format!("writing {}", out.display()))?;
+            return Ok(Some(means.len()));
+        }
+        let opts = WriteOptions {
+            overwrite,
+            ..Default::default()
+        };
+        let n = write_attributes(model, 0, IRRADIATION_ATTRIBUTE, &means, out, &opts)?;
+        Ok(Some(n))
+    }
+}

@@ -1,0 +1,304 @@
+//! Per-surface results written back into the city model (`irradiance --output-attributes`):
+//! the thematic surface that holds each POI ([`holding_surfaces`]), the mean of a value over
+//! the POIs of each surface ([`surface_means`]), and a copy of the CityGML document with a
+//! generic attribute added to each such surface by span edits ([`write_attributes`]):
+//! everything else is copied byte for byte.
+//!
+//! # Example
+//! ```
+//! use skylod::pipeline::attributes::insertion_point;
+//! let xml = br#"<bldg:WallSurface gml:id="w"><gml:name>a > b</gml:name><bldg:lod2MultiSurface/></bldg:WallSurface>"#;
+//! let at = insertion_point(xml).unwrap();
+//! assert!(xml[at..].starts_with(b"<bldg:lod2MultiSurface"));
+//! ```
+
+use super::Framed;
+use crate::citygml::write::{escape_attr, write_document, Edit, WriteOptions};
+use crate::citygml::WriteError;
+use crate::lod::scene::full_scene;
+use crate::model::{CityGmlVersion, CityModel};
+use glam::DVec3;
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::Path;
+
+/// How far behind a POI (along its normal reversed; down when it has none) its surface may
+/// lie, in metres: facade POIs sit 5 cm out.
+pub const HOLD_DISTANCE_M: f64 = 0.25;
+
+/// The name of the generic attribute of `irradiance --output-attributes`.
+pub const IRRADIATION_ATTRIBUTE: &str = "skylodAnnualIrradiation";
+
+/// Per POI of `framed`, the thematic surface (an asset that is a shell surface: wall, roof,
+/// ground, …) that holds it: the surface hit from the POI backwards along its normal (down
+/// without one) within [`HOLD_DISTANCE_M`]. Five rays, from the POI and 1 cm to each side in
+/// its plane, so that a POI on the edge between a wall and a roof (where the two tie) goes to
+/// the surface whose plane is the POI's: among the surfaces hit, those with a polygon within
+/// 25° of the POI's plane first, then the most rays, then the centre ray's. `None` when none
+/// is hit (a POI in the open, on an opening or an installation).
+pub fn holding_surfaces(framed: &Framed<'_>) -> Vec<Option<usize>> {
+    let scene = full_scene(&framed.model);
+    let model = &framed.model;
+    let aligned = |i: usize, n: DVec3| {
+        model.assets[i].detail_polygons().iter().any(|p| {
+            p.newell_normal()
+                .try_normalize()
+                .is_some_and(|m| m.dot(n).abs() > 0.9)
+        })
+    };
+    framed
+        .local_pois
+        .iter()
+        .map(|p| {
+            let n = p.normal.and_then(|n| n.try_normalize()).unwrap_or(DVec3::Z);
+            let u = n.cross(DVec3::Z).try_normalize().unwrap_or(DVec3::X);
+            let v = n.cross(u);
+            let mut votes: Vec<(usize, usize, bool)> = Vec::new();
+            for (k, d) in [DVec3::ZERO, u, -u, v, -v].into_iter().enumerate() {
+                let o = p.position + 0.01 * d;
+                let Some(hit) = scene.first_hit(o, -n, 0.0, HOLD_DISTANCE_M) else {
+                    continue;
+                };
+                let i = hit.tag as usize;
+                if !model
+                    .assets
+                    .get(i)
+                    .is_some_and(|a| a.kind.is_shell_surface())
+                {
+                    continue;
+                }
+                match votes.iter_mut().find(|x| x.0 == i) {
+                    Some(x) => x.1 += 1,
+                    None => votes.push((i, 1, k == 0)),
+                }
+            }
+            votes
+                .into_iter()
+                .max_by_key(|&(i, rays, centre)| (aligned(i, n), rays, centre))
+                .map(|x| x.0)
+        })
+        .collect()
+}
+
+/// The mean of `values[k]` over the POIs `k` of each surface (`holders` from
+/// [`holding_surfaces`]), with the number of POIs, by asset index.
+pub fn surface_means(holders: &[Option<usize>], values: &[f64]) -> BTreeMap<usize, (f64, usize)> {
+    let mut sums: BTreeMap<usize, (f64, usize)> = BTreeMap::new();
+    for (h, v) in holders.iter().zip(values) {
+        if let Some(i) = h {
+            let e = sums.entry(*i).or_insert((0.0, 0));
+            e.0 += v;
+            e.1 += 1;
+        }
+    }
+    for e in sums.values_mut() {
+        e.0 /= e.1 as f64;
+    }
+    sums
+}
+
+/// Where a generic attribute goes inside the element that starts at `xml[0]`: after its start
+/// tag and after the children that must come first (GML's `name`, `description`,
+/// `boundedBy`, …, core's `creationDate` … `relativeToWater`, `relatedTo`, appearances and
+/// generic attributes already there); `None` for an empty or malformed element.
+pub fn insertion_point(xml: &[u8]) -> Option<usize> {
+    const FIRST: &[&str] = &[
+        "metaDataProperty",
+        "description",
+        "descriptionReference",
+        "identifier",
+        "name",
+        "boundedBy",
+        "location",
+        "creationDate",
+        "terminationDate",
+        "validFrom",
+        "validTo",
+        "externalReference",
+        "generalizesTo",
+        "relativeToTerrain",
+        "relativeToWater",
+        "relatedTo",
+        "appearance",
+        "stringAttribute",
+        "intAttribute",
+        "doubleAttribute",
+        "dateAttribute",
+        "uriAttribute",
+        "measureAttribute",
+        "genericAttributeSet",
+        "genericAttribute",
+    ];
+    let mut at = tag_end(xml, 0)?;
+    if xml.get(at.checked_sub(2)?) == Some(&b'/') {
+        return None;
+    }
+    loop {
+        let mut k = at;
+        while xml.get(k).is_some_and(u8::is_ascii_whitespace) {
+            k += 1;
+        }
+        if xml[k..].starts_with(b"<!--") {
+            at = k + find(&xml[k..], b"-->")? + 3;
+            continue;
+        }
+        if xml.get(k) != Some(&b'<') || matches!(xml.get(k + 1), Some(b'/' | b'!' | b'?')) {
+            return Some(at);
+        }
+        let name_end = k + xml[k..]
+            .iter()
+            .position(|c| c.is_ascii_whitespace() || *c == b'>' || *c == b'/')?;
+        let qname = std::str::from_utf8(&xml[k + 1..name_end]).ok()?;
+        let local = qname.rsplit(':').next().unwrap_or(qname);
+        if !FIRST.contains(&local) {
+            return Some(at);
+        }
+        at = element_end(xml, k)?;
+    }
+}
+
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+/// The index just past the `>` of the tag that starts at `xml[start]` (quotes respected).
+fn tag_end(xml: &[u8], start: usize) -> Option<usize> {
+    let mut quote = None;
+    for (k, &c) in xml.iter().enumerate().skip(start) {
+        match (quote, c) {
+            (Some(q), _) if c == q => quote = None,
+            (Some(_), _) => {}
+            (None, b'"' | b'\'') => quote = Some(c),
+            (None, b'>') => return Some(k + 1),
+            _ => {}
+        }
+    }
+    None
+}
+
+/// The index just past the element that starts at `xml[start]` (nested elements, comments,
+/// CDATA and self-closing tags counted).
+fn element_end(xml: &[u8], start: usize) -> Option<usize> {
+    let mut depth = 0usize;
+    let mut k = start;
+    loop {
+        k += xml.get(k..)?.iter().position(|&c| c == b'<')?;
+        let rest = &xml[k..];
+        if rest.starts_with(b"<!--") {
+            k += find(rest, b"-->")? + 3;
+            continue;
+        }
+        if rest.starts_with(b"<![CDATA[") {
+            k += find(rest, b"]]>")? + 3;
+            continue;
+        }
+        let end = tag_end(xml, k)?;
+        if rest.starts_with(b"</") {
+            depth = depth.checked_sub(1)?;
+        } else if !rest.starts_with(b"<?") && !rest.starts_with(b"<!") && xml[end - 2] != b'/' {
+            depth += 1;
+        }
+        k = end;
+        if depth == 0 {
+            return Some(k);
+        }
+    }
+}
+
+/// A generic attribute `name` = `value` for a document of `version`, with its namespace
+/// declared on itself (whatever the document binds).
+fn attribute_xml(version: CityGmlVersion, name: &str, value: f64) -> String {
+    let name = escape_attr(name);
+    match version {
+        CityGmlVersion::V3_0 => format!(
+            "<gen:genericAttribute xmlns:gen=\"http://www.opengis.net/citygml/generics/3.0\"><gen:DoubleAttribute><gen:name>{name}</gen:name><gen:value>{value}</gen:value></gen:DoubleAttribute></gen:genericAttribute>"
+        ),
+        v => {
+            let ns = if v == CityGmlVersion::V1_0 { "1.0" } else { "2.0" };
+            format!(
+                "<gen:doubleAttribute xmlns:gen=\"http://www.opengis.net/citygml/generics/{ns}\" name=\"{name}\"><gen:value>{value}</gen:value></gen:doubleAttribute>"
+            )
+        }
+    }
+}
+
+/// Write file `file` of `model` (as read, the CRS of its source) to `out` with the generic
+/// double attribute `name` added to each asset of `values` (asset index → value) in that
+/// file; the rest is copied byte for byte ([`write_document`], envelopes kept). The number
+/// of surfaces that received it.
+///
+/// # Errors
+/// [`WriteError`] when the source cannot be read again or the output cannot be written.
+pub fn write_attributes(
+    model: &CityModel,
+    file: usize,
+    name: &str,
+    values: &BTreeMap<usize, f64>,
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<usize, WriteError> {
+    let src = model
+        .files
+        .get(file)
+        .ok_or_else(|| WriteError::Invalid(format!("no source file {file} in the model")))?;
+    let io = |source| WriteError::Io {
+        file: src.path.clone(),
+        source,
+    };
+    let (mut reader, _) = crate::citygml::source::open(&src.path)
+        .map_err(|e| WriteError::Invalid(format!("{}: {e}", src.path.display())))?;
+    let mut xml = Vec::new();
+    reader.read_to_end(&mut xml).map_err(io)?;
+    let mut edits = Vec::new();
+    for (&i, &v) in values {
+        let Some(a) = model.assets.get(i).filter(|a| a.file == file) else {
+            continue;
+        };
+        let (s, e) = (a.span.start as usize, a.span.end as usize);
+        let Some(at) = xml.get(s..e).and_then(insertion_point) else {
+            continue;
+        };
+        let at = (s + at) as u64;
+        edits.push(Edit {
+            span: at..at,
+            replacement: attribute_xml(src.version, name, v).into_bytes(),
+        });
+    }
+    let n = edits.len();
+    let opts = WriteOptions {
+        keep_envelopes: true,
+        ..opts.clone()
+    };
+    write_document(model, file, edits, out, &opts)?;
+    Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn insertion_after_the_leading_children() {
+        let x = br#"<W a="x>y"><!-- c --><gml:name>n</gml:name>
+  <gml:boundedBy><gml:Envelope><gml:lowerCorner>0 0</gml:lowerCorner></gml:Envelope></gml:boundedBy>
+  <gen:stringAttribute name="k"><gen:value>v</gen:value></gen:stringAttribute>
+  <bldg:lod3MultiSurface/></W>"#;
+        let at = insertion_point(x).unwrap();
+        assert!(x[at..]
+            .trim_ascii_start()
+            .starts_with(b"<bldg:lod3MultiSurface"));
+        let y = br#"<W><bldg:opening><x/></bldg:opening></W>"#;
+        assert_eq!(insertion_point(y), Some(3));
+        assert_eq!(insertion_point(b"<W/>"), None);
+        assert_eq!(insertion_point(b"<W><gml:name>"), None);
+    }
+
+    #[test]
+    fn means_per_surface() {
+        let m = surface_means(&[Some(3), None, Some(3), Some(1)], &[1.0, 9.0, 3.0, 5.0]);
+        assert_eq!(
+            m.into_iter().collect::<Vec<_>>(),
+            vec![(1, (5.0, 1)), (3, (2.0, 2))]
+        );
+    }
+}
