@@ -49,6 +49,42 @@ pub fn is_stdout(out: &Path) -> bool {
     out.as_os_str() == "-"
 }
 
+/// The bytes of standard input, the input named `-`: read whole on the first call (from the
+/// process's standard input, unless [`set_stdin_bytes`] gave them before) and kept for the
+/// rest of the process, so that a writer can copy from them again after the reader (a pipe
+/// can be read only once). The memory held is the input's size, as given (a gzip-compressed
+/// input stays compressed).
+///
+/// # Errors
+/// Reading standard input failed.
+pub fn stdin_bytes() -> std::io::Result<std::sync::Arc<[u8]>> {
+    let mut held = STDIN.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some(b) = held.as_ref() {
+        return Ok(std::sync::Arc::clone(b));
+    }
+    let mut v = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::stdin().lock(), &mut v)?;
+    let b: std::sync::Arc<[u8]> = v.into();
+    *held = Some(std::sync::Arc::clone(&b));
+    Ok(b)
+}
+
+/// Read `reader` whole and make it standard input for [`stdin_bytes`] (the input `-`) from
+/// now on; returns its length.
+///
+/// # Errors
+/// Reading `reader` failed (standard input is then left as it was).
+pub fn set_stdin_bytes(reader: &mut dyn std::io::Read) -> std::io::Result<u64> {
+    let mut v = Vec::new();
+    reader.read_to_end(&mut v)?;
+    let n = v.len() as u64;
+    let mut held = STDIN.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    *held = Some(v.into());
+    Ok(n)
+}
+
+static STDIN: std::sync::Mutex<Option<std::sync::Arc<[u8]>>> = std::sync::Mutex::new(None);
+
 /// I/O on a file failed.
 #[derive(Debug, thiserror::Error)]
 #[error("{file}: {}", describe_io(.source), file = .file.display())]

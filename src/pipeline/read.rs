@@ -75,7 +75,7 @@ pub fn read_inputs(paths: &[PathBuf], progress: &dyn Progress) -> Result<Inputs,
                 progress.advance(Stage::Read, 0, n, None);
             });
             let rest = size.saturating_sub(seen.load(Ordering::Relaxed));
-            progress.advance(Stage::Read, 1, rest, Some(&p.display().to_string()));
+            progress.advance(Stage::Read, 1, rest, Some(&crate::model::shown(p).to_string()));
             Ok(r)
         })
         .collect();

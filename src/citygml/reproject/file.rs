@@ -20,7 +20,7 @@ pub enum ReprojectError {
     #[error("{0}: the document names no CRS (srsName); give the source CRS with -s EPSG:n")]
     NoSourceCrs(std::path::PathBuf),
     /// The document uses several CRSs.
-    #[error("{file}: the document uses several CRSs ({names}); give the source CRS with -s EPSG:n to treat them all as one", file = .file.display())]
+    #[error("{file}: the document uses several CRSs ({names}); give the source CRS with -s EPSG:n to treat them all as one", file = crate::model::shown(.file))]
     MixedCrs {
         /// Document.
         file: std::path::PathBuf,
