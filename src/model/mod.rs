@@ -570,6 +570,7 @@ impl fmt::Display for Warning {
 /// writer needs them, or the whole document held in memory (a model read from bytes, standard
 /// input), plain or gzip-compressed as it was given.
 #[derive(Clone, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Source {
     /// A file on disk.
     File(PathBuf),

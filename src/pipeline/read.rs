@@ -1,7 +1,7 @@
 //! Step 1: the inputs read and merged, and the checks of the model alone.
 
 use crate::citygml::{read_file_observed, ReadError, ReadOptions};
-use crate::model::CityModel;
+use crate::model::{CityModel, Source};
 use crate::poi::checks::{self, TrustError};
 use crate::runtime::progress::{check, Cancelled, Progress, Stage};
 use rayon::prelude::*;
@@ -60,7 +60,10 @@ pub fn read_inputs(paths: &[PathBuf], progress: &dyn Progress) -> Result<Inputs,
     let t = Instant::now();
     let sizes: Vec<u64> = paths
         .iter()
-        .map(|p| std::fs::metadata(p).map_or(0, |m| m.len()))
+        .map(|p| match crate::citygml::source::resolve(p) {
+            Ok(Source::Memory(b)) => b.len() as u64,
+            _ => std::fs::metadata(p).map_or(0, |m| m.len()),
+        })
         .collect();
     progress.start(Stage::Read, paths.len() as u64, sizes.iter().sum());
     let results: Result<Vec<_>, Cancelled> = paths
@@ -75,7 +78,12 @@ pub fn read_inputs(paths: &[PathBuf], progress: &dyn Progress) -> Result<Inputs,
                 progress.advance(Stage::Read, 0, n, None);
             });
             let rest = size.saturating_sub(seen.load(Ordering::Relaxed));
-            progress.advance(Stage::Read, 1, rest, Some(&crate::model::shown(p).to_string()));
+            progress.advance(
+                Stage::Read,
+                1,
+                rest,
+                Some(&crate::model::shown(p).to_string()),
+            );
             Ok(r)
         })
         .collect();

@@ -295,6 +295,18 @@ impl Study {
     /// # Errors
     /// [`Error::Site`] without a site, [`Error::Solar`] for invalid options.
     pub fn sun_table(&self, sun: &SunOptions) -> Result<Arc<SunTable>> {
+        self.sun_table_with(sun, &crate::runtime::progress::Silent)
+    }
+
+    /// [`Study::sun_table`], built as the progress stage [`Stage::Sun`].
+    ///
+    /// # Errors
+    /// As [`Study::sun_table`]; [`Error::Cancelled`].
+    pub fn sun_table_with(
+        &self,
+        sun: &SunOptions,
+        progress: &dyn Progress,
+    ) -> Result<Arc<SunTable>> {
         let mut cached = self.sun.lock().unwrap_or_else(|e| e.into_inner());
         if let Some((o, t)) = cached.as_ref() {
             if o == sun {
@@ -308,7 +320,8 @@ impl Study {
                 Site::new(s.lat, s.lon)
             }
         };
-        let t = Arc::new(SunTable::year(sun.year, sun.step_min, &site)?);
+        let t = SunTable::year_with(sun.year, sun.step_min, &site, progress)?;
+        let t = Arc::new(t);
         *cached = Some((*sun, t.clone()));
         Ok(t)
     }
@@ -329,7 +342,7 @@ impl Study {
     /// # Errors
     /// As [`Study::sun_table`], [`Error::Cancelled`].
     pub fn sun_hours(&self, sun: &SunOptions, progress: &dyn Progress) -> Result<Traced<SunHours>> {
-        let table = self.sun_table(sun)?;
+        let table = self.sun_table_with(sun, progress)?;
         let scene = self.full(progress)?;
         let f = |s: &_, p: &Poi| poi_sun_hours(s, p, &table);
         Ok(trace_in(&self.framed(), scene, f, |_| None, progress)?)
@@ -424,8 +437,8 @@ impl Study {
         Ok(written)
     }
 
-    /// Write input `file` at `levels` in `format` to `w` (e.g. a buffer or a socket): written
-    /// to a temporary file first, then copied.
+    /// Write input `file` at `levels` in `format` to `w` (e.g. a buffer or a socket),
+    /// uncompressed ([`crate::pipeline::write_levels_to`]).
     ///
     /// # Errors
     /// [`Error::Write`].
@@ -436,16 +449,15 @@ impl Study {
         format: Format,
         w: &mut dyn std::io::Write,
     ) -> Result<Written> {
-        let io = |file: PathBuf| {
-            move |source| Error::Write(crate::citygml::WriteError::Io { file, source })
-        };
-        let dir = tempfile::tempdir().map_err(io(PathBuf::from("(temporary directory)")))?;
-        let tmp = dir.path().join(format.output_name("out.gml"));
         let wopts = WriteOptions::default();
-        let s = crate::pipeline::write_levels(&self.source, file, levels, &tmp, format, &wopts)?;
-        let mut f = std::fs::File::open(&tmp).map_err(io(tmp.clone()))?;
-        std::io::copy(&mut f, w).map_err(io(PathBuf::from("(writer)")))?;
-        Ok(s)
+        Ok(crate::pipeline::write_levels_to(
+            &self.source,
+            file,
+            levels,
+            w,
+            format,
+            &wopts,
+        )?)
     }
 }
 

@@ -12,6 +12,7 @@ pub use with_proj::{reproject_file, ReprojectSummary};
 
 /// Errors of reprojection.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReprojectError {
     /// A CRS name without an EPSG code skylod can read.
     #[error("{0}: not a CRS skylod can read (give EPSG:n, EPSG:h+v, or an OGC URN of EPSG codes)")]

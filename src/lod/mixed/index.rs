@@ -607,7 +607,13 @@ mod tests {
         assert_eq!(tail(&full), tail(&fast));
         // a span that does not end with the element's own end tag is parsed, not skipped
         let wrong = skip[0].start..skip[0].end + "</cityObjectMember>".len() as u64;
-        let w = scan(&DocSource::File(path.clone()), &path, std::slice::from_ref(&wrong), &opts).unwrap();
+        let w = scan(
+            &DocSource::File(path.clone()),
+            &path,
+            std::slice::from_ref(&wrong),
+            &opts,
+        )
+        .unwrap();
         assert_eq!(w.skipped, (0, 0));
         assert_eq!(w.nodes.len(), full.nodes.len());
     }
@@ -633,7 +639,11 @@ mod tests {
                     .collect();
                 let opts = ReadOptions::default();
                 let plain = scan(&DocSource::File(path.clone()), &path, &skip, &opts).unwrap();
-                assert_eq!(plain, scan(&DocSource::File(gz.clone()), &gz, &skip, &opts).unwrap(), "{name} {skip:?}");
+                assert_eq!(
+                    plain,
+                    scan(&DocSource::File(gz.clone()), &gz, &skip, &opts).unwrap(),
+                    "{name} {skip:?}"
+                );
                 assert_eq!(plain.skipped.0, usize::from(!skip.is_empty()), "{name}");
             }
         }
@@ -716,7 +726,15 @@ mod tests {
             .collect();
         ids.extend(["nope".to_string(), "a60".to_string()]);
         let opts = ReadOptions::default();
-        let serial = scan_with(&DocSource::File(path.clone()), &path, &skip, &opts, u64::MAX, CHUNK_BYTES).unwrap();
+        let serial = scan_with(
+            &DocSource::File(path.clone()),
+            &path,
+            &skip,
+            &opts,
+            u64::MAX,
+            CHUNK_BYTES,
+        )
+        .unwrap();
         // the cases: A, D, E, F (with G inside), I, K jumped over; B, C, J parsed; H empty
         assert_eq!(serial.skipped.0, 60 * 6, "spans skipped");
         assert!(serial.has_id("i0_1") && !serial.has_id("i0_2") && !serial.has_id("n0"));
@@ -732,7 +750,15 @@ mod tests {
             .map(|i| if pre.found(i).is_some() { '+' } else { '-' })
             .collect();
         assert_eq!(found, "+--+++--+-+".repeat(60), "A B C D E F G H I J K");
-        let full = scan_with(&DocSource::File(path.clone()), &path, &[], &opts, u64::MAX, CHUNK_BYTES).unwrap();
+        let full = scan_with(
+            &DocSource::File(path.clone()),
+            &path,
+            &[],
+            &opts,
+            u64::MAX,
+            CHUNK_BYTES,
+        )
+        .unwrap();
         // one chunk, chunks of a few spans, a chunk per span: with workers or without
         for chunk in [CHUNK_BYTES, 4096, 1] {
             for workers in [0, 1, 3] {
@@ -741,7 +767,16 @@ mod tests {
                     .build()
                     .unwrap();
                 let pre = pool
-                    .install(|| scan_with(&DocSource::File(path.clone()), &path, &skip, &opts, 0, chunk))
+                    .install(|| {
+                        scan_with(
+                            &DocSource::File(path.clone()),
+                            &path,
+                            &skip,
+                            &opts,
+                            0,
+                            chunk,
+                        )
+                    })
                     .unwrap();
                 assert_same_index(
                     &serial,
@@ -770,7 +805,13 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("d.gml");
         std::fs::write(&path, DOC).unwrap();
-        let doc = scan(&DocSource::File(path.clone()), &path, &[], &ReadOptions::default()).unwrap();
+        let doc = scan(
+            &DocSource::File(path.clone()),
+            &path,
+            &[],
+            &ReadOptions::default(),
+        )
+        .unwrap();
         for (i, n) in doc.nodes.iter().enumerate() {
             assert_eq!(doc.node_at(n.start), Some(i as u32));
             assert_eq!(doc.node_at(n.start + 1), None);
@@ -805,14 +846,26 @@ mod tests {
         };
         // from the memory map and streamed (gzip) alike
         for (big, path) in [(big.clone(), path.clone()), (gz(&big), gz(&path))] {
-            assert!(scan(&DocSource::File(big.clone()), &big, &[], &ReadOptions::default()).is_ok());
-            let e = scan(&DocSource::File(big.clone()), &big, &[], &tight).unwrap_err().to_string();
+            assert!(scan(
+                &DocSource::File(big.clone()),
+                &big,
+                &[],
+                &ReadOptions::default()
+            )
+            .is_ok());
+            let e = scan(&DocSource::File(big.clone()), &big, &[], &tight)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("exceeds the limit of 524288 bytes"), "{e}");
             // content larger than half the limit is not skipped but parsed, and fails alike
             let span = span_of(&DOC.replace("<!-- note -->", &text), "B");
-            let e = scan(&DocSource::File(big.clone()), &big, &[span], &tight).unwrap_err().to_string();
+            let e = scan(&DocSource::File(big.clone()), &big, &[span], &tight)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("exceeds the limit of 524288 bytes"), "{e}");
-            let e = scan(&DocSource::File(path.clone()), &path, &[], &shallow).unwrap_err().to_string();
+            let e = scan(&DocSource::File(path.clone()), &path, &[], &shallow)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("nested deeper than 2"), "{e}");
         }
     }

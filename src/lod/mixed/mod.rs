@@ -523,8 +523,13 @@ mod tests {
                 assert!(full.0 == fast.0, "{}: {what}: edits differ", f.display());
                 let containers = plan::containers(&model, 0, &levels);
                 let spans = plan::skip_spans(&model, 0, &levels, &containers);
-                let doc =
-                    index::scan(&model.files[0].source, &model.files[0].path, &spans, &ReadOptions::default()).unwrap();
+                let doc = index::scan(
+                    &model.files[0].source,
+                    &model.files[0].path,
+                    &spans,
+                    &ReadOptions::default(),
+                )
+                .unwrap();
                 skipped_bytes += doc.skipped.1;
                 checked += 1;
             }

@@ -44,7 +44,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (lat, lon) = args.site.resolve(framed.source, "sun-hours")?;
     let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
     let t = Instant::now();
-    let table = SunTable::year(args.sun.year, args.sun.step, &site)?;
+    let table = SunTable::year_with(args.sun.year, args.sun.step, &site, &crate::log::reporter())?;
     let sun_ms = ms(t);
     let traced = skylod::pipeline::sun_hours(&framed, &table, &crate::log::reporter())?;
     warn_flags(&framed.pois, &traced.flags);
