@@ -457,6 +457,85 @@ mod tests {
         assert_eq!(f.local_month(t), 5);
     }
 
+    /// Counts the sun stage's steps; asks to stop once `stop_after` steps are done.
+    struct Steps {
+        started: std::sync::atomic::AtomicU64,
+        done: std::sync::atomic::AtomicU64,
+        finished: std::sync::atomic::AtomicBool,
+        stop_after: u64,
+    }
+
+    impl Steps {
+        fn new(stop_after: u64) -> Steps {
+            Steps {
+                started: 0.into(),
+                done: 0.into(),
+                finished: false.into(),
+                stop_after,
+            }
+        }
+    }
+
+    impl Progress for Steps {
+        fn start(&self, stage: Stage, items: u64, _: u64) {
+            assert_eq!(stage, Stage::Sun);
+            self.started
+                .store(items, std::sync::atomic::Ordering::Relaxed);
+        }
+        fn advance(&self, stage: Stage, items: u64, _: u64, _: Option<&str>) {
+            assert_eq!(stage, Stage::Sun);
+            self.done
+                .fetch_add(items, std::sync::atomic::Ordering::Relaxed);
+        }
+        fn finish(&self, _: Stage) {
+            self.finished
+                .store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+        fn is_cancelled(&self) -> bool {
+            self.done.load(std::sync::atomic::Ordering::Relaxed) >= self.stop_after
+        }
+    }
+
+    #[test]
+    fn the_sun_table_is_a_progress_stage_that_can_be_cancelled() {
+        use std::sync::atomic::Ordering::Relaxed;
+        let site = Site::new(48.76, 11.42);
+        // Every step announced is done, the table is the one without progress.
+        let p = Steps::new(u64::MAX);
+        let t = SunTable::year_with(2025, 15, &site, &p).unwrap();
+        assert_eq!(p.started.load(Relaxed), 35_040);
+        assert_eq!(p.done.load(Relaxed), 35_040);
+        assert!(p.finished.load(Relaxed));
+        assert_eq!(t, SunTable::year(2025, 15, &site).unwrap());
+        // A step that does not divide a day: the last day's steps are short, all counted.
+        let p = Steps::new(u64::MAX);
+        let t = SunTable::year_with(2025, 7, &site, &p).unwrap();
+        assert_eq!(p.done.load(Relaxed), t.len() as u64);
+        // Asked to stop after the first days: Cancelled, named by the stage, well before
+        // the year is done (at most one day per thread goes on after the request).
+        let p = Steps::new(96 * 3);
+        let e = SunTable::year_with(2025, 15, &site, &p).unwrap_err();
+        assert_eq!(
+            e,
+            SolarError::Cancelled(crate::runtime::progress::Cancelled { stage: Stage::Sun })
+        );
+        assert_eq!(
+            e.to_string(),
+            "cancelled while computing the sun's positions"
+        );
+        assert!(p.finished.load(Relaxed));
+        let threads = rayon::current_num_threads() as u64;
+        assert!(
+            p.done.load(Relaxed) <= 96 * (3 + threads),
+            "{}",
+            p.done.load(Relaxed)
+        );
+        // Cancelled before it begins: no step is computed.
+        let p = Steps::new(0);
+        assert!(SunTable::year_with(2025, 15, &site, &p).is_err());
+        assert_eq!(p.done.load(Relaxed), 0);
+    }
+
     #[test]
     fn year_table_shape_and_months() {
         let site = Site::new(41.39, 2.17)
