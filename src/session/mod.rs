@@ -28,9 +28,10 @@ use crate::citygml::ReadError;
 use crate::crs::{model_site, Crs, LocalFrame, ModelSite};
 use crate::export::Format;
 use crate::lod::scene::full_scene;
-use crate::model::{CityModel, Poi};
+use crate::model::{CityModel, Poi, Source};
 use crate::pipeline::evaluation::Evaluation;
-use crate::pipeline::{evaluate, frame, horizon, levels, read_inputs, trace_in, write_all};
+use crate::pipeline::{evaluate, frame, horizon, levels, read_inputs, read_sources};
+use crate::pipeline::{trace_in, write_all};
 use crate::pipeline::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsOptions};
 use crate::pipeline::{Traced, Written};
 use crate::runtime::progress::{check, Progress, Stage};
@@ -132,6 +133,39 @@ impl Scene {
         crate::runtime::mem::set_give_back(options.trim_memory);
         let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
         let read = read_inputs(&paths, progress)?;
+        Scene::checked(inputs, read, options)
+    }
+
+    /// [`Scene::load_inputs`] of documents wherever they are: `(name, source)` pairs, a
+    /// [`Source::Memory`] for bytes a program holds (a download, a database blob), plain or
+    /// gzip. The name is the input's path in the model, messages and outputs (`-o DIR` puts
+    /// its output at its file name); every writer copies from the bytes as from a file.
+    ///
+    /// # Errors
+    /// As [`Scene::load_inputs`].
+    pub fn load_sources(
+        sources: Vec<(PathBuf, Source)>,
+        options: &SceneOptions,
+        progress: &dyn Progress,
+    ) -> Result<Scene> {
+        crate::runtime::mem::set_give_back(options.trim_memory);
+        let inputs = sources
+            .iter()
+            .map(|(name, _)| Input {
+                path: name.clone(),
+                relative: name.file_name().map_or_else(|| name.clone(), PathBuf::from),
+            })
+            .collect();
+        let read = read_sources(sources, progress)?;
+        Scene::checked(inputs, read, options)
+    }
+
+    /// The scene of `read`, checked; `inputs` cut to those read.
+    fn checked(
+        inputs: Vec<Input>,
+        read: crate::pipeline::Inputs,
+        options: &SceneOptions,
+    ) -> Result<Scene> {
         read.check(options.allow_mixed_crs)?;
         let mut left = read.read.iter().peekable();
         let inputs = inputs
@@ -491,6 +525,9 @@ mod tests {
         assert_eq!(tally.sum(Stage::Bvh, "start").0, 1);
         assert_eq!(tally.sum(Stage::Bvh, "advance").0, 1);
         assert_eq!(tally.sum(Stage::Trace, "advance").0, 3 * 4);
+        // the sun table: a stage that advances as far as it announced (a year at 2 h)
+        assert_eq!(tally.sum(Stage::Sun, "start").0, 365 * 12);
+        assert_eq!(tally.sum(Stage::Sun, "advance").0, 365 * 12);
         assert!(Arc::ptr_eq(
             &s.sun_table(&sun).unwrap(),
             &s.sun_table(&sun).unwrap()
@@ -534,6 +571,38 @@ mod tests {
             .unwrap();
         assert_eq!(buf, on_disk);
         assert_eq!(w.bytes, buf.len() as u64);
+    }
+
+    #[test]
+    fn a_scene_from_memory_writes_what_its_file_writes() {
+        let bytes: Arc<[u8]> = std::fs::read(fixture()).unwrap().into();
+        let name = PathBuf::from("mem/small.gml");
+        let sources = vec![(name.clone(), Source::Memory(bytes))];
+        let scene = Scene::load_sources(sources, &SceneOptions::default(), &Silent).unwrap();
+        assert_eq!(scene.inputs()[0].relative, PathBuf::from("small.gml"));
+        assert_eq!(scene.model().files[0].path, name);
+        let pois = grid_pois(scene.model(), 2);
+        let m = scene.frame(pois).unwrap();
+        let f = study(2);
+        let opts = LevelsOptions::default();
+        let (lm, lf) = (
+            m.levels(&opts, &Silent).unwrap(),
+            f.levels(&opts, &Silent).unwrap(),
+        );
+        for format in [Format::CityGml, Format::Obj, Format::CityJson] {
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            m.write_levels_to(&lm, 0, format, &mut a).unwrap();
+            f.write_levels_to(&lf, 0, format, &mut b).unwrap();
+            if format == Format::Obj {
+                // the comment line names the source
+                let from = format!("OBJ of {};", fixture().display());
+                let b2 = String::from_utf8(b)
+                    .unwrap()
+                    .replacen(&from, "OBJ of mem/small.gml;", 1);
+                b = b2.into_bytes();
+            }
+            assert!(!a.is_empty() && a == b, "{format:?}");
+        }
     }
 
     #[test]

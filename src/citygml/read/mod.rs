@@ -111,7 +111,7 @@ pub fn read_source_with(
     name: &Path,
     opts: &ReadOptions,
 ) -> Result<CityModel, ReadError> {
-    read_observed(src, name, opts, &|_| {})
+    read_source_observed(src, name, opts, &|_| {})
 }
 
 /// [`read_file_with`] that reports its way through the file: `passed(n)` is called, from
@@ -125,11 +125,11 @@ pub fn read_file_observed(
     opts: &ReadOptions,
     passed: &(dyn Fn(u64) + Sync),
 ) -> Result<CityModel, ReadError> {
-    read_observed(source::resolve(path)?, path, opts, passed)
+    read_source_observed(source::resolve(path)?, path, opts, passed)
 }
 
 /// [`read_file_observed`] on a [`Source`] named `name`.
-fn read_observed(
+pub fn read_source_observed(
     src: Source,
     name: &Path,
     opts: &ReadOptions,
