@@ -126,6 +126,9 @@ pub fn describe_io(e: &std::io::Error) -> String {
 /// The name standard output is given in errors.
 pub const STDOUT_NAME: &str = "standard output";
 
+/// The name a caller's writer (the `_to` twins of the writers) is given in errors.
+pub const WRITER_NAME: &str = "(writer)";
+
 /// A writer that keeps the first error of the writer inside: when the function writing
 /// through it fails, [`atomic_write`] reports that error against the target it was writing.
 struct Recording<W> {

@@ -97,7 +97,8 @@ pub fn write_document_to(
     w: &mut dyn Write,
     opts: &WriteOptions,
 ) -> Result<WriteSummary, WriteError> {
-    write_edits(model, file, edits, w, opts.keep_envelopes, Path::new(""))
+    let name = Path::new(crate::io::WRITER_NAME);
+    write_edits(model, file, edits, w, opts.keep_envelopes, name)
 }
 
 /// The source file `file` of `model`.
@@ -108,7 +109,7 @@ fn source_file(model: &CityModel, file: usize) -> Result<&SourceFile, WriteError
         .ok_or_else(|| WriteError::Invalid(format!("no source file {file}")))
 }
 
-/// The work of [`write_document_to`]; `out` names the output in errors (empty: the writer).
+/// The work of [`write_document_to`]; `out` names the output in errors.
 fn write_edits(
     model: &CityModel,
     file: usize,

@@ -181,7 +181,7 @@ pub fn write_to(
         return Err(WriteError::Invalid(format!("no source file {file}")));
     }
     let io = |e| WriteError::Io {
-        file: std::path::PathBuf::new(),
+        file: crate::io::WRITER_NAME.into(),
         source: e,
     };
     let mut cw = crate::io::CountingWriter::new(w);

@@ -296,7 +296,7 @@ pub fn merge_named_to(
     names: &[PathBuf],
     w: &mut dyn Write,
 ) -> Result<MergeSummary, MergeError> {
-    merge_into(inputs, names, w, Path::new(""))
+    merge_into(inputs, names, w, Path::new(crate::io::WRITER_NAME))
 }
 
 /// The merge written into `w`; `out` names the output in errors.
