@@ -49,6 +49,46 @@ pub fn is_stdout(out: &Path) -> bool {
     out.as_os_str() == "-"
 }
 
+/// The bytes of standard input, the input named `-`: read whole on the first call (from the
+/// process's standard input, unless [`set_stdin_bytes`] gave them before) and kept for the
+/// rest of the process, so that a writer can copy from them again after the reader (a pipe
+/// can be read only once). The memory held is the input's size, as given (a gzip-compressed
+/// input stays compressed).
+///
+/// # Errors
+/// Reading standard input failed.
+pub fn stdin_bytes() -> std::io::Result<std::sync::Arc<[u8]>> {
+    let mut held = STDIN
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some(b) = held.as_ref() {
+        return Ok(std::sync::Arc::clone(b));
+    }
+    let mut v = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::stdin().lock(), &mut v)?;
+    let b: std::sync::Arc<[u8]> = v.into();
+    *held = Some(std::sync::Arc::clone(&b));
+    Ok(b)
+}
+
+/// Read `reader` whole and make it standard input for [`stdin_bytes`] (the input `-`) from
+/// now on; returns its length.
+///
+/// # Errors
+/// Reading `reader` failed (standard input is then left as it was).
+pub fn set_stdin_bytes(reader: &mut dyn std::io::Read) -> std::io::Result<u64> {
+    let mut v = Vec::new();
+    reader.read_to_end(&mut v)?;
+    let n = v.len() as u64;
+    let mut held = STDIN
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    *held = Some(v.into());
+    Ok(n)
+}
+
+static STDIN: std::sync::Mutex<Option<std::sync::Arc<[u8]>>> = std::sync::Mutex::new(None);
+
 /// I/O on a file failed.
 #[derive(Debug, thiserror::Error)]
 #[error("{file}: {}", describe_io(.source), file = .file.display())]
@@ -85,6 +125,9 @@ pub fn describe_io(e: &std::io::Error) -> String {
 
 /// The name standard output is given in errors.
 pub const STDOUT_NAME: &str = "standard output";
+
+/// The name a caller's writer (the `_to` twins of the writers) is given in errors.
+pub const WRITER_NAME: &str = "(writer)";
 
 /// A writer that keeps the first error of the writer inside: when the function writing
 /// through it fails, [`atomic_write`] reports that error against the target it was writing.
@@ -163,6 +206,7 @@ where
 
 /// An output that must not be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum TargetError {
     /// The output exists and overwriting was not allowed.
     #[error("{}: output exists", .0.display())]
@@ -230,6 +274,10 @@ where
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
+    // A missing folder is made (errors name it), never reported as a temporary file in it.
+    if !dir.exists() {
+        std::fs::create_dir_all(dir).map_err(|source| E::from(FileError::new(dir, source)))?;
+    }
     let mut builder = tempfile::Builder::new();
     builder.prefix(".skylod-").suffix(".tmp");
     #[cfg(unix)]
@@ -239,7 +287,9 @@ where
         // right for secrets, wrong for a city model others in the group must read).
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let tmp = builder.tempfile_in(dir).map_err(io)?;
+    let tmp = builder
+        .tempfile_in(dir)
+        .map_err(|e| io(without_temporary_path(e)))?;
     let gz = out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
@@ -249,6 +299,19 @@ where
     tmp.as_file().sync_all().map_err(io)?;
     tmp.persist(out).map_err(|e| io(e.error))?;
     Ok(n)
+}
+
+/// An error of `tempfile` without the temporary file's name it appends (`... at path
+/// "dir/.skylod-XXXX.tmp"`): errors name the output, never a file the user did not ask for.
+fn without_temporary_path(e: std::io::Error) -> std::io::Error {
+    if let Some(code) = e.raw_os_error() {
+        return std::io::Error::from_raw_os_error(code);
+    }
+    let text = e.to_string();
+    match text.find(" at path ") {
+        Some(i) => std::io::Error::new(e.kind(), text[..i].to_owned()),
+        None => e,
+    }
 }
 
 /// A writer that counts the bytes written through it.
@@ -303,6 +366,44 @@ mod tests {
         assert!(check_target(Path::new("-"), [input.as_path()], false).is_ok());
         let new = dir.path().join("new.gml");
         assert!(check_target(&new, [input.as_path()], false).is_ok());
+    }
+
+    #[test]
+    fn missing_folders_are_made_and_no_error_names_the_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a/b/out.gml");
+        let n = atomic_write(&out, |w| -> Result<u64, FileError> {
+            w.write_all(b"<x/>").map_err(|e| FileError::new("w", e))?;
+            Ok(4)
+        })
+        .unwrap();
+        assert_eq!((n, std::fs::read(&out).unwrap()), (4, b"<x/>".to_vec()));
+        // A folder that cannot be made (a file is in the way), and one that cannot take the
+        // temporary file (a read-only folder): the errors name the output or its folder.
+        std::fs::write(dir.path().join("file"), b"").unwrap();
+        let blocked = dir.path().join("file/sub/out.gml");
+        let e = atomic_write(&blocked, |_| Ok::<u64, FileError>(0)).unwrap_err();
+        assert_eq!(e.file, dir.path().join("file/sub"), "{e}");
+        // A folder that takes no new file, even from root: /proc.
+        #[cfg(target_os = "linux")]
+        {
+            let out = Path::new("/proc/skylod-out.gml");
+            let e = atomic_write(out, |_| Ok::<u64, FileError>(0)).unwrap_err();
+            assert_eq!(e.file, out);
+            assert!(!e.to_string().contains(".skylod-"), "{e}");
+            assert!(!e.to_string().contains(".tmp"), "{e}");
+        }
+    }
+
+    #[test]
+    fn temporary_paths_are_cut_from_errors() {
+        let e = std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            "No such file or directory (os error 2) at path \"/x/.skylod-ab.tmp\"",
+        );
+        let e = without_temporary_path(e);
+        assert_eq!(e.kind(), std::io::ErrorKind::NotFound);
+        assert_eq!(e.to_string(), "No such file or directory (os error 2)");
     }
 
     /// A disk that takes `room` bytes, then fails with ENOSPC (write or flush).

@@ -1,8 +1,9 @@
 //! The inputs of a command, as users give them: files, directories (searched recursively for
 //! CityGML: `.gml`, `.xml`, `.citygml`, each optionally `.gz`), glob patterns expanded by
 //! skylod itself (`'tiles/**/*.gml'`, quoted so that the shell leaves them alone), and `-` for
-//! standard input (spooled to a temporary file by [`expand_spooled`]: the writer re-reads
-//! its source, and a pipe can be read only once).
+//! standard input (read whole into memory when it is first read, [`crate::io::stdin_bytes`]:
+//! the writer copies from its source again, and a pipe can be read only once; its relative
+//! path is `stdin.gml`, messages name it `<stdin>`, JSON outputs `-`).
 //!
 //! Directories and patterns yield CityGML names only (a `README.md` or an `.xsd` beside the
 //! tiles is not an input); a file named directly is read whatever its name.
@@ -24,12 +25,15 @@
 //! assert_eq!(rel, ["b/two.xml.gz", "one.gml"]);
 //! ```
 
+use crate::model::STDIN_NAME;
 use std::path::{Path, PathBuf};
 
 /// One input file.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Input {
-    /// The path to read (`-`: standard input).
+    /// The path to read (`-`: standard input), and the input's name in JSON outputs and in
+    /// the model ([`crate::model::SourceFile::path`]; messages show it with
+    /// [`crate::model::shown`]: `<stdin>`).
     pub path: PathBuf,
     /// The path below the directory or the fixed part of the pattern it was found in (its
     /// file name for a file given directly): where `-o DIR` puts its output.
@@ -165,17 +169,6 @@ pub enum InputError {
     /// `-` given more than once.
     #[error("standard input (-) can be read only once")]
     StdinTwice,
-    /// The temporary directory of the spooled standard input cannot be made.
-    #[error(transparent)]
-    SpoolDir(std::io::Error),
-    /// The spool file cannot be created.
-    #[error("spooling standard input to {}", .path.display())]
-    SpoolFile {
-        /// The spool file.
-        path: PathBuf,
-        /// Cause.
-        source: std::io::Error,
-    },
     /// Standard input cannot be read.
     #[error("reading standard input")]
     Stdin(#[source] std::io::Error),
@@ -264,7 +257,15 @@ pub fn expand_all(args: &[PathBuf]) -> Result<Expanded, InputError> {
     let mut out = Expanded::default();
     for a in args {
         let text = a.to_string_lossy();
-        if a.as_os_str() == "-" || a.is_file() || (!a.exists() && !has_glob_chars(&text)) {
+        if a.as_os_str() == STDIN_NAME {
+            if out.inputs.iter().any(|i| i.path.as_os_str() == STDIN_NAME) {
+                return Err(InputError::StdinTwice);
+            }
+            out.inputs.push(Input {
+                path: a.clone(),
+                relative: PathBuf::from(STDIN_RELATIVE),
+            });
+        } else if a.is_file() || (!a.exists() && !has_glob_chars(&text)) {
             out.inputs.push(Input {
                 path: a.clone(),
                 relative: a
@@ -312,68 +313,44 @@ pub fn expand_all(args: &[PathBuf]) -> Result<Expanded, InputError> {
     }
     let mut seen = std::collections::HashSet::new();
     out.inputs
-        .retain(|i| i.path.as_os_str() == "-" || seen.insert(i.path.clone()));
+        .retain(|i| i.path.as_os_str() == STDIN_NAME || seen.insert(i.path.clone()));
     Ok(out)
 }
 
-/// Standard input spooled to a temporary file (removed when this is dropped).
+/// Where `-o DIR` puts the output of standard input: `DIR/stdin.gml` (its relative path).
+pub const STDIN_RELATIVE: &str = "stdin.gml";
+
+/// What [`expand_spooled`] returns beside the inputs. Standard input is no longer spooled to
+/// a temporary file (it is held in memory, [`crate::io::stdin_bytes`]): nothing to keep
+/// alive, kept for the callers of 0.2.
 #[derive(Debug, Default)]
-pub struct Spool(Option<tempfile::TempDir>);
+pub struct Spool(bool);
 
 impl Spool {
-    /// Whether standard input was spooled.
+    /// Whether standard input is among the inputs.
     pub fn is_used(&self) -> bool {
-        self.0.is_some()
+        self.0
     }
 }
 
-/// [`expand_all`], with `-` read from `stdin` into a temporary file (the input is that file,
-/// its relative path `stdin.gml`). Keep the returned [`Spool`] alive while the inputs are
-/// read and written.
+/// [`expand_all`], with `-` read now from `stdin` into memory (it becomes the bytes of the
+/// input `-`, [`crate::io::set_stdin_bytes`]; its relative path is `stdin.gml`).
 ///
 /// # Errors
-/// As [`expand`]; `-` given twice; the spool file cannot be made or written.
+/// As [`expand`]; `-` given twice; `stdin` cannot be read.
 pub fn expand_spooled(
     args: &[PathBuf],
     stdin: &mut dyn std::io::Read,
 ) -> Result<(Expanded, Spool), InputError> {
-    let Expanded {
-        inputs: expanded,
-        skipped,
-    } = expand_all(args)?;
-    let mut spool = None;
-    let mut out = Vec::with_capacity(expanded.len());
-    for i in expanded {
-        if i.path.as_os_str() != "-" {
-            out.push(i);
-            continue;
-        }
-        if spool.is_some() {
-            return Err(InputError::StdinTwice);
-        }
-        let dir = tempfile::Builder::new()
-            .prefix("skylod-stdin-")
-            .tempdir()
-            .map_err(InputError::SpoolDir)?;
-        let path = dir.path().join("stdin");
-        let mut f = std::fs::File::create(&path).map_err(|source| InputError::SpoolFile {
-            path: path.clone(),
-            source,
-        })?;
-        std::io::copy(stdin, &mut f).map_err(InputError::Stdin)?;
-        out.push(Input {
-            path,
-            relative: PathBuf::from("stdin.gml"),
-        });
-        spool = Some(dir);
+    let expanded = expand_all(args)?;
+    let used = expanded
+        .inputs
+        .iter()
+        .any(|i| i.path.as_os_str() == STDIN_NAME);
+    if used {
+        crate::io::set_stdin_bytes(stdin).map_err(InputError::Stdin)?;
     }
-    Ok((
-        Expanded {
-            inputs: out,
-            skipped,
-        },
-        Spool(spool),
-    ))
+    Ok((expanded, Spool(used)))
 }
 
 #[cfg(test)]

@@ -40,9 +40,10 @@ pub enum ExtentSource {
 
 /// Errors finding a file's extent.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ExtentError {
     /// The file cannot be read.
-    #[error("{}: {source}", .file.display())]
+    #[error("{}: {source}", crate::model::shown(.file))]
     Io {
         /// File.
         file: PathBuf,
@@ -50,7 +51,7 @@ pub enum ExtentError {
         source: std::io::Error,
     },
     /// The XML is malformed.
-    #[error("{}: byte {at}: {message}", .file.display())]
+    #[error("{}: byte {at}: {message}", crate::model::shown(.file))]
     Xml {
         /// File.
         file: PathBuf,
@@ -96,6 +97,16 @@ fn open(path: &Path) -> Result<Box<dyn BufRead>, ExtentError> {
         file: path.to_path_buf(),
         source,
     };
+    if path.as_os_str() == crate::model::STDIN_NAME {
+        // standard input, held in memory: read from there (it is read again later)
+        let bytes = crate::io::stdin_bytes().map_err(io)?;
+        let r = std::io::Cursor::new(bytes);
+        return Ok(if crate::io::is_gzip(r.get_ref()) {
+            Box::new(BufReader::new(flate2::bufread::MultiGzDecoder::new(r)))
+        } else {
+            Box::new(r)
+        });
+    }
     let mut f = BufReader::with_capacity(256 * 1024, std::fs::File::open(path).map_err(io)?);
     let gz = crate::io::is_gzip(f.fill_buf().map_err(io)?);
     Ok(if gz {

@@ -56,6 +56,7 @@ pub const ENV_VARS: [&str; 5] = [
 
 /// Settings that do not name one shard.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ShardError {
     /// `--shard` text that is not `I/N`.
     #[error("--shard {0:?}: expected I/N with 0 <= I < N (e.g. 0/4)")]

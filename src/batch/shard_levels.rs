@@ -143,6 +143,7 @@ pub struct LevelsFile {
 
 /// Errors reading or combining levels files.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum LevelsError {
     /// The file cannot be read.
     #[error("{}: {source}", .file.display())]

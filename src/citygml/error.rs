@@ -18,7 +18,7 @@ pub struct Location {
 
 impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file.display())?;
+        write!(f, "{}", crate::model::shown(&self.file))?;
         if self.line > 0 {
             write!(f, ":{}:{}", self.line, self.column)?;
         }
@@ -34,7 +34,7 @@ impl fmt::Display for Location {
 #[non_exhaustive]
 pub enum ReadError {
     /// The file could not be opened or read.
-    #[error("{file}: cannot read: {source}", file = .file.display())]
+    #[error("{file}: cannot read: {source}", file = crate::model::shown(.file))]
     Io {
         /// File.
         file: PathBuf,
@@ -42,7 +42,7 @@ pub enum ReadError {
         source: std::io::Error,
     },
     /// The document is empty.
-    #[error("{}: empty document", .0.display())]
+    #[error("{}: empty document", crate::model::shown(.0))]
     Empty(PathBuf),
     /// Not well-formed XML (includes truncated documents and broken gzip streams).
     #[error("{loc}: malformed XML: {message}")]
@@ -151,7 +151,7 @@ impl ReadError {
 #[non_exhaustive]
 pub enum WriteError {
     /// I/O on the output or on re-reading the source.
-    #[error("{file}: {}", crate::io::describe_io(.source), file = .file.display())]
+    #[error("{file}: {}", crate::io::describe_io(.source), file = crate::model::shown(.file))]
     Io {
         /// File concerned.
         file: PathBuf,
@@ -165,7 +165,7 @@ pub enum WriteError {
     #[error("{}: output path is one of the inputs; refusing to overwrite an input", .0.display())]
     IsInput(PathBuf),
     /// The source changed between reading and writing.
-    #[error("{}: source changed while writing (length differs)", .0.display())]
+    #[error("{}: source changed while writing (length differs)", crate::model::shown(.0))]
     SourceChanged(PathBuf),
     /// Re-reading the source failed.
     #[error(transparent)]

@@ -1,17 +1,49 @@
-//! Opening a source document: plain or gzip-compressed, detected by content.
+//! Opening a source document: plain or gzip-compressed, detected by content; on disk, in
+//! memory ([`Source::Memory`]), or standard input (the path `-`, read whole into memory once:
+//! [`crate::io::stdin_bytes`]).
 
 use super::error::ReadError;
+use crate::model::Source;
 use std::fs::File;
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, BufReader, Cursor, Read};
 use std::path::Path;
+use std::sync::Arc;
 
 const BUF: usize = 256 * 1024;
 
+/// Where the input named `path` is: standard input for `-` (its bytes, read whole on first
+/// use and kept: [`crate::io::stdin_bytes`]), else the file.
+///
+/// # Errors
+/// [`ReadError::Io`] when standard input cannot be read.
+pub fn resolve(path: &Path) -> Result<Source, ReadError> {
+    if path.as_os_str() == crate::model::STDIN_NAME {
+        crate::io::stdin_bytes()
+            .map(Source::Memory)
+            .map_err(|source| ReadError::Io {
+                file: path.to_path_buf(),
+                source,
+            })
+    } else {
+        Ok(Source::File(path.to_path_buf()))
+    }
+}
+
 /// Open `path` for streaming; gzip is detected from the magic bytes (not the extension).
-/// Returns the reader and whether the file was compressed.
+/// Returns the reader and whether the file was compressed. `-` is standard input
+/// ([`resolve`]).
 pub fn open(path: &Path) -> Result<(Box<dyn BufRead + Send>, bool), ReadError> {
-    Ok(match open_stream(path)? {
+    open_source(&resolve(path)?, path)
+}
+
+/// [`open`] on a [`Source`]; `name` names it in errors.
+pub fn open_source(
+    src: &Source,
+    name: &Path,
+) -> Result<(Box<dyn BufRead + Send>, bool), ReadError> {
+    Ok(match open_stream(src, name)? {
         Stream::Plain(reader) => (Box::new(reader), false),
+        Stream::Memory(reader) => (Box::new(reader), false),
         Stream::Gzip(reader) => (reader, true),
     })
 }
@@ -20,15 +52,29 @@ pub fn open(path: &Path) -> Result<(Box<dyn BufRead + Send>, bool), ReadError> {
 pub(crate) enum Stream {
     /// An uncompressed file, buffered (it can seek: [`SkipAhead`]).
     Plain(BufReader<File>),
-    /// A gzip-compressed file, decompressed as it is read.
+    /// An uncompressed document in memory.
+    Memory(Cursor<Arc<[u8]>>),
+    /// A gzip-compressed document, decompressed as it is read.
     Gzip(Box<dyn BufRead + Send>),
 }
 
-/// [`open`], keeping the plain file's own reader.
-pub(crate) fn open_stream(path: &Path) -> Result<Stream, ReadError> {
+/// [`open_source`], keeping the plain file's own reader.
+pub(crate) fn open_stream(src: &Source, name: &Path) -> Result<Stream, ReadError> {
     let io = |source| ReadError::Io {
-        file: path.to_path_buf(),
+        file: name.to_path_buf(),
         source,
+    };
+    let path = match src {
+        Source::File(p) => p,
+        Source::Memory(bytes) => {
+            let cursor = Cursor::new(Arc::clone(bytes));
+            return Ok(if crate::io::is_gzip(bytes) {
+                let dec = flate2::bufread::MultiGzDecoder::new(cursor);
+                Stream::Gzip(Box::new(BufReader::with_capacity(BUF, dec)))
+            } else {
+                Stream::Memory(cursor)
+            });
+        }
     };
     let file = File::open(path).map_err(io)?;
     let mut reader = BufReader::with_capacity(BUF, file);
@@ -50,12 +96,14 @@ pub enum Document {
 }
 
 /// The bytes of a whole file: mapped into memory, or read into a buffer where it cannot be
-/// mapped (empty files, special files).
+/// mapped (empty files, special files), or a document already in memory.
 pub enum Bytes {
     /// A read-only memory map of the file.
     Mapped(memmap2::Mmap),
     /// The file read into memory.
     Read(Vec<u8>),
+    /// A document held in memory ([`Source::Memory`]).
+    Shared(Arc<[u8]>),
 }
 
 impl std::ops::Deref for Bytes {
@@ -64,17 +112,28 @@ impl std::ops::Deref for Bytes {
         match self {
             Bytes::Mapped(m) => m,
             Bytes::Read(v) => v,
+            Bytes::Shared(b) => b,
         }
     }
 }
 
-/// Open `path` whole; gzip is detected from the magic bytes (not the extension) and then
+/// Open `path` whole ([`load_source`] of [`resolve`]: `-` is standard input).
+pub fn load(path: &Path) -> Result<Document, ReadError> {
+    load_source(&resolve(path)?, path)
+}
+
+/// Open a source whole; gzip is detected from the magic bytes (not the extension) and then
 /// decompressed as it is read (the compressed bytes are held, not the document). An
 /// uncompressed file is memory-mapped: its pages come from the page cache as they are (no
-/// copy, no zeroed buffer), the cheapest way to hold a large document.
-pub fn load(path: &Path) -> Result<Document, ReadError> {
+/// copy, no zeroed buffer), the cheapest way to hold a large document; a document in memory
+/// is parsed where it is. `name` names the source in errors.
+pub fn load_source(src: &Source, name: &Path) -> Result<Document, ReadError> {
+    let path = match src {
+        Source::File(p) => p.as_path(),
+        Source::Memory(b) => return Ok(document(Bytes::Shared(Arc::clone(b)))),
+    };
     let io = |source| ReadError::Io {
-        file: path.to_path_buf(),
+        file: name.to_path_buf(),
         source,
     };
     let mut file = File::open(path).map_err(io)?;
@@ -94,15 +153,17 @@ pub fn load(path: &Path) -> Result<Document, ReadError> {
     } else {
         Bytes::Read(read_all(&mut file).map_err(io)?)
     };
+    Ok(document(bytes))
+}
+
+/// A whole document: plain, or gzip to decompress as it is read.
+fn document(bytes: Bytes) -> Document {
     if crate::io::is_gzip(&bytes) {
         let len = bytes.len() as u64;
-        let dec = flate2::bufread::MultiGzDecoder::new(std::io::Cursor::new(bytes));
-        Ok(Document::Gzip(
-            Box::new(BufReader::with_capacity(BUF, dec)),
-            len,
-        ))
+        let dec = flate2::bufread::MultiGzDecoder::new(Cursor::new(bytes));
+        Document::Gzip(Box::new(BufReader::with_capacity(BUF, dec)), len)
     } else {
-        Ok(Document::Plain(bytes))
+        Document::Plain(bytes)
     }
 }
 
@@ -214,6 +275,20 @@ pub(crate) trait SkipAhead: BufRead {
 }
 
 impl SkipAhead for Box<dyn BufRead + Send> {}
+
+impl SkipAhead for Cursor<Arc<[u8]>> {
+    fn skip_ahead(&mut self, n: u64) -> std::io::Result<()> {
+        let to = self.position().saturating_add(n);
+        if to > self.get_ref().len() as u64 {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::UnexpectedEof,
+                "source shorter than expected",
+            ));
+        }
+        self.set_position(to);
+        Ok(())
+    }
+}
 
 impl SkipAhead for BufReader<File> {
     fn skip_ahead(&mut self, n: u64) -> std::io::Result<()> {

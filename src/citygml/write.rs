@@ -29,7 +29,7 @@
 
 use super::error::WriteError;
 use super::source;
-use crate::model::{CityModel, EnvelopeSite, Polygon, Span};
+use crate::model::{CityModel, EnvelopeSite, Polygon, SourceFile, Span};
 use std::fmt::Write as _;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -64,22 +64,62 @@ pub struct WriteSummary {
 }
 
 /// Write file `file` of `model` to `out`, applying `edits` (any order; overlapping edits: the
-/// outermost wins, edits inside it are dropped).
+/// outermost wins, edits inside it are dropped): [`write_document_to`] into a temporary file
+/// renamed into place ([`atomic_write`]), after the target checks ([`check_target`]).
 pub fn write_document(
     model: &CityModel,
     file: usize,
-    mut edits: Vec<Edit>,
+    edits: Vec<Edit>,
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<WriteSummary, WriteError> {
-    let Some(src) = model.files.get(file) else {
-        return Err(WriteError::Io {
-            file: out.to_path_buf(),
-            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "no such source file"),
-        });
-    };
-    check_target(out, opts, std::iter::once(src.path.as_path()))?;
-    if !opts.keep_envelopes {
+    let src = source_file(model, file)?;
+    check_target(out, opts, src.source.path())?;
+    let mut n_edits = 0;
+    let bytes = atomic_write(out, |w| {
+        let s = write_edits(model, file, edits, w, opts.keep_envelopes, out)?;
+        n_edits = s.edits;
+        Ok(s.bytes)
+    })?;
+    Ok(WriteSummary {
+        bytes,
+        edits: n_edits,
+    })
+}
+
+/// [`write_document`] into any writer `w` (uncompressed, no target checks): the source's bytes
+/// (from its file, or from memory for a model read from bytes or standard input) with `edits`
+/// applied. Only `opts.keep_envelopes` matters here.
+pub fn write_document_to(
+    model: &CityModel,
+    file: usize,
+    edits: Vec<Edit>,
+    w: &mut dyn Write,
+    opts: &WriteOptions,
+) -> Result<WriteSummary, WriteError> {
+    let name = Path::new(crate::io::WRITER_NAME);
+    write_edits(model, file, edits, w, opts.keep_envelopes, name)
+}
+
+/// The source file `file` of `model`.
+fn source_file(model: &CityModel, file: usize) -> Result<&SourceFile, WriteError> {
+    model
+        .files
+        .get(file)
+        .ok_or_else(|| WriteError::Invalid(format!("no source file {file}")))
+}
+
+/// The work of [`write_document_to`]; `out` names the output in errors.
+fn write_edits(
+    model: &CityModel,
+    file: usize,
+    mut edits: Vec<Edit>,
+    w: &mut dyn Write,
+    keep_envelopes: bool,
+    out: &Path,
+) -> Result<WriteSummary, WriteError> {
+    let src = source_file(model, file)?;
+    if !keep_envelopes {
         for env in &src.envelopes {
             if let Some(text) = envelope_xml(env) {
                 edits.push(Edit {
@@ -91,7 +131,7 @@ pub fn write_document(
     }
     let edits = normalise(edits);
     let n_edits = edits.len();
-    let (mut reader, _) = source::open(&src.path)?;
+    let (mut reader, _) = source::open_source(&src.source, &src.path)?;
     let io_out = |source| WriteError::Io {
         file: out.to_path_buf(),
         source,
@@ -100,33 +140,30 @@ pub fn write_document(
         file: src.path.clone(),
         source,
     };
-    let bytes = atomic_write(out, |w| {
-        let mut cursor = 0u64;
-        let mut written = 0u64;
-        for e in &edits {
-            if e.span.start < cursor || e.span.end > src.len {
-                continue;
-            }
-            written += copy(&mut reader, w, e.span.start - cursor, &src.path, out)?;
-            w.write_all(&e.replacement).map_err(io_out)?;
-            written += e.replacement.len() as u64;
-            let skip = e.span.end - e.span.start;
-            let skipped = std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink())
-                .map_err(io_src)?;
-            if skipped != skip {
-                return Err(WriteError::SourceChanged(src.path.clone()));
-            }
-            cursor = e.span.end;
+    let mut cursor = 0u64;
+    let mut written = 0u64;
+    for e in &edits {
+        if e.span.start < cursor || e.span.end > src.len {
+            continue;
         }
-        written += copy(&mut reader, w, src.len - cursor, &src.path, out)?;
-        let mut rest = [0u8; 1];
-        if reader.read(&mut rest).map_err(io_src)? != 0 {
+        written += copy(&mut reader, w, e.span.start - cursor, &src.path, out)?;
+        w.write_all(&e.replacement).map_err(io_out)?;
+        written += e.replacement.len() as u64;
+        let skip = e.span.end - e.span.start;
+        let skipped =
+            std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(io_src)?;
+        if skipped != skip {
             return Err(WriteError::SourceChanged(src.path.clone()));
         }
-        Ok(written)
-    })?;
+        cursor = e.span.end;
+    }
+    written += copy(&mut reader, w, src.len - cursor, &src.path, out)?;
+    let mut rest = [0u8; 1];
+    if reader.read(&mut rest).map_err(io_src)? != 0 {
+        return Err(WriteError::SourceChanged(src.path.clone()));
+    }
     Ok(WriteSummary {
-        bytes,
+        bytes: written,
         edits: n_edits,
     })
 }

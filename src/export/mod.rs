@@ -128,7 +128,7 @@ impl ExportSummary {
         };
         format!(
             "{} -> {} ({format}): {what}, {} bytes",
-            input.display(),
+            crate::model::shown(input),
             out.display(),
             self.bytes
         )
@@ -154,31 +154,50 @@ pub fn write(
     let Some(src) = model.files.get(file) else {
         return Err(WriteError::Invalid(format!("no source file {file}")));
     };
-    crate::citygml::write::check_target(out, opts, std::iter::once(src.path.as_path()))?;
+    crate::citygml::write::check_target(out, opts, src.source.path())?;
     let mut summary = ExportSummary::default();
-    let io = |e| WriteError::Io {
-        file: out.to_path_buf(),
-        source: e,
-    };
     let bytes = crate::citygml::write::atomic_write(out, |w| {
-        let mut cw = crate::io::CountingWriter::new(w);
-        match format {
-            Format::Obj => summary = obj::write_obj(model, file, content, &mut cw).map_err(io)?,
-            Format::CityJson => {
-                summary = cityjson::write_cityjson(model, file, content, &mut cw).map_err(io)?
-            }
-            Format::CityJsonSeq => {
-                summary = cityjson::write_cityjsonseq(model, file, content, &mut cw).map_err(io)?
-            }
-            Format::CityGml => {
-                return Err(WriteError::Invalid(
-                    "CityGML is written by citygml::write / lod::mixed".into(),
-                ))
-            }
-        }
-        Ok(cw.count())
+        summary = write_to(format, model, file, content, w)?;
+        Ok(summary.bytes)
     })?;
     summary.bytes = bytes;
+    Ok(summary)
+}
+
+/// [`write()`] into any writer `w` (uncompressed, no target checks); the summary counts the
+/// bytes written.
+///
+/// # Errors
+/// As [`write()`].
+pub fn write_to(
+    format: Format,
+    model: &CityModel,
+    file: usize,
+    content: Content<'_>,
+    w: &mut dyn std::io::Write,
+) -> Result<ExportSummary, WriteError> {
+    content.check(model)?;
+    if model.files.get(file).is_none() {
+        return Err(WriteError::Invalid(format!("no source file {file}")));
+    }
+    let io = |e| WriteError::Io {
+        file: crate::io::WRITER_NAME.into(),
+        source: e,
+    };
+    let mut cw = crate::io::CountingWriter::new(w);
+    let mut summary = match format {
+        Format::Obj => obj::write_obj(model, file, content, &mut cw).map_err(io)?,
+        Format::CityJson => cityjson::write_cityjson(model, file, content, &mut cw).map_err(io)?,
+        Format::CityJsonSeq => {
+            cityjson::write_cityjsonseq(model, file, content, &mut cw).map_err(io)?
+        }
+        Format::CityGml => {
+            return Err(WriteError::Invalid(
+                "CityGML is written by citygml::write / lod::mixed".into(),
+            ))
+        }
+    };
+    summary.bytes = cw.count();
     Ok(summary)
 }
 

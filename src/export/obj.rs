@@ -109,7 +109,7 @@ fn write_header(
         w,
         "# skylod {} OBJ of {}; CRS {}; metres, Z up, vertices relative to the origin",
         env!("CARGO_PKG_VERSION"),
-        path.map_or_else(String::new, |p| p.display().to_string()),
+        path.map_or_else(String::new, |p| crate::model::shown(p).to_string()),
         srs_name.unwrap_or("unknown"),
     )
 }

@@ -558,7 +558,7 @@ pub struct Warning {
 
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}:{}: ", self.file.display(), self.line, self.column)?;
+        write!(f, "{}:{}:{}: ", shown(&self.file), self.line, self.column)?;
         if let Some(id) = &self.gml_id {
             write!(f, "[{id}] ")?;
         }
@@ -566,11 +566,79 @@ impl fmt::Display for Warning {
     }
 }
 
+/// Where the bytes of a source document are: a file read again by its path whenever a
+/// writer needs them, or the whole document held in memory (a model read from bytes, standard
+/// input), plain or gzip-compressed as it was given.
+#[derive(Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Source {
+    /// A file on disk.
+    File(PathBuf),
+    /// The document's bytes, kept for as long as the model (shared, never copied again).
+    Memory(Arc<[u8]>),
+}
+
+impl Source {
+    /// The file, for a source on disk.
+    pub fn path(&self) -> Option<&Path> {
+        match self {
+            Source::File(p) => Some(p),
+            Source::Memory(_) => None,
+        }
+    }
+}
+
+impl fmt::Debug for Source {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Source::File(p) => f.debug_tuple("File").field(p).finish(),
+            Source::Memory(b) => write!(f, "Memory({} bytes)", b.len()),
+        }
+    }
+}
+
+/// The name of standard input among the inputs (`-`, as given on the command line and in
+/// JSON outputs); messages show it as [`STDIN_SHOWN`].
+pub const STDIN_NAME: &str = "-";
+
+/// How messages (errors, warnings, progress) show standard input: `<stdin>:1:1: ...`.
+pub const STDIN_SHOWN: &str = "<stdin>";
+
+/// An input's name as messages show it: [`STDIN_SHOWN`] for standard input (`-`), else the
+/// path as given.
+///
+/// ```
+/// use skylod::model::shown;
+/// use std::path::Path;
+/// assert_eq!(shown(Path::new("-")).to_string(), "<stdin>");
+/// assert_eq!(shown(Path::new("a/b.gml")).to_string(), "a/b.gml");
+/// ```
+pub fn shown(path: &Path) -> Shown<'_> {
+    Shown(path)
+}
+
+/// [`shown`]: a path displayed as messages name an input.
+#[derive(Debug, Clone, Copy)]
+pub struct Shown<'a>(pub &'a Path);
+
+impl fmt::Display for Shown<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.0.as_os_str() == STDIN_NAME {
+            f.write_str(STDIN_SHOWN)
+        } else {
+            self.0.display().fmt(f)
+        }
+    }
+}
+
 /// Facts about one source document.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SourceFile {
-    /// Path as given.
+    /// The input's name: its path as given, `-` for standard input (messages show it with
+    /// [`shown`]: `<stdin>`).
     pub path: PathBuf,
+    /// Where the document's bytes are, for the writers that copy from it.
+    pub source: Source,
     /// CityGML version.
     pub version: CityGmlVersion,
     /// `srsName` of the model (envelope or first geometry).
@@ -741,6 +809,7 @@ mod tests {
         let mut one = CityModel::default();
         one.files.push(SourceFile {
             path: "a.gml".into(),
+            source: Source::File("a.gml".into()),
             version: CityGmlVersion::V2_0,
             srs_name: None,
             gzip: false,

@@ -64,5 +64,5 @@ pub use fisheye::{sky_pictures, SkyPicture, SkyPictureOptions};
 pub use frame::{frame, FrameOptions, Framed};
 pub use irradiance::{irradiance, PoiIrradiance};
 pub use levels::{levels, levels_of, BoundSpec, Levels, LevelsOptions};
-pub use read::{check_model, read_inputs, Inputs};
-pub use write::{buildings_without_kept_assets, write_all, write_levels, Written};
+pub use read::{check_model, read_inputs, read_sources, Inputs};
+pub use write::{buildings_without_kept_assets, write_all, write_levels, write_levels_to, Written};

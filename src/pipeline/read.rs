@@ -1,7 +1,9 @@
 //! Step 1: the inputs read and merged, and the checks of the model alone.
 
-use crate::citygml::{read_file_observed, ReadError, ReadOptions};
-use crate::model::CityModel;
+use crate::citygml::read::read_source_observed;
+use crate::citygml::source::resolve;
+use crate::citygml::{ReadError, ReadOptions};
+use crate::model::{CityModel, Source};
 use crate::poi::checks::{self, TrustError};
 use crate::runtime::progress::{check, Cancelled, Progress, Stage};
 use rayon::prelude::*;
@@ -52,30 +54,61 @@ pub fn check_model(model: &CityModel, allow_mixed_crs: bool) -> Result<(), Trust
 }
 
 /// Read `paths` in parallel ([`Stage::Read`]: files and bytes) and merge them in input
-/// order. A file that cannot be read goes to [`Inputs::failures`].
+/// order. A file that cannot be read goes to [`Inputs::failures`]. `-` is standard input
+/// (read whole into memory, [`crate::io::stdin_bytes`]).
 ///
 /// # Errors
 /// [`Cancelled`] when `progress` asks to stop (before a file is started).
 pub fn read_inputs(paths: &[PathBuf], progress: &dyn Progress) -> Result<Inputs, Cancelled> {
+    let sources = paths.iter().map(|p| resolve(p)).collect();
+    read_all(paths, sources, progress)
+}
+
+/// [`read_inputs`] of documents wherever they are ([`Source`]: files, bytes in memory), each
+/// named by its path (`model.files[k].path`, errors, warnings; [`Inputs::read`]).
+///
+/// # Errors
+/// As [`read_inputs`].
+pub fn read_sources(
+    sources: Vec<(PathBuf, Source)>,
+    progress: &dyn Progress,
+) -> Result<Inputs, Cancelled> {
+    let (names, sources): (Vec<PathBuf>, Vec<Source>) = sources.into_iter().unzip();
+    read_all(&names, sources.into_iter().map(Ok).collect(), progress)
+}
+
+fn read_all(
+    paths: &[PathBuf],
+    sources: Vec<Result<Source, ReadError>>,
+    progress: &dyn Progress,
+) -> Result<Inputs, Cancelled> {
     let t = Instant::now();
-    let sizes: Vec<u64> = paths
+    let sizes: Vec<u64> = sources
         .iter()
-        .map(|p| std::fs::metadata(p).map_or(0, |m| m.len()))
+        .map(|s| match s {
+            Ok(Source::File(p)) => std::fs::metadata(p).map_or(0, |m| m.len()),
+            Ok(Source::Memory(b)) => b.len() as u64,
+            Err(_) => 0,
+        })
         .collect();
     progress.start(Stage::Read, paths.len() as u64, sizes.iter().sum());
     let results: Result<Vec<_>, Cancelled> = paths
         .par_iter()
+        .zip(sources)
         .zip(&sizes)
-        .map(|(p, size)| {
+        .map(|((p, src), size)| {
             check(progress, Stage::Read)?;
             // bytes move while a large file is read; the rest when it is done
             let seen = AtomicU64::new(0);
-            let r = read_file_observed(p, &ReadOptions::default(), &|n| {
-                seen.fetch_add(n, Ordering::Relaxed);
-                progress.advance(Stage::Read, 0, n, None);
+            let r = src.and_then(|src| {
+                read_source_observed(src, p, &ReadOptions::default(), &|n| {
+                    seen.fetch_add(n, Ordering::Relaxed);
+                    progress.advance(Stage::Read, 0, n, None);
+                })
             });
             let rest = size.saturating_sub(seen.load(Ordering::Relaxed));
-            progress.advance(Stage::Read, 1, rest, Some(&p.display().to_string()));
+            let name = crate::model::shown(p).to_string();
+            progress.advance(Stage::Read, 1, rest, Some(&name));
             Ok(r)
         })
         .collect();

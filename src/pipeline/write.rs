@@ -4,7 +4,7 @@ use super::Levels;
 use crate::citygml::write::WriteOptions;
 use crate::citygml::WriteError;
 use crate::export::{Content, Format};
-use crate::lod::mixed::write_mixed;
+use crate::lod::mixed::{write_mixed, write_mixed_to};
 use crate::model::CityModel;
 use crate::runtime::progress::{check, Cancelled, Progress, Stage};
 use rayon::prelude::*;
@@ -65,30 +65,69 @@ pub fn write_levels(
             out,
             wopts,
         )?;
-        return Ok(Written {
-            bytes: s.bytes,
-            levels: s.levels,
-            polygons_in: s.polygons_in,
-            polygons_out: s.polygons_out,
-            buildings_dropped: s.buildings_dropped,
-            parts_dropped: s.parts_dropped,
-            export: None,
-        });
+        return Ok(mixed_written(s));
     }
-    let content = Content::Levels {
+    let s = crate::export::write(format, model, file, content(levels), out, wopts)?;
+    Ok(export_written(model, file, levels, s))
+}
+
+/// [`write_levels`] into any writer `w` (uncompressed, no target checks: of `wopts` only
+/// `keep_envelopes` matters). A model read from memory or standard input is written as one
+/// read from a file.
+///
+/// # Errors
+/// [`WriteError`].
+pub fn write_levels_to(
+    model: &CityModel,
+    file: usize,
+    levels: &Levels,
+    w: &mut dyn std::io::Write,
+    format: Format,
+    wopts: &WriteOptions,
+) -> Result<Written, WriteError> {
+    if format == Format::CityGml {
+        let (rough, lv) = (levels.rough_source(), levels.levels());
+        let s = write_mixed_to(model, file, rough, lv, w, wopts)?;
+        return Ok(mixed_written(s));
+    }
+    let s = crate::export::write_to(format, model, file, content(levels), w)?;
+    Ok(export_written(model, file, levels, s))
+}
+
+fn content(levels: &Levels) -> Content<'_> {
+    Content::Levels {
         rough: levels.rough_source(),
         levels: levels.levels(),
-    };
-    let s = crate::export::write(format, model, file, content, out, wopts)?;
+    }
+}
+
+fn mixed_written(s: crate::lod::mixed::MixedSummary) -> Written {
+    Written {
+        bytes: s.bytes,
+        levels: s.levels,
+        polygons_in: s.polygons_in,
+        polygons_out: s.polygons_out,
+        buildings_dropped: s.buildings_dropped,
+        parts_dropped: s.parts_dropped,
+        export: None,
+    }
+}
+
+fn export_written(
+    model: &CityModel,
+    file: usize,
+    levels: &Levels,
+    s: crate::export::ExportSummary,
+) -> Written {
     let (buildings_dropped, parts_dropped) =
         buildings_without_kept_assets(model, file, levels.levels());
-    Ok(Written {
+    Written {
         bytes: s.bytes,
         buildings_dropped,
         parts_dropped,
         export: Some(s),
         ..Written::default()
-    })
+    }
 }
 
 /// [`write_levels`] for each `(file, output)` pair, files in parallel ([`Stage::Write`],

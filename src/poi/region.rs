@@ -48,6 +48,7 @@ use std::collections::HashSet;
 
 /// Errors of the region samplers.
 #[derive(Debug, thiserror::Error, PartialEq)]
+#[non_exhaustive]
 pub enum RegionError {
     /// No surface or building has this id.
     #[error("no wall, roof or building with gml:id {0:?}")]

@@ -42,6 +42,7 @@ use std::fmt;
 
 /// A stage of the work, in pipeline order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Stage {
     /// Reading input files (items: files, bytes: their size on disk).
     Read,
@@ -55,6 +56,8 @@ pub enum Stage {
     Trace,
     /// Writing output files (items: files).
     Write,
+    /// The sun's positions over the simulated period, the sun table (items: time steps).
+    Sun,
 }
 
 impl Stage {
@@ -67,6 +70,7 @@ impl Stage {
             Stage::Select => "selecting levels",
             Stage::Trace => "tracing",
             Stage::Write => "writing outputs",
+            Stage::Sun => "computing the sun's positions",
         }
     }
 
@@ -77,6 +81,7 @@ impl Stage {
             Stage::Rough => "asset",
             Stage::Bvh => "scene",
             Stage::Select | Stage::Trace => "POI",
+            Stage::Sun => "time step",
         }
     }
 }

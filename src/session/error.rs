@@ -43,7 +43,7 @@ pub enum Error {
     Sky(#[from] crate::solar::sky::SkyError),
     /// Invalid solar options (site, time zone, step, horizon step).
     #[error(transparent)]
-    Solar(#[from] SolarError),
+    Solar(SolarError),
     /// The selection failed.
     #[error(transparent)]
     Select(#[from] SelectError),
@@ -76,6 +76,15 @@ pub enum Error {
 /// `Result` with the library's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+impl From<SolarError> for Error {
+    fn from(e: SolarError) -> Self {
+        match e {
+            SolarError::Cancelled(c) => Error::Cancelled(c),
+            e => Error::Solar(e),
+        }
+    }
+}
+
 impl From<PipelineError> for Error {
     fn from(e: PipelineError) -> Self {
         match e {
@@ -87,7 +96,7 @@ impl From<PipelineError> for Error {
             PipelineError::Bound(e) => Error::Bound(e),
             PipelineError::Eval(EvalError::Cancelled(c)) => Error::Cancelled(c),
             PipelineError::Eval(e) => Error::Eval(e),
-            PipelineError::Solar(e) => Error::Solar(e),
+            PipelineError::Solar(e) => e.into(),
             PipelineError::Cancelled(c) => Error::Cancelled(c),
         }
     }

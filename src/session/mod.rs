@@ -28,10 +28,11 @@ use crate::citygml::ReadError;
 use crate::crs::{model_site, Crs, LocalFrame, ModelSite};
 use crate::export::Format;
 use crate::lod::scene::full_scene;
-use crate::model::{CityModel, Poi};
+use crate::model::{CityModel, Poi, Source};
 use crate::pipeline::evaluation::Evaluation;
 use crate::pipeline::{check_model, PoiIrradiance, Traced, Written};
-use crate::pipeline::{evaluate, frame, horizon, levels, read_inputs, trace_in, write_all};
+use crate::pipeline::{evaluate, frame, horizon, levels, read_inputs, read_sources};
+use crate::pipeline::{trace_in, write_all};
 use crate::pipeline::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsOptions};
 use crate::poi::checks::TrustError;
 use crate::runtime::progress::{check, Progress, Stage};
@@ -171,18 +172,53 @@ impl Scene {
         crate::runtime::mem::set_give_back(options.trim_memory);
         let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
         let read = read_inputs(&paths, progress)?;
+        Ok(Scene::from_read(inputs, read, options))
+    }
+
+    /// [`Scene::load_inputs`] of documents wherever they are: `(name, source)` pairs, a
+    /// [`Source::Memory`] for bytes a program holds (a download, a database blob), plain or
+    /// gzip. The name is the input's path in the model, messages and outputs (`-o DIR` puts
+    /// its output at its file name); every writer copies from the bytes as from a file.
+    ///
+    /// # Errors
+    /// As [`Scene::load_inputs`].
+    pub fn load_sources(
+        sources: Vec<(PathBuf, Source)>,
+        options: &SceneOptions,
+        progress: &dyn Progress,
+    ) -> Result<Scene> {
+        crate::runtime::mem::set_give_back(options.trim_memory);
+        let inputs = sources
+            .iter()
+            .map(|(name, _)| Input {
+                path: name.clone(),
+                relative: name.file_name().map_or_else(|| name.clone(), PathBuf::from),
+            })
+            .collect();
+        let read = read_sources(sources, progress)?;
+        let scene = Scene::from_read(inputs, read, options);
+        scene.check()?;
+        Ok(scene)
+    }
+
+    /// The scene of `read`; `inputs` cut to those read.
+    fn from_read(
+        inputs: Vec<Input>,
+        read: crate::pipeline::Inputs,
+        options: &SceneOptions,
+    ) -> Scene {
         let mut left = read.read.iter().peekable();
         let inputs = inputs
             .into_iter()
             .filter(|i| left.next_if(|p| **p == i.path).is_some())
             .collect();
-        Ok(Scene {
+        Scene {
             inputs,
             model: read.model,
             failures: read.failures,
             options: options.clone(),
             read_s: read.read_s,
-        })
+        }
     }
 
     /// Refuse a model that would give a confidently wrong answer whatever the POIs: nothing
@@ -389,6 +425,18 @@ impl Study {
     /// # Errors
     /// [`Error::Site`] without a site, [`Error::Solar`] for invalid options.
     pub fn sun_table(&self, sun: &SunOptions) -> Result<Arc<SunTable>> {
+        self.sun_table_with(sun, &crate::runtime::progress::Silent)
+    }
+
+    /// [`Study::sun_table`], built as the progress stage [`Stage::Sun`].
+    ///
+    /// # Errors
+    /// As [`Study::sun_table`]; [`Error::Cancelled`].
+    pub fn sun_table_with(
+        &self,
+        sun: &SunOptions,
+        progress: &dyn Progress,
+    ) -> Result<Arc<SunTable>> {
         let mut cached = self.sun.lock().unwrap_or_else(|e| e.into_inner());
         if let Some((o, t)) = cached.as_ref() {
             if o == sun {
@@ -402,7 +450,8 @@ impl Study {
                 Site::new(s.lat, s.lon)
             }
         };
-        let t = Arc::new(SunTable::year(sun.year, sun.step_min, &site)?);
+        let t = SunTable::year_with(sun.year, sun.step_min, &site, progress)?;
+        let t = Arc::new(t);
         *cached = Some((*sun, t.clone()));
         Ok(t)
     }
@@ -422,7 +471,7 @@ impl Study {
     /// # Errors
     /// As [`Study::sun_table`], [`Error::Cancelled`].
     pub fn sun_hours(&self, sun: &SunOptions, progress: &dyn Progress) -> Result<Traced<SunHours>> {
-        let table = self.sun_table(sun)?;
+        let table = self.sun_table_with(sun, progress)?;
         let f = |s: &_, p: &Poi| poi_sun_hours(s, p, &table);
         self.trace(f, |_| None, progress)
     }
@@ -534,8 +583,8 @@ impl Study {
         Ok(written)
     }
 
-    /// Write input `file` at `levels` in `format` to `w` (e.g. a buffer or a socket): written
-    /// to a temporary file first, then copied.
+    /// Write input `file` at `levels` in `format` to `w` (e.g. a buffer or a socket),
+    /// uncompressed ([`crate::pipeline::write_levels_to`]).
     ///
     /// # Errors
     /// [`Error::Write`].
@@ -546,16 +595,15 @@ impl Study {
         format: Format,
         w: &mut dyn std::io::Write,
     ) -> Result<Written> {
-        let io = |file: PathBuf| {
-            move |source| Error::Write(crate::citygml::WriteError::Io { file, source })
-        };
-        let dir = tempfile::tempdir().map_err(io(PathBuf::from("(temporary directory)")))?;
-        let tmp = dir.path().join(format.output_name("out.gml"));
         let wopts = WriteOptions::default();
-        let s = crate::pipeline::write_levels(&self.source, file, levels, &tmp, format, &wopts)?;
-        let mut f = std::fs::File::open(&tmp).map_err(io(tmp.clone()))?;
-        std::io::copy(&mut f, w).map_err(io(PathBuf::from("(writer)")))?;
-        Ok(s)
+        Ok(crate::pipeline::write_levels_to(
+            &self.source,
+            file,
+            levels,
+            w,
+            format,
+            &wopts,
+        )?)
     }
 }
 
@@ -592,6 +640,9 @@ mod tests {
         assert_eq!(tally.sum(Stage::Bvh, "start").0, 1);
         assert_eq!(tally.sum(Stage::Bvh, "advance").0, 1);
         assert_eq!(tally.sum(Stage::Trace, "advance").0, 3 * 4);
+        // the sun table: a stage that advances as far as it announced (a year at 2 h)
+        assert_eq!(tally.sum(Stage::Sun, "start").0, 365 * 12);
+        assert_eq!(tally.sum(Stage::Sun, "advance").0, 365 * 12);
         assert!(Arc::ptr_eq(
             &s.sun_table(&sun).unwrap(),
             &s.sun_table(&sun).unwrap()
@@ -635,6 +686,38 @@ mod tests {
             .unwrap();
         assert_eq!(buf, on_disk);
         assert_eq!(w.bytes, buf.len() as u64);
+    }
+
+    #[test]
+    fn a_scene_from_memory_writes_what_its_file_writes() {
+        let bytes: Arc<[u8]> = std::fs::read(fixture()).unwrap().into();
+        let name = PathBuf::from("mem/small.gml");
+        let sources = vec![(name.clone(), Source::Memory(bytes))];
+        let scene = Scene::load_sources(sources, &SceneOptions::default(), &Silent).unwrap();
+        assert_eq!(scene.inputs()[0].relative, PathBuf::from("small.gml"));
+        assert_eq!(scene.model().files[0].path, name);
+        let pois = grid_pois(scene.model(), 2);
+        let m = scene.frame(pois).unwrap();
+        let f = study(2);
+        let opts = LevelsOptions::default();
+        let (lm, lf) = (
+            m.levels(&opts, &Silent).unwrap(),
+            f.levels(&opts, &Silent).unwrap(),
+        );
+        for format in [Format::CityGml, Format::Obj, Format::CityJson] {
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            m.write_levels_to(&lm, 0, format, &mut a).unwrap();
+            f.write_levels_to(&lf, 0, format, &mut b).unwrap();
+            if format == Format::Obj {
+                // the comment line names the source
+                let from = format!("OBJ of {};", fixture().display());
+                let b2 = String::from_utf8(b)
+                    .unwrap()
+                    .replacen(&from, "OBJ of mem/small.gml;", 1);
+                b = b2.into_bytes();
+            }
+            assert!(!a.is_empty() && a == b, "{format:?}");
+        }
     }
 
     #[test]

@@ -99,4 +99,7 @@ pub enum SolarError {
     /// A year the calendar cannot represent.
     #[error("invalid year {0}")]
     Year(i32),
+    /// The caller asked to stop ([`crate::runtime::progress::Progress::is_cancelled`]).
+    #[error(transparent)]
+    Cancelled(#[from] crate::runtime::progress::Cancelled),
 }

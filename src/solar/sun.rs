@@ -19,6 +19,7 @@
 //! ```
 
 use super::SolarError;
+use crate::runtime::progress::{check, stage, Progress, Silent, Stage};
 use chrono::{DateTime, Datelike, Duration, FixedOffset, NaiveDate, Offset, TimeZone, Utc};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -220,6 +221,20 @@ impl SunTable {
     /// [`SolarError::Year`] for a year chrono cannot represent, [`SolarError::Spa`] for
     /// invalid site parameters.
     pub fn year(year: i32, step_minutes: u32, site: &Site) -> Result<SunTable, SolarError> {
+        SunTable::year_with(year, step_minutes, site, &Silent)
+    }
+
+    /// [`SunTable::year`] as a progress stage ([`Stage::Sun`]: items are steps, advanced a
+    /// day of steps at a time), cancellable between days.
+    ///
+    /// # Errors
+    /// As [`SunTable::year`]; [`SolarError::Cancelled`] when `progress` asks to stop.
+    pub fn year_with(
+        year: i32,
+        step_minutes: u32,
+        site: &Site,
+        progress: &dyn Progress,
+    ) -> Result<SunTable, SolarError> {
         let start = Utc
             .with_ymd_and_hms(year, 1, 1, 0, 0, 0)
             .single()
@@ -231,7 +246,7 @@ impl SunTable {
             return Err(SolarError::Step(step_minutes));
         }
         let steps = usize::try_from(minutes / i64::from(step_minutes)).unwrap_or(0);
-        SunTable::range(start, steps, step_minutes, site)
+        SunTable::range_with(start, steps, step_minutes, site, progress)
     }
 
     /// `steps` consecutive steps of `step_minutes` from `start` (computed in parallel;
@@ -245,6 +260,20 @@ impl SunTable {
         step_minutes: u32,
         site: &Site,
     ) -> Result<SunTable, SolarError> {
+        SunTable::range_with(start, steps, step_minutes, site, &Silent)
+    }
+
+    /// [`SunTable::range`] as a progress stage ([`Stage::Sun`], see [`SunTable::year_with`]).
+    ///
+    /// # Errors
+    /// As [`SunTable::range`]; [`SolarError::Cancelled`] when `progress` asks to stop.
+    pub fn range_with(
+        start: DateTime<Utc>,
+        steps: usize,
+        step_minutes: u32,
+        site: &Site,
+        progress: &dyn Progress,
+    ) -> Result<SunTable, SolarError> {
         if step_minutes == 0 || step_minutes > 1440 {
             return Err(SolarError::Step(step_minutes));
         }
@@ -253,33 +282,46 @@ impl SunTable {
         let location = site.location();
         let step_s = i64::from(step_minutes) * 60;
         let half = Duration::milliseconds(step_s * 500);
-        let steps: Vec<SunStep> = (0..steps)
-            .into_par_iter()
-            .map(|k| {
-                let offset = i64::try_from(k)
-                    .ok()
-                    .and_then(|k| k.checked_mul(step_s))
-                    .and_then(Duration::try_seconds)
-                    .ok_or(SolarError::Step(step_minutes))?;
-                let mid = start
-                    .checked_add_signed(offset)
-                    .and_then(|t| t.checked_add_signed(half))
-                    .ok_or(SolarError::Step(step_minutes))?;
-                let p = spa.at(
-                    &mid,
-                    location,
-                    site.elevation_m,
-                    site.delta_t_s,
-                    Some(refraction),
-                )?;
-                let month = site.time_zone.local_month(mid);
-                Ok(SunStep {
-                    direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
-                    above_horizon: p.zenith_angle() < 90.0,
-                    month: u8::try_from(month.saturating_sub(1)).unwrap_or(0).min(11),
-                })
+        let one = |k: usize| {
+            let offset = i64::try_from(k)
+                .ok()
+                .and_then(|k| k.checked_mul(step_s))
+                .and_then(Duration::try_seconds)
+                .ok_or(SolarError::Step(step_minutes))?;
+            let mid = start
+                .checked_add_signed(offset)
+                .and_then(|t| t.checked_add_signed(half))
+                .ok_or(SolarError::Step(step_minutes))?;
+            let p = spa.at(
+                &mid,
+                location,
+                site.elevation_m,
+                site.delta_t_s,
+                Some(refraction),
+            )?;
+            let month = site.time_zone.local_month(mid);
+            Ok(SunStep {
+                direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
+                above_horizon: p.zenith_angle() < 90.0,
+                month: u8::try_from(month.saturating_sub(1)).unwrap_or(0).min(11),
             })
-            .collect::<Result<_, SolarError>>()?;
+        };
+        // A day of steps per task: the check between days, the order of the steps kept.
+        let per_day = (1440 / step_minutes as usize).max(1);
+        let steps = stage(progress, Stage::Sun, steps as u64, 0, || {
+            let days: Vec<Vec<SunStep>> = (0..steps.div_ceil(per_day))
+                .into_par_iter()
+                .map(|d| {
+                    check(progress, Stage::Sun)?;
+                    let ks = d * per_day..((d + 1) * per_day).min(steps);
+                    let n = ks.len() as u64;
+                    let day = ks.map(one).collect::<Result<Vec<_>, SolarError>>()?;
+                    progress.advance(Stage::Sun, n, 0, None);
+                    Ok(day)
+                })
+                .collect::<Result<_, SolarError>>()?;
+            Ok::<_, SolarError>(days.concat())
+        })?;
         Ok(SunTable {
             start,
             step_minutes,
@@ -413,6 +455,85 @@ mod tests {
         assert_eq!(z.local_month(t), 6);
         let f = SiteTimeZone::parse("+01:00").unwrap();
         assert_eq!(f.local_month(t), 5);
+    }
+
+    /// Counts the sun stage's steps; asks to stop once `stop_after` steps are done.
+    struct Steps {
+        started: std::sync::atomic::AtomicU64,
+        done: std::sync::atomic::AtomicU64,
+        finished: std::sync::atomic::AtomicBool,
+        stop_after: u64,
+    }
+
+    impl Steps {
+        fn new(stop_after: u64) -> Steps {
+            Steps {
+                started: 0.into(),
+                done: 0.into(),
+                finished: false.into(),
+                stop_after,
+            }
+        }
+    }
+
+    impl Progress for Steps {
+        fn start(&self, stage: Stage, items: u64, _: u64) {
+            assert_eq!(stage, Stage::Sun);
+            self.started
+                .store(items, std::sync::atomic::Ordering::Relaxed);
+        }
+        fn advance(&self, stage: Stage, items: u64, _: u64, _: Option<&str>) {
+            assert_eq!(stage, Stage::Sun);
+            self.done
+                .fetch_add(items, std::sync::atomic::Ordering::Relaxed);
+        }
+        fn finish(&self, _: Stage) {
+            self.finished
+                .store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+        fn is_cancelled(&self) -> bool {
+            self.done.load(std::sync::atomic::Ordering::Relaxed) >= self.stop_after
+        }
+    }
+
+    #[test]
+    fn the_sun_table_is_a_progress_stage_that_can_be_cancelled() {
+        use std::sync::atomic::Ordering::Relaxed;
+        let site = Site::new(48.76, 11.42);
+        // Every step announced is done, the table is the one without progress.
+        let p = Steps::new(u64::MAX);
+        let t = SunTable::year_with(2025, 15, &site, &p).unwrap();
+        assert_eq!(p.started.load(Relaxed), 35_040);
+        assert_eq!(p.done.load(Relaxed), 35_040);
+        assert!(p.finished.load(Relaxed));
+        assert_eq!(t, SunTable::year(2025, 15, &site).unwrap());
+        // A step that does not divide a day: the last day's steps are short, all counted.
+        let p = Steps::new(u64::MAX);
+        let t = SunTable::year_with(2025, 7, &site, &p).unwrap();
+        assert_eq!(p.done.load(Relaxed), t.len() as u64);
+        // Asked to stop after the first days: Cancelled, named by the stage, well before
+        // the year is done (at most one day per thread goes on after the request).
+        let p = Steps::new(96 * 3);
+        let e = SunTable::year_with(2025, 15, &site, &p).unwrap_err();
+        assert_eq!(
+            e,
+            SolarError::Cancelled(crate::runtime::progress::Cancelled { stage: Stage::Sun })
+        );
+        assert_eq!(
+            e.to_string(),
+            "cancelled while computing the sun's positions"
+        );
+        assert!(p.finished.load(Relaxed));
+        let threads = rayon::current_num_threads() as u64;
+        assert!(
+            p.done.load(Relaxed) <= 96 * (3 + threads),
+            "{}",
+            p.done.load(Relaxed)
+        );
+        // Cancelled before it begins: no step is computed.
+        let p = Steps::new(0);
+        assert!(SunTable::year_with(2025, 15, &site, &p).is_err());
+        assert_eq!(p.done.load(Relaxed), 0);
     }
 
     #[test]

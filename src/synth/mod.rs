@@ -69,6 +69,7 @@ use std::io::Write;
 
 /// Errors of the generator.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SynthError {
     /// Writing failed.
     #[error("synth: write failed: {0}")]

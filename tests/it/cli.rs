@@ -305,13 +305,16 @@ fn convert_failure_leaves_no_temporary_file() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("truncated.gml"), "{}", stderr(&o));
     assert_eq!(listing(dir.path()), vec!["truncated.gml"]);
-    // Output into a directory that does not exist.
+    // Output into a directory that does not exist: it is made, nothing else is left.
+    let missing = dir.path().join("no-such-dir");
     let o = run(&convert_args(
         &fixture("chimney-citygml2.gml"),
-        &dir.path().join("no-such-dir").join("out.gml"),
+        &missing.join("out.gml"),
         false,
     ));
-    assert_ne!(o.status.code(), Some(0));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(listing(&missing), vec!["out.gml"]);
+    std::fs::remove_dir_all(&missing).unwrap();
     assert_eq!(listing(dir.path()), vec!["truncated.gml"]);
     // Output path is a directory: the output goes into it, under the input's name (as `cp`).
     std::fs::create_dir(dir.path().join("adir")).unwrap();

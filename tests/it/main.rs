@@ -82,6 +82,8 @@ mod shard;
 mod soak;
 // The solar commands on the command line, and SVF, sky exposure and sun hours against closed forms.
 mod solar;
+// Models from memory and standard input written as from their file; `<stdin>` and `-` names.
+mod sources;
 // Issue 22: the bytes of one large file move while it is read; the model stays the same.
 mod stream;
 // `sun_position` agrees with pvlib's SPA.

@@ -1,4 +1,4 @@
-//! The inputs of a command: arguments expanded (standard input spooled to a file), read and
+//! The inputs of a command: arguments expanded (standard input read into memory), read and
 //! merged into one model, failures reported.
 
 use crate::log::{error, warning};
@@ -10,8 +10,7 @@ use std::path::PathBuf;
 pub use skylod::batch::inputs::Spool;
 
 /// Expand the input arguments in place ([`skylod::batch::inputs::expand`]: files, directories,
-/// glob patterns, `-`), spooling standard input to a temporary file. Keep the returned
-/// [`Spool`] alive while the inputs are read and written.
+/// glob patterns, `-`), reading standard input into memory.
 pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
     let (expanded, spool) = expand_inputs_relative(inputs)?;
     *inputs = expanded.into_iter().map(|i| i.path).collect();
@@ -19,7 +18,7 @@ pub fn expand_inputs(inputs: &mut Vec<PathBuf>) -> anyhow::Result<Spool> {
 }
 
 /// [`expand_inputs`], keeping each input's path relative to its argument (for `-o DIR`; the
-/// spooled standard input is `stdin.gml`): [`skylod::batch::inputs::expand_spooled`].
+/// standard input is `stdin.gml`): [`skylod::batch::inputs::expand_spooled`].
 pub fn expand_inputs_relative(inputs: &[PathBuf]) -> anyhow::Result<(Vec<Input>, Spool)> {
     let (found, spool) =
         skylod::batch::inputs::expand_spooled(inputs, &mut std::io::stdin().lock())?;
@@ -27,17 +26,7 @@ pub fn expand_inputs_relative(inputs: &[PathBuf]) -> anyhow::Result<(Vec<Input>,
     for s in &found.skipped {
         warning!("warning: {s}");
     }
-    let expanded = found.inputs;
-    if spool.is_used() {
-        if let Some(i) = expanded
-            .iter()
-            .find(|i| i.relative.as_os_str() == "stdin.gml" && i.path.ends_with("stdin"))
-        {
-            // Messages name the spool file `<stdin>`, never a deleted temporary path.
-            crate::log::name_stdin(&i.path);
-        }
-    }
-    Ok((expanded, spool))
+    Ok((found.inputs, spool))
 }
 
 /// The inputs that could be read, merged in input order ([`skylod::pipeline::Inputs`]).
@@ -76,7 +65,7 @@ pub fn load(inputs: &[PathBuf]) -> anyhow::Result<Loaded> {
     }
     Ok(Loaded {
         model: r.model,
-        inputs: r.read.iter().map(|p| crate::log::input_name(p)).collect(),
+        inputs: r.read.iter().map(|p| p.display().to_string()).collect(),
         failed: !r.failures.is_empty(),
         read_ms: (r.read_s * 1e4).round() / 10.0,
     })

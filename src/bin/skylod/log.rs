@@ -134,33 +134,12 @@ pub fn enabled(level: Level) -> bool {
     logger().level >= level
 }
 
-/// The path standard input was spooled to: messages name it `<stdin>` instead.
-static STDIN_SPOOL: OnceLock<String> = OnceLock::new();
-
-/// Name `path` (the spool file of standard input) `<stdin>` in every message written from now.
-pub fn name_stdin(path: &std::path::Path) {
-    let _ = STDIN_SPOOL.set(path.display().to_string());
-}
-
-/// An input's name in JSON outputs: `-` for the spool file of standard input, else its path.
-pub fn input_name(path: &std::path::Path) -> String {
-    let text = path.display().to_string();
-    match STDIN_SPOOL.get() {
-        Some(spool) if *spool == text => "-".to_owned(),
-        _ => text,
-    }
-}
-
 /// Write `text` on standard error when `level` is enabled, above the bars when there are.
 pub fn line(level: Level, text: &str) {
     let l = logger();
     if l.level < level {
         return;
     }
-    let text = match STDIN_SPOOL.get() {
-        Some(spool) if text.contains(spool.as_str()) => text.replace(spool.as_str(), "<stdin>"),
-        _ => text.to_owned(),
-    };
     match &l.bars {
         Some(m) => m.suspend(|| eprintln!("{text}")),
         None => eprintln!("{text}"),

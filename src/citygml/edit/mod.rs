@@ -93,8 +93,8 @@ impl EditSummary {
     pub fn describe(&self, input: &Path, out: &Path) -> String {
         let mut s = format!(
             "{} -> {}: {} of {} city object(s) kept",
-            input.display(),
-            out.display(),
+            crate::model::shown(input),
+            crate::model::shown(out),
             self.members_kept,
             self.members
         );

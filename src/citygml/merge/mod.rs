@@ -77,13 +77,14 @@ use std::collections::{HashMap, HashSet};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use super::write::{atomic_write, check_target, WriteOptions};
+use super::write::{check_target, WriteOptions};
 use copy::{copy_children, xmlns_key, CopyError, CountingWriter};
 use ids::Rewrite;
 use scan::{is_header, ns_of, open, scan, xml_err, Key};
 
 /// Why documents cannot be merged.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum MergeError {
     /// An input cannot be read or is not well-formed.
     #[error(transparent)]
@@ -95,7 +96,7 @@ pub enum MergeError {
     #[error("no document to merge")]
     NoInput,
     /// Inputs of different CityGML versions.
-    #[error("cannot merge CityGML {first_version} ({first}) with CityGML {other_version} ({other})", first = .first.display(), other = .other.display())]
+    #[error("cannot merge CityGML {first_version} ({first}) with CityGML {other_version} ({other})", first = crate::model::shown(.first), other = crate::model::shown(.other))]
     Version {
         /// The first input.
         first: PathBuf,
@@ -107,7 +108,7 @@ pub enum MergeError {
         other_version: String,
     },
     /// Inputs in different CRSs.
-    #[error("cannot merge inputs in different CRSs: {} ({first_srs}) and {} ({other_srs})", .first.display(), .other.display())]
+    #[error("cannot merge inputs in different CRSs: {} ({first_srs}) and {} ({other_srs})", crate::model::shown(.first), crate::model::shown(.other))]
     Crs {
         /// The first input naming a CRS.
         first: PathBuf,
@@ -250,6 +251,12 @@ fn compare(
     Ok(())
 }
 
+impl From<crate::io::FileError> for MergeError {
+    fn from(e: crate::io::FileError) -> Self {
+        MergeError::Write(e.into())
+    }
+}
+
 /// Merge the CityGML documents `inputs` (plain or gzip) into `out` (gzip when it ends in `.gz`;
 /// `-` for standard output), written atomically. See the module docs for the rules.
 pub fn merge_files(
@@ -268,11 +275,41 @@ pub fn merge_named(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<MergeSummary, MergeError> {
-    let name = |k: usize| names.get(k).unwrap_or(&inputs[k]).clone();
     if inputs.is_empty() {
         return Err(MergeError::NoInput);
     }
     check_target(out, opts, inputs.iter().map(PathBuf::as_path))?;
+    let mut summary = None;
+    crate::io::atomic_write(out, |w| {
+        let s = merge_into(inputs, names, w, out)?;
+        let n = s.bytes;
+        summary = Some(s);
+        Ok::<u64, MergeError>(n)
+    })?;
+    summary.ok_or(MergeError::NoInput)
+}
+
+/// [`merge_named`] into any writer `w` (uncompressed, no target checks; `-` among `inputs`
+/// is standard input).
+pub fn merge_named_to(
+    inputs: &[PathBuf],
+    names: &[PathBuf],
+    w: &mut dyn Write,
+) -> Result<MergeSummary, MergeError> {
+    merge_into(inputs, names, w, Path::new(crate::io::WRITER_NAME))
+}
+
+/// The merge written into `w`; `out` names the output in errors.
+fn merge_into(
+    inputs: &[PathBuf],
+    names: &[PathBuf],
+    w: &mut dyn Write,
+    out: &Path,
+) -> Result<MergeSummary, MergeError> {
+    let name = |k: usize| names.get(k).unwrap_or(&inputs[k]).clone();
+    if inputs.is_empty() {
+        return Err(MergeError::NoInput);
+    }
     let scans = inputs
         .iter()
         .map(|p| scan(p))
@@ -429,7 +466,7 @@ pub fn merge_named(
 
     let mut members = 0usize;
     let mut refs_rewritten = 0usize;
-    let bytes = atomic_write(out, |w| {
+    let bytes = {
         let mut cw = CountingWriter { inner: w, n: 0 };
         let io = |e: std::io::Error| WriteError::Io {
             file: out.to_path_buf(),
@@ -485,8 +522,8 @@ pub fn merge_named(
         cw.write_all(b"\n</").map_err(io)?;
         cw.write_all(&root_name).map_err(io)?;
         cw.write_all(b">\n").map_err(io)?;
-        Ok(cw.n)
-    })?;
+        cw.n
+    };
     Ok(MergeSummary {
         files: inputs.len(),
         members,

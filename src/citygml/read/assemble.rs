@@ -169,6 +169,7 @@ impl Parser<'_> {
         }
         let file = SourceFile {
             path: self.path.clone(),
+            source: crate::model::Source::File(self.path.clone()),
             version,
             srs_name: self.srs_name.clone(),
             gzip,

@@ -50,7 +50,7 @@ pub use stream::{stream, Chunk, StreamSummary, Streamed, CHUNK_BYTES};
 
 use crate::citygml::error::ReadError;
 use crate::citygml::source;
-use crate::model::CityModel;
+use crate::model::{CityModel, Source};
 use std::path::Path;
 
 /// Limits that protect against hostile input.
@@ -89,7 +89,8 @@ impl Default for ReadOptions {
     }
 }
 
-/// Read one CityGML file (`.gml`, `.xml`, gzip-compressed or not).
+/// Read one CityGML file (`.gml`, `.xml`, gzip-compressed or not); `-` reads standard input
+/// (whole, into memory: [`crate::io::stdin_bytes`]).
 pub fn read_file(path: &Path) -> Result<CityModel, ReadError> {
     read_file_with(path, &ReadOptions::default())
 }
@@ -98,20 +99,19 @@ pub fn read_file(path: &Path) -> Result<CityModel, ReadError> {
 /// parsed from there (events borrow from it); a gzip-compressed one is decompressed as it is
 /// parsed.
 pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, ReadError> {
-    match source::load(path)? {
-        source::Document::Plain(doc) => {
-            let release = |from, upto| doc.release_range(from, upto);
-            if let Some(model) = split::read_split(&doc, path, opts, &release) {
-                return Ok(model);
-            }
-            events::read_slice(&doc, path, false, opts, &|upto| doc.release_before(upto))
-        }
-        source::Document::Gzip(reader, compressed) => {
-            // gzip-compressed CityGML is typically 8-12 times smaller than the document
-            let hint = compressed.saturating_mul(8);
-            events::read_sized(reader, path, true, opts, hint)
-        }
-    }
+    read_source_with(source::resolve(path)?, path, opts)
+}
+
+/// Read a document from where it is ([`Source`]: a file, or bytes in memory), naming it
+/// `name` in the model ([`crate::model::SourceFile::path`]), errors and warnings. A model read
+/// from memory keeps the bytes ([`crate::model::SourceFile::source`]), so that every writer
+/// can copy from them as from a file.
+pub fn read_source_with(
+    src: Source,
+    name: &Path,
+    opts: &ReadOptions,
+) -> Result<CityModel, ReadError> {
+    read_source_observed(src, name, opts, &|_| {})
 }
 
 /// [`read_file_with`] that reports its way through the file: `passed(n)` is called, from
@@ -125,27 +125,46 @@ pub fn read_file_observed(
     opts: &ReadOptions,
     passed: &(dyn Fn(u64) + Sync),
 ) -> Result<CityModel, ReadError> {
-    match source::load(path)? {
+    read_source_observed(source::resolve(path)?, path, opts, passed)
+}
+
+/// [`read_file_observed`] on a [`Source`] named `name`.
+pub fn read_source_observed(
+    src: Source,
+    name: &Path,
+    opts: &ReadOptions,
+    passed: &(dyn Fn(u64) + Sync),
+) -> Result<CityModel, ReadError> {
+    let mut model = match source::load_source(&src, name)? {
         source::Document::Plain(doc) => {
             let seen = Seen::new(doc.len() as u64, passed);
             let release = |from, upto| {
                 seen.part_at(from, upto);
                 doc.release_range(from, upto);
             };
-            if let Some(model) = split::read_split(&doc, path, opts, &release) {
-                return Ok(model);
+            match split::read_split(&doc, name, opts, &release) {
+                Some(model) => model,
+                None => {
+                    seen.restart();
+                    events::read_slice(&doc, name, false, opts, &|upto| {
+                        seen.part_at(0, upto);
+                        doc.release_before(upto);
+                    })?
+                }
             }
-            seen.restart();
-            events::read_slice(&doc, path, false, opts, &|upto| {
-                seen.part_at(0, upto);
-                doc.release_before(upto);
-            })
         }
         source::Document::Gzip(reader, compressed) => {
+            // gzip-compressed CityGML is typically 8-12 times smaller than the document
             let hint = compressed.saturating_mul(8);
-            events::read_sized(reader, path, true, opts, hint)
+            events::read_sized(reader, name, true, opts, hint)?
+        }
+    };
+    if let Source::Memory(_) = src {
+        for f in &mut model.files {
+            f.source = src.clone();
         }
     }
+    Ok(model)
 }
 
 /// The bytes [`read_file_observed`] has reported: how far each part (keyed by its first byte)
@@ -210,7 +229,10 @@ pub fn read_file_split(path: &Path, opts: &ReadOptions) -> Result<Option<CityMod
     }
 }
 
-/// Read a document held in memory (tests, examples). `name` is used in messages.
+/// Read a document held in memory, plain or gzip-compressed. `name` names it in the model,
+/// errors and warnings. The bytes are copied once and kept with the model, so that it can be
+/// written as a model read from a file can ([`read_source_with`] keeps shared bytes without
+/// the copy).
 pub fn read_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<CityModel, ReadError> {
     read_bytes_with(bytes, name, &ReadOptions::default())
 }
@@ -222,11 +244,7 @@ pub fn read_bytes_with(
     name: impl AsRef<Path>,
     opts: &ReadOptions,
 ) -> Result<CityModel, ReadError> {
-    let path = name.as_ref();
-    if let Some(model) = split::read_split(bytes, path, opts, &|_, _| {}) {
-        return Ok(model);
-    }
-    events::read_slice(bytes, path, false, opts, &|_| {})
+    read_source_with(Source::Memory(bytes.into()), name.as_ref(), opts)
 }
 
 /// Largest accepted coordinate magnitude: far beyond any real CRS (geocentric coordinates are

@@ -24,6 +24,59 @@ use quick_xml::NsReader;
 use std::collections::hash_map::Entry;
 use std::path::Path;
 
+/// A document's prolog and root start tag, parsed ([`parse_head`]).
+pub(super) struct Head<'d> {
+    /// The parser that read them (it goes on with the root's first part).
+    pub(super) parser: Parser<'d>,
+    /// The reader over `body`, standing after the root's start tag.
+    pub(super) reader: NsReader<&'d [u8]>,
+    /// Bytes of the byte-order mark (0 or 3).
+    pub(super) bom: usize,
+    /// The document after the byte-order mark.
+    pub(super) body: &'d [u8],
+    /// Offset in `body` after the root's start tag: `body[..root_end]` is the prolog.
+    pub(super) root_end: usize,
+}
+
+/// Parse the prolog and the root's start tag of `doc` (a whole uncompressed document), for a
+/// read that goes on in parts (the split read, the stream). `Err` with why a part-wise read
+/// does not apply: no `CityModel` root (or no well-formed start), or a DOCTYPE (entities).
+pub(super) fn parse_head<'d>(
+    doc: &'d [u8],
+    path: &Path,
+    opts: &ReadOptions,
+) -> Result<Head<'d>, &'static str> {
+    let bom = if doc.starts_with(&BOM) { 3 } else { 0 };
+    let body = &doc[bom..];
+    let mut parser = Parser::new(path, opts.clone(), doc);
+    let mut reader = NsReader::from_reader(body);
+    configure(&mut reader);
+    let mut saw_root = false;
+    let started = parse_events(
+        &mut parser,
+        &mut reader,
+        bom as u64,
+        &mut saw_root,
+        (&|_| {}, RELEASE_STEP),
+        true,
+    );
+    if !matches!(started, Ok(true)) || parser.stack.len() != 1 || !parser.root_is_model {
+        return Err("no CityModel root");
+    }
+    let root_end = usize::try_from(reader.buffer_position()).map_err(|_| "no CityModel root")?;
+    let prolog = body.get(..root_end).ok_or("no CityModel root")?;
+    if memchr::memmem::find(prolog, b"<!DOCTYPE").is_some() {
+        return Err("a DOCTYPE");
+    }
+    Ok(Head {
+        parser,
+        reader,
+        bom,
+        body,
+        root_end,
+    })
+}
+
 /// Read `doc` (a whole uncompressed document) split across rayon's threads; `None` where the
 /// split does not apply (document smaller than [`ReadOptions::split_min_bytes`], one thread)
 /// or could differ from the serial read (see the module's documentation): read serially then.
@@ -43,29 +96,14 @@ pub(super) fn read_split(
     if threads < 2 || n < 2 || (doc.len() as u64) < opts.split_min_bytes {
         return None;
     }
-    let bom = if doc.starts_with(&BOM) { 3 } else { 0 };
-    let body = &doc[bom..];
-    // the prolog and the root's start tag
-    let mut head = Parser::new(path, opts.clone(), doc);
-    let mut reader = NsReader::from_reader(body);
-    configure(&mut reader);
-    let mut saw_root = false;
-    let started = parse_events(
-        &mut head,
-        &mut reader,
-        bom as u64,
-        &mut saw_root,
-        (&|_| {}, RELEASE_STEP),
-        true,
-    );
-    if !matches!(started, Ok(true)) || head.stack.len() != 1 || !head.root_is_model {
-        return None;
-    }
-    let root_end = usize::try_from(reader.buffer_position()).ok()?;
-    let prolog = body.get(..root_end)?;
-    if memchr::memmem::find(prolog, b"<!DOCTYPE").is_some() {
-        return None;
-    }
+    let Head {
+        parser: mut head,
+        mut reader,
+        bom,
+        body,
+        root_end,
+    } = parse_head(doc, path, opts).ok()?;
+    let prolog = &body[..root_end];
     // parts: [root_end, cut 1), [cut 1, cut 2), ..., [cut n-1, end) in body offsets
     let mut bounds = vec![root_end];
     bounds.extend(cuts(body, root_end, n));

@@ -31,7 +31,7 @@
 //! envelope is computed over the chunk. The summary of invalid gml:ids ("N more ...") is the
 //! stream's: [`StreamSummary::patch_warnings`].
 
-use super::events::{configure, finish, parse_events, BOM, RELEASE_STEP};
+use super::events::{configure, finish, parse_events};
 use super::ids::INVALID_IDS_LISTED;
 use super::state::{EnvOwner, LineMark, Parser, NO_REC};
 use super::ReadOptions;
@@ -147,32 +147,11 @@ pub fn stream<E>(
         Ok(source::Document::Gzip(..)) => return decline("gzip-compressed"),
         Err(e) => return decline(&e.to_string()),
     };
-    let bom = if doc.starts_with(&BOM) { 3 } else { 0 };
-    let body = &doc[bom..];
-    // the prolog and the root's start tag
-    let mut head = Parser::new(path, opts.clone(), &doc);
-    let mut reader = NsReader::from_reader(body);
-    configure(&mut reader);
-    let mut saw_root = false;
-    let started = parse_events(
-        &mut head,
-        &mut reader,
-        bom as u64,
-        &mut saw_root,
-        (&|_| {}, RELEASE_STEP),
-        true,
-    );
-    if !matches!(started, Ok(true)) || head.stack.len() != 1 || !head.root_is_model {
-        return decline("no CityModel root");
-    }
-    let Ok(root_end) = usize::try_from(reader.buffer_position()) else {
-        return decline("no CityModel root");
+    let (bom, body, root_end) = match super::split::parse_head(&doc, path, opts) {
+        Ok(h) => (h.bom, h.body, h.root_end),
+        Err(why) => return decline(why),
     };
     let prolog = &body[..root_end];
-    if memchr::memmem::find(prolog, b"<!DOCTYPE").is_some() {
-        return decline("a DOCTYPE");
-    }
-    drop(head);
     let mut state = DocState {
         line: LineMark {
             line: 1,

@@ -12,6 +12,7 @@ pub use with_proj::{reproject_file, ReprojectSummary};
 
 /// Errors of reprojection.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReprojectError {
     /// A CRS name without an EPSG code skylod can read.
     #[error("{0}: not a CRS skylod can read (give EPSG:n, EPSG:h+v, or an OGC URN of EPSG codes)")]
@@ -20,7 +21,7 @@ pub enum ReprojectError {
     #[error("{0}: the document names no CRS (srsName); give the source CRS with -s EPSG:n")]
     NoSourceCrs(std::path::PathBuf),
     /// The document uses several CRSs.
-    #[error("{file}: the document uses several CRSs ({names}); give the source CRS with -s EPSG:n to treat them all as one", file = .file.display())]
+    #[error("{file}: the document uses several CRSs ({names}); give the source CRS with -s EPSG:n to treat them all as one", file = crate::model::shown(.file))]
     MixedCrs {
         /// Document.
         file: std::path::PathBuf,

@@ -31,7 +31,7 @@ use crate::citygml::error::{ReadError, WriteError};
 use crate::citygml::ns::{self, Module, Ns};
 use crate::citygml::read::ReadOptions;
 use crate::citygml::source::{self, Limited, SkipAhead, Stream};
-use crate::model::Span;
+use crate::model::{Source as DocSource, Span};
 use foldhash::{HashMap, HashMapExt};
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::name::{QName, ResolveResult};
@@ -66,23 +66,32 @@ const PRESCAN_MIN_BYTES: u64 = 1 << 20;
 
 /// One streaming pass over the source: the element index. `skip` are the spans of elements
 /// whose content is dropped with them (sorted by start; nested spans allowed).
-pub(super) fn scan(path: &Path, skip: &[Span], opts: &ReadOptions) -> Result<Doc, WriteError> {
-    scan_with(path, skip, opts, PRESCAN_MIN_BYTES, CHUNK_BYTES)
+pub(super) fn scan(
+    src: &DocSource,
+    path: &Path,
+    skip: &[Span],
+    opts: &ReadOptions,
+) -> Result<Doc, WriteError> {
+    scan_with(src, path, skip, opts, PRESCAN_MIN_BYTES, CHUNK_BYTES)
 }
 
 /// [`scan`], with the ids of skipped content found ahead of the pass on the other cores
 /// ([`Prescan`], `chunk_bytes` at a time) when the document is plain and the spans hold
 /// `prescan_min` bytes or more.
 fn scan_with(
+    src: &DocSource,
     path: &Path,
     skip: &[Span],
     opts: &ReadOptions,
     prescan_min: u64,
     chunk_bytes: u64,
 ) -> Result<Doc, WriteError> {
-    let size = std::fs::metadata(path).map_or(0, |m| m.len());
+    let size = match src {
+        DocSource::File(p) => std::fs::metadata(p).map_or(0, |m| m.len()),
+        DocSource::Memory(b) => b.len() as u64,
+    };
     let skipped: u64 = skip.iter().map(|s| s.end.saturating_sub(s.start)).sum();
-    let mut doc = match source::open_stream(path)? {
+    let mut doc = match source::open_stream(src, path)? {
         Stream::Plain(reader) if cfg!(unix) && skipped >= prescan_min => {
             let file = reader
                 .get_ref()
@@ -101,6 +110,7 @@ fn scan_with(
             doc
         }
         Stream::Plain(reader) => scan_stream(reader, size, path, skip, opts, None)?.0,
+        Stream::Memory(reader) => scan_stream(reader, size, path, skip, opts, None)?.0,
         Stream::Gzip(reader) => scan_stream(reader, size, path, skip, opts, None)?.0,
     };
     doc.seal();
@@ -557,9 +567,9 @@ mod tests {
         let path = dir.path().join("d.gml");
         std::fs::write(&path, DOC).unwrap();
         let opts = ReadOptions::default();
-        let full = scan(&path, &[], &opts).unwrap();
+        let full = scan(&DocSource::File(path.clone()), &path, &[], &opts).unwrap();
         let skip = [span_of(DOC, "A"), span_of(DOC, "B"), span_of(DOC, "C")];
-        let fast = scan(&path, &skip, &opts).unwrap();
+        let fast = scan(&DocSource::File(path.clone()), &path, &skip, &opts).unwrap();
         // A skipped; B (comment) and C (namespace declaration) parsed
         assert_eq!(
             fast.skipped,
@@ -597,7 +607,13 @@ mod tests {
         assert_eq!(tail(&full), tail(&fast));
         // a span that does not end with the element's own end tag is parsed, not skipped
         let wrong = skip[0].start..skip[0].end + "</cityObjectMember>".len() as u64;
-        let w = scan(&path, std::slice::from_ref(&wrong), &opts).unwrap();
+        let w = scan(
+            &DocSource::File(path.clone()),
+            &path,
+            std::slice::from_ref(&wrong),
+            &opts,
+        )
+        .unwrap();
         assert_eq!(w.skipped, (0, 0));
         assert_eq!(w.nodes.len(), full.nodes.len());
     }
@@ -622,8 +638,12 @@ mod tests {
                     .map(|s| s.start + shift..s.end + shift)
                     .collect();
                 let opts = ReadOptions::default();
-                let plain = scan(&path, &skip, &opts).unwrap();
-                assert_eq!(plain, scan(&gz, &skip, &opts).unwrap(), "{name} {skip:?}");
+                let plain = scan(&DocSource::File(path.clone()), &path, &skip, &opts).unwrap();
+                assert_eq!(
+                    plain,
+                    scan(&DocSource::File(gz.clone()), &gz, &skip, &opts).unwrap(),
+                    "{name} {skip:?}"
+                );
                 assert_eq!(plain.skipped.0, usize::from(!skip.is_empty()), "{name}");
             }
         }
@@ -706,7 +726,15 @@ mod tests {
             .collect();
         ids.extend(["nope".to_string(), "a60".to_string()]);
         let opts = ReadOptions::default();
-        let serial = scan_with(&path, &skip, &opts, u64::MAX, CHUNK_BYTES).unwrap();
+        let serial = scan_with(
+            &DocSource::File(path.clone()),
+            &path,
+            &skip,
+            &opts,
+            u64::MAX,
+            CHUNK_BYTES,
+        )
+        .unwrap();
         // the cases: A, D, E, F (with G inside), I, K jumped over; B, C, J parsed; H empty
         assert_eq!(serial.skipped.0, 60 * 6, "spans skipped");
         assert!(serial.has_id("i0_1") && !serial.has_id("i0_2") && !serial.has_id("n0"));
@@ -722,7 +750,15 @@ mod tests {
             .map(|i| if pre.found(i).is_some() { '+' } else { '-' })
             .collect();
         assert_eq!(found, "+--+++--+-+".repeat(60), "A B C D E F G H I J K");
-        let full = scan_with(&path, &[], &opts, u64::MAX, CHUNK_BYTES).unwrap();
+        let full = scan_with(
+            &DocSource::File(path.clone()),
+            &path,
+            &[],
+            &opts,
+            u64::MAX,
+            CHUNK_BYTES,
+        )
+        .unwrap();
         // one chunk, chunks of a few spans, a chunk per span: with workers or without
         for chunk in [CHUNK_BYTES, 4096, 1] {
             for workers in [0, 1, 3] {
@@ -731,7 +767,16 @@ mod tests {
                     .build()
                     .unwrap();
                 let pre = pool
-                    .install(|| scan_with(&path, &skip, &opts, 0, chunk))
+                    .install(|| {
+                        scan_with(
+                            &DocSource::File(path.clone()),
+                            &path,
+                            &skip,
+                            &opts,
+                            0,
+                            chunk,
+                        )
+                    })
                     .unwrap();
                 assert_same_index(
                     &serial,
@@ -751,7 +796,7 @@ mod tests {
         let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
         std::io::Write::write_all(&mut enc, text.as_bytes()).unwrap();
         std::fs::write(&gz, enc.finish().unwrap()).unwrap();
-        let z = scan_with(&gz, &skip, &opts, 0, 1).unwrap();
+        let z = scan_with(&DocSource::File(gz.clone()), &gz, &skip, &opts, 0, 1).unwrap();
         assert_same_index(&serial, &z, &ids, "gzip");
     }
 
@@ -760,7 +805,13 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("d.gml");
         std::fs::write(&path, DOC).unwrap();
-        let doc = scan(&path, &[], &ReadOptions::default()).unwrap();
+        let doc = scan(
+            &DocSource::File(path.clone()),
+            &path,
+            &[],
+            &ReadOptions::default(),
+        )
+        .unwrap();
         for (i, n) in doc.nodes.iter().enumerate() {
             assert_eq!(doc.node_at(n.start), Some(i as u32));
             assert_eq!(doc.node_at(n.start + 1), None);
@@ -795,14 +846,26 @@ mod tests {
         };
         // from the memory map and streamed (gzip) alike
         for (big, path) in [(big.clone(), path.clone()), (gz(&big), gz(&path))] {
-            assert!(scan(&big, &[], &ReadOptions::default()).is_ok());
-            let e = scan(&big, &[], &tight).unwrap_err().to_string();
+            assert!(scan(
+                &DocSource::File(big.clone()),
+                &big,
+                &[],
+                &ReadOptions::default()
+            )
+            .is_ok());
+            let e = scan(&DocSource::File(big.clone()), &big, &[], &tight)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("exceeds the limit of 524288 bytes"), "{e}");
             // content larger than half the limit is not skipped but parsed, and fails alike
             let span = span_of(&DOC.replace("<!-- note -->", &text), "B");
-            let e = scan(&big, &[span], &tight).unwrap_err().to_string();
+            let e = scan(&DocSource::File(big.clone()), &big, &[span], &tight)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("exceeds the limit of 524288 bytes"), "{e}");
-            let e = scan(&path, &[], &shallow).unwrap_err().to_string();
+            let e = scan(&DocSource::File(path.clone()), &path, &[], &shallow)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("nested deeper than 2"), "{e}");
         }
     }

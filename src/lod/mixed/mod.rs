@@ -148,7 +148,7 @@ mod push_back;
 
 use crate::citygml::error::WriteError;
 use crate::citygml::read::ReadOptions;
-use crate::citygml::write::{check_target, write_document, Edit, WriteOptions};
+use crate::citygml::write::{check_target, write_document, write_document_to, Edit, WriteOptions};
 use crate::lod::rough::RoughGeometry;
 use crate::model::CityModel;
 use plan::Plan;
@@ -191,7 +191,7 @@ impl MixedSummary {
         };
         format!(
             "{} -> {}: {} assets, polygons {} -> {} ({pct:.1}%), {} href(s) and {} appearance target(s) pruned",
-            input.display(),
+            crate::model::shown(input),
             out.display(),
             self.levels[1],
             self.polygons_in,
@@ -214,6 +214,46 @@ pub fn write_mixed(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<MixedSummary, WriteError> {
+    let (edits, mut summary) = mixed_edits(model, file, rough, levels, opts, |src| {
+        check_target(out, opts, src.source.path())
+    })?;
+    let wopts = WriteOptions {
+        keep_envelopes: true,
+        ..opts.clone()
+    };
+    let w = write_document(model, file, edits, out, &wopts)?;
+    summary.bytes = w.bytes;
+    Ok(summary)
+}
+
+/// [`write_mixed`] into any writer `w` (uncompressed, no target checks; of `opts` only
+/// `keep_envelopes` matters).
+pub fn write_mixed_to(
+    model: &CityModel,
+    file: usize,
+    rough: &[RoughGeometry],
+    levels: &[u8],
+    w: &mut dyn std::io::Write,
+    opts: &WriteOptions,
+) -> Result<MixedSummary, WriteError> {
+    let (edits, mut summary) = mixed_edits(model, file, rough, levels, opts, |_| Ok(()))?;
+    let wopts = WriteOptions {
+        keep_envelopes: true,
+        ..opts.clone()
+    };
+    summary.bytes = write_document_to(model, file, edits, w, &wopts)?.bytes;
+    Ok(summary)
+}
+
+/// The arguments checked, `check` passed for the source file, the edits planned.
+fn mixed_edits(
+    model: &CityModel,
+    file: usize,
+    rough: &[RoughGeometry],
+    levels: &[u8],
+    opts: &WriteOptions,
+    check: impl FnOnce(&crate::model::SourceFile) -> Result<(), WriteError>,
+) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
     if levels.len() != model.assets.len() || rough.len() != model.assets.len() {
         return Err(WriteError::Invalid(format!(
             "{} assets, {} levels and {} rough geometries: one of each per asset expected",
@@ -225,15 +265,8 @@ pub fn write_mixed(
     let Some(src) = model.files.get(file) else {
         return Err(WriteError::Invalid(format!("no source file {file}")));
     };
-    check_target(out, opts, std::iter::once(src.path.as_path()))?;
-    let (edits, mut summary) = plan_file(model, file, rough, levels, opts.keep_envelopes, true)?;
-    let wopts = WriteOptions {
-        keep_envelopes: true,
-        ..opts.clone()
-    };
-    let w = write_document(model, file, edits, out, &wopts)?;
-    summary.bytes = w.bytes;
-    Ok(summary)
+    check(src)?;
+    plan_file(model, file, rough, levels, opts.keep_envelopes, true)
 }
 
 /// The edits that write `file` at `levels`, and what they do. `skip`: do not parse the
@@ -253,7 +286,7 @@ fn plan_file(
     } else {
         Vec::new()
     };
-    let doc = index::scan(&src.path, &spans, &ReadOptions::default())?;
+    let doc = index::scan(&src.source, &src.path, &spans, &ReadOptions::default())?;
     let mut plan = Plan::new(model, file, rough, levels, containers, &doc);
     plan.run(keep_envelopes);
     Ok((plan.edits(), plan.summary))
@@ -490,8 +523,13 @@ mod tests {
                 assert!(full.0 == fast.0, "{}: {what}: edits differ", f.display());
                 let containers = plan::containers(&model, 0, &levels);
                 let spans = plan::skip_spans(&model, 0, &levels, &containers);
-                let doc =
-                    index::scan(&model.files[0].path, &spans, &ReadOptions::default()).unwrap();
+                let doc = index::scan(
+                    &model.files[0].source,
+                    &model.files[0].path,
+                    &spans,
+                    &ReadOptions::default(),
+                )
+                .unwrap();
                 skipped_bytes += doc.skipped.1;
                 checked += 1;
             }

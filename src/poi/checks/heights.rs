@@ -29,7 +29,7 @@ pub fn check_heights(model: &CityModel) -> Result<(), TrustError> {
     let files: Vec<String> = model
         .files
         .iter()
-        .map(|f| f.path.display().to_string())
+        .map(|f| crate::model::shown(&f.path).to_string())
         .collect();
     let two_d = model
         .files

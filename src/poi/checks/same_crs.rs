@@ -33,7 +33,7 @@ pub fn check_same_crs(model: &CityModel) -> Result<(), TrustError> {
         let k = key(srs);
         match seen.iter_mut().find(|(sk, ..)| *sk == k) {
             Some((_, _, n, _)) => *n += 1,
-            None => seen.push((k, srs, 1, f.path.display().to_string())),
+            None => seen.push((k, srs, 1, crate::model::shown(&f.path).to_string())),
         }
     }
     if seen.len() < 2 {
@@ -71,6 +71,7 @@ mod tests {
         ] {
             model.files.push(SourceFile {
                 path: name.into(),
+                source: crate::model::Source::File(name.into()),
                 version: CityGmlVersion::V2_0,
                 srs_name: srs.map(Into::into),
                 gzip: false,

@@ -104,10 +104,11 @@ impl BoundArgs {
         let sun = match sun_error {
             Some(_) => {
                 let (lat, lon) = self.site.resolve(source, "lod")?;
-                Some(SunTable::year(
+                Some(SunTable::year_with(
                     self.sun.year,
                     self.sun.step,
                     &Site::new(lat, lon),
+                    &crate::log::reporter(),
                 )?)
             }
             None => None,

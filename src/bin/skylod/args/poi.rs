@@ -6,7 +6,7 @@ use super::jobs::JobsArgs;
 use super::non_negative;
 use crate::args::tracing::Session;
 use crate::inputs::{load, Loaded, Spool};
-use crate::log::{error, input_name, summary, warning};
+use crate::log::{error, summary, warning};
 use anyhow::bail;
 use skylod::batch::inputs::Input;
 use skylod::batch::shard::Shard;
@@ -125,7 +125,11 @@ impl PoiArgs {
             summary!("{cmd}: {n}");
         }
         Ok(Session {
-            inputs: study.inputs().iter().map(|i| input_name(&i.path)).collect(),
+            inputs: study
+                .inputs()
+                .iter()
+                .map(|i| i.path.display().to_string())
+                .collect(),
             read_ms: (study.read_s() * 1e4).round() / 10.0,
             study,
             shard,

@@ -56,7 +56,10 @@ impl SceneArgs {
             .filter(|(_, k)| **k)
             .map(|(p, _)| p)
             .collect();
-        let names: Vec<String> = inputs.iter().map(|p| p.display().to_string()).collect();
+        let names: Vec<String> = inputs
+            .iter()
+            .map(|p| skylod::model::shown(p).to_string())
+            .collect();
         crate::log::summary!(
             "{cmd}: scene radius {radius} m: {} of {total} input(s) within reach of {} POI(s) \
              ({} not read; {scanned} without an envelope, pre-scanned): {}",

@@ -104,7 +104,7 @@ fn one(
     passed: &(dyn Fn(u64) + Sync),
 ) -> anyhow::Result<Done> {
     if crate::log::cancelled() {
-        anyhow::bail!("{}: cancelled before reading", input.display());
+        anyhow::bail!("{}: cancelled before reading", skylod::model::shown(input));
     }
     let model = read_file_observed(input, &ReadOptions::default(), passed)?;
     let polygons = crate::commands::polygons(&model);
@@ -127,7 +127,7 @@ fn one(
     Ok(Done {
         line: Some(format!(
             "{} -> {}: {}, {} envelope(s) recomputed, {} warning(s)",
-            input.display(),
+            skylod::model::shown(input),
             out.display(),
             outputs::size_note(out, s.bytes),
             s.edits,

@@ -57,7 +57,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         Some(Site::new(lat, lon))
     };
     let table = match &site {
-        Some(s) => Some(SunTable::year(args.sun.year, args.sun.step, s)?),
+        Some(s) => Some(SunTable::year_with(
+            args.sun.year,
+            args.sun.step,
+            s,
+            &crate::log::reporter(),
+        )?),
         None => None,
     };
     let opts = EvaluateOptions {

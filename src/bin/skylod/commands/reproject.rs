@@ -110,7 +110,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 };
                 crate::log::summary!(
                     "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
-                    input.display(),
+                    skylod::model::shown(input),
                     shown.display(),
                     s.source,
                     s.target,
@@ -120,11 +120,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                     s.rewrite.srs_names
                 );
                 for w in &s.rewrite.warnings {
-                    crate::log::warning!("warning: {}: {w}", input.display());
+                    crate::log::warning!("warning: {}: {w}", skylod::model::shown(input));
                 }
             }
             Err(e) => {
-                crate::log::error!("{}: {e}", input.display());
+                crate::log::error!("{}: {e}", skylod::model::shown(input));
                 failed += 1;
             }
         }

@@ -86,7 +86,7 @@ fn one(
     let (frame, warning) =
         LocalFrame::new(&model_crs(&model, crs.source_crs.as_ref()), &model.bbox());
     if let Some(w) = warning {
-        crate::log::warning!("rough: warning: {}: {w}", input.display());
+        crate::log::warning!("rough: warning: {}: {w}", skylod::model::shown(input));
     }
     let local = frame.model_to_local(&model);
     let rough_local = rough_model(&local, opts);

@@ -111,7 +111,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     let files = ok
         .iter()
-        .map(|(p, s)| FileStats::new(crate::log::input_name(p), s.clone()))
+        .map(|(p, s)| FileStats::new(p.display().to_string(), s.clone()))
         .collect();
     // One shape whatever the number of inputs: a pipeline never has to test for it.
     let v = StatsOutput::new(files, total);

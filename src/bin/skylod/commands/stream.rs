@@ -37,7 +37,7 @@ pub fn stats(
     let sum = match end {
         Streamed::Done(sum) => sum,
         Streamed::Declined(why) => {
-            crate::log::info!("{}: read whole ({why})", path.display());
+            crate::log::info!("{}: read whole ({why})", skylod::model::shown(path));
             return None;
         }
     };

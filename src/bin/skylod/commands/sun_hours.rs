@@ -35,7 +35,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
     let sun = SunOptions::new(Some(site), args.sun.year, args.sun.step);
     let t = Instant::now();
-    let table = s.study.sun_table(&sun)?;
+    let table = s.study.sun_table_with(&sun, &crate::log::reporter())?;
     let sun_ms = ms(t);
     let traced = s.study.sun_hours(&sun, &crate::log::reporter())?;
     s.warn_flags(&traced.flags);

@@ -123,7 +123,7 @@ pub fn outputs(
             Some(e) => summary!("{}", crate::outputs::describe(e, format, model, *f, out)),
             None => summary!(
                 "{} -> {}: assets at level 0/1/2 = {}/{}/{}, polygons {} -> {}, {} building(s) and {} part(s) dropped",
-                model.files[*f].path.display(),
+                skylod::model::shown(&model.files[*f].path),
                 shown(out),
                 s.levels[0],
                 s.levels[1],
