@@ -77,6 +77,7 @@ use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Options of [`bound`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -387,10 +388,31 @@ fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Ref
     (tags, reference)
 }
 
+/// Boxes per ray looked up before the first round: the [`SEED_BOXES`] nearest ones
+/// ([`BoxIndex::nearest_k`]). Their assets make the first part, and a ray whose answer
+/// there comes before the last of them is final without another box query.
+const SEED_BOXES: usize = 8;
+
 /// [`full_tags`] through the lazy rounds (see the module docs, "Reference"), with the
 /// distance of each hit.
 #[allow(clippy::type_complexity)]
 fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
+    lazy_hits_with(model, probes, SEED_BOXES)
+}
+
+/// [`lazy_hits`] seeded with the `seed_boxes` nearest boxes of every ray (at least 1).
+///
+/// Each round builds only the assets added since the round before (a pending ray was
+/// traced in every earlier part) and keeps, per ray, the nearest answer of the parts so
+/// far by (f32 distance, asset): the answer of their union, since the whole model orders
+/// its triangles by asset and breaks ties of the f32 distance by that order.
+#[allow(clippy::type_complexity)]
+fn lazy_hits_with(
+    model: &CityModel,
+    probes: &[Probe],
+    seed_boxes: usize,
+) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
+    let seed_boxes = seed_boxes.max(1);
     let mut out: Vec<Vec<Option<(u32, f64)>>> =
         probes.iter().map(|p| vec![None; p.len()]).collect();
     let (boxes, frame) = detail_boxes(model);
@@ -406,50 +428,86 @@ fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
     let far = (frame.max - frame.center()).abs().max_element().max(1.0);
     let margin = far / 32768.0 + 1e-3;
     let index = BoxIndex::new(boxes, margin);
-    let mut include = vec![false; model.assets.len()];
-    let mut pending: Vec<Pending> = probes
+    let rays: Vec<(u32, u32)> = probes
         .iter()
         .enumerate()
-        .flat_map(|(k, p)| (0..p.len()).map(move |j| (k, j, None)))
+        .flat_map(|(k, p)| (0..p.len()).map(move |j| (k as u32, j as u32)))
         .collect();
-    // seed: the nearest box of every ray
-    let seed: Vec<u32> = pending
+    // seed: the nearest boxes of every ray, all built in the first round
+    let seeded: Vec<AtomicBool> = (0..model.assets.len())
+        .map(|_| AtomicBool::new(false))
+        .collect();
+    let known: Vec<f64> = rays
         .par_iter()
         .with_min_len(512)
-        .map(|&(k, j, _)| {
-            index
-                .nearest(probes[k].origin, probes[k].dir(j))
-                .unwrap_or(u32::MAX)
+        .map_init(Vec::new, |v, &(k, j)| {
+            let p = &probes[k as usize];
+            v.clear();
+            index.nearest_k(p.origin, p.dir(j as usize), seed_boxes, v);
+            for &(_, a) in v.iter() {
+                if let Some(x) = seeded.get(a as usize) {
+                    x.store(true, Ordering::Relaxed);
+                }
+            }
+            // a box not listed is entered at this distance or later
+            v.get(seed_boxes - 1).map_or(f64::INFINITY, |x| x.0)
         })
         .collect();
-    for a in seed {
-        if let Some(x) = include.get_mut(a as usize) {
-            *x = true;
-        }
-    }
+    let mut include: Vec<bool> = seeded.into_iter().map(AtomicBool::into_inner).collect();
+    let mut built = vec![false; include.len()];
+    let mut pending: Vec<Pending> = rays
+        .into_iter()
+        .zip(known)
+        .map(|((probe, ray), known)| Pending {
+            probe,
+            ray,
+            known,
+            crossed: None,
+            best: None,
+        })
+        .collect();
     loop {
         reference.rounds += 1;
-        let scene = full_scene_part(model, &include, frame, pending.len());
+        let new: Vec<bool> = include.iter().zip(&built).map(|(&i, &b)| i && !b).collect();
+        let scene = full_scene_part(model, &new, frame, pending.len());
+        built.clone_from(&include);
         let cap = if reference.rounds as u32 >= UNCAPPED_ROUND {
             usize::MAX
         } else {
             1 << (2 * reference.rounds)
         };
         let include_ref = &include;
-        let results: Vec<(Pending, Option<(u32, f64)>, Vec<u32>)> = pending
+        let results: Vec<(Pending, Vec<u32>)> = pending
             .into_par_iter()
             .with_min_len(256)
-            .map_init(Vec::new, |v, (k, j, mut all)| {
-                let (o, d) = (probes[k].origin, probes[k].dir(j));
-                let h = scene.first_hit(o, d, POI_OFFSET, f64::INFINITY);
+            .map_init(Vec::new, |v, mut p| {
+                let (o, d) = (
+                    probes[p.probe as usize].origin,
+                    probes[p.probe as usize].dir(p.ray as usize),
+                );
+                if let Some((h, t32)) = scene.first_hit_f32(o, d, POI_OFFSET, f64::INFINITY) {
+                    // nearer, or as near and of an asset earlier in the model
+                    if p.best.is_none_or(|b| (t32, h.tag) < (b.t32, b.tag)) {
+                        p.best = Some(Best {
+                            t32,
+                            tag: h.tag,
+                            t: h.t,
+                        });
+                    }
+                }
+                let h = p.best;
                 // every asset a triangle of which the ray may hit as close as `h`
                 let limit = h.map_or(f64::INFINITY, |h| h.t + 2e-3 * (1.0 + h.t.abs()) + margin);
+                if p.known == f64::INFINITY || limit < p.known {
+                    // every box entered up to `limit` was seeded, so built
+                    return (p, Vec::new());
+                }
                 let missing_of = |it: &mut dyn Iterator<Item = u32>| -> Vec<u32> {
                     it.filter(|&a| !include_ref.get(a as usize).copied().unwrap_or(true))
                         .take(if h.is_some() { usize::MAX } else { cap })
                         .collect()
                 };
-                let missing = match &all {
+                let missing = match &p.crossed {
                     // every box the ray crosses, known from an earlier round
                     Some(list) => missing_of(
                         &mut list
@@ -462,7 +520,7 @@ fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
                         index.crossed(o, d, limit, v);
                         if h.is_none() {
                             // entries rounded down: a later limit keeps every box it must
-                            all = Some(
+                            p.crossed = Some(
                                 v.iter()
                                     .map(|&(t, i)| ((t * (1.0 - 1e-6) - 1e-3) as f32, i))
                                     .collect(),
@@ -471,14 +529,14 @@ fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
                         missing_of(&mut v.iter().map(|x| x.1))
                     }
                 };
-                ((k, j, all), h.map(|h| (h.tag, h.t)), missing)
+                (p, missing)
             })
             .collect();
         drop(scene);
         let mut next = Vec::new();
-        for (p, hit, missing) in results {
+        for (p, missing) in results {
             if missing.is_empty() {
-                out[p.0][p.1] = hit;
+                out[p.probe as usize][p.ray as usize] = p.best.map(|b| (b.tag, b.t));
             } else {
                 next.push(p);
                 for a in missing {
@@ -494,9 +552,29 @@ fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
     }
 }
 
-/// A ray of the reference trace still open: probe, ray, and every box it crosses (entry
-/// rounded down, nearest first) once it was seen to hit nothing.
-type Pending = (usize, usize, Option<Vec<(f32, u32)>>);
+/// A ray of the reference trace still open.
+struct Pending {
+    /// Probe and ray.
+    probe: u32,
+    ray: u32,
+    /// Entry of the last seeded box (infinite when the ray crosses no other): every box
+    /// entered before it is built.
+    known: f64,
+    /// Every box it crosses (entry rounded down, nearest first), once it was seen to hit
+    /// nothing.
+    crossed: Option<Vec<(f32, u32)>>,
+    /// Its nearest hit in the parts built so far.
+    best: Option<Best>,
+}
+
+/// A hit of the reference trace: f32 distance and asset (what orders hits), and the
+/// distance ([`crate::trace::Hit::t`]).
+#[derive(Clone, Copy)]
+struct Best {
+    t32: f32,
+    tag: u32,
+    t: f64,
+}
 
 /// First-hit tags of every ray of a probe (SVF rays, then sun rays).
 fn tags(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
@@ -883,31 +961,40 @@ mod tests {
             .iter()
             .map(|p| probe(p, &bundles, Some(&table)))
             .collect();
-        let (hits, reference) = lazy_hits(&model, &probes);
         let whole = full_scene(&model);
-        let (mut compared, mut hit) = (0, 0);
-        for (p, got) in probes.iter().zip(&hits) {
-            assert_eq!(got.len(), p.len());
-            for (j, g) in got.iter().enumerate() {
-                let want = whole
-                    .first_hit(p.origin, p.dir(j), POI_OFFSET, f64::INFINITY)
-                    .map(|h| (h.tag, h.t));
-                match (g, want) {
-                    (Some((a, t)), Some((b, u))) => {
-                        assert_eq!((*a, t.to_bits()), (b, u.to_bits()), "ray {j}");
-                        hit += 1;
+        // seeded with one box per ray (many rounds) and with the default
+        let mut rounds = Vec::new();
+        for seed in [1, 3, SEED_BOXES] {
+            let (hits, reference) = lazy_hits_with(&model, &probes, seed);
+            let (mut compared, mut hit) = (0, 0);
+            for (p, got) in probes.iter().zip(&hits) {
+                assert_eq!(got.len(), p.len());
+                for (j, g) in got.iter().enumerate() {
+                    let want = whole
+                        .first_hit(p.origin, p.dir(j), POI_OFFSET, f64::INFINITY)
+                        .map(|h| (h.tag, h.t));
+                    match (g, want) {
+                        (Some((a, t)), Some((b, u))) => {
+                            assert_eq!((*a, t.to_bits()), (b, u.to_bits()), "ray {j}, seed {seed}");
+                            hit += 1;
+                        }
+                        (a, b) => {
+                            assert_eq!(a.map(|x| x.0), b.map(|x| x.0), "ray {j}, seed {seed}")
+                        }
                     }
-                    (a, b) => assert_eq!(a.map(|x| x.0), b.map(|x| x.0), "ray {j}"),
+                    compared += 1;
                 }
-                compared += 1;
             }
+            assert!(hit > 100 && hit < compared, "{hit} of {compared} rays hit");
+            assert!(
+                reference.assets > 0 && reference.assets < reference.of && !reference.whole,
+                "{reference:?}"
+            );
+            rounds.push(reference.rounds);
         }
-        assert!(hit > 100 && hit < compared, "{hit} of {compared} rays hit");
-        assert!(
-            reference.assets > 0 && reference.assets < reference.of,
-            "{reference:?}"
-        );
-        assert!(reference.rounds >= 2 && !reference.whole, "{reference:?}");
+        // the parts built round after round are merged (each round builds only its new assets)
+        assert!(rounds[0] >= 3, "{rounds:?}");
+        let (hits, _) = lazy_hits(&model, &probes);
         // `bound` uses these tags, or (more rays than polygons here) the whole model's
         let (tags, r) = full_tags(&model, &probes);
         assert!(r.whole, "{r:?}");
