@@ -437,7 +437,7 @@ fn lazy_hits_with(
     let seeded: Vec<AtomicBool> = (0..model.assets.len())
         .map(|_| AtomicBool::new(false))
         .collect();
-    let known: Vec<f64> = rays
+    let known: Vec<f32> = rays
         .par_iter()
         .with_min_len(512)
         .map_init(Vec::new, |v, &(k, j)| {
@@ -449,8 +449,9 @@ fn lazy_hits_with(
                     x.store(true, Ordering::Relaxed);
                 }
             }
-            // a box not listed is entered at this distance or later
-            v.get(seed_boxes - 1).map_or(f64::INFINITY, |x| x.0)
+            // a box not listed is entered at this distance or later (rounded down)
+            v.get(seed_boxes - 1)
+                .map_or(f32::INFINITY, |x| (x.0 * (1.0 - 1e-6) - 1e-3) as f32)
         })
         .collect();
     let mut include: Vec<bool> = seeded.into_iter().map(AtomicBool::into_inner).collect();
@@ -477,10 +478,11 @@ fn lazy_hits_with(
             1 << (2 * reference.rounds)
         };
         let include_ref = &include;
-        let results: Vec<(Pending, Vec<u32>)> = pending
-            .into_par_iter()
+        // the assets each ray still needs (none: its answer is final)
+        let missing: Vec<Vec<u32>> = pending
+            .par_iter_mut()
             .with_min_len(256)
-            .map_init(Vec::new, |v, mut p| {
+            .map_init(Vec::new, |v, p| {
                 let (o, d) = (
                     probes[p.probe as usize].origin,
                     probes[p.probe as usize].dir(p.ray as usize),
@@ -498,9 +500,9 @@ fn lazy_hits_with(
                 let h = p.best;
                 // every asset a triangle of which the ray may hit as close as `h`
                 let limit = h.map_or(f64::INFINITY, |h| h.t + 2e-3 * (1.0 + h.t.abs()) + margin);
-                if p.known == f64::INFINITY || limit < p.known {
+                if p.known == f32::INFINITY || limit < f64::from(p.known) {
                     // every box entered up to `limit` was seeded, so built
-                    return (p, Vec::new());
+                    return Vec::new();
                 }
                 let missing_of = |it: &mut dyn Iterator<Item = u32>| -> Vec<u32> {
                     it.filter(|&a| !include_ref.get(a as usize).copied().unwrap_or(true))
@@ -529,12 +531,12 @@ fn lazy_hits_with(
                         missing_of(&mut v.iter().map(|x| x.1))
                     }
                 };
-                (p, missing)
+                missing
             })
             .collect();
         drop(scene);
         let mut next = Vec::new();
-        for (p, missing) in results {
+        for (p, missing) in pending.into_iter().zip(missing) {
             if missing.is_empty() {
                 out[p.probe as usize][p.ray as usize] = p.best.map(|b| (b.tag, b.t));
             } else {
@@ -557,12 +559,12 @@ struct Pending {
     /// Probe and ray.
     probe: u32,
     ray: u32,
-    /// Entry of the last seeded box (infinite when the ray crosses no other): every box
-    /// entered before it is built.
-    known: f64,
+    /// Entry of the last seeded box, rounded down (infinite when the ray crosses no
+    /// other): every box entered before it is built.
+    known: f32,
     /// Every box it crosses (entry rounded down, nearest first), once it was seen to hit
     /// nothing.
-    crossed: Option<Vec<(f32, u32)>>,
+    crossed: Option<Box<[(f32, u32)]>>,
     /// Its nearest hit in the parts built so far.
     best: Option<Best>,
 }
