@@ -68,7 +68,7 @@
 
 use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{detail_boxes, full_scene, full_scene_part, mixed_scene};
-use crate::model::CityModel;
+use crate::model::{Bbox, CityModel};
 use crate::poi::{Poi, POI_OFFSET};
 use crate::solar::sky::{Frame, SkyError};
 use crate::solar::{SkyBundles, SunTable};
@@ -323,10 +323,10 @@ fn probe(poi: &Poi, bundles: &SkyBundles, table: Option<&SunTable>) -> Probe {
         .filter(|d| d.z > 0.0)
         .collect();
     let sun_dirs = table.map_or_else(Vec::new, |t| {
-        t.steps()
+        t.sun_up()
             .iter()
-            .filter(|s| s.above_horizon && n.dot(s.direction) > 0.0)
-            .map(|s| s.direction)
+            .filter(|(_, s)| n.dot(s.direction) > 0.0)
+            .map(|(_, s)| s.direction)
             .collect()
     });
     Probe {
@@ -361,7 +361,11 @@ const UNCAPPED_ROUND: u32 = 4;
 /// First-hit tags of every ray of every probe in the full model, as [`tags`] on
 /// [`crate::lod::scene::full_scene`] gives them, from a scene built only of the assets the
 /// rays can reach (see [`full_tags`] in the module docs, "Reference").
-fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Reference) {
+fn full_tags(
+    model: &CityModel,
+    probes: &[Probe],
+    boxes: &AssetBoxes,
+) -> (Vec<Vec<Option<u32>>>, Reference) {
     let rays: usize = probes.iter().map(Probe::len).sum();
     let polygons: usize = model.assets.iter().map(|a| a.detail_polygons().len()).sum();
     if rays > polygons {
@@ -380,7 +384,7 @@ fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Ref
         };
         return (probes.iter().map(|p| tags(&whole, p)).collect(), reference);
     }
-    let (hits, reference) = lazy_hits(model, probes);
+    let (hits, reference) = lazy_hits_with(model, probes, boxes, SEED_BOXES);
     let tags = hits
         .into_iter()
         .map(|v| v.into_iter().map(|h| h.map(|h| h.0)).collect())
@@ -396,8 +400,38 @@ const SEED_BOXES: usize = 8;
 /// [`full_tags`] through the lazy rounds (see the module docs, "Reference"), with the
 /// distance of each hit.
 #[allow(clippy::type_complexity)]
+#[cfg(test)]
 fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
-    lazy_hits_with(model, probes, SEED_BOXES)
+    lazy_hits_with(model, probes, &AssetBoxes::new(model), SEED_BOXES)
+}
+
+/// The boxes of the lazy reference: per asset the box of its full-detail polygons
+/// ([`detail_boxes`]) grown by `margin`, indexed, in the frame of the whole full scene.
+struct AssetBoxes {
+    /// `None` when the model has no full-detail triangle.
+    index: Option<BoxIndex>,
+    frame: Bbox,
+    margin: f64,
+    /// Assets with a box.
+    of: usize,
+}
+
+impl AssetBoxes {
+    fn new(model: &CityModel) -> AssetBoxes {
+        let (boxes, frame) = detail_boxes(model);
+        let of = boxes.iter().filter(|b| !b.is_empty()).count();
+        // Far above the f32 rounding of the scene (its node growth): a triangle's hit
+        // point lies inside its asset's grown box.
+        let far = (frame.max - frame.center()).abs().max_element().max(1.0);
+        let margin = far / 32768.0 + 1e-3;
+        let index = (!frame.is_empty()).then(|| BoxIndex::new(boxes, margin));
+        AssetBoxes {
+            index,
+            frame,
+            margin,
+            of,
+        }
+    }
 }
 
 /// [`lazy_hits`] seeded with the `seed_boxes` nearest boxes of every ray (at least 1).
@@ -410,24 +444,19 @@ fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
 fn lazy_hits_with(
     model: &CityModel,
     probes: &[Probe],
+    boxes: &AssetBoxes,
     seed_boxes: usize,
 ) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
     let seed_boxes = seed_boxes.max(1);
     let mut out: Vec<Vec<Option<(u32, f64)>>> =
         probes.iter().map(|p| vec![None; p.len()]).collect();
-    let (boxes, frame) = detail_boxes(model);
     let mut reference = Reference {
-        of: boxes.iter().filter(|b| !b.is_empty()).count(),
+        of: boxes.of,
         ..Default::default()
     };
-    if frame.is_empty() {
+    let (Some(index), frame, margin) = (&boxes.index, boxes.frame, boxes.margin) else {
         return (out, reference);
-    }
-    // Far above the f32 rounding of the scene (its node growth): a triangle's hit point
-    // lies inside its asset's grown box.
-    let far = (frame.max - frame.center()).abs().max_element().max(1.0);
-    let margin = far / 32768.0 + 1e-3;
-    let index = BoxIndex::new(boxes, margin);
+    };
     let rays: Vec<(u32, u32)> = probes
         .iter()
         .enumerate()
@@ -640,8 +669,17 @@ pub fn bound(
     } else {
         None
     };
+    // the sun above the horizon and the assets' boxes, side by side (the boxes are partly
+    // serial work)
+    let ((), boxes) = rayon::join(
+        || {
+            table.map(SunTable::sun_up);
+        },
+        || AssetBoxes::new(model),
+    );
     let probes: Vec<Probe> = pois.iter().map(|p| probe(p, &bundles, table)).collect();
-    let (full_tags, reference) = full_tags(model, &probes);
+    let (full_tags, reference) = full_tags(model, &probes, &boxes);
+    drop(boxes);
 
     let mut levels: Vec<u8> = levels.iter().map(|&l| l.min(2)).collect();
     let mut promotions = Vec::new();
@@ -967,7 +1005,7 @@ mod tests {
         // seeded with one box per ray (many rounds) and with the default
         let mut rounds = Vec::new();
         for seed in [1, 3, SEED_BOXES] {
-            let (hits, reference) = lazy_hits_with(&model, &probes, seed);
+            let (hits, reference) = lazy_hits_with(&model, &probes, &AssetBoxes::new(&model), seed);
             let (mut compared, mut hit) = (0, 0);
             for (p, got) in probes.iter().zip(&hits) {
                 assert_eq!(got.len(), p.len());
@@ -998,7 +1036,7 @@ mod tests {
         assert!(rounds[0] >= 3, "{rounds:?}");
         let (hits, _) = lazy_hits(&model, &probes);
         // `bound` uses these tags, or (more rays than polygons here) the whole model's
-        let (tags, r) = full_tags(&model, &probes);
+        let (tags, r) = full_tags(&model, &probes, &AssetBoxes::new(&model));
         assert!(r.whole, "{r:?}");
         for (p, (t, h)) in probes.iter().zip(tags.iter().zip(&hits)) {
             assert_eq!(t, &tags_of(&whole, p));

@@ -23,6 +23,7 @@ use chrono::{DateTime, Datelike, Duration, FixedOffset, NaiveDate, Offset, TimeZ
 use glam::DVec3;
 use rayon::prelude::*;
 use solar_positioning::{Location, RefractionCorrection, SolarPositions};
+use std::sync::OnceLock;
 
 /// Time zone used to attribute steps to local months: an IANA zone (with daylight saving)
 /// or a fixed offset from UTC.
@@ -195,7 +196,8 @@ pub struct SunStep {
     pub month: u8,
 }
 
-/// Sun directions for consecutive equal time steps, precomputed once.
+/// Sun directions for consecutive equal time steps, each computed once, when first asked
+/// for.
 ///
 /// Step `k` stands for the interval `[start + k*step, start + (k+1)*step)`; the sun is
 /// evaluated at the middle of the interval (midpoint rule), and the interval is attributed
@@ -203,11 +205,69 @@ pub struct SunStep {
 /// steps cover a UTC calendar year, so with a non-UTC zone the first/last few hours of the
 /// table fall into the neighbouring local year and are counted in its month (January or
 /// December) — a year of steps always yields one full year of hours.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// [`SunTable::steps`] evaluates SPA at every step (in parallel, on its first call);
+/// [`SunTable::sun_up`], the steps with the sun above the horizon, skips SPA where a quick
+/// solar position puts the sun far below the horizon (half the steps of a year), with the
+/// same figures for the steps it keeps.
+#[derive(Debug, Clone)]
 pub struct SunTable {
     start: DateTime<Utc>,
     step_minutes: u32,
-    steps: Vec<SunStep>,
+    len: usize,
+    site: Site,
+    steps: OnceLock<Vec<SunStep>>,
+    up: OnceLock<Vec<(usize, SunStep)>>,
+}
+
+impl PartialEq for SunTable {
+    fn eq(&self, other: &SunTable) -> bool {
+        self.start == other.start
+            && self.step_minutes == other.step_minutes
+            && self.steps() == other.steps()
+    }
+}
+
+/// Sun elevation (geometric, degrees) below which [`quick_elevation`] proves the sun is
+/// under the horizon for SPA: SPA refracts only above its cut-off of -0.83337 degrees, and
+/// the quick position is within 0.05 degrees of SPA's (tested); the rest is margin.
+const NIGHT_DEG: f64 = -2.0;
+
+/// Years (of every step) in which [`quick_elevation`] is trusted; outside, every step goes
+/// through SPA.
+const QUICK_YEARS: std::ops::RangeInclusive<i32> = 1800..=2200;
+
+/// Geometric sun elevation in degrees at `utc` seen from `site` (no refraction, no
+/// parallax): the low-accuracy solar coordinates of Meeus, *Astronomical Algorithms*
+/// ch. 25 (about 0.01 degrees) with delta T, and the mean sidereal time of ch. 12. Only
+/// used to skip SPA for steps far below the horizon ([`NIGHT_DEG`]).
+fn quick_elevation(utc: DateTime<Utc>, site: &Site) -> f64 {
+    let jd = utc.timestamp_millis() as f64 / 86_400_000.0 + 2_440_587.5;
+    let d = jd - 2_451_545.0;
+    // Julian centuries of dynamical time for the sun, of universal time for the Earth's spin
+    let t = (d + site.delta_t_s / 86_400.0) / 36_525.0;
+    let l0 = 280.46646 + t * (36_000.76983 + t * 0.0003032);
+    let m = (357.52911 + t * (35_999.05029 - t * 0.0001537)).to_radians();
+    let c = (1.914602 - t * (0.004817 + t * 0.000014)) * m.sin()
+        + (0.019993 - t * 0.000101) * (2.0 * m).sin()
+        + 0.000289 * (3.0 * m).sin();
+    let omega = (125.04 - 1934.136 * t).to_radians();
+    let lambda = (l0 + c - 0.00569 - 0.00478 * omega.sin()).to_radians();
+    let eps = (23.0
+        + (26.0 + (21.448 - t * (46.815 + t * (0.00059 - t * 0.001813))) / 60.0) / 60.0
+        + 0.00256 * omega.cos())
+    .to_radians();
+    let alpha = (eps.cos() * lambda.sin()).atan2(lambda.cos());
+    let delta = (eps.sin() * lambda.sin()).asin();
+    let tu = d / 36_525.0;
+    let gmst =
+        280.460_618_37 + 360.985_647_366_29 * d + tu * tu * (0.000_387_933 - tu / 38_710_000.0);
+    let h = (gmst + site.longitude).to_radians() - alpha;
+    let phi = site.latitude.to_radians();
+    (phi.sin() * delta.sin() + phi.cos() * delta.cos() * h.cos())
+        .clamp(-1.0, 1.0)
+        .asin()
+        .to_degrees()
 }
 
 impl SunTable {
@@ -234,11 +294,12 @@ impl SunTable {
         SunTable::range(start, steps, step_minutes, site)
     }
 
-    /// `steps` consecutive steps of `step_minutes` from `start` (computed in parallel;
-    /// the result does not depend on the thread count).
+    /// `steps` consecutive steps of `step_minutes` from `start` (computed in parallel when
+    /// first asked for; the result does not depend on the thread count).
     ///
     /// # Errors
-    /// As [`SunTable::year`].
+    /// As [`SunTable::year`]: the first and the last step are evaluated here, so that every
+    /// step can be.
     pub fn range(
         start: DateTime<Utc>,
         steps: usize,
@@ -248,58 +309,130 @@ impl SunTable {
         if step_minutes == 0 || step_minutes > 1440 {
             return Err(SolarError::Step(step_minutes));
         }
-        let refraction = RefractionCorrection::new(site.pressure_mbar, site.temperature_c)?;
-        let spa = SolarPositions::new();
-        let location = site.location();
-        let step_s = i64::from(step_minutes) * 60;
-        let half = Duration::milliseconds(step_s * 500);
-        let steps: Vec<SunStep> = (0..steps)
-            .into_par_iter()
-            .map(|k| {
-                let offset = i64::try_from(k)
-                    .ok()
-                    .and_then(|k| k.checked_mul(step_s))
-                    .and_then(Duration::try_seconds)
-                    .ok_or(SolarError::Step(step_minutes))?;
-                let mid = start
-                    .checked_add_signed(offset)
-                    .and_then(|t| t.checked_add_signed(half))
-                    .ok_or(SolarError::Step(step_minutes))?;
-                let p = spa.at(
-                    &mid,
-                    location,
-                    site.elevation_m,
-                    site.delta_t_s,
-                    Some(refraction),
-                )?;
-                let month = site.time_zone.local_month(mid);
-                Ok(SunStep {
-                    direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
-                    above_horizon: p.zenith_angle() < 90.0,
-                    month: u8::try_from(month.saturating_sub(1)).unwrap_or(0).min(11),
-                })
-            })
-            .collect::<Result<_, SolarError>>()?;
-        Ok(SunTable {
+        let table = SunTable {
             start,
             step_minutes,
-            steps,
+            len: steps,
+            site: *site,
+            steps: OnceLock::new(),
+            up: OnceLock::new(),
+        };
+        let refraction = RefractionCorrection::new(site.pressure_mbar, site.temperature_c)?;
+        // SPA's checks are of the site and of the time range: what holds at both ends
+        // holds at every step
+        for k in [0, steps.saturating_sub(1)]
+            .into_iter()
+            .filter(|_| steps > 0)
+        {
+            table.spa_step(k, refraction)?;
+        }
+        Ok(table)
+    }
+
+    /// Step `k` by SPA.
+    fn spa_step(&self, k: usize, refraction: RefractionCorrection) -> Result<SunStep, SolarError> {
+        let site = &self.site;
+        let mid = self
+            .step_mid(k)
+            .ok_or(SolarError::Step(self.step_minutes))?;
+        let p = SolarPositions::new().at(
+            &mid,
+            site.location(),
+            site.elevation_m,
+            site.delta_t_s,
+            Some(refraction),
+        )?;
+        let month = site.time_zone.local_month(mid);
+        Ok(SunStep {
+            direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
+            above_horizon: p.zenith_angle() < 90.0,
+            month: u8::try_from(month.saturating_sub(1)).unwrap_or(0).min(11),
         })
     }
 
-    /// The steps in time order.
+    /// Step `k` by SPA, for a table whose ends [`SunTable::range`] evaluated (so no step
+    /// fails; one that did would count as the sun below the horizon).
+    fn step(&self, k: usize, refraction: Option<RefractionCorrection>) -> SunStep {
+        refraction
+            .and_then(|r| self.spa_step(k, r).ok())
+            .unwrap_or(SunStep {
+                direction: DVec3::ZERO,
+                above_horizon: false,
+                month: 0,
+            })
+    }
+
+    fn refraction(&self) -> Option<RefractionCorrection> {
+        RefractionCorrection::new(self.site.pressure_mbar, self.site.temperature_c).ok()
+    }
+
+    /// The steps in time order (every step by SPA, on the first call).
     pub fn steps(&self) -> &[SunStep] {
-        &self.steps
+        if let Some(s) = self.steps.get() {
+            return s;
+        }
+        // computed outside the lock: a rayon worker waiting in the parallel loop below may
+        // run another task that asks for the same table
+        let r = self.refraction();
+        let all: Vec<SunStep> = (0..self.len)
+            .into_par_iter()
+            .map(|k| self.step(k, r))
+            .collect();
+        self.steps.get_or_init(|| all)
+    }
+
+    /// The steps with the sun above the horizon, `(index, step)` in time order: exactly
+    /// [`SunTable::steps`] filtered by [`SunStep::above_horizon`], computed (on the first
+    /// call, unless the whole table already was) without SPA for the steps that a quick
+    /// solar position puts more than a degree below SPA's refraction cut-off (in the years
+    /// 1800-2200; all steps by SPA otherwise).
+    pub fn sun_up(&self) -> &[(usize, SunStep)] {
+        if let Some(u) = self.up.get() {
+            return u;
+        }
+        let up: Vec<(usize, SunStep)> = match self.steps.get() {
+            Some(all) => all
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.above_horizon)
+                .map(|(k, s)| (k, *s))
+                .collect(),
+            None => {
+                let r = self.refraction();
+                let years =
+                    |t: Option<DateTime<Utc>>| t.is_some_and(|t| QUICK_YEARS.contains(&t.year()));
+                let quick = self.len > 0
+                    && years(self.step_mid(0))
+                    && years(self.step_mid(self.len - 1))
+                    && self.site.delta_t_s.abs() <= 86_400.0;
+                (0..self.len)
+                    .into_par_iter()
+                    .with_min_len(64)
+                    .filter_map(|k| {
+                        let night = quick
+                            && self
+                                .step_mid(k)
+                                .is_some_and(|t| quick_elevation(t, &self.site) < NIGHT_DEG);
+                        if night {
+                            return None;
+                        }
+                        let s = self.step(k, r);
+                        s.above_horizon.then_some((k, s))
+                    })
+                    .collect()
+            }
+        };
+        self.up.get_or_init(|| up)
     }
 
     /// Number of steps.
     pub fn len(&self) -> usize {
-        self.steps.len()
+        self.len
     }
 
     /// Whether the table has no steps.
     pub fn is_empty(&self) -> bool {
-        self.steps.is_empty()
+        self.len == 0
     }
 
     /// Step length in minutes.
@@ -457,7 +590,135 @@ mod tests {
             .num_threads(1)
             .build()
             .unwrap();
-        let b = pool.install(|| SunTable::year(2023, 180, &site).unwrap());
+        let b = pool.install(|| {
+            let b = SunTable::year(2023, 180, &site).unwrap();
+            b.steps();
+            b.sun_up();
+            b
+        });
         assert_eq!(a, b);
+        assert_eq!(a.sun_up(), b.sun_up());
+    }
+
+    /// The table as it was computed before it became lazy: every step by SPA at once.
+    fn eager(year: i32, step_minutes: u32, site: &Site) -> Vec<SunStep> {
+        let start = Utc.with_ymd_and_hms(year, 1, 1, 0, 0, 0).unwrap();
+        let end = NaiveDate::from_ymd_opt(year + 1, 1, 1).unwrap();
+        let steps = (end - start.date_naive()).num_minutes() / i64::from(step_minutes);
+        let refraction = RefractionCorrection::new(site.pressure_mbar, site.temperature_c).unwrap();
+        let spa = SolarPositions::new();
+        let step_s = i64::from(step_minutes) * 60;
+        let half = Duration::milliseconds(step_s * 500);
+        (0..steps)
+            .map(|k| {
+                let mid = start + Duration::seconds(k * step_s) + half;
+                let p = spa
+                    .at(
+                        &mid,
+                        site.location(),
+                        site.elevation_m,
+                        site.delta_t_s,
+                        Some(refraction),
+                    )
+                    .unwrap();
+                SunStep {
+                    direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
+                    above_horizon: p.zenith_angle() < 90.0,
+                    month: (site.time_zone.local_month(mid) - 1) as u8,
+                }
+            })
+            .collect()
+    }
+
+    fn bits(s: &SunStep) -> ([u64; 3], bool, u8) {
+        (
+            s.direction.to_array().map(f64::to_bits),
+            s.above_horizon,
+            s.month,
+        )
+    }
+
+    #[test]
+    fn lazy_table_and_sun_up_are_the_eager_table_bit_for_bit() {
+        let mut high = Site::new(-22.9, -68.2).with_time_zone("-04:00").unwrap();
+        (high.elevation_m, high.pressure_mbar, high.temperature_c) = (4000.0, 620.0, -5.0);
+        let mut late = Site::new(35.0, 139.7);
+        late.delta_t_s = 3000.0;
+        let cases = [
+            (2025, 15, Site::new(41.38, 2.17)),
+            (
+                2024,
+                60,
+                Site::new(41.39, 2.17)
+                    .with_time_zone("Europe/Madrid")
+                    .unwrap(),
+            ),
+            (2025, 30, Site::new(78.2, 15.6)),
+            (2023, 20, Site::new(-89.9, 0.0)),
+            (2026, 15, Site::new(0.0, -179.9)),
+            (2025, 45, high),
+            (2030, 60, late),
+            // outside the years of the quick position: every step by SPA
+            (1700, 180, Site::new(51.5, 0.0)),
+            (2300, 180, Site::new(-33.9, 18.4)),
+        ];
+        for (year, step, site) in cases {
+            let want = eager(year, step, &site);
+            let want_up: Vec<(usize, ([u64; 3], bool, u8))> = want
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.above_horizon)
+                .map(|(k, s)| (k, bits(s)))
+                .collect();
+            let up_of = |t: &SunTable| -> Vec<(usize, ([u64; 3], bool, u8))> {
+                t.sun_up().iter().map(|(k, s)| (*k, bits(s))).collect()
+            };
+            // sun_up first (quick nights), then the whole table
+            let t = SunTable::year(year, step, &site).unwrap();
+            assert_eq!(t.len(), want.len());
+            assert_eq!(up_of(&t), want_up, "{year} {step} {site:?}");
+            let got: Vec<_> = t.steps().iter().map(bits).collect();
+            assert_eq!(
+                got,
+                want.iter().map(bits).collect::<Vec<_>>(),
+                "{year} {site:?}"
+            );
+            // the whole table first, then sun_up from it
+            let u = SunTable::year(year, step, &site).unwrap();
+            u.steps();
+            assert_eq!(up_of(&u), want_up);
+            assert!(!want_up.is_empty() || site.latitude.abs() > 66.0);
+        }
+    }
+
+    /// The quick elevation that lets `sun_up` skip SPA at night is within 0.05 degrees of
+    /// SPA's geometric elevation over the years it is trusted for (the margin to the
+    /// night threshold is over a degree).
+    #[test]
+    fn quick_elevation_is_close_to_spa() {
+        let mut worst: f64 = 0.0;
+        for year in [1800, 1900, 2025, 2100, 2200] {
+            for (lat, lon, dt) in [
+                (41.38, 2.17, 69.0),
+                (78.2, 15.6, 69.0),
+                (-89.9, 0.0, 0.0),
+                (0.0, -179.9, 69.0),
+                (-33.9, 18.4, 300.0),
+            ] {
+                let mut site = Site::new(lat, lon);
+                site.delta_t_s = dt;
+                let start = Utc.with_ymd_and_hms(year, 1, 1, 0, 0, 0).unwrap();
+                for k in 0..900 {
+                    let t = start + Duration::minutes(k * 587);
+                    let p = SolarPositions::new()
+                        .at(&t, site.location(), 0.0, site.delta_t_s, None)
+                        .unwrap();
+                    let e = quick_elevation(t, &site) - (90.0 - p.zenith_angle());
+                    worst = worst.max(e.abs());
+                }
+            }
+        }
+        assert!(worst < 0.05, "{worst}");
+        assert!(NIGHT_DEG + 0.05 < -0.83337 - 1.0);
     }
 }
