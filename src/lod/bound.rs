@@ -394,8 +394,11 @@ fn full_tags(
 
 /// Boxes per ray looked up before the first round: the [`SEED_BOXES`] nearest ones
 /// ([`BoxIndex::nearest_k`]). Their assets make the first part, and a ray whose answer
-/// there comes before the last of them is final without another box query.
-const SEED_BOXES: usize = 8;
+/// there comes before the last of them is final without another box query. Measured on
+/// the paper district (6 POIs, 118,888 rays; BENCHMARKS.md): 1 box builds 2,816 assets in
+/// 3 rounds, 4 boxes 2,500 in 2 rounds (the quickest), 8 boxes 5,031 in one round (slower:
+/// boxes behind the answer are built too).
+const SEED_BOXES: usize = 4;
 
 /// [`full_tags`] through the lazy rounds (see the module docs, "Reference"), with the
 /// distance of each hit.
