@@ -13,11 +13,14 @@
 //! and memory: 805K triangles on the paper district, ~6 M on a 1 GB city), only the full
 //! geometry of the assets the rays can reach, found lazily on one box per asset (the box of
 //! its full-detail polygons, which holds its triangles, grown by a margin far above the f32
-//! rounding, [`crate::trace::BoxIndex`]). First the nearest box of every ray is built; then, round
+//! rounding, [`crate::trace::BoxIndex`]). First the 4 nearest boxes of every ray are built
+//! (a ray whose hit comes before the last of them is then final at once); then, round
 //! after round, each pending ray is traced in the part built so far, and if a box it
 //! crosses before its hit (any box, when it hits nothing; the `4^round` nearest until
 //! round 4) is not built yet, those assets are added and the ray waits for the next round;
-//! otherwise its answer is final. The part is built in the frame of the whole model
+//! otherwise its answer is final. A round builds only the assets added since the last and
+//! keeps each ray's nearest answer over the parts by (f32 distance, asset), the whole
+//! model's order. The part is built in the frame of the whole model
 //! ([`crate::trace::SceneBuilder::with_frame`]: same origin, same f32 triangles, same node
 //! growth) with its triangles in the whole model's order, so the f32 distances are those of
 //! the whole model and ties go to the same triangle; and since every triangle a ray may hit
@@ -29,7 +32,7 @@
 //! ends rays or adds assets. When the rays outnumber the model's full-detail polygons (many
 //! POIs on a small model), the rounds would cost more than the BVH they avoid, and the whole
 //! model is built at once, as before ([`Reference::whole`]). Measured (BENCHMARKS.md, "The
-//! default error bound"): on the paper district, 6 POIs reach 2,951 of 57,530 assets.
+//! default error bound"): on the paper district, the 6 POIs' rays reach 2,500 of 57,530 assets.
 //!
 //! **Promotion.** At a POI over the bound, the rays whose answers differ tell which assets
 //! are to blame. When the LoD model sees *less* sky than the full one, the culprits are the
