@@ -13,11 +13,14 @@
 //! and memory: 805K triangles on the paper district, ~6 M on a 1 GB city), only the full
 //! geometry of the assets the rays can reach, found lazily on one box per asset (the box of
 //! its full-detail polygons, which holds its triangles, grown by a margin far above the f32
-//! rounding, [`crate::trace::BoxIndex`]). First the nearest box of every ray is built; then, round
+//! rounding, [`crate::trace::BoxIndex`]). First the 4 nearest boxes of every ray are built
+//! (a ray whose hit comes before the last of them is then final at once); then, round
 //! after round, each pending ray is traced in the part built so far, and if a box it
 //! crosses before its hit (any box, when it hits nothing; the `4^round` nearest until
 //! round 4) is not built yet, those assets are added and the ray waits for the next round;
-//! otherwise its answer is final. The part is built in the frame of the whole model
+//! otherwise its answer is final. A round builds only the assets added since the last and
+//! keeps each ray's nearest answer over the parts by (f32 distance, asset), the whole
+//! model's order. The part is built in the frame of the whole model
 //! ([`crate::trace::SceneBuilder::with_frame`]: same origin, same f32 triangles, same node
 //! growth) with its triangles in the whole model's order, so the f32 distances are those of
 //! the whole model and ties go to the same triangle; and since every triangle a ray may hit
@@ -29,7 +32,7 @@
 //! ends rays or adds assets. When the rays outnumber the model's full-detail polygons (many
 //! POIs on a small model), the rounds would cost more than the BVH they avoid, and the whole
 //! model is built at once, as before ([`Reference::whole`]). Measured (BENCHMARKS.md, "The
-//! default error bound"): on the paper district, 6 POIs reach 2,951 of 57,530 assets.
+//! default error bound"): on the paper district, the 6 POIs' rays reach 2,500 of 57,530 assets.
 //!
 //! **Irradiance** ([`bound_with`] and a weather year): the annual global irradiation of the
 //! POI's plane ([`crate::solar::irradiance`]) from the SVF rays above and one sun ray per
@@ -76,7 +79,7 @@
 
 use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{detail_boxes, full_scene, full_scene_part, mixed_scene};
-use crate::model::CityModel;
+use crate::model::{Bbox, CityModel};
 use crate::poi::{Poi, POI_OFFSET};
 use crate::solar::irradiance::{IrradianceSetting, PlaneRays};
 use crate::solar::sky::{Frame, SkyError};
@@ -86,6 +89,7 @@ use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use super::bound_report::{BoundReport, PoiBound, Promotion};
 
@@ -278,7 +282,11 @@ const UNCAPPED_ROUND: u32 = 4;
 /// First-hit tags of every ray of every probe in the full model, as [`tags`] on
 /// [`crate::lod::scene::full_scene`] gives them, from a scene built only of the assets the
 /// rays can reach (see [`full_tags`] in the module docs, "Reference").
-fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Reference) {
+fn full_tags(
+    model: &CityModel,
+    probes: &[Probe],
+    boxes: &AssetBoxes,
+) -> (Vec<Vec<Option<u32>>>, Reference) {
     let rays: usize = probes.iter().map(Probe::len).sum();
     let polygons: usize = model.assets.iter().map(|a| a.detail_polygons().len()).sum();
     if rays > polygons {
@@ -297,7 +305,7 @@ fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Ref
         };
         return (probes.iter().map(|p| tags(&whole, p)).collect(), reference);
     }
-    let (hits, reference) = lazy_hits(model, probes);
+    let (hits, reference) = lazy_hits_with(model, probes, boxes, SEED_BOXES);
     let tags = hits
         .into_iter()
         .map(|v| v.into_iter().map(|h| h.map(|h| h.0)).collect())
@@ -305,69 +313,156 @@ fn full_tags(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<u32>>>, Ref
     (tags, reference)
 }
 
+/// Boxes per ray looked up before the first round: the [`SEED_BOXES`] nearest ones
+/// ([`BoxIndex::nearest_k`]). Their assets make the first part, and a ray whose answer
+/// there comes before the last of them is final without another box query. Measured on
+/// the paper district (6 POIs, 118,888 rays; BENCHMARKS.md): 1 box builds 2,816 assets in
+/// 3 rounds, 4 boxes 2,500 in 2 rounds (the quickest), 8 boxes 5,031 in one round (slower:
+/// boxes behind the answer are built too).
+const SEED_BOXES: usize = 4;
+
 /// [`full_tags`] through the lazy rounds (see the module docs, "Reference"), with the
 /// distance of each hit.
 #[allow(clippy::type_complexity)]
+#[cfg(test)]
 fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
-    let mut out: Vec<Vec<Option<(u32, f64)>>> =
-        probes.iter().map(|p| vec![None; p.len()]).collect();
-    let (boxes, frame) = detail_boxes(model);
-    let mut reference = Reference {
-        of: boxes.iter().filter(|b| !b.is_empty()).count(),
-        ..Default::default()
-    };
-    if frame.is_empty() {
-        return (out, reference);
-    }
-    // Far above the f32 rounding of the scene (its node growth): a triangle's hit point
-    // lies inside its asset's grown box.
-    let far = (frame.max - frame.center()).abs().max_element().max(1.0);
-    let margin = far / 32768.0 + 1e-3;
-    let index = BoxIndex::new(boxes, margin);
-    let mut include = vec![false; model.assets.len()];
-    let mut pending: Vec<Pending> = probes
-        .iter()
-        .enumerate()
-        .flat_map(|(k, p)| (0..p.len()).map(move |j| (k, j, None)))
-        .collect();
-    // seed: the nearest box of every ray
-    let seed: Vec<u32> = pending
-        .par_iter()
-        .with_min_len(512)
-        .map(|&(k, j, _)| {
-            index
-                .nearest(probes[k].origin, probes[k].dir(j))
-                .unwrap_or(u32::MAX)
-        })
-        .collect();
-    for a in seed {
-        if let Some(x) = include.get_mut(a as usize) {
-            *x = true;
+    lazy_hits_with(model, probes, &AssetBoxes::new(model), SEED_BOXES)
+}
+
+/// The boxes of the lazy reference: per asset the box of its full-detail polygons
+/// ([`detail_boxes`]) grown by `margin`, indexed, in the frame of the whole full scene.
+struct AssetBoxes {
+    /// `None` when the model has no full-detail triangle.
+    index: Option<BoxIndex>,
+    frame: Bbox,
+    margin: f64,
+    /// Assets with a box.
+    of: usize,
+}
+
+impl AssetBoxes {
+    fn new(model: &CityModel) -> AssetBoxes {
+        let (boxes, frame) = detail_boxes(model);
+        let of = boxes.iter().filter(|b| !b.is_empty()).count();
+        // Far above the f32 rounding of the scene (its node growth): a triangle's hit
+        // point lies inside its asset's grown box.
+        let far = (frame.max - frame.center()).abs().max_element().max(1.0);
+        let margin = far / 32768.0 + 1e-3;
+        let index = (!frame.is_empty()).then(|| BoxIndex::new(boxes, margin));
+        AssetBoxes {
+            index,
+            frame,
+            margin,
+            of,
         }
     }
+}
+
+/// [`lazy_hits`] seeded with the `seed_boxes` nearest boxes of every ray (at least 1).
+///
+/// Each round builds only the assets added since the round before (a pending ray was
+/// traced in every earlier part) and keeps, per ray, the nearest answer of the parts so
+/// far by (f32 distance, asset): the answer of their union, since the whole model orders
+/// its triangles by asset and breaks ties of the f32 distance by that order.
+#[allow(clippy::type_complexity)]
+fn lazy_hits_with(
+    model: &CityModel,
+    probes: &[Probe],
+    boxes: &AssetBoxes,
+    seed_boxes: usize,
+) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
+    let seed_boxes = seed_boxes.max(1);
+    let mut out: Vec<Vec<Option<(u32, f64)>>> =
+        probes.iter().map(|p| vec![None; p.len()]).collect();
+    let mut reference = Reference {
+        of: boxes.of,
+        ..Default::default()
+    };
+    let (Some(index), frame, margin) = (&boxes.index, boxes.frame, boxes.margin) else {
+        return (out, reference);
+    };
+    let rays: Vec<(u32, u32)> = probes
+        .iter()
+        .enumerate()
+        .flat_map(|(k, p)| (0..p.len()).map(move |j| (k as u32, j as u32)))
+        .collect();
+    // seed: the nearest boxes of every ray, all built in the first round
+    let seeded: Vec<AtomicBool> = (0..model.assets.len())
+        .map(|_| AtomicBool::new(false))
+        .collect();
+    let known: Vec<f32> = rays
+        .par_iter()
+        .with_min_len(512)
+        .map_init(Vec::new, |v, &(k, j)| {
+            let p = &probes[k as usize];
+            v.clear();
+            index.nearest_k(p.origin, p.dir(j as usize), seed_boxes, v);
+            for &(_, a) in v.iter() {
+                if let Some(x) = seeded.get(a as usize) {
+                    x.store(true, Ordering::Relaxed);
+                }
+            }
+            // a box not listed is entered at this distance or later (rounded down)
+            v.get(seed_boxes - 1)
+                .map_or(f32::INFINITY, |x| (x.0 * (1.0 - 1e-6) - 1e-3) as f32)
+        })
+        .collect();
+    let mut include: Vec<bool> = seeded.into_iter().map(AtomicBool::into_inner).collect();
+    let mut built = vec![false; include.len()];
+    let mut pending: Vec<Pending> = rays
+        .into_iter()
+        .zip(known)
+        .map(|((probe, ray), known)| Pending {
+            probe,
+            ray,
+            known,
+            crossed: None,
+            best: None,
+        })
+        .collect();
     loop {
         reference.rounds += 1;
-        let scene = full_scene_part(model, &include, frame, pending.len());
+        let new: Vec<bool> = include.iter().zip(&built).map(|(&i, &b)| i && !b).collect();
+        let scene = full_scene_part(model, &new, frame, pending.len());
+        built.clone_from(&include);
         let cap = if reference.rounds as u32 >= UNCAPPED_ROUND {
             usize::MAX
         } else {
             1 << (2 * reference.rounds)
         };
         let include_ref = &include;
-        let results: Vec<(Pending, Option<(u32, f64)>, Vec<u32>)> = pending
-            .into_par_iter()
+        // the assets each ray still needs (none: its answer is final)
+        let missing: Vec<Vec<u32>> = pending
+            .par_iter_mut()
             .with_min_len(256)
-            .map_init(Vec::new, |v, (k, j, mut all)| {
-                let (o, d) = (probes[k].origin, probes[k].dir(j));
-                let h = scene.first_hit(o, d, POI_OFFSET, f64::INFINITY);
+            .map_init(Vec::new, |v, p| {
+                let (o, d) = (
+                    probes[p.probe as usize].origin,
+                    probes[p.probe as usize].dir(p.ray as usize),
+                );
+                if let Some((h, t32)) = scene.first_hit_f32(o, d, POI_OFFSET, f64::INFINITY) {
+                    // nearer, or as near and of an asset earlier in the model
+                    if p.best.is_none_or(|b| (t32, h.tag) < (b.t32, b.tag)) {
+                        p.best = Some(Best {
+                            t32,
+                            tag: h.tag,
+                            t: h.t,
+                        });
+                    }
+                }
+                let h = p.best;
                 // every asset a triangle of which the ray may hit as close as `h`
                 let limit = h.map_or(f64::INFINITY, |h| h.t + 2e-3 * (1.0 + h.t.abs()) + margin);
+                if p.known == f32::INFINITY || limit < f64::from(p.known) {
+                    // every box entered up to `limit` was seeded, so built
+                    return Vec::new();
+                }
                 let missing_of = |it: &mut dyn Iterator<Item = u32>| -> Vec<u32> {
                     it.filter(|&a| !include_ref.get(a as usize).copied().unwrap_or(true))
                         .take(if h.is_some() { usize::MAX } else { cap })
                         .collect()
                 };
-                let missing = match &all {
+                let missing = match &p.crossed {
                     // every box the ray crosses, known from an earlier round
                     Some(list) => missing_of(
                         &mut list
@@ -380,7 +475,7 @@ fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
                         index.crossed(o, d, limit, v);
                         if h.is_none() {
                             // entries rounded down: a later limit keeps every box it must
-                            all = Some(
+                            p.crossed = Some(
                                 v.iter()
                                     .map(|&(t, i)| ((t * (1.0 - 1e-6) - 1e-3) as f32, i))
                                     .collect(),
@@ -389,14 +484,14 @@ fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
                         missing_of(&mut v.iter().map(|x| x.1))
                     }
                 };
-                ((k, j, all), h.map(|h| (h.tag, h.t)), missing)
+                missing
             })
             .collect();
         drop(scene);
         let mut next = Vec::new();
-        for (p, hit, missing) in results {
+        for (p, missing) in pending.into_iter().zip(missing) {
             if missing.is_empty() {
-                out[p.0][p.1] = hit;
+                out[p.probe as usize][p.ray as usize] = p.best.map(|b| (b.tag, b.t));
             } else {
                 next.push(p);
                 for a in missing {
@@ -412,9 +507,29 @@ fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>
     }
 }
 
-/// A ray of the reference trace still open: probe, ray, and every box it crosses (entry
-/// rounded down, nearest first) once it was seen to hit nothing.
-type Pending = (usize, usize, Option<Vec<(f32, u32)>>);
+/// A ray of the reference trace still open.
+struct Pending {
+    /// Probe and ray.
+    probe: u32,
+    ray: u32,
+    /// Entry of the last seeded box, rounded down (infinite when the ray crosses no
+    /// other): every box entered before it is built.
+    known: f32,
+    /// Every box it crosses (entry rounded down, nearest first), once it was seen to hit
+    /// nothing.
+    crossed: Option<Box<[(f32, u32)]>>,
+    /// Its nearest hit in the parts built so far.
+    best: Option<Best>,
+}
+
+/// A hit of the reference trace: f32 distance and asset (what orders hits), and the
+/// distance ([`crate::trace::Hit::t`]).
+#[derive(Clone, Copy)]
+struct Best {
+    t32: f32,
+    tag: u32,
+    t: f64,
+}
 
 /// First-hit tags of every ray of a probe (SVF rays, sun rays, irradiance sun rays).
 fn tags(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
@@ -522,6 +637,7 @@ pub fn bound_with(
     } else {
         None
     };
+    let boxes = AssetBoxes::new(model);
     let probes: Vec<Probe> = (pois.iter())
         .map(|p| probe(p, &bundles, table, irr))
         .collect();
@@ -530,7 +646,8 @@ pub fn bound_with(
     let weights: Vec<Option<Vec<f64>>> = (probes.iter())
         .map(|p| Some(irradiance_weights(p, irr?)))
         .collect();
-    let (full_tags, reference) = full_tags(model, &probes);
+    let (full_tags, reference) = full_tags(model, &probes, &boxes);
+    drop(boxes);
 
     let mut levels: Vec<u8> = levels.iter().map(|&l| l.min(2)).collect();
     let mut promotions = Vec::new();
@@ -692,235 +809,4 @@ pub fn bound_with(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::lod::scene::full_scene;
-    use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
-    use crate::solar::poi_sky_view;
-
-    fn quad(x0: f64, x1: f64, y0: f64, y1: f64, z: f64) -> Polygon {
-        Polygon::new(vec![
-            DVec3::new(x0, y0, z),
-            DVec3::new(x1, y0, z),
-            DVec3::new(x1, y1, z),
-            DVec3::new(x0, y1, z),
-        ])
-    }
-
-    fn asset(kind: AssetKind, polys: Vec<Polygon>) -> Asset {
-        Asset::new(
-            kind,
-            Some(&format!("{}", polys.len())),
-            "X",
-            vec![LodGeometry {
-                lod: 3,
-                property: "lod3MultiSurface".into(),
-                polygons: polys,
-                ..Default::default()
-            }],
-        )
-    }
-
-    /// An L-shaped canopy over the POI whose rough geometry is its full square (a rough
-    /// model too big), and a small roof far off that the selection dropped.
-    fn scene() -> (CityModel, Vec<RoughGeometry>, Vec<u8>) {
-        let mut m = CityModel::default();
-        m.assets.push(asset(
-            AssetKind::Roof,
-            vec![
-                quad(-5.0, 5.0, -5.0, 0.0, 4.0),
-                quad(-5.0, 0.0, 0.0, 5.0, 4.0),
-            ],
-        ));
-        m.assets.push(asset(
-            AssetKind::Roof,
-            vec![quad(20.0, 30.0, -5.0, 5.0, 3.0)],
-        ));
-        let rough = vec![
-            RoughGeometry {
-                polygons: vec![quad(-5.0, 5.0, -5.0, 5.0, 4.0)],
-                obb: None,
-                lod: 3,
-            },
-            RoughGeometry {
-                polygons: vec![quad(20.0, 30.0, -5.0, 5.0, 3.0)],
-                obb: None,
-                lod: 3,
-            },
-        ];
-        (m, rough, vec![1, 0])
-    }
-
-    fn poi() -> Poi {
-        Poi {
-            id: "p".into(),
-            position: DVec3::ZERO,
-            normal: None,
-        }
-    }
-
-    #[test]
-    fn figures_equal_poi_sky_view() {
-        let (m, rough, levels) = scene();
-        let opts = BoundOptions {
-            max_svf_error: Some(10.0),
-            svf_rays: 4000,
-            ..Default::default()
-        };
-        let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
-        assert!(b.met && b.promotions.is_empty() && b.rounds == 1);
-        // 3 polygons, thousands of rays: the whole model at once
-        assert!(
-            b.reference.whole && b.reference.assets == 2,
-            "{:?}",
-            b.reference
-        );
-        let bundles = SkyBundles::new(4000, 7).unwrap();
-        let full = poi_sky_view(&full_scene(&m), &poi(), &bundles).svf;
-        let lod = poi_sky_view(&mixed_scene(&m, &rough, &levels), &poi(), &bundles).svf;
-        assert_eq!(b.pois[0].svf_full, full);
-        assert_eq!(b.pois[0].svf_lod, lod);
-        assert!(lod < full);
-    }
-
-    #[test]
-    fn promotes_the_too_big_rough_asset_and_not_the_far_one() {
-        let (m, rough, levels) = scene();
-        let opts = BoundOptions {
-            max_svf_error: Some(0.01),
-            svf_rays: 4000,
-            ..Default::default()
-        };
-        let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
-        assert!(b.met);
-        assert_eq!(b.levels, vec![2, 0]);
-        assert_eq!(b.promotions.len(), 1);
-        assert_eq!((b.promotions[0].asset, b.promotions[0].from), (0, 1));
-        // what is left is the far roof, within the bound
-        assert!(b.pois[0].svf_error > 0.0 && b.pois[0].svf_error <= 0.01);
-    }
-
-    #[test]
-    fn a_dropped_asset_that_is_seen_comes_back() {
-        let (m, rough, _) = scene();
-        // everything dropped: the LoD model sees the whole sky
-        let opts = BoundOptions {
-            max_svf_error: Some(0.0),
-            svf_rays: 4000,
-            ..Default::default()
-        };
-        let b = bound(&m, &rough, &[0, 0], &[poi()], &opts, None).unwrap();
-        assert!(b.met, "{:?}", b.pois);
-        assert_eq!(b.levels[0], 2);
-        assert!(b.promotions.iter().any(|p| p.from == 0));
-    }
-
-    #[test]
-    fn unmet_bound_names_the_poi_and_bad_input_is_an_error() {
-        let (m, rough, levels) = scene();
-        let opts = BoundOptions {
-            max_svf_error: Some(0.0),
-            svf_rays: 2000,
-            max_rounds: 0,
-            ..Default::default()
-        };
-        let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
-        assert!(!b.met);
-        assert_eq!(b.failing(), vec!["p"]);
-        let bad = BoundOptions {
-            max_svf_error: Some(f64::NAN),
-            ..Default::default()
-        };
-        assert!(bound(&m, &rough, &levels, &[poi()], &bad, None).is_err());
-        let sun = BoundOptions {
-            max_sun_error: Some(0.01),
-            ..Default::default()
-        };
-        assert!(matches!(
-            bound(&m, &rough, &levels, &[poi()], &sun, None),
-            Err(BoundError::NoSunTable)
-        ));
-        assert!(bound(&m, &rough, &[1], &[poi()], &opts, None).is_err());
-    }
-
-    #[test]
-    fn sun_hours_bound() {
-        let (m, rough, levels) = scene();
-        let site = crate::solar::Site::new(41.39, 2.17);
-        let table = SunTable::year(2025, 60, &site).unwrap();
-        let opts = BoundOptions {
-            max_sun_error: Some(0.0),
-            svf_rays: 1000,
-            ..Default::default()
-        };
-        let b = bound(&m, &rough, &levels, &[poi()], &opts, Some(&table)).unwrap();
-        assert!(b.met);
-        let p = &b.pois[0];
-        assert_eq!(p.sun_hours_error, Some(0.0));
-        assert!(p.sun_hours_full.unwrap() > 0.0);
-    }
-
-    /// The lazy reference trace gives every ray the answer of the whole-model scene (same
-    /// asset, same distance to the bit) on a synth district with low sun rays, while it
-    /// builds only part of the model.
-    #[test]
-    fn restricted_full_scene_answers_as_the_whole_model() {
-        use crate::synth::{generate, pois, Preset};
-        let mut opts = Preset::Paper.defaults();
-        (opts.blocks_x, opts.blocks_y) = (3, 2);
-        let mut xml = Vec::new();
-        generate(&opts, &mut xml).unwrap();
-        let model = crate::citygml::read::read_bytes(&xml, "paper.gml").unwrap();
-        let mut ps: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
-        // and a POI on the ground in the open, facing up
-        ps.push(Poi {
-            id: "open".into(),
-            position: ps[0].position + DVec3::new(3.0, -2.0, 0.0),
-            normal: None,
-        });
-        assert!(ps.len() >= 3);
-        let site = crate::solar::Site::new(48.76, 11.42);
-        let table = SunTable::year(2025, 30, &site).unwrap();
-        let bundles = SkyBundles::new(3000, 7).unwrap();
-        let probes: Vec<Probe> = ps
-            .iter()
-            .map(|p| probe(p, &bundles, Some(&table), None))
-            .collect();
-        let (hits, reference) = lazy_hits(&model, &probes);
-        let whole = full_scene(&model);
-        let (mut compared, mut hit) = (0, 0);
-        for (p, got) in probes.iter().zip(&hits) {
-            assert_eq!(got.len(), p.len());
-            for (j, g) in got.iter().enumerate() {
-                let want = whole
-                    .first_hit(p.origin, p.dir(j), POI_OFFSET, f64::INFINITY)
-                    .map(|h| (h.tag, h.t));
-                match (g, want) {
-                    (Some((a, t)), Some((b, u))) => {
-                        assert_eq!((*a, t.to_bits()), (b, u.to_bits()), "ray {j}");
-                        hit += 1;
-                    }
-                    (a, b) => assert_eq!(a.map(|x| x.0), b.map(|x| x.0), "ray {j}"),
-                }
-                compared += 1;
-            }
-        }
-        assert!(hit > 100 && hit < compared, "{hit} of {compared} rays hit");
-        assert!(
-            reference.assets > 0 && reference.assets < reference.of,
-            "{reference:?}"
-        );
-        assert!(reference.rounds >= 2 && !reference.whole, "{reference:?}");
-        // `bound` uses these tags, or (more rays than polygons here) the whole model's
-        let (tags, r) = full_tags(&model, &probes);
-        assert!(r.whole, "{r:?}");
-        for (p, (t, h)) in probes.iter().zip(tags.iter().zip(&hits)) {
-            assert_eq!(t, &tags_of(&whole, p));
-            assert_eq!(t, &h.iter().map(|h| h.map(|h| h.0)).collect::<Vec<_>>());
-        }
-    }
-
-    fn tags_of(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
-        tags(scene, p)
-    }
-}
+mod tests;

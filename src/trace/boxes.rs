@@ -115,6 +115,49 @@ impl BoxIndex {
         best.map(|(_, i)| i)
     }
 
+    /// The first `k` entries of [`BoxIndex::crossed`] with an infinite `tmax` (every box
+    /// when the ray crosses fewer), appended to `out`: (entry distance, box index),
+    /// nearest first, ties by box index. One traversal that prunes beyond the `k`-th entry
+    /// found so far, so it costs about what [`BoxIndex::nearest`] does.
+    pub fn nearest_k(&self, origin: DVec3, dir: DVec3, k: usize, out: &mut Vec<(f64, u32)>) {
+        let Some((bvh, ids)) = &self.bvh else {
+            return;
+        };
+        if k == 0 {
+            return;
+        }
+        let Some(ray) = self.local_ray(origin, dir, f64::INFINITY) else {
+            return;
+        };
+        let start = out.len();
+        let g = DVec3::splat(self.margin);
+        let mut hit = RayHit::none();
+        bvh.ray_traverse(ray, &mut hit, |_, slot| {
+            let Some((i, b)) = self.slot_box(bvh, ids, slot) else {
+                return f32::INFINITY;
+            };
+            let Some((t0, _)) =
+                super::ray::ray_aabb(origin, dir, b.min - g, b.max + g, 0.0, f64::INFINITY)
+            else {
+                return f32::INFINITY;
+            };
+            let list = &mut out[start..];
+            let at = list.partition_point(|x| x.0 < t0 || (x.0 == t0 && x.1 < i));
+            if list.len() == k {
+                if at == k {
+                    return f32::INFINITY;
+                }
+                out.pop();
+            }
+            out.insert(start + at, (t0, i));
+            match out[start..].get(k - 1) {
+                // prune a little beyond the k-th: f32 node entries are rounded
+                Some(&(tk, _)) => (tk * (1.0 + 1e-6) + 1e-3) as f32,
+                None => f32::INFINITY,
+            }
+        });
+    }
+
     fn slot_box<'a>(&'a self, bvh: &Bvh2, ids: &[u32], slot: usize) -> Option<(u32, &'a Bbox)> {
         let k = *bvh.primitive_indices.get(slot)?;
         let i = *ids.get(k as usize)?;
@@ -231,6 +274,13 @@ mod tests {
             want.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             assert_eq!(got, want, "ray {r}");
             assert!(got.windows(2).all(|w| w[0].0 <= w[1].0));
+            if tmax.is_infinite() {
+                for k in [1, 3, 8] {
+                    let mut first = Vec::new();
+                    index.nearest_k(p, d, k, &mut first);
+                    assert_eq!(first, got[..k.min(got.len())], "ray {r}, k {k}");
+                }
+            }
             let near = index.nearest(p, d);
             if tmax.is_infinite() {
                 assert_eq!(near.is_some(), !got.is_empty(), "ray {r}");

@@ -153,6 +153,22 @@ impl Scene {
     /// build quality or tree. Hits closer than 1e-4 (obvhs' CWBVH node epsilon) are not
     /// covered by that promise; callers start rays at [`crate::model::POI_OFFSET`] or more.
     pub fn first_hit(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Option<Hit> {
+        self.first_hit_f32(origin, dir, tmin, tmax).map(|(h, _)| h)
+    }
+
+    /// [`Scene::first_hit`] and the f32 distance by which it won (hits are ordered by it,
+    /// then by triangle index): for callers that merge the answers of several scenes built
+    /// in one frame ([`SceneBuilder::with_frame`](super::SceneBuilder::with_frame)) from
+    /// disjoint parts of one triangle list, where the smallest (f32 distance, position in
+    /// that list) is the whole list's answer.
+    #[inline]
+    pub(crate) fn first_hit_f32(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: f64,
+    ) -> Option<(Hit, f32)> {
         let (ray, wt) = self.local_ray(origin, dir, tmin, tmax)?;
         let (t0, t1) = (ray.tmin, ray.tmax);
         let ray = Ray {
@@ -188,7 +204,7 @@ impl Scene {
         let tri = self.tris.get(slot)?;
         let tag = *self.tags.get(triangle as usize)?;
         let t = refine_t(tri, origin - self.origin, dir, t32 as f64);
-        Some(Hit { tag, t, triangle })
+        Some((Hit { tag, t, triangle }, t32))
     }
 }
 
