@@ -131,7 +131,9 @@ def _column(doc: Dict[str, Any], key: str) -> np.ndarray:
     return np.array([p[key] for p in doc["pois"]], dtype=np.float64)
 
 
-def stats(paths: Paths, *, source_crs: Optional[str] = None, progress: Progress = None) -> Dict[str, Any]:
+def stats(
+    paths: Paths, *, source_crs: Optional[str] = None, progress: Progress = None
+) -> Dict[str, Any]:
     """Counts of the model in ``paths``: the ``total`` of ``skylod stats --json``.
 
     ``paths`` is a file (``.gml``, ``.xml``, gzip told by content), a directory (searched
@@ -140,8 +142,11 @@ def stats(paths: Paths, *, source_crs: Optional[str] = None, progress: Progress 
     >>> skylod.stats("fzk_haus_lod2_v2.gml")["buildings"]               # doctest: +SKIP
     1
     """
-    doc = _skylod.stats(_paths(paths), source_crs=source_crs, progress=progress)
-    return json.loads(doc)["total"]
+    doc: Dict[str, Any] = json.loads(
+        _skylod.stats(_paths(paths), source_crs=source_crs, progress=progress)
+    )
+    total: Dict[str, Any] = doc["total"]
+    return total
 
 
 def svf(
@@ -304,10 +309,10 @@ def evaluate(
     """
     setup = _setup(paths, pois, ids, poi_crs, source_crs, poi_margin, allow_mixed_crs)
     lod_args = _lod_args(rays, seed, threshold, roof_tolerance, angle, thickness, prefer_lod2)
-    doc = _skylod.evaluate(
-        setup, lod_args, svf_rays, sun, site, year, step, progress=progress
+    doc: Dict[str, Any] = json.loads(
+        _skylod.evaluate(setup, lod_args, svf_rays, sun, site, year, step, progress=progress)
     )
-    return json.loads(doc)
+    return doc
 
 
 def lod(
@@ -364,7 +369,7 @@ def lod(
         "year": year,
         "step": step,
     }
-    doc = _skylod.lod(
+    doc: Dict[str, Any] = json.loads(_skylod.lod(
         setup,
         os.fspath(output),
         lod_args,
@@ -372,8 +377,8 @@ def lod(
         format=format,
         overwrite=overwrite,
         progress=progress,
-    )
-    return json.loads(doc)
+    ))
+    return doc
 
 
 def convert(

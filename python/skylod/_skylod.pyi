@@ -2,6 +2,7 @@
 (``skylod.svf``, ...): they build the ``setup`` dicts and parse the JSON returned here."""
 
 from os import PathLike
+from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 _Path = Union[str, PathLike[str]]
@@ -60,4 +61,4 @@ def convert(
     format: Optional[str] = None,
     overwrite: bool = False,
     progress: _Progress = None,
-) -> List[str]: ...
+) -> List[Path]: ...

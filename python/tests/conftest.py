@@ -91,12 +91,13 @@ def synth_pois() -> Path:
 
 
 def without_timings(doc: Any) -> Any:
-    """The document without its wall-clock fields (``timings_ms``, per-POI ``select_ms``)."""
+    """The document without its wall-clock fields (``timings_ms``, ``select_ms``, ``bvh_ms``,
+    ...: every key ``ms`` or ending in ``_ms`` or ``_s``)."""
     if isinstance(doc, dict):
         return {
             k: without_timings(v)
             for k, v in doc.items()
-            if k not in ("timings_ms", "select_ms")
+            if not (k == "ms" or k.endswith("_ms") or k.endswith("_s"))
         }
     if isinstance(doc, list):
         return [without_timings(v) for v in doc]
