@@ -124,11 +124,13 @@ impl BoundArgs {
             None => None,
         };
         guarantee.sun_hours_error = sun_error;
-        let mut options = BoundOptions::default();
-        options.max_svf_error = Some(svf);
-        options.max_sun_error = sun_error;
-        options.svf_rays = self.bound_rays;
-        options.svf_seed = seed;
+        let options = BoundOptions {
+            max_svf_error: Some(svf),
+            max_sun_error: sun_error,
+            svf_rays: self.bound_rays,
+            svf_seed: seed,
+            ..Default::default()
+        };
         Ok((Some(BoundSpec { options, sun }), guarantee))
     }
 }
@@ -235,7 +237,7 @@ pub fn lod(
             layout(study.inputs(), &output, format.as_deref(), overwrite)?;
         let (bound, guarantee) = bound.spec(study, lod.seed)?;
         let opts = LevelsOptions {
-            lod: lod_opts.clone(),
+            lod: lod_opts,
             bound,
         };
         let lv = study.levels(&opts, p).map_err(|e| message(&e))?;
