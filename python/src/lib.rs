@@ -1,0 +1,317 @@
+//! `skylod._skylod`: the native part of the Python package `skylod` (PyO3, abi3). Each call
+//! reads, frames and traces through the library's owned API (`skylod::session`) on its own
+//! thread with the GIL released ([`relay::run`]) and returns the JSON document the matching
+//! command prints with `--json` (the same output types), which `skylod/__init__.py` turns into
+//! dicts and numpy arrays. Errors are `SkylodError` with the library's message.
+
+mod relay;
+mod setup;
+mod write;
+
+use pyo3::prelude::*;
+use relay::{message, run, SkylodError};
+use setup::{load, ms, s_to_ms, Setup};
+use skylod::output::evaluate::{EvaluateOutput, EvaluateTimings};
+use skylod::output::horizon::{round_deg, HorizonOutput, HorizonPoi};
+use skylod::output::irradiance::{
+    IrradianceOutput, IrradiancePoi, IrradianceTimings, WeatherSummary,
+};
+use skylod::output::sun_hours::{SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting};
+use skylod::output::svf::{SvfOutput, SvfPoi, TraceTimings};
+use skylod::pipeline::evaluation::EvalOptions;
+use skylod::pipeline::EvaluateOptions;
+use skylod::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
+use skylod::solar::weather::read_weather;
+use skylod::solar::{HorizonOptions, Site, SkyBundles, SunTable};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// A document as pretty JSON, as the commands print it.
+fn json<T: serde::Serialize>(doc: &T) -> Result<String, String> {
+    serde_json::to_string_pretty(doc).map_err(|e| e.to_string())
+}
+
+/// `(lat, lon)` given, or the centre of the study's model from its CRS.
+fn site(study: &skylod::session::Study, given: Option<(f64, f64)>) -> Result<(f64, f64), String> {
+    if let Some(s) = given {
+        return Ok(s);
+    }
+    let s = study
+        .site()
+        .map_err(|e| format!("the sun needs the site's lat and lon (WGS84 degrees): {e}"))?;
+    Ok((s.lat, s.lon))
+}
+
+/// `skylod svf --json`.
+#[pyfunction]
+#[pyo3(signature = (setup, rays, seed, progress=None))]
+fn svf(
+    py: Python<'_>,
+    setup: Setup,
+    rays: usize,
+    seed: u64,
+    progress: Option<PyObject>,
+) -> PyResult<String> {
+    run(py, progress, move |p| {
+        let bundles = SkyBundles::new(rays, seed).map_err(|e| message(&e))?;
+        let l = load(&setup, p)?;
+        let t = l.study.svf(&bundles, p).map_err(|e| message(&e))?;
+        let rows = t.rows(l.study.pois(), SvfPoi::new);
+        let timings = TraceTimings {
+            read: l.read_ms,
+            bvh: s_to_ms(t.bvh_s),
+            trace: s_to_ms(t.trace_s),
+        };
+        let polygons = l.study.source().polygon_count();
+        json(&SvfOutput::new(
+            rows, rays, seed, l.inputs, polygons, timings,
+        ))
+    })
+}
+
+/// `skylod sun-hours --json`.
+#[pyfunction]
+#[pyo3(signature = (setup, site=None, year=2025, step=15, timezone="UTC".to_string(), progress=None))]
+fn sun_hours(
+    py: Python<'_>,
+    setup: Setup,
+    site: Option<(f64, f64)>,
+    year: i32,
+    step: u32,
+    timezone: String,
+    progress: Option<PyObject>,
+) -> PyResult<String> {
+    run(py, progress, move |p| {
+        let l = load(&setup, p)?;
+        let (lat, lon) = self::site(&l.study, site)?;
+        let s = Site::new(lat, lon)
+            .with_time_zone(&timezone)
+            .map_err(|e| message(&e))?;
+        let t0 = Instant::now();
+        let table = SunTable::year(year, step, &s).map_err(|e| message(&e))?;
+        let sun_ms = ms(t0);
+        let framed = l.study.framed();
+        let t = skylod::pipeline::sun_hours(&framed, &table, p).map_err(|e| message(&e))?;
+        let rows = t.rows(l.study.pois(), SunHoursPoi::new);
+        let timings = SunHoursTimings {
+            read: l.read_ms,
+            sun: sun_ms,
+            bvh: s_to_ms(t.bvh_s),
+            trace: s_to_ms(t.trace_s),
+        };
+        json(&SunHoursOutput::new(
+            rows,
+            SunSetting::new(lat, lon, year, step),
+            timezone,
+            table.len(),
+            l.inputs,
+            l.study.source().polygon_count(),
+            timings,
+        ))
+    })
+}
+
+/// `skylod horizon --json`.
+#[pyfunction]
+#[pyo3(signature = (setup, step=1.0, progress=None))]
+fn horizon(
+    py: Python<'_>,
+    setup: Setup,
+    step: f64,
+    progress: Option<PyObject>,
+) -> PyResult<String> {
+    run(py, progress, move |p| {
+        let opts = HorizonOptions::default().with_step(step);
+        opts.validate()
+            .map_err(|e| format!("step: {}", message(&e)))?;
+        let l = load(&setup, p)?;
+        let t = l.study.horizon(&opts, p).map_err(|e| message(&e))?;
+        let rows = t.rows(l.study.pois(), |poi, h, flags| {
+            HorizonPoi::new(
+                poi,
+                h.azimuth.iter().map(|a| round_deg(*a)).collect(),
+                h.elevation.iter().map(|e| round_deg(*e)).collect(),
+                flags,
+            )
+            .with_overhang(h.overhang.iter().map(|o| o.map(round_deg)).collect())
+        });
+        let timings = TraceTimings {
+            read: l.read_ms,
+            bvh: s_to_ms(t.bvh_s),
+            trace: s_to_ms(t.trace_s),
+        };
+        json(&HorizonOutput::new(
+            rows,
+            step,
+            opts.tolerance_deg,
+            l.inputs,
+            l.study.source().polygon_count(),
+            timings,
+        ))
+    })
+}
+
+/// Farthest a weather station may be from the model's site (km) unless the site is given
+/// (as `skylod irradiance`).
+const MAX_STATION_KM: f64 = 50.0;
+
+/// `skylod irradiance --json`.
+#[pyfunction]
+#[pyo3(signature = (setup, weather, site=None, sky="perez", albedo=0.2, rays=10_000, seed=1, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn irradiance(
+    py: Python<'_>,
+    setup: Setup,
+    weather: PathBuf,
+    site: Option<(f64, f64)>,
+    sky: &str,
+    albedo: f64,
+    rays: usize,
+    seed: u64,
+    progress: Option<PyObject>,
+) -> PyResult<String> {
+    let sky = match sky {
+        "perez" => SkyModel::Perez,
+        "isotropic" => SkyModel::Isotropic,
+        other => {
+            return Err(SkylodError::new_err(format!(
+                "sky must be \"perez\" or \"isotropic\" (got {other:?})"
+            )))
+        }
+    };
+    if !(0.0..=1.0).contains(&albedo) {
+        return Err(SkylodError::new_err(format!(
+            "albedo must be in 0..1 (got {albedo})"
+        )));
+    }
+    run(py, progress, move |p| {
+        let t0 = Instant::now();
+        let w = read_weather(&weather).map_err(|e| message(&e))?;
+        let weather_ms = ms(t0);
+        let bundles = SkyBundles::new(rays, seed).map_err(|e| message(&e))?;
+        let l = load(&setup, p)?;
+        let (lat, lon) = match site {
+            Some(s) => s,
+            None => match l.study.site() {
+                Ok(s) => {
+                    let km = w.site.distance_km(s.lat, s.lon);
+                    if km > MAX_STATION_KM {
+                        return Err(format!(
+                            "irradiance: the model (lat {:.4}, lon {:.4} in {}) is {km:.0} km from \
+                             the weather station {:?} (lat {}, lon {}); give site=(lat, lon) to use \
+                             this weather anyway",
+                            s.lat, s.lon, s.crs.name, w.site.name, w.site.latitude, w.site.longitude
+                        ));
+                    }
+                    (s.lat, s.lon)
+                }
+                Err(_) => (w.site.latitude, w.site.longitude),
+            },
+        };
+        let t1 = Instant::now();
+        let table = IrradianceTable::new(&w, &Site::new(lat, lon), sky).map_err(|e| message(&e))?;
+        let sun_ms = weather_ms + ms(t1);
+        let opts = IrradianceOptions { sky, albedo };
+        let framed = l.study.framed();
+        let t = skylod::pipeline::irradiance(&framed, &bundles, &table, &opts, false, p)
+            .map_err(|e| message(&e))?;
+        let rows = t.rows(l.study.pois(), |poi, r, f| {
+            IrradiancePoi::new(poi, &r.annual, f)
+        });
+        let summary = WeatherSummary::new(
+            weather.display().to_string(),
+            w.format,
+            &w.site,
+            w.hours.len(),
+            w.totals_kwh_m2(),
+        );
+        let timings = IrradianceTimings {
+            read: l.read_ms,
+            sun: sun_ms,
+            bvh: s_to_ms(t.bvh_s),
+            trace: s_to_ms(t.trace_s),
+        };
+        json(&IrradianceOutput::new(
+            rows,
+            summary,
+            [lat, lon],
+            sky,
+            albedo,
+            rays,
+            l.inputs,
+            l.study.source().polygon_count(),
+            timings,
+        ))
+    })
+}
+
+/// `skylod evaluate --json`.
+#[pyfunction]
+#[pyo3(signature = (setup, lod, svf_rays=20_000, sun=true, site=None, year=2025, step=15, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn evaluate(
+    py: Python<'_>,
+    setup: Setup,
+    lod: write::LodArgs,
+    svf_rays: usize,
+    sun: bool,
+    site: Option<(f64, f64)>,
+    year: i32,
+    step: u32,
+    progress: Option<PyObject>,
+) -> PyResult<String> {
+    run(py, progress, move |p| {
+        let t_all = Instant::now();
+        let lod_opts = lod.options()?;
+        let l = load(&setup, p)?;
+        let site = match sun {
+            true => Some(self::site(&l.study, site)?),
+            false => None,
+        };
+        let table = match site {
+            Some((lat, lon)) => {
+                Some(SunTable::year(year, step, &Site::new(lat, lon)).map_err(|e| message(&e))?)
+            }
+            None => None,
+        };
+        let opts = EvaluateOptions {
+            eval: EvalOptions {
+                lod: lod_opts,
+                svf_rays,
+                ..Default::default()
+            },
+            sun: table,
+        };
+        let e = l.study.evaluate(&opts, p).map_err(|e| message(&e))?;
+        json(&EvaluateOutput::new(
+            l.inputs,
+            lod.rays,
+            svf_rays,
+            lod.seed,
+            site.map(|(lat, lon)| SunSetting::new(lat, lon, year, step)),
+            e.pois,
+            EvaluateTimings {
+                read: l.read_ms,
+                rough: e.rough_ms,
+                selection_bvh: e.selection_bvh_ms,
+                total: ms(t_all),
+            },
+        ))
+    })
+}
+
+/// The native module.
+#[pymodule]
+fn _skylod(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("SkylodError", m.py().get_type::<SkylodError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(svf, m)?)?;
+    m.add_function(wrap_pyfunction!(sun_hours, m)?)?;
+    m.add_function(wrap_pyfunction!(horizon, m)?)?;
+    m.add_function(wrap_pyfunction!(irradiance, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(write::stats, m)?)?;
+    m.add_function(wrap_pyfunction!(write::lod, m)?)?;
+    m.add_function(wrap_pyfunction!(write::convert, m)?)?;
+    Ok(())
+}

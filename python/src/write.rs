@@ -1,0 +1,356 @@
+//! The calls that write or count: `stats`, `lod` (levels, error bound, model and report) and
+//! `convert`, laid out as the commands lay them out (one file, a mirrored tree, a merge).
+
+use crate::relay::{message, run};
+use crate::setup::{crs, failures, load, ms, Setup};
+use pyo3::prelude::*;
+use skylod::batch::inputs::{expand, Input};
+use skylod::batch::outputs::{create_parent, plan, Plan, Targets};
+use skylod::citygml::merge::merge_named;
+use skylod::citygml::write::{write_document, WriteOptions};
+use skylod::citygml::{read_file_observed, ReadOptions};
+use skylod::export::{Content, Format};
+use skylod::lod::bound::BoundOptions;
+use skylod::lod::rough::RoughOptions;
+use skylod::lod::select::SelectOptions;
+use skylod::lod::LodOptions;
+use skylod::output::report::{Guarantee, Parameters, Report, Timings};
+use skylod::output::stats::{FileStats, Stats, StatsOutput};
+use skylod::pipeline::{write_all, BoundSpec, LevelsOptions};
+use skylod::runtime::progress::Stage;
+use skylod::solar::{Site, SunTable};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Rough model and selection options (`--rays`, `--seed`, `--threshold`, `--roof-tolerance`,
+/// `--angle`, `--thickness`, `--no-lod2`), a dict built by `skylod/__init__.py`.
+#[derive(FromPyObject, Debug, Clone)]
+pub struct LodArgs {
+    #[pyo3(item)]
+    pub rays: usize,
+    #[pyo3(item)]
+    pub seed: u64,
+    #[pyo3(item)]
+    pub threshold: Option<f64>,
+    #[pyo3(item)]
+    pub roof_tolerance: f64,
+    #[pyo3(item)]
+    pub angle: f64,
+    #[pyo3(item)]
+    pub thickness: f64,
+    #[pyo3(item)]
+    pub prefer_lod2: bool,
+}
+
+impl LodArgs {
+    /// The library's options, checked as the CLI checks them.
+    pub fn options(&self) -> Result<LodOptions, String> {
+        if !(0.0..=90.0).contains(&self.angle) {
+            return Err("angle must be between 0 and 90 degrees".into());
+        }
+        if self.thickness < 0.0 || self.roof_tolerance < 0.0 {
+            return Err("thickness and roof_tolerance must not be negative".into());
+        }
+        let mut rough = RoughOptions::default();
+        (rough.angle_deg, rough.thickness_m, rough.prefer_lod2) =
+            (self.angle, self.thickness, self.prefer_lod2);
+        let mut select = SelectOptions::default();
+        (select.rays, select.seed) = (self.rays, self.seed);
+        (select.threshold_deg, select.roof_tolerance_m) = (self.threshold, self.roof_tolerance);
+        let mut lod = LodOptions::default();
+        (lod.rough, lod.select) = (rough, select);
+        Ok(lod)
+    }
+}
+
+/// The error bound (`--max-svf-error`, `--max-sun-hours-error`, `--no-bound`,
+/// `--bound-rays`, `--lat/--lon`, `--year`, `--step`).
+#[derive(FromPyObject, Debug, Clone)]
+pub struct BoundArgs {
+    #[pyo3(item)]
+    pub bound: bool,
+    #[pyo3(item)]
+    pub max_svf_error: Option<f64>,
+    #[pyo3(item)]
+    pub max_sun_hours_error: Option<f64>,
+    #[pyo3(item)]
+    pub bound_rays: usize,
+    #[pyo3(item)]
+    pub site: Option<(f64, f64)>,
+    #[pyo3(item)]
+    pub year: i32,
+    #[pyo3(item)]
+    pub step: u32,
+}
+
+/// The default error allowed (1 %), as `skylod lod`.
+const DEFAULT_MAX_ERROR: f64 = 0.01;
+
+impl BoundArgs {
+    /// The bound and what the report says of it, as `skylod lod` decides them.
+    fn spec(
+        &self,
+        study: &skylod::session::Study,
+        seed: u64,
+    ) -> Result<(Option<BoundSpec>, Guarantee), String> {
+        let mut guarantee = Guarantee::default();
+        if !self.bound {
+            let why = "SVF and sun hours: no error bound (bound=False)";
+            guarantee.not_bounded.push(why.into());
+            return Ok((None, guarantee));
+        }
+        let svf = self.max_svf_error.unwrap_or(DEFAULT_MAX_ERROR);
+        guarantee.svf_error = Some(svf);
+        let model_site = study.site().map(|s| (s.lat, s.lon));
+        let site = match (self.site, model_site) {
+            (Some(s), _) | (None, Ok(s)) => Some(s),
+            (None, Err(why)) => {
+                if self.max_sun_hours_error.is_some() {
+                    return Err(format!(
+                        "max_sun_hours_error needs the site (lat, lon): {why}"
+                    ));
+                }
+                let line = format!("sun hours: no site ({why}; give site=(lat, lon))");
+                guarantee.not_bounded.push(line);
+                None
+            }
+        };
+        let sun_error = site.map(|_| self.max_sun_hours_error.unwrap_or(DEFAULT_MAX_ERROR));
+        let sun = match site {
+            Some((lat, lon)) => Some(
+                SunTable::year(self.year, self.step, &Site::new(lat, lon))
+                    .map_err(|e| message(&e))?,
+            ),
+            None => None,
+        };
+        guarantee.sun_hours_error = sun_error;
+        let options = BoundOptions {
+            max_svf_error: Some(svf),
+            max_sun_error: sun_error,
+            svf_rays: self.bound_rays,
+            svf_seed: seed,
+            ..Default::default()
+        };
+        Ok((Some(BoundSpec { options, sun }), guarantee))
+    }
+}
+
+/// Where the outputs go, checked before any work: (plan, format, targets).
+fn layout(
+    inputs: &[Input],
+    output: &Path,
+    format: Option<&str>,
+    overwrite: bool,
+) -> Result<(Plan, Format, Targets, WriteOptions), String> {
+    let format = format
+        .map(|f| f.parse::<Format>().map_err(|e| format!("format: {e}")))
+        .transpose()?;
+    let (plan, format) = plan(inputs, output, format).map_err(|e| message(&e))?;
+    let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
+    let mut wopts = WriteOptions::default();
+    (wopts.overwrite, wopts.protect, wopts.keep_envelopes) = (overwrite, paths.clone(), false);
+    let targets = (plan.targets(&paths, &wopts, None, true)).map_err(|e| message(&e))?;
+    if let Some(e) = targets.refused.first() {
+        return Err(message(e));
+    }
+    Ok((plan, format, targets, wopts))
+}
+
+/// Merge the staged parts of a merge plan into its target.
+fn merge(
+    plan: &Plan,
+    parts: &[PathBuf],
+    names: &[PathBuf],
+    w: &WriteOptions,
+) -> Result<(), String> {
+    if let Plan::Merge(target) = plan {
+        merge_named(parts, names, target, w).map_err(|e| message(&e))?;
+    }
+    Ok(())
+}
+
+/// `skylod stats --json`.
+#[pyfunction]
+#[pyo3(signature = (paths, source_crs=None, progress=None))]
+pub fn stats(
+    py: Python<'_>,
+    paths: Vec<PathBuf>,
+    source_crs: Option<String>,
+    progress: Option<PyObject>,
+) -> PyResult<String> {
+    run(py, progress, move |p| {
+        let source = source_crs
+            .as_deref()
+            .map(|c| crs(c, "source_crs"))
+            .transpose()?;
+        let inputs = expand(&paths).map_err(|e| message(&e))?;
+        p.start(Stage::Read, inputs.len() as u64, 0);
+        let (mut files, mut failed) = (Vec::new(), Vec::new());
+        for i in &inputs {
+            if p.is_cancelled() {
+                return Err("cancelled while reading inputs".into());
+            }
+            match read_file_observed(&i.path, &ReadOptions::default(), &|_| ()) {
+                Ok(mut m) => {
+                    if let Some(c) = &source {
+                        m.files
+                            .iter_mut()
+                            .for_each(|f| f.srs_name = Some(c.name.clone()));
+                    }
+                    files.push(FileStats::new(i.path.display().to_string(), Stats::of(&m)));
+                }
+                Err(e) => failed.push(e),
+            }
+            p.advance(Stage::Read, 1, 0, None);
+        }
+        p.finish(Stage::Read);
+        failures(&failed)?;
+        let total = Stats::total(files.iter().map(|f| &f.stats));
+        serde_json::to_string_pretty(&StatsOutput::new(files, total)).map_err(|e| e.to_string())
+    })
+}
+
+/// `skylod lod -o OUTPUT --report`: levels (with the error bound), the model written, the
+/// report returned.
+#[pyfunction]
+#[pyo3(signature = (setup, output, lod, bound, format=None, overwrite=false, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn lod(
+    py: Python<'_>,
+    setup: Setup,
+    output: PathBuf,
+    lod: LodArgs,
+    bound: BoundArgs,
+    format: Option<String>,
+    overwrite: bool,
+    progress: Option<PyObject>,
+) -> PyResult<String> {
+    run(py, progress, move |p| {
+        let t_all = Instant::now();
+        let lod_opts = lod.options()?;
+        let expanded = expand(&setup.paths).map_err(|e| message(&e))?;
+        // Every target is checked before any input is read.
+        layout(&expanded, &output, format.as_deref(), overwrite)?;
+        let l = load(&setup, p)?;
+        let study = &l.study;
+        let (plan, format, targets, wopts) =
+            layout(study.inputs(), &output, format.as_deref(), overwrite)?;
+        let (bound, guarantee) = bound.spec(study, lod.seed)?;
+        let opts = LevelsOptions {
+            lod: lod_opts,
+            bound,
+        };
+        let lv = study.levels(&opts, p).map_err(|e| message(&e))?;
+        if let Some(b) = lv.bound.as_ref().filter(|b| !b.met) {
+            return Err(format!(
+                "the error bound cannot be met at these POIs (nothing written):\n{}",
+                b.failing_lines()
+            ));
+        }
+        let t_write = Instant::now();
+        if targets.mirror {
+            for (_, out) in &targets.todo {
+                create_parent(out).map_err(|e| message(&e))?;
+            }
+        }
+        let model = study.source();
+        let results = write_all(model, &targets.todo, &lv, format, &targets.write_opts, p)
+            .map_err(|e| message(&e))?;
+        let mut written = Vec::with_capacity(results.len());
+        for ((f, out), r) in targets.todo.iter().zip(results) {
+            let w = r.map_err(|e| message(&e))?;
+            let shown = match &plan {
+                Plan::Merge(t) => t.display().to_string(),
+                _ => out.display().to_string(),
+            };
+            written.push((*f, shown, w.buildings_dropped + w.parts_dropped));
+        }
+        let names: Vec<PathBuf> = model.files.iter().map(|f| f.path.clone()).collect();
+        let parts: Vec<PathBuf> = targets.todo.iter().map(|(_, o)| o.clone()).collect();
+        merge(&plan, &parts, &names, &wopts)?;
+        let result = &lv.lod;
+        let timings = Timings {
+            read: l.read_ms,
+            rough: result.rough_s * 1e3,
+            bvh: result.bvh_s * 1e3,
+            select: result.select_s * 1e3,
+            write: ms(t_write),
+            total: ms(t_all),
+        };
+        let params = Parameters::of(
+            &result.selection,
+            lod.seed,
+            lod_opts.select.roof_tolerance_m,
+            &lod_opts.rough,
+        );
+        let mut report = Report::new(
+            model,
+            lv.rough_source(),
+            &result.selection,
+            study.pois(),
+            params,
+            timings,
+        );
+        report.set_flags(&result.flags);
+        report.bound = lv.bound.clone();
+        for (f, shown, dropped) in written {
+            let in_file = model.buildings.iter().filter(|b| b.file == f).count();
+            report.record_output(f, shown, in_file, dropped);
+        }
+        report.guarantee = guarantee;
+        serde_json::to_string_pretty(&report).map_err(|e| e.to_string())
+    })
+}
+
+/// `skylod convert -o OUTPUT`: the outputs written, in input order (the merged file once).
+#[pyfunction]
+#[pyo3(signature = (paths, output, format=None, overwrite=false, progress=None))]
+pub fn convert(
+    py: Python<'_>,
+    paths: Vec<PathBuf>,
+    output: PathBuf,
+    format: Option<String>,
+    overwrite: bool,
+    progress: Option<PyObject>,
+) -> PyResult<Vec<PathBuf>> {
+    run(py, progress, move |p| {
+        let inputs = expand(&paths).map_err(|e| message(&e))?;
+        let (plan, format, targets, wopts) =
+            layout(&inputs, &output, format.as_deref(), overwrite)?;
+        let fmt = match targets.staging {
+            Some(_) => Format::CityGml,
+            None => format,
+        };
+        let (mut parts, mut names) = (Vec::new(), Vec::new());
+        p.start(Stage::Read, targets.todo.len() as u64, 0);
+        for (k, out) in &targets.todo {
+            if p.is_cancelled() {
+                return Err(format!(
+                    "{}: cancelled before reading",
+                    inputs[*k].path.display()
+                ));
+            }
+            let input = &inputs[*k].path;
+            let model = read_file_observed(input, &ReadOptions::default(), &|_| ())
+                .map_err(|e| message(&e))?;
+            if targets.mirror {
+                create_parent(out).map_err(|e| message(&e))?;
+            }
+            let w = &targets.write_opts;
+            match fmt {
+                Format::CityGml => write_document(&model, 0, Vec::new(), out, w).map(|_| ()),
+                f => skylod::export::write(f, &model, 0, Content::Full, out, w).map(|_| ()),
+            }
+            .map_err(|e| message(&e))?;
+            parts.push(out.clone());
+            names.push(input.clone());
+            p.advance(Stage::Read, 1, 0, None);
+        }
+        p.finish(Stage::Read);
+        merge(&plan, &parts, &names, &wopts)?;
+        Ok(match &plan {
+            Plan::Merge(t) => vec![t.clone()],
+            _ => parts,
+        })
+    })
+}
