@@ -281,6 +281,7 @@ fn evaluate(
                 ..Default::default()
             },
             sun: table,
+            irradiance: None,
         };
         let e = l.study.evaluate(&opts, p).map_err(|e| message(&e))?;
         json(&EvaluateOutput::new(

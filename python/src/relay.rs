@@ -69,6 +69,8 @@ pub fn stage_name(s: Stage) -> &'static str {
         Stage::Select => "select",
         Stage::Trace => "trace",
         Stage::Write => "write",
+        Stage::Sun => "sun",
+        _ => "other",
     }
 }
 

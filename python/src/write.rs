@@ -131,7 +131,14 @@ impl BoundArgs {
             svf_seed: seed,
             ..Default::default()
         };
-        Ok((Some(BoundSpec { options, sun }), guarantee))
+        Ok((
+            Some(BoundSpec {
+                options,
+                sun,
+                irradiance: None,
+            }),
+            guarantee,
+        ))
     }
 }
 
