@@ -18,21 +18,6 @@ pub(super) fn xmlns_key(prefix: &[u8]) -> Vec<u8> {
     }
 }
 
-pub(super) struct CountingWriter<'a> {
-    pub(super) inner: &'a mut dyn Write,
-    pub(super) n: u64,
-}
-
-impl Write for CountingWriter<'_> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.n += n as u64;
-        Ok(n)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
-}
 pub(super) enum CopyError {
     Read(ReadError),
     Io(std::io::Error),

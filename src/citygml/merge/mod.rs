@@ -78,7 +78,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::write::{check_target, WriteOptions};
-use copy::{copy_children, xmlns_key, CopyError, CountingWriter};
+use crate::io::CountingWriter;
+use copy::{copy_children, xmlns_key, CopyError};
 use ids::Rewrite;
 use scan::{is_header, ns_of, open, scan, xml_err, Key};
 
@@ -467,7 +468,7 @@ fn merge_into(
     let mut members = 0usize;
     let mut refs_rewritten = 0usize;
     let bytes = {
-        let mut cw = CountingWriter { inner: w, n: 0 };
+        let mut cw = CountingWriter::new(w);
         let io = |e: std::io::Error| WriteError::Io {
             file: out.to_path_buf(),
             source: e,
@@ -522,7 +523,7 @@ fn merge_into(
         cw.write_all(b"\n</").map_err(io)?;
         cw.write_all(&root_name).map_err(io)?;
         cw.write_all(b">\n").map_err(io)?;
-        cw.n
+        cw.count()
     };
     Ok(MergeSummary {
         files: inputs.len(),
