@@ -98,6 +98,24 @@ pub fn is_standard_foreign(uri: &[u8]) -> bool {
         || uri == b"http://www.w3.org/XML/1998/namespace"
 }
 
+/// Core properties that come before any other child of a city object (CityGML 1.0 to 3.0,
+/// `core:_CityObject` / `core:AbstractCityObject`): a generic attribute added to a feature goes
+/// after them. Local names; GML's own leading properties and the generics module come before
+/// them in document order.
+pub const CORE_LEADING: &[&str] = &[
+    "creationDate",
+    "terminationDate",
+    "validFrom",
+    "validTo",
+    "externalReference",
+    "generalizesTo",
+    "relativeToTerrain",
+    "relativeToWater",
+    "relatedTo",
+    "appearance",
+    "genericAttribute",
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,6 +13,7 @@
 //! ```
 
 use super::Framed;
+use crate::citygml::ns::CORE_LEADING;
 use crate::citygml::write::{escape_attr, write_document, Edit, WriteOptions};
 use crate::citygml::WriteError;
 use crate::lod::scene::full_scene;
@@ -102,7 +103,7 @@ pub fn surface_means(holders: &[Option<usize>], values: &[f64]) -> BTreeMap<usiz
 /// `boundedBy`, …, core's `creationDate` … `relativeToWater`, `relatedTo`, appearances and
 /// generic attributes already there); `None` for an empty or malformed element.
 pub fn insertion_point(xml: &[u8]) -> Option<usize> {
-    const FIRST: &[&str] = &[
+    const GML_LEADING: &[&str] = &[
         "metaDataProperty",
         "description",
         "descriptionReference",
@@ -110,16 +111,8 @@ pub fn insertion_point(xml: &[u8]) -> Option<usize> {
         "name",
         "boundedBy",
         "location",
-        "creationDate",
-        "terminationDate",
-        "validFrom",
-        "validTo",
-        "externalReference",
-        "generalizesTo",
-        "relativeToTerrain",
-        "relativeToWater",
-        "relatedTo",
-        "appearance",
+    ];
+    const GENERIC_ATTRIBUTES: &[&str] = &[
         "stringAttribute",
         "intAttribute",
         "doubleAttribute",
@@ -127,7 +120,6 @@ pub fn insertion_point(xml: &[u8]) -> Option<usize> {
         "uriAttribute",
         "measureAttribute",
         "genericAttributeSet",
-        "genericAttribute",
     ];
     let mut at = tag_end(xml, 0)?;
     if xml.get(at.checked_sub(2)?) == Some(&b'/') {
@@ -150,7 +142,8 @@ pub fn insertion_point(xml: &[u8]) -> Option<usize> {
             .position(|c| c.is_ascii_whitespace() || *c == b'>' || *c == b'/')?;
         let qname = std::str::from_utf8(&xml[k + 1..name_end]).ok()?;
         let local = qname.rsplit(':').next().unwrap_or(qname);
-        if !FIRST.contains(&local) {
+        let leading = [GML_LEADING, CORE_LEADING, GENERIC_ATTRIBUTES];
+        if !leading.iter().any(|names| names.contains(&local)) {
             return Some(at);
         }
         at = element_end(xml, k)?;

@@ -6,6 +6,7 @@
 use super::doc::{Doc, Name, NsKind, RefKind};
 use super::encode::{encoding, Encoder, IdPool};
 use super::MixedSummary;
+use crate::citygml::ns::CORE_LEADING;
 use crate::citygml::write::{envelope_xml, Edit};
 use crate::lod::rough::RoughGeometry;
 use crate::model::{Asset, AssetKind, Bbox, CityGmlVersion, CityModel, Polygon, Span};
@@ -22,20 +23,6 @@ const CONNECTED: &[&str] = &[
     "Surface",
     "TriangulatedSurface",
     "Tin",
-];
-
-const CORE_LEADING: &[&str] = &[
-    "creationDate",
-    "terminationDate",
-    "validFrom",
-    "validTo",
-    "externalReference",
-    "generalizesTo",
-    "relativeToTerrain",
-    "relativeToWater",
-    "relatedTo",
-    "appearance",
-    "genericAttribute",
 ];
 
 struct Replacement {
