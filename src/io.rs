@@ -22,7 +22,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use std::io::{BufWriter, Write};
+use std::io::{BufRead, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// The first two bytes of a gzip member (RFC 1952).
@@ -312,6 +312,20 @@ fn without_temporary_path(e: std::io::Error) -> std::io::Error {
         Some(i) => std::io::Error::new(e.kind(), text[..i].to_owned()),
         None => e,
     }
+}
+
+/// [`std::io::Read::read`] of a reader whose buffer is the truth ([`BufRead`]): copy what
+/// [`BufRead::fill_buf`] holds (as much as fits) and [`BufRead::consume`] it, so that a
+/// reader that watches or rewinds what is consumed sees every byte read.
+pub(crate) fn read_through_buf<R: BufRead + ?Sized>(
+    r: &mut R,
+    buf: &mut [u8],
+) -> std::io::Result<usize> {
+    let avail = r.fill_buf()?;
+    let n = avail.len().min(buf.len());
+    buf[..n].copy_from_slice(&avail[..n]);
+    r.consume(n);
+    Ok(n)
 }
 
 /// A writer that counts the bytes written through it.

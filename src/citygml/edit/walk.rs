@@ -30,14 +30,7 @@ struct Tee<R> {
 
 impl<R: BufRead> Read for Tee<R> {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        let n = {
-            let b = self.fill_buf()?;
-            let n = b.len().min(buf.len());
-            buf[..n].copy_from_slice(&b[..n]);
-            n
-        };
-        self.consume(n);
-        Ok(n)
+        crate::io::read_through_buf(self, buf)
     }
 }
 

@@ -39,11 +39,7 @@ impl<R: BufRead> PushBack<R> {
 
 impl<R: BufRead> Read for PushBack<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let avail = self.fill_buf()?;
-        let n = avail.len().min(buf.len());
-        buf[..n].copy_from_slice(&avail[..n]);
-        self.consume(n);
-        Ok(n)
+        crate::io::read_through_buf(self, buf)
     }
 }
 
