@@ -77,17 +77,12 @@ impl<'a> Content<'a> {
     }
 
     fn check(&self, model: &CityModel) -> Result<(), WriteError> {
-        if let Content::Levels { rough, levels } = self {
-            if rough.len() != model.assets.len() || levels.len() != model.assets.len() {
-                return Err(WriteError::Invalid(format!(
-                    "{} assets, {} levels and {} rough geometries: one of each per asset expected",
-                    model.assets.len(),
-                    levels.len(),
-                    rough.len()
-                )));
+        match self {
+            Content::Levels { rough, levels } => {
+                crate::lod::mixed::check_per_asset(model, rough, levels)
             }
+            Content::Full => Ok(()),
         }
-        Ok(())
     }
 }
 

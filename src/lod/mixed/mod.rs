@@ -245,6 +245,24 @@ pub fn write_mixed_to(
     Ok(summary)
 }
 
+/// One rough geometry and one level per asset of `model`, or [`WriteError::Invalid`] naming
+/// the three counts (the mixed writer and the exports).
+pub(crate) fn check_per_asset(
+    model: &CityModel,
+    rough: &[RoughGeometry],
+    levels: &[u8],
+) -> Result<(), WriteError> {
+    if levels.len() != model.assets.len() || rough.len() != model.assets.len() {
+        return Err(WriteError::Invalid(format!(
+            "{} assets, {} levels and {} rough geometries: one of each per asset expected",
+            model.assets.len(),
+            levels.len(),
+            rough.len()
+        )));
+    }
+    Ok(())
+}
+
 /// The arguments checked, `check` passed for the source file, the edits planned.
 fn mixed_edits(
     model: &CityModel,
@@ -254,14 +272,7 @@ fn mixed_edits(
     opts: &WriteOptions,
     check: impl FnOnce(&crate::model::SourceFile) -> Result<(), WriteError>,
 ) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
-    if levels.len() != model.assets.len() || rough.len() != model.assets.len() {
-        return Err(WriteError::Invalid(format!(
-            "{} assets, {} levels and {} rough geometries: one of each per asset expected",
-            model.assets.len(),
-            levels.len(),
-            rough.len()
-        )));
-    }
+    check_per_asset(model, rough, levels)?;
     let Some(src) = model.files.get(file) else {
         return Err(WriteError::Invalid(format!("no source file {file}")));
     };
