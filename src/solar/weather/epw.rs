@@ -3,8 +3,8 @@
 //! year, month, day, hour (1–24, ending), minute, flags, …, GHI (field 14), DNI (15),
 //! DHI (16), in Wh/m².
 
-use super::{format_error, irradiation, mid_hour_utc, number, Weather, WeatherError};
-use super::{WeatherFormat, WeatherHour, WeatherSite};
+use super::{format_error, number, weather, weather_hour, Weather, WeatherError};
+use super::{WeatherFormat, WeatherSite};
 use chrono::NaiveDate;
 
 pub(super) fn parse(text: &str, name: &str) -> Result<Weather, WeatherError> {
@@ -43,24 +43,21 @@ pub(super) fn parse(text: &str, name: &str) -> Result<Weather, WeatherError> {
         let hour = number(&rec, 3, "hour", (1.0, 24.0), name)? as u32;
         let date = NaiveDate::from_ymd_opt(year, month, day)
             .ok_or_else(|| format_error(name, line, format!("no date {year}-{month}-{day}")))?;
-        let mid_utc = mid_hour_utc(date, hour, site.utc_offset_hours)
-            .ok_or_else(|| format_error(name, line, "the hour is out of range"))?;
-        hours.push(WeatherHour {
-            mid_utc,
-            ghi: irradiation(&rec, 13, "global horizontal radiation", name)?,
-            dni: irradiation(&rec, 14, "direct normal radiation", name)?,
-            dhi: irradiation(&rec, 15, "diffuse horizontal radiation", name)?,
-        });
+        hours.push(weather_hour(
+            &rec,
+            line,
+            (date, hour),
+            site,
+            [
+                (13, "global horizontal radiation"),
+                (14, "direct normal radiation"),
+                (15, "diffuse horizontal radiation"),
+            ],
+            name,
+        )?);
     }
     let site = site.ok_or_else(|| format_error(name, 1, "no LOCATION line: not an EPW file"))?;
-    if hours.is_empty() {
-        return Err(format_error(name, 9, "no hourly data"));
-    }
-    Ok(Weather {
-        format: WeatherFormat::Epw,
-        site,
-        hours,
-    })
+    weather(WeatherFormat::Epw, site, hours, name, 9)
 }
 
 #[cfg(test)]

@@ -173,6 +173,45 @@ fn mid_hour_utc(date: NaiveDate, hour_end: u32, utc_offset_hours: f64) -> Option
     )
 }
 
+/// The hour of `rec` (line `line`) that ends at `hour_end` of `date` (local standard time of
+/// `site`), its GHI, DNI and DHI read from the columns `irr` (index, name for errors).
+fn weather_hour(
+    rec: &csv::StringRecord,
+    line: u64,
+    (date, hour_end): (NaiveDate, u32),
+    site: &WeatherSite,
+    irr: [(usize, &str); 3],
+    name: &str,
+) -> Result<WeatherHour, WeatherError> {
+    let mid_utc = mid_hour_utc(date, hour_end, site.utc_offset_hours)
+        .ok_or_else(|| format_error(name, line, "the hour is out of range"))?;
+    let [ghi, dni, dhi] = irr;
+    Ok(WeatherHour {
+        mid_utc,
+        ghi: irradiation(rec, ghi.0, ghi.1, name)?,
+        dni: irradiation(rec, dni.0, dni.1, name)?,
+        dhi: irradiation(rec, dhi.0, dhi.1, name)?,
+    })
+}
+
+/// The weather year read, or a format error at `first_data_line` when it has no hour.
+fn weather(
+    format: WeatherFormat,
+    site: WeatherSite,
+    hours: Vec<WeatherHour>,
+    name: &str,
+    first_data_line: u64,
+) -> Result<Weather, WeatherError> {
+    if hours.is_empty() {
+        return Err(format_error(name, first_data_line, "no hourly data"));
+    }
+    Ok(Weather {
+        format,
+        site,
+        hours,
+    })
+}
+
 /// A field of a record as a finite number in `lo..=hi`, or a format error naming the line.
 fn number(
     rec: &csv::StringRecord,

@@ -3,8 +3,8 @@
 //! `Time (HH:MM)` (01:00–24:00, ending), … `GHI`, `DNI`, `DHI` (Wh/m², whatever unit the
 //! header prints), found by their column names.
 
-use super::{format_error, irradiation, mid_hour_utc, number, Weather, WeatherError};
-use super::{WeatherFormat, WeatherHour, WeatherSite};
+use super::{format_error, number, weather, weather_hour, Weather, WeatherError};
+use super::{WeatherFormat, WeatherSite};
 use chrono::NaiveDate;
 
 pub(super) fn parse(text: &str, name: &str) -> Result<Weather, WeatherError> {
@@ -65,23 +65,10 @@ pub(super) fn parse(text: &str, name: &str) -> Result<Weather, WeatherError> {
             .ok_or_else(|| {
                 format_error(name, line, format!("time {time_s:?} is not 01:00..24:00"))
             })?;
-        let mid_utc = mid_hour_utc(date, hour, site.utc_offset_hours)
-            .ok_or_else(|| format_error(name, line, "the hour is out of range"))?;
-        hours.push(WeatherHour {
-            mid_utc,
-            ghi: irradiation(&rec, ghi_c, "GHI", name)?,
-            dni: irradiation(&rec, dni_c, "DNI", name)?,
-            dhi: irradiation(&rec, dhi_c, "DHI", name)?,
-        });
+        let irr = [(ghi_c, "GHI"), (dni_c, "DNI"), (dhi_c, "DHI")];
+        hours.push(weather_hour(&rec, line, (date, hour), &site, irr, name)?);
     }
-    if hours.is_empty() {
-        return Err(format_error(name, 3, "no hourly data"));
-    }
-    Ok(Weather {
-        format: WeatherFormat::Tmy3,
-        site,
-        hours,
-    })
+    weather(WeatherFormat::Tmy3, site, hours, name, 3)
 }
 
 #[cfg(test)]
