@@ -181,7 +181,8 @@ fn dispatch<R, const COUNT: bool>(
     saw_root: &mut bool,
 ) -> Result<bool, ReadError> {
     match ev {
-        Event::Start(e) => {
+        Event::Start(ref e) | Event::Empty(ref e) => {
+            let empty = matches!(ev, Event::Empty(_));
             if p.stack.is_empty() && *saw_root {
                 return Err(p.xml_error(pos, "more than one root element".into()));
             }
@@ -189,25 +190,14 @@ fn dispatch<R, const COUNT: bool>(
             let (res, _) = reader.resolve_element(e.name());
             let uri = p.bound(&res);
             p.content_start = reader.buffer_position() + base;
-            p.start(reader, uri, &e, pos, false)?;
+            p.start(reader, uri, e, pos, empty)?;
             if COUNT {
-                p.count_lines(&e, pos + 1);
+                p.count_lines(e, pos + 1);
             }
-        }
-        Event::Empty(e) => {
-            if p.stack.is_empty() && *saw_root {
-                return Err(p.xml_error(pos, "more than one root element".into()));
+            if empty {
+                let end = reader.buffer_position() + base;
+                p.end(end)?;
             }
-            *saw_root = true;
-            let (res, _) = reader.resolve_element(e.name());
-            let uri = p.bound(&res);
-            p.content_start = reader.buffer_position() + base;
-            p.start(reader, uri, &e, pos, true)?;
-            if COUNT {
-                p.count_lines(&e, pos + 1);
-            }
-            let end = reader.buffer_position() + base;
-            p.end(end)?;
         }
         Event::End(e) => {
             if COUNT {
