@@ -92,6 +92,21 @@ pub enum AssetKind {
 }
 
 impl AssetKind {
+    /// Every kind, in declaration order (the order of [`AssetKind`]'s `Ord`).
+    pub const ALL: [AssetKind; 11] = [
+        AssetKind::Roof,
+        AssetKind::Wall,
+        AssetKind::Ground,
+        AssetKind::Closure,
+        AssetKind::OuterCeiling,
+        AssetKind::OuterFloor,
+        AssetKind::Installation,
+        AssetKind::Window,
+        AssetKind::Door,
+        AssetKind::Body,
+        AssetKind::Other,
+    ];
+
     /// Thematic boundary surface of a building shell.
     pub fn is_shell_surface(self) -> bool {
         matches!(
@@ -524,6 +539,30 @@ pub struct Building {
     pub file: usize,
 }
 
+impl Building {
+    /// A building (not a part) with `gml:id` `id` that owns `assets`, in file 0, with no
+    /// geometry of its own, at span `0..0` of line 1: what tests and examples build by hand
+    /// (the reader fills every field). Other fields by struct update, as [`Asset::new`].
+    ///
+    /// ```
+    /// use skylod::model::Building;
+    /// let b = Building { span: 0..10, ..Building::new(Some("b1"), vec![0, 1]) };
+    /// assert_eq!((b.id.as_deref(), b.is_part, b.assets.len()), (Some("b1"), false, 2));
+    /// ```
+    pub fn new(id: Option<&str>, assets: Vec<usize>) -> Building {
+        Building {
+            id: id.map(str::to_string),
+            is_part: false,
+            parent: None,
+            span: 0..0,
+            line: 1,
+            assets,
+            geometries: Vec::new(),
+            file: 0,
+        }
+    }
+}
+
 /// A `gml:Envelope` inside a `gml:boundedBy` whose owner's geometry is known.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnvelopeSite {
@@ -663,6 +702,39 @@ pub struct SourceFile {
     /// Elements per CityGML feature or object type (local name: `WallSurface`,
     /// `BuildingInstallation`, `Room`, `Appearance`, …), wherever they nest.
     pub features: std::collections::BTreeMap<String, usize>,
+}
+
+impl SourceFile {
+    /// An empty file named `path` (read from that path) of CityGML `version`: no CRS, no
+    /// envelope, nothing counted, GML bound to `gml:`; what tests and examples build by hand
+    /// (the reader fills every field). Other fields by struct update.
+    ///
+    /// ```
+    /// use skylod::model::{CityGmlVersion, SourceFile};
+    /// let f = SourceFile {
+    ///     srs_name: Some("EPSG:25832".into()),
+    ///     ..SourceFile::new("a.gml", CityGmlVersion::V2_0)
+    /// };
+    /// assert_eq!((f.path.to_str(), f.len, f.gzip), (Some("a.gml"), 0, false));
+    /// ```
+    pub fn new(path: impl Into<PathBuf>, version: CityGmlVersion) -> SourceFile {
+        let path = path.into();
+        SourceFile {
+            source: Source::File(path.clone()),
+            path,
+            version,
+            srs_name: None,
+            gzip: false,
+            len: 0,
+            gml_prefix: "gml:".into(),
+            envelopes: Vec::new(),
+            implicit_geometries: 0,
+            library_objects: Vec::new(),
+            objects_without_geometry: 0,
+            polygon_elements: 0,
+            features: Default::default(),
+        }
+    }
 }
 
 /// A city model read from one or more CityGML documents.
@@ -807,30 +879,11 @@ mod tests {
     #[test]
     fn merge_takes_the_first_model_and_reindexes_the_next() {
         let mut one = CityModel::default();
-        one.files.push(SourceFile {
-            path: "a.gml".into(),
-            source: Source::File("a.gml".into()),
-            version: CityGmlVersion::V2_0,
-            srs_name: None,
-            gzip: false,
-            len: 0,
-            gml_prefix: "gml:".into(),
-            envelopes: Vec::new(),
-            implicit_geometries: 0,
-            library_objects: Vec::new(),
-            objects_without_geometry: 0,
-            polygon_elements: 0,
-            features: Default::default(),
-        });
+        one.files
+            .push(SourceFile::new("a.gml", CityGmlVersion::V2_0));
         one.buildings.push(Building {
-            id: Some("b".into()),
-            is_part: false,
-            parent: None,
             span: 0..1,
-            line: 1,
-            assets: vec![0],
-            geometries: Vec::new(),
-            file: 0,
+            ..Building::new(Some("b"), vec![0])
         });
         one.assets.push(Asset {
             building: Some(0),

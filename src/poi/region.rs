@@ -334,16 +334,7 @@ mod tests {
 
     fn model() -> CityModel {
         let mut m = CityModel::default();
-        m.buildings.push(Building {
-            id: Some("B".into()),
-            is_part: false,
-            parent: None,
-            span: 0..0,
-            line: 1,
-            assets: vec![0],
-            geometries: Vec::new(),
-            file: 0,
-        });
+        m.buildings.push(Building::new(Some("B"), vec![0]));
         let reveal = Polygon::new(vec![
             DVec3::new(0.0, 4.0, 1.5),
             DVec3::new(-0.3, 4.0, 1.5),

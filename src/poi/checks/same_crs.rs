@@ -70,19 +70,8 @@ mod tests {
             ("e.gml", Some("EPSG:28992")),
         ] {
             model.files.push(SourceFile {
-                path: name.into(),
-                source: crate::model::Source::File(name.into()),
-                version: CityGmlVersion::V2_0,
                 srs_name: srs.map(Into::into),
-                gzip: false,
-                len: 0,
-                gml_prefix: "gml:".into(),
-                envelopes: Vec::new(),
-                implicit_geometries: 0,
-                library_objects: Vec::new(),
-                objects_without_geometry: 0,
-                polygon_elements: 0,
-                features: Default::default(),
+                ..SourceFile::new(name, CityGmlVersion::V2_0)
             });
         }
         let e = check_same_crs(&model).unwrap_err().to_string();
