@@ -178,6 +178,28 @@ fn multi_surface(
     buf.extend_from_slice(b">\n");
 }
 
+/// The property `prop` holding the feature `<tag gml:id="{building}_{suffix}{k}">` (the
+/// building's id from `ids`) with what `content` writes in it.
+fn feature(
+    buf: &mut Vec<u8>,
+    prop: &[u8],
+    tag: &[u8],
+    (ids, suffix, k): (&mut Ids, &[u8], usize),
+    sum: &mut SynthSummary,
+    content: impl FnOnce(&mut Vec<u8>, &mut Ids, &mut SynthSummary),
+) {
+    buf.push(b'<');
+    buf.extend_from_slice(prop);
+    buf.extend_from_slice(b">\n");
+    open_id(buf, tag, ids, suffix, k as u64);
+    content(buf, ids, sum);
+    buf.extend_from_slice(b"</");
+    buf.extend_from_slice(tag);
+    buf.extend_from_slice(b">\n</");
+    buf.extend_from_slice(prop);
+    buf.extend_from_slice(b">\n");
+}
+
 /// One `core:cityObjectMember` with its building.
 pub fn building(buf: &mut Vec<u8>, g: &BuildingGeom, sum: &mut SynthSummary) {
     let Some(lot) = g.lot.as_ref() else {
@@ -199,87 +221,53 @@ pub fn building(buf: &mut Vec<u8>, g: &BuildingGeom, sum: &mut SynthSummary) {
     sum.buildings += 1;
 
     for (k, inst) in g.installations.iter().enumerate() {
-        buf.extend_from_slice(b"<bldg:outerBuildingInstallation>\n");
-        open_id(buf, b"bldg:BuildingInstallation", &ids, b"i", k as u64);
-        buf.extend_from_slice(b"<bldg:function>");
-        buf.extend_from_slice(inst.kind.code().as_bytes());
-        buf.extend_from_slice(b"</bldg:function>\n");
-        multi_surface(
-            buf,
-            b"bldg:lod3Geometry",
-            g,
-            inst.polys.clone(),
-            &mut ids,
-            sum,
-        );
-        buf.extend_from_slice(b"</bldg:BuildingInstallation>\n</bldg:outerBuildingInstallation>\n");
+        let prop = b"bldg:outerBuildingInstallation";
+        let tag = b"bldg:BuildingInstallation";
+        feature(buf, prop, tag, (&mut ids, b"i", k), sum, |buf, ids, sum| {
+            buf.extend_from_slice(b"<bldg:function>");
+            buf.extend_from_slice(inst.kind.code().as_bytes());
+            buf.extend_from_slice(b"</bldg:function>\n");
+            multi_surface(buf, b"bldg:lod3Geometry", g, inst.polys.clone(), ids, sum);
+        });
         *sum.installations.entry(inst.kind).or_insert(0) += 1;
     }
 
     for (k, s) in g.surfaces.iter().enumerate() {
-        let tag: &[u8] = match s.kind {
-            SurfaceKind::Wall => {
-                sum.wall_surfaces += 1;
-                b"bldg:WallSurface"
-            }
-            SurfaceKind::Roof => {
-                sum.roof_surfaces += 1;
-                b"bldg:RoofSurface"
-            }
-            SurfaceKind::Ground => {
-                sum.ground_surfaces += 1;
-                b"bldg:GroundSurface"
-            }
+        let (tag, count): (&[u8], _) = match s.kind {
+            SurfaceKind::Wall => (b"bldg:WallSurface", &mut sum.wall_surfaces),
+            SurfaceKind::Roof => (b"bldg:RoofSurface", &mut sum.roof_surfaces),
+            SurfaceKind::Ground => (b"bldg:GroundSurface", &mut sum.ground_surfaces),
         };
-        buf.extend_from_slice(b"<bldg:boundedBy>\n");
-        open_id(buf, tag, &ids, b"s", k as u64);
-        multi_surface(
+        *count += 1;
+        feature(
             buf,
-            b"bldg:lod2MultiSurface",
-            g,
-            s.lod2.clone(),
-            &mut ids,
+            b"bldg:boundedBy",
+            tag,
+            (&mut ids, b"s", k),
             sum,
-        );
-        multi_surface(
-            buf,
-            b"bldg:lod3MultiSurface",
-            g,
-            s.lod3.clone(),
-            &mut ids,
-            sum,
-        );
-        for oi in s.openings.clone() {
-            let Some(o) = g.openings.get(oi as usize) else {
-                continue;
-            };
-            let otag: &[u8] = match o.kind {
-                OpeningKind::Window => {
-                    sum.windows += 1;
-                    b"bldg:Window"
+            |buf, ids, sum| {
+                for (prop, polys) in [
+                    (b"bldg:lod2MultiSurface", &s.lod2),
+                    (b"bldg:lod3MultiSurface", &s.lod3),
+                ] {
+                    multi_surface(buf, prop, g, polys.clone(), ids, sum);
                 }
-                OpeningKind::Door => {
-                    sum.doors += 1;
-                    b"bldg:Door"
+                for oi in s.openings.clone() {
+                    let Some(o) = g.openings.get(oi as usize) else {
+                        continue;
+                    };
+                    let (tag, count): (&[u8], _) = match o.kind {
+                        OpeningKind::Window => (b"bldg:Window", &mut sum.windows),
+                        OpeningKind::Door => (b"bldg:Door", &mut sum.doors),
+                    };
+                    *count += 1;
+                    let id = (&mut *ids, b"o".as_slice(), oi as usize);
+                    feature(buf, b"bldg:opening", tag, id, sum, |buf, ids, sum| {
+                        multi_surface(buf, b"bldg:lod3MultiSurface", g, o.polys.clone(), ids, sum);
+                    });
                 }
-            };
-            buf.extend_from_slice(b"<bldg:opening>\n");
-            open_id(buf, otag, &ids, b"o", oi as u64);
-            multi_surface(
-                buf,
-                b"bldg:lod3MultiSurface",
-                g,
-                o.polys.clone(),
-                &mut ids,
-                sum,
-            );
-            buf.extend_from_slice(b"</");
-            buf.extend_from_slice(otag);
-            buf.extend_from_slice(b">\n</bldg:opening>\n");
-        }
-        buf.extend_from_slice(b"</");
-        buf.extend_from_slice(tag);
-        buf.extend_from_slice(b">\n</bldg:boundedBy>\n");
+            },
+        );
     }
     buf.extend_from_slice(b"</bldg:Building>\n</core:cityObjectMember>\n");
 }
