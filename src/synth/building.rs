@@ -220,13 +220,7 @@ pub fn build(lot: &Lot, opts: &SynthOptions, g: &mut BuildingGeom) {
     if lod3 {
         g.mesh.poly(&ground, -DVec3::Z);
     }
-    let end = g.mesh.poly_count();
-    g.surfaces.push(Surface {
-        kind: SurfaceKind::Ground,
-        lod2: start..mid,
-        lod3: mid..end,
-        openings: 0..0,
-    });
+    push_surface(g, SurfaceKind::Ground, (start, mid), 0..0);
 
     roof(g, lot, &style, rise, lod2, lod3);
     if lod3 {
@@ -273,12 +267,7 @@ fn wall(
     let l3s = g.mesh.poly_count();
     let o_start = g.openings.len() as u32;
     if !lod3 {
-        g.surfaces.push(Surface {
-            kind: SurfaceKind::Wall,
-            lod2: l2s..l3s,
-            lod3: l3s..l3s,
-            openings: o_start..o_start,
-        });
+        push_surface(g, SurfaceKind::Wall, (l2s, l3s), o_start..o_start);
         return;
     }
     g.rects.clear();
@@ -501,12 +490,23 @@ fn roof(g: &mut BuildingGeom, lot: &Lot, style: &Style, rise: f64, lod2: bool, l
             g.mesh.hole(&hole, DVec3::Z);
         }
     }
-    let l3e = g.mesh.poly_count();
+    push_surface(g, SurfaceKind::Roof, (l2s, l3s), 0..0);
+}
+
+/// A surface of `kind` whose LoD 2 polygons start at `lod2_start` and whose LoD 3 polygons
+/// run from `lod3_start` to the last polygon made.
+fn push_surface(
+    g: &mut BuildingGeom,
+    kind: SurfaceKind,
+    (lod2_start, lod3_start): (u32, u32),
+    openings: Range<u32>,
+) {
+    let end = g.mesh.poly_count();
     g.surfaces.push(Surface {
-        kind: SurfaceKind::Roof,
-        lod2: l2s..l3s,
-        lod3: l3s..l3e,
-        openings: 0..0,
+        kind,
+        lod2: lod2_start..lod3_start,
+        lod3: lod3_start..end,
+        openings,
     });
 }
 
