@@ -205,40 +205,41 @@ mod tests {
         assert_eq!(triangulate(&p, &mut out), 2);
     }
 
+    /// Rings of (x, y, z) and their triangle count and area (within a tolerance): a vertical
+    /// wall far from the origin, a concave L, a quad warped by lifting one corner 1 cm.
     #[test]
-    fn vertical_wall_and_non_planar_ring() {
-        let wall = vec![
-            DVec3::new(430_000.0, 4_581_000.0, 0.0),
-            DVec3::new(430_010.0, 4_581_000.0, 0.0),
-            DVec3::new(430_010.0, 4_581_000.0, 6.0),
-            DVec3::new(430_000.0, 4_581_000.0, 6.0),
+    fn walls_concave_and_non_planar_rings() {
+        let (x, y) = (430_000.0, 4_581_000.0);
+        let wall = [
+            [x, y, 0.0],
+            [x + 10.0, y, 0.0],
+            [x + 10.0, y, 6.0],
+            [x, y, 6.0],
         ];
-        let mut out = Vec::new();
-        assert_eq!(triangulate(&Polygon::new(wall), &mut out), 2);
-        assert!((area(&out) - 60.0).abs() < 1e-9);
-        // Warped quad: one corner lifted by 1 cm.
-        let mut warped = sq(5.0, 0.0);
-        warped[2].z = 0.01;
-        out.clear();
-        assert_eq!(triangulate(&Polygon::new(warped.clone()), &mut out), 2);
-        assert!((area(&out) - 25.0).abs() < 1e-3);
-        // Output keeps the original vertices.
-        assert!(out.iter().flatten().any(|q| *q == warped[2]));
-    }
-
-    #[test]
-    fn concave_l_shape() {
-        let l = vec![
-            DVec3::new(0.0, 0.0, 0.0),
-            DVec3::new(4.0, 0.0, 0.0),
-            DVec3::new(4.0, 1.0, 0.0),
-            DVec3::new(1.0, 1.0, 0.0),
-            DVec3::new(1.0, 4.0, 0.0),
-            DVec3::new(0.0, 4.0, 0.0),
+        let l =
+            [(0, 0), (4, 0), (4, 1), (1, 1), (1, 4), (0, 4)].map(|(x, y)| [x, y, 0].map(f64::from));
+        let warped = [
+            [0.0, 0.0, 0.0],
+            [5.0, 0.0, 0.0],
+            [5.0, 5.0, 0.01],
+            [0.0, 5.0, 0.0],
         ];
-        let mut out = Vec::new();
-        assert_eq!(triangulate(&Polygon::new(l), &mut out), 4);
-        assert!((area(&out) - 7.0).abs() < 1e-12);
+        let cases: [(&[[f64; 3]], usize, f64, f64); 3] = [
+            (&wall, 2, 60.0, 1e-9),
+            (&l, 4, 7.0, 1e-12),
+            (&warped, 2, 25.0, 1e-3),
+        ];
+        for (ring, triangles, want, tol) in cases {
+            let ring: Vec<DVec3> = ring.iter().map(|&p| DVec3::from_array(p)).collect();
+            let mut out = Vec::new();
+            assert_eq!(
+                triangulate(&Polygon::new(ring.clone()), &mut out),
+                triangles
+            );
+            assert!((area(&out) - want).abs() < tol, "{ring:?}");
+            // Output keeps the original vertices.
+            assert!(ring.iter().all(|p| out.iter().flatten().any(|q| q == p)));
+        }
     }
 
     /// Star-shaped ring around `c` (in the xy plane), angles jittered by at most

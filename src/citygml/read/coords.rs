@@ -502,24 +502,31 @@ mod tests {
 
     #[test]
     fn coordinates_element() {
-        let mut v = Vec::new();
-        let a = CoordAttrs {
-            dim: None,
-            cs: b',',
-            ts: b' ',
-            decimal: b'.',
-        };
-        parse_coordinates(b"1,2,3 4,5,6\n7,8", a, &mut v).unwrap();
-        assert_eq!(v.len(), 3);
-        assert_eq!(v[2], DVec3::new(7., 8., 0.));
-        v.clear();
-        let a = CoordAttrs {
-            dim: None,
-            cs: b';',
-            ts: b'|',
-            decimal: b',',
-        };
-        parse_coordinates(b"1,5;2;3|4;5;6", a, &mut v).unwrap();
-        assert_eq!(v[0], DVec3::new(1.5, 2., 3.));
+        // (cs, ts, decimal), text, points read, (index, point)
+        let cases = [
+            (
+                (b',', b' ', b'.'),
+                b"1,2,3 4,5,6\n7,8".as_slice(),
+                3,
+                (2, DVec3::new(7., 8., 0.)),
+            ),
+            (
+                (b';', b'|', b','),
+                b"1,5;2;3|4;5;6".as_slice(),
+                2,
+                (0, DVec3::new(1.5, 2., 3.)),
+            ),
+        ];
+        for ((cs, ts, decimal), text, n, (i, point)) in cases {
+            let mut v = Vec::new();
+            let a = CoordAttrs {
+                dim: None,
+                cs,
+                ts,
+                decimal,
+            };
+            parse_coordinates(text, a, &mut v).unwrap();
+            assert_eq!((v.len(), v[i]), (n, point));
+        }
     }
 }
