@@ -359,11 +359,16 @@ mod tests {
         s
     }
 
+    /// `xml` written to `dir/in.gml` and read.
+    fn read_in(dir: &Path, xml: &str) -> CityModel {
+        let src = dir.join("in.gml");
+        std::fs::write(&src, xml).unwrap();
+        read_file(&src).unwrap()
+    }
+
     fn run(xml: &str, levels: &[u8]) -> (String, MixedSummary) {
         let dir = tempfile::tempdir().unwrap();
-        let src = dir.path().join("in.gml");
-        std::fs::write(&src, xml).unwrap();
-        let model = read_file(&src).unwrap();
+        let model = read_in(dir.path(), xml);
         let rough = rough_model(&model, &RoughOptions::default());
         let out = dir.path().join("out.gml");
         let s = write_mixed(&model, 0, &rough, levels, &out, &WriteOptions::default()).unwrap();
@@ -429,26 +434,8 @@ mod tests {
 
     #[test]
     fn writing_twice_replaces_the_level_attribute() {
-        let dir = tempfile::tempdir().unwrap();
-        let src = dir.path().join("in.gml");
-        std::fs::write(&src, house()).unwrap();
-        let model = read_file(&src).unwrap();
-        let rough = rough_model(&model, &RoughOptions::default());
-        let out = dir.path().join("out.gml");
-        write_mixed(
-            &model,
-            0,
-            &rough,
-            &[1, 1, 1],
-            &out,
-            &WriteOptions::default(),
-        )
-        .unwrap();
-        let m2 = read_file(&out).unwrap();
-        let r2 = rough_model(&m2, &RoughOptions::default());
-        let out2 = dir.path().join("out2.gml");
-        write_mixed(&m2, 0, &r2, &[2, 2, 2], &out2, &WriteOptions::default()).unwrap();
-        let text = std::fs::read_to_string(&out2).unwrap();
+        let (once, _) = run(&house(), &[1, 1, 1]);
+        let (text, _) = run(&once, &[2, 2, 2]);
         assert_eq!(text.matches("skylod_level").count(), 3);
         assert_eq!(text.matches("<gen:value>2</gen:value>").count(), 3);
     }
@@ -552,9 +539,7 @@ mod tests {
     #[test]
     fn bad_arguments() {
         let dir = tempfile::tempdir().unwrap();
-        let src = dir.path().join("in.gml");
-        std::fs::write(&src, house()).unwrap();
-        let model = read_file(&src).unwrap();
+        let model = read_in(dir.path(), &house());
         let e = write_mixed(
             &model,
             0,
