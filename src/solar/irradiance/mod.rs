@@ -501,12 +501,17 @@ mod tests {
         }
     }
 
+    /// [`year`], its Perez table, `rays` sky rays and the default options.
+    fn perez_year(rays: usize) -> (Weather, SkyBundles, IrradianceTable, IrradianceOptions) {
+        let (w, site) = year();
+        let b = SkyBundles::new(rays, 3).unwrap();
+        let t = IrradianceTable::new(&w, &site, SkyModel::Perez).unwrap();
+        (w, b, t, IrradianceOptions::default())
+    }
+
     #[test]
     fn a_wall_that_blocks_everything_receives_only_reflection() {
-        let (w, site) = year();
-        let b = SkyBundles::new(500, 3).unwrap();
-        let t = IrradianceTable::new(&w, &site, SkyModel::Perez).unwrap();
-        let o = IrradianceOptions::default();
+        let (w, b, t, o) = perez_year(500);
         let view = plane_view(Some(DVec3::X), &b, |_| true);
         assert_eq!((view.svf, view.horizon), (0.0, 0.0));
         let r = irradiance(&t, Some(DVec3::X), view, |_| true, &o);
@@ -555,10 +560,7 @@ mod tests {
 
     #[test]
     fn south_wall_gets_more_than_north_wall() {
-        let (w, site) = year();
-        let b = SkyBundles::new(2000, 3).unwrap();
-        let t = IrradianceTable::new(&w, &site, SkyModel::Perez).unwrap();
-        let o = IrradianceOptions::default();
+        let (_, b, t, o) = perez_year(2000);
         let wall = |n: DVec3| {
             irradiance(
                 &t,
