@@ -66,14 +66,19 @@ fn poi() -> Poi {
     }
 }
 
+/// An SVF bound of `max_svf_error` with `svf_rays` rays, the rest by default.
+fn svf_opts(max_svf_error: f64, svf_rays: usize) -> BoundOptions {
+    BoundOptions {
+        max_svf_error: Some(max_svf_error),
+        svf_rays,
+        ..Default::default()
+    }
+}
+
 #[test]
 fn figures_equal_poi_sky_view() {
     let (m, rough, levels) = scene();
-    let opts = BoundOptions {
-        max_svf_error: Some(10.0),
-        svf_rays: 4000,
-        ..Default::default()
-    };
+    let opts = svf_opts(10.0, 4000);
     let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
     assert!(b.met && b.promotions.is_empty() && b.rounds == 1);
     // 3 polygons, thousands of rays: the whole model at once
@@ -93,11 +98,7 @@ fn figures_equal_poi_sky_view() {
 #[test]
 fn promotes_the_too_big_rough_asset_and_not_the_far_one() {
     let (m, rough, levels) = scene();
-    let opts = BoundOptions {
-        max_svf_error: Some(0.01),
-        svf_rays: 4000,
-        ..Default::default()
-    };
+    let opts = svf_opts(0.01, 4000);
     let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
     assert!(b.met);
     assert_eq!(b.levels, vec![2, 0]);
@@ -111,11 +112,7 @@ fn promotes_the_too_big_rough_asset_and_not_the_far_one() {
 fn a_dropped_asset_that_is_seen_comes_back() {
     let (m, rough, _) = scene();
     // everything dropped: the LoD model sees the whole sky
-    let opts = BoundOptions {
-        max_svf_error: Some(0.0),
-        svf_rays: 4000,
-        ..Default::default()
-    };
+    let opts = svf_opts(0.0, 4000);
     let b = bound(&m, &rough, &[0, 0], &[poi()], &opts, None).unwrap();
     assert!(b.met, "{:?}", b.pois);
     assert_eq!(b.levels[0], 2);
@@ -126,10 +123,8 @@ fn a_dropped_asset_that_is_seen_comes_back() {
 fn unmet_bound_names_the_poi_and_bad_input_is_an_error() {
     let (m, rough, levels) = scene();
     let opts = BoundOptions {
-        max_svf_error: Some(0.0),
-        svf_rays: 2000,
         max_rounds: 0,
-        ..Default::default()
+        ..svf_opts(0.0, 2000)
     };
     let b = bound(&m, &rough, &levels, &[poi()], &opts, None).unwrap();
     assert!(!b.met);
