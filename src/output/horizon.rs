@@ -141,18 +141,13 @@ impl super::text::Document for HorizonOutput {
         let azimuths = HorizonOptions::default()
             .with_step(self.step_deg)
             .azimuths();
-        let t = &self.timings_ms;
+        let t = self.timings_ms.stages();
         vec![format!(
             "{} POI(s), {} azimuths each (step {}°); {}",
             self.pois.len(),
             azimuths.len(),
             self.step_deg,
-            run_part(
-                self.polygons,
-                cx,
-                self.inputs.len(),
-                &[("read", t.read), ("bvh", t.bvh), ("trace", t.trace)]
-            )
+            run_part(self.polygons, cx, self.inputs.len(), &t)
         )]
     }
 }

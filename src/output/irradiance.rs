@@ -280,7 +280,7 @@ impl super::text::Document for IrradianceOutput {
     }
 
     fn summary(&self, cx: &TextContext) -> Vec<String> {
-        let (w, t) = (&self.weather, &self.timings_ms);
+        let (w, t) = (&self.weather, self.timings_ms.stages("weather and sun"));
         vec![format!(
             "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {:?} sky, albedo {}; {}",
             self.pois.len(),
@@ -292,7 +292,7 @@ impl super::text::Document for IrradianceOutput {
             self.site[1],
             self.sky,
             self.albedo,
-            run_part(self.polygons, cx, self.inputs.len(), &[("read", t.read), ("weather and sun", t.sun), ("bvh", t.bvh), ("trace", t.trace)])
+            run_part(self.polygons, cx, self.inputs.len(), &t)
         )]
     }
 }

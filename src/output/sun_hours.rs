@@ -166,6 +166,17 @@ pub struct SunHoursTimings {
 }
 
 impl SunHoursTimings {
+    /// `(stage, ms)` in the order the summary line names them ([`run_part`]), the sun's
+    /// stage named `sun`.
+    pub(crate) fn stages(&self, sun: &'static str) -> [(&'static str, f64); 4] {
+        [
+            ("read", self.read),
+            (sun, self.sun),
+            ("bvh", self.bvh),
+            ("trace", self.trace),
+        ]
+    }
+
     /// The timings `t` of a traced command with `sun` milliseconds placing the sun.
     pub fn new(t: super::svf::TraceTimings, sun: f64) -> Self {
         let super::svf::TraceTimings { read, bvh, trace } = t;
@@ -184,7 +195,7 @@ impl super::text::Document for SunHoursOutput {
     }
 
     fn summary(&self, cx: &TextContext) -> Vec<String> {
-        let (s, t) = (&self.sun, &self.timings_ms);
+        let (s, t) = (&self.sun, self.timings_ms.stages("sun"));
         vec![format!(
             "{} POI(s); {} steps of {} min in {} at ({}, {}), months in {}; {}",
             self.pois.len(),
@@ -194,17 +205,7 @@ impl super::text::Document for SunHoursOutput {
             s.lat,
             s.lon,
             self.timezone,
-            run_part(
-                self.polygons,
-                cx,
-                self.inputs.len(),
-                &[
-                    ("read", t.read),
-                    ("sun", t.sun),
-                    ("bvh", t.bvh),
-                    ("trace", t.trace)
-                ]
-            )
+            run_part(self.polygons, cx, self.inputs.len(), &t)
         )]
     }
 }

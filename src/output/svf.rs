@@ -137,6 +137,15 @@ pub struct TraceTimings {
 }
 
 impl TraceTimings {
+    /// `(stage, ms)` in the order the summary line names them ([`run_part`]).
+    pub(crate) fn stages(&self) -> [(&'static str, f64); 3] {
+        [
+            ("read", self.read),
+            ("bvh", self.bvh),
+            ("trace", self.trace),
+        ]
+    }
+
     /// `read_ms` with the seconds building the scene and tracing, as milliseconds rounded
     /// to 0.1.
     pub fn new(read_ms: f64, bvh_s: f64, trace_s: f64) -> Self {
@@ -155,18 +164,13 @@ impl super::text::Document for SvfOutput {
     }
 
     fn summary(&self, cx: &TextContext) -> Vec<String> {
-        let t = &self.timings_ms;
+        let t = self.timings_ms.stages();
         vec![format!(
             "{} POI(s), {} rays per bundle, seed {}; {}",
             self.pois.len(),
             self.rays,
             self.seed,
-            run_part(
-                self.polygons,
-                cx,
-                self.inputs.len(),
-                &[("read", t.read), ("bvh", t.bvh), ("trace", t.trace)]
-            )
+            run_part(self.polygons, cx, self.inputs.len(), &t)
         )]
     }
 }
