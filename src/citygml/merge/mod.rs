@@ -162,11 +162,13 @@ pub fn check_mergeable(inputs: &[PathBuf], same_crs_needed: bool) -> Result<(), 
         .iter()
         .map(|p| head(p))
         .collect::<Result<Vec<_>, _>>()?;
-    let heads: Vec<(&[u8], Option<&str>)> = heads
-        .iter()
-        .map(|(ns, srs)| (ns.as_slice(), srs.as_deref()))
-        .collect();
-    compare(&heads, &|k| inputs[k].clone(), same_crs_needed)
+    let name = |k: usize| inputs[k].clone();
+    compare(
+        &heads,
+        |(ns, srs)| (ns.as_slice(), srs.as_deref()),
+        &name,
+        same_crs_needed,
+    )
 }
 
 /// How far [`check_mergeable`] looks for a document's first `srsName`.
@@ -208,13 +210,16 @@ fn head(path: &Path) -> Result<(Vec<u8>, Option<String>), ReadError> {
     }
 }
 
-/// The version and CRS rules of a merge over each input's root namespace and srsName;
-/// `name(k)` names the k-th input in an error.
-fn compare(
-    heads: &[(&[u8], Option<&str>)],
+/// The version and CRS rules of a merge over each input's root namespace and srsName
+/// (`head` of what was read of each input, `docs`); `name(k)` names the k-th input in an
+/// error.
+fn compare<T>(
+    docs: &[T],
+    head: impl Fn(&T) -> (&[u8], Option<&str>),
     name: &dyn Fn(usize) -> PathBuf,
     same_crs_needed: bool,
 ) -> Result<(), MergeError> {
+    let heads: Vec<(&[u8], Option<&str>)> = docs.iter().map(head).collect();
     let Some(&(first_ns, _)) = heads.first() else {
         return Ok(());
     };
@@ -315,11 +320,12 @@ fn merge_into(
         .iter()
         .map(|p| scan(p))
         .collect::<Result<Vec<_>, _>>()?;
-    let heads: Vec<(&[u8], Option<&str>)> = scans
-        .iter()
-        .map(|s| (s.root_ns.as_slice(), s.srs.as_deref()))
-        .collect();
-    compare(&heads, &name, true)?;
+    compare(
+        &scans,
+        |s| (s.root_ns.as_slice(), s.srs.as_deref()),
+        &name,
+        true,
+    )?;
     let first = &scans[0];
     // The CRS written: the first input's that names one.
     let srs: Option<(usize, &str)> = scans
