@@ -212,13 +212,27 @@ pub fn poi_flags(
     poi: &Poi,
     sky_rays: Option<usize>,
 ) -> Vec<PoiFlag> {
+    flags_with(scene, model, poi, sky_rays, |_| {})
+}
+
+/// The flags of `poi` in their order: inside a building (then no other), what `between`
+/// adds, no sky.
+fn flags_with(
+    scene: &Scene,
+    model: &CityModel,
+    poi: &Poi,
+    sky_rays: Option<usize>,
+    between: impl FnOnce(&mut Vec<PoiFlag>),
+) -> Vec<PoiFlag> {
     if let Some(building) = enclosed(scene, model, poi.ray_origin()) {
         return vec![PoiFlag::InsideBuilding { building }];
     }
+    let mut flags = Vec::new();
+    between(&mut flags);
     if sky_rays == Some(0) {
-        return vec![PoiFlag::NoSky];
+        flags.push(PoiFlag::NoSky);
     }
-    Vec::new()
+    flags
 }
 
 /// Every flag of `poi`: inside a building (judged on `scene`, which must hold the full
@@ -231,23 +245,17 @@ pub fn poi_flags_around(
     poi: &Poi,
     sky_rays: Option<usize>,
 ) -> Vec<PoiFlag> {
-    if let Some(building) = enclosed(scene, model, poi.ray_origin()) {
-        return vec![PoiFlag::InsideBuilding { building }];
-    }
-    let mut flags = Vec::new();
-    let p = poi.position;
-    if let Some(low) = around.lowest_near(p, FAR_BELOW_RADIUS) {
-        if p.z < low - FAR_BELOW_MARGIN {
-            flags.push(PoiFlag::FarBelow {
-                below_m: (low - p.z).floor().min(u32::MAX as f64) as u32,
-            });
+    flags_with(scene, model, poi, sky_rays, |flags| {
+        let p = poi.position;
+        if let Some(low) = around.lowest_near(p, FAR_BELOW_RADIUS) {
+            if p.z < low - FAR_BELOW_MARGIN {
+                flags.push(PoiFlag::FarBelow {
+                    below_m: (low - p.z).floor().min(u32::MAX as f64) as u32,
+                });
+            }
         }
-    }
-    flags.extend(normal_into_surface(scene, model, around, poi));
-    if sky_rays == Some(0) {
-        flags.push(PoiFlag::NoSky);
-    }
-    flags
+        flags.extend(normal_into_surface(scene, model, around, poi));
+    })
 }
 
 /// Whether `q` (on the plane of `t` with unit normal `n`) lies in the triangle `t`.
