@@ -19,6 +19,7 @@ use crate::citygml::WriteError;
 use crate::lod::scene::full_scene;
 use crate::model::{CityGmlVersion, CityModel};
 use glam::DVec3;
+use quick_xml::events::Event;
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
@@ -121,79 +122,29 @@ pub fn insertion_point(xml: &[u8]) -> Option<usize> {
         "measureAttribute",
         "genericAttributeSet",
     ];
-    let mut at = tag_end(xml, 0)?;
-    if xml.get(at.checked_sub(2)?) == Some(&b'/') {
-        return None;
-    }
-    loop {
-        let mut k = at;
-        while xml.get(k).is_some_and(u8::is_ascii_whitespace) {
-            k += 1;
-        }
-        if xml[k..].starts_with(b"<!--") {
-            at = k + find(&xml[k..], b"-->")? + 3;
-            continue;
-        }
-        if xml.get(k) != Some(&b'<') || matches!(xml.get(k + 1), Some(b'/' | b'!' | b'?')) {
-            return Some(at);
-        }
-        let name_end = k + xml[k..]
+    let leading = |local: &[u8]| {
+        let local = std::str::from_utf8(local).unwrap_or_default();
+        [GML_LEADING, CORE_LEADING, GENERIC_ATTRIBUTES]
             .iter()
-            .position(|c| c.is_ascii_whitespace() || *c == b'>' || *c == b'/')?;
-        let qname = std::str::from_utf8(&xml[k + 1..name_end]).ok()?;
-        let local = qname.rsplit(':').next().unwrap_or(qname);
-        let leading = [GML_LEADING, CORE_LEADING, GENERIC_ATTRIBUTES];
-        if !leading.iter().any(|names| names.contains(&local)) {
-            return Some(at);
-        }
-        at = element_end(xml, k)?;
-    }
-}
-
-fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
-    hay.windows(needle.len()).position(|w| w == needle)
-}
-
-/// The index just past the `>` of the tag that starts at `xml[start]` (quotes respected).
-fn tag_end(xml: &[u8], start: usize) -> Option<usize> {
-    let mut quote = None;
-    for (k, &c) in xml.iter().enumerate().skip(start) {
-        match (quote, c) {
-            (Some(q), _) if c == q => quote = None,
-            (Some(_), _) => {}
-            (None, b'"' | b'\'') => quote = Some(c),
-            (None, b'>') => return Some(k + 1),
-            _ => {}
-        }
-    }
-    None
-}
-
-/// The index just past the element that starts at `xml[start]` (nested elements, comments,
-/// CDATA and self-closing tags counted).
-fn element_end(xml: &[u8], start: usize) -> Option<usize> {
-    let mut depth = 0usize;
-    let mut k = start;
+            .any(|names| names.contains(&local))
+    };
+    // The XML reader every other scan uses: quotes, comments, CDATA and nesting are its.
+    let mut reader = quick_xml::Reader::from_reader(xml);
+    let at = |r: &quick_xml::Reader<&[u8]>| usize::try_from(r.buffer_position()).ok();
+    let Ok(Event::Start(_)) = reader.read_event() else {
+        return None;
+    };
+    let mut after = at(&reader)?;
     loop {
-        k += xml.get(k..)?.iter().position(|&c| c == b'<')?;
-        let rest = &xml[k..];
-        if rest.starts_with(b"<!--") {
-            k += find(rest, b"-->")? + 3;
-            continue;
-        }
-        if rest.starts_with(b"<![CDATA[") {
-            k += find(rest, b"]]>")? + 3;
-            continue;
-        }
-        let end = tag_end(xml, k)?;
-        if rest.starts_with(b"</") {
-            depth = depth.checked_sub(1)?;
-        } else if !rest.starts_with(b"<?") && !rest.starts_with(b"<!") && xml[end - 2] != b'/' {
-            depth += 1;
-        }
-        k = end;
-        if depth == 0 {
-            return Some(k);
+        match reader.read_event().ok()? {
+            Event::Text(t) if t.iter().all(u8::is_ascii_whitespace) => {}
+            Event::Comment(_) => after = at(&reader)?,
+            Event::Start(e) if leading(e.local_name().as_ref()) => {
+                reader.read_to_end(e.name()).ok()?;
+                after = at(&reader)?;
+            }
+            Event::Empty(e) if leading(e.local_name().as_ref()) => after = at(&reader)?,
+            _ => return Some(after),
         }
     }
 }
