@@ -201,13 +201,12 @@ pub fn evaluate(
 mod tests {
     use super::*;
     use crate::lod::LodOptions;
-    use crate::pipeline::read_inputs;
     use crate::pipeline::test_support::*;
     use std::sync::atomic::Ordering;
 
     #[test]
     fn solar_entry_points_trace_every_poi_and_stop_when_cancelled() {
-        let mut inputs = read_inputs(&[fixture()], &crate::runtime::progress::Silent).unwrap();
+        let mut inputs = fixture_inputs();
         let framed = framed_with(&mut inputs, 24);
         let scene = full_scene(&framed.model);
         let bundles = SkyBundles::new(400, 3).unwrap();
@@ -266,7 +265,7 @@ mod tests {
     }
     #[test]
     fn evaluate_reports_each_poi_and_stops_when_cancelled() {
-        let mut inputs = read_inputs(&[fixture()], &crate::runtime::progress::Silent).unwrap();
+        let mut inputs = fixture_inputs();
         let framed = framed_with(&mut inputs, 6);
         let site = crate::solar::Site::new(48.76, 11.42);
         let opts = EvaluateOptions {

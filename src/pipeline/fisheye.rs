@@ -127,14 +127,13 @@ fn shown_levels(model: &CityModel, mut levels: Vec<u8>) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::read_inputs;
     use crate::pipeline::test_support::*;
     use crate::runtime::progress::Cancelled;
     use crate::runtime::progress::Silent;
 
     #[test]
     fn sky_pictures_come_one_per_poi_and_stop_when_cancelled() {
-        let mut inputs = read_inputs(&[fixture()], &crate::runtime::progress::Silent).unwrap();
+        let mut inputs = fixture_inputs();
         let framed = framed_with(&mut inputs, 5);
         let partition =
             SkyPartition::new(300, crate::solar::sky::SkyVariant::EqualSolidAngle).unwrap();

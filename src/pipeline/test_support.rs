@@ -12,6 +12,11 @@ pub(crate) fn fixture() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml")
 }
 
+/// The [`fixture`] read.
+pub(crate) fn fixture_inputs() -> Inputs {
+    super::read_inputs(&[fixture()], &crate::runtime::progress::Silent).unwrap()
+}
+
 /// Counts POIs of `stage` (selected or traced); cancels after `stop_after` of them.
 pub(crate) struct Stopper {
     pub(crate) stage: Stage,
