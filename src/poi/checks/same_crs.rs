@@ -83,6 +83,7 @@ mod tests {
                 objects_without_geometry: 0,
                 polygon_elements: 0,
                 features: Default::default(),
+                cityjson: None,
             });
         }
         let e = check_same_crs(&model).unwrap_err().to_string();
