@@ -470,9 +470,9 @@ impl Mapper {
                 .templates
                 .and_then(|t| g.template.and_then(|k| t.templates.get(k)));
             let Some(t) = t else {
+                let t = g.template.map_or("(none)".to_string(), |t| t.to_string());
                 return Err(err(format!(
-                    "GeometryInstance: template {:?} is not in geometry-templates",
-                    g.template
+                    "GeometryInstance: template {t} is not in geometry-templates"
                 )));
             };
             let refpt: Vec<usize> = Vec::deserialize(&g.boundaries)
