@@ -5,7 +5,7 @@
 //! Vertices get the document's `transform`; `metadata.referenceSystem` (any form the CRS
 //! parser knows: `https://www.opengis.net/def/crs/EPSG/0/7415`, `urn:ogc:def:crs:EPSG::7415`,
 //! `EPSG:7415`) becomes the model's `srsName`. A CityJSON source has no XML: its spans are
-//! empty, [`SourceFile::cityjson`] says what it is, and the writers that copy CityGML from
+//! empty, [`crate::model::SourceFile::cityjson`] says what it is, and the writers that copy CityGML from
 //! their source refuse it.
 //!
 //! The document is read value by value ([`serde_json::StreamDeserializer`]): CityJSONSeq one
