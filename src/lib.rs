@@ -48,6 +48,8 @@
 pub mod batch;
 // CityGML 1.0/2.0/3.0: the streaming reader, the span-preserving writer, merge, reprojection.
 pub mod citygml;
+// CityJSON 1.x/2.0 and CityJSONSeq read into the same model as CityGML.
+pub mod cityjson;
 // Coordinate reference systems: the `srsName` parser, local frames, conversions, PROJ.
 pub mod crs;
 // OBJ and CityJSON outputs of a model at its levels.

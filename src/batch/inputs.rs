@@ -1,11 +1,12 @@
 //! The inputs of a command, as users give them: files, directories (searched recursively for
-//! CityGML: `.gml`, `.xml`, `.citygml`, each optionally `.gz`), glob patterns expanded by
+//! CityGML: `.gml`, `.xml`, `.citygml`, and CityJSON: `.city.json`, `.city.jsonl`, other
+//! `.json`/`.jsonl` that are CityJSON by content; each optionally `.gz`), glob patterns expanded by
 //! skylod itself (`'tiles/**/*.gml'`, quoted so that the shell leaves them alone), and `-` for
 //! standard input (read whole into memory when it is first read, [`crate::io::stdin_bytes`]:
 //! the writer copies from its source again, and a pipe can be read only once; its relative
 //! path is `stdin.gml`, messages name it `<stdin>`, JSON outputs `-`).
 //!
-//! Directories and patterns yield CityGML names only (a `README.md` or an `.xsd` beside the
+//! Directories and patterns yield CityGML and CityJSON names only (a `README.md` or an `.xsd` beside the
 //! tiles is not an input); a file named directly is read whatever its name.
 //!
 //! Every input keeps the path relative to the argument it came from, so that `-o DIR` can
@@ -80,22 +81,7 @@ pub const SNIFF_BYTES: usize = 4096;
 /// a root tag longer than the window, a file that cannot be read): reading the file reports
 /// what is wrong with it.
 pub fn sniff_other_xml(path: &Path) -> Option<String> {
-    use std::io::Read;
-    let file = std::fs::File::open(path).ok()?;
-    let mut head = Vec::with_capacity(SNIFF_BYTES);
-    let mut r = std::io::BufReader::new(file);
-    let gz = std::io::BufRead::fill_buf(&mut r)
-        .ok()
-        .is_some_and(crate::io::is_gzip);
-    if gz {
-        flate2::read::MultiGzDecoder::new(r)
-            .take(SNIFF_BYTES as u64)
-            .read_to_end(&mut head)
-            .ok()?;
-    } else {
-        r.take(SNIFF_BYTES as u64).read_to_end(&mut head).ok()?;
-    }
-    other_xml_root(&head)
+    other_xml_root(&head_of(path)?)
 }
 
 /// [`sniff_other_xml`] on the first bytes of a document.
@@ -155,8 +141,8 @@ pub enum InputError {
         /// What is wrong.
         message: String,
     },
-    /// A pattern or directory that names no CityGML file.
-    #[error("{0}: no CityGML file (.gml, .xml, .citygml, optionally .gz) found")]
+    /// A pattern or directory that names no CityGML or CityJSON file.
+    #[error("{0}: no CityGML file (.gml, .xml, .citygml, optionally .gz) or CityJSON file (.city.json, .city.jsonl, CityJSON .json) found")]
     Empty(String),
     /// A directory that cannot be listed.
     #[error("{}: cannot list: {source}", .path.display())]
@@ -185,6 +171,64 @@ pub fn is_citygml_name(name: &str) -> bool {
     let n = name.to_ascii_lowercase();
     let n = n.strip_suffix(".gz").unwrap_or(&n);
     [".gml", ".xml", ".citygml"].iter().any(|e| n.ends_with(e))
+}
+
+/// Whether a file name is CityJSON skylod reads from a directory whatever its content:
+/// `.city.json` and `.city.jsonl` (CityJSONSeq), each optionally `.gz`.
+///
+/// ```
+/// use skylod::batch::inputs::is_cityjson_name;
+/// assert!(is_cityjson_name("t/a.city.json") && is_cityjson_name("b.CITY.JSONL.gz"));
+/// assert!(!is_cityjson_name("package.json"));
+/// ```
+pub fn is_cityjson_name(name: &str) -> bool {
+    let n = name.to_ascii_lowercase();
+    let n = n.strip_suffix(".gz").unwrap_or(&n);
+    [".city.json", ".city.jsonl"].iter().any(|e| n.ends_with(e))
+}
+
+/// Whether a directory or a pattern takes this file: a CityGML name ([`is_citygml_name`]),
+/// a CityJSON name ([`is_cityjson_name`]), or another `.json` / `.jsonl` (optionally `.gz`)
+/// whose start shows CityJSON ([`sniff_cityjson`]).
+pub fn is_input_file(path: &Path) -> bool {
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    if is_citygml_name(&name) || is_cityjson_name(&name) {
+        return true;
+    }
+    let n = name.to_ascii_lowercase();
+    let n = n.strip_suffix(".gz").unwrap_or(&n);
+    (n.ends_with(".json") || n.ends_with(".jsonl")) && sniff_cityjson(path)
+}
+
+/// True when the first [`SNIFF_BYTES`] bytes of a file (gzip decompressed) are a JSON object
+/// naming `CityJSON` (`"type": "CityJSON"`, `CityJSONFeature`) or holding `"CityObjects"`.
+pub fn sniff_cityjson(path: &Path) -> bool {
+    let Some(head) = head_of(path) else {
+        return false;
+    };
+    let json = crate::cityjson::sniff(&head) == crate::cityjson::Sniffed::Json;
+    json && (memchr::memmem::find(&head, b"\"CityJSON").is_some()
+        || memchr::memmem::find(&head, b"\"CityObjects\"").is_some())
+}
+
+/// The first [`SNIFF_BYTES`] bytes of a file, gzip decompressed.
+fn head_of(path: &Path) -> Option<Vec<u8>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).ok()?;
+    let mut head = Vec::with_capacity(SNIFF_BYTES);
+    let mut r = std::io::BufReader::new(file);
+    let gz = std::io::BufRead::fill_buf(&mut r)
+        .ok()
+        .is_some_and(crate::io::is_gzip);
+    if gz {
+        flate2::read::MultiGzDecoder::new(r)
+            .take(SNIFF_BYTES as u64)
+            .read_to_end(&mut head)
+            .ok()?;
+    } else {
+        r.take(SNIFF_BYTES as u64).read_to_end(&mut head).ok()?;
+    }
+    Some(head)
 }
 
 fn has_glob_chars(s: &str) -> bool {
@@ -221,7 +265,7 @@ fn walk(dir: &Path, base: &Path, out: &mut Expanded) -> Result<(), InputError> {
                 .into_io_error()
                 .unwrap_or_else(|| std::io::Error::other("loop")),
         })?;
-        if entry.file_type().is_file() && is_citygml_name(&entry.file_name().to_string_lossy()) {
+        if entry.file_type().is_file() && is_input_file(entry.path()) {
             found.push(Input {
                 path: entry.path().to_path_buf(),
                 relative: relative_to(entry.path(), base),
@@ -292,7 +336,7 @@ pub fn expand_all(args: &[PathBuf]) -> Result<Expanded, InputError> {
                     source: e.into(),
                 })?;
                 if p.is_file() {
-                    if is_citygml_name(&p.file_name().unwrap_or_default().to_string_lossy()) {
+                    if is_input_file(&p) {
                         let i = Input {
                             relative: relative_to(&p, &base),
                             path: p,

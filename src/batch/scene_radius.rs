@@ -119,6 +119,15 @@ fn open(path: &Path) -> Result<Box<dyn BufRead>, ExtentError> {
     })
 }
 
+/// True for a CityJSON input (JSON by content, [`crate::cityjson::sniff`]).
+fn is_json(path: &Path) -> bool {
+    let Ok(mut r) = open(path) else {
+        return false;
+    };
+    r.fill_buf()
+        .is_ok_and(|h| crate::cityjson::sniff(h) == crate::cityjson::Sniffed::Json)
+}
+
 fn numbers(text: &[u8]) -> impl Iterator<Item = f64> + '_ {
     text.split(|b| b.is_ascii_whitespace())
         .filter(|t| !t.is_empty())
@@ -277,6 +286,8 @@ pub fn within_reach(inputs: &[PathBuf], at: &[DVec3], radius: f64) -> Reach {
     let found: Vec<(bool, Option<ExtentSource>)> = inputs
         .par_iter()
         .map(|p| match file_extent(p) {
+            // CityJSON has no XML envelope to pre-scan: always read
+            _ if is_json(p) => (true, None),
             Ok(Some((e, how))) => (e.within(at, radius), Some(how)),
             // No coordinate at all: nothing of it can occlude.
             Ok(None) => (false, None),

@@ -103,6 +103,9 @@ pub enum ReadError {
         /// The reference.
         href: String,
     },
+    /// A CityJSON document that cannot be read ([`crate::cityjson`]).
+    #[error("{0}")]
+    CityJson(#[from] crate::cityjson::Error),
     /// A resource limit protecting against hostile input was exceeded.
     #[error("{loc}: {message}")]
     Limit {
@@ -118,6 +121,7 @@ impl ReadError {
     pub fn file(&self) -> &std::path::Path {
         match self {
             ReadError::Io { file, .. } | ReadError::Empty(file) => file,
+            ReadError::CityJson(e) => &e.file,
             ReadError::Xml { loc, .. }
             | ReadError::NotCityGml { loc, .. }
             | ReadError::Coordinate { loc, .. }
@@ -142,6 +146,7 @@ impl ReadError {
             ReadError::DanglingHref { .. } => "dangling_href",
             ReadError::HrefCycle { .. } => "href_cycle",
             ReadError::Limit { .. } => "limit",
+            ReadError::CityJson(_) => "cityjson",
         }
     }
 }

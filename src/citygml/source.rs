@@ -70,8 +70,11 @@ pub(crate) fn open_stream(src: &Source, name: &Path) -> Result<Stream, ReadError
             let cursor = Cursor::new(Arc::clone(bytes));
             return Ok(if crate::io::is_gzip(bytes) {
                 let dec = flate2::bufread::MultiGzDecoder::new(cursor);
-                Stream::Gzip(Box::new(BufReader::with_capacity(BUF, dec)))
+                let mut dec: Box<dyn BufRead + Send> = Box::new(BufReader::with_capacity(BUF, dec));
+                refuse_json(peek(&mut dec), name)?;
+                Stream::Gzip(dec)
             } else {
+                refuse_json(bytes, name)?;
                 Stream::Memory(cursor)
             });
         }
@@ -81,10 +84,44 @@ pub(crate) fn open_stream(src: &Source, name: &Path) -> Result<Stream, ReadError
     let head = reader.fill_buf().map_err(io)?;
     if crate::io::is_gzip(head) {
         let dec = flate2::bufread::MultiGzDecoder::new(reader);
-        Ok(Stream::Gzip(Box::new(BufReader::with_capacity(BUF, dec))))
+        let mut dec: Box<dyn BufRead + Send> = Box::new(BufReader::with_capacity(BUF, dec));
+        refuse_json(peek(&mut dec), name)?;
+        Ok(Stream::Gzip(dec))
     } else {
+        refuse_json(head, name)?;
         Ok(Stream::Plain(reader))
     }
+}
+
+/// True when a document's first bytes are JSON (CityJSON, CityJSONSeq:
+/// [`crate::cityjson::sniff`]).
+pub fn is_json(head: &[u8]) -> bool {
+    crate::cityjson::sniff(head) == crate::cityjson::Sniffed::Json
+}
+
+/// The bytes a reader holds ready (empty when it cannot read): what [`is_json`] looks at.
+pub fn peek(reader: &mut Box<dyn BufRead + Send>) -> &[u8] {
+    reader.fill_buf().unwrap_or(&[])
+}
+
+/// The error of the readers that copy a CityGML source's XML (writers, `subset`,
+/// `filter-lods`, `reproject`, merges) when the source is CityJSON.
+fn refuse_json(head: &[u8], name: &Path) -> Result<(), ReadError> {
+    if !is_json(head) {
+        return Ok(());
+    }
+    Err(ReadError::NotCityGml {
+        loc: super::Location {
+            file: name.to_path_buf(),
+            line: 1,
+            column: 1,
+            gml_id: None,
+        },
+        message: "this is CityJSON, and this step copies a CityGML source's XML \
+                  (CityGML output, subset, filter-lods, reproject, merge); a CityJSON input \
+                  is written as OBJ, CityJSON or CityJSONSeq"
+            .into(),
+    })
 }
 
 /// A source document ready to parse: see [`load`].

@@ -54,6 +54,7 @@
 //! assert_eq!(text.lines().count(), 1 + s.features);
 //! ```
 
+use super::cityjson_source::{from_source, FromSource};
 use super::{asset_name, Content, ExportSummary};
 use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon};
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
@@ -103,6 +104,7 @@ pub fn write_cityjson_with(
 ) -> io::Result<ExportSummary> {
     let mut plan = Plan::new(model, file, content);
     plan.surface_attributes = surface_attributes;
+    plan.source = from_source(model, file)?;
     let mut s = ExportSummary::default();
     let mut verts = Vertices::new(plan.translate, plan.scale);
     let mut head = plan.header();
@@ -143,7 +145,8 @@ pub fn write_cityjsonseq(
     content: Content<'_>,
     w: &mut dyn Write,
 ) -> io::Result<ExportSummary> {
-    let plan = Plan::new(model, file, content);
+    let mut plan = Plan::new(model, file, content);
+    plan.source = from_source(model, file)?;
     let mut s = ExportSummary::default();
     serde_json::to_writer(&mut *w, &Value::Object(plan.header()))?;
     w.write_all(b"\n")?;
@@ -378,6 +381,8 @@ struct Plan<'a> {
     bbox: Bbox,
     /// Extra attributes of the semantic surface objects of some assets.
     surface_attributes: Option<&'a BTreeMap<usize, Map<String, Value>>>,
+    /// A CityJSON source's attributes and semantic surface members, copied to the output.
+    source: Option<FromSource>,
 }
 
 impl<'a> Plan<'a> {
@@ -395,6 +400,7 @@ impl<'a> Plan<'a> {
             scale: scale_for(model.files.get(file).and_then(|f| f.srs_name.as_deref())),
             bbox: Bbox::EMPTY,
             surface_attributes: None,
+            source: None,
         };
         let mut used: HashSet<String> = HashSet::new();
         let mut unique = |cand: String| {
@@ -579,7 +585,7 @@ impl<'a> Plan<'a> {
         };
         let id = self.building_ids.get(&b).cloned().unwrap_or_default();
         let mut geoms: BTreeMap<u8, Geom> = BTreeMap::new();
-        let mut attributes = Map::new();
+        let mut attributes = self.source_attributes(bd.id.as_deref());
         let mut children: Vec<String> = Vec::new();
         let mut installations: Vec<usize> = Vec::new();
         // Surfaces first, then openings (their parent's semantic object must exist).
@@ -614,10 +620,16 @@ impl<'a> Plan<'a> {
             for (lod, polys) in lods {
                 let g = geoms.entry(lod).or_default();
                 let sem = g.semantic(model, self.content, i);
+                let copied = self.source.as_ref().and_then(|s| s.surfaces.get(&i));
                 let extra = self.surface_attributes.and_then(|m| m.get(&i));
-                if let (Some(k), Some(extra)) = (sem, extra) {
-                    if let Some(surface) = g.surfaces.get_mut(k) {
-                        surface.extend(extra.clone());
+                for extra in [copied, extra].into_iter().flatten() {
+                    if let Some(surface) = sem.and_then(|k| g.surfaces.get_mut(k)) {
+                        for (key, v) in extra {
+                            // the writer's own members (skylod_level) stay
+                            if key != "skylod_level" || !surface.contains_key(key) {
+                                surface.insert(key.clone(), v.clone());
+                            }
+                        }
                     }
                 }
                 s.polygons += g.add(verts, &polys, sem);
@@ -735,6 +747,15 @@ impl<'a> Plan<'a> {
         Some(obj)
     }
 
+    /// The attributes of city object `id` in a CityJSON source (empty otherwise).
+    fn source_attributes(&self, id: Option<&str>) -> Map<String, Value> {
+        self.source
+            .as_ref()
+            .zip(id)
+            .and_then(|(s, id)| s.objects.get(id).cloned())
+            .unwrap_or_default()
+    }
+
     /// A city object of one asset: its geometry per LoD, `skylod_level`; `None` when nothing
     /// of it is written.
     fn simple_object(
@@ -759,7 +780,7 @@ impl<'a> Plan<'a> {
         if geometry.is_empty() && self.content.has_levels() {
             return None;
         }
-        let mut obj = json!({"type": ty, "attributes": {}});
+        let mut obj = json!({"type": ty, "attributes": self.source_attributes(a.id.as_deref())});
         if !geometry.is_empty() {
             obj["geometry"] = Value::Array(geometry);
         }

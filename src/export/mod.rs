@@ -28,6 +28,7 @@
 //! ```
 
 pub mod cityjson;
+mod cityjson_source;
 pub mod format;
 pub mod obj;
 

@@ -702,6 +702,19 @@ pub struct SourceFile {
     /// Elements per CityGML feature or object type (local name: `WallSurface`,
     /// `BuildingInstallation`, `Room`, `Appearance`, …), wherever they nest.
     pub features: std::collections::BTreeMap<String, usize>,
+    /// For a CityJSON document (read by `crate::cityjson`): its `version` and whether it came
+    /// as CityJSONSeq; `None` for CityGML. A CityJSON file has no XML to copy: the writers
+    /// that copy spans refuse it.
+    pub cityjson: Option<CityJsonFormat>,
+}
+
+/// How a CityJSON source was encoded ([`SourceFile::cityjson`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CityJsonFormat {
+    /// The document's `version`: `"1.0"`, `"1.1"`, `"2.0"`.
+    pub version: String,
+    /// True for CityJSONSeq (`.city.jsonl`: a header line, then `CityJSONFeature` lines).
+    pub seq: bool,
 }
 
 impl SourceFile {
@@ -733,6 +746,7 @@ impl SourceFile {
             objects_without_geometry: 0,
             polygon_elements: 0,
             features: Default::default(),
+            cityjson: None,
         }
     }
 }

@@ -28,6 +28,8 @@ mod etl;
 mod edit;
 // CityJSON and CityJSONSeq output is valid for `cjval` and read by `cjio` with skylod's counts.
 mod cityjson_export;
+// CityJSON and CityJSONSeq as inputs of every command (issue 24).
+mod cityjson_input;
 // The command line: exit codes, error messages, `stats --json`, `convert` safety.
 mod cli;
 // `convert` on every shared file and fixture: same stats, valid, idempotent, gzip output.

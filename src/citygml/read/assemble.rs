@@ -185,6 +185,7 @@ impl Parser<'_> {
                 .iter()
                 .map(|(name, n)| (String::from_utf8_lossy(name).into_owned(), *n))
                 .collect(),
+            cityjson: None,
         };
         Ok(CityModel {
             files: vec![file],

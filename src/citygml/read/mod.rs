@@ -135,8 +135,10 @@ pub fn read_source_observed(
     opts: &ReadOptions,
     passed: &(dyn Fn(u64) + Sync),
 ) -> Result<CityModel, ReadError> {
-    let mut model = match source::load_source(&src, name)? {
-        source::Document::Plain(doc) => {
+    // CityJSON and CityJSONSeq, recognised by content (issue 24)
+    let mut model = match json_or_xml(source::load_source(&src, name)?, name)? {
+        Ok(model) => model,
+        Err(source::Document::Plain(doc)) => {
             let seen = Seen::new(doc.len() as u64, passed);
             let release = |from, upto| {
                 seen.part_at(from, upto);
@@ -153,7 +155,7 @@ pub fn read_source_observed(
                 }
             }
         }
-        source::Document::Gzip(reader, compressed) => {
+        Err(source::Document::Gzip(reader, compressed)) => {
             // gzip-compressed CityGML is typically 8-12 times smaller than the document
             let hint = compressed.saturating_mul(8);
             events::read_sized(reader, name, true, opts, hint)?
@@ -165,6 +167,26 @@ pub fn read_source_observed(
         }
     }
     Ok(model)
+}
+
+/// A CityJSON document read ([`crate::cityjson`]), or the document handed back for the
+/// CityGML reader.
+fn json_or_xml(
+    doc: source::Document,
+    name: &Path,
+) -> Result<Result<CityModel, source::Document>, ReadError> {
+    Ok(Ok(match doc {
+        source::Document::Plain(doc) if source::is_json(&doc) => {
+            crate::cityjson::read_slice(&doc, name)?
+        }
+        source::Document::Gzip(mut reader, n) => {
+            if !source::is_json(source::peek(&mut reader)) {
+                return Ok(Err(source::Document::Gzip(reader, n)));
+            }
+            crate::cityjson::read_reader(reader, name, true)?
+        }
+        doc => return Ok(Err(doc)),
+    }))
 }
 
 /// The bytes [`read_file_observed`] has reported: how far each part (keyed by its first byte)

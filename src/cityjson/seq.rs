@@ -1,0 +1,190 @@
+//! A document value by value: the `CityJSON` object, then (CityJSONSeq) one
+//! `CityJSONFeature` per line, each mapped and dropped before the next is parsed.
+
+use super::doc::Doc;
+use super::map::{real_vertices, Mapper, Origin, Vertices};
+use super::Error;
+use crate::model::{CityGmlVersion, CityJsonFormat, CityModel, Source, SourceFile};
+use glam::DVec3;
+use std::cell::Cell;
+use std::io::{BufRead, Read};
+use std::path::Path;
+
+/// Read a CityJSON or CityJSONSeq document held in memory (`name` names it in the model,
+/// errors and warnings).
+///
+/// # Errors
+/// [`Error`]: not JSON, not CityJSON, a vertex index out of range, a non-finite coordinate...
+pub fn read_slice(bytes: &[u8], name: &Path) -> Result<CityModel, Error> {
+    read_slice_with_origins(bytes, name).map(|(m, _)| m)
+}
+
+/// [`read_slice`], with where each asset came from in the document ([`Origin`], one per
+/// asset, in the model's order).
+///
+/// # Errors
+/// As [`read_slice`].
+pub fn read_slice_with_origins(
+    bytes: &[u8],
+    name: &Path,
+) -> Result<(CityModel, Vec<Origin>), Error> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let de = serde_json::Deserializer::from_slice(bytes);
+    let (mut model, origins) = read_values(de.into_iter::<Doc>(), name, false)?;
+    if let Some(f) = model.files.first_mut() {
+        f.len = bytes.len() as u64;
+    }
+    Ok((model, origins))
+}
+
+/// Read a CityJSON or CityJSONSeq document from a reader (a gzip stream being decompressed:
+/// nothing but the current value is held); `gzip` is recorded in the model.
+///
+/// # Errors
+/// As [`read_slice`]; I/O errors of `r` as [`Error`]s.
+pub fn read_reader<R: BufRead>(mut r: R, name: &Path, gzip: bool) -> Result<CityModel, Error> {
+    let head = r
+        .fill_buf()
+        .map_err(|e| Error::at(name, 0, None, format!("cannot read: {e}")))?;
+    if head.starts_with(b"\xEF\xBB\xBF") {
+        r.consume(3);
+    }
+    let n = Cell::new(0u64);
+    let counted = Counting { inner: r, n: &n };
+    let de = serde_json::Deserializer::from_reader(counted);
+    let (mut model, _) = read_values(de.into_iter::<Doc>(), name, gzip)?;
+    if let Some(f) = model.files.first_mut() {
+        f.len = n.get();
+    }
+    Ok(model)
+}
+
+/// A reader that counts the bytes it hands out.
+struct Counting<'a, R> {
+    inner: R,
+    n: &'a Cell<u64>,
+}
+
+impl<R: Read> Read for Counting<'_, R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let k = self.inner.read(buf)?;
+        self.n.set(self.n.get() + k as u64);
+        Ok(k)
+    }
+}
+
+/// The header value, then any feature values.
+fn read_values(
+    mut values: impl Iterator<Item = Result<Doc, serde_json::Error>>,
+    name: &Path,
+    gzip: bool,
+) -> Result<(CityModel, Vec<Origin>), Error> {
+    let head = match values.next() {
+        None => return Err(Error::at(name, 0, None, "empty document".into())),
+        Some(Err(e)) => return Err(Error::json(name, &e)),
+        Some(Ok(d)) => d,
+    };
+    if head.ty != "CityJSON" {
+        return Err(Error::at(
+            name,
+            1,
+            None,
+            format!(
+                "the first object is of type {:?}, not \"CityJSON\"",
+                head.ty
+            ),
+        ));
+    }
+    let version = head.version.clone().unwrap_or_default();
+    let mut mapper = Mapper::new(name);
+    if !["1.0", "1.1", "2.0"].contains(&version.as_str()) {
+        mapper.warn(1, "", format!("CityJSON version {version:?}: read as 2.0"));
+    }
+    let srs_name = head
+        .metadata
+        .as_ref()
+        .and_then(|m| m.reference_system.as_ref())
+        .and_then(|v| match v {
+            serde_json::Value::String(s) => Some(s.clone()),
+            // 1.x extended forms: {"base_url": ..., "authority": "EPSG", "code": 7415, ...}
+            serde_json::Value::Object(o) => {
+                let code = o
+                    .get("code")
+                    .map(|c| c.to_string().trim_matches('"').to_string())?;
+                let auth = o
+                    .get("authority")
+                    .and_then(|a| a.as_str())
+                    .unwrap_or("EPSG");
+                Some(format!("{auth}:{code}"))
+            }
+            _ => None,
+        });
+    let transform = head.transform;
+    let template_list: Vec<DVec3> = head
+        .templates
+        .as_ref()
+        .map(|t| real_vertices(&t.vertices, None, name, 1))
+        .transpose()?
+        .unwrap_or_default();
+    let templates = head.templates.as_ref();
+    let list = real_vertices(&head.vertices, transform.as_ref(), name, 0)?;
+    let verts = Vertices {
+        list: &list,
+        templates,
+        template_list: &template_list,
+    };
+    mapper.add(&head.objects.0, &verts, 0)?;
+    drop(list);
+    let mut seq = false;
+    for (k, v) in values.enumerate() {
+        let line = k as u64 + 2;
+        let f = v.map_err(|e| Error::json(name, &e))?;
+        if f.ty != "CityJSONFeature" {
+            return Err(Error::at(
+                name,
+                line,
+                f.id.as_deref(),
+                format!("a value of type {:?} after the CityJSON header (CityJSONSeq holds CityJSONFeature lines)", f.ty),
+            ));
+        }
+        seq = true;
+        let list = real_vertices(&f.vertices, transform.as_ref(), name, line)?;
+        let verts = Vertices {
+            list: &list,
+            templates,
+            template_list: &template_list,
+        };
+        mapper.add(&f.objects.0, &verts, line)?;
+    }
+    let (buildings, assets, origins, warnings, counts) = mapper.finish();
+    let file = SourceFile {
+        path: name.to_path_buf(),
+        source: Source::File(name.to_path_buf()),
+        // CityJSON 2.0 encodes CityGML 3.0's data model, 1.x CityGML 2.0's
+        version: if version.starts_with('1') {
+            CityGmlVersion::V2_0
+        } else {
+            CityGmlVersion::V3_0
+        },
+        srs_name,
+        gzip,
+        len: 0,
+        gml_prefix: String::new(),
+        envelopes: Vec::new(),
+        implicit_geometries: counts.implicit_geometries,
+        library_objects: Vec::new(),
+        objects_without_geometry: counts.objects_without_geometry,
+        polygon_elements: counts.polygon_elements,
+        features: counts.features,
+        cityjson: Some(CityJsonFormat { version, seq }),
+    };
+    Ok((
+        CityModel {
+            files: vec![file],
+            buildings,
+            assets,
+            warnings,
+        },
+        origins,
+    ))
+}
