@@ -188,7 +188,9 @@ pub fn sun_position(utc: DateTime<Utc>, site: &Site) -> Result<SunPosition, Sola
 /// One time step of a [`SunTable`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SunStep {
-    /// Unit direction towards the sun at the middle of the step (x east, y north, z up).
+    /// Unit direction towards the sun at the middle of the step (x east, y north, z up):
+    /// SPA's, but for the steps with the sun more than 2 degrees below the horizon (see
+    /// [`SunTable`]), where it is a quick position's, within 0.05 degrees of SPA's.
     pub direction: DVec3,
     /// Whether the sun is above the horizon (apparent zenith < 90 degrees).
     pub above_horizon: bool,
@@ -204,11 +206,69 @@ pub struct SunStep {
 /// steps cover a UTC calendar year, so with a non-UTC zone the first/last few hours of the
 /// table fall into the neighbouring local year and are counted in its month (January or
 /// December) — a year of steps always yields one full year of hours.
+///
+/// SPA is skipped at night: in the years 1800-2200, a step that a quick solar position
+/// (Meeus' low-accuracy solar coordinates, within 0.05 degrees of SPA) puts more than 2 degrees below the
+/// horizon is below it for SPA too; it gets `above_horizon: false` and the quick position's
+/// direction without SPA (about half the steps of a year, half the table's cost). Every
+/// step with the sun up, and every flag, is SPA's to the bit; the first and the last step
+/// always go through SPA, so that a site or a date SPA refuses is refused as before.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SunTable {
     start: DateTime<Utc>,
     step_minutes: u32,
     steps: Vec<SunStep>,
+}
+
+/// Sun elevation (geometric, degrees) below which [`quick_direction`] proves the sun is
+/// under the horizon for SPA: SPA refracts only above its cut-off of -0.83337 degrees, and
+/// the quick position is within 0.05 degrees of SPA's (tested); the rest is margin.
+const NIGHT_DEG: f64 = -2.0;
+
+/// Years (of every step) in which [`quick_direction`] is trusted; outside, every step goes
+/// through SPA.
+const QUICK_YEARS: std::ops::RangeInclusive<i32> = 1800..=2200;
+
+/// Geometric sun direction (x east, y north, z up; no refraction, no parallax) at `utc`
+/// seen from `site`: the low-accuracy solar coordinates of Meeus, *Astronomical
+/// Algorithms* ch. 25 (about 0.01 degrees) with delta T, and the mean sidereal time of
+/// ch. 12. Only used for the steps far below the horizon ([`NIGHT_DEG`]).
+fn quick_direction(utc: DateTime<Utc>, site: &Site) -> DVec3 {
+    let jd = utc.timestamp_millis() as f64 / 86_400_000.0 + 2_440_587.5;
+    let d = jd - 2_451_545.0;
+    // Julian centuries of dynamical time for the sun, of universal time for the Earth's spin
+    let t = (d + site.delta_t_s / 86_400.0) / 36_525.0;
+    let l0 = 280.46646 + t * (36_000.769_83 + t * 0.0003032);
+    let m = (357.52911 + t * (35_999.050_29 - t * 0.0001537)).to_radians();
+    let c = (1.914602 - t * (0.004817 + t * 0.000014)) * m.sin()
+        + (0.019993 - t * 0.000101) * (2.0 * m).sin()
+        + 0.000289 * (3.0 * m).sin();
+    let omega = (125.04 - 1934.136 * t).to_radians();
+    let lambda = (l0 + c - 0.00569 - 0.00478 * omega.sin()).to_radians();
+    let eps = (23.0
+        + (26.0 + (21.448 - t * (46.815 + t * (0.00059 - t * 0.001813))) / 60.0) / 60.0
+        + 0.00256 * omega.cos())
+    .to_radians();
+    let alpha = (eps.cos() * lambda.sin()).atan2(lambda.cos());
+    let delta = (eps.sin() * lambda.sin()).clamp(-1.0, 1.0).asin();
+    let tu = d / 36_525.0;
+    let gmst =
+        280.460_618_37 + 360.985_647_366_29 * d + tu * tu * (0.000_387_933 - tu / 38_710_000.0);
+    let h = (gmst + site.longitude).to_radians() - alpha;
+    let (sp, cp) = site.latitude.to_radians().sin_cos();
+    let (sd, cd) = delta.sin_cos();
+    let (sh, ch) = h.sin_cos();
+    DVec3::new(-cd * sh, sd * cp - cd * ch * sp, sd * sp + cd * ch * cp).normalize_or_zero()
+}
+
+/// Geometric sun elevation in degrees of [`quick_direction`].
+#[cfg(test)]
+fn quick_elevation(utc: DateTime<Utc>, site: &Site) -> f64 {
+    quick_direction(utc, site)
+        .z
+        .clamp(-1.0, 1.0)
+        .asin()
+        .to_degrees()
 }
 
 impl SunTable {
@@ -282,6 +342,21 @@ impl SunTable {
         let location = site.location();
         let step_s = i64::from(step_minutes) * 60;
         let half = Duration::milliseconds(step_s * 500);
+        let in_years = |k: usize| {
+            let mid = i64::try_from(k)
+                .ok()
+                .and_then(|k| k.checked_mul(step_s))
+                .and_then(Duration::try_seconds)
+                .and_then(|o| start.checked_add_signed(o))
+                .and_then(|t| t.checked_add_signed(half));
+            mid.is_some_and(|t| QUICK_YEARS.contains(&t.year()))
+        };
+        let quick = steps > 2
+            && in_years(0)
+            && in_years(steps - 1)
+            && site.delta_t_s.abs() <= 86_400.0
+            && (-90.0..=90.0).contains(&site.latitude)
+            && (-180.0..=180.0).contains(&site.longitude);
         let one = |k: usize| {
             let offset = i64::try_from(k)
                 .ok()
@@ -292,6 +367,19 @@ impl SunTable {
                 .checked_add_signed(offset)
                 .and_then(|t| t.checked_add_signed(half))
                 .ok_or(SolarError::Step(step_minutes))?;
+            let month = u8::try_from(site.time_zone.local_month(mid).saturating_sub(1))
+                .unwrap_or(0)
+                .min(11);
+            if quick && k != 0 && k + 1 != steps {
+                let q = quick_direction(mid, site);
+                if q.z.clamp(-1.0, 1.0).asin().to_degrees() < NIGHT_DEG {
+                    return Ok(SunStep {
+                        direction: q,
+                        above_horizon: false,
+                        month,
+                    });
+                }
+            }
             let p = spa.at(
                 &mid,
                 location,
@@ -299,11 +387,10 @@ impl SunTable {
                 site.delta_t_s,
                 Some(refraction),
             )?;
-            let month = site.time_zone.local_month(mid);
             Ok(SunStep {
                 direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
                 above_horizon: p.zenith_angle() < 90.0,
-                month: u8::try_from(month.saturating_sub(1)).unwrap_or(0).min(11),
+                month,
             })
         };
         // A day of steps per task: the check between days, the order of the steps kept.
@@ -560,9 +647,11 @@ mod tests {
         // Roughly half the hours of the year are daytime (a bit more with refraction).
         assert!((4300..4600).contains(&above), "{above}");
         // Each step agrees with a direct evaluation at its middle.
+        // (SPA's to the bit with the sun up; at night, within 0.05 degrees)
         for k in [0, 1000, 4321, 8759] {
             let p = sun_position(t.step_mid(k).unwrap(), &site).unwrap();
-            assert!((p.direction - t.steps()[k].direction).length() < 1e-12);
+            let tol = if p.zenith_deg < 92.0 { 1e-12 } else { 1e-3 };
+            assert!((p.direction - t.steps()[k].direction).length() < tol);
             assert_eq!(p.zenith_deg < 90.0, t.steps()[k].above_horizon);
         }
         let y15 = SunTable::year(2025, 15, &Site::new(0.0, 0.0)).unwrap();
@@ -580,5 +669,112 @@ mod tests {
             .unwrap();
         let b = pool.install(|| SunTable::year(2023, 180, &site).unwrap());
         assert_eq!(a, b);
+    }
+
+    /// The table as it was before SPA was skipped at night: every step by SPA.
+    fn every_step_by_spa(year: i32, step_minutes: u32, site: &Site) -> Vec<SunStep> {
+        let start = Utc.with_ymd_and_hms(year, 1, 1, 0, 0, 0).unwrap();
+        let end = NaiveDate::from_ymd_opt(year + 1, 1, 1).unwrap();
+        let steps = (end - start.date_naive()).num_minutes() / i64::from(step_minutes);
+        let refraction = RefractionCorrection::new(site.pressure_mbar, site.temperature_c).unwrap();
+        let step_s = i64::from(step_minutes) * 60;
+        (0..steps)
+            .map(|k| {
+                let mid = start + Duration::seconds(k * step_s + step_s / 2);
+                let p = SolarPositions::new()
+                    .at(
+                        &mid,
+                        site.location(),
+                        site.elevation_m,
+                        site.delta_t_s,
+                        Some(refraction),
+                    )
+                    .unwrap();
+                SunStep {
+                    direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
+                    above_horizon: p.zenith_angle() < 90.0,
+                    month: (site.time_zone.local_month(mid) - 1) as u8,
+                }
+            })
+            .collect()
+    }
+
+    /// Skipping SPA at night changes no flag, no month and no step with the sun up (to the
+    /// bit), and moves the night directions by less than 0.05 degrees; outside 1800-2200
+    /// every step is SPA's.
+    #[test]
+    fn night_steps_skip_spa_and_change_no_step_with_the_sun_up() {
+        let mut high = Site::new(-22.9, -68.2).with_time_zone("-04:00").unwrap();
+        (high.elevation_m, high.pressure_mbar, high.temperature_c) = (4000.0, 620.0, -5.0);
+        let mut late = Site::new(35.0, 139.7);
+        late.delta_t_s = 3000.0;
+        let madrid = Site::new(41.39, 2.17)
+            .with_time_zone("Europe/Madrid")
+            .unwrap();
+        let cases = [
+            (2025, 15, Site::new(41.38, 2.17), true),
+            (2024, 60, madrid, true),
+            (2025, 30, Site::new(78.2, 15.6), true),
+            (2023, 20, Site::new(-89.9, 0.0), true),
+            (2026, 15, Site::new(0.0, -179.9), true),
+            (2025, 45, high, true),
+            (2030, 60, late, true),
+            (1700, 180, Site::new(51.5, 0.0), false),
+            (2300, 180, Site::new(-33.9, 18.4), false),
+        ];
+        for (year, step, site, quick) in cases {
+            let want = every_step_by_spa(year, step, &site);
+            let got = SunTable::year(year, step, &site).unwrap();
+            assert_eq!(got.len(), want.len());
+            let mut skipped = 0;
+            for (k, (g, w)) in got.steps().iter().zip(&want).enumerate() {
+                assert_eq!(g.above_horizon, w.above_horizon, "{year} {site:?} {k}");
+                assert_eq!(g.month, w.month);
+                if g.direction.to_array().map(f64::to_bits)
+                    != w.direction.to_array().map(f64::to_bits)
+                {
+                    skipped += 1;
+                    assert!(!w.above_horizon && w.direction.z < -0.03, "{year} {k}");
+                    assert!(g.direction.angle_between(w.direction).to_degrees() < 0.05);
+                }
+            }
+            // half the steps of a year, but at the poles
+            if quick && site.latitude.abs() < 70.0 {
+                assert!(skipped * 3 > want.len(), "{year} {site:?}: {skipped}");
+            }
+            if !quick {
+                assert_eq!(skipped, 0);
+            }
+        }
+    }
+
+    /// The quick elevation is within 0.05 degrees of SPA's geometric elevation over the
+    /// years it is trusted for (the margin to the night threshold is over a degree).
+    #[test]
+    fn quick_elevation_is_close_to_spa() {
+        let mut worst: f64 = 0.0;
+        for year in [1800, 1900, 2025, 2100, 2200] {
+            for (lat, lon, dt) in [
+                (41.38, 2.17, 69.0),
+                (78.2, 15.6, 69.0),
+                (-89.9, 0.0, 0.0),
+                (0.0, -179.9, 69.0),
+                (-33.9, 18.4, 300.0),
+            ] {
+                let mut site = Site::new(lat, lon);
+                site.delta_t_s = dt;
+                let start = Utc.with_ymd_and_hms(year, 1, 1, 0, 0, 0).unwrap();
+                for k in 0..900 {
+                    let t = start + Duration::minutes(k * 587);
+                    let p = SolarPositions::new()
+                        .at(&t, site.location(), 0.0, site.delta_t_s, None)
+                        .unwrap();
+                    let e = quick_elevation(t, &site) - (90.0 - p.zenith_angle());
+                    worst = worst.max(e.abs());
+                }
+            }
+        }
+        assert!(worst < 0.05, "{worst}");
+        const { assert!(NIGHT_DEG + 0.05 < -0.83337 - 1.0) };
     }
 }
