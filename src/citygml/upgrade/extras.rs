@@ -90,9 +90,23 @@ fn texture_association(mut t: El, ctx: &mut Ctx<'_>) -> El {
     ctx.counts.appearance_targets += 1;
     let uri = t.take_attr("uri").unwrap_or_default();
     let mut param = El::new("app:textureParameterization");
+    let href = t.take_attr("href");
     param.attrs = std::mem::take(&mut t.attrs);
+    let mut inline = false;
     for c in t.into_els() {
         param = param.with(object(c, ctx));
+        inline = true;
+    }
+    if let (false, Some(h)) = (inline, href) {
+        // 3.0 texture coordinates have no id to refer to: a copy of the referenced list
+        match ctx
+            .texcoords
+            .get(h.strip_prefix(b"#").unwrap_or(&h))
+            .cloned()
+        {
+            Some(list) => param = param.with(appearance(list, ctx)),
+            None => param.attrs.push(("xlink:href".into(), h)),
+        }
     }
     El::new("app:textureParameterization").with(
         El::new("app:TextureAssociation")

@@ -20,6 +20,23 @@ pub(super) struct Ctx<'a> {
     pub(super) seqs: &'a mut foldhash::HashMap<String, Option<Vec<&'static str>>>,
     /// City objects to write as top-level members after this one (inline group members).
     pub(super) extra: Vec<El>,
+    /// The `app:TexCoordList`s with a `gml:id` so far (3.0 has no ids on them: a reference
+    /// to one is replaced by a copy). The one part of memory that grows with the document,
+    /// by the lists that have an id.
+    pub(super) texcoords: &'a mut foldhash::HashMap<Vec<u8>, El>,
+}
+
+/// The `app:TexCoordList`s with a `gml:id` in `e`.
+pub(super) fn texcoord_lists(e: &El, into: &mut foldhash::HashMap<Vec<u8>, El>) {
+    if e.local == "TexCoordList" {
+        if let Some(id) = e.attr("id") {
+            into.insert(id.to_vec(), e.clone());
+        }
+        return;
+    }
+    for c in e.els() {
+        texcoord_lists(c, into);
+    }
 }
 
 /// A city object, or anything a member or property holds (GML, ADE content).
@@ -305,13 +322,26 @@ fn lod_geometry(
                     Vec::new()
                 }
                 (_, g) => {
+                    let mut curves = Vec::new();
                     let g = g.map(|g| {
-                        let (ms, left_out) = geometry::to_multi_surface(g);
-                        if left_out > 0 {
-                            ctx.counts.dropped.push(format!("{from} (curves, points)"));
+                        let (ms, cs, points) = geometry::to_multi_surface(g);
+                        if points > 0 {
+                            ctx.counts.dropped.push(format!("{from} (points)"));
                         }
+                        curves = cs;
                         ms
                     });
+                    let mut extra = Vec::new();
+                    if !curves.is_empty() {
+                        if matches!(lod, 0 | 2 | 3) && !thematic {
+                            let mc = curves.into_iter().fold(El::new("gml:MultiCurve"), |m, c| {
+                                m.with(El::new("gml:curveMember").with(c))
+                            });
+                            extra.push(El::new(&core("MultiCurve")).with(mc));
+                        } else {
+                            ctx.counts.dropped.push(format!("{from} (curves)"));
+                        }
+                    }
                     if lod == 1 && !thematic {
                         if !ctx.opts.map_lod1_multi_surfaces {
                             ctx.counts.dropped.push(from);
@@ -322,7 +352,9 @@ fn lod_geometry(
                         return vec![El::new("core:boundary")
                             .with(El::new("gen:GenericThematicSurface").with(prop))];
                     }
-                    named(core("MultiSurface"), g)
+                    let mut v = named(core("MultiSurface"), g);
+                    v.extend(extra);
+                    v
                 }
             }
         }

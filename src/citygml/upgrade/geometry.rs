@@ -173,11 +173,10 @@ fn members(g: &El) -> impl Iterator<Item = &El> {
 }
 
 /// `g` (upgraded GML) as one `gml:MultiSurface` of its surfaces (solids give their shells'
-/// surfaces); curves and points are left out. The number of surfaces left out as not
-/// surfaces is returned too.
-pub(super) fn to_multi_surface(g: El) -> (El, usize) {
+/// surfaces), the curves it held (for a `gml:MultiCurve`), and the number of points left out.
+pub(super) fn to_multi_surface(g: El) -> (El, Vec<El>, usize) {
     if g.local == "MultiSurface" {
-        return (g, 0);
+        return (g, Vec::new(), 0);
     }
     let mut ms = El::new("gml:MultiSurface");
     let surface = matches!(shape(&g), Shape::Surfaces)
@@ -192,12 +191,12 @@ pub(super) fn to_multi_surface(g: El) -> (El, usize) {
     if let Some(s) = g.attr("srsName") {
         ms.attrs.push(("srsName".into(), s.to_vec()));
     }
-    let mut left_out = 0;
-    gather(g, &mut ms, &mut left_out);
-    (ms, left_out)
+    let (mut curves, mut points) = (Vec::new(), 0);
+    gather(g, &mut ms, &mut curves, &mut points);
+    (ms, curves, points)
 }
 
-fn gather(g: El, ms: &mut El, left_out: &mut usize) {
+fn gather(g: El, ms: &mut El, curves: &mut Vec<El>, points: &mut usize) {
     match g.local.as_str() {
         "Polygon"
         | "CompositeSurface"
@@ -213,8 +212,13 @@ fn gather(g: El, ms: &mut El, left_out: &mut usize) {
             }
             ms.kids.push(Node::El(El::new("gml:surfaceMember").with(g)));
         }
-        "Point" | "MultiPoint" | "LineString" | "MultiCurve" | "CompositeCurve" | "Curve"
-        | "OrientableCurve" => *left_out += 1,
+        "Point" | "MultiPoint" => *points += 1,
+        "MultiCurve" => {
+            for m in g.into_els() {
+                curves.extend(m.into_els());
+            }
+        }
+        "LineString" | "CompositeCurve" | "Curve" | "OrientableCurve" => curves.push(g),
         _ => {
             // aggregates, solids, and their member / boundary properties
             for c in g.kids {
@@ -228,7 +232,7 @@ fn gather(g: El, ms: &mut El, left_out: &mut usize) {
                     }
                     continue;
                 }
-                gather(c, ms, left_out);
+                gather(c, ms, curves, points);
             }
         }
     }
@@ -286,8 +290,8 @@ mod tests {
             r##"<gml:MultiGeometry gml:id="g"><gml:geometryMember><gml:Polygon gml:id="a"/></gml:geometryMember><gml:geometryMember><gml:Solid><gml:exterior><gml:CompositeSurface><gml:surfaceMember><gml:Polygon gml:id="b"/></gml:surfaceMember></gml:CompositeSurface></gml:exterior></gml:Solid></gml:geometryMember><gml:geometryMember><gml:LineString/></gml:geometryMember></gml:MultiGeometry>"##,
         ));
         assert_eq!(shape(&g), Shape::Surfaces);
-        let (ms, left) = to_multi_surface(g);
-        assert_eq!(left, 1);
+        let (ms, curves, points) = to_multi_surface(g);
+        assert_eq!((curves.len(), points), (1, 0));
         let t = text(&ms);
         assert!(
             t.starts_with(

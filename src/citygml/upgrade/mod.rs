@@ -31,6 +31,9 @@
 //!   `textureCoordinates ring=` → `textureCoordinates` + `ring`; target URIs kept;
 //!   **addresses** xAL 2.0 → xAL 3.0 (country, area, locality, street, number, post code).
 //!
+//! Memory: one member, and the `app:TexCoordList`s that have a `gml:id` (3.0 has no ids on
+//! them, so a texture target that refers to one gets a copy).
+//!
 //! A CityGML 3.0 document is refused (nothing to upgrade). A root `gml:metaDataProperty`
 //! (GML 3.1.1 metadata such as a local `EngineeringCRS`) is kept as a comment.
 
@@ -96,6 +99,8 @@ pub struct UpgradeSummary {
     pub mapped: usize,
     /// `gml:id`s made (for inline group members, which 3.0 refers to).
     pub ids_made: usize,
+    /// Inline group members written as top-level members (3.0 groups refer to theirs).
+    pub lifted: usize,
     /// Properties without a 3.0 place, dropped (`bldg:lod4Solid`, ...), in document order.
     pub dropped: Vec<String>,
     /// Bytes of the (decompressed) source.
@@ -121,6 +126,12 @@ impl UpgradeSummary {
             s += &format!(
                 ", {} LoD4 propert(ies) as LoD3 ({} LoD3 replaced)",
                 self.lod4_as_lod3, self.lod3_replaced
+            );
+        }
+        if self.lifted > 0 {
+            s += &format!(
+                ", {} inline group member(s) made top-level ({} gml:id(s) made)",
+                self.lifted, self.ids_made
             );
         }
         if self.mapped > 0 {
@@ -163,6 +174,7 @@ pub fn upgrade(
     let mut root_name = String::new();
     let mut held: Vec<u8> = Vec::new();
     let mut seqs = Default::default();
+    let mut texcoords = Default::default();
     let mut buf = Vec::new();
     let bytes_in = std::cell::Cell::new(0u64);
     let bytes_out = crate::citygml::write::atomic_write(out, |w| {
@@ -200,7 +212,9 @@ pub fn upgrade(
                         drop_lod3: options.use_lod4_as_lod3 && feature::has_lod4(&e),
                         seqs: &mut seqs,
                         extra: Vec::new(),
+                        texcoords: &mut texcoords,
                     };
+                    feature::texcoord_lists(&e, ctx.texcoords);
                     let node = root_child(e, &mut ctx);
                     let extra = std::mem::take(&mut ctx.extra);
                     match node {
@@ -212,6 +226,7 @@ pub fn upgrade(
                     }
                     for f in extra {
                         counts.members += 1;
+                        counts.lifted += 1;
                         put(w, b"\n")?;
                         let m = El::new("core:cityObjectMember").with(f);
                         let k = m.write_to(w, &mut buf).map_err(io)?;
