@@ -307,7 +307,7 @@ fn lod_geometry(
         "MultiCurve" if matches!(lod, 0 | 2 | 3) => named(core("MultiCurve"), g),
         "MultiSurface" | "Surface" | "Geometry" | "MultiSolid" => {
             let shape = g.as_ref().map_or(Shape::Unknown, geometry::shape);
-            let solid_member = g.as_ref().and_then(|g| single_solid(g));
+            let solid_member = g.as_ref().and_then(single_solid);
             match (shape, g) {
                 (Shape::Solid, g) if (1..=3).contains(&lod) && !thematic => named(core("Solid"), g),
                 (Shape::Surfaces, Some(g)) if solid_member.is_some() && !thematic && lod > 0 => {
