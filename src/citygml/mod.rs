@@ -7,6 +7,7 @@ pub mod ns;
 pub mod read;
 pub mod reproject;
 pub mod source;
+pub mod upgrade;
 pub mod write;
 
 pub use error::{Location, ReadError, WriteError};

@@ -97,3 +97,4 @@ mod trust;
 // Issue 21 item 3: inside a building judged on the full geometry, far below, normal into
 // the surface, latitude and longitude swapped.
 mod truth;
+mod upgrade;

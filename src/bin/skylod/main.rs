@@ -57,6 +57,8 @@ enum Command {
     Subset(commands::subset::Args),
     /// Keep or remove LoD representations of city objects (streamed).
     FilterLods(commands::filter_lods::Args),
+    /// Upgrade CityGML 1.0 / 2.0 to CityGML 3.0 (streamed).
+    Upgrade(commands::upgrade::Args),
 }
 
 /// Outcome of a command: success, some inputs failed (exit 1), or fatal (exit 2).
@@ -108,6 +110,7 @@ fn main() -> ExitCode {
         Command::Reproject(a) => commands::reproject::run(a),
         Command::Subset(a) => commands::subset::run(a),
         Command::FilterLods(a) => commands::filter_lods::run(a),
+        Command::Upgrade(a) => commands::upgrade::run(a),
     };
     // SIGTERM or SIGHUP: the command stopped at its next file or POI (or had finished);
     // every output in place is complete. The exit code says which signal (143, 129).

@@ -53,7 +53,7 @@
 pub mod lods;
 pub mod subset;
 mod tree;
-mod walk;
+pub(crate) mod walk;
 
 pub use lods::{filter_lods, LodMode, Lods};
 pub use subset::{subset, BboxMode, Subset};
@@ -230,7 +230,7 @@ fn removed_ids(tree: &Tree, cuts: &Cuts, all: bool, into: &mut foldhash::HashSet
 }
 
 /// Whether a child of the root is a top-level member.
-fn is_member(local: &[u8]) -> bool {
+pub(crate) fn is_member(local: &[u8]) -> bool {
     matches!(local, b"cityObjectMember" | b"featureMember")
 }
 

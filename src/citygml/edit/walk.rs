@@ -9,7 +9,7 @@ use std::io::{self, BufRead, Read};
 use std::path::Path;
 
 /// One piece of the document, in order.
-pub(super) enum Piece<'a> {
+pub(crate) enum Piece<'a> {
     /// Bytes to copy as they are (the root's start tag is among them).
     Verbatim(&'a [u8]),
     /// The root's start tag (also given as [`Piece::Verbatim`]): its namespace declarations.
@@ -53,7 +53,7 @@ impl<R: BufRead> BufRead for Tee<R> {
 ///
 /// # Errors
 /// The source cannot be read, is not well-formed, has no `CityModel` root; or `f`'s error.
-pub(super) fn walk<E: From<ReadError>>(
+pub(crate) fn walk<E: From<ReadError>>(
     path: &Path,
     f: &mut dyn FnMut(Piece<'_>) -> Result<(), E>,
 ) -> Result<u64, E> {
@@ -169,7 +169,7 @@ fn lines(b: &[u8]) -> u64 {
 }
 
 /// The location of the end of `before` (the bytes read since the last drain).
-pub(super) fn location(path: &Path, base_lines: u64, before: &[u8]) -> Location {
+pub(crate) fn location(path: &Path, base_lines: u64, before: &[u8]) -> Location {
     let line_start = memchr::memrchr(b'\n', before).map_or(0, |i| i + 1);
     Location {
         file: path.to_path_buf(),

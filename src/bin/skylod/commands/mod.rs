@@ -26,6 +26,7 @@ pub mod subset;
 pub mod sun_hours;
 pub mod svf;
 pub mod synth;
+pub mod upgrade;
 
 /// The closing line of a batch: files ok / failed, warnings, polygons in / out, wall time.
 pub fn summary_line(
