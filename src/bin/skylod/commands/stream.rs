@@ -87,6 +87,10 @@ pub fn export(
         skylod::export::write_streamed(format, input, &ropts, chunk, &passed, out, opts)
             .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?
     else {
+        crate::log::info!(
+            "{}: read whole (the stream declined)",
+            skylod::model::shown(input)
+        );
         return Ok(None);
     };
     summary!("{}", s.describe(format, input, out));
