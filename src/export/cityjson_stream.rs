@@ -375,7 +375,7 @@ impl Vertices {
 }
 
 fn bucket_of(key: [i64; 3], n: usize) -> usize {
-    let h = foldhash::fast::FixedState::with_seed(0xb0c4_e7).hash_one(key);
+    let h = foldhash::fast::FixedState::with_seed(0x00b0_c4e7).hash_one(key);
     (h % n as u64) as usize
 }
 
