@@ -204,6 +204,28 @@ fn document(bytes: Bytes) -> Document {
     }
 }
 
+/// Decompress `reader` into an unnamed temporary file (in [`std::env::temp_dir`], removed
+/// by the system when it is closed, whatever happens) and map it: a whole document that
+/// takes room on disk, not in memory (the streamed read of a compressed file).
+///
+/// # Errors
+/// I/O errors of the decompression or the temporary file.
+pub(crate) fn spill(reader: &mut dyn BufRead) -> std::io::Result<Bytes> {
+    let mut file = tempfile::tempfile()?;
+    {
+        let mut w = std::io::BufWriter::with_capacity(BUF, &mut file);
+        std::io::copy(reader, &mut w)?;
+        std::io::Write::flush(&mut w)?;
+    }
+    if file.metadata()?.len() == 0 {
+        return Ok(Bytes::Read(Vec::new()));
+    }
+    // SAFETY: the file is this process's own, unnamed: no other process can change it.
+    let m = unsafe { memmap2::Mmap::map(&file)? };
+    let _ = m.advise(memmap2::Advice::Sequential);
+    Ok(Bytes::Mapped(m))
+}
+
 fn read_all(file: &mut File) -> std::io::Result<Vec<u8>> {
     let mut v = Vec::new();
     file.read_to_end(&mut v)?;

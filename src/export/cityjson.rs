@@ -55,6 +55,7 @@
 //! ```
 
 use super::cityjson_source::{from_source, FromSource};
+use super::cityjson_stream::External;
 use super::{asset_name, Content, ExportSummary};
 use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon};
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
@@ -178,7 +179,7 @@ pub fn write_cityjsonseq(
     Ok(s)
 }
 
-fn write_vertices(w: &mut dyn Write, list: &[[i64; 3]]) -> io::Result<()> {
+pub(super) fn write_vertices(w: &mut dyn Write, list: &[[i64; 3]]) -> io::Result<()> {
     let mut buf = String::with_capacity(64);
     for (k, v) in list.iter().enumerate() {
         buf.clear();
@@ -219,39 +220,51 @@ fn epsg_code(srs_name: &str) -> Option<u32> {
 
 /// Scale per axis for a CRS: millimetres, or about a millimetre in degrees for the horizontal
 /// axes of a geographic CRS.
-fn scale_for(srs_name: Option<&str>) -> DVec3 {
+pub(super) fn scale_for(srs_name: Option<&str>) -> DVec3 {
     match srs_name.and_then(epsg_code) {
         Some(c) if GEOGRAPHIC.contains(&c) => DVec3::new(SCALE_DEGREES, SCALE_DEGREES, SCALE),
         _ => DVec3::splat(SCALE),
     }
 }
 
-/// Integer vertices (millimetres from `translate`), each distinct one stored once.
-struct Vertices {
+/// Integer vertices (millimetres from `translate`), each distinct one stored once: in memory,
+/// or numbered by an [`External`] index (a streamed document's, on disk).
+pub(super) struct Vertices {
     translate: DVec3,
     scale: DVec3,
     map: HashMap<[i64; 3], u32>,
-    list: Vec<[i64; 3]>,
+    pub(super) list: Vec<[i64; 3]>,
+    /// Where the indices come from instead of `map` and `list`.
+    pub(super) external: Option<External>,
 }
 
 impl Vertices {
-    fn new(translate: DVec3, scale: DVec3) -> Self {
+    pub(super) fn new(translate: DVec3, scale: DVec3) -> Self {
         Vertices {
             translate,
             scale,
             map: HashMap::new(),
             list: Vec::new(),
+            external: None,
         }
     }
 
-    fn clear(&mut self) {
+    pub(super) fn clear(&mut self) {
         self.map.clear();
         self.list.clear();
     }
 
-    fn index(&mut self, p: DVec3) -> u32 {
+    fn key(&self, p: DVec3) -> [i64; 3] {
         let q = ((p - self.translate) / self.scale).round();
-        let key = [q.x as i64, q.y as i64, q.z as i64];
+        [q.x as i64, q.y as i64, q.z as i64]
+    }
+
+    /// The index of `key` (every call is one use of a vertex: an [`External`] index numbers
+    /// the calls).
+    fn index(&mut self, key: [i64; 3]) -> u32 {
+        if let Some(x) = &mut self.external {
+            return x.index(key);
+        }
         let n = self.list.len() as u32;
         let k = *self.map.entry(key).or_insert(n);
         if k == n {
@@ -261,19 +274,24 @@ impl Vertices {
     }
 
     /// Indices of a ring, consecutive duplicates (after rounding) removed; `None` below 3.
+    /// (Duplicates are found by their integer coordinates: equal keys, equal indices.)
     fn ring(&mut self, ring: &[DVec3]) -> Option<Vec<u32>> {
         let mut v: Vec<u32> = Vec::with_capacity(ring.len());
+        let mut keys: Vec<[i64; 3]> = Vec::with_capacity(ring.len());
         for p in ring {
             if !p.is_finite() {
                 continue;
             }
-            let k = self.index(*p);
-            if v.last() != Some(&k) {
+            let key = self.key(*p);
+            let k = self.index(key);
+            if keys.last() != Some(&key) {
                 v.push(k);
+                keys.push(key);
             }
         }
-        while v.len() > 1 && v.first() == v.last() {
+        while v.len() > 1 && keys.first() == keys.last() {
             v.pop();
+            keys.pop();
         }
         (v.len() >= 3).then_some(v)
     }
@@ -357,28 +375,28 @@ impl Geom {
 /// A line of CityJSONSeq: a root building with its parts and installations, or one other
 /// city object.
 #[derive(Debug, Clone, Copy)]
-enum Feature {
+pub(super) enum Feature {
     Building(usize),
     Standalone(usize),
 }
 
 /// What to write for one file: ids, kept objects, transform.
-struct Plan<'a> {
+pub(super) struct Plan<'a> {
     model: &'a CityModel,
     file: usize,
     content: Content<'a>,
     /// Ids per building (index into `model.buildings`) of this file.
-    building_ids: HashMap<usize, String>,
+    pub(super) building_ids: HashMap<usize, String>,
     /// Ids per installation or standalone asset.
-    asset_ids: HashMap<usize, String>,
+    pub(super) asset_ids: HashMap<usize, String>,
     /// Parts (index) of each building or part.
     parts: HashMap<usize, Vec<usize>>,
     /// Buildings written.
     kept: HashSet<usize>,
-    features: Vec<Feature>,
-    translate: DVec3,
-    scale: DVec3,
-    bbox: Bbox,
+    pub(super) features: Vec<Feature>,
+    pub(super) translate: DVec3,
+    pub(super) scale: DVec3,
+    pub(super) bbox: Bbox,
     /// Extra attributes of the semantic surface objects of some assets.
     surface_attributes: Option<&'a BTreeMap<usize, Map<String, Value>>>,
     /// A CityJSON source's attributes and semantic surface members, copied to the output.
@@ -387,21 +405,7 @@ struct Plan<'a> {
 
 impl<'a> Plan<'a> {
     fn new(model: &'a CityModel, file: usize, content: Content<'a>) -> Self {
-        let mut plan = Plan {
-            model,
-            file,
-            content,
-            building_ids: HashMap::new(),
-            asset_ids: HashMap::new(),
-            parts: HashMap::new(),
-            kept: HashSet::new(),
-            features: Vec::new(),
-            translate: DVec3::ZERO,
-            scale: scale_for(model.files.get(file).and_then(|f| f.srs_name.as_deref())),
-            bbox: Bbox::EMPTY,
-            surface_attributes: None,
-            source: None,
-        };
+        let mut plan = Self::bare(model, file, content);
         let mut used: HashSet<String> = HashSet::new();
         let mut unique = |cand: String| {
             let mut id = cand.clone();
@@ -418,15 +422,40 @@ impl<'a> Plan<'a> {
             }
             let cand = bd.id.clone().unwrap_or_else(|| format!("building_{b}"));
             plan.building_ids.insert(b, unique(cand));
-            if let Some(p) = bd.parent {
-                plan.parts.entry(p).or_default().push(b);
-            }
         }
         for (i, a) in model.assets.iter().enumerate() {
             if a.file != file || !standalone_or_installation(a) {
                 continue;
             }
             plan.asset_ids.insert(i, unique(asset_name(model, i)));
+        }
+        plan
+    }
+
+    /// The plan without ids ([`Plan::building_ids`], [`Plan::asset_ids`]: the caller's).
+    pub(super) fn bare(model: &'a CityModel, file: usize, content: Content<'a>) -> Self {
+        let mut plan = Plan {
+            model,
+            file,
+            content,
+            building_ids: HashMap::new(),
+            asset_ids: HashMap::new(),
+            parts: HashMap::new(),
+            kept: HashSet::new(),
+            features: Vec::new(),
+            translate: DVec3::ZERO,
+            scale: scale_for(model.files.get(file).and_then(|f| f.srs_name.as_deref())),
+            bbox: Bbox::EMPTY,
+            surface_attributes: None,
+            source: None,
+        };
+        for (b, bd) in model.buildings.iter().enumerate() {
+            if bd.file != file {
+                continue;
+            }
+            if let Some(p) = bd.parent {
+                plan.parts.entry(p).or_default().push(b);
+            }
         }
         // Bounding box of what is written, and the buildings kept.
         let mut bbox = Bbox::EMPTY;
@@ -513,14 +542,14 @@ impl<'a> Plan<'a> {
     }
 
     fn header(&self) -> Map<String, Value> {
+        let srs = self.model.files.get(self.file);
+        self.header_in(srs.and_then(|f| f.srs_name.as_deref()))
+    }
+
+    /// [`Plan::header`] of a document in CRS `srs_name`.
+    pub(super) fn header_in(&self, srs_name: Option<&str>) -> Map<String, Value> {
         let mut meta = Map::new();
-        if let Some(rs) = self
-            .model
-            .files
-            .get(self.file)
-            .and_then(|f| f.srs_name.as_deref())
-            .and_then(reference_system)
-        {
+        if let Some(rs) = srs_name.and_then(reference_system) {
             meta.insert("referenceSystem".into(), rs.into());
         }
         if let Some(b) = self.bbox.to_array() {
@@ -540,7 +569,7 @@ impl<'a> Plan<'a> {
         h
     }
 
-    fn feature_id(&self, f: Feature) -> String {
+    pub(super) fn feature_id(&self, f: Feature) -> String {
         match f {
             Feature::Building(b) => self.building_ids.get(&b).cloned(),
             Feature::Standalone(i) => self.asset_ids.get(&i).cloned(),
@@ -549,7 +578,7 @@ impl<'a> Plan<'a> {
     }
 
     /// The city objects of a feature, their vertices added to `verts`.
-    fn objects(
+    pub(super) fn objects(
         &self,
         f: Feature,
         verts: &mut Vertices,
@@ -793,7 +822,7 @@ impl<'a> Plan<'a> {
 }
 
 /// Installations and assets outside any building are city objects of their own.
-fn standalone_or_installation(a: &Asset) -> bool {
+pub(super) fn standalone_or_installation(a: &Asset) -> bool {
     a.building.is_none() || a.kind == AssetKind::Installation
 }
 

@@ -29,6 +29,7 @@
 
 pub mod cityjson;
 mod cityjson_source;
+mod cityjson_stream;
 pub mod format;
 pub mod obj;
 
@@ -198,9 +199,7 @@ pub fn write_to(
 }
 
 /// [`write()`] of the whole file at `input` as OBJ from a streamed read
-/// ([`obj::write_obj_streamed`]: chunks of `chunk_bytes`, memory follows the chunk, the same
-/// bytes as [`write()`] of the whole model with [`Content::Full`]), atomically. `Ok(None)`,
-/// nothing written, where the stream declines: read the whole file and [`write()`] it then.
+/// ([`obj::write_obj_streamed`]): [`write_streamed`] with [`Format::Obj`].
 ///
 /// # Errors
 /// As [`write()`].
@@ -212,6 +211,41 @@ pub fn write_obj_streamed(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<Option<(ExportSummary, crate::citygml::read::StreamSummary)>, WriteError> {
+    write_streamed(Format::Obj, input, read, chunk_bytes, passed, out, opts)
+}
+
+/// [`write()`] of the whole file at `input` in `format` (OBJ, CityJSON or CityJSONSeq) from
+/// a streamed read (chunks of `chunk_bytes`, memory follows the chunk, the same bytes as
+/// [`write()`] of the whole model with [`Content::Full`]), atomically. OBJ:
+/// [`obj::write_obj_streamed`]; CityJSON and CityJSONSeq read the file in several passes, and
+/// CityJSON numbers its shared vertices in temporary files (in `TMPDIR`: about 32 bytes a
+/// vertex use; see the module `cityjson_stream`'s docs in the source). `passed(k, n)`: `n`
+/// more bytes read in pass `k` (OBJ: 0 the origin, 1 and 2 the objects; CityJSON: 0 the
+/// plan, 3 and 4 the vertex uses, 1 and 2 the objects written; CityJSONSeq: 0 the plan, 1
+/// and 2 the objects; a pass 2 or 4 only for a file with such objects). `Ok(None)`, nothing
+/// written, where the stream declines: read the whole file and [`write()`] it then.
+///
+/// # Errors
+/// As [`write()`]; [`WriteError::Invalid`] for [`Format::CityGml`].
+pub fn write_streamed(
+    format: Format,
+    input: &Path,
+    read: &crate::citygml::read::ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(usize, u64),
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<Option<(ExportSummary, crate::citygml::read::StreamSummary)>, WriteError> {
+    let kind = match format {
+        Format::Obj => None,
+        Format::CityJson => Some(cityjson_stream::Kind::CityJson),
+        Format::CityJsonSeq => Some(cityjson_stream::Kind::Seq),
+        Format::CityGml => {
+            return Err(WriteError::Invalid(
+                "CityGML is written by citygml::write / lod::mixed".into(),
+            ))
+        }
+    };
     crate::citygml::write::check_target(out, opts, std::iter::once(input))?;
     let io = |e| WriteError::Io {
         file: out.to_path_buf(),
@@ -220,7 +254,13 @@ pub fn write_obj_streamed(
     let mut done = None;
     let r = crate::citygml::write::atomic_write(out, |w| {
         let mut cw = crate::io::CountingWriter::new(w);
-        match obj::write_obj_streamed(input, read, chunk_bytes, passed, &mut cw).map_err(io)? {
+        let r = match kind {
+            None => obj::write_obj_streamed(input, read, chunk_bytes, passed, &mut cw),
+            Some(k) => {
+                cityjson_stream::write_streamed(k, input, read, chunk_bytes, passed, &mut cw)
+            }
+        };
+        match r.map_err(io)? {
             Some(d) => done = Some(d),
             // nothing is kept of a declined stream's output
             None => return Err(WriteError::Invalid("declined".into())),

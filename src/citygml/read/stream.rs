@@ -17,8 +17,10 @@
 //!   read error, and any chunk that does not end between two children of the root, declines);
 //! * an `xlink:href` to a gml:id that is also in an earlier chunk (the serial read resolves it
 //!   to the first);
-//! * a DOCTYPE (entities), a root that is no `CityModel`, a gzip-compressed file (its bytes
-//!   are not in memory to cut).
+//! * a DOCTYPE (entities), a root that is no `CityModel`.
+//!
+//! A gzip-compressed file is decompressed once into an unnamed temporary file and streamed
+//! from there (see [`stream`]).
 //!
 //! A gml:id repeated in a later chunk is warned about there, as the serial read does: the
 //! hashes of the ids read so far are kept, sorted (8 bytes an id: the one part of memory that
@@ -129,7 +131,12 @@ pub enum Streamed {
 /// Read `path` one chunk of about `chunk_bytes` bytes of whole top-level members at a time
 /// (see the module docs), handing each to `each` in document order and dropping it after;
 /// `passed(n)` is called as bytes of the document have been read (they add up to the
-/// document's size when the stream is done).
+/// file's size when the stream is done: for a gzip-compressed file, its compressed bytes in
+/// proportion to the document's read).
+///
+/// A gzip-compressed file is first decompressed into an unnamed temporary file (in the
+/// system's temporary directory, `TMPDIR`: it needs the document's size on disk, never in
+/// memory; nothing is left behind) and streamed from there as a plain file is.
 ///
 /// # Errors
 /// Errors of `each` (the stream stops at the first). A document that cannot be read is
@@ -142,10 +149,30 @@ pub fn stream<E>(
     mut each: impl FnMut(Chunk) -> Result<(), E>,
 ) -> Result<Streamed, E> {
     let decline = |why: &str| Ok(Streamed::Declined(why.to_string()));
-    let doc = match source::load(path) {
-        Ok(source::Document::Plain(doc)) => doc,
-        Ok(source::Document::Gzip(..)) => return decline("gzip-compressed"),
+    let (doc, on_disk) = match source::load(path) {
+        Ok(source::Document::Plain(doc)) => (doc, None),
+        // decompressed once into an unnamed temporary file, then streamed from its map
+        Ok(source::Document::Gzip(mut reader, len)) => match source::spill(&mut reader) {
+            Ok(doc) => (doc, Some(len)),
+            Err(e) => return decline(&format!("decompressing: {e}")),
+        },
         Err(e) => return decline(&e.to_string()),
+    };
+    // the bytes reported: the document's, or for a compressed file its compressed bytes in
+    // proportion (they add up to the size on disk)
+    let doc_len = doc.len() as u64;
+    let reported = std::cell::Cell::new(0u64);
+    let passed = |to: u64| {
+        let at = match on_disk {
+            Some(len) if doc_len > 0 => {
+                u64::try_from(u128::from(to) * u128::from(len) / u128::from(doc_len)).unwrap_or(len)
+            }
+            _ => to,
+        };
+        let n = at.saturating_sub(reported.replace(at.max(reported.get())));
+        if n > 0 {
+            passed(n);
+        }
     };
     let (bom, body, root_end) = match super::split::parse_head(&doc, path, opts) {
         Ok(h) => (h.bom, h.body, h.root_end),
@@ -241,7 +268,7 @@ pub fn stream<E>(
         sum.assets += chunk.model.assets.len() - bodies;
         sum.bodies += bodies;
         sum.warnings += chunk.model.warnings.len();
-        passed(chunk.bytes.1 - chunk.bytes.0);
+        passed(chunk.bytes.1);
         each(chunk)?;
         index += 1;
         from = to;

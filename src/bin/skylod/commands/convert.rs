@@ -73,9 +73,10 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 let chunk = args
                     .stream
                     .chunk_for(&paths[k])
-                    .filter(|_| fmt == Format::Obj);
+                    .filter(|_| fmt != Format::CityGml);
                 let r = match chunk.map(|c| {
-                    crate::commands::stream::obj(&paths[k], &out, c, write_opts, mirror, &progress)
+                    let p = &paths[k];
+                    crate::commands::stream::export(fmt, p, &out, c, write_opts, mirror, &progress)
                 }) {
                     Some(Ok(Some(done))) => Ok(done),
                     Some(Err(e)) => Err(e),

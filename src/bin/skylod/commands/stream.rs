@@ -1,4 +1,4 @@
-//! `stats` and `convert` on a large file: read a chunk of whole top-level members at a time
+//! `stats` and `convert` (to OBJ, CityJSON, CityJSONSeq) on a large file: read a chunk of whole top-level members at a time
 //! ([`skylod::citygml::read::stream`]), the same output as from the whole model, memory that
 //! follows the chunk. Where the stream declines, the commands read the file whole.
 
@@ -51,10 +51,11 @@ pub fn stats(
     Some((total, warnings))
 }
 
-/// `input` written as OBJ to `out` from a streamed read ([`skylod::export::write_obj_streamed`]:
-/// the same bytes, memory that follows a chunk); `Ok(None)` where the stream declines. The
-/// bar's bytes move through the origin pass and the writing pass.
-pub fn obj(
+/// `input` written as OBJ, CityJSON or CityJSONSeq to `out` from a streamed read
+/// ([`skylod::export::write_streamed`]: the same bytes, memory that follows a chunk);
+/// `Ok(None)` where the stream declines. The bar's bytes move through every pass.
+pub fn export(
+    format: Format,
     input: &Path,
     out: &Path,
     chunk: u64,
@@ -62,23 +63,37 @@ pub fn obj(
     mirror: bool,
     progress: &crate::log::Reporter,
 ) -> anyhow::Result<Option<Done>> {
-    // half the bar for the pass that finds the origin, half for the one that writes
-    let passed = |pass, n: u64| match pass {
-        0 => progress.advance(Stage::Read, 0, n.div_ceil(2), None),
-        1 => progress.advance(Stage::Read, 0, n / 2, None),
-        _ => {}
+    // the bar's share of each pass: OBJ origin 1/2, objects 1/2; CityJSONSeq plan 1/2,
+    // buildings 1/2; CityJSON plan, vertex uses and objects 1/3 each (the passes over the
+    // objects outside buildings, when a file has them, are not counted)
+    let thirds = format == Format::CityJson;
+    let passed = |pass, n: u64| {
+        let share = match (thirds, pass) {
+            (false, 0) => n.div_ceil(2),
+            (false, 1) => n / 2,
+            (true, 0) => n.div_ceil(3),
+            (true, 1 | 3) => n / 3,
+            _ => 0,
+        };
+        if share > 0 {
+            progress.advance(Stage::Read, 0, share, None);
+        }
     };
     if mirror {
         crate::outputs::create_parent(out)?;
     }
     let ropts = ReadOptions::default();
     let Some((s, sum)) =
-        skylod::export::write_obj_streamed(input, &ropts, chunk, &passed, out, opts)
+        skylod::export::write_streamed(format, input, &ropts, chunk, &passed, out, opts)
             .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?
     else {
+        crate::log::info!(
+            "{}: read whole (the stream declined)",
+            skylod::model::shown(input)
+        );
         return Ok(None);
     };
-    summary!("{}", s.describe(Format::Obj, input, out));
+    summary!("{}", s.describe(format, input, out));
     Ok(Some(Done {
         line: None,
         warnings: sum.warnings,

@@ -1,0 +1,552 @@
+//! CityJSON and CityJSONSeq of a whole file from a streamed read
+//! ([`crate::citygml::read::stream`]): the bytes of [`super::cityjson::write_cityjson`] and
+//! [`super::cityjson::write_cityjsonseq`] of the whole model with [`Content::Full`], memory that
+//! follows a chunk.
+//!
+//! What the whole model gives at once is gathered in passes over the file, one chunk at a time:
+//!
+//! 1. **plan**: the bounding box (the header's extent and `transform`), the CRS, the
+//!    buildings' ids (made unique in document order, as the whole writer does);
+//! 2. **objects**: buildings (with their parts and installations) in document order, then, in
+//!    another pass when the file has any, the city objects outside buildings (the whole
+//!    writer's order). The installations' and other objects' ids are made unique in the first
+//!    of these passes, after every building's.
+//!
+//! CityJSONSeq writes each feature's vertices on its line: the objects passes write the
+//! document. CityJSON shares one vertex list over the whole document, numbered by first use:
+//! a list as large as the document's distinct vertices. So CityJSON runs the objects passes
+//! twice. The first writes nothing: every use of a vertex (its integer coordinates and its
+//! number among all uses) goes to one of `B` temporary bucket files chosen by a hash of the
+//! coordinates. Each bucket is then read alone (its records and a map of its distinct
+//! vertices in memory: `B` grows with the file, about one per 32 MiB of document) to find
+//! every use's first use, written back over the record; a bit per use marks the first
+//! uses, and a vertex's index is the number of first uses before its own (the bits and a
+//! count per 64 of them: 0.19 bytes a use, the part of memory that grows with the
+//! document, 15 MB for 80 million uses). The second objects pass writes the document: a
+//! use's index is read from its bucket (in the order of the first pass) and a vertex met
+//! the first time goes to a temporary list, copied out after the city objects.
+//!
+//! Temporary files are unnamed (in the system's temporary directory, `TMPDIR`), gone when
+//! the writer ends whatever happens: 32 bytes a vertex use plus 24 a distinct vertex.
+//! Unique ids are kept as 128-bit hashes of the ids of buildings, installations and objects
+//! outside buildings.
+
+use super::cityjson::{
+    scale_for, standalone_or_installation, write_vertices, Feature, Plan, Vertices,
+};
+use super::{asset_name_as, Content, ExportSummary};
+use crate::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
+use crate::model::Bbox;
+use foldhash::{HashMap, HashMapExt, HashSet};
+use glam::DVec3;
+use serde_json::Value;
+use std::fs::File;
+use std::hash::BuildHasher;
+use std::io::{self, BufReader, BufWriter, Read, Seek, Write};
+use std::path::Path;
+
+/// Bytes of a bucket record: the vertex's three integer coordinates, then the number of its
+/// use (replaced by the number of its first use once the bucket is resolved).
+const RECORD: usize = 32;
+
+/// Buffer of each bucket file.
+const BUCKET_BUF: usize = 32 << 10;
+
+/// One bucket per this many bytes of document (at least one, at most [`MAX_BUCKETS`]).
+const BUCKET_BYTES: u64 = 32 << 20;
+
+/// At most this many bucket files (open at once).
+const MAX_BUCKETS: u64 = 256;
+
+/// Which output ([`write_streamed`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Kind {
+    /// One CityJSON document.
+    CityJson,
+    /// CityJSONSeq.
+    Seq,
+}
+
+/// [`super::cityjson::write_cityjson`] (or `write_cityjsonseq`) of the whole file at `path`
+/// with [`Content::Full`], from a streamed read in chunks of `chunk_bytes` (module docs).
+/// `passed(k, n)`: `n` more bytes read in pass `k` (0 the plan; 1 and 2 the objects, CityJSON
+/// only: written; 3 and 4 the objects counted first, CityJSON only). `Ok(None)` where the
+/// stream declines: read the whole file then (what was written is to be dropped).
+///
+/// # Errors
+/// I/O errors of `w` and of the temporary files.
+pub(super) fn write_streamed(
+    kind: Kind,
+    path: &Path,
+    opts: &ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(usize, u64),
+    w: &mut dyn Write,
+) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
+    let pass = |k: usize, each: &mut dyn FnMut(Chunk) -> io::Result<()>| {
+        stream(path, opts, chunk_bytes, &|n| passed(k, n), each).map(|r| match r {
+            Streamed::Done(s) => Some(s),
+            Streamed::Declined(_) => None,
+        })
+    };
+    // 1. the plan
+    let mut ids = Ids::default();
+    let mut bbox = Bbox::EMPTY;
+    let mut others = false;
+    let Some(sum) = pass(0, &mut |c: Chunk| {
+        let plan = Plan::bare(&c.model, 0, Content::Full);
+        bbox.union(&plan.bbox);
+        others |= plan
+            .features
+            .iter()
+            .any(|f| matches!(f, Feature::Standalone(_)));
+        for (b, bd) in c.model.buildings.iter().enumerate() {
+            let global = c.buildings_before + b;
+            let cand = bd
+                .id
+                .clone()
+                .unwrap_or_else(|| format!("building_{global}"));
+            if let Some(id) = ids.unique(cand) {
+                ids.buildings.insert(global, id);
+            }
+        }
+        Ok(())
+    })?
+    else {
+        return Ok(None);
+    };
+    let srs = sum.srs_name.clone();
+    let scale = scale_for(srs.as_deref());
+    let translate = if bbox.is_empty() {
+        DVec3::ZERO
+    } else {
+        bbox.min.floor()
+    };
+    let frame = Frame {
+        bbox,
+        translate,
+        scale,
+    };
+    let parts: &[bool] = if others { &[false, true] } else { &[false] };
+    let mut s = ExportSummary::default();
+    let mut verts = Vertices::new(translate, scale);
+    match kind {
+        Kind::Seq => {
+            let mut head_done = false;
+            for (k, &standalone) in parts.iter().enumerate() {
+                let done = pass(1 + k, &mut |c: Chunk| {
+                    let plan = frame.plan(&c, &mut ids);
+                    if !head_done {
+                        serde_json::to_writer(
+                            &mut *w,
+                            &Value::Object(plan.header_in(srs.as_deref())),
+                        )?;
+                        w.write_all(b"\n")?;
+                        head_done = true;
+                    }
+                    write_features(&plan, standalone, &mut verts, &mut s, w)
+                })?;
+                if done.is_none() {
+                    return Ok(None);
+                }
+            }
+        }
+        Kind::CityJson => {
+            let buckets = (std::fs::metadata(path).map_or(0, |m| m.len()) / BUCKET_BYTES)
+                .clamp(1, MAX_BUCKETS) as usize;
+            verts.external = Some(External::Record(Recorder::new(buckets)?));
+            let mut throwaway = ExportSummary::default();
+            for (k, &standalone) in parts.iter().enumerate() {
+                let done = pass(3 + k, &mut |c: Chunk| {
+                    let plan = frame.plan(&c, &mut ids);
+                    for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
+                        plan.objects(*f, &mut verts, &mut throwaway);
+                    }
+                    verts.check()
+                })?;
+                if done.is_none() {
+                    return Ok(None);
+                }
+            }
+            let Some(External::Record(rec)) = verts.external.take() else {
+                return Err(io::Error::other("vertex index lost"));
+            };
+            verts.external = Some(External::Replay(rec.resolve()?));
+            let mut first = true;
+            let mut head_done = false;
+            for (k, &standalone) in parts.iter().enumerate() {
+                let done = pass(1 + k, &mut |c: Chunk| {
+                    let plan = frame.plan(&c, &mut ids);
+                    if !head_done {
+                        let mut head = plan.header_in(srs.as_deref());
+                        head.remove("vertices");
+                        head.remove("CityObjects");
+                        let head = serde_json::to_string(&Value::Object(head))?;
+                        w.write_all(&head.as_bytes()[..head.len() - 1])?;
+                        w.write_all(b",\"CityObjects\":{")?;
+                        head_done = true;
+                    }
+                    for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
+                        for (id, obj) in plan.objects(*f, &mut verts, &mut s) {
+                            if !first {
+                                w.write_all(b",")?;
+                            }
+                            first = false;
+                            serde_json::to_writer(&mut *w, &id)?;
+                            w.write_all(b":")?;
+                            serde_json::to_writer(&mut *w, &obj)?;
+                        }
+                    }
+                    verts.check()
+                })?;
+                if done.is_none() {
+                    return Ok(None);
+                }
+            }
+            let Some(External::Replay(rep)) = verts.external.take() else {
+                return Err(io::Error::other("vertex index lost"));
+            };
+            w.write_all(b"},\"vertices\":[")?;
+            s.vertices = rep.copy_vertices(w)?;
+            w.write_all(b"]}\n")?;
+        }
+    }
+    Ok(Some((s, sum)))
+}
+
+/// Whether feature `f` is written in the pass of buildings (`standalone` false) or of the
+/// other city objects.
+fn is_part(f: &Feature, standalone: bool) -> bool {
+    matches!(f, Feature::Standalone(_)) == standalone
+}
+
+/// One CityJSONSeq line per feature of `plan` in the pass (see [`is_part`]).
+fn write_features(
+    plan: &Plan<'_>,
+    standalone: bool,
+    verts: &mut Vertices,
+    s: &mut ExportSummary,
+    w: &mut dyn Write,
+) -> io::Result<()> {
+    for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
+        verts.clear();
+        let objs = plan.objects(*f, verts, s);
+        if objs.is_empty() {
+            continue;
+        }
+        w.write_all(b"{\"type\":\"CityJSONFeature\",\"id\":")?;
+        serde_json::to_writer(&mut *w, &plan.feature_id(*f))?;
+        w.write_all(b",\"CityObjects\":{")?;
+        for (k, (oid, obj)) in objs.iter().enumerate() {
+            if k > 0 {
+                w.write_all(b",")?;
+            }
+            serde_json::to_writer(&mut *w, oid)?;
+            w.write_all(b":")?;
+            serde_json::to_writer(&mut *w, obj)?;
+        }
+        w.write_all(b"},\"vertices\":[")?;
+        write_vertices(w, &verts.list)?;
+        w.write_all(b"]}\n")?;
+        s.vertices += verts.list.len();
+        s.features += 1;
+    }
+    Ok(())
+}
+
+/// The whole document's box and transform.
+struct Frame {
+    bbox: Bbox,
+    translate: DVec3,
+    scale: DVec3,
+}
+
+impl Frame {
+    /// The plan of chunk `c` in the whole document's frame, with the whole writer's ids (the
+    /// installations' and other objects' made unique on the first call for the chunk).
+    fn plan<'a>(&self, c: &'a Chunk, ids: &mut Ids) -> Plan<'a> {
+        let m = &c.model;
+        let mut plan = Plan::bare(m, 0, Content::Full);
+        plan.bbox = self.bbox;
+        plan.translate = self.translate;
+        plan.scale = self.scale;
+        for (b, bd) in m.buildings.iter().enumerate() {
+            let global = c.buildings_before + b;
+            let id = match ids.buildings.get(&global) {
+                Some(id) => id.clone(),
+                None => bd
+                    .id
+                    .clone()
+                    .unwrap_or_else(|| format!("building_{global}")),
+            };
+            plan.building_ids.insert(b, id);
+        }
+        // the first pass over the objects takes the ids, chunk after chunk
+        let fresh = c.index >= ids.chunks_done;
+        for (i, a) in m.assets.iter().enumerate() {
+            if !standalone_or_installation(a) {
+                continue;
+            }
+            // bodies are never installations nor outside a building: `i` is not a body
+            let global = c.assets_before + i;
+            let cand = asset_name_as(m, i, global);
+            if fresh {
+                if let Some(id) = ids.unique(cand.clone()) {
+                    ids.assets.insert(global, id);
+                }
+            }
+            let id = ids.assets.get(&global).cloned().unwrap_or(cand);
+            plan.asset_ids.insert(i, id);
+        }
+        if fresh {
+            ids.chunks_done = c.index + 1;
+        }
+        plan
+    }
+}
+
+/// The whole writer's unique ids: candidates taken in its order (buildings, then
+/// installations and other objects), a repeated one given `_2`, `_3`, ...; only the renamed
+/// ones are kept as text.
+#[derive(Default)]
+struct Ids {
+    /// 128-bit hashes of the ids taken.
+    used: HashSet<u128>,
+    /// Renamed buildings, by index in the whole document.
+    buildings: HashMap<usize, String>,
+    /// Renamed installations and other objects, by asset index in the whole document.
+    assets: HashMap<usize, String>,
+    /// Chunks whose assets' ids were taken.
+    chunks_done: usize,
+}
+
+impl Ids {
+    fn hash(id: &str) -> u128 {
+        let a = foldhash::fast::FixedState::with_seed(0x51c1_0d5e).hash_one(id);
+        let b = foldhash::fast::FixedState::with_seed(0x7e57_ab1e).hash_one(id);
+        (u128::from(a) << 64) | u128::from(b)
+    }
+
+    /// Take `cand`, or `cand_2`, `cand_3`, ... when taken: `Some` of the id when renamed.
+    fn unique(&mut self, cand: String) -> Option<String> {
+        if self.used.insert(Self::hash(&cand)) {
+            return None;
+        }
+        let mut k = 2;
+        loop {
+            let id = format!("{cand}_{k}");
+            if self.used.insert(Self::hash(&id)) {
+                return Some(id);
+            }
+            k += 1;
+        }
+    }
+}
+
+/// The vertex index of a streamed CityJSON document, on disk (module docs).
+pub(super) enum External {
+    /// First pass: every use recorded in its bucket.
+    Record(Recorder),
+    /// Second pass: every use's index read back.
+    Replay(Replayer),
+}
+
+impl External {
+    /// The index of one use of vertex `key` (0 while recording: the ring's duplicates are
+    /// found by key, so the number does not matter yet).
+    pub(super) fn index(&mut self, key: [i64; 3]) -> u32 {
+        match self {
+            External::Record(r) => r.record(key),
+            External::Replay(r) => r.index(key),
+        }
+    }
+}
+
+impl Vertices {
+    /// The first I/O error of the external index, if any.
+    fn check(&mut self) -> io::Result<()> {
+        let err = match &mut self.external {
+            Some(External::Record(r)) => r.err.take(),
+            Some(External::Replay(r)) => r.err.take(),
+            None => None,
+        };
+        err.map_or(Ok(()), Err)
+    }
+}
+
+fn bucket_of(key: [i64; 3], n: usize) -> usize {
+    let h = foldhash::fast::FixedState::with_seed(0x00b0_c4e7).hash_one(key);
+    (h % n as u64) as usize
+}
+
+/// Records every use of a vertex in its bucket.
+pub(super) struct Recorder {
+    buckets: Vec<BufWriter<File>>,
+    uses: u64,
+    err: Option<io::Error>,
+}
+
+impl Recorder {
+    fn new(n: usize) -> io::Result<Self> {
+        let buckets = (0..n)
+            .map(|_| Ok(BufWriter::with_capacity(BUCKET_BUF, tempfile::tempfile()?)))
+            .collect::<io::Result<_>>()?;
+        Ok(Recorder {
+            buckets,
+            uses: 0,
+            err: None,
+        })
+    }
+
+    fn record(&mut self, key: [i64; 3]) -> u32 {
+        let b = bucket_of(key, self.buckets.len());
+        let mut rec = [0u8; RECORD];
+        for (k, c) in key.iter().enumerate() {
+            rec[k * 8..k * 8 + 8].copy_from_slice(&c.to_le_bytes());
+        }
+        rec[24..].copy_from_slice(&self.uses.to_le_bytes());
+        self.uses += 1;
+        if let Err(e) = self.buckets[b].write_all(&rec) {
+            self.err.get_or_insert(e);
+        }
+        0
+    }
+
+    /// Every use's first use, bucket by bucket (written over its record), and the bits of
+    /// the first uses with their counts: the index of every use, ready to be read back.
+    fn resolve(self) -> io::Result<Replayer> {
+        if let Some(e) = self.err {
+            return Err(e);
+        }
+        let words = usize::try_from(self.uses.div_ceil(64)).map_err(io::Error::other)?;
+        let mut first = vec![0u64; words];
+        let mut files = Vec::with_capacity(self.buckets.len());
+        let mut map: HashMap<[i64; 3], u64> = HashMap::new();
+        for b in self.buckets {
+            let mut f = b.into_inner().map_err(|e| e.into_error())?;
+            f.rewind()?;
+            let mut recs = Vec::new();
+            f.read_to_end(&mut recs)?;
+            map.clear();
+            for r in recs.chunks_exact_mut(RECORD) {
+                let key = key_of(r);
+                let at = u64::from_le_bytes(r[24..32].try_into().map_err(io::Error::other)?);
+                let f0 = *map.entry(key).or_insert(at);
+                if f0 == at {
+                    first[(at / 64) as usize] |= 1 << (at % 64);
+                }
+                r[24..32].copy_from_slice(&f0.to_le_bytes());
+            }
+            f.rewind()?;
+            f.write_all(&recs)?;
+            f.rewind()?;
+            files.push(BufReader::with_capacity(BUCKET_BUF, f));
+        }
+        let mut before = Vec::with_capacity(words);
+        let mut n = 0u32;
+        for w in &first {
+            before.push(n);
+            n += w.count_ones();
+        }
+        Ok(Replayer {
+            buckets: files,
+            first,
+            before,
+            next: 0,
+            list: BufWriter::new(tempfile::tempfile()?),
+            err: None,
+        })
+    }
+}
+
+fn key_of(r: &[u8]) -> [i64; 3] {
+    let c = |k: usize| {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(&r[k * 8..k * 8 + 8]);
+        i64::from_le_bytes(b)
+    };
+    [c(0), c(1), c(2)]
+}
+
+/// Reads every use's index back in the order of the record.
+pub(super) struct Replayer {
+    buckets: Vec<BufReader<File>>,
+    /// Bit `u`: use `u` is its vertex's first.
+    first: Vec<u64>,
+    /// First uses before each word of `first`.
+    before: Vec<u32>,
+    /// Vertices listed so far.
+    next: u32,
+    /// The vertices in index order.
+    list: BufWriter<File>,
+    err: Option<io::Error>,
+}
+
+impl Replayer {
+    fn index(&mut self, key: [i64; 3]) -> u32 {
+        let b = bucket_of(key, self.buckets.len());
+        let mut rec = [0u8; RECORD];
+        if let Err(e) = self.buckets[b].read_exact(&mut rec) {
+            self.err.get_or_insert(e);
+            return 0;
+        }
+        if key_of(&rec) != key {
+            self.err
+                .get_or_insert(io::Error::other("vertex uses differ between the passes"));
+            return 0;
+        }
+        let at = u64::from_le_bytes(rec[24..32].try_into().unwrap_or_default());
+        let word = (at / 64) as usize;
+        let below = self
+            .first
+            .get(word)
+            .map_or(0, |w| w & ((1u64 << (at % 64)) - 1));
+        let index = self.before.get(word).copied().unwrap_or(0) + below.count_ones();
+        if index == self.next {
+            if let Err(e) = self.list.write_all(&rec[..24]) {
+                self.err.get_or_insert(e);
+            }
+            self.next += 1;
+        }
+        index
+    }
+
+    /// Write the vertex list to `w` (as the whole writer does); how many.
+    fn copy_vertices(self, w: &mut dyn Write) -> io::Result<usize> {
+        if let Some(e) = self.err {
+            return Err(e);
+        }
+        let mut f = self.list.into_inner().map_err(|e| e.into_error())?;
+        f.rewind()?;
+        let mut r = BufReader::with_capacity(1 << 20, f);
+        let mut rec = [0u8; 24];
+        let mut batch: Vec<[i64; 3]> = Vec::with_capacity(4096);
+        let mut n = 0usize;
+        loop {
+            match r.read_exact(&mut rec) {
+                Ok(()) => batch.push(key_of(&rec)),
+                Err(e) if e.kind() == io::ErrorKind::UnexpectedEof => break,
+                Err(e) => return Err(e),
+            }
+            if batch.len() == batch.capacity() {
+                flush_vertices(w, &batch, n)?;
+                n += batch.len();
+                batch.clear();
+            }
+        }
+        flush_vertices(w, &batch, n)?;
+        Ok(n + batch.len())
+    }
+}
+
+/// Vertices `batch`, the first of which is vertex `n` of the list (a comma before it but
+/// the first).
+fn flush_vertices(w: &mut dyn Write, batch: &[[i64; 3]], n: usize) -> io::Result<()> {
+    if batch.is_empty() {
+        return Ok(());
+    }
+    if n > 0 {
+        w.write_all(b",")?;
+    }
+    write_vertices(w, batch)
+}
