@@ -18,6 +18,7 @@
 //! ```
 
 mod error;
+mod lod;
 
 pub use error::{Error, Result};
 
