@@ -11,7 +11,7 @@ use anyhow::bail;
 use skylod::batch::inputs::Input;
 use skylod::batch::shard::Shard;
 use skylod::poi::checks::DEFAULT_POI_MARGIN;
-use skylod::poi::{check_pois, parse_poi, read_pois_csv, Located, Poi};
+use skylod::poi::{check_pois, parse_poi_at, read_pois_csv, Located, Poi};
 use skylod::session::{Scene, SceneOptions};
 use std::path::PathBuf;
 
@@ -57,9 +57,10 @@ impl PoiArgs {
     pub fn points(&self) -> anyhow::Result<Vec<Poi>> {
         let mut out = Vec::new();
         for (i, t) in self.poi.iter().enumerate() {
+            let at = format!("--poi {t}");
             out.push(Located {
-                poi: parse_poi(t, i)?,
-                at: format!("--poi {t}"),
+                poi: parse_poi_at(t, i, &at)?,
+                at,
             });
         }
         if let Some(f) = &self.pois {
@@ -107,7 +108,13 @@ impl PoiArgs {
     ) -> anyhow::Result<Session> {
         let failed = !scene.failures().is_empty();
         let study = scene.frame(pois)?;
+        let frame = study.frame_warning();
+        let frame = frame.map(|w| (w.to_string(), crate::errors::frame_warning(w)));
         for w in study.warnings() {
+            let w = match &frame {
+                Some((lib, cli)) if lib == w => cli,
+                _ => w,
+            };
             warning!("{cmd}: warning: {w}");
         }
         if let Some(n) = study.note() {
