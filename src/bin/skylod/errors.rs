@@ -5,8 +5,8 @@
 use skylod::batch::shard::{Setting, ShardError, ENV_VARS};
 use skylod::citygml::WriteError;
 use skylod::crs::FrameWarning;
-use skylod::lod::bound::BoundError;
 use skylod::io::TargetError;
+use skylod::lod::bound::BoundError;
 use skylod::pipeline::{PipelineError, PoiCrsError};
 use skylod::poi::checks::TrustError;
 use skylod::Error;

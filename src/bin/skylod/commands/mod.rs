@@ -27,7 +27,7 @@ pub mod sun_hours;
 pub mod svf;
 pub mod synth;
 
-/// The closing line of a batch: files ok / failed, warnings, polygons in / out, wall time.
+/// The closing line of a batch ([`skylod::batch::run::summary_line`]) at `t`'s elapsed time.
 pub fn summary_line(
     cmd: &str,
     ok: usize,
@@ -36,11 +36,7 @@ pub fn summary_line(
     polygons: Option<(usize, usize)>,
     t: Instant,
 ) -> String {
-    let polys = polygons.map_or(String::new(), |(i, o)| format!(", polygons {i} -> {o}"));
-    format!(
-        "{cmd}: {ok} file(s) ok, {failed} failed, {warnings} warning(s){polys}, {:.2} s",
-        t.elapsed().as_secs_f64()
-    )
+    skylod::batch::run::summary_line(cmd, ok, failed, warnings, polygons, t.elapsed())
 }
 
 /// Milliseconds since `t`, rounded to 0.1.
