@@ -27,18 +27,6 @@ pub mod sun_hours;
 pub mod svf;
 pub mod synth;
 
-/// The closing line of a batch ([`skylod::batch::run::summary_line`]) at `t`'s elapsed time.
-pub fn summary_line(
-    cmd: &str,
-    ok: usize,
-    failed: usize,
-    warnings: usize,
-    polygons: Option<(usize, usize)>,
-    t: Instant,
-) -> String {
-    skylod::batch::run::summary_line(cmd, ok, failed, warnings, polygons, t.elapsed())
-}
-
 /// Milliseconds since `t`, rounded to 0.1.
 pub fn ms(t: Instant) -> f64 {
     (t.elapsed().as_secs_f64() * 1e4).round() / 10.0
