@@ -93,6 +93,7 @@ fn one(
     let (frame, warning) =
         LocalFrame::new(&model_crs(&model, crs.source_crs.as_ref()), &model.bbox());
     if let Some(w) = warning {
+        let w = crate::errors::frame_warning(&w);
         crate::log::warning!("rough: warning: {}: {w}", skylod::model::shown(input));
     }
     let local = frame.model_to_local(&model);
