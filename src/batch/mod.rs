@@ -5,6 +5,8 @@
 //! * [`inputs`]: arguments (files, directories, globs, `-`) → the input files, with the
 //!   relative path each mirrors under `-o DIR`.
 //! * [`outputs`]: an output name → one output per input, a mirrored tree, or a merge.
+//! * [`run`]: a batch that writes per input: its outputs planned, its inputs' results
+//!   gathered and merged, what to tell the user returned (never printed).
 //! * [`shard`]: `--shard I/N` or a scheduler's array index → this run's files or POIs.
 //! * [`shard_levels`]: the levels files `lod` shards write and `--reduce` combines.
 //! * [`reduce`]: the levels files of every shard → the levels one serial run selects.
@@ -13,6 +15,7 @@
 pub mod inputs;
 pub mod outputs;
 pub mod reduce;
+pub mod run;
 pub mod scene_radius;
 pub mod shard;
 pub mod shard_levels;

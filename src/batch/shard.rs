@@ -54,18 +54,40 @@ pub const ENV_VARS: [&str; 5] = [
     "AWS_BATCH_JOB_ARRAY_INDEX",
 ];
 
+/// Where a shard setting came from, as errors name it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Setting {
+    /// The shard given as text, `I/N`.
+    Given(String),
+    /// The shard count given.
+    Count(usize),
+    /// A setting named by the caller, e.g. a scheduler's environment variable.
+    Named(String),
+}
+
+impl std::fmt::Display for Setting {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Setting::Given(s) => write!(f, "shard {s}"),
+            Setting::Count(n) => write!(f, "shard count {n}"),
+            Setting::Named(n) => f.write_str(n),
+        }
+    }
+}
+
 /// Settings that do not name one shard.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ShardError {
-    /// `--shard` text that is not `I/N`.
-    #[error("--shard {0:?}: expected I/N with 0 <= I < N (e.g. 0/4)")]
+    /// Shard text that is not `I/N`.
+    #[error("shard {0:?}: expected I/N with 0 <= I < N (e.g. 0/4)")]
     Syntax(String),
     /// An index not below the count.
     #[error("{from}: shard index {index} is not below the shard count {count}")]
     OutOfRange {
         /// Where the pair came from.
-        from: String,
+        from: Setting,
         /// Index.
         index: usize,
         /// Count.
@@ -79,15 +101,65 @@ pub enum ShardError {
         /// Its value.
         value: String,
     },
-    /// Two sources that disagree.
+    /// Two variables of the environment that disagree.
     #[error("conflicting shard settings: {0}")]
     Conflict(String),
-    /// An index without a count.
-    #[error("{0} gives the shard index but not the count: add --shards N")]
+    /// The scheduler's count and the count given disagree.
+    #[error(
+        "conflicting shard settings: SLURM_ARRAY_TASK_COUNT={env} but a shard count of \
+         {given} was given"
+    )]
+    CountDisagrees {
+        /// SLURM_ARRAY_TASK_COUNT.
+        env: usize,
+        /// The count given.
+        given: usize,
+    },
+    /// A count given without an index, and no scheduler's index.
+    #[error(
+        "conflicting shard settings: a shard count of {0} without an index: give the shard \
+         I/{0}, or run under a scheduler that sets one of {vars}",
+        vars = ENV_VARS.join(", ")
+    )]
+    CountWithoutIndex(usize),
+    /// The shard given and the count given disagree.
+    #[error("conflicting shard settings: shard {shard} but a shard count of {count}")]
+    ShardCountDisagrees {
+        /// The shard given.
+        shard: Shard,
+        /// The count given.
+        count: usize,
+    },
+    /// The shard given and the scheduler's environment disagree.
+    #[error(
+        "conflicting shard settings: shard {shard} but the scheduler's environment ({env}) \
+         says {says}"
+    )]
+    EnvDisagrees {
+        /// The shard given.
+        shard: Shard,
+        /// The variables set (`NAME=value, ...`).
+        env: String,
+        /// The shard of the environment.
+        says: Shard,
+    },
+    /// The shard given, and an environment that names no shard.
+    #[error(
+        "conflicting shard settings: shard {shard} but the scheduler's environment is not \
+         usable: {error}"
+    )]
+    EnvUnusable {
+        /// The shard given.
+        shard: Shard,
+        /// Why the environment names no shard.
+        error: Box<ShardError>,
+    },
+    /// An index without a count (the setting that gave the index).
+    #[error("{0} gives the shard index but not the count")]
     NoCount(String),
     /// A count of zero.
     #[error("{0}: the shard count must be at least 1")]
-    ZeroCount(String),
+    ZeroCount(Setting),
 }
 
 impl std::str::FromStr for Shard {
@@ -97,7 +169,7 @@ impl std::str::FromStr for Shard {
         let (i, n) = s.trim().split_once('/').ok_or_else(bad)?;
         let index: usize = i.trim().parse().map_err(|_| bad())?;
         let count: usize = n.trim().parse().map_err(|_| bad())?;
-        Shard::new(index, count, &format!("--shard {s}"))
+        Shard::checked(index, count, Setting::Given(s.to_string()))
     }
 }
 
@@ -120,15 +192,16 @@ impl Shard {
     /// # Errors
     /// A zero count or an index not below it.
     pub fn new(index: usize, count: usize, from: &str) -> Result<Shard, ShardError> {
+        Shard::checked(index, count, Setting::Named(from.to_string()))
+    }
+
+    /// [`Shard::new`] with the setting `from`.
+    fn checked(index: usize, count: usize, from: Setting) -> Result<Shard, ShardError> {
         if count == 0 {
-            return Err(ShardError::ZeroCount(from.to_string()));
+            return Err(ShardError::ZeroCount(from));
         }
         if index >= count {
-            return Err(ShardError::OutOfRange {
-                from: from.to_string(),
-                index,
-                count,
-            });
+            return Err(ShardError::OutOfRange { from, index, count });
         }
         Ok(Shard { index, count })
     }
@@ -215,9 +288,7 @@ impl Shard {
         }
         let count = match (given, shards) {
             (Some(c), Some(n)) if c != n => {
-                return Err(ShardError::Conflict(format!(
-                    "SLURM_ARRAY_TASK_COUNT={c} but --shards {n}"
-                )))
+                return Err(ShardError::CountDisagrees { env: c, given: n })
             }
             (Some(c), _) => c,
             (None, Some(n)) => n,
@@ -240,37 +311,33 @@ impl Shard {
     ) -> Result<Option<Shard>, ShardError> {
         if let Some(n) = shards {
             if n == 0 {
-                return Err(ShardError::ZeroCount("--shards 0".into()));
+                return Err(ShardError::ZeroCount(Setting::Count(0)));
             }
         }
         let Some(s) = option else {
             return match (Shard::from_env(get, shards)?, shards) {
-                (None, Some(n)) => Err(ShardError::Conflict(format!(
-                    "--shards {n} without an index: give --shard I/{n}, or run under a scheduler \
-                     that sets one of {}",
-                    ENV_VARS.join(", ")
-                ))),
+                (None, Some(n)) => Err(ShardError::CountWithoutIndex(n)),
                 (found, _) => Ok(found),
             };
         };
         if let Some(n) = shards.filter(|&n| n != s.count) {
-            return Err(ShardError::Conflict(format!(
-                "--shard {s} but --shards {n}"
-            )));
+            return Err(ShardError::ShardCountDisagrees { shard: s, count: n });
         }
         let set: Vec<String> = ENV_VARS
             .iter()
             .filter_map(|k| get(k).map(|v| format!("{k}={v}")))
             .collect();
         match Shard::from_env(&get, Some(s.count)) {
-            Ok(Some(e)) if e != s => Err(ShardError::Conflict(format!(
-                "--shard {s} but the scheduler's environment ({}) says {e}",
-                set.join(", ")
-            ))),
+            Ok(Some(e)) if e != s => Err(ShardError::EnvDisagrees {
+                shard: s,
+                env: set.join(", "),
+                says: e,
+            }),
             Ok(_) => Ok(Some(s)),
-            Err(e) => Err(ShardError::Conflict(format!(
-                "--shard {s} but the scheduler's environment is not usable: {e}"
-            ))),
+            Err(e) => Err(ShardError::EnvUnusable {
+                shard: s,
+                error: Box::new(e),
+            }),
         }
     }
 

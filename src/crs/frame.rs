@@ -74,15 +74,15 @@ impl fmt::Display for FrameWarning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             FrameWarning::NoCrs => f.write_str(
-                "the input names no CRS (srsName): coordinates are taken as metres (give --source-crs)",
+                "the input names no CRS (srsName): coordinates are taken as metres (give the source CRS)",
             ),
             FrameWarning::UnknownCrs(n) => write!(
                 f,
-                "CRS {n:?} is not one skylod knows: coordinates are taken as metres (give --source-crs EPSG:n)"
+                "CRS {n:?} is not one skylod knows: coordinates are taken as metres (give the source CRS, EPSG:n)"
             ),
             FrameWarning::NotDegrees(n) => write!(
                 f,
-                "CRS {n:?} is geographic but the coordinates are not degrees: taken as metres (give --source-crs)"
+                "CRS {n:?} is geographic but the coordinates are not degrees: taken as metres (give the source CRS)"
             ),
             FrameWarning::AxesSwapped(n) => write!(
                 f,

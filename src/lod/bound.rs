@@ -136,7 +136,7 @@ pub enum BoundError {
     #[error("a sun-hours error bound needs a sun table (site and year)")]
     NoSunTable,
     /// An irradiance bound without a weather year.
-    #[error("an irradiance error bound needs a weather year (--weather)")]
+    #[error("an irradiance error bound needs a weather year")]
     NoWeather,
     /// A bound that is negative or not a number.
     #[error("error bound {0} is not a non-negative number")]

@@ -52,6 +52,9 @@ pub struct Framed<'a> {
     pub warnings: Vec<String>,
     /// A note on the frame when it is not the identity ("tracing in ...").
     pub note: Option<String>,
+    /// The frame's warning (no CRS, an unknown one, ...), structured; its text is the last
+    /// of [`Framed::warnings`].
+    pub frame_warning: Option<crate::crs::FrameWarning>,
 }
 
 /// Check `pois` ([`check_poi_list`]: finite, non-zero normals, unique ids), apply
@@ -93,7 +96,7 @@ pub fn frame<'a>(
     // the frame is the identity)
     let source_bbox = source.bbox();
     let (frame, warning) = LocalFrame::new(&crs, &source_bbox);
-    warnings.extend(warning.map(|w| w.to_string()));
+    warnings.extend(warning.as_ref().map(|w| w.to_string()));
     let note = (!frame.is_identity()).then(|| format!("{crs}: tracing in {}", frame.describe()));
     let local = frame.model_to_local(source);
     let local_bbox = match &local {
@@ -150,6 +153,7 @@ pub fn frame<'a>(
         local_pois,
         warnings,
         note,
+        frame_warning: warning,
     })
 }
 

@@ -110,19 +110,24 @@ fn build(id: String, v: &[f64], at: &str) -> Result<Poi, PoiError> {
 /// assert!(skylod::poi::parse_poi("1,2", 0).is_err());
 /// ```
 pub fn parse_poi(text: &str, index: usize) -> Result<Poi, PoiError> {
+    parse_poi_at(text, index, &format!("POI {text}"))
+}
+
+/// [`parse_poi`], its errors naming the place the text was given as `at` (e.g. the option
+/// of a command line, `--poi 1,2`).
+pub fn parse_poi_at(text: &str, index: usize, at: &str) -> Result<Poi, PoiError> {
     let fields: Vec<&str> = text.split(',').collect();
     if fields.len() != 3 && fields.len() != 6 {
         return Err(PoiError::Syntax {
-            at: format!("--poi {text}"),
+            at: at.to_string(),
             message: format!(
                 "expected X,Y,Z or X,Y,Z,NX,NY,NZ, got {} values",
                 fields.len()
             ),
         });
     }
-    let at = format!("--poi {text}");
-    let v = numbers(&fields, &at)?;
-    build(format!("poi-{}", index + 1), &v, &at)
+    let v = numbers(&fields, at)?;
+    build(format!("poi-{}", index + 1), &v, at)
 }
 
 /// A POI with the place it was given: `--poi …` or `file:line`, for messages.

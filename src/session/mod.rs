@@ -18,6 +18,7 @@
 //! ```
 
 mod error;
+mod lod;
 
 pub use error::{Error, Result};
 
@@ -276,7 +277,7 @@ impl Scene {
             Cow::Borrowed(_) => None,
         };
         let (crs, lframe, pois, local_pois) = (f.crs, f.frame, f.pois, f.local_pois);
-        let (warnings, note) = (f.warnings, f.note);
+        let (warnings, note, frame_warning) = (f.warnings, f.note, f.frame_warning);
         Ok(Study {
             inputs,
             source: model,
@@ -287,6 +288,7 @@ impl Scene {
             local_pois,
             warnings,
             note,
+            frame_warning,
             failures,
             read_s,
             full: OnceLock::new(),
@@ -308,6 +310,7 @@ pub struct Study {
     local_pois: Vec<Poi>,
     warnings: Vec<String>,
     note: Option<String>,
+    frame_warning: Option<crate::crs::FrameWarning>,
     failures: Vec<ReadError>,
     read_s: f64,
     full: OnceLock<crate::trace::Scene>,
@@ -326,6 +329,7 @@ impl Study {
             local_pois: self.local_pois.clone(),
             warnings: self.warnings.clone(),
             note: self.note.clone(),
+            frame_warning: self.frame_warning.clone(),
         }
     }
 
@@ -357,6 +361,11 @@ impl Study {
     /// What to tell the user: other CRSs named by the inputs, the frame's accuracy.
     pub fn warnings(&self) -> &[String] {
         &self.warnings
+    }
+
+    /// The frame's warning, structured (its text is the last of [`Study::warnings`]).
+    pub fn frame_warning(&self) -> Option<&crate::crs::FrameWarning> {
+        self.frame_warning.as_ref()
     }
 
     /// A note on the frame when it is not the identity ("tracing in ...").

@@ -1,9 +1,12 @@
 //! Library errors in the command line's words: the library says what is wrong in its own
 //! terms, the CLI adds the flag that fixes it (`--poi-crs`, `--source-crs`,
-//! `--allow-mixed-crs`, `--overwrite`).
+//! `--allow-mixed-crs`, `--overwrite`, `--poi`, `--shard`, `--shards`, `--weather`).
 
+use skylod::batch::shard::{Setting, ShardError, ENV_VARS};
 use skylod::citygml::WriteError;
+use skylod::crs::FrameWarning;
 use skylod::io::TargetError;
+use skylod::lod::bound::BoundError;
 use skylod::pipeline::{PipelineError, PoiCrsError};
 use skylod::poi::checks::TrustError;
 use skylod::Error;
@@ -16,6 +19,7 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
             Error::Trust(t) => trust(t),
             Error::PoiCrs(e) => poi_crs(e),
             Error::Write(w) => write(w),
+            Error::Bound(b) => bound(b),
             e => e.to_string(),
         };
     }
@@ -23,8 +27,15 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
         return match e {
             PipelineError::Trust(t) => trust(t),
             PipelineError::PoiCrs(e) => poi_crs(e),
+            PipelineError::Bound(b) => bound(b),
             e => e.to_string(),
         };
+    }
+    if let Some(s) = e.downcast_ref::<ShardError>() {
+        return shard(s);
+    }
+    if let Some(b) = e.downcast_ref::<BoundError>() {
+        return bound(b);
     }
     if let Some(t) = e.downcast_ref::<TrustError>() {
         return trust(t);
@@ -56,6 +67,10 @@ fn poi_crs(e: &PoiCrsError) -> String {
 fn trust(t: &TrustError) -> String {
     match t {
         TrustError::PoiOutside(far) => far.message("--poi-crs EPSG:4326"),
+        TrustError::LatLonSwapped { message, crs } => format!(
+            "{message} the order is probably swapped: {crs}'s axis order is latitude, longitude \
+             (--poi LAT,LON,H; CSV columns lat, lon), not longitude, latitude"
+        ),
         TrustError::MixedCrs { listing } => format!(
             "the inputs are in different CRSs and would be merged into one scene: {listing}. \
              Reproject them to one CRS first, or give --allow-mixed-crs if the names differ \
@@ -68,6 +83,77 @@ fn trust(t: &TrustError) -> String {
 fn write(w: &WriteError) -> String {
     match w {
         WriteError::Exists(p) => format!("{}: output exists (use --overwrite)", p.display()),
+        w => w.to_string(),
+    }
+}
+
+fn bound(b: &BoundError) -> String {
+    match b {
+        BoundError::NoWeather => format!("{b} (--weather)"),
+        b => b.to_string(),
+    }
+}
+
+/// A shard setting as the flags give it.
+fn setting(s: &Setting) -> String {
+    match s {
+        Setting::Given(s) => format!("--shard {s}"),
+        Setting::Count(n) => format!("--shards {n}"),
+        s => s.to_string(),
+    }
+}
+
+/// A shard error in the words of `--shard` and `--shards`.
+pub fn shard(e: &ShardError) -> String {
+    const CONFLICT: &str = "conflicting shard settings";
+    match e {
+        ShardError::Syntax(s) => format!("--shard {s:?}: expected I/N with 0 <= I < N (e.g. 0/4)"),
+        ShardError::OutOfRange { from, index, count } => format!(
+            "{}: shard index {index} is not below the shard count {count}",
+            setting(from)
+        ),
+        ShardError::ZeroCount(from) => {
+            format!("{}: the shard count must be at least 1", setting(from))
+        }
+        ShardError::NoCount(from) => {
+            format!("{from} gives the shard index but not the count: add --shards N")
+        }
+        ShardError::CountDisagrees { env, given } => {
+            format!("{CONFLICT}: SLURM_ARRAY_TASK_COUNT={env} but --shards {given}")
+        }
+        ShardError::CountWithoutIndex(n) => format!(
+            "{CONFLICT}: --shards {n} without an index: give --shard I/{n}, or run under a \
+             scheduler that sets one of {}",
+            ENV_VARS.join(", ")
+        ),
+        ShardError::ShardCountDisagrees { shard, count } => {
+            format!("{CONFLICT}: --shard {shard} but --shards {count}")
+        }
+        ShardError::EnvDisagrees { shard, env, says } => format!(
+            "{CONFLICT}: --shard {shard} but the scheduler's environment ({env}) says {says}"
+        ),
+        ShardError::EnvUnusable { shard: s, error } => format!(
+            "{CONFLICT}: --shard {s} but the scheduler's environment is not usable: {}",
+            shard(error)
+        ),
+        e => e.to_string(),
+    }
+}
+
+/// The frame's warning with the flag that fixes it.
+pub fn frame_warning(w: &FrameWarning) -> String {
+    let metres = "coordinates are taken as metres";
+    match w {
+        FrameWarning::NoCrs => {
+            format!("the input names no CRS (srsName): {metres} (give --source-crs)")
+        }
+        FrameWarning::UnknownCrs(n) => {
+            format!("CRS {n:?} is not one skylod knows: {metres} (give --source-crs EPSG:n)")
+        }
+        FrameWarning::NotDegrees(n) => format!(
+            "CRS {n:?} is geographic but the coordinates are not degrees: taken as metres \
+             (give --source-crs)"
+        ),
         w => w.to_string(),
     }
 }
@@ -94,5 +180,17 @@ mod tests {
         };
         assert!(cli_text(&m).contains("--allow-mixed-crs"));
         assert!(!m.to_string().contains("--"));
+        let s = "5/4".parse::<skylod::batch::shard::Shard>().unwrap_err();
+        assert!(!s.to_string().contains("--"), "{s}");
+        assert_eq!(
+            cli_text(&s),
+            "--shard 5/4: shard index 5 is not below the shard count 4"
+        );
+        let s = skylod::batch::shard::Shard::resolve(None, Some(0), |_| None).unwrap_err();
+        assert_eq!(shard(&s), "--shards 0: the shard count must be at least 1");
+        let w = FrameWarning::UnknownCrs("X".into());
+        assert!(!w.to_string().contains("--"), "{w}");
+        assert!(frame_warning(&w).ends_with("(give --source-crs EPSG:n)"));
+        assert!(cli_text(&BoundError::NoWeather).ends_with("weather year (--weather)"));
     }
 }

@@ -241,12 +241,8 @@ pub fn check_lat_lon_order(
     if swapped.len() > 5 {
         let _ = write!(message, " and {} more;", swapped.len() - 5);
     }
-    let _ = write!(
-        message,
-        " the order is probably swapped: {crs}'s axis order is latitude, longitude (--poi \
-         LAT,LON,H; CSV columns lat, lon), not longitude, latitude"
-    );
-    Err(TrustError::LatLonSwapped { message })
+    let crs = crs.to_string();
+    Err(TrustError::LatLonSwapped { message, crs })
 }
 
 #[cfg(test)]

@@ -36,10 +36,15 @@ pub enum TrustError {
     #[error("{0}")]
     PoiOutside(Box<PoisOutside>),
     /// POIs in a latitude-first geographic CRS given longitude first.
-    #[error("{message}")]
+    #[error(
+        "{message} the order is probably swapped: {crs}'s axis order is latitude, longitude \
+         (a POI as LAT,LON,H; CSV columns lat, lon), not longitude, latitude"
+    )]
     LatLonSwapped {
-        /// The full explanation: which POIs, and the axis order expected.
+        /// Which POIs lie outside the model and inside it with their axes exchanged.
         message: String,
+        /// The POIs' CRS, whose axis order is latitude first.
+        crs: String,
     },
     /// The model has no heights.
     #[error(

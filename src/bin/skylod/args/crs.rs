@@ -2,11 +2,9 @@
 //! ([`skylod::crs::LocalFrame`]): the model and the POIs are brought into it after reading,
 //! reports and outputs stay in the input's CRS.
 
-use crate::log::{summary, warning};
 use skylod::crs::Crs;
 use skylod::model::CityModel;
 use skylod::pipeline::FrameOptions;
-use skylod::poi::Poi;
 
 /// Parse a CRS flag: any `srsName` spelling that names a CRS ([`Crs::parse_named`]).
 pub fn parse_crs(s: &str) -> Result<Crs, String> {
@@ -51,8 +49,6 @@ pub struct CrsArgs {
     pub poi_crs: Option<Crs>,
 }
 
-pub use skylod::pipeline::Framed;
-
 impl CrsArgs {
     /// The frame options of the flags: `--source-crs`, `--poi-crs`, and `margin` (m) for
     /// POIs outside the scene.
@@ -63,24 +59,6 @@ impl CrsArgs {
             poi_margin: margin,
         }
     }
-}
-
-/// Bring `model` and `pois` into the local metric frame ([`skylod::pipeline::frame`] with
-/// `opts`), saying its warnings and note on stderr, prefixed by `cmd`.
-pub fn to_local_frame<'a>(
-    model: &'a mut CityModel,
-    pois: Vec<Poi>,
-    opts: &FrameOptions,
-    cmd: &str,
-) -> anyhow::Result<Framed<'a>> {
-    let framed = skylod::pipeline::frame(model, pois, opts)?;
-    for w in &framed.warnings {
-        warning!("{cmd}: warning: {w}");
-    }
-    if let Some(n) = &framed.note {
-        summary!("{cmd}: {n}");
-    }
-    Ok(framed)
 }
 
 #[cfg(test)]

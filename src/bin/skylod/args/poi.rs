@@ -1,18 +1,17 @@
 //! Inputs and points of interest (`--poi`, `--pois`, `--poi-margin`, `--allow-mixed-crs`,
 //! with `--source-crs`, `--poi-crs` and `--jobs`), for the commands that trace POIs.
 
-use super::crs::{to_local_frame, CrsArgs, Framed};
+use super::crs::CrsArgs;
 use super::jobs::JobsArgs;
 use super::non_negative;
 use crate::args::tracing::Session;
-use crate::inputs::{load, Loaded, Spool};
+use crate::inputs::Spool;
 use crate::log::{error, summary, warning};
 use anyhow::bail;
 use skylod::batch::inputs::Input;
 use skylod::batch::shard::Shard;
-use skylod::model::CityModel;
 use skylod::poi::checks::DEFAULT_POI_MARGIN;
-use skylod::poi::{check_pois, parse_poi, read_pois_csv, Located, Poi};
+use skylod::poi::{check_pois, parse_poi_at, read_pois_csv, Located, Poi};
 use skylod::session::{Scene, SceneOptions};
 use std::path::PathBuf;
 
@@ -44,7 +43,7 @@ pub struct PoiArgs {
     /// the names differ but the coordinates really are in one CRS).
     #[arg(long)]
     pub allow_mixed_crs: bool,
-    /// `--source-crs`, `--poi-crs`: applied by [`PoiArgs::frame_checked`] after reading.
+    /// `--source-crs`, `--poi-crs`: applied by [`Scene::frame`] after reading.
     #[command(flatten)]
     pub crs: CrsArgs,
     /// `--jobs`: threads reading the inputs and tracing the POIs.
@@ -58,9 +57,10 @@ impl PoiArgs {
     pub fn points(&self) -> anyhow::Result<Vec<Poi>> {
         let mut out = Vec::new();
         for (i, t) in self.poi.iter().enumerate() {
+            let at = format!("--poi {t}");
             out.push(Located {
-                poi: parse_poi(t, i)?,
-                at: format!("--poi {t}"),
+                poi: parse_poi_at(t, i, &at)?,
+                at,
             });
         }
         if let Some(f) = &self.pois {
@@ -71,16 +71,6 @@ impl PoiArgs {
         }
         check_pois(&out)?;
         Ok(out.into_iter().map(|l| l.poi).collect())
-    }
-
-    /// Size the thread pool (`--jobs`), read the inputs ([`load`]) and refuse a model that would give a confidently wrong
-    /// answer whatever the POIs (`skylod::poi::checks`): inputs in different CRSs (unless
-    /// --allow-mixed-crs), a model without heights.
-    pub fn load_checked(&self) -> anyhow::Result<Loaded> {
-        self.jobs.global()?;
-        let loaded = load(&self.inputs)?;
-        loaded.check(self.allow_mixed_crs)?;
-        Ok(loaded)
     }
 
     /// Size the thread pool (`--jobs`) and read the inputs into a [`Scene`] (with progress),
@@ -118,7 +108,13 @@ impl PoiArgs {
     ) -> anyhow::Result<Session> {
         let failed = !scene.failures().is_empty();
         let study = scene.frame(pois)?;
+        let frame = study.frame_warning();
+        let frame = frame.map(|w| (w.to_string(), crate::errors::frame_warning(w)));
         for w in study.warnings() {
+            let w = match &frame {
+                Some((lib, cli)) if lib == w => cli,
+                _ => w,
+            };
             warning!("{cmd}: warning: {w}");
         }
         if let Some(n) = study.note() {
@@ -136,17 +132,5 @@ impl PoiArgs {
             failed,
             _spool: spool,
         })
-    }
-
-    /// Bring the model and `pois` into the local metric frame ([`to_local_frame`]:
-    /// `--source-crs`, `--poi-crs`) and refuse POIs farther than `--poi-margin` metres outside
-    /// the scene.
-    pub fn frame_checked<'a>(
-        &self,
-        model: &'a mut CityModel,
-        pois: Vec<Poi>,
-        cmd: &str,
-    ) -> anyhow::Result<Framed<'a>> {
-        to_local_frame(model, pois, &self.crs.frame_options(self.poi_margin), cmd)
     }
 }

@@ -11,7 +11,7 @@ pub struct ShardArgs {
     /// POIs grouped by place. Default: from the scheduler's environment
     /// (JOB_COMPLETION_INDEX, SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN with
     /// SLURM_ARRAY_TASK_COUNT, AWS_BATCH_JOB_ARRAY_INDEX), else all of it.
-    #[arg(long, value_name = "I/N")]
+    #[arg(long, value_name = "I/N", value_parser = parse_shard)]
     pub shard: Option<Shard>,
     /// Number of shards where the scheduler gives only the index (Kubernetes `completions`,
     /// AWS Batch array `size`).
@@ -19,13 +19,17 @@ pub struct ShardArgs {
     pub shards: Option<usize>,
 }
 
+/// Parse `--shard I/N`, its errors in the flag's words.
+fn parse_shard(s: &str) -> Result<Shard, String> {
+    s.parse().map_err(|e| crate::errors::shard(&e))
+}
+
 impl ShardArgs {
     /// The shard of this run: the options, else the scheduler's environment; `None` when
     /// neither says anything. Invalid or conflicting settings are usage errors.
     pub fn resolve(&self) -> anyhow::Result<Option<Shard>> {
-        Ok(Shard::resolve(self.shard, self.shards, |k| {
-            std::env::var(k).ok()
-        })?)
+        Shard::resolve(self.shard, self.shards, |k| std::env::var(k).ok())
+            .map_err(|e| anyhow::anyhow!(crate::errors::shard(&e)))
     }
 }
 

@@ -3,7 +3,7 @@
 //! ([`crate::outputs`]), files in parallel (`--jobs`), the same bytes whatever the number.
 
 use crate::args::jobs::JobsArgs;
-use crate::outputs::{self, Batch, Done};
+use crate::outputs::{self, Done};
 use crate::Outcome;
 use rayon::prelude::*;
 use skylod::batch::outputs::Targets;
@@ -46,7 +46,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     let shard = args.shard.resolve()?;
     let out = (args.output.as_path(), args.format, args.overwrite);
-    let batch = Batch::new("convert", &inputs, out, false, shard)?;
+    let batch = outputs::batch("convert", &inputs, out, false, shard)?;
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
     let Targets {
         todo,
@@ -92,7 +92,14 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     })?;
     progress.finish(Stage::Read);
     let failure = |e: &anyhow::Error| crate::message(e);
-    Ok(batch.finish("convert", results, failure, paths.len(), t0))
+    Ok(outputs::finish(
+        &batch,
+        "convert",
+        results,
+        failure,
+        paths.len(),
+        t0,
+    ))
 }
 
 /// Read `input` and write it to `out`.

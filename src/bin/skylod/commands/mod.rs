@@ -28,22 +28,6 @@ pub mod svf;
 pub mod synth;
 pub mod upgrade;
 
-/// The closing line of a batch: files ok / failed, warnings, polygons in / out, wall time.
-pub fn summary_line(
-    cmd: &str,
-    ok: usize,
-    failed: usize,
-    warnings: usize,
-    polygons: Option<(usize, usize)>,
-    t: Instant,
-) -> String {
-    let polys = polygons.map_or(String::new(), |(i, o)| format!(", polygons {i} -> {o}"));
-    format!(
-        "{cmd}: {ok} file(s) ok, {failed} failed, {warnings} warning(s){polys}, {:.2} s",
-        t.elapsed().as_secs_f64()
-    )
-}
-
 /// Milliseconds since `t`, rounded to 0.1.
 pub fn ms(t: Instant) -> f64 {
     (t.elapsed().as_secs_f64() * 1e4).round() / 10.0

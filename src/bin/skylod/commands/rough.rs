@@ -1,7 +1,7 @@
 //! `skylod rough`: the rough model (every asset at level 1) written as CityGML.
 
 use crate::args::crs::SourceCrsArgs;
-use crate::outputs::{Batch, Done};
+use crate::outputs::{self, Done};
 use crate::Outcome;
 use rayon::prelude::*;
 use skylod::batch::outputs::Targets;
@@ -45,7 +45,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // Every target is checked before any work: an input whose output is refused fails
     // (exit 1) without being read; the others are done. A merge writes every input to a
     // staging directory, then merges them into the target.
-    let batch = Batch::new("rough", &inputs, out, false, shard)?;
+    let batch = outputs::batch("rough", &inputs, out, false, shard)?;
     let Targets {
         todo,
         mirror,
@@ -69,7 +69,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             .collect()
     })?;
     let failure = |e: &anyhow::Error| e.to_string();
-    Ok(batch.finish("rough", results, failure, args.inputs.len(), t0))
+    Ok(outputs::finish(
+        &batch,
+        "rough",
+        results,
+        failure,
+        args.inputs.len(),
+        t0,
+    ))
 }
 
 fn one(
@@ -86,6 +93,7 @@ fn one(
     let (frame, warning) =
         LocalFrame::new(&model_crs(&model, crs.source_crs.as_ref()), &model.bbox());
     if let Some(w) = warning {
+        let w = crate::errors::frame_warning(&w);
         crate::log::warning!("rough: warning: {}: {w}", skylod::model::shown(input));
     }
     let local = frame.model_to_local(&model);

@@ -106,7 +106,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         let n_failed = args.inputs.len() - ok.len();
         crate::log::summary!(
             "{}",
-            crate::commands::summary_line("stats", ok.len(), n_failed, total.warnings, None, t0)
+            skylod::batch::run::summary_line(
+                "stats",
+                ok.len(),
+                n_failed,
+                total.warnings,
+                None,
+                t0.elapsed()
+            )
         );
     }
     let files = ok

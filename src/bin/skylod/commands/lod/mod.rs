@@ -11,12 +11,12 @@ use crate::args::output::OutputArgs;
 use crate::args::poi::PoiArgs;
 use crate::args::rough::RoughArgs;
 use crate::args::select::SelectArgs;
-use crate::commands::{ms, warn_flags};
+use crate::commands::ms;
 use crate::log::{error, summary};
 use crate::Outcome;
 use skylod::lod::LodOptions;
 use skylod::output::report::Guarantee;
-use skylod::pipeline::{levels, levels_of, Levels, LevelsOptions};
+use skylod::pipeline::{Levels, LevelsOptions};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -51,12 +51,12 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.pois.inputs)?;
+    let (inputs, spool) = crate::inputs::expand_inputs_relative(&args.pois.inputs)?;
     args.pois.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let t_all = Instant::now();
     args.bound.check()?;
     if let Some(s) = args.shard.resolve()? {
-        return shard::shard(args, s, t_all);
+        return shard::shard(args, s, spool, t_all);
     }
     let reduce = shard::read(&mut args)?;
     let pois = match &reduce {
@@ -64,66 +64,52 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         None => args.region.points(&args.pois)?,
     };
     let layout = write::layout(&args, &inputs)?;
-    let rough_opts = args.rough.options()?;
-    let select_opts = args.select.options();
+    let lod = LodOptions {
+        rough: args.rough.options()?,
+        select: args.select.options(),
+    };
     // Outputs are laid out for every input; --scene-radius then leaves out the far ones.
     let all_inputs = args.pois.inputs.clone();
     let region = args.region.active();
     args.scene
         .filter(&mut args.pois, &pois, None, region, "lod")?;
-    let mut loaded = args.pois.load_checked()?;
-    if loaded.inputs.is_empty() {
+    let Some(scene) = args.pois.scene()? else {
         return Ok(Outcome::SomeFailed);
-    }
-    let combined = match reduce {
-        Some(r) => Some(r.combine(&loaded.model)?),
-        None => None,
     };
-    let pois = match &combined {
-        Some(_) => pois,
-        None => args.region.extend(pois, &loaded.model)?,
+    let (combined, pois) = match reduce {
+        Some(r) => (Some(r.combine(scene.model())?), pois),
+        None => (None, args.region.extend(pois, scene.model())?),
     };
-    let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
-    let (bound, guarantee) = args.bound.spec(framed.source, args.select.seed)?;
-    let opts = LevelsOptions {
-        lod: LodOptions {
-            rough: rough_opts,
-            select: select_opts,
-        },
-        bound,
-    };
+    let session = args.pois.study(scene, pois, None, spool, "lod")?;
+    let study = &session.study;
+    let (bound, guarantee) = args.bound.spec(study.source(), args.select.seed)?;
+    let opts = LevelsOptions { lod, bound };
     let progress = crate::log::reporter();
     let lv = match combined {
-        Some(c) => {
-            let lod = skylod::batch::reduce::lod_result(&framed.model, c, &opts.lod);
-            levels_of(&framed, &opts, lod, &progress)?
-        }
-        None => levels(&framed, &opts, &progress)?,
+        Some(c) => study.levels_combined(c, &opts, &progress)?,
+        None => study.levels(&opts, &progress)?,
     };
-    warn_flags(&framed.pois, &lv.lod.flags);
+    session.warn_flags(&lv.lod.flags);
     if !bound_holds(&lv, &guarantee) {
         return Ok(Outcome::SomeFailed);
     }
     // Written geometry and the report are in the input's CRS.
     let t_write = Instant::now();
     let (written, write_failed) =
-        write::outputs(framed.source, &all_inputs, &layout, &lv, &progress)?;
-    let timings = report::timings(&lv, loaded.read_ms, ms(t_write), t_all);
-    let mut report = report::report(&args, framed.source, &framed.pois, &lv, written, timings)?;
+        write::outputs(study.source(), &all_inputs, &layout, &lv, &progress)?;
+    let timings = report::timings(&lv, session.read_ms, ms(t_write), t_all);
+    let mut report = study.report(&lv, &opts.lod, timings);
     report.guarantee = guarantee;
+    report::finish(&mut report, study, &lv, written, args.region.active());
     report::write(&args, &report)?;
     // The process ends here: handing a city's model back to the allocator piece by piece
     // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
     std::mem::forget(report);
     std::mem::forget(lv);
-    std::mem::forget(framed);
-    let failed = loaded.failed || write_failed;
-    std::mem::forget(loaded);
-    Ok(if failed {
-        Outcome::SomeFailed
-    } else {
-        Outcome::Ok
-    })
+    let failed = session.failed || write_failed;
+    let crate::args::tracing::Session { study, _spool, .. } = session;
+    std::mem::forget(study);
+    Ok(Outcome::failed_if(failed))
 }
 
 /// The error bound's lines, or why it cannot be met (nothing is written then): false.

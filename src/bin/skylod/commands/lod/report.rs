@@ -6,10 +6,9 @@ use crate::commands::ms;
 use crate::log::summary;
 use anyhow::Context;
 use skylod::citygml::write::atomic_write_bytes;
-use skylod::model::CityModel;
-use skylod::output::report::{Parameters, Report, Timings};
+use skylod::output::report::{Report, Timings};
 use skylod::pipeline::Levels;
-use skylod::poi::Poi;
+use skylod::session::Study;
 use std::time::Instant;
 
 /// The timings of the report (ms): the stages of `lv`, reading, writing, the whole run.
@@ -25,43 +24,20 @@ pub fn timings(lv: &Levels, read: f64, write: f64, t_all: Instant) -> Timings {
     }
 }
 
-/// The closing lines and `--report`, from the model as read (`model`, `pois`: input CRS).
-pub fn report(
-    args: &Args,
-    model: &CityModel,
-    pois: &[Poi],
-    lv: &Levels,
-    written: Written,
-    timings: Timings,
-) -> anyhow::Result<Report> {
-    let result = &lv.lod;
-    let rough_opts = args.rough.options()?;
-    let mut report = Report::new(
-        model,
-        lv.rough_source(),
-        &result.selection,
-        pois,
-        Parameters::of(
-            &result.selection,
-            args.select.seed,
-            args.select.silhouette.roof_tolerance,
-            &rough_opts,
-        ),
-        timings,
-    );
-    report.set_flags(&result.flags);
-    report.bound = lv.bound.clone();
+/// The outputs `written` recorded in `report` ([`Study::report`]), and the closing lines
+/// (`region`: the POIs of --facade/--region are among them).
+pub fn finish(report: &mut Report, study: &Study, lv: &Levels, written: Written, region: bool) {
     for (f, w) in written.into_iter().enumerate() {
         if let Some((path, dropped)) = w {
-            let in_file = model.buildings.iter().filter(|b| b.file == f).count();
-            report.record_output(f, path, in_file, dropped);
+            report.record_output(f, path, study.buildings_in(f), dropped);
         }
     }
-    let t = &report.totals;
+    let (result, t, timings) = (&lv.lod, &report.totals, &report.timings_ms);
+    let pois = study.pois().len();
     summary!(
         "{} POI(s), {} rays each: assets at level 0/1/2 = {}/{}/{}; polygons {} -> {} ({:.1}%); \
          {} triangles traced; read {:.0} ms, rough {:.0} ms, bvh {:.0} ms, select {:.0} ms, write {:.0} ms",
-        pois.len(),
+        pois,
         result.selection.rays,
         t.levels[0],
         t.levels[1],
@@ -76,18 +52,17 @@ pub fn report(
         timings.select,
         timings.write
     );
-    if args.region.active() {
+    if region {
         summary!(
             "region: one model of {} polygons for {} POIs; their own models hold {:.0} on average, \
              {} at most ({:.2}x)",
             t.polygons_out,
-            pois.len(),
+            pois,
             t.single_poi_polygons_mean,
             t.single_poi_polygons_max,
             t.region_over_single_poi
         );
     }
-    Ok(report)
 }
 
 /// Write `--report`, when asked for.

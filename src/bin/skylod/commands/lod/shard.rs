@@ -2,19 +2,20 @@
 //! `--reduce` writes the model from all shards' levels ([`skylod::batch::reduce`]).
 
 use crate::commands::lod::Args;
-use crate::commands::{ms, warn_flags};
+use crate::commands::ms;
+use crate::inputs::Spool;
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::batch::reduce::Reduce;
 use skylod::batch::shard::Shard;
 use skylod::batch::shard_levels;
 use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
-use skylod::lod::{lod, LodOptions};
+use skylod::lod::LodOptions;
 use std::path::PathBuf;
 use std::time::Instant;
 
 /// Run one shard of `lod`: trace this shard's POIs and write their levels to `-o`.
-pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome> {
+pub fn shard(mut args: Args, s: Shard, spool: Spool, t_all: Instant) -> anyhow::Result<Outcome> {
     if !args.reduce.is_empty() {
         bail!(
             "--reduce combines the levels of every shard: run it once, without --shard (and \
@@ -55,22 +56,22 @@ pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome
     let region = args.region.active();
     args.scene
         .filter(&mut args.pois, &pois, Some(s), region, "lod")?;
-    let mut loaded = args.pois.load_checked()?;
-    if loaded.inputs.is_empty() {
+    let Some(scene) = args.pois.scene()? else {
         return Ok(Outcome::SomeFailed);
-    }
-    let pois = args.region.extend(pois, &loaded.model)?;
+    };
+    let pois = args.region.extend(pois, scene.model())?;
     let pois = crate::args::shard::pois(Some(s), pois, "lod");
     let opts = LodOptions {
         rough: args.rough.options()?,
         select: args.select.options(),
     };
-    let framed = args.pois.frame_checked(&mut loaded.model, pois, "lod")?;
-    let result = lod(&framed.model, &framed.local_pois, &opts)?;
-    warn_flags(&framed.pois, &result.flags);
-    let header = shard_levels::header(s, framed.source, &opts, &result.selection, result.triangles);
+    let session = args.pois.study(scene, pois, Some(s), spool, "lod")?;
+    let study = &session.study;
+    let result = study.lod(&opts, &crate::log::reporter())?;
+    session.warn_flags(&result.flags);
+    let (source, pois) = (study.source(), study.pois());
+    let header = shard_levels::header(s, source, &opts, &result.selection, result.triangles);
     let out = std::mem::take(&mut args.out.output);
-    let (source, pois) = (framed.source, &framed.pois);
     shard_levels::write_levels_file(
         &out,
         &header,
@@ -84,13 +85,13 @@ pub fn shard(mut args: Args, s: Shard, t_all: Instant) -> anyhow::Result<Outcome
     crate::log::summary!(
         "lod: shard {s}: {} POI(s) -> {}: assets at level 0/1/2 = {l0}/{l1}/{l2}; read {:.0} ms, \
          select {:.0} ms, total {:.0} ms",
-        framed.pois.len(),
+        pois.len(),
         out.display(),
-        loaded.read_ms,
+        session.read_ms,
         result.select_s * 1e3,
         ms(t_all)
     );
-    Ok(loaded.outcome())
+    Ok(session.outcome())
 }
 
 /// Read the `--reduce` files (none: `Ok(None)`), and take the options of the lod run from

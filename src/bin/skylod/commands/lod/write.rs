@@ -5,9 +5,9 @@ use super::Args;
 use crate::log::{error, summary};
 use anyhow::{bail, Context};
 use skylod::batch::inputs::Input;
-use skylod::batch::outputs::{Plan, Targets};
+use skylod::batch::outputs::Plan;
+use skylod::batch::run::Batch;
 use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
-use skylod::export::Format;
 use skylod::model::CityModel;
 use skylod::pipeline::{write_all, Levels};
 use skylod::runtime::progress::Progress;
@@ -15,13 +15,9 @@ use std::path::{Path, PathBuf};
 
 /// Where the model goes, laid out before any input is read.
 pub struct Layout {
-    plan: Plan,
-    format: Format,
+    batch: Batch,
     /// The output of each input (in input order), `None` when it is not written.
     outputs: Vec<Option<PathBuf>>,
-    targets: Targets,
-    /// The user's write options (the merge target's).
-    wopts: WriteOptions,
 }
 
 /// Every target is checked before any work: a refusal after minutes of reading and tracing
@@ -29,21 +25,18 @@ pub struct Layout {
 /// or -o - for several inputs) writes each input's model to a staging directory, then merges
 /// them into the target.
 pub fn layout(args: &Args, inputs: &[Input]) -> anyhow::Result<Layout> {
-    let (plan, format) = crate::outputs::plan(inputs, &args.out.output, args.out.format)?;
-    let wopts = WriteOptions {
-        overwrite: args.out.overwrite,
-        protect: args.pois.inputs.clone(),
-        keep_envelopes: false,
-    };
-    let (targets, refused) =
-        crate::outputs::targets(&plan, &args.pois.inputs, &wopts, None, "lod", true, |e| {
-            error!("{e:#}");
-        })?;
-    if refused > 0 {
+    let out = (
+        args.out.output.as_path(),
+        args.out.format,
+        args.out.overwrite,
+    );
+    let batch = crate::outputs::batch("lod", inputs, out, false, None)?;
+    if batch.refused > 0 {
+        let refused = batch.refused;
         bail!("{refused} output(s) refused (above): lod writes every input's model, nothing done");
     }
     let mut outputs: Vec<Option<PathBuf>> = vec![None; inputs.len()];
-    for (k, out) in &targets.todo {
+    for (k, out) in &batch.targets.todo {
         if let Some(o) = outputs.get_mut(*k) {
             *o = Some(out.clone());
         }
@@ -59,13 +52,7 @@ pub fn layout(args: &Args, inputs: &[Input]) -> anyhow::Result<Layout> {
         check_target(path, &opts, args.pois.inputs.iter().map(|p| p.as_path()))
             .context("the report")?;
     }
-    Ok(Layout {
-        plan,
-        format,
-        outputs,
-        targets,
-        wopts,
-    })
+    Ok(Layout { batch, outputs })
 }
 
 /// What was written of each file of the model: the path shown, the buildings dropped.
@@ -89,25 +76,17 @@ pub fn outputs(
             Some((f, layout.outputs.get(k)?.clone()?))
         })
         .collect();
-    if layout.targets.mirror {
+    let batch = &layout.batch;
+    if batch.targets.mirror {
         for (_, out) in &targets {
             crate::outputs::create_parent(out)?;
         }
     }
     // In a merge, the messages and the report name the merged document.
-    let shown = |out: &Path| match &layout.plan {
-        Plan::Merge(t) => t.display().to_string(),
-        _ => out.display().to_string(),
-    };
-    let format = layout.format;
-    let results = write_all(
-        model,
-        &targets,
-        lv,
-        format,
-        &layout.targets.write_opts,
-        progress,
-    )?;
+    let shown = |out: &Path| batch.shown(out).display().to_string();
+    let format = batch.format;
+    let wopts = &batch.targets.write_opts;
+    let results = write_all(model, &targets, lv, format, wopts, progress)?;
     let mut failed = false;
     let mut written: Written = vec![None; model.files.len()];
     for ((f, out), r) in targets.iter().zip(results) {
@@ -138,13 +117,13 @@ pub fn outputs(
             *w = Some((shown(out), s.buildings_dropped + s.parts_dropped));
         }
     }
-    if let (Some(_), Plan::Merge(t)) = (&layout.targets.staging, &layout.plan) {
+    if let (Some(_), Plan::Merge(t)) = (&batch.targets.staging, &batch.plan) {
         let (parts, names): (Vec<PathBuf>, Vec<PathBuf>) = targets
             .iter()
             .filter(|(f, _)| written.get(*f).is_some_and(Option::is_some))
             .map(|(f, out)| (out.clone(), model.files[*f].path.clone()))
             .unzip();
-        if !crate::outputs::merge(&parts, &names, t, &layout.wopts, targets.len()) {
+        if !crate::outputs::merge(&parts, &names, t, &batch.wopts, targets.len()) {
             failed = true;
             written.iter_mut().for_each(|w| *w = None);
         }

@@ -1,0 +1,293 @@
+//! A batch that writes per input (`convert`, `rough`, `subset`, `filter-lods`, `lod`,
+//! `reproject`): its outputs planned before any work ([`Batch::new`]: [`plan`], then
+//! [`Plan::targets`]), the results of the inputs gathered and several inputs merged into
+//! one file ([`Batch::finish`], [`merge_parts`]). Nothing is printed: each step returns what
+//! to tell the user ([`Said`]), in order.
+
+use super::inputs::Input;
+use super::outputs::{plan, Plan, PlanError, Targets};
+use super::shard::Shard;
+use crate::citygml::merge::{merge_named, MergeSummary};
+use crate::citygml::write::{is_stdout, WriteOptions};
+use crate::export::Format;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// A line for the user, at its level (an error is shown even when the others are not).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Said {
+    /// What was done (an output written, a closing line).
+    Summary(String),
+    /// Something the user should know; the work went on.
+    Warning(String),
+    /// Something failed.
+    Error(String),
+}
+
+/// The outputs of a batch that writes per input, laid out for an output name and a format,
+/// every target checked before any work (a refused target's input fails without being
+/// read: [`Targets::refused`]).
+#[derive(Debug)]
+pub struct Batch {
+    /// Per input, mirrored or merged.
+    pub plan: Plan,
+    /// The format written.
+    pub format: Format,
+    /// The options the caller gave (a merge is written with them).
+    pub wopts: WriteOptions,
+    /// What to do, and where.
+    pub targets: Targets,
+    /// Inputs whose target was refused.
+    pub refused: usize,
+    /// Whether the closing line counts polygons.
+    pub counts_polygons: bool,
+}
+
+/// What one input gave: its line (said in input order unless merged), its warnings and
+/// polygons in and out.
+#[derive(Debug, Clone, Default)]
+pub struct Done {
+    /// The input's summary line.
+    pub line: Option<String>,
+    /// Warnings of the input.
+    pub warnings: usize,
+    /// Polygons read and written.
+    pub polygons: (usize, usize),
+}
+
+/// The end of a batch: what to say, and how many inputs failed.
+#[derive(Debug, Clone, Default)]
+pub struct Finished {
+    /// The lines to show, in order (the closing line last).
+    pub said: Vec<Said>,
+    /// Inputs that failed (refused, not done, or lost in a failed merge).
+    pub failed: usize,
+}
+
+impl Batch {
+    /// Plan the outputs of `inputs` to `out` in `format` (`None`: from `out`'s ending),
+    /// replacing existing files with `overwrite`; `shard`'s part of the inputs. The
+    /// refused targets stay in [`Targets::refused`] for the caller to report.
+    ///
+    /// # Errors
+    /// As [`plan`] and [`Plan::targets`].
+    pub fn new(
+        inputs: &[Input],
+        (out, format, overwrite): (&Path, Option<Format>, bool),
+        keep_envelopes: bool,
+        shard: Option<Shard>,
+    ) -> Result<Batch, PlanError> {
+        let (plan, format) = plan(inputs, out, format)?;
+        let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
+        let wopts = WriteOptions {
+            overwrite,
+            protect: paths.clone(),
+            keep_envelopes,
+        };
+        let targets = plan.targets(&paths, &wopts, shard, true)?;
+        Ok(Batch {
+            counts_polygons: format == Format::CityGml,
+            refused: targets.refused.len(),
+            plan,
+            format,
+            wopts,
+            targets,
+        })
+    }
+
+    /// The name an output is shown by: the merge target for a staged part of a merge.
+    pub fn shown<'a>(&'a self, out: &'a Path) -> &'a Path {
+        match (&self.targets.staging, &self.plan) {
+            (Some(_), Plan::Merge(target)) => target,
+            _ => out,
+        }
+    }
+
+    /// The results of the inputs done (`(input, output, result)` in input order, each
+    /// failure as its message): each line (none when merged), each failure, the merge, then
+    /// `cmd`'s closing line (polygons when [`Batch::counts_polygons`]), of `inputs` inputs
+    /// and the time since `started`.
+    pub fn finish(
+        &self,
+        cmd: &str,
+        results: Vec<(PathBuf, PathBuf, Result<Done, String>)>,
+        inputs: usize,
+        started: Instant,
+    ) -> Finished {
+        let staged = self.targets.staging.is_some();
+        let mut said = Vec::new();
+        let (mut ok, mut failed, mut warnings, mut polys) = (0, self.refused, 0, (0, 0));
+        let (mut parts, mut names) = (Vec::new(), Vec::new());
+        for (input, out, r) in results {
+            match r {
+                Ok(d) => {
+                    if let Some(line) = d.line.filter(|_| !staged) {
+                        said.push(Said::Summary(line));
+                    }
+                    ok += 1;
+                    warnings += d.warnings;
+                    polys.0 += d.polygons.0;
+                    polys.1 += d.polygons.1;
+                    parts.push(out);
+                    names.push(input);
+                }
+                Err(e) => {
+                    said.push(Said::Error(e));
+                    failed += 1;
+                }
+            }
+        }
+        if let (true, Plan::Merge(target)) = (staged, &self.plan) {
+            let (merged, s) = merge_parts(&parts, &names, target, &self.wopts, inputs);
+            said.extend(s);
+            if !merged {
+                failed += ok;
+                ok = 0;
+            }
+        }
+        let polys = self.counts_polygons.then_some(polys);
+        let line = summary_line(cmd, ok, failed, warnings, polys, started.elapsed());
+        said.push(Said::Summary(line));
+        Finished { said, failed }
+    }
+}
+
+/// The closing line of a batch: files ok / failed, warnings, polygons in / out, wall time.
+pub fn summary_line(
+    cmd: &str,
+    ok: usize,
+    failed: usize,
+    warnings: usize,
+    polygons: Option<(usize, usize)>,
+    elapsed: Duration,
+) -> String {
+    let polys = polygons.map_or(String::new(), |(i, o)| format!(", polygons {i} -> {o}"));
+    format!(
+        "{cmd}: {ok} file(s) ok, {failed} failed, {warnings} warning(s){polys}, {:.2} s",
+        elapsed.as_secs_f64()
+    )
+}
+
+/// Merge `parts` (in input order; written from the inputs `names`) into `target`, the last
+/// step of every batch that merges: whether `target` was written, and what to say — the
+/// merge line, with a warning when some of the `inputs` failed and the target holds only
+/// the others, or why nothing was written (then every input counts as failed).
+pub fn merge_parts(
+    parts: &[PathBuf],
+    names: &[PathBuf],
+    target: &Path,
+    opts: &WriteOptions,
+    inputs: usize,
+) -> (bool, Vec<Said>) {
+    if parts.is_empty() {
+        let e = format!(
+            "nothing to merge (every input failed); {} not written",
+            target.display()
+        );
+        return (false, vec![Said::Error(e)]);
+    }
+    match merge_named(parts, names, target, opts) {
+        Ok(s) => {
+            let mut said = Vec::new();
+            if parts.len() < inputs {
+                said.push(Said::Warning(format!(
+                    "warning: {} holds {} of the {} inputs (the others failed)",
+                    target.display(),
+                    parts.len(),
+                    inputs
+                )));
+            }
+            said.push(Said::Summary(merge_line(&s, target)));
+            (true, said)
+        }
+        Err(e) => (false, vec![Said::Error(format!("{e:#}"))]),
+    }
+}
+
+/// The line said after a merge.
+pub fn merge_line(s: &MergeSummary, target: &Path) -> String {
+    format!(
+        "merged {} file(s) into {}: {} member(s), {} gml:id(s) renamed, {} reference(s) \
+         rewritten, {}",
+        s.files,
+        target.display(),
+        s.members,
+        s.ids_renamed,
+        s.refs_rewritten,
+        size_note(target, s.bytes)
+    )
+}
+
+/// `N bytes` of a written file `out`: its size on disk, so the compressed size of a `.gz`,
+/// with the `written` (uncompressed) bytes in brackets when they differ; `written` alone for
+/// standard output or a file that cannot be read back.
+pub fn size_note(out: &Path, written: u64) -> String {
+    match std::fs::metadata(out).map(|m| m.len()) {
+        Ok(n) if n != written && !is_stdout(out) => {
+            format!("{n} bytes ({written} uncompressed)")
+        }
+        _ => format!("{written} bytes"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn input(p: &Path) -> Input {
+        Input {
+            path: p.to_path_buf(),
+            relative: p.file_name().map(PathBuf::from).unwrap_or_default(),
+        }
+    }
+
+    #[test]
+    fn a_merge_of_two_inputs_is_said_and_counted() {
+        let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml");
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("merged.gml");
+        let ins = [dir.path().join("a.gml"), dir.path().join("b.gml")];
+        for i in &ins {
+            std::fs::copy(&fix, i).unwrap();
+        }
+        let inputs: Vec<Input> = ins.iter().map(|p| input(p)).collect();
+        let b = Batch::new(&inputs, (&target, None, false), false, None).unwrap();
+        assert!(matches!(b.plan, Plan::Merge(_)) && b.targets.staging.is_some());
+        assert_eq!(b.shown(Path::new("part")), target.as_path());
+        let results = b
+            .targets
+            .todo
+            .iter()
+            .map(|(k, out)| {
+                std::fs::copy(&ins[*k], out).unwrap();
+                let done = Done {
+                    line: Some("not said: merged".into()),
+                    ..Done::default()
+                };
+                (ins[*k].clone(), out.clone(), Ok(done))
+            })
+            .collect();
+        let f = b.finish("convert", results, 2, Instant::now());
+        assert_eq!(f.failed, 0);
+        assert_eq!(f.said.len(), 2, "{:?}", f.said);
+        assert!(matches!(&f.said[0], Said::Summary(l) if l.starts_with("merged 2 file(s) into")));
+        let end = "convert: 2 file(s) ok, 0 failed, 0 warning(s), polygons 0 -> 0, ";
+        assert!(matches!(&f.said[1], Said::Summary(l) if l.starts_with(end)));
+        let line = summary_line("rough", 1, 2, 3, None, Duration::from_millis(1234));
+        assert_eq!(line, "rough: 1 file(s) ok, 2 failed, 3 warning(s), 1.23 s");
+        assert!(target.exists());
+        // Nothing to merge: every input failed, the target is not written.
+        let (ok, said) = merge_parts(&[], &[], &dir.path().join("x.gml"), &b.wopts, 2);
+        assert!(!ok && matches!(&said[0], Said::Error(e) if e.starts_with("nothing to merge")));
+    }
+
+    #[test]
+    fn sizes_say_the_compressed_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("a.gml.gz");
+        std::fs::write(&f, [0u8; 10]).unwrap();
+        assert_eq!(size_note(&f, 30), "10 bytes (30 uncompressed)");
+        assert_eq!(size_note(&f, 10), "10 bytes");
+        assert_eq!(size_note(Path::new("-"), 7), "7 bytes");
+    }
+}

@@ -1,0 +1,115 @@
+//! The LoD side of a [`Study`] beyond [`Study::levels`]: the selection alone (a shard of an
+//! array job), levels from the shards' combined selections (the reduce step) and the
+//! `lod` report.
+
+use super::{Result, Study};
+use crate::batch::shard_levels::Combined;
+use crate::lod::{lod_with, LodOptions, LodResult};
+use crate::output::report::{Parameters, Report, Timings};
+use crate::pipeline::{levels_of, Levels, LevelsOptions};
+use crate::runtime::progress::Progress;
+
+impl Study {
+    /// The selection of every asset at the POIs, without an error bound and in the local
+    /// frame ([`crate::lod::lod_with`]): what a shard of an array job records.
+    ///
+    /// # Errors
+    /// [`super::Error::Select`], [`super::Error::Cancelled`].
+    pub fn lod(&self, opts: &LodOptions, progress: &dyn Progress) -> Result<LodResult> {
+        let framed = self.framed();
+        Ok(lod_with(&framed.model, &framed.local_pois, opts, progress)?)
+    }
+
+    /// [`Study::levels`] for the selections of every shard combined
+    /// ([`crate::batch::reduce::Reduce::combine`] on [`super::Scene::model`]): the rough
+    /// model rebuilt with `opts.lod`, the error bound checked when asked.
+    ///
+    /// # Errors
+    /// [`super::Error::Bound`], [`super::Error::Cancelled`].
+    pub fn levels_combined(
+        &self,
+        combined: Combined,
+        opts: &LevelsOptions,
+        progress: &dyn Progress,
+    ) -> Result<Levels> {
+        let framed = self.framed();
+        let lod = crate::batch::reduce::lod_result(&framed.model, combined, &opts.lod);
+        Ok(levels_of(&framed, opts, lod, progress)?)
+    }
+
+    /// The report of `lv` made with `opts` (schemas/report.schema.json): parameters, POIs
+    /// with their flags, assets, totals in the input's CRS, the bound; the outputs are
+    /// added with [`Report::record_output`] as they are written.
+    pub fn report(&self, lv: &Levels, opts: &LodOptions, timings: Timings) -> Report {
+        let result = &lv.lod;
+        let params = Parameters::of(
+            &result.selection,
+            opts.select.seed,
+            opts.select.roof_tolerance_m,
+            &opts.rough,
+        );
+        let mut report = Report::new(
+            self.source(),
+            lv.rough_source(),
+            &result.selection,
+            self.pois(),
+            params,
+            timings,
+        );
+        report.set_flags(&result.flags);
+        report.bound = lv.bound.clone();
+        report
+    }
+
+    /// The buildings and building parts of input `file` (what [`Report::record_output`]
+    /// counts against).
+    pub fn buildings_in(&self, file: usize) -> usize {
+        let b = &self.source().buildings;
+        b.iter().filter(|b| b.file == file).count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Scene, SceneOptions};
+    use crate::batch::reduce::Reduce;
+    use crate::batch::shard::Shard;
+    use crate::batch::shard_levels::{header, write_levels_file};
+    use crate::pipeline::test_support::*;
+    use crate::runtime::progress::Silent;
+
+    #[test]
+    fn two_shards_reduced_give_the_levels_of_one_run() {
+        let load = || Scene::load(&[fixture()], &SceneOptions::default(), &Silent).unwrap();
+        let scene = load();
+        let pois = grid_pois(scene.model(), 4);
+        let whole = scene.frame(pois.clone()).unwrap();
+        let opts = crate::pipeline::LevelsOptions::default();
+        let one = whole.levels(&opts, &Silent).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let mut files = Vec::new();
+        for s in 0..2 {
+            let shard = Shard::new(s, 2, "test").unwrap();
+            let at: Vec<glam::DVec3> = pois.iter().map(|p| p.position).collect();
+            let mine = pois[shard.pois(&at)].to_vec();
+            let study = load().frame(mine).unwrap();
+            let r = study.lod(&opts.lod, &Silent).unwrap();
+            let h = header(shard, study.source(), &opts.lod, &r.selection, r.triangles);
+            let out = dir.path().join(format!("levels-{s}.jsonl"));
+            let (src, p) = (study.source(), study.pois());
+            write_levels_file(&out, &h, src, p, &r.selection, &r.flags).unwrap();
+            files.push(out);
+        }
+        let reduce = Reduce::read(&files).unwrap();
+        let scene = load();
+        let combined = reduce.combine(scene.model()).unwrap();
+        let study = scene.frame(pois).unwrap();
+        let lv = study.levels_combined(combined, &opts, &Silent).unwrap();
+        assert_eq!(lv.levels(), one.levels());
+        let report = study.report(&lv, &opts.lod, Default::default());
+        assert_eq!(report.pois.len(), 4);
+        assert_eq!(report.totals.assets, lv.levels().len());
+        assert_eq!(report.parameters.seed, opts.lod.select.seed);
+        assert!(study.buildings_in(0) > 0);
+    }
+}
