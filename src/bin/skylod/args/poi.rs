@@ -18,7 +18,7 @@ use std::path::PathBuf;
 /// Inputs and points of interest.
 #[derive(clap::Args, Debug)]
 pub struct PoiArgs {
-    /// CityGML files (.gml, .xml, .gz; gzip is recognised by content), directories (searched
+    /// CityGML or CityJSON files (.gml, .xml, .city.json, .city.jsonl, .gz; gzip is recognised by content), directories (searched
     /// recursively), glob patterns ('tiles/**/*.gml', quoted), or - for standard input; all
     /// are merged into one scene.
     #[arg(required = true)]

@@ -16,7 +16,7 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML files (.gml, .xml, .gz; gzip is recognised by content), directories (searched
+    /// CityGML or CityJSON files (.gml, .xml, .city.json, .city.jsonl, .gz; gzip is recognised by content), directories (searched
     /// recursively), glob patterns ('tiles/**/*.gml', quoted), or - for standard input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,

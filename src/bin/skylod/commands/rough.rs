@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML files (.gml, .xml, .gz), directories (searched recursively), glob patterns
+    /// CityGML or CityJSON files (.gml, .xml, .city.json, .city.jsonl, .gz), directories (searched recursively), glob patterns
     /// ('tiles/**/*.gml', quoted), or - for standard input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML files (.gml, .xml, .gz; gzip is recognised by content), directories
+    /// CityGML or CityJSON files (.gml, .xml, .city.json, .city.jsonl, .gz; gzip is recognised by content), directories
     /// (searched recursively), glob patterns ('tiles/**/*.gml', quoted), or - for standard
     /// input.
     #[arg(required = true)]
