@@ -153,30 +153,42 @@ pub fn write_cityjsonseq(
     w.write_all(b"\n")?;
     let mut verts = Vertices::new(plan.translate, plan.scale);
     for f in &plan.features {
-        verts.clear();
-        let objs = plan.objects(*f, &mut verts, &mut s);
-        if objs.is_empty() {
-            continue;
-        }
-        let id = plan.feature_id(*f);
-        w.write_all(b"{\"type\":\"CityJSONFeature\",\"id\":")?;
-        serde_json::to_writer(&mut *w, &id)?;
-        w.write_all(b",\"CityObjects\":{")?;
-        for (k, (oid, obj)) in objs.iter().enumerate() {
-            if k > 0 {
-                w.write_all(b",")?;
-            }
-            serde_json::to_writer(&mut *w, oid)?;
-            w.write_all(b":")?;
-            serde_json::to_writer(&mut *w, obj)?;
-        }
-        w.write_all(b"},\"vertices\":[")?;
-        write_vertices(w, &verts.list)?;
-        w.write_all(b"]}\n")?;
-        s.vertices += verts.list.len();
-        s.features += 1;
+        write_feature_line(&plan, *f, &mut verts, &mut s, w)?;
     }
     Ok(s)
+}
+
+/// One CityJSONSeq line: feature `f` of `plan` as a `CityJSONFeature` with its own vertex
+/// list (nothing when it has no city object to write).
+pub(super) fn write_feature_line(
+    plan: &Plan<'_>,
+    f: Feature,
+    verts: &mut Vertices,
+    s: &mut ExportSummary,
+    w: &mut dyn Write,
+) -> io::Result<()> {
+    verts.clear();
+    let objs = plan.objects(f, verts, s);
+    if objs.is_empty() {
+        return Ok(());
+    }
+    w.write_all(b"{\"type\":\"CityJSONFeature\",\"id\":")?;
+    serde_json::to_writer(&mut *w, &plan.feature_id(f))?;
+    w.write_all(b",\"CityObjects\":{")?;
+    for (k, (oid, obj)) in objs.iter().enumerate() {
+        if k > 0 {
+            w.write_all(b",")?;
+        }
+        serde_json::to_writer(&mut *w, oid)?;
+        w.write_all(b":")?;
+        serde_json::to_writer(&mut *w, obj)?;
+    }
+    w.write_all(b"},\"vertices\":[")?;
+    write_vertices(w, &verts.list)?;
+    w.write_all(b"]}\n")?;
+    s.vertices += verts.list.len();
+    s.features += 1;
+    Ok(())
 }
 
 pub(super) fn write_vertices(w: &mut dyn Write, list: &[[i64; 3]]) -> io::Result<()> {

@@ -229,27 +229,7 @@ fn write_features(
     w: &mut dyn Write,
 ) -> io::Result<()> {
     for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
-        verts.clear();
-        let objs = plan.objects(*f, verts, s);
-        if objs.is_empty() {
-            continue;
-        }
-        w.write_all(b"{\"type\":\"CityJSONFeature\",\"id\":")?;
-        serde_json::to_writer(&mut *w, &plan.feature_id(*f))?;
-        w.write_all(b",\"CityObjects\":{")?;
-        for (k, (oid, obj)) in objs.iter().enumerate() {
-            if k > 0 {
-                w.write_all(b",")?;
-            }
-            serde_json::to_writer(&mut *w, oid)?;
-            w.write_all(b":")?;
-            serde_json::to_writer(&mut *w, obj)?;
-        }
-        w.write_all(b"},\"vertices\":[")?;
-        write_vertices(w, &verts.list)?;
-        w.write_all(b"]}\n")?;
-        s.vertices += verts.list.len();
-        s.features += 1;
+        super::cityjson::write_feature_line(plan, *f, verts, s, w)?;
     }
     Ok(())
 }
