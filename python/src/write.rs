@@ -14,7 +14,7 @@ use skylod::lod::bound::BoundOptions;
 use skylod::lod::rough::RoughOptions;
 use skylod::lod::select::SelectOptions;
 use skylod::lod::LodOptions;
-use skylod::output::report::{Guarantee, Parameters, Report, Timings};
+use skylod::output::report::{Guarantee, Timings};
 use skylod::output::stats::{FileStats, Stats, StatsOutput};
 use skylod::pipeline::{write_all, BoundSpec, LevelsOptions};
 use skylod::runtime::progress::Stage;
@@ -284,22 +284,7 @@ pub fn lod(
             write: ms(t_write),
             total: ms(t_all),
         };
-        let params = Parameters::of(
-            &result.selection,
-            lod.seed,
-            lod_opts.select.roof_tolerance_m,
-            &lod_opts.rough,
-        );
-        let mut report = Report::new(
-            model,
-            lv.rough_source(),
-            &result.selection,
-            study.pois(),
-            params,
-            timings,
-        );
-        report.set_flags(&result.flags);
-        report.bound = lv.bound.clone();
+        let mut report = study.report(&lv, &lod_opts, timings);
         for (f, shown, dropped) in written {
             let in_file = model.buildings.iter().filter(|b| b.file == f).count();
             report.record_output(f, shown, in_file, dropped);
