@@ -380,9 +380,12 @@ fn site_rules_hourly_and_csv() {
 /// rcontrib, dctimestep on the full model's OBJ files), with pvlib's Greensboro year at its
 /// own site and no reflection (`--albedo 0`, Radiance's surfaces black, ground 0). `p10`
 /// faces west-south-west under its neighbours (SVF 0.30): global within 5 % (measured 1.1 %),
-/// direct within 2 % (0.3 %); `p17`, on the north-north-west side (SVF 0.31, mostly
-/// diffuse), direct within 2 % (0.5 %) — its diffuse part is where the two sky models differ
-/// (Perez 1990 transposition against the Perez all-weather luminance distribution: 6.2 %).
+/// direct within 3 % (0.3 %); `p17`, on the north-north-west side (SVF 0.31, mostly
+/// diffuse), direct within 3 % (0.2–2.0 %) — its diffuse part is where the two sky models
+/// differ (Perez 1990 transposition against the Perez all-weather luminance distribution:
+/// 6.2 %). The oracle is a Monte Carlo estimate: in five runs (65,536 hemisphere samples
+/// each) Radiance put `p17`'s direct at 60.2, 60.7, 61.0, 61.0 and 61.3 kWh/m² (skylod:
+/// 61.4, deterministic), so a 2 % bound failed once on the oracle's own scatter.
 #[test]
 fn ingolstadt_facade_matches_radiance() {
     if !python_has("pyradiance", "pip install pyradiance") {
@@ -449,7 +452,7 @@ fn ingolstadt_facade_matches_radiance() {
             &format!("{id} direct"),
             f(s, "direct"),
             f(r, "direct"),
-            0.02,
+            0.03,
         );
     }
     let (s, r) = (by_id(&ours, "p10"), &rad["p10"]);
