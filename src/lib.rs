@@ -44,51 +44,34 @@
 //! ```
 #![warn(missing_docs)]
 
-// Batch work: input files, shards, levels files and their reduce, scene radius.
-pub mod batch;
-// CityGML 1.0/2.0/3.0: the streaming reader, the span-preserving writer, merge, reprojection.
-pub mod citygml;
-// CityJSON 1.x/2.0 and CityJSONSeq read into the same model as CityGML.
-pub mod cityjson;
-// Coordinate reference systems: the `srsName` parser, local frames, conversions, PROJ.
-pub mod crs;
-// OBJ and CityJSON outputs of a model at its levels.
-pub mod export;
-// Files in and out: gzip, standard output, target checks, atomic writes.
-pub mod io;
-// The LoD stage: rough model, scenes, silhouette selection, levels, error bound, the mixed writer.
-pub mod lod;
-// Plain data: the city model, its assets and polygons, POIs, triangulation.
+// The data every stage passes: the city model, POIs, triangulation; georeferencing (`crs`),
+// generated districts (`synth`), progress and cancellation (`runtime`).
 pub mod model;
-// What the commands report: the `lod` report, model counts.
-pub mod output;
-// The pipeline a program runs: read, frame, levels, analyse, write.
-pub mod pipeline;
-// Reading POIs, POIs from regions and facades, trust checks.
-pub mod poi;
-// Progress, cancellation, memory given back between stages.
-pub mod runtime;
-// The owned session (Scene -> Study) and the one error of the library.
-pub mod session;
-// Solar analysis: sky partition, sun positions, SVF, sun hours, horizons, fisheye pictures.
+// Files and the city formats: file helpers (`files`), CityGML (`citygml`), CityJSON (`cityjson`).
+pub mod io;
+// Solar analysis: ray tracing (`trace`), sky, sun, SVF, sun hours, horizons, fisheye, irradiance.
 pub mod solar;
-// Deterministic synthetic districts (the paper's Eixample) and box scenes.
-pub mod synth;
-// Ray tracing: triangles in a BVH, first hit and occlusion, exact reference tests.
-pub mod trace;
+// The LoD stage: POIs (`poi`), rough model, scenes, selection, levels, error bound, the mixed
+// writer, the evaluation against the full model.
+pub mod lod;
+// Outputs: OBJ and CityJSON writers, and what the commands report (`report`: typed JSON).
+pub mod export;
+// The calls a program runs (read, frame, levels, analyse, write), the owned session
+// (`session`: Scene -> Study), batch work (`batch`: inputs, shards, reduce).
+pub mod pipeline;
 
 // The facade: read → POIs → levels → write, and the solar numbers, from the root.
-pub use citygml::{read_file, ReadError, WriteError};
 pub use export::Format;
 /// The vector types of positions and normals ([`glam::DVec3`]), so that a program needs no
 /// `glam` dependency of its own.
 pub use glam;
+pub use io::citygml::{read_file, ReadError, WriteError};
 pub use model::{Asset, AssetKind, CityModel, Poi};
+pub use pipeline::session::{Error, Result, Scene, SceneOptions, Study, SunOptions};
 pub use pipeline::{
     frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, EvaluateOptions,
     FrameOptions, Framed, Inputs, Levels, LevelsOptions, PipelineError, Traced, Written,
 };
-pub use session::{Error, Result, Scene, SceneOptions, Study, SunOptions};
 pub use solar::{HorizonOptions, Site, SkyBundles, SkyView, SunHours};
 
 /// What a program embedding skylod needs, in one `use skylod::prelude::*;`: the session
@@ -101,37 +84,50 @@ pub mod prelude {
         SkyView, Study, SunHours, SunOptions, Traced, Written,
     };
 }
-pub use poi::{read_pois_csv, PoiError};
-pub use runtime::progress::{Cancelled, Progress, Silent};
+pub use lod::poi::{read_pois_csv, PoiError};
+pub use model::runtime::progress::{Cancelled, Progress, Silent};
 
 // The paths of release 0.1, kept for one release (moved in 0.2, see CHANGELOG.md).
 #[doc(hidden)]
-pub use batch::{inputs, scene_radius, shard, shard_levels};
-/// Moved: [`crs::CrsName`], `crs::proj` (feature `proj`), [`citygml::reproject`].
+pub use pipeline::batch::{inputs, scene_radius, shard, shard_levels};
+/// Moved: [`model::crs::CrsName`], `model::crs::proj` (feature `proj`), [`io::citygml::reproject`].
 #[doc(hidden)]
 pub mod reproject {
-    pub use crate::citygml::reproject::ReprojectError;
+    pub use crate::io::citygml::reproject::ReprojectError;
     #[cfg(feature = "proj")]
-    pub use crate::citygml::reproject::{reproject_file, ReprojectSummary};
+    pub use crate::io::citygml::reproject::{reproject_file, ReprojectSummary};
     #[cfg(feature = "proj")]
-    pub use crate::crs::proj::{crs_info, CrsInfo, Reprojector};
-    pub use crate::crs::CrsName;
+    pub use crate::model::crs::proj::{crs_info, CrsInfo, Reprojector};
+    pub use crate::model::crs::CrsName;
 }
+#[doc(hidden)]
+pub use export::report::{report, stats};
+#[doc(hidden)]
+pub use lod::evaluation as evaluate;
+#[doc(hidden)]
+pub use lod::poi::{checks, region};
 #[doc(hidden)]
 pub use lod::{bound, level, rough, scene, select};
 #[doc(hidden)]
-pub use output::{report, stats};
-#[doc(hidden)]
-pub use pipeline::evaluation as evaluate;
-#[doc(hidden)]
-pub use poi::{checks, region};
-#[doc(hidden)]
-pub use runtime::{mem, progress};
+pub use model::runtime::{mem, progress};
 #[doc(hidden)]
 pub use solar::sky;
-/// Moved: polygon triangulation is [`mod@model::triangulate`], the exact ray tests [`trace::ray`].
+// The folders of release 0.2 before the six groups (issue 23), kept for one release.
+#[doc(hidden)]
+pub use export::report as output;
+#[doc(hidden)]
+pub use io::{citygml, cityjson};
+#[doc(hidden)]
+pub use lod::poi;
+#[doc(hidden)]
+pub use model::{crs, runtime, synth};
+#[doc(hidden)]
+pub use pipeline::{batch, session};
+#[doc(hidden)]
+pub use solar::trace;
+/// Moved: polygon triangulation is [`mod@model::triangulate`], the exact ray tests [`solar::trace::ray`].
 #[doc(hidden)]
 pub mod geom {
     pub use crate::model::triangulate::{self, triangulate};
-    pub use crate::trace::ray::{self, ray_aabb, ray_triangle, RayTriangleHit};
+    pub use crate::solar::trace::ray::{self, ray_aabb, ray_triangle, RayTriangleHit};
 }

@@ -32,6 +32,9 @@ mod cityjson_source;
 mod cityjson_stream;
 pub mod format;
 pub mod obj;
+// What the commands report (typed JSON with schemas): the `lod` report, model counts.
+#[allow(clippy::module_inception)] // `report::report` is the `lod` report
+pub mod report;
 
 pub use format::{Format, UnknownFormat};
 

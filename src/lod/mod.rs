@@ -20,8 +20,12 @@
 
 pub mod bound;
 mod bound_report;
+// Full vs LoD vs all-boxes model per POI (paper 5, Tables 1 and 2).
+pub mod evaluation;
 pub mod level;
 pub mod mixed;
+// Reading POIs, POIs from regions and facades, trust checks.
+pub mod poi;
 pub mod rough;
 pub mod scene;
 pub mod select;

@@ -15,7 +15,13 @@
 //! kin in the document, each once, including those of no asset such as rooms or a
 //! building's own geometry beside its surfaces).
 
+// Coordinate reference systems: the `srsName` parser, local frames, conversions, PROJ.
+pub mod crs;
 pub mod poi;
+// Progress, cancellation, memory given back between stages.
+pub mod runtime;
+// Deterministic synthetic districts (the paper's Eixample) and box scenes.
+pub mod synth;
 pub mod triangulate;
 
 pub use poi::{Poi, POI_OFFSET};

@@ -46,13 +46,19 @@
 
 mod analyse;
 pub mod attributes;
+// Batch work: input files, shards, levels files and their reduce, scene radius.
+pub mod batch;
 mod error;
-pub mod evaluation;
+// Moved to `lod::evaluation` (the layering: `export::report` reads it); kept for one release.
+#[doc(hidden)]
+pub use crate::lod::evaluation;
 mod fisheye;
 mod frame;
 mod irradiance;
 mod levels;
 mod read;
+// The owned session (Scene -> Study) and the one error of the library.
+pub mod session;
 #[cfg(test)]
 pub(crate) mod test_support;
 mod write;

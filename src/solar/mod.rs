@@ -13,6 +13,8 @@ pub mod sky;
 pub mod sun;
 pub mod sun_hours;
 pub mod svf;
+// Ray tracing: triangles in a BVH, first hit and occlusion, exact reference tests.
+pub mod trace;
 pub mod weather;
 
 pub use horizon::{horizon_profile, HorizonOptions, HorizonProfile};

@@ -1,0 +1,15 @@
+//! Files and the city formats: the file helpers every reader and writer shares ([`files`]:
+//! gzip, standard input and output, target checks, atomic writes), CityGML ([`citygml`]:
+//! the streaming reader, the span-preserving writer, merge, reprojection, edits, upgrade)
+//! and CityJSON ([`cityjson`]), both read into the same [`crate::model::CityModel`].
+
+// CityGML 1.0/2.0/3.0: the streaming reader, the span-preserving writer, merge, reprojection.
+pub mod citygml;
+// CityJSON 1.x/2.0 and CityJSONSeq read into the same model as CityGML.
+pub mod cityjson;
+// Files in and out: gzip, standard output, target checks, atomic writes.
+pub mod files;
+
+// The paths of release 0.1 (`skylod::io::atomic_write`, ...), kept for one release.
+#[doc(hidden)]
+pub use files::*;
