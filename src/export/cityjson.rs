@@ -42,10 +42,10 @@
 //! # Example
 //! ```
 //! use skylod::export::{cityjson::write_cityjsonseq, Content};
-//! use skylod::synth::{generate, Preset};
+//! use skylod::model::synth::{generate, Preset};
 //! let mut xml = Vec::new();
 //! generate(&Preset::Small.defaults(), &mut xml).unwrap();
-//! let model = skylod::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
 //! let mut out = Vec::new();
 //! let s = write_cityjsonseq(&model, 0, Content::Full, &mut out).unwrap();
 //! let text = String::from_utf8(out).unwrap();
@@ -224,10 +224,10 @@ pub fn reference_system(srs_name: &str) -> Option<String> {
 }
 
 /// The horizontal EPSG code of an `srsName` (see [`reference_system`]): the one parser
-/// [`crate::crs::Crs::parse`], so AdV names (`urn:adv:crs:DE_DHDN_3GK4*...` = EPSG:31468,
+/// [`crate::model::crs::Crs::parse`], so AdV names (`urn:adv:crs:DE_DHDN_3GK4*...` = EPSG:31468,
 /// `ETRS89_UTM32*...` = 25832) and compound names give their horizontal code.
 fn epsg_code(srs_name: &str) -> Option<u32> {
-    crate::crs::Crs::parse(srs_name).epsg
+    crate::model::crs::Crs::parse(srs_name).epsg
 }
 
 /// Scale per axis for a CRS: millimetres, or about a millimetre in degrees for the horizontal

@@ -1,9 +1,9 @@
 //! What a CityJSON source gives its CityJSON output: the attributes of its city objects and
 //! the members of its semantic surface objects (beyond `type`, `parent` and `children`,
 //! which the writer makes itself), found again from the source document
-//! ([`crate::cityjson::read_slice_with_origins`]: where each asset came from).
+//! ([`crate::io::cityjson::read_slice_with_origins`]: where each asset came from).
 
-use crate::cityjson::Origin;
+use crate::io::cityjson::Origin;
 use crate::model::CityModel;
 use serde_json::{Map, Value};
 use std::collections::{BTreeMap, HashMap};
@@ -27,14 +27,14 @@ pub(super) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<F
         return Ok(None);
     };
     let mut bytes = Vec::new();
-    match crate::citygml::source::load_source(&f.source, &f.path).map_err(io::Error::other)? {
-        crate::citygml::source::Document::Plain(b) => bytes.extend_from_slice(&b),
-        crate::citygml::source::Document::Gzip(mut r, _) => {
+    match crate::io::citygml::source::load_source(&f.source, &f.path).map_err(io::Error::other)? {
+        crate::io::citygml::source::Document::Plain(b) => bytes.extend_from_slice(&b),
+        crate::io::citygml::source::Document::Gzip(mut r, _) => {
             r.read_to_end(&mut bytes)?;
         }
     }
     let (_, origins) =
-        crate::cityjson::read_slice_with_origins(&bytes, &f.path).map_err(io::Error::other)?;
+        crate::io::cityjson::read_slice_with_origins(&bytes, &f.path).map_err(io::Error::other)?;
     let assets: Vec<usize> = (0..model.assets.len())
         .filter(|&i| model.assets[i].file == file)
         .collect();

@@ -1,5 +1,5 @@
 //! CityJSON and CityJSONSeq of a whole file from a streamed read
-//! ([`crate::citygml::read::stream`]): the bytes of [`super::cityjson::write_cityjson`] and
+//! ([`crate::io::citygml::read::stream`]): the bytes of [`super::cityjson::write_cityjson`] and
 //! [`super::cityjson::write_cityjsonseq`] of the whole model with [`Content::Full`], memory that
 //! follows a chunk.
 //!
@@ -35,7 +35,7 @@ use super::cityjson::{
     scale_for, standalone_or_installation, write_vertices, Feature, Plan, Vertices,
 };
 use super::{asset_name_as, Content, ExportSummary};
-use crate::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
+use crate::io::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
 use crate::model::Bbox;
 use foldhash::{HashMap, HashMapExt, HashSet};
 use glam::DVec3;

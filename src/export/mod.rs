@@ -1,7 +1,7 @@
 //! Interchange with the tools that come next (DESIGN.md "Interchange"): the model, the rough
 //! model or the mixed-LoD model written as OBJ ([`obj`]) for daylight tools, or as CityJSON 2.0
 //! and CityJSONSeq ([`cityjson`]) for the CityJSON tools. The format follows the output's name
-//! ([`mod@format`]). CityGML itself is written by [`crate::citygml::write`] and
+//! ([`mod@format`]). CityGML itself is written by [`crate::io::citygml::write`] and
 //! [`crate::lod::mixed`].
 //!
 //! What each asset contributes is decided once: [`Content::Full`] (`convert`) writes every asset
@@ -13,13 +13,13 @@
 //! # Example
 //! ```
 //! use skylod::export::{write, Content, Format};
-//! use skylod::synth::{generate, Preset};
+//! use skylod::model::synth::{generate, Preset};
 //! let dir = tempfile::tempdir().unwrap();
 //! let gml = dir.path().join("small.gml");
 //! let mut xml = Vec::new();
 //! generate(&Preset::Small.defaults(), &mut xml).unwrap();
 //! std::fs::write(&gml, &xml).unwrap();
-//! let model = skylod::citygml::read_file(&gml).unwrap();
+//! let model = skylod::io::citygml::read_file(&gml).unwrap();
 //! let out = dir.path().join("small.obj");
 //! let s = write(Format::Obj, &model, 0, Content::Full, &out, &Default::default()).unwrap();
 //! let text = std::fs::read_to_string(&out).unwrap();
@@ -38,8 +38,8 @@ pub mod report;
 
 pub use format::{Format, UnknownFormat};
 
-use crate::citygml::write::WriteOptions;
-use crate::citygml::WriteError;
+use crate::io::citygml::write::WriteOptions;
+use crate::io::citygml::WriteError;
 use crate::lod::rough::RoughGeometry;
 use crate::model::{Asset, CityModel};
 use std::path::Path;
@@ -141,7 +141,7 @@ impl ExportSummary {
 ///
 /// # Errors
 /// [`WriteError`] for a refused target, I/O errors, mismatched `content` lengths, or
-/// [`Format::CityGml`] (written by [`crate::citygml::write`] and [`crate::lod::mixed`]).
+/// [`Format::CityGml`] (written by [`crate::io::citygml::write`] and [`crate::lod::mixed`]).
 pub fn write(
     format: Format,
     model: &CityModel,
@@ -154,9 +154,9 @@ pub fn write(
     let Some(src) = model.files.get(file) else {
         return Err(WriteError::Invalid(format!("no source file {file}")));
     };
-    crate::citygml::write::check_target(out, opts, src.source.path())?;
+    crate::io::citygml::write::check_target(out, opts, src.source.path())?;
     let mut summary = ExportSummary::default();
-    let bytes = crate::citygml::write::atomic_write(out, |w| {
+    let bytes = crate::io::citygml::write::atomic_write(out, |w| {
         summary = write_to(format, model, file, content, w)?;
         Ok(summary.bytes)
     })?;
@@ -181,10 +181,10 @@ pub fn write_to(
         return Err(WriteError::Invalid(format!("no source file {file}")));
     }
     let io = |e| WriteError::Io {
-        file: crate::io::WRITER_NAME.into(),
+        file: crate::io::files::WRITER_NAME.into(),
         source: e,
     };
-    let mut cw = crate::io::CountingWriter::new(w);
+    let mut cw = crate::io::files::CountingWriter::new(w);
     let mut summary = match format {
         Format::Obj => obj::write_obj(model, file, content, &mut cw).map_err(io)?,
         Format::CityJson => cityjson::write_cityjson(model, file, content, &mut cw).map_err(io)?,
@@ -208,12 +208,12 @@ pub fn write_to(
 /// As [`write()`].
 pub fn write_obj_streamed(
     input: &Path,
-    read: &crate::citygml::read::ReadOptions,
+    read: &crate::io::citygml::read::ReadOptions,
     chunk_bytes: u64,
     passed: &dyn Fn(usize, u64),
     out: &Path,
     opts: &WriteOptions,
-) -> Result<Option<(ExportSummary, crate::citygml::read::StreamSummary)>, WriteError> {
+) -> Result<Option<(ExportSummary, crate::io::citygml::read::StreamSummary)>, WriteError> {
     write_streamed(Format::Obj, input, read, chunk_bytes, passed, out, opts)
 }
 
@@ -233,12 +233,12 @@ pub fn write_obj_streamed(
 pub fn write_streamed(
     format: Format,
     input: &Path,
-    read: &crate::citygml::read::ReadOptions,
+    read: &crate::io::citygml::read::ReadOptions,
     chunk_bytes: u64,
     passed: &dyn Fn(usize, u64),
     out: &Path,
     opts: &WriteOptions,
-) -> Result<Option<(ExportSummary, crate::citygml::read::StreamSummary)>, WriteError> {
+) -> Result<Option<(ExportSummary, crate::io::citygml::read::StreamSummary)>, WriteError> {
     let kind = match format {
         Format::Obj => None,
         Format::CityJson => Some(cityjson_stream::Kind::CityJson),
@@ -249,14 +249,14 @@ pub fn write_streamed(
             ))
         }
     };
-    crate::citygml::write::check_target(out, opts, std::iter::once(input))?;
+    crate::io::citygml::write::check_target(out, opts, std::iter::once(input))?;
     let io = |e| WriteError::Io {
         file: out.to_path_buf(),
         source: e,
     };
     let mut done = None;
-    let r = crate::citygml::write::atomic_write(out, |w| {
-        let mut cw = crate::io::CountingWriter::new(w);
+    let r = crate::io::citygml::write::atomic_write(out, |w| {
+        let mut cw = crate::io::files::CountingWriter::new(w);
         let r = match kind {
             None => obj::write_obj_streamed(input, read, chunk_bytes, passed, &mut cw),
             Some(k) => {

@@ -39,7 +39,7 @@
 //! ```
 
 use super::{asset_name, asset_name_as, assets_of, Content, ExportSummary};
-use crate::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
+use crate::io::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
 use crate::lod::level::traced as level_polygons;
 use crate::model::triangulate;
 use crate::model::{Bbox, CityModel, Polygon};
@@ -195,7 +195,7 @@ fn write_asset(
 }
 
 /// [`write_obj`] of the whole file at `path` (with [`Content::Full`], as `convert` writes
-/// it) from a streamed read ([`crate::citygml::read::stream`], chunks of `chunk_bytes`):
+/// it) from a streamed read ([`crate::io::citygml::read::stream`], chunks of `chunk_bytes`):
 /// memory follows the chunk, the bytes are [`write_obj`]'s of the whole model. Passes over
 /// the file: one for the origin (the centre of all the geometry), one writing the assets,
 /// and, for a file with body assets (buildings without thematic surfaces, last in the whole

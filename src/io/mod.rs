@@ -10,6 +10,6 @@ pub mod cityjson;
 // Files in and out: gzip, standard output, target checks, atomic writes.
 pub mod files;
 
-// The paths of release 0.1 (`skylod::io::atomic_write`, ...), kept for one release.
+// The paths of release 0.1 (`skylod::io::files::atomic_write`, ...), kept for one release.
 #[doc(hidden)]
 pub use files::*;

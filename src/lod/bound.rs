@@ -13,7 +13,7 @@
 //! and memory: 805K triangles on the paper district, ~6 M on a 1 GB city), only the full
 //! geometry of the assets the rays can reach, found lazily on one box per asset (the box of
 //! its full-detail polygons, which holds its triangles, grown by a margin far above the f32
-//! rounding, [`crate::trace::BoxIndex`]). First the 4 nearest boxes of every ray are built
+//! rounding, [`crate::solar::trace::BoxIndex`]). First the 4 nearest boxes of every ray are built
 //! (a ray whose hit comes before the last of them is then final at once); then, round
 //! after round, each pending ray is traced in the part built so far, and if a box it
 //! crosses before its hit (any box, when it hits nothing; the `4^round` nearest until
@@ -21,7 +21,7 @@
 //! otherwise its answer is final. A round builds only the assets added since the last and
 //! keeps each ray's nearest answer over the parts by (f32 distance, asset), the whole
 //! model's order. The part is built in the frame of the whole model
-//! ([`crate::trace::SceneBuilder::with_frame`]: same origin, same f32 triangles, same node
+//! ([`crate::solar::trace::SceneBuilder::with_frame`]: same origin, same f32 triangles, same node
 //! growth) with its triangles in the whole model's order, so the f32 distances are those of
 //! the whole model and ties go to the same triangle; and since every triangle a ray may hit
 //! at or before its answer lies in a box the ray enters before that answer (with a slack of
@@ -59,12 +59,12 @@
 //! ```
 //! use skylod::lod::bound::{bound, BoundOptions};
 //! use skylod::lod::{lod, LodOptions};
-//! use skylod::poi::Poi;
-//! use skylod::synth::{generate, pois, Preset};
+//! use skylod::lod::poi::Poi;
+//! use skylod::model::synth::{generate, pois, Preset};
 //! let opts = Preset::Small.defaults();
 //! let mut xml = Vec::new();
 //! generate(&opts, &mut xml).unwrap();
-//! let model = skylod::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
 //! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
 //! let r = lod(&model, &pois, &LodOptions::default()).unwrap();
 //! let b = BoundOptions { max_svf_error: Some(0.001), ..Default::default() };
@@ -77,14 +77,14 @@
 //! assert!(out.levels.iter().zip(&r.selection.levels).all(|(a, b)| a >= b));
 //! ```
 
+use crate::lod::poi::{Poi, POI_OFFSET};
 use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{detail_boxes, full_scene, full_scene_part, mixed_scene};
 use crate::model::{Bbox, CityModel};
-use crate::poi::{Poi, POI_OFFSET};
 use crate::solar::irradiance::{IrradianceSetting, PlaneRays};
 use crate::solar::sky::{Frame, SkyError};
+use crate::solar::trace::{BoxIndex, Scene};
 use crate::solar::{SkyBundles, SunTable};
-use crate::trace::{BoxIndex, Scene};
 use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -523,7 +523,7 @@ struct Pending {
 }
 
 /// A hit of the reference trace: f32 distance and asset (what orders hits), and the
-/// distance ([`crate::trace::Hit::t`]).
+/// distance ([`crate::solar::trace::Hit::t`]).
 #[derive(Clone, Copy)]
 struct Best {
     t32: f32,

@@ -10,14 +10,14 @@
 //!
 //! # Example
 //! ```
-//! use skylod::pipeline::evaluation::{evaluate, EvalOptions};
+//! use skylod::lod::evaluation::{evaluate, EvalOptions};
 //! use skylod::model::Poi;
 //! use skylod::solar::{Site, SunTable};
-//! use skylod::synth::{generate, pois, Preset};
+//! use skylod::model::synth::{generate, pois, Preset};
 //! let opts = Preset::Small.defaults();
 //! let mut xml = Vec::new();
 //! generate(&opts, &mut xml).unwrap();
-//! let model = skylod::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
 //! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
 //! let table = SunTable::year(2025, 60, &Site::new(41.39, 2.17)).unwrap();
 //! let e = evaluate(&model, &pois, &EvalOptions::default(), Some(&table)).unwrap();
@@ -27,18 +27,18 @@
 //! assert!(p.lod.svf_rel_error(&p.full) < 0.05);
 //! ```
 
+use crate::lod::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::lod::rough::{all_boxes, rough_model};
 use crate::lod::scene::{full_scene, mixed_scene, rough_scene, selection_scene};
 use crate::lod::select::{select, SelectError};
 use crate::lod::LodOptions;
+use crate::model::runtime::progress::{check, stage, Cancelled, Progress, Silent, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
-use crate::runtime::progress::{check, stage, Cancelled, Progress, Silent, Stage};
 use crate::solar::irradiance::IrradianceSetting;
 use crate::solar::sky::SkyError;
+use crate::solar::trace::Scene;
 use crate::solar::{poi_irradiance, poi_sky_view, poi_sun_hours, SkyBundles, SunTable};
-use crate::trace::Scene;
 use serde::Serialize;
 use std::time::Instant;
 

@@ -5,12 +5,12 @@
 //! # Example
 //! ```
 //! use skylod::lod::{lod, LodOptions};
-//! use skylod::poi::Poi;
-//! use skylod::synth::{generate, pois, Preset};
+//! use skylod::lod::poi::Poi;
+//! use skylod::model::synth::{generate, pois, Preset};
 //! let opts = Preset::Small.defaults();
 //! let mut xml = Vec::new();
 //! generate(&opts, &mut xml).unwrap();
-//! let model = skylod::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
 //! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
 //! let r = lod(&model, &pois, &LodOptions::default()).unwrap();
 //! let [l0, l1, l2] = r.selection.level_counts();
@@ -34,14 +34,14 @@ pub mod select;
 #[doc(hidden)]
 pub use crate::solar::sky;
 
+use crate::lod::poi::checks::enclosure::ON_SURFACE;
+use crate::lod::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::lod::rough::{rough_model, RoughGeometry, RoughOptions};
 use crate::lod::scene::selection_scene_for_rays;
 use crate::lod::select::{select_with, SelectError, SelectOptions, Selection};
+use crate::model::runtime::progress::{check, stage, Progress, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::poi::checks::enclosure::ON_SURFACE;
-use crate::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
-use crate::runtime::progress::{check, stage, Progress, Stage};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -80,7 +80,7 @@ pub struct LodResult {
 /// # Errors
 /// As [`crate::lod::select::select`].
 pub fn lod(model: &CityModel, pois: &[Poi], opts: &LodOptions) -> Result<LodResult, SelectError> {
-    lod_with(model, pois, opts, &crate::runtime::progress::Silent)
+    lod_with(model, pois, opts, &crate::model::runtime::progress::Silent)
 }
 
 /// [`lod`] reporting its stages to `progress` ([`Stage::Rough`], [`Stage::Bvh`],
@@ -102,7 +102,7 @@ pub fn lod_with(
         progress.advance(Stage::Rough, n, 0, None);
         r
     });
-    crate::runtime::mem::give_back_for(model.assets.len());
+    crate::model::runtime::mem::give_back_for(model.assets.len());
     let rough_s = t.elapsed().as_secs_f64();
     check(progress, Stage::Bvh)?;
     let t = Instant::now();

@@ -24,11 +24,11 @@
 use crate::lod::rough::RoughGeometry;
 use crate::model::triangulate;
 use crate::model::{Bbox, CityModel};
-use crate::trace::{Scene, SceneBuilder};
+use crate::solar::trace::{Scene, SceneBuilder};
 use glam::DVec3;
 use rayon::prelude::*;
 
-pub use crate::trace::scene_of;
+pub use crate::solar::trace::scene_of;
 
 /// Assets triangulated per parallel task, and per group added before the next group is
 /// triangulated (the group's triangles are the only extra memory).

@@ -33,7 +33,7 @@
 //! ```
 //! use glam::DVec3;
 //! use skylod::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
-//! use skylod::poi::Poi;
+//! use skylod::lod::poi::Poi;
 //! use skylod::lod::rough::{rough_model, RoughOptions};
 //! use skylod::lod::select::{select, SelectOptions};
 //! // One flat roof 10 m above the POI, 20 m x 20 m: it hides the zenith.
@@ -54,11 +54,11 @@
 //! # Ok::<(), skylod::lod::select::SelectError>(())
 //! ```
 
+use crate::lod::poi::{Poi, POI_OFFSET};
 use crate::lod::rough::RoughGeometry;
 use crate::model::{AssetKind, CityModel};
-use crate::poi::{Poi, POI_OFFSET};
 use crate::solar::sky::{SkyError, SkyPartition, SkyVariant};
-use crate::trace::Scene;
+use crate::solar::trace::Scene;
 use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -110,9 +110,9 @@ pub enum SelectError {
     /// A POI with a non-finite position or normal.
     #[error("POI {0}: position or normal is not finite")]
     Poi(String),
-    /// The caller asked to stop ([`crate::runtime::progress::Progress::is_cancelled`]).
+    /// The caller asked to stop ([`crate::model::runtime::progress::Progress::is_cancelled`]).
     #[error(transparent)]
-    Cancelled(#[from] crate::runtime::progress::Cancelled),
+    Cancelled(#[from] crate::model::runtime::progress::Cancelled),
 }
 
 /// What one POI saw.
@@ -185,7 +185,7 @@ pub fn select(
         scene,
         pois,
         opts,
-        &crate::runtime::progress::Silent,
+        &crate::model::runtime::progress::Silent,
     )
 }
 
@@ -195,16 +195,16 @@ pub fn select(
 /// # Errors
 /// As [`select`], and [`SelectError::Cancelled`].
 ///
-/// [`Stage::Select`]: crate::runtime::progress::Stage::Select
+/// [`Stage::Select`]: crate::model::runtime::progress::Stage::Select
 pub fn select_with(
     model: &CityModel,
     rough: &[RoughGeometry],
     scene: &Scene,
     pois: &[Poi],
     opts: &SelectOptions,
-    progress: &dyn crate::runtime::progress::Progress,
+    progress: &dyn crate::model::runtime::progress::Progress,
 ) -> Result<Selection, SelectError> {
-    use crate::runtime::progress::{check, Stage};
+    use crate::model::runtime::progress::{check, Stage};
     let n_assets = model.assets.len();
     if rough.len() != n_assets {
         return Err(SelectError::RoughMismatch {
@@ -234,7 +234,7 @@ pub fn select_with(
             progress.advance(Stage::Select, 1, 0, None);
             Ok(one)
         })
-        .collect::<Result<_, crate::runtime::progress::Cancelled>>()?;
+        .collect::<Result<_, crate::model::runtime::progress::Cancelled>>()?;
 
     let mut levels = vec![0u8; n_assets];
     let mut hits = vec![0u64; n_assets];
@@ -599,7 +599,7 @@ mod tests {
 
     /// The box's faces: top first, then bottom and the four sides.
     fn boxed(x0: f64, y0: f64, z0: f64, x1: f64, y1: f64, z1: f64) -> Vec<Polygon> {
-        crate::synth::boxes::box_faces([x0, y0, z0, x1, y1, z1])
+        crate::model::synth::boxes::box_faces([x0, y0, z0, x1, y1, z1])
             .into_iter()
             .map(|r| Polygon::new(r.into_iter().map(DVec3::from_array).collect()))
             .collect()

@@ -1,6 +1,6 @@
 //! The in-memory city model: buildings and the *assets* that receive a level.
 //!
-//! The reader ([`crate::citygml::read`]) fills a [`CityModel`]; every later stage
+//! The reader ([`crate::io::citygml::read`]) fills a [`CityModel`]; every later stage
 //! (rough, trace, select, solar, write) works on it. Coordinates are `f64`
 //! ([`glam::DVec3`]) in the model's CRS.
 //!
@@ -708,7 +708,7 @@ pub struct SourceFile {
     /// Elements per CityGML feature or object type (local name: `WallSurface`,
     /// `BuildingInstallation`, `Room`, `Appearance`, …), wherever they nest.
     pub features: std::collections::BTreeMap<String, usize>,
-    /// For a CityJSON document (read by `crate::cityjson`): its `version` and whether it came
+    /// For a CityJSON document (read by `crate::io::cityjson`): its `version` and whether it came
     /// as CityJSONSeq; `None` for CityGML. A CityJSON file has no XML to copy: the writers
     /// that copy spans refuse it.
     pub cityjson: Option<CityJsonFormat>,

@@ -1,6 +1,6 @@
 //! A point of interest: a position in the model's CRS, an optional surface normal, and the
 //! two things every stage asks of it (where its rays start, how they are seeded). Plain data:
-//! reading POIs (CSV, `--poi`) and checking them are [`crate::poi`]'s.
+//! reading POIs (CSV, `--poi`) and checking them are [`crate::lod::poi`]'s.
 
 use glam::DVec3;
 use serde::Serialize;
@@ -37,7 +37,7 @@ impl Poi {
     }
 
     /// The same point on a surface facing `normal` (normalised; a zero or non-finite normal
-    /// is kept as given and refused by [`crate::poi::check_poi`]'s callers, never traced).
+    /// is kept as given and refused by [`crate::lod::poi::check_poi`]'s callers, never traced).
     pub fn facing(mut self, normal: [f64; 3]) -> Poi {
         let n = DVec3::from_array(normal);
         self.normal = Some(n.try_normalize().unwrap_or(n));

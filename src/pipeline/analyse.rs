@@ -2,17 +2,17 @@
 //! the evaluation of the LoD model.
 
 use super::{Framed, PipelineError};
+use crate::lod::evaluation::{evaluate_irradiance, EvalError, EvalOptions, Evaluation};
+use crate::lod::poi::checks::{self, PoiFlag};
 use crate::lod::scene::full_scene;
+use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::pipeline::evaluation::{evaluate_irradiance, EvalError, EvalOptions, Evaluation};
-use crate::poi::checks::{self, PoiFlag};
-use crate::runtime::progress::{check, Cancelled, Progress, Stage};
+use crate::solar::trace::Scene;
 use crate::solar::{
     poi_horizon, poi_sky_view, poi_sun_hours, HorizonOptions, HorizonProfile, SkyBundles, SkyView,
     SunHours, SunTable,
 };
-use crate::trace::Scene;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -58,7 +58,7 @@ pub fn trace<T: Send>(
 ) -> Result<Traced<T>, Cancelled> {
     check(progress, Stage::Bvh)?;
     let t = Instant::now();
-    let scene = crate::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || {
+    let scene = crate::model::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || {
         let s = full_scene(&framed.model);
         progress.advance(Stage::Bvh, 1, 0, None);
         s
@@ -84,8 +84,12 @@ pub(crate) fn trace_in<T: Send>(
     let pois = &framed.local_pois;
     let around = checks::Surroundings::new(model);
     let t = Instant::now();
-    let traced: Result<Vec<(T, Vec<PoiFlag>)>, Cancelled> =
-        crate::runtime::progress::stage(progress, Stage::Trace, pois.len() as u64, 0, || {
+    let traced: Result<Vec<(T, Vec<PoiFlag>)>, Cancelled> = crate::model::runtime::progress::stage(
+        progress,
+        Stage::Trace,
+        pois.len() as u64,
+        0,
+        || {
             pois.par_iter()
                 .map(|p| {
                     check(progress, Stage::Trace)?;
@@ -96,7 +100,8 @@ pub(crate) fn trace_in<T: Send>(
                     Ok((r, flags))
                 })
                 .collect()
-        });
+        },
+    );
     let (results, flags) = traced?.into_iter().unzip();
     Ok(Traced {
         results,
@@ -291,7 +296,7 @@ mod tests {
         let n = framed.source.assets.len() as u64;
         assert_eq!(tally.sum(Stage::Rough, "advance").0, n);
         // The same figures as the evaluation called directly (timings aside).
-        let direct = crate::pipeline::evaluation::evaluate(
+        let direct = crate::lod::evaluation::evaluate(
             &framed.model,
             &framed.local_pois,
             &opts.eval,

@@ -13,9 +13,9 @@
 //! ```
 
 use super::Framed;
-use crate::citygml::ns::CORE_LEADING;
-use crate::citygml::write::{escape_attr, write_document, Edit, WriteOptions};
-use crate::citygml::WriteError;
+use crate::io::citygml::ns::CORE_LEADING;
+use crate::io::citygml::write::{escape_attr, write_document, Edit, WriteOptions};
+use crate::io::citygml::WriteError;
 use crate::lod::scene::full_scene;
 use crate::model::{CityGmlVersion, CityModel};
 use glam::DVec3;
@@ -189,7 +189,7 @@ pub fn write_attributes(
         file: src.path.clone(),
         source,
     };
-    let (mut reader, _) = crate::citygml::source::open(&src.path)
+    let (mut reader, _) = crate::io::citygml::source::open(&src.path)
         .map_err(|e| WriteError::Invalid(format!("{}: {e}", src.path.display())))?;
     let mut xml = Vec::new();
     reader.read_to_end(&mut xml).map_err(io)?;

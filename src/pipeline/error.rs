@@ -1,12 +1,12 @@
 //! The errors that stop the pipeline.
 
-use crate::crs::CrsError;
 use crate::lod::bound::BoundError;
+use crate::lod::evaluation::EvalError;
+use crate::lod::poi::checks::TrustError;
+use crate::lod::poi::PoiError;
 use crate::lod::select::SelectError;
-use crate::pipeline::evaluation::EvalError;
-use crate::poi::checks::TrustError;
-use crate::poi::PoiError;
-use crate::runtime::progress::Cancelled;
+use crate::model::crs::CrsError;
+use crate::model::runtime::progress::Cancelled;
 use crate::solar::SolarError;
 
 /// The POIs could not be brought from their CRS to the model's (one definition for
@@ -37,7 +37,7 @@ pub enum PoiCrsError {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum PipelineError {
-    /// A POI is invalid (not finite, zero normal, a duplicate id: [`crate::poi::check_poi_list`]).
+    /// A POI is invalid (not finite, zero normal, a duplicate id: [`crate::lod::poi::check_poi_list`]).
     #[error(transparent)]
     Poi(#[from] PoiError),
     /// The model or the POIs would give a confidently wrong answer.

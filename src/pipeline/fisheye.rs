@@ -1,14 +1,14 @@
 //! Step 5, pictured: the fisheye picture of each POI.
 
 use super::{Framed, PipelineError};
+use crate::lod::poi::checks::{self, PoiFlag};
 use crate::lod::rough::rough_model;
 use crate::lod::scene::{full_scene, selection_scene};
 use crate::lod::select::select;
 use crate::lod::LodOptions;
+use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::CityModel;
 use crate::model::POI_OFFSET;
-use crate::poi::checks::{self, PoiFlag};
-use crate::runtime::progress::{check, Progress, Stage};
 use crate::solar::fisheye::{classify_cells, CellClass};
 use crate::solar::sky::SkyPartition;
 use crate::solar::{poi_sky_view, SkyBundles, SkyView};
@@ -127,9 +127,9 @@ fn shown_levels(model: &CityModel, mut levels: Vec<u8>) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::runtime::progress::Cancelled;
+    use crate::model::runtime::progress::Silent;
     use crate::pipeline::test_support::*;
-    use crate::runtime::progress::Cancelled;
-    use crate::runtime::progress::Silent;
 
     #[test]
     fn sky_pictures_come_one_per_poi_and_stop_when_cancelled() {

@@ -1,11 +1,11 @@
 //! Step 2: the model and the POIs in the local metric frame the tracing works in.
 
 use super::{PipelineError, PoiCrsError};
-use crate::crs::{build_transform, model_crs, Crs, CrsKind, LocalFrame, PointTransform};
+use crate::lod::poi::checks::extent::distance_to_box;
+use crate::lod::poi::{check_poi, check_poi_list, checks};
+use crate::model::crs::{build_transform, model_crs, Crs, CrsKind, LocalFrame, PointTransform};
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::poi::checks::extent::distance_to_box;
-use crate::poi::{check_poi, check_poi_list, checks};
 use glam::DVec3;
 use std::borrow::Cow;
 
@@ -54,7 +54,7 @@ pub struct Framed<'a> {
     pub note: Option<String>,
     /// The frame's warning (no CRS, an unknown one, ...), structured; its text is the last
     /// of [`Framed::warnings`].
-    pub frame_warning: Option<crate::crs::FrameWarning>,
+    pub frame_warning: Option<crate::model::crs::FrameWarning>,
 }
 
 /// Check `pois` ([`check_poi_list`]: finite, non-zero normals, unique ids), apply
@@ -160,10 +160,10 @@ pub fn frame<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lod::poi::PoiError;
+    use crate::model::runtime::progress::Silent;
     use crate::pipeline::test_support::*;
     use crate::pipeline::{read_inputs, svf};
-    use crate::poi::PoiError;
-    use crate::runtime::progress::Silent;
     use crate::solar::SkyBundles;
     use glam::DVec3;
 

@@ -2,7 +2,7 @@
 
 use super::analyse::{trace, Traced};
 use super::Framed;
-use crate::runtime::progress::{Cancelled, Progress};
+use crate::model::runtime::progress::{Cancelled, Progress};
 use crate::solar::irradiance::{Irradiance, IrradianceOptions, IrradianceTable};
 use crate::solar::{poi_irradiance, SkyBundles};
 

@@ -4,8 +4,8 @@ use super::{Framed, PipelineError};
 use crate::lod::bound::{bound_with, BoundOptions, BoundReport};
 use crate::lod::rough::RoughGeometry;
 use crate::lod::{lod_with, LodOptions, LodResult};
+use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::CityModel;
-use crate::runtime::progress::{check, Progress, Stage};
 use crate::solar::SunTable;
 use std::borrow::Cow;
 use std::time::Instant;
@@ -96,8 +96,12 @@ pub fn levels_of(
     let t = Instant::now();
     if let Some(spec) = &opts.bound {
         check(progress, Stage::Trace)?;
-        let b =
-            crate::runtime::progress::stage(progress, Stage::Trace, pois.len() as u64, 0, || {
+        let b = crate::model::runtime::progress::stage(
+            progress,
+            Stage::Trace,
+            pois.len() as u64,
+            0,
+            || {
                 bound_with(
                     model,
                     &lod.rough,
@@ -107,7 +111,8 @@ pub fn levels_of(
                     spec.sun.as_ref(),
                     spec.irradiance.as_ref(),
                 )
-            })?;
+            },
+        )?;
         bound_report = Some(BoundReport::new(&b, &spec.options));
         lod.selection.levels = b.levels;
     }
@@ -134,14 +139,15 @@ pub fn levels_of(
 mod tests {
     use super::*;
     use crate::lod::select::SelectError;
+    use crate::model::runtime::progress::Cancelled;
     use crate::pipeline::test_support::*;
     use crate::pipeline::{frame, read_inputs, FrameOptions};
-    use crate::runtime::progress::Cancelled;
     use std::sync::atomic::Ordering;
 
     #[test]
     fn selection_stops_when_cancelled() {
-        let mut inputs = read_inputs(&[fixture()], &crate::runtime::progress::Silent).unwrap();
+        let mut inputs =
+            read_inputs(&[fixture()], &crate::model::runtime::progress::Silent).unwrap();
         assert!(inputs.failures.is_empty());
         let pois = grid_pois(&inputs.model, 64);
         let framed = frame(&mut inputs.model, pois, &FrameOptions::default()).unwrap();

@@ -1,6 +1,6 @@
 //! The path every tracing command takes, as a library API: **inputs → scene → levels →
 //! outputs**, with progress and cancellation through a
-//! [`Progress`](crate::runtime::progress::Progress).
+//! [`Progress`](crate::model::runtime::progress::Progress).
 //!
 //! 1. [`read_inputs`]: files read in parallel and merged into one model (occluders of a
 //!    neighbouring tile count); a file that cannot be read is reported, the others are used.
@@ -17,17 +17,17 @@
 //! 5. Or, after step 2, the POIs traced instead of levels chosen: [`evaluate`] (full vs LoD
 //!    vs all-boxes model per POI), [`trace`] against the full-detail scene ([`svf`],
 //!    [`sun_hours`], [`horizon`]), one
-//!    [`Stage::Trace`](crate::runtime::progress::Stage::Trace) item per POI, cancellable before each.
+//!    [`Stage::Trace`](crate::model::runtime::progress::Stage::Trace) item per POI, cancellable before each.
 //!
 //! `skylod lod` is steps 1–4 plus messages; `evaluate`, `svf`, `sun-hours` and `horizon` are
 //! steps 1, 2 and 5; `fisheye` is steps 1, 2 and [`sky_pictures`]. Nothing here prints: warnings are returned
 //! ([`Framed::warnings`]), progress goes to the
-//! [`Progress`](crate::runtime::progress::Progress).
+//! [`Progress`](crate::model::runtime::progress::Progress).
 //!
 //! # Example
 //! ```
 //! use skylod::pipeline::{frame, levels, read_inputs, write_levels, FrameOptions, LevelsOptions};
-//! use skylod::runtime::progress::Silent;
+//! use skylod::model::runtime::progress::Silent;
 //! use skylod::export::Format;
 //! use std::path::PathBuf;
 //! let input = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml");

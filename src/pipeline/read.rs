@@ -1,11 +1,11 @@
 //! Step 1: the inputs read and merged, and the checks of the model alone.
 
-use crate::citygml::read::read_source_observed;
-use crate::citygml::source::resolve;
-use crate::citygml::{ReadError, ReadOptions};
+use crate::io::citygml::read::read_source_observed;
+use crate::io::citygml::source::resolve;
+use crate::io::citygml::{ReadError, ReadOptions};
+use crate::lod::poi::checks::{self, TrustError};
+use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
 use crate::model::{CityModel, Source};
-use crate::poi::checks::{self, TrustError};
-use crate::runtime::progress::{check, Cancelled, Progress, Stage};
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -55,7 +55,7 @@ pub fn check_model(model: &CityModel, allow_mixed_crs: bool) -> Result<(), Trust
 
 /// Read `paths` in parallel ([`Stage::Read`]: files and bytes) and merge them in input
 /// order. A file that cannot be read goes to [`Inputs::failures`]. `-` is standard input
-/// (read whole into memory, [`crate::io::stdin_bytes`]).
+/// (read whole into memory, [`crate::io::files::stdin_bytes`]).
 ///
 /// # Errors
 /// [`Cancelled`] when `progress` asks to stop (before a file is started).
@@ -125,7 +125,7 @@ fn read_all(
     }
     // the reader's registry, id log and arena are freed: a large model's pages go back
     // before the next stage's large blocks are mapped
-    crate::runtime::mem::give_back_for(inputs.model.assets.len());
+    crate::model::runtime::mem::give_back_for(inputs.model.assets.len());
     inputs.read_s = t.elapsed().as_secs_f64();
     Ok(inputs)
 }
@@ -140,14 +140,17 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let bad = dir.path().join("bad.gml");
         std::fs::write(&bad, "<CityModel").unwrap();
-        let inputs =
-            read_inputs(&[fixture(), bad.clone()], &crate::runtime::progress::Silent).unwrap();
+        let inputs = read_inputs(
+            &[fixture(), bad.clone()],
+            &crate::model::runtime::progress::Silent,
+        )
+        .unwrap();
         assert_eq!(inputs.read, vec![fixture()]);
         assert_eq!(inputs.failures.len(), 1);
         assert!(inputs.failures[0].to_string().contains("bad.gml"));
         assert!(inputs.check(false).is_ok());
         // Nothing read: refused here, not later as a POI far outside an empty scene.
-        let none = read_inputs(&[bad], &crate::runtime::progress::Silent).unwrap();
+        let none = read_inputs(&[bad], &crate::model::runtime::progress::Silent).unwrap();
         assert!(matches!(
             none.check(false),
             Err(TrustError::NoInput { failed: 1 })

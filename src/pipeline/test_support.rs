@@ -2,9 +2,9 @@
 //! counts and cancels.
 
 use super::{frame, FrameOptions, Framed, Inputs};
+use crate::model::runtime::progress::{Progress, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::runtime::progress::{Progress, Stage};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -14,7 +14,7 @@ pub(crate) fn fixture() -> PathBuf {
 
 /// The [`fixture`] read.
 pub(crate) fn fixture_inputs() -> Inputs {
-    super::read_inputs(&[fixture()], &crate::runtime::progress::Silent).unwrap()
+    super::read_inputs(&[fixture()], &crate::model::runtime::progress::Silent).unwrap()
 }
 
 /// Counts POIs of `stage` (selected or traced); cancels after `stop_after` of them.

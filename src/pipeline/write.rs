@@ -1,12 +1,12 @@
 //! Step 4: each input file written with its assets at their levels.
 
 use super::Levels;
-use crate::citygml::write::WriteOptions;
-use crate::citygml::WriteError;
 use crate::export::{Content, Format};
+use crate::io::citygml::write::WriteOptions;
+use crate::io::citygml::WriteError;
 use crate::lod::mixed::{write_mixed, write_mixed_to};
+use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
 use crate::model::CityModel;
-use crate::runtime::progress::{check, Cancelled, Progress, Stage};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -49,7 +49,7 @@ pub fn write_levels(
         .parent()
         .filter(|d| !d.as_os_str().is_empty() && !d.exists())
     {
-        if !crate::io::is_stdout(out) {
+        if !crate::io::files::is_stdout(out) {
             std::fs::create_dir_all(dir).map_err(|source| WriteError::Io {
                 file: dir.to_path_buf(),
                 source,

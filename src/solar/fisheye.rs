@@ -37,7 +37,7 @@ use super::sun::{sun_position, Site};
 use super::SolarError;
 use crate::model::AssetKind;
 use crate::solar::sky::{SkyPartition, SkyVariant};
-use crate::trace::Scene;
+use crate::solar::trace::Scene;
 use chrono::{Duration, NaiveDate, TimeZone, Utc};
 use glam::DVec3;
 use rayon::prelude::*;

@@ -29,7 +29,7 @@ pub const DEFAULT_STEP_MIN: u32 = 15;
 
 use crate::model::Poi;
 use crate::model::POI_OFFSET;
-use crate::trace::Scene;
+use crate::solar::trace::Scene;
 
 /// [`sky_view()`] of a POI against a scene: rays start at [`Poi::ray_origin`] (moved
 /// [`POI_OFFSET`] along the normal) and ignore hits closer than [`POI_OFFSET`]; the bundles
@@ -101,7 +101,7 @@ pub enum SolarError {
     /// A year the calendar cannot represent.
     #[error("invalid year {0}")]
     Year(i32),
-    /// The caller asked to stop ([`crate::runtime::progress::Progress::is_cancelled`]).
+    /// The caller asked to stop ([`crate::model::runtime::progress::Progress::is_cancelled`]).
     #[error(transparent)]
-    Cancelled(#[from] crate::runtime::progress::Cancelled),
+    Cancelled(#[from] crate::model::runtime::progress::Cancelled),
 }

@@ -19,7 +19,7 @@
 //! ```
 
 use super::SolarError;
-use crate::runtime::progress::{check, stage, Progress, Silent, Stage};
+use crate::model::runtime::progress::{check, stage, Progress, Silent, Stage};
 use chrono::{DateTime, Datelike, Duration, FixedOffset, NaiveDate, Offset, TimeZone, Utc};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -604,7 +604,7 @@ mod tests {
         let e = SunTable::year_with(2025, 15, &site, &p).unwrap_err();
         assert_eq!(
             e,
-            SolarError::Cancelled(crate::runtime::progress::Cancelled { stage: Stage::Sun })
+            SolarError::Cancelled(crate::model::runtime::progress::Cancelled { stage: Stage::Sun })
         );
         assert_eq!(
             e.to_string(),

@@ -5,8 +5,8 @@
 use super::row::PoiRow;
 use super::svf::TraceTimings;
 use super::text::{run_part, TextContext};
+use crate::lod::poi::checks::PoiFlag;
 use crate::model::Poi;
-use crate::poi::checks::PoiFlag;
 use crate::solar::{HorizonOptions, HorizonProfile};
 use schemars::JsonSchema;
 use serde::Serialize;
@@ -173,8 +173,8 @@ mod tests {
     fn csv_rows_and_quoting() {
         // Built by the parser, not as literals: the struct may gain fields.
         let mut pois = [
-            crate::poi::parse_poi("0,0,0", 0).unwrap(),
-            crate::poi::parse_poi("0,0,0", 1).unwrap(),
+            crate::lod::poi::parse_poi("0,0,0", 0).unwrap(),
+            crate::lod::poi::parse_poi("0,0,0", 1).unwrap(),
         ];
         pois[0].id = "a".into();
         pois[1].id = "b,c".into();

@@ -4,8 +4,8 @@
 
 use super::row::PoiRow;
 use super::text::{run_part, TextContext};
+use crate::lod::poi::checks::PoiFlag;
 use crate::model::Poi;
-use crate::poi::checks::PoiFlag;
 use crate::solar::irradiance::{Irradiance, SkyModel};
 use crate::solar::weather::{Weather, WeatherFormat, WeatherSite};
 use schemars::JsonSchema;

@@ -5,7 +5,7 @@
 //! # Example
 //! ```
 //! use skylod::model::CityModel;
-//! use skylod::output::report::{Parameters, Report, Timings};
+//! use skylod::export::report::report::{Parameters, Report, Timings};
 //! use skylod::lod::select::Selection;
 //! let model = CityModel::default();
 //! let sel = Selection { levels: vec![], hits: vec![], roof_asset: vec![], pois: vec![],
@@ -165,7 +165,7 @@ impl Parameters {
 }
 
 /// Where a POI is and what its rays saw: the part of a POI's summary that the report
-/// ([`PoiEntry`]) and a shard's levels file ([`crate::batch::shard_levels::PoiRecord`]) share.
+/// ([`PoiEntry`]) and a shard's levels file ([`crate::pipeline::batch::shard_levels::PoiRecord`]) share.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[schemars(deny_unknown_fields)]
 pub struct PoiSeen {
@@ -221,12 +221,12 @@ pub struct PoiEntry {
     pub ms: f64,
     /// Polygons of this POI's own LoD model (its levels alone, before any error bound).
     pub polygons_own: usize,
-    /// What makes this POI's result suspect ([`crate::poi::checks::poi_flags`]); set by
+    /// What makes this POI's result suspect ([`crate::lod::poi::checks::poi_flags`]); set by
     /// [`Report::set_flags`].
     #[schemars(
         description = "What makes this POI's results suspect: inside a closed building solid (every direction blocked), or no sky ray at all."
     )]
-    pub flags: Vec<crate::poi::checks::PoiFlag>,
+    pub flags: Vec<crate::lod::poi::checks::PoiFlag>,
 }
 
 /// One asset.
@@ -416,7 +416,7 @@ impl Report {
     }
 
     /// Set the flags of each POI (in POI order).
-    pub fn set_flags(&mut self, flags: &[Vec<crate::poi::checks::PoiFlag>]) {
+    pub fn set_flags(&mut self, flags: &[Vec<crate::lod::poi::checks::PoiFlag>]) {
         for (entry, f) in self.pois.iter_mut().zip(flags) {
             entry.flags = f.clone();
         }

@@ -1,8 +1,8 @@
 //! One POI's row in the JSON of the tracing commands (`svf`, `sun-hours`, `horizon`,
 //! `irradiance`): the POI, the command's values and the POI's flags.
 
+use crate::lod::poi::checks::PoiFlag;
 use crate::model::Poi;
-use crate::poi::checks::PoiFlag;
 use schemars::JsonSchema;
 use serde::Serialize;
 

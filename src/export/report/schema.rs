@@ -4,7 +4,7 @@
 //!
 //! # Example
 //! ```
-//! let text = skylod::output::schema::text(&skylod::output::schema::report());
+//! let text = skylod::export::report::schema::text(&skylod::export::report::schema::report());
 //! assert!(text.contains("\"report_version\""));
 //! ```
 

@@ -148,7 +148,7 @@ impl Stats {
     ///
     /// ```
     /// let m = skylod::model::CityModel::default();
-    /// let s = skylod::output::stats::Stats::of(&m);
+    /// let s = skylod::export::report::stats::Stats::of(&m);
     /// assert_eq!(s.buildings, 0);
     /// assert_eq!(s.bbox, None);
     /// ```
@@ -198,7 +198,7 @@ impl Stats {
     }
 
     /// Add the counts of `other` (a further chunk of the same document, see
-    /// [`crate::citygml::read::stream`]): sums, LoDs and features merged, boxes joined; the
+    /// [`crate::io::citygml::read::stream`]): sums, LoDs and features merged, boxes joined; the
     /// version and CRS are left to the caller (the document's, not a chunk's).
     pub fn add(&mut self, other: &Stats) {
         let (version, srs) = (self.citygml_version.take(), self.srs_name.take());

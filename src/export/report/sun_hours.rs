@@ -3,8 +3,8 @@
 
 use super::row::PoiRow;
 use super::text::{run_part, TextContext};
+use crate::lod::poi::checks::PoiFlag;
 use crate::model::Poi;
-use crate::poi::checks::PoiFlag;
 use crate::solar::SunHours;
 use schemars::JsonSchema;
 use serde::Serialize;

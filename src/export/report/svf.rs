@@ -3,8 +3,8 @@
 
 use super::row::PoiRow;
 use super::text::{run_part, TextContext};
+use crate::lod::poi::checks::PoiFlag;
 use crate::model::Poi;
-use crate::poi::checks::PoiFlag;
 use crate::solar::SkyView;
 use schemars::JsonSchema;
 use serde::Serialize;
@@ -51,7 +51,7 @@ impl SvfOutput {
 }
 
 /// The table of `skylod svf`: a header line (if `header`), then one line per POI with its
-/// position (`decimals` plan decimals, see [`crate::crs::Crs::plan_decimals`]), normal, sky
+/// position (`decimals` plan decimals, see [`crate::model::crs::Crs::plan_decimals`]), normal, sky
 /// view factor and sky exposure.
 pub fn write_table(
     out: &mut impl Write,

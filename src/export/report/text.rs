@@ -10,7 +10,7 @@ use std::io::Write;
 pub struct TextContext {
     /// Polygons of the model that are traced ([`crate::model::CityModel::traced_polygon_count`]).
     pub traced_polygons: usize,
-    /// Decimals of plan coordinates ([`crate::crs::Crs::plan_decimals`]).
+    /// Decimals of plan coordinates ([`crate::model::crs::Crs::plan_decimals`]).
     pub decimals: usize,
     /// Whether the table has its header line (a shard after the first leaves it out, so
     /// that the shards' tables concatenated are the serial run's).
@@ -60,9 +60,9 @@ pub(crate) fn run_part(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::export::report::horizon::{profile_summary, HorizonOutput, HorizonPoi};
+    use crate::export::report::svf::{SvfOutput, SvfPoi, TraceTimings};
     use crate::model::Poi;
-    use crate::output::horizon::{profile_summary, HorizonOutput, HorizonPoi};
-    use crate::output::svf::{SvfOutput, SvfPoi, TraceTimings};
     use crate::solar::{HorizonProfile, SkyView};
 
     #[test]

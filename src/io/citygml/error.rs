@@ -103,9 +103,9 @@ pub enum ReadError {
         /// The reference.
         href: String,
     },
-    /// A CityJSON document that cannot be read ([`crate::cityjson`]).
+    /// A CityJSON document that cannot be read ([`crate::io::cityjson`]).
     #[error("{0}")]
-    CityJson(#[from] crate::cityjson::Error),
+    CityJson(#[from] crate::io::cityjson::Error),
     /// A resource limit protecting against hostile input was exceeded.
     #[error("{loc}: {message}")]
     Limit {
@@ -156,7 +156,7 @@ impl ReadError {
 #[non_exhaustive]
 pub enum WriteError {
     /// I/O on the output or on re-reading the source.
-    #[error("{file}: {}", crate::io::describe_io(.source), file = crate::model::shown(.file))]
+    #[error("{file}: {}", crate::io::files::describe_io(.source), file = crate::model::shown(.file))]
     Io {
         /// File concerned.
         file: PathBuf,
@@ -180,8 +180,8 @@ pub enum WriteError {
     Invalid(String),
 }
 
-impl From<crate::io::FileError> for WriteError {
-    fn from(e: crate::io::FileError) -> Self {
+impl From<crate::io::files::FileError> for WriteError {
+    fn from(e: crate::io::files::FileError) -> Self {
         WriteError::Io {
             file: e.file,
             source: e.source,
@@ -189,11 +189,11 @@ impl From<crate::io::FileError> for WriteError {
     }
 }
 
-impl From<crate::io::TargetError> for WriteError {
-    fn from(e: crate::io::TargetError) -> Self {
+impl From<crate::io::files::TargetError> for WriteError {
+    fn from(e: crate::io::files::TargetError) -> Self {
         match e {
-            crate::io::TargetError::Exists(p) => WriteError::Exists(p),
-            crate::io::TargetError::IsInput(p) => WriteError::IsInput(p),
+            crate::io::files::TargetError::Exists(p) => WriteError::Exists(p),
+            crate::io::files::TargetError::IsInput(p) => WriteError::IsInput(p),
         }
     }
 }

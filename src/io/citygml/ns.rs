@@ -48,7 +48,7 @@ pub enum Ns {
 /// Classify a namespace URI.
 ///
 /// ```
-/// use skylod::citygml::ns::{classify, Module, Ns};
+/// use skylod::io::citygml::ns::{classify, Module, Ns};
 /// use skylod::model::CityGmlVersion;
 /// assert_eq!(
 ///     classify(b"http://www.opengis.net/citygml/building/2.0"),

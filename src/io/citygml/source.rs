@@ -1,6 +1,6 @@
 //! Opening a source document: plain or gzip-compressed, detected by content; on disk, in
 //! memory ([`Source::Memory`]), or standard input (the path `-`, read whole into memory once:
-//! [`crate::io::stdin_bytes`]).
+//! [`crate::io::files::stdin_bytes`]).
 
 use super::error::ReadError;
 use crate::model::Source;
@@ -12,13 +12,13 @@ use std::sync::Arc;
 const BUF: usize = 256 * 1024;
 
 /// Where the input named `path` is: standard input for `-` (its bytes, read whole on first
-/// use and kept: [`crate::io::stdin_bytes`]), else the file.
+/// use and kept: [`crate::io::files::stdin_bytes`]), else the file.
 ///
 /// # Errors
 /// [`ReadError::Io`] when standard input cannot be read.
 pub fn resolve(path: &Path) -> Result<Source, ReadError> {
     if path.as_os_str() == crate::model::STDIN_NAME {
-        crate::io::stdin_bytes()
+        crate::io::files::stdin_bytes()
             .map(Source::Memory)
             .map_err(|source| ReadError::Io {
                 file: path.to_path_buf(),
@@ -68,7 +68,7 @@ pub(crate) fn open_stream(src: &Source, name: &Path) -> Result<Stream, ReadError
         Source::File(p) => p,
         Source::Memory(bytes) => {
             let cursor = Cursor::new(Arc::clone(bytes));
-            return Ok(if crate::io::is_gzip(bytes) {
+            return Ok(if crate::io::files::is_gzip(bytes) {
                 let dec = flate2::bufread::MultiGzDecoder::new(cursor);
                 let mut dec: Box<dyn BufRead + Send> = Box::new(BufReader::with_capacity(BUF, dec));
                 refuse_json(peek(&mut dec), name)?;
@@ -82,7 +82,7 @@ pub(crate) fn open_stream(src: &Source, name: &Path) -> Result<Stream, ReadError
     let file = File::open(path).map_err(io)?;
     let mut reader = BufReader::with_capacity(BUF, file);
     let head = reader.fill_buf().map_err(io)?;
-    if crate::io::is_gzip(head) {
+    if crate::io::files::is_gzip(head) {
         let dec = flate2::bufread::MultiGzDecoder::new(reader);
         let mut dec: Box<dyn BufRead + Send> = Box::new(BufReader::with_capacity(BUF, dec));
         refuse_json(peek(&mut dec), name)?;
@@ -94,9 +94,9 @@ pub(crate) fn open_stream(src: &Source, name: &Path) -> Result<Stream, ReadError
 }
 
 /// True when a document's first bytes are JSON (CityJSON, CityJSONSeq:
-/// [`crate::cityjson::sniff`]).
+/// [`crate::io::cityjson::sniff`]).
 pub fn is_json(head: &[u8]) -> bool {
-    crate::cityjson::sniff(head) == crate::cityjson::Sniffed::Json
+    crate::io::cityjson::sniff(head) == crate::io::cityjson::Sniffed::Json
 }
 
 /// The bytes a reader holds ready (empty when it cannot read): what [`is_json`] looks at.
@@ -195,7 +195,7 @@ pub fn load_source(src: &Source, name: &Path) -> Result<Document, ReadError> {
 
 /// A whole document: plain, or gzip to decompress as it is read.
 fn document(bytes: Bytes) -> Document {
-    if crate::io::is_gzip(&bytes) {
+    if crate::io::files::is_gzip(&bytes) {
         let len = bytes.len() as u64;
         let dec = flate2::bufread::MultiGzDecoder::new(Cursor::new(bytes));
         Document::Gzip(Box::new(BufReader::with_capacity(BUF, dec)), len)

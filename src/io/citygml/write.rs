@@ -8,7 +8,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::citygml::{read_file, write::{write_document, Edit, WriteOptions}};
+//! use skylod::io::citygml::{read_file, write::{write_document, Edit, WriteOptions}};
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");
 //! std::fs::write(&src, br#"<CityModel xmlns="http://www.opengis.net/citygml/2.0"
@@ -97,7 +97,7 @@ pub fn write_document_to(
     w: &mut dyn Write,
     opts: &WriteOptions,
 ) -> Result<WriteSummary, WriteError> {
-    let name = Path::new(crate::io::WRITER_NAME);
+    let name = Path::new(crate::io::files::WRITER_NAME);
     write_edits(model, file, edits, w, opts.keep_envelopes, name)
 }
 
@@ -210,10 +210,10 @@ fn normalise(mut edits: Vec<Edit>) -> Vec<Edit> {
     out
 }
 
-pub use crate::io::is_stdout;
+pub use crate::io::files::is_stdout;
 
 /// Refuse to write over an input (or over `opts.protect`), or over an existing file without
-/// `overwrite` ([`crate::io::check_target`]). Standard output (`-`) is always a valid target.
+/// `overwrite` ([`crate::io::files::check_target`]). Standard output (`-`) is always a valid target.
 pub fn check_target<'a>(
     out: &Path,
     opts: &WriteOptions,
@@ -221,16 +221,20 @@ pub fn check_target<'a>(
 ) -> Result<(), WriteError> {
     let mut protected: Vec<&Path> = inputs.into_iter().collect();
     protected.extend(opts.protect.iter().map(PathBuf::as_path));
-    Ok(crate::io::check_target(out, protected, opts.overwrite)?)
+    Ok(crate::io::files::check_target(
+        out,
+        protected,
+        opts.overwrite,
+    )?)
 }
 
-/// [`crate::io::atomic_write`] with the writer's error: a temporary file beside `out`
+/// [`crate::io::files::atomic_write`] with the writer's error: a temporary file beside `out`
 /// (gzip when `out` ends in `.gz`) renamed into place, or standard output for `-`.
 pub fn atomic_write<F>(out: &Path, f: F) -> Result<u64, WriteError>
 where
     F: FnOnce(&mut dyn Write) -> Result<u64, WriteError>,
 {
-    crate::io::atomic_write(out, f)
+    crate::io::files::atomic_write(out, f)
 }
 
 /// [`atomic_write`] of bytes already made (a report, a picture, a table): their length.
@@ -288,7 +292,7 @@ pub fn escape_attr(v: &str) -> String {
 /// Writes GML geometry with deterministic ids.
 ///
 /// ```
-/// use skylod::citygml::write::GmlWriter;
+/// use skylod::io::citygml::write::GmlWriter;
 /// use skylod::model::Polygon;
 /// use glam::DVec3;
 /// let w = GmlWriter { gml: "gml:".into(), ids: true };

@@ -22,7 +22,7 @@
 //!     "boundaries":[[[0,1,2,3]]],
 //!     "semantics":{"surfaces":[{"type":"RoofSurface"}],"values":[0]}}]}},
 //!   "vertices":[[0,0,5000],[1000,0,5000],[1000,1000,5000],[0,1000,5000]]}"#;
-//! let model = skylod::cityjson::read_slice(doc, "b.city.json".as_ref()).unwrap();
+//! let model = skylod::io::cityjson::read_slice(doc, "b.city.json".as_ref()).unwrap();
 //! assert_eq!(model.assets[0].kind, skylod::model::AssetKind::Roof);
 //! assert_eq!(model.assets[0].geometries[0].lod, 2);
 //! assert_eq!(model.assets[0].detail_polygons()[0].exterior()[1].x, 1001.0);
@@ -108,7 +108,7 @@ pub enum Sniffed {
 /// JSON when the first byte after a UTF-8 byte-order mark and white space is `{`.
 ///
 /// ```
-/// use skylod::cityjson::{sniff, Sniffed};
+/// use skylod::io::cityjson::{sniff, Sniffed};
 /// assert_eq!(sniff(b" \n{\"type\":\"CityJSON\"}"), Sniffed::Json);
 /// assert_eq!(sniff(b"<?xml version=\"1.0\"?>"), Sniffed::Other);
 /// ```

@@ -167,12 +167,12 @@ fn sun_hours_bound() {
 /// builds only part of the model.
 #[test]
 fn restricted_full_scene_answers_as_the_whole_model() {
-    use crate::synth::{generate, pois, Preset};
+    use crate::model::synth::{generate, pois, Preset};
     let mut opts = Preset::Paper.defaults();
     (opts.blocks_x, opts.blocks_y) = (3, 2);
     let mut xml = Vec::new();
     generate(&opts, &mut xml).unwrap();
-    let model = crate::citygml::read::read_bytes(&xml, "paper.gml").unwrap();
+    let model = crate::io::citygml::read::read_bytes(&xml, "paper.gml").unwrap();
     let mut ps: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
     // and a POI on the ground in the open, facing up
     ps.push(Poi {

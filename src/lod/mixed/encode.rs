@@ -6,8 +6,8 @@
 //! a `gml:MultiSurface`; other `lodNSurface` properties a `gml:CompositeSurface`; everything
 //! else (implicit geometry, curves, terrain intersections, reliefs) is kept verbatim.
 
-use crate::citygml::ns;
-use crate::citygml::write::{escape_attr, GmlWriter};
+use crate::io::citygml::ns;
+use crate::io::citygml::write::{escape_attr, GmlWriter};
 use crate::model::{CityGmlVersion, Polygon};
 use foldhash::{HashSet, HashSetExt};
 use std::fmt::Write as _;

@@ -20,17 +20,17 @@
 //! comes. Ids go to an arena table ([`IdTable`](super::id_table::IdTable)): no allocation per id; an id that repeats
 //! maps to its first element, as in a full parse.
 //!
-//! The pass shares the reader's set-up: namespace classification ([`crate::citygml::ns`]),
+//! The pass shares the reader's set-up: namespace classification ([`crate::io::citygml::ns`]),
 //! the byte-order-mark handling and the per-token size limit and nesting depth of
 //! [`ReadOptions`].
 
 use super::content_ids::{gml_ids, is_end_tag, Prescan, Taken, CHUNK_BYTES};
 use super::doc::{Doc, Name, Node, NsKind, RefKind, NONE};
 use super::push_back::{PushBack, Source};
-use crate::citygml::error::{ReadError, WriteError};
-use crate::citygml::ns::{self, Module, Ns};
-use crate::citygml::read::ReadOptions;
-use crate::citygml::source::{self, Limited, SkipAhead, Stream};
+use crate::io::citygml::error::{ReadError, WriteError};
+use crate::io::citygml::ns::{self, Module, Ns};
+use crate::io::citygml::read::ReadOptions;
+use crate::io::citygml::source::{self, Limited, SkipAhead, Stream};
 use crate::model::{Source as DocSource, Span};
 use foldhash::{HashMap, HashMapExt};
 use quick_xml::events::{BytesStart, Event};

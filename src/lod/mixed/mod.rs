@@ -105,7 +105,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::citygml::{read_file, write::WriteOptions};
+//! use skylod::io::citygml::{read_file, write::WriteOptions};
 //! use skylod::lod::mixed::write_mixed;
 //! use skylod::lod::rough::{rough_model, RoughOptions};
 //! let dir = tempfile::tempdir().unwrap();
@@ -146,9 +146,11 @@ mod index;
 mod plan;
 mod push_back;
 
-use crate::citygml::error::WriteError;
-use crate::citygml::read::ReadOptions;
-use crate::citygml::write::{check_target, write_document, write_document_to, Edit, WriteOptions};
+use crate::io::citygml::error::WriteError;
+use crate::io::citygml::read::ReadOptions;
+use crate::io::citygml::write::{
+    check_target, write_document, write_document_to, Edit, WriteOptions,
+};
 use crate::lod::rough::RoughGeometry;
 use crate::model::CityModel;
 use plan::Plan;
@@ -306,7 +308,7 @@ fn plan_file(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::citygml::read::read_file;
+    use crate::io::citygml::read::read_file;
     use crate::lod::rough::{rough_model, RoughOptions};
 
     const HEAD2: &str = r#"<?xml version="1.0"?>

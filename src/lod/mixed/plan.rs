@@ -6,8 +6,8 @@
 use super::doc::{Doc, Name, NsKind, RefKind};
 use super::encode::{encoding, Encoder, IdPool};
 use super::MixedSummary;
-use crate::citygml::ns::CORE_LEADING;
-use crate::citygml::write::{envelope_xml, Edit};
+use crate::io::citygml::ns::CORE_LEADING;
+use crate::io::citygml::write::{envelope_xml, Edit};
 use crate::lod::rough::RoughGeometry;
 use crate::model::{Asset, AssetKind, Bbox, CityGmlVersion, CityModel, Polygon, Span};
 use foldhash::{HashMap, HashMapExt, HashSet};

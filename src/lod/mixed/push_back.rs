@@ -1,7 +1,7 @@
 //! A reader that can be given bytes back ([`PushBack`]), under the XML reader of the index
 //! pass ([`super::index`]).
 
-use crate::citygml::source::{Limited, SkipAhead};
+use crate::io::citygml::source::{Limited, SkipAhead};
 use std::io::{BufRead, Read};
 
 /// A [`BufRead`] that can be given bytes back: the index reads a skipped element's content
@@ -39,7 +39,7 @@ impl<R: BufRead> PushBack<R> {
 
 impl<R: BufRead> Read for PushBack<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        crate::io::read_through_buf(self, buf)
+        crate::io::files::read_through_buf(self, buf)
     }
 }
 

@@ -104,10 +104,10 @@ fn build(id: String, v: &[f64], at: &str) -> Result<Poi, PoiError> {
 /// Parse `X,Y,Z` or `X,Y,Z,NX,NY,NZ`.
 ///
 /// ```
-/// let p = skylod::poi::parse_poi("430000,4581000,12.5,0,-2,0", 0).unwrap();
+/// let p = skylod::lod::poi::parse_poi("430000,4581000,12.5,0,-2,0", 0).unwrap();
 /// assert_eq!(p.id, "poi-1");
 /// assert_eq!(p.normal, Some(glam::DVec3::new(0.0, -1.0, 0.0)));
-/// assert!(skylod::poi::parse_poi("1,2", 0).is_err());
+/// assert!(skylod::lod::poi::parse_poi("1,2", 0).is_err());
 /// ```
 pub fn parse_poi(text: &str, index: usize) -> Result<Poi, PoiError> {
     parse_poi_at(text, index, &format!("POI {text}"))
@@ -161,13 +161,13 @@ pub fn read_pois_csv(path: &Path) -> Result<Vec<Located>, PoiError> {
 ///
 /// ```
 /// let text = "longitude,latitude,height\n11.42,48.77,380\n";
-/// let p = skylod::poi::parse_pois_csv(text.as_bytes(), "p.csv").unwrap();
+/// let p = skylod::lod::poi::parse_pois_csv(text.as_bytes(), "p.csv").unwrap();
 /// assert_eq!(p[0].poi.position.to_array(), [48.77, 11.42, 380.0]);
 /// ```
 ///
 /// ```
 /// let text = "\u{feff}# facade points\nZ,\"Id\",x,y\n12.5,\"w,1\",430000,4581000\n";
-/// let p = skylod::poi::parse_pois_csv(text.as_bytes(), "p.csv").unwrap();
+/// let p = skylod::lod::poi::parse_pois_csv(text.as_bytes(), "p.csv").unwrap();
 /// assert_eq!(p[0].poi.id, "w,1");
 /// assert_eq!(p[0].at, "p.csv:3");
 /// ```
@@ -268,7 +268,7 @@ fn position_columns(cols: &[String]) -> Option<(usize, usize, usize)> {
 /// Refuse two POIs with the same id, naming the id and where each was given.
 ///
 /// ```
-/// use skylod::poi::{check_unique_ids, parse_pois_csv};
+/// use skylod::lod::poi::{check_unique_ids, parse_pois_csv};
 /// let p = parse_pois_csv(b"id,x,y,z\na,0,0,0\nb,1,0,0\na,2,0,0\n", "p.csv").unwrap();
 /// let e = check_unique_ids(&p).unwrap_err().to_string();
 /// assert!(e.contains("\"a\"") && e.contains("p.csv:2") && e.contains("p.csv:4"), "{e}");

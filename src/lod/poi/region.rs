@@ -12,14 +12,14 @@
 //!   normal).
 //!
 //! Facade points that fall inside a closed solid (the neighbour behind a party wall) are
-//! dropped: a 128-direction sphere probe ([`crate::poi::checks::poi_flags`]) against the buildings
+//! dropped: a 128-direction sphere probe ([`crate::lod::poi::checks::poi_flags`]) against the buildings
 //! near the facade. A facade with no point left is an error.
 //!
 //! # Example
 //! ```
 //! use glam::DVec3;
 //! use skylod::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
-//! use skylod::poi::region::{facade_pois, grid_pois};
+//! use skylod::lod::poi::region::{facade_pois, grid_pois};
 //! let mut m = CityModel::default();
 //! // a 4 m x 3 m wall in the plane y = 0, facing -y (counter-clockwise seen from outside)
 //! let wall = Polygon::new(vec![
@@ -39,10 +39,10 @@
 //! assert_eq!(street.len(), 20);
 //! ```
 
+use crate::lod::poi::checks::{poi_flags, PoiFlag};
 use crate::model::Poi;
 use crate::model::{AssetKind, Bbox, CityModel, Polygon};
-use crate::poi::checks::{poi_flags, PoiFlag};
-use crate::trace::scene_of;
+use crate::solar::trace::scene_of;
 use glam::{DVec2, DVec3};
 use std::collections::HashSet;
 

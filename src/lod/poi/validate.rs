@@ -5,7 +5,7 @@
 //!
 //! ```
 //! use glam::DVec3;
-//! use skylod::poi::{check_poi_list, Poi, PoiError};
+//! use skylod::lod::poi::{check_poi_list, Poi, PoiError};
 //! let p = |id: &str, x: f64| Poi { id: id.into(), position: DVec3::new(x, 0.0, 0.0), normal: None };
 //! assert!(check_poi_list(&[p("a", 0.0), p("b", 1.0)]).is_ok());
 //! assert!(matches!(check_poi_list(&[p("a", f64::NAN)]), Err(PoiError::NotFinite { .. })));

@@ -2,7 +2,7 @@
 //! (the frame itself, [`LocalFrame`], knows nothing of rough geometry).
 
 use super::RoughGeometry;
-use crate::crs::LocalFrame;
+use crate::model::crs::LocalFrame;
 use crate::model::CityModel;
 use std::borrow::Cow;
 
@@ -67,8 +67,8 @@ pub fn rough_to_source<'r>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::crs::Crs;
     use crate::lod::rough::{rough_model, RoughOptions};
+    use crate::model::crs::Crs;
     use crate::model::Bbox;
     use glam::DVec3;
 

@@ -31,7 +31,7 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::crs::{Builtin, Crs, PointTransform};
+//! use skylod::model::crs::{Builtin, Crs, PointTransform};
 //! // A point in WGS 84 (lat, lon) into a UTM 31N model.
 //! let p = Builtin.position(&Crs::epsg(4326), &Crs::epsg(25831), DVec3::new(41.39, 2.17, 20.0)).unwrap();
 //! // pyproj: (430608.497, 4582384.561).

@@ -1,7 +1,7 @@
 //! The local metric frame every tracing command works in, and its way back to the input's CRS.
 //!
 //! * Projected CRSs in metres (and unknown CRSs, with a warning): the identity; the scene
-//!   shifts to its own origin in f32 as before ([`crate::trace`]).
+//!   shifts to its own origin in f32 as before ([`crate::solar::trace`]).
 //! * Projected CRSs in feet: `x`, `y` times the foot (US survey foot 1200/3937 m or
 //!   international foot 0.3048 m), `z` times the unit of the heights
 //!   ([`Crs::vertical_metres_per_unit`]: the vertical CRS of a compound name, otherwise the
@@ -20,7 +20,7 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::crs::{Crs, LocalFrame};
+//! use skylod::model::crs::{Crs, LocalFrame};
 //! use skylod::model::Bbox;
 //! let crs = Crs::parse("http://www.opengis.net/def/crs/EPSG/0/6697");
 //! let bbox = Bbox { min: DVec3::new(35.538, 139.775, 2.0), max: DVec3::new(35.542, 139.779, 20.0) };
@@ -307,7 +307,7 @@ impl LocalFrame {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::crs::feet::US_SURVEY_FOOT;
+    use crate::model::crs::feet::US_SURVEY_FOOT;
 
     fn bbox(a: [f64; 3], b: [f64; 3]) -> Bbox {
         Bbox {

@@ -18,7 +18,7 @@
 //! # Example: trace a PLATEAU (EPSG:6697, latitude, longitude, metres) POI in metres
 //! ```
 //! use glam::DVec3;
-//! use skylod::crs::{Builtin, Crs, LocalFrame, PointTransform};
+//! use skylod::model::crs::{Builtin, Crs, LocalFrame, PointTransform};
 //! use skylod::model::Bbox;
 //! let model_crs = Crs::parse("http://www.opengis.net/def/crs/EPSG/0/6697");
 //! let bbox = Bbox { min: DVec3::new(35.538, 139.775, 2.0), max: DVec3::new(35.542, 139.779, 20.0) };

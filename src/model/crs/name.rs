@@ -7,7 +7,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::crs::CrsName;
+//! use skylod::model::crs::CrsName;
 //! let c = CrsName::parse("urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783").unwrap();
 //! assert_eq!((c.horizontal, c.vertical), (25832, Some(5783)));
 //! assert_eq!(CrsName::parse("urn:adv:crs:ETRS89_UTM32*DE_DHHN2016_NH").unwrap().vertical, Some(7837));

@@ -207,7 +207,7 @@ impl Crs {
     /// `OGC:CRS84`) that names a CRS; an error message saying so otherwise.
     ///
     /// ```
-    /// use skylod::crs::Crs;
+    /// use skylod::model::crs::Crs;
     /// assert_eq!(Crs::parse_named("EPSG:6697").unwrap().epsg, Some(6697));
     /// assert!(Crs::parse_named("wgs84").is_err());
     /// ```
@@ -234,7 +234,7 @@ impl Crs {
     /// Parse an `srsName` (never fails: an unrecognised name is [`CrsKind::Unknown`]).
     ///
     /// ```
-    /// use skylod::crs::{Crs, CrsKind};
+    /// use skylod::model::crs::{Crs, CrsKind};
     /// let c = Crs::parse("http://www.opengis.net/def/crs/EPSG/0/6697");
     /// assert!(matches!(c.kind, CrsKind::Geographic { lat_first: true, .. }));
     /// assert_eq!(c, Crs::parse("EPSG:6697"));
@@ -322,7 +322,7 @@ pub fn srs_key(name: &str) -> String {
 /// [`Crs::compatible`] also compares vertical CRSs where both name one).
 ///
 /// ```
-/// use skylod::crs::same_crs;
+/// use skylod::model::crs::same_crs;
 /// assert!(same_crs("EPSG:25832", "urn:ogc:def:crs:EPSG::25832"));
 /// assert!(same_crs("urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH", "urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"));
 /// assert!(!same_crs("EPSG:25832", "EPSG:25833"));

@@ -3,7 +3,7 @@
 //!
 //! It tries [`Builtin`] first (so every conversion the default build does gives the same
 //! result with the feature on) and falls back to PROJ through
-//! [`crate::crs::proj::Reprojector`], with its axis-order handling: geographic CRSs in their
+//! [`crate::model::crs::proj::Reprojector`], with its axis-order handling: geographic CRSs in their
 //! EPSG order (EPSG:4326 latitude first), projected CRSs easting first. The CRS is handed to
 //! PROJ by its EPSG codes ([`CrsName::from_crs`]); a CRS without one that [`Builtin`] knows
 //! (OGC:CRS84) goes through EPSG:4326. Heights pass through unchanged, as with [`Builtin`].
@@ -13,7 +13,7 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::crs::{Crs, PointTransform, ProjTransform};
+//! use skylod::model::crs::{Crs, PointTransform, ProjTransform};
 //! // Karlsruhe in WGS 84 (lat, lon) into DHDN / 3-degree Gauss-Kruger zone 3 (Bessel datum).
 //! let p = ProjTransform
 //!     .position(&Crs::epsg(4326), &Crs::epsg(31467), DVec3::new(49.0, 8.4, 115.0))

@@ -14,7 +14,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::crs::{lat_lon, utm_zone};
+//! use skylod::model::crs::{lat_lon, utm_zone};
 //! assert_eq!(utm_zone("urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"), Some((32, true)));
 //! // Barcelona, the synthetic district's corner.
 //! let (lat, lon) = lat_lon("EPSG:25831", 430000.0, 4581000.0).unwrap();
@@ -167,7 +167,7 @@ mod site_tests {
     fn site_of_a_model_is_the_centre_of_its_box() {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml");
-        let m = crate::citygml::read_file(&path).unwrap();
+        let m = crate::io::citygml::read_file(&path).unwrap();
         let crs = super::super::model_crs(&m, None);
         let s = model_site(&m, &crs).unwrap();
         let c = m.bbox().center();

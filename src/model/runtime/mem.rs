@@ -40,7 +40,7 @@ pub fn give_back_for(assets: usize) {
 /// ```
 /// let v = vec![0u8; 1 << 20];
 /// drop(v);
-/// skylod::runtime::mem::give_back();
+/// skylod::model::runtime::mem::give_back();
 /// ```
 pub fn give_back() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]

@@ -9,9 +9,9 @@
 //! # Example
 //!
 //! ```rust
-//! use skylod::synth::building::{build, BuildingGeom, SurfaceKind};
-//! use skylod::synth::layout::block_lots;
-//! use skylod::synth::Preset;
+//! use skylod::model::synth::building::{build, BuildingGeom, SurfaceKind};
+//! use skylod::model::synth::layout::block_lots;
+//! use skylod::model::synth::Preset;
 //!
 //! let mut lots = Vec::new();
 //! block_lots(7, 0, 0, &mut lots);
@@ -715,8 +715,8 @@ fn roof_installations(g: &mut BuildingGeom, lot: &Lot, rng: &mut ChaCha8Rng, ris
 mod tests {
     use super::*;
     use crate::model::newell;
-    use crate::synth::layout::block_lots;
-    use crate::synth::Preset;
+    use crate::model::synth::layout::block_lots;
+    use crate::model::synth::Preset;
 
     /// Every building of a 2x2 Paper district, with its geometry.
     fn each_building(seed: u64, mut f: impl FnMut(&BuildingGeom)) {

@@ -44,7 +44,7 @@
 //! # Example
 //!
 //! ```rust
-//! use skylod::synth::{generate, Preset};
+//! use skylod::model::synth::{generate, Preset};
 //!
 //! let opts = Preset::Small.defaults();
 //! let mut out = Vec::new();

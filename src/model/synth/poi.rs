@@ -8,7 +8,7 @@
 //! # Example
 //!
 //! ```rust
-//! use skylod::synth::{pois, write_pois_csv, Preset};
+//! use skylod::model::synth::{pois, write_pois_csv, Preset};
 //!
 //! let p = pois(&Preset::Paper.defaults());
 //! assert!(p.len() >= 4 && p.len() <= 8);
@@ -123,7 +123,7 @@ pub fn write_pois_csv<W: Write>(pois: &[Poi], mut out: W) -> Result<(), SynthErr
 /// (`district.gml` / `district.gml.gz` → `district.pois.csv`).
 ///
 /// ```
-/// use skylod::synth::pois_path;
+/// use skylod::model::synth::pois_path;
 /// use std::path::{Path, PathBuf};
 /// assert_eq!(pois_path(Path::new("a/d.gml")), PathBuf::from("a/d.pois.csv"));
 /// assert_eq!(pois_path(Path::new("d.gml.gz")), PathBuf::from("d.pois.csv"));
@@ -146,7 +146,7 @@ pub fn pois_path(out: &std::path::Path) -> std::path::PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Preset;
+    use crate::model::synth::Preset;
 
     #[test]
     fn paper_pois_are_corner_and_street_windows_in_front_of_walls() {
@@ -157,7 +157,7 @@ mod tests {
             assert!((poi.normal.length() - 1.0).abs() < 1e-9);
             assert_eq!(poi.normal.z, 0.0);
             // first floor: between 3.1 and 6.2 m above ground
-            let h = poi.position.z - crate::synth::layout::GROUND_Z;
+            let h = poi.position.z - crate::model::synth::layout::GROUND_Z;
             assert!(h > 3.1 && h < 6.2, "{h}");
             assert!(poi.id.contains("_o"));
         }

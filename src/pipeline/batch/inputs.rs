@@ -2,7 +2,7 @@
 //! CityGML: `.gml`, `.xml`, `.citygml`, and CityJSON: `.city.json`, `.city.jsonl`, other
 //! `.json`/`.jsonl` that are CityJSON by content; each optionally `.gz`), glob patterns expanded by
 //! skylod itself (`'tiles/**/*.gml'`, quoted so that the shell leaves them alone), and `-` for
-//! standard input (read whole into memory when it is first read, [`crate::io::stdin_bytes`]:
+//! standard input (read whole into memory when it is first read, [`crate::io::files::stdin_bytes`]:
 //! the writer copies from its source again, and a pipe can be read only once; its relative
 //! path is `stdin.gml`, messages name it `<stdin>`, JSON outputs `-`).
 //!
@@ -21,7 +21,7 @@
 //! for f in ["a/one.gml", "a/b/two.xml.gz", "a/notes.txt"] {
 //!     std::fs::write(dir.path().join(f), "").unwrap();
 //! }
-//! let found = skylod::batch::inputs::expand(&[dir.path().join("a")]).unwrap();
+//! let found = skylod::pipeline::batch::inputs::expand(&[dir.path().join("a")]).unwrap();
 //! let rel: Vec<_> = found.iter().map(|i| i.relative.display().to_string()).collect();
 //! assert_eq!(rel, ["b/two.xml.gz", "one.gml"]);
 //! ```
@@ -163,7 +163,7 @@ pub enum InputError {
 /// Whether a file name is a CityGML document skylod reads from a directory.
 ///
 /// ```
-/// use skylod::batch::inputs::is_citygml_name;
+/// use skylod::pipeline::batch::inputs::is_citygml_name;
 /// assert!(is_citygml_name("4018215.XML.gz") && is_citygml_name("b.citygml"));
 /// assert!(!is_citygml_name("README.md") && !is_citygml_name("schema.xsd"));
 /// ```
@@ -177,7 +177,7 @@ pub fn is_citygml_name(name: &str) -> bool {
 /// `.city.json` and `.city.jsonl` (CityJSONSeq), each optionally `.gz`.
 ///
 /// ```
-/// use skylod::batch::inputs::is_cityjson_name;
+/// use skylod::pipeline::batch::inputs::is_cityjson_name;
 /// assert!(is_cityjson_name("t/a.city.json") && is_cityjson_name("b.CITY.JSONL.gz"));
 /// assert!(!is_cityjson_name("package.json"));
 /// ```
@@ -206,7 +206,7 @@ pub fn sniff_cityjson(path: &Path) -> bool {
     let Some(head) = head_of(path) else {
         return false;
     };
-    let json = crate::cityjson::sniff(&head) == crate::cityjson::Sniffed::Json;
+    let json = crate::io::cityjson::sniff(&head) == crate::io::cityjson::Sniffed::Json;
     json && (memchr::memmem::find(&head, b"\"CityJSON").is_some()
         || memchr::memmem::find(&head, b"\"CityObjects\"").is_some())
 }
@@ -219,7 +219,7 @@ fn head_of(path: &Path) -> Option<Vec<u8>> {
     let mut r = std::io::BufReader::new(file);
     let gz = std::io::BufRead::fill_buf(&mut r)
         .ok()
-        .is_some_and(crate::io::is_gzip);
+        .is_some_and(crate::io::files::is_gzip);
     if gz {
         flate2::read::MultiGzDecoder::new(r)
             .take(SNIFF_BYTES as u64)
@@ -365,7 +365,7 @@ pub fn expand_all(args: &[PathBuf]) -> Result<Expanded, InputError> {
 pub const STDIN_RELATIVE: &str = "stdin.gml";
 
 /// What [`expand_spooled`] returns beside the inputs. Standard input is no longer spooled to
-/// a temporary file (it is held in memory, [`crate::io::stdin_bytes`]): nothing to keep
+/// a temporary file (it is held in memory, [`crate::io::files::stdin_bytes`]): nothing to keep
 /// alive, kept for the callers of 0.2.
 #[derive(Debug, Default)]
 pub struct Spool(bool);
@@ -378,7 +378,7 @@ impl Spool {
 }
 
 /// [`expand_all`], with `-` read now from `stdin` into memory (it becomes the bytes of the
-/// input `-`, [`crate::io::set_stdin_bytes`]; its relative path is `stdin.gml`).
+/// input `-`, [`crate::io::files::set_stdin_bytes`]; its relative path is `stdin.gml`).
 ///
 /// # Errors
 /// As [`expand`]; `-` given twice; `stdin` cannot be read.
@@ -392,7 +392,7 @@ pub fn expand_spooled(
         .iter()
         .any(|i| i.path.as_os_str() == STDIN_NAME);
     if used {
-        crate::io::set_stdin_bytes(stdin).map_err(InputError::Stdin)?;
+        crate::io::files::set_stdin_bytes(stdin).map_err(InputError::Stdin)?;
     }
     Ok((expanded, Spool(used)))
 }

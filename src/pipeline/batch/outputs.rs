@@ -8,13 +8,13 @@
 //! * an output file with one input is that input's output (format from its ending or the
 //!   one named).
 //! * a CityGML file (or `-`, standard output) with several inputs merges them into one
-//!   document ([`crate::citygml::merge`]): each input is written to a [`Staging`] directory
+//!   document ([`crate::io::citygml::merge`]): each input is written to a [`Staging`] directory
 //!   beside the target, then merged into it.
 //!
 //! # Example
 //! ```
-//! use skylod::batch::inputs::Input;
-//! use skylod::batch::outputs::{plan, Plan};
+//! use skylod::pipeline::batch::inputs::Input;
+//! use skylod::pipeline::batch::outputs::{plan, Plan};
 //! use skylod::export::Format;
 //! use std::path::{Path, PathBuf};
 //! let inputs = [
@@ -25,15 +25,15 @@
 //! assert_eq!(format, Format::Obj);
 //! assert_eq!(p, Plan::Mirror(vec![PathBuf::from("out/a/x.obj"), PathBuf::from("out/b/y.obj")]));
 //! assert_eq!(plan(&inputs, Path::new("all.gml"), None)?.0, Plan::Merge("all.gml".into()));
-//! # Ok::<(), skylod::batch::outputs::PlanError>(())
+//! # Ok::<(), skylod::pipeline::batch::outputs::PlanError>(())
 //! ```
 
-use crate::batch::inputs::Input;
-use crate::batch::shard::Shard;
-use crate::citygml::merge::{check_mergeable, MergeError};
-use crate::citygml::write::{check_target, is_stdout, WriteOptions};
-use crate::citygml::WriteError;
 use crate::export::{Format, UnknownFormat};
+use crate::io::citygml::merge::{check_mergeable, MergeError};
+use crate::io::citygml::write::{check_target, is_stdout, WriteOptions};
+use crate::io::citygml::WriteError;
+use crate::pipeline::batch::inputs::Input;
+use crate::pipeline::batch::shard::Shard;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 

@@ -1,9 +1,9 @@
 //! The reduce step of a sharded `lod` run: the levels files of every shard
-//! ([`crate::batch::shard_levels`]) read back, their options taken over, and their levels
+//! ([`crate::pipeline::batch::shard_levels`]) read back, their options taken over, and their levels
 //! turned into the [`LodResult`] one serial run would have made, ready to write.
 //!
 //! ```no_run
-//! use skylod::batch::reduce::{lod_result, Reduce};
+//! use skylod::pipeline::batch::reduce::{lod_result, Reduce};
 //! # fn f(model: &skylod::model::CityModel) -> Result<(), Box<dyn std::error::Error>> {
 //! let r = Reduce::read(&["levels-0.jsonl".into(), "levels-1.jsonl".into()])?;
 //! let opts = r.options(); // the options every shard ran with
@@ -14,12 +14,12 @@
 //! # Ok(()) }
 //! ```
 
-use crate::batch::shard_levels::{self, Combined, Header, LevelsError, LevelsFile};
+use crate::lod::poi::Poi;
 use crate::lod::rough::{rough_model, RoughOptions};
 use crate::lod::select::{roof_assets, SelectOptions, Selection};
 use crate::lod::{LodOptions, LodResult};
 use crate::model::CityModel;
-use crate::poi::Poi;
+use crate::pipeline::batch::shard_levels::{self, Combined, Header, LevelsError, LevelsFile};
 use std::path::PathBuf;
 use std::time::Instant;
 

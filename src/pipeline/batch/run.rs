@@ -7,9 +7,9 @@
 use super::inputs::Input;
 use super::outputs::{plan, Plan, PlanError, Targets};
 use super::shard::Shard;
-use crate::citygml::merge::{merge_named, MergeSummary};
-use crate::citygml::write::{is_stdout, WriteOptions};
 use crate::export::Format;
+use crate::io::citygml::merge::{merge_named, MergeSummary};
+use crate::io::citygml::write::{is_stdout, WriteOptions};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 

@@ -9,7 +9,7 @@
 //! # Example
 //! ```
 //! use glam::{DVec2, DVec3};
-//! use skylod::batch::scene_radius::Extent;
+//! use skylod::pipeline::batch::scene_radius::Extent;
 //! let tile = Extent { min: DVec2::new(0.0, 0.0), max: DVec2::new(100.0, 100.0) };
 //! assert!(tile.within(&[DVec3::new(150.0, 50.0, 10.0)], 60.0));
 //! assert!(!tile.within(&[DVec3::new(150.0, 150.0, 10.0)], 60.0));
@@ -99,16 +99,16 @@ fn open(path: &Path) -> Result<Box<dyn BufRead>, ExtentError> {
     };
     if path.as_os_str() == crate::model::STDIN_NAME {
         // standard input, held in memory: read from there (it is read again later)
-        let bytes = crate::io::stdin_bytes().map_err(io)?;
+        let bytes = crate::io::files::stdin_bytes().map_err(io)?;
         let r = std::io::Cursor::new(bytes);
-        return Ok(if crate::io::is_gzip(r.get_ref()) {
+        return Ok(if crate::io::files::is_gzip(r.get_ref()) {
             Box::new(BufReader::new(flate2::bufread::MultiGzDecoder::new(r)))
         } else {
             Box::new(r)
         });
     }
     let mut f = BufReader::with_capacity(256 * 1024, std::fs::File::open(path).map_err(io)?);
-    let gz = crate::io::is_gzip(f.fill_buf().map_err(io)?);
+    let gz = crate::io::files::is_gzip(f.fill_buf().map_err(io)?);
     Ok(if gz {
         Box::new(BufReader::with_capacity(
             256 * 1024,
@@ -119,13 +119,13 @@ fn open(path: &Path) -> Result<Box<dyn BufRead>, ExtentError> {
     })
 }
 
-/// True for a CityJSON input (JSON by content, [`crate::cityjson::sniff`]).
+/// True for a CityJSON input (JSON by content, [`crate::io::cityjson::sniff`]).
 fn is_json(path: &Path) -> bool {
     let Ok(mut r) = open(path) else {
         return false;
     };
     r.fill_buf()
-        .is_ok_and(|h| crate::cityjson::sniff(h) == crate::cityjson::Sniffed::Json)
+        .is_ok_and(|h| crate::io::cityjson::sniff(h) == crate::io::cityjson::Sniffed::Json)
 }
 
 fn numbers(text: &[u8]) -> impl Iterator<Item = f64> + '_ {

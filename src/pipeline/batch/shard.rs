@@ -19,7 +19,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::batch::shard::Shard;
+//! use skylod::pipeline::batch::shard::Shard;
 //! use std::collections::HashMap;
 //! let s: Shard = "1/3".parse()?;
 //! assert_eq!(s.files(7), 2..4); // 7 files: 0..2, 2..4, 4..7
@@ -32,7 +32,7 @@
 //! .into();
 //! let got = Shard::from_env(|k| env.get(k).map(|v| v.to_string()), None)?;
 //! assert_eq!(got, Some(s));
-//! # Ok::<(), skylod::batch::shard::ShardError>(())
+//! # Ok::<(), skylod::pipeline::batch::shard::ShardError>(())
 //! ```
 
 use glam::DVec3;

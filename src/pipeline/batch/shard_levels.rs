@@ -17,18 +17,18 @@
 //!
 //! [`combine`] reads the files of all N shards and gives what one serial run would have
 //! selected: levels combine by maximum, hits add up, POIs follow in shard order (the order
-//! of the serial run, [`crate::batch::shard`]); [`crate::batch::reduce`] makes the
+//! of the serial run, [`crate::pipeline::batch::shard`]); [`crate::pipeline::batch::reduce`] makes the
 //! selection of it.
 
-use crate::batch::shard::Shard;
-use crate::citygml::write::atomic_write;
-use crate::citygml::WriteError;
+use crate::export::report::report::PoiSeen;
+use crate::io::citygml::write::atomic_write;
+use crate::io::citygml::WriteError;
+use crate::lod::poi::checks::PoiFlag;
 use crate::lod::select::{PoiSelection, Selection};
 use crate::lod::LodOptions;
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::output::report::PoiSeen;
-use crate::poi::checks::PoiFlag;
+use crate::pipeline::batch::shard::Shard;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::io::{BufRead, Write};
@@ -534,14 +534,14 @@ pub fn combine(mut files: Vec<LevelsFile>, model: &CityModel) -> Result<Combined
 mod tests {
     use super::*;
     use crate::lod::lod;
-    use crate::synth::{generate, pois as synth_pois, Preset};
+    use crate::model::synth::{generate, pois as synth_pois, Preset};
     use glam::DVec3;
 
     fn model() -> (CityModel, Vec<Poi>) {
         let opts = Preset::Small.defaults();
         let mut xml = Vec::new();
         generate(&opts, &mut xml).unwrap();
-        let m = crate::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+        let m = crate::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
         let p = synth_pois(&opts).into_iter().map(Into::into).collect();
         (m, p)
     }

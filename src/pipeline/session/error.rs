@@ -1,13 +1,13 @@
 //! The one error of the library ([`Error`], [`Result`]): every stage's error converts into it.
 
-use crate::crs::CrsError;
 use crate::lod::bound::BoundError;
+use crate::lod::evaluation::EvalError;
+use crate::lod::poi::checks::TrustError;
+use crate::lod::poi::PoiError;
 use crate::lod::select::SelectError;
-use crate::pipeline::evaluation::EvalError;
+use crate::model::crs::CrsError;
+use crate::model::runtime::progress::Cancelled;
 use crate::pipeline::{PipelineError, PoiCrsError};
-use crate::poi::checks::TrustError;
-use crate::poi::PoiError;
-use crate::runtime::progress::Cancelled;
 use crate::solar::SolarError;
 
 /// The one error of the library ([`crate::Error`]): every sub-error converts into
@@ -18,16 +18,16 @@ use crate::solar::SolarError;
 pub enum Error {
     /// An input could not be read (file, line:column, gml:id where known).
     #[error(transparent)]
-    Read(#[from] crate::citygml::ReadError),
+    Read(#[from] crate::io::citygml::ReadError),
     /// The input arguments name no file (a pattern or directory without CityGML).
     #[error(transparent)]
-    Input(#[from] crate::batch::inputs::InputError),
+    Input(#[from] crate::pipeline::batch::inputs::InputError),
     /// A POI could not be read or is invalid.
     #[error(transparent)]
     Poi(#[from] PoiError),
     /// POIs of a region could not be made.
     #[error(transparent)]
-    Region(#[from] crate::poi::region::RegionError),
+    Region(#[from] crate::lod::poi::region::RegionError),
     /// The model or the POIs would give a confidently wrong answer (structured:
     /// [`TrustError::PoiOutside`] names each POI and its distance).
     #[error(transparent)]
@@ -55,16 +55,16 @@ pub enum Error {
     Eval(#[from] EvalError),
     /// The outputs could not be planned (mirror, merge).
     #[error(transparent)]
-    Plan(#[from] crate::batch::outputs::PlanError),
+    Plan(#[from] crate::pipeline::batch::outputs::PlanError),
     /// An output could not be written (the target is named).
     #[error(transparent)]
-    Write(#[from] crate::citygml::WriteError),
+    Write(#[from] crate::io::citygml::WriteError),
     /// Per-input outputs could not be merged into one document.
     #[error(transparent)]
-    Merge(Box<crate::citygml::merge::MergeError>),
+    Merge(Box<crate::io::citygml::merge::MergeError>),
     /// The model gives no site for the sun (empty, or a CRS not converted).
     #[error(transparent)]
-    Site(#[from] crate::crs::NoSite),
+    Site(#[from] crate::model::crs::NoSite),
     /// I/O on something that is not a named file (a caller's writer).
     #[error(transparent)]
     Io(#[from] std::io::Error),
@@ -105,7 +105,7 @@ impl From<PipelineError> for Error {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::runtime::progress::Stage;
+    use crate::model::runtime::progress::Stage;
 
     #[test]
     fn pipeline_errors_flatten_and_keep_their_message() {

@@ -3,11 +3,11 @@
 //! `lod` report.
 
 use super::{Result, Study};
-use crate::batch::shard_levels::Combined;
+use crate::export::report::report::{Parameters, Report, Timings};
 use crate::lod::{lod_with, LodOptions, LodResult};
-use crate::output::report::{Parameters, Report, Timings};
+use crate::model::runtime::progress::Progress;
+use crate::pipeline::batch::shard_levels::Combined;
 use crate::pipeline::{levels_of, Levels, LevelsOptions};
-use crate::runtime::progress::Progress;
 
 impl Study {
     /// The selection of every asset at the POIs, without an error bound and in the local
@@ -21,7 +21,7 @@ impl Study {
     }
 
     /// [`Study::levels`] for the selections of every shard combined
-    /// ([`crate::batch::reduce::Reduce::combine`] on [`super::Scene::model`]): the rough
+    /// ([`crate::pipeline::batch::reduce::Reduce::combine`] on [`super::Scene::model`]): the rough
     /// model rebuilt with `opts.lod`, the error bound checked when asked.
     ///
     /// # Errors
@@ -33,7 +33,7 @@ impl Study {
         progress: &dyn Progress,
     ) -> Result<Levels> {
         let framed = self.framed();
-        let lod = crate::batch::reduce::lod_result(&framed.model, combined, &opts.lod);
+        let lod = crate::pipeline::batch::reduce::lod_result(&framed.model, combined, &opts.lod);
         Ok(levels_of(&framed, opts, lod, progress)?)
     }
 
@@ -72,11 +72,11 @@ impl Study {
 #[cfg(test)]
 mod tests {
     use super::super::{Scene, SceneOptions};
-    use crate::batch::reduce::Reduce;
-    use crate::batch::shard::Shard;
-    use crate::batch::shard_levels::{header, write_levels_file};
+    use crate::model::runtime::progress::Silent;
+    use crate::pipeline::batch::reduce::Reduce;
+    use crate::pipeline::batch::shard::Shard;
+    use crate::pipeline::batch::shard_levels::{header, write_levels_file};
     use crate::pipeline::test_support::*;
-    use crate::runtime::progress::Silent;
 
     #[test]
     fn two_shards_reduced_give_the_levels_of_one_run() {

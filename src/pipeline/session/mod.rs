@@ -22,21 +22,21 @@ mod lod;
 
 pub use error::{Error, Result};
 
-use crate::batch::inputs::{expand, Input};
-use crate::batch::outputs::{create_parent, plan, Plan};
-use crate::citygml::write::WriteOptions;
-use crate::citygml::ReadError;
-use crate::crs::{model_site, Crs, LocalFrame, ModelSite};
 use crate::export::Format;
+use crate::io::citygml::write::WriteOptions;
+use crate::io::citygml::ReadError;
+use crate::lod::evaluation::Evaluation;
+use crate::lod::poi::checks::TrustError;
 use crate::lod::scene::full_scene;
+use crate::model::crs::{model_site, Crs, LocalFrame, ModelSite};
+use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::{CityModel, Poi, Source};
-use crate::pipeline::evaluation::Evaluation;
+use crate::pipeline::batch::inputs::{expand, Input};
+use crate::pipeline::batch::outputs::{create_parent, plan, Plan};
 use crate::pipeline::{check_model, PoiIrradiance, Traced, Written};
 use crate::pipeline::{evaluate, frame, horizon, levels, read_inputs, read_sources};
 use crate::pipeline::{trace_in, write_all};
 use crate::pipeline::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsOptions};
-use crate::poi::checks::TrustError;
-use crate::runtime::progress::{check, Progress, Stage};
 use crate::solar::irradiance::{IrradianceOptions, IrradianceTable};
 use crate::solar::{poi_horizon, poi_sky_view, poi_sun_hours, HorizonOptions, HorizonProfile};
 use crate::solar::{Site, SkyBundles, SkyView, SunHours, SunTable, DEFAULT_STEP_MIN, DEFAULT_YEAR};
@@ -53,7 +53,7 @@ pub struct SceneOptions {
     /// Merge inputs whose `srsName`s name different CRSs anyway.
     pub allow_mixed_crs: bool,
     /// Give free heap pages back to the system between stages for large models
-    /// (`malloc_trim`, process-wide: [`crate::runtime::mem::set_give_back`]).
+    /// (`malloc_trim`, process-wide: [`crate::model::runtime::mem::set_give_back`]).
     pub trim_memory: bool,
 }
 
@@ -131,7 +131,7 @@ pub struct Scene {
 
 impl Scene {
     /// Read `paths` (files, directories searched recursively, glob patterns:
-    /// [`crate::batch::inputs::expand`]) in parallel and merge them ([`Scene::load_inputs`]).
+    /// [`crate::pipeline::batch::inputs::expand`]) in parallel and merge them ([`Scene::load_inputs`]).
     ///
     /// # Errors
     /// [`Error::Input`] (nothing found), then as [`Scene::load_inputs`].
@@ -170,7 +170,7 @@ impl Scene {
         options: &SceneOptions,
         progress: &dyn Progress,
     ) -> Result<Scene> {
-        crate::runtime::mem::set_give_back(options.trim_memory);
+        crate::model::runtime::mem::set_give_back(options.trim_memory);
         let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
         let read = read_inputs(&paths, progress)?;
         Ok(Scene::from_read(inputs, read, options))
@@ -188,7 +188,7 @@ impl Scene {
         options: &SceneOptions,
         progress: &dyn Progress,
     ) -> Result<Scene> {
-        crate::runtime::mem::set_give_back(options.trim_memory);
+        crate::model::runtime::mem::set_give_back(options.trim_memory);
         let inputs = sources
             .iter()
             .map(|(name, _)| Input {
@@ -258,7 +258,7 @@ impl Scene {
         &self.failures
     }
 
-    /// Check `pois` ([`crate::poi::check_poi_list`]) and bring them and the model into the
+    /// Check `pois` ([`crate::lod::poi::check_poi_list`]) and bring them and the model into the
     /// local metric frame ([`crate::pipeline::frame`]), refusing POIs far outside the scene.
     ///
     /// # Errors
@@ -310,10 +310,10 @@ pub struct Study {
     local_pois: Vec<Poi>,
     warnings: Vec<String>,
     note: Option<String>,
-    frame_warning: Option<crate::crs::FrameWarning>,
+    frame_warning: Option<crate::model::crs::FrameWarning>,
     failures: Vec<ReadError>,
     read_s: f64,
-    full: OnceLock<crate::trace::Scene>,
+    full: OnceLock<crate::solar::trace::Scene>,
     sun: Mutex<Option<(SunOptions, Arc<SunTable>)>>,
 }
 
@@ -364,7 +364,7 @@ impl Study {
     }
 
     /// The frame's warning, structured (its text is the last of [`Study::warnings`]).
-    pub fn frame_warning(&self) -> Option<&crate::crs::FrameWarning> {
+    pub fn frame_warning(&self) -> Option<&crate::model::crs::FrameWarning> {
         self.frame_warning.as_ref()
     }
 
@@ -400,14 +400,14 @@ impl Study {
     }
 
     /// The full-detail scene (built on first use) and the seconds this call spent building it.
-    fn full(&self, progress: &dyn Progress) -> Result<(&crate::trace::Scene, f64)> {
+    fn full(&self, progress: &dyn Progress) -> Result<(&crate::solar::trace::Scene, f64)> {
         if let Some(s) = self.full.get() {
             return Ok((s, 0.0));
         }
         check(progress, Stage::Bvh)?;
         let t = std::time::Instant::now();
         let model = self.local_model();
-        let s = crate::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || {
+        let s = crate::model::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || {
             let s = full_scene(model);
             progress.advance(Stage::Bvh, 1, 0, None);
             s
@@ -419,7 +419,7 @@ impl Study {
     /// `f` for every POI against the full-detail scene, with the seconds of building it.
     fn trace<T: Send>(
         &self,
-        f: impl Fn(&crate::trace::Scene, &Poi) -> T + Sync,
+        f: impl Fn(&crate::solar::trace::Scene, &Poi) -> T + Sync,
         sky_rays: impl Fn(&T) -> Option<usize> + Sync,
         progress: &dyn Progress,
     ) -> Result<Traced<T>> {
@@ -434,7 +434,7 @@ impl Study {
     /// # Errors
     /// [`Error::Site`] without a site, [`Error::Solar`] for invalid options.
     pub fn sun_table(&self, sun: &SunOptions) -> Result<Arc<SunTable>> {
-        self.sun_table_with(sun, &crate::runtime::progress::Silent)
+        self.sun_table_with(sun, &crate::model::runtime::progress::Silent)
     }
 
     /// [`Study::sun_table`], built as the progress stage [`Stage::Sun`].
@@ -537,7 +537,7 @@ impl Study {
 
     /// Write every input at `levels` to `out` in `format` (`None`: from `out`'s ending, else
     /// CityGML): one input to a file, several mirrored below a directory (parent folders
-    /// created) or merged into one CityGML file ([`crate::batch::outputs::plan`]). An
+    /// created) or merged into one CityGML file ([`crate::pipeline::batch::outputs::plan`]). An
     /// existing output is replaced only with `overwrite`. The outputs written, in input order.
     ///
     /// # Errors
@@ -579,7 +579,7 @@ impl Study {
         }
         if let (Plan::Merge(target), Some(staging)) = (&plan, &targets.staging) {
             let parts: Vec<PathBuf> = (0..paths.len()).map(|k| staging.part(k)).collect();
-            crate::citygml::merge::merge_named(&parts, &paths, target, &wopts)
+            crate::io::citygml::merge::merge_named(&parts, &paths, target, &wopts)
                 .map_err(|e| Error::Merge(Box::new(e)))?;
             let total = written.iter().fold(Written::default(), |mut a, (_, w)| {
                 a.bytes += w.bytes;
@@ -619,9 +619,9 @@ impl Study {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lod::poi::checks::TrustError;
+    use crate::model::runtime::progress::Silent;
     use crate::pipeline::test_support::*;
-    use crate::poi::checks::TrustError;
-    use crate::runtime::progress::Silent;
 
     /// A study built in a function and returned: nothing borrowed.
     fn study(n: usize) -> Study {
@@ -688,7 +688,7 @@ mod tests {
         assert_eq!(w[0].1.bytes, on_disk.len() as u64);
         // Again without overwrite: refused, naming the output.
         let e = s.write_levels(&lv, &out, None, false, &Silent).unwrap_err();
-        assert!(matches!(&e, Error::Write(crate::citygml::WriteError::Exists(p)) if *p == out));
+        assert!(matches!(&e, Error::Write(crate::io::citygml::WriteError::Exists(p)) if *p == out));
         let mut buf = Vec::new();
         let w = s
             .write_levels_to(&lv, 0, Format::CityGml, &mut buf)

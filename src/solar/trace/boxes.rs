@@ -183,7 +183,7 @@ impl BoxIndex {
     /// Every box (grown by the margin) that the ray `origin + t dir` crosses with
     /// `0 <= t <= tmax`, as (entry distance, box index) appended to `out`, nearest first
     /// (ties by box index). The entry distance is 0 for a box around the origin. The
-    /// crossing is decided in f64 ([`crate::trace::ray::ray_aabb`]).
+    /// crossing is decided in f64 ([`crate::solar::trace::ray::ray_aabb`]).
     pub fn crossed(&self, origin: DVec3, dir: DVec3, tmax: f64, out: &mut Vec<(f64, u32)>) {
         let Some((bvh, ids)) = &self.bvh else {
             return;

@@ -14,7 +14,7 @@ use crate::model::Polygon;
 ///     DVec3::new(-1.0, -1.0, 5.0), DVec3::new(1.0, -1.0, 5.0),
 ///     DVec3::new(1.0, 1.0, 5.0), DVec3::new(-1.0, 1.0, 5.0),
 /// ]);
-/// let scene = skylod::trace::scene_of([(7, &quad)]);
+/// let scene = skylod::solar::trace::scene_of([(7, &quad)]);
 /// let hit = scene.first_hit(DVec3::ZERO, DVec3::Z, 0.0, f64::INFINITY).unwrap();
 /// assert_eq!((hit.tag, (hit.t - 5.0).abs() < 1e-6), (7, true));
 /// ```

@@ -1,5 +1,5 @@
 //! The ray queries of a [`Scene`]: the watertight triangle test, [`Scene::first_hit`] and
-//! [`Scene::occluded`] (see the module docs of [`crate::trace`]).
+//! [`Scene::occluded`] (see the module docs of [`crate::solar::trace`]).
 
 use super::scene::{Accel, Scene};
 use glam::{DVec3, Vec3A};
@@ -240,7 +240,7 @@ fn refine_t(tri: &Triangle, o: DVec3, d: DVec3, t32: f64) -> f64 {
 pub(super) mod tests {
     use super::*;
     use crate::model::Polygon;
-    use crate::trace::{BuildQuality, BvhLayout, SceneBuilder};
+    use crate::solar::trace::{BuildQuality, BvhLayout, SceneBuilder};
     use proptest::prelude::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;

@@ -1,6 +1,6 @@
 //! The scene and its BVH: tagged triangles collected in model coordinates, shifted to a
 //! local origin, converted to f32 and built into an obvhs BVH (see the module docs of
-//! [`crate::trace`]).
+//! [`crate::solar::trace`]).
 
 use crate::model::triangulate;
 use crate::model::{Bbox, Polygon};
@@ -314,7 +314,7 @@ impl std::fmt::Debug for Accel {
 /// ```rust
 /// use glam::DVec3;
 /// use skylod::model::Polygon;
-/// use skylod::trace::SceneBuilder;
+/// use skylod::solar::trace::SceneBuilder;
 /// let o = DVec3::new(430_000.0, 4_581_000.0, 0.0);
 /// let roof = Polygon::new(vec![
 ///     o + DVec3::new(-5.0, 5.0, 8.0), o + DVec3::new(5.0, 5.0, 8.0),
@@ -374,7 +374,7 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::trace::query::tests::random_scene;
+    use crate::solar::trace::query::tests::random_scene;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

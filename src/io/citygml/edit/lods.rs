@@ -13,7 +13,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::citygml::edit::{LodMode, Lods};
+//! use skylod::io::citygml::edit::{LodMode, Lods};
 //! let keep2 = Lods { lods: vec![2], mode: LodMode::Keep, keep_empty: false };
 //! assert_eq!(keep2.kept(&[1, 2, 3]), vec![2]);
 //! let max = Lods { lods: vec![1, 2, 3], mode: LodMode::Maximum, keep_empty: false };
@@ -22,8 +22,8 @@
 
 use super::tree::{Kind, Tree};
 use super::{run, Context, Decision, EditSummary, Rule};
-use crate::citygml::write::WriteOptions;
-use crate::citygml::WriteError;
+use crate::io::citygml::write::WriteOptions;
+use crate::io::citygml::WriteError;
 use std::path::Path;
 
 /// How [`Lods::lods`] is applied.

@@ -24,7 +24,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::citygml::edit::{subset, Subset};
+//! use skylod::io::citygml::edit::{subset, Subset};
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");
 //! std::fs::write(&src, br##"<CityModel xmlns="http://www.opengis.net/citygml/2.0"
@@ -58,8 +58,8 @@ pub(crate) mod walk;
 pub use lods::{filter_lods, LodMode, Lods};
 pub use subset::{subset, BboxMode, Subset};
 
-use crate::citygml::error::{Location, ReadError, WriteError};
-use crate::citygml::write::{check_target, WriteOptions};
+use crate::io::citygml::error::{Location, ReadError, WriteError};
+use crate::io::citygml::write::{check_target, WriteOptions};
 use crate::model::Bbox;
 use std::fmt;
 use std::io::Write;
@@ -292,7 +292,7 @@ impl RootEnvelope {
             prefix: self.prefix.clone(),
             file: 0,
         };
-        match crate::citygml::write::envelope_xml(&site) {
+        match crate::io::citygml::write::envelope_xml(&site) {
             Some(env) => {
                 format!("<{p}boundedBy>{env}</{p}boundedBy>", p = self.bounded_by).into_bytes()
             }
@@ -426,7 +426,7 @@ fn run<'r>(
         source: e,
     };
     let bytes_in = std::cell::Cell::new(0u64);
-    let bytes_out = crate::citygml::write::atomic_write(out, |w| {
+    let bytes_out = crate::io::citygml::write::atomic_write(out, |w| {
         let mut n = 0u64;
         let read = walk::walk::<WriteError>(input, &mut |piece| {
             match piece {

@@ -9,16 +9,16 @@
 //!
 //! # Example
 //! ```
-//! use skylod::citygml::edit::{BboxMode, Subset};
+//! use skylod::io::citygml::edit::{BboxMode, Subset};
 //! let s = Subset { bbox: Some([0.0, 0.0, 10.0, 10.0]), mode: BboxMode::Within, ..Subset::default() };
 //! assert!(s.bbox_matches(&[1.0, 1.0, 9.0, 9.0]) && !s.bbox_matches(&[5.0, 5.0, 11.0, 9.0]));
 //! ```
 
 use super::tree::Tree;
 use super::{run, Context, Decision, EditSummary, Rule};
-use crate::citygml::write::WriteOptions;
-use crate::citygml::WriteError;
-use crate::crs::{build_transform, Crs, PointTransform};
+use crate::io::citygml::write::WriteOptions;
+use crate::io::citygml::WriteError;
+use crate::model::crs::{build_transform, Crs, PointTransform};
 use glam::DVec3;
 use std::path::Path;
 

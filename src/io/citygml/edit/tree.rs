@@ -4,8 +4,8 @@
 //! [`super::lods`] decide on this tree which spans to cut; the tree never holds more than one
 //! member, so memory follows the largest member, not the file.
 
-use crate::citygml::ns::{classify, Module, Ns};
-use crate::citygml::read::coords::parse_gml_points;
+use crate::io::citygml::ns::{classify, Module, Ns};
+use crate::io::citygml::read::coords::parse_gml_points;
 use crate::model::Bbox;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::name::ResolveResult;
@@ -215,7 +215,7 @@ fn node_of(
     let kind = match ns {
         Ns::Gml => Kind::Gml,
         Ns::Xlink | Ns::None => Kind::Other,
-        Ns::Foreign if crate::citygml::ns::is_standard_foreign(uri) => Kind::Other,
+        Ns::Foreign if crate::io::citygml::ns::is_standard_foreign(uri) => Kind::Other,
         _ => match lod_of(&local) {
             Some(n) => Kind::Lod(n),
             None if local.starts_with(|c: char| c.is_ascii_uppercase()) => Kind::Feature,

@@ -2,8 +2,8 @@
 //! whitespace, comments, the end), and each child of the root whole. Only the current child
 //! is held in memory.
 
-use crate::citygml::error::{Location, ReadError};
-use crate::citygml::source;
+use crate::io::citygml::error::{Location, ReadError};
+use crate::io::citygml::source;
 use quick_xml::events::Event;
 use std::io::{self, BufRead, Read};
 use std::path::Path;
@@ -30,7 +30,7 @@ struct Tee<R> {
 
 impl<R: BufRead> Read for Tee<R> {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        crate::io::read_through_buf(self, buf)
+        crate::io::files::read_through_buf(self, buf)
     }
 }
 

@@ -3,8 +3,8 @@
 
 use super::ids::{rewrite_start, Rewrite};
 use super::scan::{ns_of, open, xml_err};
-use crate::citygml::error::ReadError;
-use crate::citygml::ns::{classify, Ns};
+use crate::io::citygml::error::ReadError;
+use crate::io::citygml::ns::{classify, Ns};
 use quick_xml::events::{BytesText, Event};
 use quick_xml::Writer;
 use std::io::Write;

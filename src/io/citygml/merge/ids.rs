@@ -1,10 +1,10 @@
 //! Colliding `gml:id`s renamed, and the references to them that follow (see the module docs
-//! of [`crate::citygml::merge`], "Identifiers").
+//! of [`crate::io::citygml::merge`], "Identifiers").
 
 use super::copy::xmlns_key;
 use super::scan::{ns_of, xml_err};
-use crate::citygml::error::ReadError;
-use crate::citygml::ns::{classify, Ns};
+use crate::io::citygml::error::ReadError;
+use crate::io::citygml::ns::{classify, Ns};
 use quick_xml::escape::escape;
 use quick_xml::events::attributes::Attribute;
 use quick_xml::events::BytesStart;
@@ -18,7 +18,7 @@ use std::path::Path;
 ///
 /// ```
 /// use std::collections::HashSet;
-/// use skylod::citygml::merge::renamed_id;
+/// use skylod::io::citygml::merge::renamed_id;
 /// let taken: HashSet<String> = ["w".into(), "w__2".into()].into();
 /// assert_eq!(renamed_id("w", 3, &taken), "w__3");
 /// assert_eq!(renamed_id("w", 2, &taken), "w__2_2");

@@ -31,13 +31,13 @@
 //! # Refused
 //!
 //! Inputs of different CityGML versions, and inputs whose `srsName`s denote different CRSs
-//! ([`crate::crs::same_crs`]; an input without one agrees with any), are refused
+//! ([`crate::model::crs::same_crs`]; an input without one agrees with any), are refused
 //! before anything is written, naming the files.
 //!
 //! # Example
 //! ```
-//! use skylod::citygml::merge::merge_files;
-//! use skylod::citygml::write::WriteOptions;
+//! use skylod::io::citygml::merge::merge_files;
+//! use skylod::io::citygml::write::WriteOptions;
 //! let dir = tempfile::tempdir().unwrap();
 //! let doc = |x: f64| format!(r##"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0"
 //!  xmlns:gml="http://www.opengis.net/gml" xmlns:bldg="http://www.opengis.net/citygml/building/2.0"
@@ -67,7 +67,7 @@ pub use ids::renamed_id;
 
 use super::error::{ReadError, WriteError};
 use super::ns::{classify, Ns};
-use crate::crs::same_crs;
+use crate::model::crs::same_crs;
 use quick_xml::escape::escape;
 use quick_xml::events::attributes::Attribute;
 use quick_xml::events::{BytesStart, Event};
@@ -78,7 +78,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::write::{check_target, WriteOptions};
-use crate::io::CountingWriter;
+use crate::io::files::CountingWriter;
 use copy::{copy_children, xmlns_key, CopyError};
 use ids::Rewrite;
 use scan::{is_header, ns_of, open, scan, xml_err, Key};
@@ -257,8 +257,8 @@ fn compare<T>(
     Ok(())
 }
 
-impl From<crate::io::FileError> for MergeError {
-    fn from(e: crate::io::FileError) -> Self {
+impl From<crate::io::files::FileError> for MergeError {
+    fn from(e: crate::io::files::FileError) -> Self {
         MergeError::Write(e.into())
     }
 }
@@ -286,7 +286,7 @@ pub fn merge_named(
     }
     check_target(out, opts, inputs.iter().map(PathBuf::as_path))?;
     let mut summary = None;
-    crate::io::atomic_write(out, |w| {
+    crate::io::files::atomic_write(out, |w| {
         let s = merge_into(inputs, names, w, out)?;
         let n = s.bytes;
         summary = Some(s);
@@ -302,7 +302,7 @@ pub fn merge_named_to(
     names: &[PathBuf],
     w: &mut dyn Write,
 ) -> Result<MergeSummary, MergeError> {
-    merge_into(inputs, names, w, Path::new(crate::io::WRITER_NAME))
+    merge_into(inputs, names, w, Path::new(crate::io::files::WRITER_NAME))
 }
 
 /// The merge written into `w`; `out` names the output in errors.

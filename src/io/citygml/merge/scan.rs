@@ -1,9 +1,9 @@
 //! The first pass over each input: its prolog, root start tag and namespace declarations,
 //! `srsName`, envelope (or coordinate bounds), `gml:id`s and member kinds.
 
-use crate::citygml::error::ReadError;
-use crate::citygml::ns::{classify, Ns};
-use crate::citygml::source;
+use crate::io::citygml::error::ReadError;
+use crate::io::citygml::ns::{classify, Ns};
+use crate::io::citygml::source;
 use quick_xml::events::Event;
 use quick_xml::name::ResolveResult;
 use quick_xml::{NsReader, Writer};

@@ -3,7 +3,7 @@
 
 use super::state::{EnvOwner, Owner, Parser};
 use super::xlink::{PolyRef, Walk};
-use crate::citygml::error::{Location, ReadError};
+use crate::io::citygml::error::{Location, ReadError};
 use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon, SourceFile, Warning};
 
 /// Drop the polygons at the end of the arena that no reference needs any more (`uses` 0),

@@ -1,8 +1,8 @@
 //! Namespaces and attributes of a start tag: the few attributes the reader needs.
 
 use super::state::{Attrs, Parser};
-use crate::citygml::error::ReadError;
-use crate::citygml::ns::{self, Ns};
+use crate::io::citygml::error::ReadError;
+use crate::io::citygml::ns::{self, Ns};
 use quick_xml::events::attributes::Attribute;
 use quick_xml::events::BytesStart;
 use quick_xml::name::{QName, ResolveResult};
@@ -138,7 +138,7 @@ impl Parser<'_> {
 #[cfg(test)]
 mod tests {
     fn duplicate_warnings(xml: &str) -> usize {
-        let m = crate::citygml::read::read_bytes(xml.as_bytes(), "t.gml").unwrap();
+        let m = crate::io::citygml::read::read_bytes(xml.as_bytes(), "t.gml").unwrap();
         m.warnings
             .iter()
             .filter(|w| w.message.starts_with("duplicate gml:id"))

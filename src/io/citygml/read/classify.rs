@@ -3,8 +3,8 @@
 
 use super::coords::CoordAttrs;
 use super::state::{Attrs, Capture, CoordKind, EnvOwner, Implicit, Kind, Parser, Part};
-use crate::citygml::error::ReadError;
-use crate::citygml::ns::{Module, Ns};
+use crate::io::citygml::error::ReadError;
+use crate::io::citygml::ns::{Module, Ns};
 use crate::model::{AssetKind, Bbox, Building, CityGmlVersion, EnvelopeSite};
 
 pub(super) const SHELL_NAMES: &[(&[u8], AssetKind)] = &[

@@ -3,7 +3,7 @@
 
 use super::state::{Capture, CoordKind, Parser};
 use super::MAX_COORDINATE;
-use crate::citygml::error::ReadError;
+use crate::io::citygml::error::ReadError;
 use glam::DVec3;
 
 #[derive(Debug, Clone, Copy, Default)]

@@ -5,8 +5,8 @@ use super::classify::is_lod_property;
 use super::state::{
     Capture, EnvOwner, Frame, Kind, Owner, Parser, Part, PendingGeom, PolyBuild, NO_REC,
 };
-use crate::citygml::error::ReadError;
-use crate::citygml::ns::{self, Module, Ns};
+use crate::io::citygml::error::ReadError;
+use crate::io::citygml::ns::{self, Module, Ns};
 use crate::model::{AssetKind, Bbox, LodGeometry};
 use quick_xml::events::BytesStart;
 use quick_xml::NsReader;

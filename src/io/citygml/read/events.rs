@@ -2,8 +2,8 @@
 
 use super::state::Parser;
 use super::ReadOptions;
-use crate::citygml::error::ReadError;
-use crate::citygml::source;
+use crate::io::citygml::error::ReadError;
+use crate::io::citygml::source;
 use crate::model::CityModel;
 use quick_xml::events::Event;
 use quick_xml::NsReader;

@@ -25,7 +25,7 @@
 //!    <gml:LinearRing><gml:posList>0 0 5 1 0 5 1 1 5 0 0 5</gml:posList></gml:LinearRing>
 //!   </gml:exterior></gml:Polygon></gml:surfaceMember></gml:MultiSurface></bldg:lod2MultiSurface>
 //!  </bldg:RoofSurface></bldg:boundedBy></bldg:Building></cityObjectMember></CityModel>"#;
-//! let model = skylod::citygml::read::read_bytes(xml, "inline.gml").unwrap();
+//! let model = skylod::io::citygml::read::read_bytes(xml, "inline.gml").unwrap();
 //! assert_eq!(model.buildings.len(), 1);
 //! assert_eq!(model.assets[0].kind, skylod::model::AssetKind::Roof);
 //! assert_eq!(model.assets[0].detail_polygons()[0].exterior().len(), 3);
@@ -48,8 +48,8 @@ mod xlink;
 pub use events::read_from;
 pub use stream::{stream, Chunk, StreamSummary, Streamed, CHUNK_BYTES};
 
-use crate::citygml::error::ReadError;
-use crate::citygml::source;
+use crate::io::citygml::error::ReadError;
+use crate::io::citygml::source;
 use crate::model::{CityModel, Source};
 use std::path::Path;
 
@@ -90,7 +90,7 @@ impl Default for ReadOptions {
 }
 
 /// Read one CityGML file (`.gml`, `.xml`, gzip-compressed or not); `-` reads standard input
-/// (whole, into memory: [`crate::io::stdin_bytes`]).
+/// (whole, into memory: [`crate::io::files::stdin_bytes`]).
 pub fn read_file(path: &Path) -> Result<CityModel, ReadError> {
     read_file_with(path, &ReadOptions::default())
 }
@@ -169,7 +169,7 @@ pub fn read_source_observed(
     Ok(model)
 }
 
-/// A CityJSON document read ([`crate::cityjson`]), or the document handed back for the
+/// A CityJSON document read ([`crate::io::cityjson`]), or the document handed back for the
 /// CityGML reader.
 fn json_or_xml(
     doc: source::Document,
@@ -177,13 +177,13 @@ fn json_or_xml(
 ) -> Result<Result<CityModel, source::Document>, ReadError> {
     Ok(Ok(match doc {
         source::Document::Plain(doc) if source::is_json(&doc) => {
-            crate::cityjson::read_slice(&doc, name)?
+            crate::io::cityjson::read_slice(&doc, name)?
         }
         source::Document::Gzip(mut reader, n) => {
             if !source::is_json(source::peek(&mut reader)) {
                 return Ok(Err(source::Document::Gzip(reader, n)));
             }
-            crate::cityjson::read_reader(reader, name, true)?
+            crate::io::cityjson::read_reader(reader, name, true)?
         }
         doc => return Ok(Err(doc)),
     }))

@@ -1,7 +1,7 @@
 //! Positions: byte offsets, line and column numbers, locations of errors and warnings.
 
 use super::state::{Parser, MARK_STEP};
-use crate::citygml::error::{Location, ReadError};
+use crate::io::citygml::error::{Location, ReadError};
 use crate::model::Warning;
 
 impl Parser<'_> {

@@ -4,8 +4,8 @@
 use super::coords::CoordAttrs;
 use super::xlink::Registry;
 use super::ReadOptions;
-use crate::citygml::error::Location;
-use crate::citygml::ns::Ns;
+use crate::io::citygml::error::Location;
+use crate::io::citygml::ns::Ns;
 use crate::model::{Asset, AssetKind, Building, CityGmlVersion, EnvelopeSite, Polygon, Warning};
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;

@@ -37,7 +37,7 @@ use super::events::{configure, finish, parse_events};
 use super::ids::INVALID_IDS_LISTED;
 use super::state::{EnvOwner, LineMark, Parser, NO_REC};
 use super::ReadOptions;
-use crate::citygml::source;
+use crate::io::citygml::source;
 use crate::model::{AssetKind, CityGmlVersion, CityModel, Warning};
 use quick_xml::NsReader;
 use std::path::Path;

@@ -2,7 +2,7 @@
 //! after the last event (forward references work) within depth and work limits.
 
 use super::state::{HrefRef, Parser, Part};
-use crate::citygml::error::ReadError;
+use crate::io::citygml::error::ReadError;
 use crate::model::Polygon;
 use foldhash::{HashMap, HashMapExt, HashSet};
 use glam::DVec3;

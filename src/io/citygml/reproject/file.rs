@@ -1,5 +1,5 @@
 //! Reprojection of one CityGML document (`skylod reproject`): the source CRS from `-s` or
-//! the document's `srsName`, the points through PROJ ([`crate::crs::proj::Reprojector`],
+//! the document's `srsName`, the points through PROJ ([`crate::model::crs::proj::Reprojector`],
 //! feature `proj`), and every coordinate, `srsName`, envelope and implicit-geometry
 //! translation rewritten by [`super::rewrite_edits`].
 //!
@@ -33,15 +33,15 @@ pub enum ReprojectError {
     Proj(String),
     /// Reading the document.
     #[error(transparent)]
-    Read(#[from] crate::citygml::ReadError),
+    Read(#[from] crate::io::citygml::ReadError),
     /// Writing the document.
     #[error(transparent)]
-    Write(#[from] crate::citygml::WriteError),
+    Write(#[from] crate::io::citygml::WriteError),
 }
 
 #[cfg(feature = "proj")]
-impl From<crate::crs::proj::ProjError> for ReprojectError {
-    fn from(e: crate::crs::proj::ProjError) -> Self {
+impl From<crate::model::crs::proj::ProjError> for ReprojectError {
+    fn from(e: crate::model::crs::proj::ProjError) -> Self {
         ReprojectError::Proj(e.0)
     }
 }
@@ -49,11 +49,11 @@ impl From<crate::crs::proj::ProjError> for ReprojectError {
 #[cfg(feature = "proj")]
 mod with_proj {
     use super::ReprojectError;
-    use crate::citygml::read_file;
-    use crate::citygml::reproject::{rewrite_edits, RewriteSummary};
-    use crate::citygml::write::{write_document, WriteOptions};
-    use crate::crs::proj::Reprojector;
-    use crate::crs::CrsName;
+    use crate::io::citygml::read_file;
+    use crate::io::citygml::reproject::{rewrite_edits, RewriteSummary};
+    use crate::io::citygml::write::{write_document, WriteOptions};
+    use crate::model::crs::proj::Reprojector;
+    use crate::model::crs::CrsName;
     use glam::DVec3;
     use std::path::Path;
 

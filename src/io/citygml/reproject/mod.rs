@@ -1,5 +1,5 @@
 //! Rewriting every coordinate of a CityGML document through a point transform, span-preserving
-//! (the machinery of `skylod reproject`; the PROJ transform itself is `crate::crs::proj`).
+//! (the machinery of `skylod reproject`; the PROJ transform itself is `crate::model::crs::proj`).
 //!
 //! One streaming pass over the source ([`quick_xml::NsReader`]) finds every coordinate in the
 //! GML namespace and replaces the text of its element; everything else is copied byte for byte
@@ -36,8 +36,8 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::citygml::reproject::rewrite_file;
-//! use skylod::citygml::write::WriteOptions;
+//! use skylod::io::citygml::reproject::rewrite_file;
+//! use skylod::io::citygml::write::WriteOptions;
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");
 //! std::fs::write(&src, br#"<CityModel xmlns="http://www.opengis.net/citygml/2.0"

@@ -43,9 +43,9 @@ mod feature;
 mod geometry;
 mod names;
 
-use crate::citygml::edit::walk::{self, Piece};
-use crate::citygml::error::{ReadError, WriteError};
-use crate::citygml::write::{check_target, WriteOptions};
+use crate::io::citygml::edit::walk::{self, Piece};
+use crate::io::citygml::error::{ReadError, WriteError};
+use crate::io::citygml::write::{check_target, WriteOptions};
 use dom::{El, Node};
 use names::{Module, Src};
 use std::io::Write;
@@ -177,7 +177,7 @@ pub fn upgrade(
     let mut texcoords = Default::default();
     let mut buf = Vec::new();
     let bytes_in = std::cell::Cell::new(0u64);
-    let bytes_out = crate::citygml::write::atomic_write(out, |w| {
+    let bytes_out = crate::io::citygml::write::atomic_write(out, |w| {
         let n = std::cell::Cell::new(0u64);
         let put = |w: &mut dyn Write, b: &[u8]| -> Result<(), WriteError> {
             w.write_all(b).map_err(io)?;
@@ -203,7 +203,7 @@ pub fn upgrade(
                         loc: walk::location(input, line - 1, &bytes[..e.at.min(bytes.len())]),
                         message: e.message,
                     })?;
-                    if crate::citygml::edit::is_member(local) {
+                    if crate::io::citygml::edit::is_member(local) {
                         counts.members += 1;
                     }
                     let mut ctx = feature::Ctx {

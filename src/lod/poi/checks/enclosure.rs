@@ -14,13 +14,13 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::poi::checks::{poi_flags, PoiFlag};
-//! use skylod::poi::Poi;
-//! use skylod::synth::boxes::{boxes_citygml, BoxBuilding};
+//! use skylod::lod::poi::checks::{poi_flags, PoiFlag};
+//! use skylod::lod::poi::Poi;
+//! use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
 //! let b = BoxBuilding { id: "B".into(), min: [0.0, 0.0], max: [10.0, 10.0], height: 10.0,
 //!     installations: vec![] };
 //! let xml = boxes_citygml(&[b], [0.0, 0.0, 0.0]);
-//! let m = skylod::citygml::read::read_bytes(xml.as_bytes(), "b.gml").unwrap();
+//! let m = skylod::io::citygml::read::read_bytes(xml.as_bytes(), "b.gml").unwrap();
 //! let scene = skylod::lod::scene::full_scene(&m);
 //! let inside = Poi { id: "in".into(), position: DVec3::new(5.0, 5.0, 5.0), normal: None };
 //! let flags = poi_flags(&scene, &m, &inside, None);
@@ -33,7 +33,7 @@ use super::surroundings::Surroundings;
 use crate::model::CityModel;
 use crate::model::Poi;
 use crate::model::POI_OFFSET;
-use crate::trace::Scene;
+use crate::solar::trace::Scene;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 

@@ -5,17 +5,17 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::poi::checks::check_pois_near;
+//! use skylod::lod::poi::checks::check_pois_near;
 //! use skylod::model::Bbox;
-//! use skylod::poi::Poi;
+//! use skylod::lod::poi::Poi;
 //! let scene = Bbox::of_points(&[DVec3::new(430000.0, 4581000.0, 0.0), DVec3::new(430500.0, 4581500.0, 30.0)]);
 //! let near = Poi { id: "a".into(), position: DVec3::new(430100.0, 4581100.0, 2.0), normal: None };
 //! assert!(check_pois_near(&scene, &[near], 1000.0).is_ok());
 //! let latlon = Poi { id: "b".into(), position: DVec3::new(41.38, 2.16, 2.0), normal: None };
 //! let e = check_pois_near(&scene, &[latlon], 1000.0).unwrap_err();
-//! let skylod::poi::checks::TrustError::PoiOutside(far) = e else { panic!("{e}") };
+//! let skylod::lod::poi::checks::TrustError::PoiOutside(far) = e else { panic!("{e}") };
 //! assert_eq!(far.pois[0].id, "b");
-//! assert_eq!(far.pois[0].hint, Some(skylod::poi::checks::OutsideHint::Degrees));
+//! assert_eq!(far.pois[0].hint, Some(skylod::lod::poi::checks::OutsideHint::Degrees));
 //! ```
 
 use super::TrustError;
@@ -192,8 +192,8 @@ impl std::fmt::Display for PoisOutside {
 /// ```
 /// use glam::DVec3;
 /// use skylod::model::Bbox;
-/// use skylod::poi::checks::check_lat_lon_order;
-/// use skylod::poi::Poi;
+/// use skylod::lod::poi::checks::check_lat_lon_order;
+/// use skylod::lod::poi::Poi;
 /// let scene = Bbox::of_points(&[DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 1.0)]);
 /// // a "scene" near latitude 48.77, longitude 11.42
 /// let near = |p: DVec3| (p.x - 48.77).abs() < 0.01 && (p.y - 11.42).abs() < 0.01;

@@ -10,15 +10,15 @@
 //!
 //! # Example
 //! ```
-//! use skylod::crs::same_crs;
+//! use skylod::model::crs::same_crs;
 //! assert!(same_crs("EPSG:25832", "urn:ogc:def:crs:EPSG::25832"));
 //! assert!(same_crs("urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH", "urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"));
 //! assert!(!same_crs("EPSG:25832", "EPSG:25833"));
 //! ```
 
 use super::TrustError;
-pub use crate::crs::same_crs;
-use crate::crs::srs_key as key;
+pub use crate::model::crs::same_crs;
+use crate::model::crs::srs_key as key;
 use crate::model::CityModel;
 
 /// Refuse a model merged from files in different CRSs, naming each CRS once with its number

@@ -8,11 +8,11 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::poi::checks::surroundings::Surroundings;
-//! use skylod::synth::boxes::{boxes_citygml, BoxBuilding};
+//! use skylod::lod::poi::checks::surroundings::Surroundings;
+//! use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
 //! let b = BoxBuilding { id: "B".into(), min: [0.0, 0.0], max: [10.0, 10.0], height: 10.0,
 //!     installations: vec![] };
-//! let m = skylod::citygml::read::read_bytes(boxes_citygml(&[b], [0.0, 0.0, 0.0]).as_bytes(),
+//! let m = skylod::io::citygml::read::read_bytes(boxes_citygml(&[b], [0.0, 0.0, 0.0]).as_bytes(),
 //!     "b.gml").unwrap();
 //! let around = Surroundings::new(&m);
 //! assert_eq!(around.lowest_near(DVec3::new(20.0, 5.0, 0.0), 100.0), Some(0.0));
@@ -20,7 +20,7 @@
 //! ```
 
 use crate::model::{Bbox, CityModel, Polygon};
-use crate::trace::{scene_of, Scene};
+use crate::solar::trace::{scene_of, Scene};
 use glam::DVec3;
 use std::collections::HashMap;
 
