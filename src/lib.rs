@@ -7,8 +7,9 @@
 //! end over the same calls. The library never prints and never panics on input.
 //!
 //! The crate root re-exports what a program needs for that path (the calls, their options and
-//! results, the model, POIs, formats, errors, progress); the modules below hold the rest, one
-//! stage per folder, each importing only stages below it (`ARCHITECTURE.md`).
+//! results, the model, POIs, formats, errors, progress); the six modules below hold the rest,
+//! layered [`model`] < [`io`] < [`solar`] < [`lod`] < [`export`] < [`pipeline`], each importing
+//! only the groups before it (`ARCHITECTURE.md`).
 //!
 //! Cargo features: `cli` (default) builds the `skylod` program and its dependencies (clap,
 //! anyhow, indicatif, clap_complete, clap_mangen); `skylod = { default-features = false }`
