@@ -229,6 +229,15 @@ pub fn citygml_from_cityjson(
     Ok(summary)
 }
 
+/// Whether the file at `path` holds JSON (CityJSON, CityJSONSeq; gzip-compressed or not), by
+/// its first bytes ([`crate::cityjson::sniff`]); false when it cannot be read.
+pub fn is_json_file(path: &Path) -> bool {
+    open(path).is_ok_and(|mut r| {
+        r.fill_buf()
+            .is_ok_and(|h| crate::cityjson::sniff(h) == crate::cityjson::Sniffed::Json)
+    })
+}
+
 /// Open a (possibly gzip-compressed) file.
 fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
     let io = |source| ReadError::Io {
