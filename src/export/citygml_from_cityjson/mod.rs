@@ -13,9 +13,12 @@
 //!   polygon of more than 3 vertices as a fan of triangles, counted), `GenericCityObject`,
 //!   `CityObjectGroup` (`grp:groupMember` links to its `children`). A child is nested in its
 //!   parent where the parent's feature has a property for it; otherwise it is a member of
-//!   its own. Types without a CityGML 2.0 counterpart (`BuildingRoom`, `BuildingStorey`,
-//!   `BuildingUnit`, `BuildingFurniture`, `BuildingConstructiveElement`, `OtherConstruction`,
-//!   `Waterway`, tunnel and bridge rooms, extensions `+...`) are dropped and counted.
+//!   its own. `OtherConstruction`, `Waterway` and extension types (`+...`) become
+//!   `GenericCityObject`s with their type in the generic attribute `cityjson_type`
+//!   (counted); interior types without a CityGML 2.0 counterpart at LoD 0 to 3
+//!   (`BuildingRoom`, `BuildingStorey`, `BuildingUnit`, `BuildingFurniture`,
+//!   `BuildingConstructiveElement`, tunnel and bridge rooms, hollow spaces and furniture)
+//!   are dropped and counted.
 //! * **Geometry** by integer LoD (`"2.2"` → 2) into the first free property of the feature
 //!   that can hold it, in this order: a solid into `lodXSolid` (a `MultiSolid` /
 //!   `CompositeSolid` as a `gml:CompositeSolid`), `lodXMultiSolid`, `lodXGeometry`, or its
@@ -136,7 +139,8 @@ pub struct FromCityJsonSummary {
     pub polygons: usize,
     /// `gml:id`s made from keys that are not XML names.
     pub ids_made: usize,
-    /// What was not written, by kind, with how many.
+    /// What was left out or written otherwise (as a generic object, a fan of triangles),
+    /// by kind, with how many.
     pub dropped: BTreeMap<String, usize>,
     /// Bytes written (before compression).
     pub bytes_out: u64,
@@ -168,7 +172,7 @@ impl FromCityJsonSummary {
                 .iter()
                 .map(|(k, n)| format!("{n} × {k}"))
                 .collect();
-            s += &format!(", not written: {}", d.join("; "));
+            s += &format!(", left out or changed: {}", d.join("; "));
         }
         s += &format!(", {} bytes", self.bytes_out);
         s

@@ -104,6 +104,14 @@ pub(super) fn write_object(
     let el = format!("{p}:{}", sp.element);
     *t.objects.entry(sp.element.clone()).or_default() += 1;
     let mut s = format!("<{el} gml:id=\"{}\">", esc(&id));
+    if sp.element != o.ty && sp.element == "GenericCityObject" {
+        // CityGML 2.0 has no such type: the CityJSON type is kept as an attribute
+        s += &generic("cityjson_type", &Value::String(o.ty.clone())).unwrap_or_default();
+        t.drop(format!(
+            "{} as GenericCityObject (type in cityjson_type)",
+            o.ty
+        ));
+    }
     // properties by schema position
     let mut at: BTreeMap<usize, String> = BTreeMap::new();
     let mut used = std::collections::HashSet::new();

@@ -144,10 +144,10 @@ pub(super) fn spec(ty: &str) -> Option<Spec> {
             p.extend(geoms(1..=3, &[Geometry, Implicit]));
             ("frn", ty, p)
         }
-        "GenericCityObject" => {
+        "GenericCityObject" | "OtherConstruction" | "Waterway" => {
             let mut p = CFU.to_vec();
             p.extend(geoms(0..=3, &[Geometry, Implicit]));
-            ("gen", ty, p)
+            ("gen", "GenericCityObject", p)
         }
         "LandUse" => {
             let mut p = CFU.to_vec();
@@ -195,6 +195,7 @@ pub(super) fn spec(ty: &str) -> Option<Spec> {
             ("tran", el, p)
         }
         "TINRelief" => ("dem", ty, vec![Tin]),
+        t if t.starts_with('+') => return spec("GenericCityObject"),
         "CityObjectGroup" => {
             let mut p = CFU.to_vec();
             p.push(Members);
