@@ -152,9 +152,9 @@ impl Verts<'_> {
 
     fn push(&mut self, s: &mut String, i: usize) {
         let p = self.list[i];
-        for a in 0..3 {
-            self.bbox[a] = self.bbox[a].min(p[a]);
-            self.bbox[a + 3] = self.bbox[a + 3].max(p[a]);
+        for (a, v) in p.iter().enumerate() {
+            self.bbox[a] = self.bbox[a].min(*v);
+            self.bbox[a + 3] = self.bbox[a + 3].max(*v);
         }
         self.coords.push(s, p);
     }

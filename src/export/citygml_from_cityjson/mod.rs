@@ -380,7 +380,6 @@ pub fn write_citygml<R: BufRead>(
         let list = real(&f.vertices, transform, name, line)?;
         unit(&f.objects.0, &list, line, w)?;
     }
-    drop(unit);
     put(w, "</core:CityModel>\n")?;
     for _ in 0..appearances {
         tally.drop("appearance (materials, textures)".into());
@@ -448,9 +447,9 @@ fn bbox(list: &[[f64; 3]]) -> Option<[f64; 6]> {
     let first = list.first()?;
     let mut b = [first[0], first[1], first[2], first[0], first[1], first[2]];
     for p in list {
-        for a in 0..3 {
-            b[a] = b[a].min(p[a]);
-            b[a + 3] = b[a + 3].max(p[a]);
+        for (a, v) in p.iter().enumerate() {
+            b[a] = b[a].min(*v);
+            b[a + 3] = b[a + 3].max(*v);
         }
     }
     Some(b)

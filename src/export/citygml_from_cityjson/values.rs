@@ -194,7 +194,7 @@ mod tests {
         Coords::new(None).push(&mut s, [1.25, 2.0, 3.0]);
         assert_eq!(s, "1.25 2 3");
         assert_eq!(gml_id("").0, "id_");
-        assert_eq!(gml_id("_x").1, false);
+        assert!(!gml_id("_x").1);
         let p = |v, k| property("bldg:yearOfConstruction", &v, k, false);
         assert_eq!(
             p(json!(1999), Kind::Year).unwrap(),
