@@ -90,7 +90,10 @@ fn seq_is_written_feature_by_feature_and_errors_name_the_line() {
     );
     let (x, s) = convert(seq);
     assert!(s.seq);
-    assert_eq!(s.members, 1);
+    // Waterway has no CityGML 2.0 type: a generic object that says which (counted)
+    assert_eq!(s.members, 2);
+    assert!(x.contains("<gen:GenericCityObject gml:id=\"b\"><gen:stringAttribute name=\"cityjson_type\"><gen:value>Waterway</gen:value>"), "{x}");
+    assert_eq!(s.dropped.len(), 1, "{:?}", s.dropped);
     assert!(x.contains("<luse:lod1MultiSurface><gml:MultiSurface><gml:surfaceMember><gml:Polygon>"));
     assert!(x.starts_with("<?xml") && x.contains("<gml:boundedBy><gml:Envelope srsDimension=\"3\"><gml:lowerCorner>0 0 0</gml:lowerCorner>"));
     let bad = seq.replace("[[[0,1,2]]]", "[[[0,1,7]]]");
