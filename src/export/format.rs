@@ -106,10 +106,20 @@ impl Format {
     }
 
     /// Output file name for an input named `input_name` written in this format into an output
-    /// directory: the input's name for CityGML, otherwise the input's name with its CityGML
+    /// directory: the input's name for CityGML (a CityJSON name with `.gml` for its JSON
+    /// ending), otherwise the input's name with its CityGML
     /// ending (`.gml`, `.xml`, `.citygml`, each with or without `.gz`) replaced by [`Format::extension`].
     pub fn output_name(self, input_name: &str) -> String {
         if self == Format::CityGml {
+            // a CityJSON input's CityGML: `x.city.json` → `x.gml`, `x.city.jsonl.gz` → `x.gml.gz`
+            let lower = input_name.to_ascii_lowercase();
+            let json = [".city.jsonl", ".city.json", ".jsonl", ".json"];
+            for gz in ["", ".gz"] {
+                if let Some(e) = json.iter().find(|e| lower.ends_with(&format!("{e}{gz}"))) {
+                    let stem = input_name.len() - e.len() - gz.len();
+                    return format!("{}.gml{gz}", &input_name[..stem]);
+                }
+            }
             return input_name.to_string();
         }
         let lower = input_name.to_ascii_lowercase();

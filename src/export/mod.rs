@@ -27,6 +27,7 @@
 //! assert_eq!(s.objects, model.assets.len());
 //! ```
 
+pub mod citygml_from_cityjson;
 pub mod cityjson;
 mod cityjson_source;
 mod cityjson_stream;

@@ -194,6 +194,19 @@ pub fn per_input(
     cmd: &str,
     edit: &Edit<'_>,
 ) -> anyhow::Result<crate::Outcome> {
+    per_input_jobs(a, cmd, None, edit)
+}
+
+/// [`per_input`] with `--jobs` inputs at once (`None`: one after the other, outside any
+/// pool); the lines said in input order, the outputs the same whatever the number
+/// (`upgrade --jobs`).
+pub fn per_input_jobs(
+    a: &crate::args::citygml_io::CityGmlIoArgs,
+    cmd: &str,
+    jobs: Option<&crate::args::jobs::JobsArgs>,
+    edit: &Edit<'_>,
+) -> anyhow::Result<crate::Outcome> {
+    use rayon::prelude::*;
     let t0 = std::time::Instant::now();
     let shard = a.shard.resolve()?;
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&a.inputs)?;
@@ -201,23 +214,23 @@ pub fn per_input(
     let mut b = batch(cmd, &inputs, out, true, shard)?;
     b.counts_polygons = false;
     let t = &b.targets;
-    let results = t
-        .todo
-        .iter()
-        .map(|(k, out)| {
-            let input = inputs[*k].path.clone();
-            let parent = if t.mirror { create_parent(out) } else { Ok(()) };
-            let r = parent.and_then(|()| {
-                let line = edit(&input, out, b.shown(out), &t.write_opts)
-                    .map_err(|e| anyhow!(crate::errors::cli_text(&e)))?;
-                Ok(Done {
-                    line: Some(line),
-                    ..Done::default()
-                })
-            });
-            (input, out.clone(), r)
-        })
-        .collect();
+    let work = |(k, out): &(usize, PathBuf)| {
+        let input = inputs[*k].path.clone();
+        let parent = if t.mirror { create_parent(out) } else { Ok(()) };
+        let r = parent.and_then(|()| {
+            let line = edit(&input, out, b.shown(out), &t.write_opts)
+                .map_err(|e| anyhow!(crate::errors::cli_text(&e)))?;
+            Ok(Done {
+                line: Some(line),
+                ..Done::default()
+            })
+        });
+        (input, out.clone(), r)
+    };
+    let results = match jobs {
+        Some(j) => j.install(|| t.todo.par_iter().map(work).collect())?,
+        None => t.todo.iter().map(work).collect(),
+    };
     Ok(finish(
         &b,
         cmd,

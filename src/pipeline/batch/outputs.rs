@@ -273,7 +273,14 @@ impl Plan {
                     });
                 }
                 check_target(target, wopts, protect())?;
-                check_mergeable(inputs, keeps_crs)?;
+                // CityJSON inputs are written as CityGML first; their parts are checked
+                // when merged.
+                let xml: Vec<PathBuf> = inputs
+                    .iter()
+                    .filter(|p| !crate::export::citygml_from_cityjson::is_json_file(p))
+                    .cloned()
+                    .collect();
+                check_mergeable(&xml, keeps_crs)?;
                 let staging = Staging::new(target)?;
                 Ok(Targets {
                     todo: (0..inputs.len()).map(|k| (k, staging.part(k))).collect(),

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use skylod::batch::outputs::Targets;
 use skylod::citygml::write::{write_document, WriteOptions};
 use skylod::citygml::{read_file_observed, ReadOptions};
+use skylod::export::citygml_from_cityjson::{citygml_from_cityjson, is_json_file, TargetVersion};
 use skylod::export::{Content, Format};
 use skylod::runtime::progress::{Progress, Stage};
 use std::path::{Path, PathBuf};
@@ -32,6 +33,9 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     overwrite: bool,
+    /// CityGML version written for CityJSON inputs (CityGML inputs keep theirs).
+    #[arg(long, value_name = "2.0|3.0", default_value = "2.0")]
+    citygml_version: TargetVersion,
     #[command(flatten)]
     jobs: JobsArgs,
     #[command(flatten)]
@@ -82,7 +86,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                     Some(Err(e)) => Err(e),
                     _ => {
                         let passed = |n| progress.advance(Stage::Read, 0, n, None);
-                        one(&paths[k], &out, fmt, write_opts, mirror, &passed)
+                        let v = args.citygml_version;
+                        one(&paths[k], &out, (fmt, v), write_opts, mirror, &passed)
                     }
                 };
                 progress.advance(Stage::Read, 1, 0, None);
@@ -106,13 +111,32 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
 fn one(
     input: &Path,
     out: &Path,
-    format: Format,
+    (format, version): (Format, TargetVersion),
     opts: &WriteOptions,
     mirror: bool,
     passed: &(dyn Fn(u64) + Sync),
 ) -> anyhow::Result<Done> {
     if crate::log::cancelled() {
         anyhow::bail!("{}: cancelled before reading", skylod::model::shown(input));
+    }
+    if format == Format::CityGml && is_json_file(input) {
+        // CityJSON → CityGML from the document itself, feature by feature.
+        if mirror {
+            outputs::create_parent(out)?;
+        }
+        let s = citygml_from_cityjson(input, out, version, opts)?;
+        let line = s.describe(input, out).replace(
+            &format!(", {} bytes", s.bytes_out),
+            &format!(", {}", outputs::size_note(out, s.bytes_out)),
+        );
+        let warnings = s.dropped.values().sum();
+        let polygons = (s.polygons, s.polygons);
+        let line = Some(line);
+        return Ok(Done {
+            line,
+            warnings,
+            polygons,
+        });
     }
     let model = read_file_observed(input, &ReadOptions::default(), passed)?;
     let polygons = crate::commands::polygons(&model);

@@ -1,5 +1,6 @@
 //! `skylod upgrade`: CityGML 1.0 / 2.0 → 3.0 (citygml-tools' `upgrade`), streamed: memory
-//! follows the largest city object.
+//! follows the largest city object; files in parallel (`--jobs`), the same bytes whatever
+//! the number.
 
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
@@ -20,6 +21,8 @@ pub struct Args {
     /// dropped: 3.0 spaces have no LoD1 multi-surface).
     #[arg(short = 'm', long)]
     map_lod1_multi_surfaces: bool,
+    #[command(flatten)]
+    jobs: crate::args::jobs::JobsArgs,
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
@@ -28,7 +31,11 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         args.map_lod0_roof_edge,
         args.map_lod1_multi_surfaces,
     );
-    crate::outputs::per_input(&args.io, "upgrade", &|input, out, shown, opts| {
-        Ok(upgrade(input, out, &options, opts)?.describe(input, shown))
-    })
+    let jobs = &args.jobs;
+    crate::outputs::per_input_jobs(
+        &args.io,
+        "upgrade",
+        Some(jobs),
+        &|input, out, shown, opts| Ok(upgrade(input, out, &options, opts)?.describe(input, shown)),
+    )
 }
