@@ -19,6 +19,7 @@
 
 mod error;
 mod lod;
+pub mod lod_write;
 
 pub use error::{Error, Result};
 
