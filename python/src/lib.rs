@@ -13,13 +13,12 @@ use relay::{message, run, SkylodError};
 use setup::{load, ms, s_to_ms, Setup};
 use skylod::output::evaluate::{EvaluateOutput, EvaluateTimings};
 use skylod::output::horizon::{round_deg, HorizonOutput, HorizonPoi};
-use skylod::output::irradiance::{
-    IrradianceOutput, IrradiancePoi, IrradianceTimings, WeatherSummary,
-};
+use skylod::output::irradiance::{IrradianceOutput, IrradiancePoi, IrradianceTimings};
 use skylod::output::sun_hours::{SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting};
 use skylod::output::svf::{SvfOutput, SvfPoi, TraceTimings};
 use skylod::pipeline::evaluation::EvalOptions;
 use skylod::pipeline::EvaluateOptions;
+use skylod::session::weather::{weather_site, weather_summary};
 use skylod::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
 use skylod::solar::weather::read_weather;
 use skylod::solar::{HorizonOptions, Site, SkyBundles, SunTable};
@@ -151,10 +150,6 @@ fn horizon(
     })
 }
 
-/// Farthest a weather station may be from the model's site (km) unless the site is given
-/// (as `skylod irradiance`).
-const MAX_STATION_KM: f64 = 50.0;
-
 /// `skylod irradiance --json`.
 #[pyfunction]
 #[pyo3(signature = (setup, weather, site=None, sky="perez", albedo=0.2, rays=10_000, seed=1, progress=None))]
@@ -190,24 +185,11 @@ fn irradiance(
         let weather_ms = ms(t0);
         let bundles = SkyBundles::new(rays, seed).map_err(|e| message(&e))?;
         let l = load(&setup, p)?;
-        let (lat, lon) = match site {
-            Some(s) => s,
-            None => match l.study.site() {
-                Ok(s) => {
-                    let km = w.site.distance_km(s.lat, s.lon);
-                    if km > MAX_STATION_KM {
-                        return Err(format!(
-                            "irradiance: the model (lat {:.4}, lon {:.4} in {}) is {km:.0} km from \
-                             the weather station {:?} (lat {}, lon {}); give site=(lat, lon) to use \
-                             this weather anyway",
-                            s.lat, s.lon, s.crs.name, w.site.name, w.site.latitude, w.site.longitude
-                        ));
-                    }
-                    (s.lat, s.lon)
-                }
-                Err(_) => (w.site.latitude, w.site.longitude),
-            },
-        };
+        let model = skylod::crs::model_site(l.study.source(), l.study.crs());
+        let at = weather_site(site, model, &w).map_err(|e| {
+            format!("irradiance: {e}; give site=(lat, lon) to use this weather anyway")
+        })?;
+        let (lat, lon) = at.lat_lon();
         let t1 = Instant::now();
         let table = IrradianceTable::new(&w, &Site::new(lat, lon), sky).map_err(|e| message(&e))?;
         let sun_ms = weather_ms + ms(t1);
@@ -218,13 +200,7 @@ fn irradiance(
         let rows = t.rows(l.study.pois(), |poi, r, f| {
             IrradiancePoi::new(poi, &r.annual, f)
         });
-        let summary = WeatherSummary::new(
-            weather.display().to_string(),
-            w.format,
-            &w.site,
-            w.hours.len(),
-            w.totals_kwh_m2(),
-        );
+        let summary = weather_summary(&weather, &w);
         let timings = IrradianceTimings {
             read: l.read_ms,
             sun: sun_ms,

@@ -9,6 +9,7 @@ use skylod::io::TargetError;
 use skylod::lod::bound::BoundError;
 use skylod::pipeline::{PipelineError, PoiCrsError};
 use skylod::poi::checks::TrustError;
+use skylod::poi::region::RegionError;
 use skylod::Error;
 use std::error::Error as StdError;
 
@@ -42,6 +43,9 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
     }
     if let Some(w) = e.downcast_ref::<WriteError>() {
         return write(w);
+    }
+    if let Some(RegionError::DuplicateId(id)) = e.downcast_ref::<RegionError>() {
+        return format!("POI id {id:?} is given twice (a region POI and a --poi/--pois one?)");
     }
     if let Some(TargetError::Exists(p)) = e.downcast_ref::<TargetError>() {
         return format!("{}: output exists (use --overwrite)", p.display());
@@ -191,6 +195,9 @@ mod tests {
         let w = FrameWarning::UnknownCrs("X".into());
         assert!(!w.to_string().contains("--"), "{w}");
         assert!(frame_warning(&w).ends_with("(give --source-crs EPSG:n)"));
+        let d = RegionError::DuplicateId("p1".into());
+        assert!(!d.to_string().contains("--"), "{d}");
+        assert!(cli_text(&d).ends_with("(a region POI and a --poi/--pois one?)"));
         assert!(cli_text(&BoundError::NoWeather).ends_with("weather year (--weather)"));
     }
 }

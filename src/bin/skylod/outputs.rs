@@ -7,7 +7,7 @@ use crate::log::{error, summary, warning};
 use anyhow::anyhow;
 use skylod::batch::inputs::Input;
 use skylod::batch::outputs::{PlanError, Targets};
-use skylod::batch::run::{merge_parts, Batch, Said};
+use skylod::batch::run::{Batch, Said};
 use skylod::batch::shard::Shard;
 use skylod::citygml::write::WriteOptions;
 use skylod::export::{Content, ExportSummary, Format};
@@ -132,20 +132,6 @@ pub fn say(said: Vec<Said>) {
             Said::Error(l) => error!("{l}"),
         }
     }
-}
-
-/// Merge `parts` into `target` ([`merge_parts`]) and print what it says; false when
-/// `target` was not written (the caller then counts every input as failed).
-pub fn merge(
-    parts: &[PathBuf],
-    names: &[PathBuf],
-    target: &Path,
-    opts: &WriteOptions,
-    inputs: usize,
-) -> bool {
-    let (merged, said) = merge_parts(parts, names, target, opts, inputs);
-    say(said);
-    merged
 }
 
 /// `cmd`'s [`Batch`] of `inputs` for `-o`, `--format`, `--overwrite`: this shard's files

@@ -62,6 +62,50 @@ pub enum RegionError {
     /// Nothing to sample (the surface or polygon is smaller than one cell).
     #[error("{0}: no point falls inside at this spacing")]
     Empty(String),
+    /// Two POIs of a run share an id (a region POI and a listed one).
+    #[error("POI id {0:?} is given twice (a region POI and a listed one?)")]
+    DuplicateId(String),
+}
+
+/// Distance (m) facade POIs are moved out along the surface normal ([`RegionSpec`]).
+pub const FACADE_OFFSET: f64 = 0.05;
+
+/// The region POIs of a run (`--facade`, `--region`/`--height`, `--spacing`): sampled on the
+/// model as read, after the listed POIs.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RegionSpec {
+    /// Surfaces or buildings (gml:ids) whose walls are sampled ([`facade_pois`]).
+    pub facades: Vec<String>,
+    /// A WKT polygon and the height of its grid ([`grid_pois`]).
+    pub area: Option<(String, f64)>,
+    /// Grid spacing (m) of both.
+    pub spacing: f64,
+}
+
+impl RegionSpec {
+    /// Whether any region is given.
+    pub fn is_active(&self) -> bool {
+        !self.facades.is_empty() || self.area.is_some()
+    }
+
+    /// `pois` followed by the facades' POIs ([`FACADE_OFFSET`] out) and the area's, sampled
+    /// on `model`; every id once.
+    ///
+    /// # Errors
+    /// As [`facade_pois`] and [`grid_pois`]; [`RegionError::DuplicateId`].
+    pub fn extend(&self, mut pois: Vec<Poi>, model: &CityModel) -> Result<Vec<Poi>, RegionError> {
+        for id in &self.facades {
+            pois.extend(facade_pois(model, id, self.spacing, FACADE_OFFSET)?);
+        }
+        if let Some((wkt, z)) = &self.area {
+            pois.extend(grid_pois(wkt, *z, self.spacing)?);
+        }
+        let mut seen = HashSet::new();
+        if let Some(p) = pois.iter().find(|p| !seen.insert(p.id.as_str())) {
+            return Err(RegionError::DuplicateId(p.id.clone()));
+        }
+        Ok(pois)
+    }
 }
 
 /// Even-odd point-in-ring test in 2D.
@@ -313,6 +357,36 @@ pub fn grid_pois(wkt: &str, z: f64, spacing: f64) -> Result<Vec<Poi>, RegionErro
 mod tests {
     use super::*;
     use crate::model::{Asset, Building, LodGeometry};
+
+    #[test]
+    fn a_region_spec_adds_its_pois_after_the_listed_ones_each_id_once() {
+        let m = model();
+        let street = "POLYGON((0 0, 4 0, 4 2, 0 2, 0 0))";
+        let mut spec = RegionSpec {
+            spacing: 1.0,
+            ..RegionSpec::default()
+        };
+        assert!(!spec.is_active());
+        let listed = vec![Poi::at("p", [1.0, 1.0, 1.0])];
+        assert_eq!(spec.extend(listed.clone(), &m).unwrap(), listed);
+        spec.area = Some((street.into(), 1.5));
+        spec.facades.push("B".into());
+        assert!(spec.is_active());
+        let all = spec.extend(listed.clone(), &m).unwrap();
+        let walls = facade_pois(&m, "B", 1.0, FACADE_OFFSET).unwrap();
+        let grid = grid_pois(street, 1.5, 1.0).unwrap();
+        assert_eq!(all.len(), 1 + walls.len() + grid.len());
+        assert_eq!(all[0], listed[0]);
+        assert_eq!(all[1..=walls.len()], walls[..]);
+        assert_eq!(all[1 + walls.len()..], grid[..]);
+        // A listed POI named as a region POI: refused, naming the id.
+        let clash = vec![Poi::at(grid[0].id.clone(), [0.0, 0.0, 0.0])];
+        let e = spec.extend(clash, &m).unwrap_err();
+        assert_eq!(e, RegionError::DuplicateId(grid[0].id.clone()));
+        spec.facades = vec!["nope".into()];
+        let e = spec.extend(listed, &m).unwrap_err();
+        assert_eq!(e, RegionError::UnknownId("nope".into()));
+    }
 
     fn wall_with_window() -> Polygon {
         // 10 m x 5 m wall facing +x, a 2 m x 2 m window hole in the middle

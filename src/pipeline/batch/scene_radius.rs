@@ -304,9 +304,96 @@ pub fn within_reach(inputs: &[PathBuf], at: &[DVec3], radius: f64) -> Reach {
     }
 }
 
+/// The inputs of a run kept by [`keep_within`], and what to say of them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Kept {
+    /// The inputs kept, in their order.
+    pub inputs: Vec<PathBuf>,
+    /// Inputs given.
+    pub total: usize,
+    /// POIs whose reach was tested (the shard's).
+    pub pois: usize,
+    /// Inputs without an envelope, whose extent came from a pre-scan.
+    pub scanned: usize,
+}
+
+impl Kept {
+    /// The inputs kept, as messages name them.
+    pub fn names(&self) -> Vec<String> {
+        (self.inputs.iter())
+            .map(|p| crate::model::shown(p).to_string())
+            .collect()
+    }
+}
+
+/// `inputs` within `radius` of `pois` ([`within_reach`]), or of `shard`'s part of them: the
+/// others are not read. Nothing kept while POIs are given usually means POIs in another
+/// CRS; the caller says so.
+pub fn keep_within(
+    inputs: Vec<PathBuf>,
+    pois: &[crate::model::Poi],
+    shard: Option<super::shard::Shard>,
+    radius: f64,
+) -> Kept {
+    let mut at: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+    if let Some(s) = shard {
+        at = at[s.pois(&at)].to_vec();
+    }
+    let total = inputs.len();
+    let Reach { keep, scanned } = within_reach(&inputs, &at, radius);
+    let inputs = (inputs.into_iter().zip(&keep))
+        .filter(|(_, k)| **k)
+        .map(|(p, _)| p)
+        .collect();
+    Kept {
+        inputs,
+        total,
+        pois: at.len(),
+        scanned,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn inputs_out_of_reach_of_the_shard_s_pois_are_left_out() {
+        let d = tempfile::tempdir().unwrap();
+        let env = |x: f64| {
+            format!(
+                "<gml:boundedBy><gml:Envelope><gml:lowerCorner>{x} 0 0</gml:lowerCorner>\
+                 <gml:upperCorner>{} 10 5</gml:upperCorner></gml:Envelope></gml:boundedBy>",
+                x + 10.0
+            )
+        };
+        let near = file(d.path(), "near.gml", &env(0.0));
+        let far = file(d.path(), "far.gml", &env(1000.0));
+        let scan = file(
+            d.path(),
+            "scan.gml",
+            "<core:cityObjectMember><gml:posList>1000 0 0 1010 10 0</gml:posList></core:cityObjectMember>",
+        );
+        let inputs = vec![near.clone(), far.clone(), scan.clone()];
+        let pois = vec![
+            crate::model::Poi::at("a", [5.0, 5.0, 1.0]),
+            crate::model::Poi::at("b", [1005.0, 5.0, 1.0]),
+        ];
+        let all = keep_within(inputs.clone(), &pois, None, 20.0);
+        assert_eq!(
+            (all.inputs.len(), all.total, all.pois, all.scanned),
+            (3, 3, 2, 1)
+        );
+        let one = keep_within(inputs.clone(), &pois[..1], None, 20.0);
+        assert_eq!(one.inputs, vec![near.clone()]);
+        assert_eq!(one.names(), vec![near.display().to_string()]);
+        // Shard 1 of 2 takes the second POI (POIs grouped by place): the far files.
+        let s: super::super::shard::Shard = "1/2".parse().unwrap();
+        let second = keep_within(inputs.clone(), &pois, Some(s), 20.0);
+        assert_eq!((second.inputs, second.pois), (vec![far, scan], 1));
+        let none = keep_within(inputs, &pois, None, -1.0);
+        assert!(none.inputs.is_empty());
+    }
 
     const HEAD: &str = r#"<?xml version="1.0"?>
 <core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0" xmlns:gml="http://www.opengis.net/gml">

@@ -19,6 +19,8 @@
 
 mod error;
 mod lod;
+pub mod lod_write;
+pub mod weather;
 
 pub use error::{Error, Result};
 

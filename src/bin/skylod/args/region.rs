@@ -6,11 +6,8 @@ use crate::args::poi::PoiArgs;
 use crate::args::positive;
 use anyhow::bail;
 use skylod::model::CityModel;
-use skylod::poi::region::{facade_pois, grid_pois};
+use skylod::poi::region::RegionSpec;
 use skylod::poi::Poi;
-
-/// Distance (m) facade POIs are moved out along the surface normal.
-const FACADE_OFFSET: f64 = 0.05;
 
 #[derive(clap::Args, Debug)]
 pub struct RegionArgs {
@@ -51,21 +48,15 @@ impl RegionArgs {
         pois.points()
     }
 
-    /// `pois` followed by the region's POIs sampled on `model` (as read).
-    pub fn extend(&self, mut pois: Vec<Poi>, model: &CityModel) -> anyhow::Result<Vec<Poi>> {
-        for id in &self.facade {
-            pois.extend(facade_pois(model, id, self.spacing, FACADE_OFFSET)?);
-        }
-        if let (Some(wkt), Some(z)) = (&self.region, self.height) {
-            pois.extend(grid_pois(wkt, z, self.spacing)?);
-        }
-        let mut seen = std::collections::HashSet::new();
-        if let Some(p) = pois.iter().find(|p| !seen.insert(p.id.as_str())) {
-            bail!(
-                "POI id {:?} is given twice (a region POI and a --poi/--pois one?)",
-                p.id
-            );
-        }
+    /// `pois` followed by the region's POIs sampled on `model` (as read:
+    /// [`RegionSpec::extend`]).
+    pub fn extend(&self, pois: Vec<Poi>, model: &CityModel) -> anyhow::Result<Vec<Poi>> {
+        let spec = RegionSpec {
+            facades: self.facade.clone(),
+            area: self.region.clone().zip(self.height),
+            spacing: self.spacing,
+        };
+        let pois = spec.extend(pois, model)?;
         if self.active() {
             crate::log::summary!("{} POI(s) in all", pois.len());
         }

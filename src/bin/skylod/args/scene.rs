@@ -2,7 +2,7 @@
 
 use crate::args::poi::PoiArgs;
 use anyhow::bail;
-use skylod::batch::scene_radius::{within_reach, Reach};
+use skylod::batch::scene_radius::keep_within;
 use skylod::batch::shard::Shard;
 use skylod::poi::Poi;
 
@@ -37,41 +37,23 @@ impl SceneArgs {
         if args.crs.poi_crs.is_some() {
             bail!("--scene-radius compares POIs with the inputs in the model's CRS: leave out --poi-crs");
         }
-        let mine = match shard {
-            Some(s) => {
-                let at: Vec<glam::DVec3> = pois.iter().map(|p| p.position).collect();
-                pois[s.pois(&at)].to_vec()
-            }
-            None => pois.to_vec(),
-        };
-        let at: Vec<glam::DVec3> = mine.iter().map(|p| p.position).collect();
-        let total = args.inputs.len();
         // The pre-scan runs in rayon's global pool: size it (once) before it starts.
         args.jobs.global()?;
-        let Reach { keep, scanned } = within_reach(&args.inputs, &at, radius);
-        let inputs: Vec<_> = args
-            .inputs
-            .drain(..)
-            .zip(&keep)
-            .filter(|(_, k)| **k)
-            .map(|(p, _)| p)
-            .collect();
-        let names: Vec<String> = inputs
-            .iter()
-            .map(|p| skylod::model::shown(p).to_string())
-            .collect();
+        let kept = keep_within(std::mem::take(&mut args.inputs), pois, shard, radius);
         crate::log::summary!(
-            "{cmd}: scene radius {radius} m: {} of {total} input(s) within reach of {} POI(s) \
-             ({} not read; {scanned} without an envelope, pre-scanned): {}",
-            inputs.len(),
-            mine.len(),
-            total - inputs.len(),
-            names.join(", ")
+            "{cmd}: scene radius {radius} m: {} of {} input(s) within reach of {} POI(s) \
+             ({} not read; {} without an envelope, pre-scanned): {}",
+            kept.inputs.len(),
+            kept.total,
+            kept.pois,
+            kept.total - kept.inputs.len(),
+            kept.scanned,
+            kept.names().join(", ")
         );
-        if inputs.is_empty() && !mine.is_empty() {
+        if kept.inputs.is_empty() && kept.pois > 0 {
             bail!("no input comes within --scene-radius {radius} of a POI (are the POIs in the model's CRS?)");
         }
-        args.inputs = inputs;
+        args.inputs = kept.inputs;
         Ok(())
     }
 }

@@ -2,17 +2,13 @@
 //! irradiation ([`skylod::solar::irradiance`]), and the sun's site for it (shared with
 //! `irradiance`).
 
-use crate::args::site::{model_site, SiteArgs};
-use anyhow::{bail, Context};
+use crate::args::site::SiteArgs;
+use anyhow::{anyhow, bail, Context};
 use skylod::model::CityModel;
-use skylod::output::irradiance::{SkyName, WeatherSummary};
-use skylod::solar::irradiance::{IrradianceOptions, IrradianceSetting, IrradianceTable, SkyModel};
+use skylod::session::weather::{weather_site as sun_site, SunSite, WeatherYear};
+use skylod::solar::irradiance::SkyModel;
 use skylod::solar::weather::{read_weather, Weather};
-use skylod::solar::Site;
 use std::path::PathBuf;
-
-/// Farthest a weather station may be from the model's site (km) unless --lat/--lon are given.
-pub const MAX_STATION_KM: f64 = 50.0;
 
 #[derive(clap::Args, Debug)]
 pub struct WeatherArgs {
@@ -26,16 +22,6 @@ pub struct WeatherArgs {
     /// Reflectance of the ground and obstructions with --weather (0 turns reflection off).
     #[arg(long, default_value_t = 0.2, requires = "weather")]
     pub albedo: f64,
-}
-
-/// A weather year read and placed: what to trace and what to report.
-pub struct WeatherYear {
-    /// The table and options to trace with.
-    pub setting: IrradianceSetting,
-    /// The file and its totals.
-    pub summary: WeatherSummary,
-    /// The sun's site (latitude, longitude).
-    pub site: [f64; 2],
 }
 
 impl WeatherArgs {
@@ -59,73 +45,36 @@ impl WeatherArgs {
             return Ok(None);
         };
         let weather = read_weather(path)?;
-        let (lat, lon) = weather_site(site, model, &weather, cmd)?;
-        let table = IrradianceTable::new(&weather, &Site::new(lat, lon), self.sky)
+        let at = weather_site(site, model, &weather, cmd)?;
+        let year = WeatherYear::new(path, &weather, at, self.sky, self.albedo)
             .with_context(|| format!("{cmd}: placing the sun for {}", path.display()))?;
-        let summary = WeatherSummary::new(
-            path.display().to_string(),
-            weather.format,
-            &weather.site,
-            weather.hours.len(),
-            weather.totals_kwh_m2(),
-        );
-        let opts = IrradianceOptions {
-            sky: self.sky,
-            albedo: self.albedo,
-        };
-        Ok(Some(WeatherYear {
-            setting: IrradianceSetting { table, opts },
-            summary,
-            site: [lat, lon],
-        }))
+        Ok(Some(year))
     }
 }
 
-impl WeatherYear {
-    /// The sky model's name in the JSON.
-    pub fn sky(&self) -> SkyName {
-        self.setting.opts.sky.into()
-    }
-}
-
-/// The sun's site for a weather year: --lat/--lon; else the model's centre (refused when
-/// the weather station is farther than [`MAX_STATION_KM`]); else the weather station's.
+/// The sun's site for a weather year ([`skylod::session::weather::weather_site`]: --lat/--lon,
+/// else the model's centre, else the station's), said on stderr.
 pub fn weather_site(
     args: &SiteArgs,
     model: &CityModel,
     weather: &Weather,
     cmd: &str,
 ) -> anyhow::Result<(f64, f64)> {
-    if let Some(s) = args.given() {
-        return Ok(s);
-    }
+    let site = skylod::crs::model_site(model, &skylod::crs::model_crs(model, None));
+    let s = sun_site(args.given(), site, weather)
+        .map_err(|e| anyhow!("{cmd}: {e}; give --lat/--lon to use this weather anyway"))?;
     let w = &weather.site;
-    match model_site(model) {
-        Ok((a, o, srs)) => {
-            let km = w.distance_km(a, o);
-            if km > MAX_STATION_KM {
-                bail!(
-                    "{cmd}: the model (lat {a:.4}, lon {o:.4} in {srs}) is {km:.0} km from \
-                     the weather station {:?} (lat {}, lon {}); give --lat/--lon to use this \
-                     weather anyway",
-                    w.name,
-                    w.latitude,
-                    w.longitude
-                );
-            }
-            crate::log::summary!(
-                "{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}"
-            );
-            Ok((a, o))
-        }
-        Err(why) => {
-            crate::log::summary!(
-                "{cmd}: site of the weather station {:?} (lat {}, lon {}): {why}",
-                w.name,
-                w.latitude,
-                w.longitude
-            );
-            Ok((w.latitude, w.longitude))
-        }
+    match &s {
+        SunSite::Model(a, o, srs) => crate::log::summary!(
+            "{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}"
+        ),
+        SunSite::Station(.., why) => crate::log::summary!(
+            "{cmd}: site of the weather station {:?} (lat {}, lon {}): {why}",
+            w.name,
+            w.latitude,
+            w.longitude
+        ),
+        _ => {}
     }
+    Ok(s.lat_lon())
 }

@@ -6,8 +6,9 @@ use crate::commands::{emit, ms, polygons};
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::output::irradiance::{
-    write_csv, write_hourly_csv, IrradianceOutput, IrradiancePoi, IrradianceTimings, WeatherSummary,
+    write_csv, write_hourly_csv, IrradianceOutput, IrradiancePoi, IrradianceTimings,
 };
+use skylod::session::weather::weather_summary;
 use skylod::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
 use skylod::solar::weather::read_weather;
 use skylod::solar::{Site, SkyBundles};
@@ -105,13 +106,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         })
         .with_context(|| format!("writing {}", path.display()))?;
     }
-    let summary = WeatherSummary::new(
-        args.weather.display().to_string(),
-        weather.format,
-        &weather.site,
-        weather.hours.len(),
-        weather.totals_kwh_m2(),
-    );
+    let summary = weather_summary(&args.weather, &weather);
     let timings = IrradianceTimings::new(s.timings(&traced), sun_ms);
     let doc = IrradianceOutput::new(
         rows,

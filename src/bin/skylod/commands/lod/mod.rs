@@ -1,11 +1,10 @@
 //! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs, step by step:
-//! outputs laid out and checked ([`write::layout`]), inputs read, levels selected (or
-//! reduced from the shards' levels files, [`shard`]), the error bound, outputs written
-//! ([`write`]) and the report ([`report`]).
+//! outputs laid out and checked ([`layout`]), inputs read, levels selected (or reduced from
+//! the shards' levels files, [`shard`]), the error bound, outputs written
+//! ([`skylod::session::lod_write`]) and the report ([`report`]).
 
 pub mod report;
 pub mod shard;
-pub mod write;
 
 use crate::args::output::OutputArgs;
 use crate::args::poi::PoiArgs;
@@ -14,9 +13,11 @@ use crate::args::select::SelectArgs;
 use crate::commands::ms;
 use crate::log::{error, summary};
 use crate::Outcome;
+use skylod::batch::inputs::Input;
 use skylod::lod::LodOptions;
 use skylod::output::report::Guarantee;
 use skylod::pipeline::{Levels, LevelsOptions};
+use skylod::session::lod_write::{check_report, FileOutcome, LodLayout, ReportTargetError};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -63,7 +64,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         Some(r) => r.pois().to_vec(),
         None => args.region.points(&args.pois)?,
     };
-    let layout = write::layout(&args, &inputs)?;
+    let layout = layout(&args, &inputs)?;
     let lod = LodOptions {
         rough: args.rough.options()?,
         select: args.select.options(),
@@ -95,8 +96,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     // Written geometry and the report are in the input's CRS.
     let t_write = Instant::now();
-    let (written, write_failed) =
-        write::outputs(study.source(), &all_inputs, &layout, &lv, &progress)?;
+    let w = layout.write(study.source(), &all_inputs, &lv, &progress)?;
+    for f in w.files {
+        match f {
+            FileOutcome::Written(line) => summary!("{line}"),
+            FileOutcome::Failed(e) => error!("{}", crate::errors::cli_text(&e)),
+        }
+    }
+    crate::outputs::say(w.merge);
+    let (written, write_failed) = (w.written, w.failed);
     let timings = report::timings(&lv, session.read_ms, ms(t_write), t_all);
     let mut report = study.report(&lv, &opts.lod, timings);
     report.guarantee = guarantee;
@@ -110,6 +118,22 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let crate::args::tracing::Session { study, _spool, .. } = session;
     std::mem::forget(study);
     Ok(Outcome::failed_if(failed))
+}
+
+/// Where the model goes, every target checked before any work (a refused target is fatal:
+/// one scene needs every input), and the report's target.
+fn layout(args: &Args, inputs: &[Input]) -> anyhow::Result<LodLayout> {
+    let out = (&*args.out.output, args.out.format, args.out.overwrite);
+    let batch = crate::outputs::batch("lod", inputs, out, false, None)?;
+    let layout = LodLayout::new(batch, inputs.len())?;
+    if let Some(path) = &args.report {
+        let (model, overwrite) = (&args.out.output, args.out.overwrite);
+        check_report(path, model, overwrite, &args.pois.inputs).map_err(|e| match e {
+            ReportTargetError::Target(w) => anyhow::Error::new(w).context("the report"),
+            e => e.into(),
+        })?;
+    }
+    Ok(layout)
 }
 
 /// The error bound's lines, or why it cannot be met (nothing is written then): false.

@@ -1,6 +1,5 @@
 //! The closing lines of `skylod lod` and its `--report`.
 
-use super::write::Written;
 use super::Args;
 use crate::commands::ms;
 use crate::log::summary;
@@ -26,7 +25,13 @@ pub fn timings(lv: &Levels, read: f64, write: f64, t_all: Instant) -> Timings {
 
 /// The outputs `written` recorded in `report` ([`Study::report`]), and the closing lines
 /// (`region`: the POIs of --facade/--region are among them).
-pub fn finish(report: &mut Report, study: &Study, lv: &Levels, written: Written, region: bool) {
+pub fn finish(
+    report: &mut Report,
+    study: &Study,
+    lv: &Levels,
+    written: Vec<Option<(String, usize)>>,
+    region: bool,
+) {
     for (f, w) in written.into_iter().enumerate() {
         if let Some((path, dropped)) = w {
             report.record_output(f, path, study.buildings_in(f), dropped);
