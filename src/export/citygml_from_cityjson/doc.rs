@@ -1,5 +1,5 @@
 //! The CityJSON document as this writer reads it: unlike the model reader's types
-//! ([`crate::cityjson`]), every attribute, `children`, the semantic objects' own attributes
+//! ([`crate::io::cityjson`]), every attribute, `children`, the semantic objects' own attributes
 //! and `metadata.geographicalExtent` are kept.
 
 use serde::de::{Deserializer, MapAccess, Visitor};

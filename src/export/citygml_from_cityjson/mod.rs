@@ -1,6 +1,6 @@
 //! CityJSON 1.0 / 1.1 / 2.0 and CityJSONSeq → CityGML 2.0 (or 3.0 through
-//! [`crate::citygml::upgrade`]), written from the CityJSON document itself (not the model
-//! [`crate::cityjson`] reads, which keeps only what the analysis needs).
+//! [`crate::io::citygml::upgrade`]), written from the CityJSON document itself (not the model
+//! [`crate::io::cityjson`] reads, which keeps only what the analysis needs).
 //!
 //! # Mapping
 //!
@@ -68,9 +68,9 @@ mod values;
 
 pub use values::gml_id;
 
-use crate::citygml::error::{ReadError, WriteError};
-use crate::citygml::upgrade::{upgrade, UpgradeOptions};
-use crate::citygml::write::{check_target, WriteOptions};
+use crate::io::citygml::error::{ReadError, WriteError};
+use crate::io::citygml::upgrade::{upgrade, UpgradeOptions};
+use crate::io::citygml::write::{check_target, WriteOptions};
 use doc::Doc;
 use geometry::Verts;
 use object::{write_object, Tally, Unit};
@@ -85,7 +85,7 @@ pub enum TargetVersion {
     /// CityGML 2.0.
     #[default]
     V2_0,
-    /// CityGML 3.0 (2.0 upgraded member by member: [`crate::citygml::upgrade`]).
+    /// CityGML 3.0 (2.0 upgraded member by member: [`crate::io::citygml::upgrade`]).
     V3_0,
 }
 
@@ -106,7 +106,7 @@ impl std::str::FromStr for TargetVersion {
 pub enum FromCityJsonError {
     /// The source is not valid CityJSON (file, line, city object).
     #[error(transparent)]
-    CityJson(#[from] crate::cityjson::Error),
+    CityJson(#[from] crate::io::cityjson::Error),
     /// The source cannot be read.
     #[error(transparent)]
     Read(#[from] ReadError),
@@ -115,8 +115,8 @@ pub enum FromCityJsonError {
     Write(#[from] WriteError),
 }
 
-impl From<crate::io::FileError> for FromCityJsonError {
-    fn from(e: crate::io::FileError) -> Self {
+impl From<crate::io::files::FileError> for FromCityJsonError {
+    fn from(e: crate::io::files::FileError) -> Self {
         FromCityJsonError::Write(e.into())
     }
 }
@@ -195,7 +195,7 @@ pub fn citygml_from_cityjson(
     let reader = open(input)?;
     if version == TargetVersion::V2_0 {
         let mut summary = FromCityJsonSummary::default();
-        let bytes = crate::io::atomic_write(out, |w| {
+        let bytes = crate::io::files::atomic_write(out, |w| {
             summary = write_citygml(reader, input, w)?;
             Ok::<_, FromCityJsonError>(summary.bytes_out)
         })?;
@@ -204,7 +204,7 @@ pub fn citygml_from_cityjson(
     }
     // 3.0: the 2.0 document in a temporary file beside the output, upgraded member by member.
     let dir = match out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(d) if !crate::io::is_stdout(out) && d.is_dir() => d.to_path_buf(),
+        Some(d) if !crate::io::files::is_stdout(out) && d.is_dir() => d.to_path_buf(),
         _ => std::env::temp_dir(),
     };
     let io = |source| WriteError::Io {
@@ -234,22 +234,22 @@ pub fn citygml_from_cityjson(
 }
 
 /// Whether the file at `path` holds JSON (CityJSON, CityJSONSeq; gzip-compressed or not), by
-/// its first bytes ([`crate::cityjson::sniff`]); false when it cannot be read.
+/// its first bytes ([`crate::io::cityjson::sniff`]); false when it cannot be read.
 pub fn is_json_file(path: &Path) -> bool {
     open(path).is_ok_and(|mut r| {
         r.fill_buf()
-            .is_ok_and(|h| crate::cityjson::sniff(h) == crate::cityjson::Sniffed::Json)
+            .is_ok_and(|h| crate::io::cityjson::sniff(h) == crate::io::cityjson::Sniffed::Json)
     })
 }
 
 /// Open a (possibly gzip-compressed) file, or standard input for `-` (its bytes as kept by
-/// [`crate::io::stdin_bytes`]).
+/// [`crate::io::files::stdin_bytes`]).
 fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
     let io = |source| ReadError::Io {
         file: input.to_path_buf(),
         source,
     };
-    let mut r: Box<dyn BufRead + Send> = match crate::citygml::source::resolve(input)? {
+    let mut r: Box<dyn BufRead + Send> = match crate::io::citygml::source::resolve(input)? {
         crate::model::Source::Memory(bytes) => Box::new(std::io::Cursor::new(bytes)),
         crate::model::Source::File(p) => Box::new(std::io::BufReader::with_capacity(
             1 << 16,
@@ -257,7 +257,7 @@ fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
         )),
     };
     let head = r.fill_buf().map_err(io)?;
-    Ok(if crate::io::is_gzip(head) {
+    Ok(if crate::io::files::is_gzip(head) {
         let dec = flate2::bufread::MultiGzDecoder::new(r);
         Box::new(std::io::BufReader::with_capacity(1 << 16, dec))
     } else {
@@ -276,14 +276,15 @@ pub fn write_citygml<R: BufRead>(
     name: &Path,
     w: &mut dyn Write,
 ) -> Result<FromCityJsonSummary, FromCityJsonError> {
-    let cj = |line: u64, id: Option<&str>, m: String| crate::cityjson::Error::at(name, line, id, m);
+    let cj =
+        |line: u64, id: Option<&str>, m: String| crate::io::cityjson::Error::at(name, line, id, m);
     if r.fill_buf().is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF")) {
         r.consume(3);
     }
     let mut values = serde_json::Deserializer::from_reader(r).into_iter::<Doc>();
     let head = match values.next() {
         None => return Err(cj(0, None, "empty document".into()).into()),
-        Some(Err(e)) => return Err(crate::cityjson::Error::json(name, &e).into()),
+        Some(Err(e)) => return Err(crate::io::cityjson::Error::json(name, &e).into()),
         Some(Ok(d)) => d,
     };
     if head.ty != "CityJSON" {
@@ -370,7 +371,7 @@ pub fn write_citygml<R: BufRead>(
     let (mut seq, mut appearances) = (false, 0);
     for (k, v) in values.enumerate() {
         let line = k as u64 + 2;
-        let f = v.map_err(|e| crate::cityjson::Error::json(name, &e))?;
+        let f = v.map_err(|e| crate::io::cityjson::Error::json(name, &e))?;
         if f.ty != "CityJSONFeature" {
             let m = format!("a value of type {:?} after the CityJSON header (CityJSONSeq holds CityJSONFeature lines)", f.ty);
             return Err(cj(line, None, m).into());
@@ -413,7 +414,7 @@ fn srs_name(v: &serde_json::Value) -> Option<String> {
         }
         _ => return None,
     };
-    match crate::crs::CrsName::parse(&text) {
+    match crate::model::crs::CrsName::parse(&text) {
         Some(c) => Some(c.urn()),
         None => Some(text).filter(|t| !t.trim().is_empty()),
     }
@@ -425,7 +426,7 @@ fn real(
     t: Option<doc::Transform>,
     name: &Path,
     line: u64,
-) -> Result<Vec<[f64; 3]>, crate::cityjson::Error> {
+) -> Result<Vec<[f64; 3]>, crate::io::cityjson::Error> {
     let (s, o) = t.map_or(([1.0; 3], [0.0; 3]), |t| (t.scale, t.translate));
     raw.iter()
         .enumerate()
@@ -437,7 +438,7 @@ fn real(
                 let m = format!(
                     "vertex {k} {v:?} is not a finite coordinate of magnitude at most 1e12"
                 );
-                Err(crate::cityjson::Error::at(name, line, None, m))
+                Err(crate::io::cityjson::Error::at(name, line, None, m))
             }
         })
         .collect()

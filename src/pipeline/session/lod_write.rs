@@ -4,13 +4,13 @@
 //! is printed: what to tell the user comes back in order.
 
 use super::Result;
-use crate::batch::outputs::Plan;
-use crate::batch::run::{merge_parts, Batch, Said};
-use crate::citygml::write::{check_target, is_stdout, WriteOptions};
-use crate::citygml::WriteError;
+use crate::io::citygml::write::{check_target, is_stdout, WriteOptions};
+use crate::io::citygml::WriteError;
+use crate::model::runtime::progress::Progress;
 use crate::model::CityModel;
+use crate::pipeline::batch::outputs::Plan;
+use crate::pipeline::batch::run::{merge_parts, Batch, Said};
 use crate::pipeline::{write_all, Levels};
-use crate::runtime::progress::Progress;
 use std::path::{Path, PathBuf};
 
 /// Why the outputs of a `lod` run cannot be laid out.
@@ -109,7 +109,7 @@ impl LodLayout {
         let batch = &self.batch;
         if batch.targets.mirror {
             for (_, out) in &targets {
-                crate::batch::outputs::create_parent(out)?;
+                crate::pipeline::batch::outputs::create_parent(out)?;
             }
         }
         // In a merge, the messages and the report name the merged document.
@@ -206,11 +206,11 @@ pub enum ReportTargetError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::batch::inputs::Input;
+    use crate::model::runtime::progress::Silent;
+    use crate::pipeline::batch::inputs::Input;
+    use crate::pipeline::session::{Scene, SceneOptions};
     use crate::pipeline::test_support::*;
     use crate::pipeline::LevelsOptions;
-    use crate::runtime::progress::Silent;
-    use crate::session::{Scene, SceneOptions};
 
     fn inputs(dir: &Path, names: &[&str]) -> Vec<Input> {
         names

@@ -3,8 +3,8 @@
 //! centre unless the station is too far, else the station's) and the year read and placed
 //! with what the documents report of it ([`WeatherYear`]).
 
-use crate::crs::{ModelSite, NoSite};
-use crate::output::irradiance::{SkyName, WeatherSummary};
+use crate::export::report::irradiance::{SkyName, WeatherSummary};
+use crate::model::crs::{ModelSite, NoSite};
 use crate::solar::irradiance::{IrradianceOptions, IrradianceSetting, IrradianceTable, SkyModel};
 use crate::solar::weather::Weather;
 use crate::solar::{Site, SolarError};
@@ -147,7 +147,7 @@ impl WeatherYear {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::crs::Crs;
+    use crate::model::crs::Crs;
 
     /// Noon on 1 January at a station in Barcelona (as `solar::weather`'s example).
     fn weather() -> Weather {
