@@ -126,9 +126,25 @@ fn triangles_box(model: &CityModel, boxes: &[Bbox]) -> Bbox {
         for high in [false, true] {
             // reach of a box on this side, larger is farther out
             let reach = |b: &Bbox| if high { b.max[axis] } else { -b.min[axis] };
-            order.sort_unstable_by(|&a, &b| reach(&boxes[b]).total_cmp(&reach(&boxes[a])));
+            let farther = |a: &usize, b: &usize| reach(&boxes[*b]).total_cmp(&reach(&boxes[*a]));
+            // the walk nearly always stops within the first few boxes: the farthest
+            // `TOP` sorted first, the whole order only when the walk gets past them
+            // (the box found is the same in any order: every side's reach is exact)
             let mut best = f64::NEG_INFINITY;
-            for &i in &order {
+            let mut sorted = 0;
+            let mut at = 0;
+            while at < order.len() {
+                if at == sorted {
+                    sorted = if sorted == 0 && order.len() > TOP {
+                        order.select_nth_unstable_by(TOP - 1, farther);
+                        order[..TOP].sort_unstable_by(farther);
+                        TOP
+                    } else {
+                        order[sorted..].sort_unstable_by(farther);
+                        order.len()
+                    };
+                }
+                let i = order[at];
                 if reach(&boxes[i]) <= best {
                     break;
                 }
@@ -137,11 +153,15 @@ fn triangles_box(model: &CityModel, boxes: &[Bbox]) -> Bbox {
                     best = best.max(reach(&b));
                     out.union(&b);
                 }
+                at += 1;
             }
         }
     }
     out
 }
+
+/// Boxes sorted first on each side in [`triangles_box`].
+const TOP: usize = 64;
 
 /// The part of [`full_scene`] made of the assets `i` with `include[i]`, built in the
 /// frame of the full scene's box `frame` (the union of [`detail_boxes`]) and for about

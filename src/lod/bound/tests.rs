@@ -234,3 +234,39 @@ fn restricted_full_scene_answers_as_the_whole_model() {
 fn tags_of(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
     tags(scene, p)
 }
+
+/// The reference's frame is the box of the whole full scene's triangles, also when many
+/// assets' point boxes reach farther than their triangles (points of rings that make no
+/// triangle): the walk on a side then goes past the boxes sorted first.
+#[test]
+fn reference_frame_is_the_full_scene_box() {
+    for (far, reaching) in [(0usize, 0usize), (3, 10), (150, 150)] {
+        let mut m = CityModel::default();
+        for i in 0..400 {
+            let x = (i % 20) as f64 * 7.0;
+            let y = (i / 20) as f64 * 5.0;
+            let mut polys = vec![quad(x, x + 3.0, y, y + 2.0, (i % 7) as f64)];
+            if i < far {
+                // a ring folded onto a line far out: points in the box, no triangle
+                polys.push(Polygon::new(vec![
+                    DVec3::new(x, y, 1.0),
+                    DVec3::new(900.0 + i as f64, y, 1.0),
+                    DVec3::new(x, y, 1.0),
+                ]));
+            }
+            if i < reaching {
+                // and one whose triangles do reach out, on the other side
+                polys.push(quad(-300.0 - i as f64, -299.0, y, y + 1.0, 2.0));
+            }
+            m.assets.push(asset(AssetKind::Roof, polys));
+        }
+        let (_, frame) = crate::lod::scene::detail_boxes(&m);
+        let whole = full_scene(&m).bbox();
+        assert_eq!(
+            (frame.min, frame.max),
+            (whole.min, whole.max),
+            "{far} {reaching}"
+        );
+        assert!(frame.max.x < 900.0, "{far}: {:?}", frame.max);
+    }
+}
