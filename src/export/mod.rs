@@ -31,6 +31,7 @@ pub mod cityjson;
 mod cityjson_source;
 mod cityjson_stream;
 pub mod format;
+pub mod merged;
 pub mod obj;
 
 pub use format::{Format, UnknownFormat};
@@ -236,6 +237,25 @@ pub fn write_streamed(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<Option<(ExportSummary, crate::citygml::read::StreamSummary)>, WriteError> {
+    write_streamed_as(format, input, None, read, chunk_bytes, passed, out, opts)
+}
+
+/// [`write_streamed`], the OBJ's comment line naming `label` instead of `input` when given
+/// (a merge's staged document is named by the inputs it holds: [`merged`]).
+///
+/// # Errors
+/// As [`write_streamed`].
+#[allow(clippy::too_many_arguments)]
+pub fn write_streamed_as(
+    format: Format,
+    input: &Path,
+    label: Option<&str>,
+    read: &crate::citygml::read::ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(usize, u64),
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<Option<(ExportSummary, crate::citygml::read::StreamSummary)>, WriteError> {
     let kind = match format {
         Format::Obj => None,
         Format::CityJson => Some(cityjson_stream::Kind::CityJson),
@@ -255,7 +275,9 @@ pub fn write_streamed(
     let r = crate::citygml::write::atomic_write(out, |w| {
         let mut cw = crate::io::CountingWriter::new(w);
         let r = match kind {
-            None => obj::write_obj_streamed(input, read, chunk_bytes, passed, &mut cw),
+            None => {
+                obj::write_obj_streamed_as(input, label, read, chunk_bytes, passed, &mut cw)
+            }
             Some(k) => {
                 cityjson_stream::write_streamed(k, input, read, chunk_bytes, passed, &mut cw)
             }

@@ -9,7 +9,7 @@ use skylod::batch::outputs::Plan;
 use skylod::batch::run::Batch;
 use skylod::citygml::write::{check_target, is_stdout, WriteOptions};
 use skylod::model::CityModel;
-use skylod::pipeline::{write_all, Levels};
+use skylod::pipeline::{buildings_without_kept_assets, write_all, write_merged_levels, Levels};
 use skylod::runtime::progress::Progress;
 use std::path::{Path, PathBuf};
 
@@ -86,6 +86,11 @@ pub fn outputs(
     let shown = |out: &Path| batch.shown(out).display().to_string();
     let format = batch.format;
     let wopts = &batch.targets.write_opts;
+    if let (Some(_), Plan::Merge(t)) = (&batch.targets.staging, &batch.plan) {
+        if format != skylod::export::Format::CityGml {
+            return Ok(merged_export(model, &targets, t, lv, batch));
+        }
+    }
     let results = write_all(model, &targets, lv, format, wopts, progress)?;
     let mut failed = false;
     let mut written: Written = vec![None; model.files.len()];
@@ -129,4 +134,37 @@ pub fn outputs(
         }
     }
     Ok((written, failed))
+}
+
+/// Several inputs merged into one OBJ / CityJSON / CityJSONSeq file `target`, written from
+/// the model in memory ([`skylod::pipeline::write_merged_levels`]).
+fn merged_export(
+    model: &CityModel,
+    targets: &[(usize, PathBuf)],
+    target: &Path,
+    lv: &Levels,
+    batch: &Batch,
+) -> (Written, bool) {
+    let files: Vec<usize> = targets.iter().map(|(f, _)| *f).collect();
+    let mut written: Written = vec![None; model.files.len()];
+    let r = write_merged_levels(model, &files, lv, target, batch.format, &batch.wopts);
+    match r {
+        Ok(s) => {
+            if let Some(e) = &s.export {
+                let label = skylod::export::merged::label(model, &files);
+                summary!("{}", e.describe(batch.format, Path::new(&label), target));
+            }
+            for &f in &files {
+                let (b, p) = buildings_without_kept_assets(model, f, lv.levels());
+                if let Some(w) = written.get_mut(f) {
+                    *w = Some((target.display().to_string(), b + p));
+                }
+            }
+            (written, false)
+        }
+        Err(e) => {
+            error!("{}", crate::errors::cli_text(&e));
+            (written, true)
+        }
+    }
 }
