@@ -230,7 +230,9 @@ pub fn merge_converted(
         );
         return (false, vec![Said::Error(e)]);
     }
-    if let Err(e) = crate::citygml::write::check_target(target, opts, parts.iter().map(PathBuf::as_path)) {
+    if let Err(e) =
+        crate::citygml::write::check_target(target, opts, parts.iter().map(PathBuf::as_path))
+    {
         return (false, vec![Said::Error(format!("{e:#}"))]);
     }
     let staged = staging.merged();
@@ -242,7 +244,9 @@ pub fn merge_converted(
         Ok(m) => m,
         Err(e) => return (false, vec![Said::Error(format!("{e:#}"))]),
     };
-    let first = names.first().map_or(String::new(), |p| crate::model::shown(p).to_string());
+    let first = names
+        .first()
+        .map_or(String::new(), |p| crate::model::shown(p).to_string());
     let label = match names.len() {
         0 | 1 => first,
         n => format!("{first} and {} more", n - 1),

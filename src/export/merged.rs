@@ -31,7 +31,10 @@ use std::path::Path;
 ///
 /// # Errors
 /// A CityGML input that can no longer be read.
-pub fn renames(model: &CityModel, files: &[usize]) -> Result<Vec<HashMap<String, String>>, ReadError> {
+pub fn renames(
+    model: &CityModel,
+    files: &[usize],
+) -> Result<Vec<HashMap<String, String>>, ReadError> {
     let mut ids: Vec<Vec<String>> = Vec::with_capacity(files.len());
     for &f in files {
         let Some(src) = model.files.get(f) else {
@@ -115,7 +118,10 @@ pub fn view(model: &CityModel, files: &[usize], renames: &[HashMap<String, Strin
         match slot(a.file) {
             Some(k) => {
                 a.file = 0;
-                if let Some(new) = a.id.as_ref().and_then(|id| renames.get(k)?.get(id.as_str())) {
+                if let Some(new) =
+                    a.id.as_ref()
+                        .and_then(|id| renames.get(k)?.get(id.as_str()))
+                {
                     a.id = Some(new.as_str().into());
                 }
             }

@@ -275,9 +275,7 @@ pub fn write_streamed_as(
     let r = crate::citygml::write::atomic_write(out, |w| {
         let mut cw = crate::io::CountingWriter::new(w);
         let r = match kind {
-            None => {
-                obj::write_obj_streamed_as(input, label, read, chunk_bytes, passed, &mut cw)
-            }
+            None => obj::write_obj_streamed_as(input, label, read, chunk_bytes, passed, &mut cw),
             Some(k) => {
                 cityjson_stream::write_streamed(k, input, read, chunk_bytes, passed, &mut cw)
             }

@@ -70,10 +70,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         todo.par_iter()
             .map(|(k, out)| {
                 let (k, out) = (*k, out.clone());
-                let chunk = args
-                    .stream
-                    .chunk_for(&paths[k])
-                    .filter(|_| fmt != Format::CityGml);
+                let chunk = args.stream.chunk_for(&paths[k]);
                 let r = match chunk.map(|c| {
                     let p = &paths[k];
                     crate::commands::stream::export(fmt, p, &out, c, write_opts, mirror, &progress)
