@@ -22,8 +22,9 @@ pub struct Args {
     inputs: Vec<PathBuf>,
     /// Output: a file for one input (`-` for standard output; .gml/.xml (.gz to compress)
     /// CityGML, .obj OBJ, .city.json CityJSON 2.0, .city.jsonl CityJSONSeq); a directory
-    /// that mirrors the input tree; or, for several inputs, one CityGML file (or `-`) that
-    /// merges them (one CityModel, colliding gml:ids of later inputs renamed `<id>__<k>`).
+    /// that mirrors the input tree; or, for several inputs, one file (or `-`) that merges
+    /// them (CityGML: one CityModel; OBJ, CityJSON: that merge converted, one origin;
+    /// colliding gml:ids of later inputs renamed `<id>__<k>`).
     #[arg(short, long)]
     output: PathBuf,
     /// Output format when the output's name does not tell it.
