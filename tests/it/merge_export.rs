@@ -233,3 +233,20 @@ fn different_crss_refused() {
         "nothing left behind"
     );
 }
+
+/// `rough` merges CityGML only: several inputs into one OBJ are refused before any work.
+#[test]
+fn rough_refuses_a_merge_into_obj() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.gml"), dir.path().join("b.gml"));
+    std::fs::copy(fixture("synth-small.gml"), &a).unwrap();
+    std::fs::copy(fixture("synth-small.gml"), &b).unwrap();
+    let out = dir.path().join("m.obj");
+    let v = args(&["rough"], &[a, b], &[&"-o", &out]);
+    let v: Vec<&OsStr> = v.iter().map(OsString::as_os_str).collect();
+    let o = run(&v);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("cannot be merged into one obj file"), "{err}");
+    assert!(!out.exists());
+}

@@ -47,11 +47,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // staging directory, then merges them into the target.
     let batch = outputs::batch("rough", &inputs, out, false, shard)?;
     // OBJ and CityJSON merges are `convert`'s and `lod`'s; rough merges CityGML only.
-    if matches!(batch.plan, skylod::batch::outputs::Plan::Merge(_)) && batch.format != Format::CityGml {
-        return Err(outputs::usage(skylod::batch::outputs::PlanError::NotMergeable {
-            format: batch.format,
-            inputs: inputs.len(),
-        }));
+    if matches!(batch.plan, skylod::batch::outputs::Plan::Merge(_))
+        && batch.format != Format::CityGml
+    {
+        return Err(outputs::usage(
+            skylod::batch::outputs::PlanError::NotMergeable {
+                format: batch.format,
+                inputs: inputs.len(),
+            },
+        ));
     }
     let Targets {
         todo,
