@@ -32,6 +32,7 @@ pub mod cityjson;
 mod cityjson_source;
 mod cityjson_stream;
 pub mod format;
+pub mod merged;
 pub mod obj;
 // What the commands report (typed JSON with schemas): the `lod` report, model counts.
 #[allow(clippy::module_inception)] // `report::report` is the `lod` report
@@ -240,6 +241,25 @@ pub fn write_streamed(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<Option<(ExportSummary, crate::io::citygml::read::StreamSummary)>, WriteError> {
+    write_streamed_as(format, input, None, read, chunk_bytes, passed, out, opts)
+}
+
+/// [`write_streamed`], the OBJ's comment line naming `label` instead of `input` when given
+/// (a merge's staged document is named by the inputs it holds: [`merged`]).
+///
+/// # Errors
+/// As [`write_streamed`].
+#[allow(clippy::too_many_arguments)]
+pub fn write_streamed_as(
+    format: Format,
+    input: &Path,
+    label: Option<&str>,
+    read: &crate::io::citygml::read::ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(usize, u64),
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<Option<(ExportSummary, crate::io::citygml::read::StreamSummary)>, WriteError> {
     let kind = match format {
         Format::Obj => None,
         Format::CityJson => Some(cityjson_stream::Kind::CityJson),
@@ -259,7 +279,7 @@ pub fn write_streamed(
     let r = crate::io::citygml::write::atomic_write(out, |w| {
         let mut cw = crate::io::files::CountingWriter::new(w);
         let r = match kind {
-            None => obj::write_obj_streamed(input, read, chunk_bytes, passed, &mut cw),
+            None => obj::write_obj_streamed_as(input, label, read, chunk_bytes, passed, &mut cw),
             Some(k) => {
                 cityjson_stream::write_streamed(k, input, read, chunk_bytes, passed, &mut cw)
             }

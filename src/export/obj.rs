@@ -71,10 +71,11 @@ pub fn write_obj(
         bbox.center().round()
     };
     let src = model.files.get(file);
+    let label = src.map(|f| crate::model::shown(&f.path).to_string());
     write_header(
         w,
         origin,
-        src.map(|f| f.path.as_path()),
+        label.as_deref(),
         src.and_then(|f| f.srs_name.as_deref()),
     )?;
     let mut s = ExportSummary::default();
@@ -97,11 +98,12 @@ pub fn write_obj(
     Ok(s)
 }
 
-/// The origin line and the comment line of an OBJ of the file at `path` in CRS `srs_name`.
+/// The origin line and the comment line of an OBJ of the file shown as `label` in CRS
+/// `srs_name`.
 fn write_header(
     w: &mut dyn Write,
     origin: DVec3,
-    path: Option<&std::path::Path>,
+    label: Option<&str>,
     srs_name: Option<&str>,
 ) -> io::Result<()> {
     writeln!(w, "# origin {} {} {}", origin.x, origin.y, origin.z)?;
@@ -109,7 +111,7 @@ fn write_header(
         w,
         "# skylod {} OBJ of {}; CRS {}; metres, Z up, vertices relative to the origin",
         env!("CARGO_PKG_VERSION"),
-        path.map_or_else(String::new, |p| crate::model::shown(p).to_string()),
+        label.unwrap_or(""),
         srs_name.unwrap_or("unknown"),
     )
 }
@@ -214,6 +216,21 @@ pub fn write_obj_streamed(
     passed: &dyn Fn(usize, u64),
     w: &mut dyn Write,
 ) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
+    write_obj_streamed_as(path, None, opts, chunk_bytes, passed, w)
+}
+
+/// [`write_obj_streamed`], the comment line naming `label` (when given) instead of `path`.
+///
+/// # Errors
+/// I/O errors of `w`.
+pub fn write_obj_streamed_as(
+    path: &std::path::Path,
+    label: Option<&str>,
+    opts: &ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(usize, u64),
+    w: &mut dyn Write,
+) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
     let mut bbox = Bbox::EMPTY;
     let pass = |k: usize, each: &mut dyn FnMut(Chunk) -> io::Result<()>| {
         stream(path, opts, chunk_bytes, &|n| passed(k, n), each).map(|r| match r {
@@ -239,7 +256,8 @@ pub fn write_obj_streamed(
     } else {
         bbox.center().round()
     };
-    write_header(w, origin, Some(path), sum.srs_name.as_deref())?;
+    let label = label.map_or_else(|| crate::model::shown(path).to_string(), str::to_string);
+    write_header(w, origin, Some(&label), sum.srs_name.as_deref())?;
     let mut s = ExportSummary::default();
     let mut scratch = Scratch::default();
     for bodies in [false, true] {

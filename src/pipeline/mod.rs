@@ -71,4 +71,7 @@ pub use frame::{frame, FrameOptions, Framed};
 pub use irradiance::{irradiance, PoiIrradiance};
 pub use levels::{levels, levels_of, BoundSpec, Levels, LevelsOptions};
 pub use read::{check_model, read_inputs, read_sources, Inputs};
-pub use write::{buildings_without_kept_assets, write_all, write_levels, write_levels_to, Written};
+pub use write::{
+    buildings_without_kept_assets, write_all, write_levels, write_levels_to, write_merged_levels,
+    Written,
+};

@@ -158,6 +158,52 @@ pub fn write_all(
     out
 }
 
+/// `files` of `model` (in input order) merged into one OBJ, CityJSON or CityJSONSeq file at
+/// `out` with every asset at its level ([`crate::export::merged::write_merged`]: one origin,
+/// the CityGML merge's ids); `out`'s missing parent folders are created. What was written,
+/// counted over all of `files` (buildings and parts dropped summed).
+///
+/// # Errors
+/// [`WriteError`]; [`WriteError::Invalid`] for [`Format::CityGml`] (merged by
+/// [`crate::io::citygml::merge`] from the per-file documents).
+pub fn write_merged_levels(
+    model: &CityModel,
+    files: &[usize],
+    levels: &Levels,
+    out: &Path,
+    format: Format,
+    wopts: &WriteOptions,
+) -> Result<Written, WriteError> {
+    if format == Format::CityGml {
+        return Err(WriteError::Invalid(
+            "a CityGML merge is merged from the per-file documents".into(),
+        ));
+    }
+    if let Some(dir) = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty() && !d.exists() && !crate::io::files::is_stdout(out))
+    {
+        std::fs::create_dir_all(dir).map_err(|source| WriteError::Io {
+            file: dir.to_path_buf(),
+            source,
+        })?;
+    }
+    let s = crate::export::merged::write_merged(format, model, files, content(levels), out, wopts)?;
+    let (mut buildings_dropped, mut parts_dropped) = (0, 0);
+    for &f in files {
+        let (b, p) = buildings_without_kept_assets(model, f, levels.levels());
+        buildings_dropped += b;
+        parts_dropped += p;
+    }
+    Ok(Written {
+        bytes: s.bytes,
+        buildings_dropped,
+        parts_dropped,
+        export: Some(s),
+        ..Written::default()
+    })
+}
+
 /// Buildings and parts of file `f` that keep no asset (through any part below them): what
 /// the OBJ and CityJSON writers leave out, as `(buildings, parts)` (top-level buildings, then
 /// building parts).

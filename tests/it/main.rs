@@ -55,6 +55,8 @@ mod layout;
 mod lod;
 // Selection on the hand-made scenes: the known level of each named asset.
 mod lod_scenes;
+// Several inputs merged into one OBJ / CityJSON: the CityGML merge converted (issue 22).
+mod merge_export;
 // Mixed-LoD output (`rough`, `write_mixed`): valid, resolved, levels and counts consistent.
 mod mixed_output;
 // Progress bars under a terminal, plain log lines on a pipe, only errors with `--quiet`.

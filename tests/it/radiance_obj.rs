@@ -180,6 +180,17 @@ fn ingolstadt_facades() {
     assert_eq!(objs.len(), tiles.len(), "one OBJ per tile");
     let sky = skylod_svf(&tiles, &pois);
     compare("Ingolstadt LoD OBJ", &radiance_svf(&objs, &pois), &sky);
+    // The whole street in one OBJ (`-o street.obj`): one origin for all tiles (issue 22).
+    let street = dir.path().join("street.obj");
+    let mut args = os(&[&"lod"]);
+    args.extend(tiles.iter().map(|p| p.clone().into_os_string()));
+    args.extend(os(&[&"--pois", &pois, &"-o", &street]));
+    skylod(&args);
+    compare(
+        "Ingolstadt LoD OBJ, one file",
+        &radiance_svf(std::slice::from_ref(&street), &pois),
+        &sky,
+    );
     // The exporter alone: every tile at full detail (holes, xlinks, real LoD3 geometry).
     let full_dir = dir.path().join("full");
     std::fs::create_dir(&full_dir).unwrap();

@@ -25,8 +25,8 @@ pub fn usage(e: PlanError) -> anyhow::Error {
             output.display()
         ),
         PlanError::NotMergeable { format, inputs } => anyhow!(
-            "{inputs} inputs cannot be merged into one {format} file: give -o DIR for one output \
-             per input, or a CityGML name (.gml, .xml, .gz) to merge"
+            "{inputs} inputs cannot be merged into one {format} file by this command: give -o \
+             DIR for one output per input, or a CityGML name (.gml, .xml, .gz) to merge"
         ),
         PlanError::ShardedMerge { shard, target } => anyhow!(
             "shard {shard} cannot merge into {}: a merge needs every input (give -o DIR to the \

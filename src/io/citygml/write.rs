@@ -168,6 +168,201 @@ fn write_edits(
     })
 }
 
+/// What [`write_document_streamed`] wrote.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct StreamedDocument {
+    /// Bytes and edits, as [`write_document`] counts them.
+    pub summary: WriteSummary,
+    /// The stream's summary of the document (warnings, version, CRS).
+    pub stream: crate::io::citygml::read::StreamSummary,
+    /// Asset polygons of the document ([`CityModel::polygon_count`] of the whole read).
+    pub polygons: usize,
+}
+
+/// [`write_document`] of the whole document at `input` (no other edits than the envelopes)
+/// from two streamed reads ([`crate::io::citygml::read::stream`], chunks of `chunk_bytes` whole
+/// top-level members): memory follows the chunk, not the file, and the bytes are
+/// [`write_document`]'s of the whole read. The root's `gml:boundedBy` comes first in the
+/// document but bounds everything, so a first pass computes its box (the union of every
+/// chunk's assets and building geometry, the whole read's root envelope), and a second
+/// writes the document chunk by chunk, each chunk's envelopes recomputed from the chunk (an
+/// envelope's owner is within one top-level member). `passed(k, n)`: `n` more bytes read in
+/// pass `k` (0: the root's box, 1: the writing). `Ok(None)`, nothing written, where the
+/// stream declines (or where the first chunk holds no geometry to tell the root's envelope
+/// by): read the whole file and [`write_document`] it then.
+///
+/// # Errors
+/// As [`write_document`].
+pub fn write_document_streamed(
+    input: &Path,
+    read: &crate::io::citygml::read::ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(usize, u64),
+    out: &Path,
+    opts: &WriteOptions,
+) -> Result<Option<StreamedDocument>, WriteError> {
+    use crate::io::citygml::read::{stream, Chunk, Streamed};
+    use crate::model::Bbox;
+    check_target(out, opts, std::iter::once(input))?;
+    // Pass 0: the root envelope's box, and where that envelope is (the first chunk's
+    // envelope before every building and asset: every other one is inside its owner).
+    let mut root = Bbox::EMPTY;
+    let mut root_site: Option<u64> = None;
+    let mut unsure = false;
+    let first = stream(input, read, chunk_bytes, &|n| passed(0, n), |c: Chunk| {
+        let b = chunk_box(&c.model);
+        if c.index == 0 {
+            root_site = root_site_of(&c.model);
+            unsure = root_site.is_some() && b.is_empty();
+        }
+        root.union(&b);
+        Ok::<(), WriteError>(())
+    })?;
+    if !matches!(first, Streamed::Done(_)) || unsure {
+        return Ok(None);
+    }
+    // Pass 1: the document, chunk by chunk.
+    let keep = opts.keep_envelopes;
+    let mut done: Option<StreamedDocument> = None;
+    let r = atomic_write(out, |w| {
+        let src = crate::model::Source::File(input.to_path_buf());
+        let (mut reader, _) = source::open_source(&src, input)?;
+        let (mut cursor, mut written, mut n_edits, mut polygons, mut len) = (0, 0, 0, 0, 0);
+        let second = stream(input, read, chunk_bytes, &|n| passed(1, n), |c: Chunk| {
+            polygons += c.model.polygon_count();
+            let Some(f) = c.model.files.first() else {
+                return Ok::<(), WriteError>(());
+            };
+            len = f.len;
+            let mut edits = Vec::new();
+            for env in f.envelopes.iter().filter(|_| !keep) {
+                let text = if c.index == 0 && root_site == Some(env.span.start) {
+                    // an envelope of no dimension stays empty, as in the whole read
+                    let whole = EnvelopeSite {
+                        bbox: if env.bbox.is_empty() { env.bbox } else { root },
+                        ..env.clone()
+                    };
+                    envelope_xml(&whole)
+                } else {
+                    envelope_xml(env)
+                };
+                if let Some(text) = text {
+                    edits.push(Edit {
+                        span: env.span.clone(),
+                        replacement: text.into_bytes(),
+                    });
+                }
+            }
+            let edits = normalise(edits);
+            n_edits += edits.len();
+            written += apply_edits(&mut reader, w, &edits, &mut cursor, (len, input, out))?;
+            Ok(())
+        })?;
+        let Streamed::Done(sum) = second else {
+            // nothing is kept of a declined stream's output
+            return Err(WriteError::Invalid("declined".into()));
+        };
+        written += copy(&mut reader, w, len.saturating_sub(cursor), input, out)?;
+        let mut rest = [0u8; 1];
+        let extra = reader.read(&mut rest).map_err(|source| WriteError::Io {
+            file: input.to_path_buf(),
+            source,
+        })?;
+        if extra != 0 {
+            return Err(WriteError::SourceChanged(input.to_path_buf()));
+        }
+        done = Some(StreamedDocument {
+            summary: WriteSummary {
+                bytes: written,
+                edits: n_edits,
+            },
+            stream: sum,
+            polygons,
+        });
+        Ok(written)
+    });
+    match (r, done) {
+        (Ok(bytes), Some(mut d)) => {
+            d.summary.bytes = bytes;
+            Ok(Some(d))
+        }
+        (Err(WriteError::Invalid(_)), None) | (Ok(_), None) => Ok(None),
+        (Err(e), _) => Err(e),
+    }
+}
+
+/// The box the whole read gives the root envelope, over one chunk's model: its assets and
+/// the buildings' own geometry.
+fn chunk_box(model: &CityModel) -> crate::model::Bbox {
+    let mut b = crate::model::Bbox::EMPTY;
+    for a in &model.assets {
+        b.union(&a.bbox());
+    }
+    for bd in &model.buildings {
+        for g in &bd.geometries {
+            for p in &g.polygons {
+                for q in p.points() {
+                    b.add(*q);
+                }
+            }
+        }
+    }
+    b
+}
+
+/// Where the root's envelope starts in the first chunk's model: its first envelope, when
+/// that comes before every building and asset (an owner's envelope is inside its owner).
+fn root_site_of(model: &CityModel) -> Option<u64> {
+    let f = model.files.first()?;
+    let first = f.envelopes.iter().map(|e| e.span.start).min()?;
+    let owners = model
+        .buildings
+        .iter()
+        .map(|b| b.span.start)
+        .chain(model.assets.iter().map(|a| a.span.start))
+        .min();
+    owners.is_none_or(|o| first < o).then_some(first)
+}
+
+/// The source from `cursor` to the last of `edits` (sorted, not nested) copied to `w` with
+/// them applied; `cursor` moves past it. `(len, src, out)`: the source's length and the
+/// names of the source and the output. The bytes written.
+fn apply_edits(
+    reader: &mut dyn Read,
+    w: &mut dyn Write,
+    edits: &[Edit],
+    cursor: &mut u64,
+    (len, src, out): (u64, &Path, &Path),
+) -> Result<u64, WriteError> {
+    let mut written = 0;
+    for e in edits {
+        if e.span.start < *cursor || e.span.end > len {
+            continue;
+        }
+        written += copy(reader, w, e.span.start - *cursor, src, out)?;
+        w.write_all(&e.replacement)
+            .map_err(|source| WriteError::Io {
+                file: out.to_path_buf(),
+                source,
+            })?;
+        written += e.replacement.len() as u64;
+        let skip = e.span.end - e.span.start;
+        let skipped =
+            std::io::copy(&mut reader.take(skip), &mut std::io::sink()).map_err(|source| {
+                WriteError::Io {
+                    file: src.to_path_buf(),
+                    source,
+                }
+            })?;
+        if skipped != skip {
+            return Err(WriteError::SourceChanged(src.to_path_buf()));
+        }
+        *cursor = e.span.end;
+    }
+    Ok(written)
+}
+
 fn copy(
     reader: &mut dyn Read,
     w: &mut dyn Write,

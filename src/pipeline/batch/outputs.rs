@@ -7,9 +7,10 @@
 //!   CityGML. Two inputs that map to one output are refused.
 //! * an output file with one input is that input's output (format from its ending or the
 //!   one named).
-//! * a CityGML file (or `-`, standard output) with several inputs merges them into one
-//!   document ([`crate::io::citygml::merge`]): each input is written to a [`Staging`] directory
-//!   beside the target, then merged into it.
+//! * a file (or `-`, standard output) with several inputs merges them into one document
+//!   ([`crate::io::citygml::merge`]): each input is written to a [`Staging`] directory beside the
+//!   target, then merged into it. An OBJ, CityJSON or CityJSONSeq target holds the merge
+//!   converted: one origin, the merge's ids ([`crate::export::merged`]).
 //!
 //! # Example
 //! ```
@@ -25,6 +26,7 @@
 //! assert_eq!(format, Format::Obj);
 //! assert_eq!(p, Plan::Mirror(vec![PathBuf::from("out/a/x.obj"), PathBuf::from("out/b/y.obj")]));
 //! assert_eq!(plan(&inputs, Path::new("all.gml"), None)?.0, Plan::Merge("all.gml".into()));
+//! assert_eq!(plan(&inputs, Path::new("all.obj"), None)?, (Plan::Merge("all.obj".into()), Format::Obj));
 //! # Ok::<(), skylod::pipeline::batch::outputs::PlanError>(())
 //! ```
 
@@ -45,7 +47,7 @@ pub enum Plan {
     /// One output per input below a directory, in input order (parent directories are
     /// created when the input is written: [`create_parent`]).
     Mirror(Vec<PathBuf>),
-    /// All inputs merged into one CityGML document (a file or `-`).
+    /// All inputs merged into one document (a file or `-`): CityGML, or the merge converted.
     Merge(PathBuf),
 }
 
@@ -68,8 +70,9 @@ pub enum PlanError {
         /// How many inputs.
         inputs: usize,
     },
-    /// Several inputs to merge into a format other than CityGML.
-    #[error("{inputs} inputs cannot be merged into one {format} file, only into CityGML")]
+    /// Several inputs to merge into a format that cannot hold them (none today: every
+    /// output format merges).
+    #[error("{inputs} inputs cannot be merged into one {format} file")]
     NotMergeable {
         /// The format asked for.
         format: Format,
@@ -129,8 +132,7 @@ fn names_directory(out: &Path) -> bool {
 /// docs; `explicit`: the format named, if any).
 ///
 /// # Errors
-/// An unknown ending for one file, a merge into a format other than CityGML, colliding
-/// outputs: before any input is read.
+/// An unknown ending for one file, colliding outputs: before any input is read.
 pub fn plan(
     inputs: &[Input],
     out: &Path,
@@ -140,7 +142,6 @@ pub fn plan(
     if is_stdout(out) {
         let format = explicit.unwrap_or(Format::CityGml);
         if several {
-            refuse_merge(format, inputs.len())?;
             return Ok((Plan::Merge(out.to_path_buf()), format));
         }
         return Ok((Plan::PerInput(vec![out.to_path_buf()]), format));
@@ -151,7 +152,6 @@ pub fn plan(
                 return Ok((Plan::PerInput(vec![out.to_path_buf()]), format));
             }
             Ok(format) if Format::from_path(out).is_some() => {
-                refuse_merge(format, inputs.len())?;
                 return Ok((Plan::Merge(out.to_path_buf()), format));
             }
             Err(e) if !several => return Err(e.into()),
@@ -167,13 +167,6 @@ pub fn plan(
     }
     let format = explicit.unwrap_or(Format::CityGml);
     Ok((Plan::Mirror(mirror(inputs, out, format)?), format))
-}
-
-fn refuse_merge(format: Format, inputs: usize) -> Result<(), PlanError> {
-    if format != Format::CityGml {
-        return Err(PlanError::NotMergeable { format, inputs });
-    }
-    Ok(())
 }
 
 /// `dir/<relative>` per input, with the format's ending.
@@ -345,6 +338,11 @@ impl Staging {
     pub fn part(&self, k: usize) -> PathBuf {
         self.dir.path().join(format!("{k:06}.gml"))
     }
+
+    /// Where the merged CityGML document is staged when the target is another format.
+    pub fn merged(&self) -> PathBuf {
+        self.dir.path().join("merged.gml")
+    }
 }
 
 /// The name of the `k`-th of `n` per-POI outputs from the output name `base`: `base` itself
@@ -407,7 +405,18 @@ mod tests {
             p(&two, "-", None),
             (Plan::Merge("-".into()), Format::CityGml)
         );
-        assert!(plan(&two, Path::new("m.obj"), None).is_err());
+        assert_eq!(
+            p(&two, "m.obj", None),
+            (Plan::Merge("m.obj".into()), Format::Obj)
+        );
+        assert_eq!(
+            p(&two, "-", Some(Format::CityJson)),
+            (Plan::Merge("-".into()), Format::CityJson)
+        );
+        assert_eq!(
+            p(&two, "m.city.jsonl", None),
+            (Plan::Merge("m.city.jsonl".into()), Format::CityJsonSeq)
+        );
         assert_eq!(
             p(&two, "outdir", None),
             (

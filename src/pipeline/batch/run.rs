@@ -5,7 +5,7 @@
 //! to tell the user ([`Said`]), in order.
 
 use super::inputs::Input;
-use super::outputs::{plan, Plan, PlanError, Targets};
+use super::outputs::{plan, Plan, PlanError, Staging, Targets};
 use super::shard::Shard;
 use crate::export::Format;
 use crate::io::citygml::merge::{merge_named, MergeSummary};
@@ -138,7 +138,13 @@ impl Batch {
             }
         }
         if let (true, Plan::Merge(target)) = (staged, &self.plan) {
-            let (merged, s) = merge_parts(&parts, &names, target, &self.wopts, inputs);
+            let (merged, s) = match &self.targets.staging {
+                Some(st) if self.format != Format::CityGml => {
+                    let to = (target.as_path(), self.format);
+                    merge_converted(&parts, &names, to, st, &self.wopts, inputs)
+                }
+                _ => merge_parts(&parts, &names, target, &self.wopts, inputs),
+            };
             said.extend(s);
             if !merged {
                 failed += ok;
@@ -202,6 +208,111 @@ pub fn merge_parts(
         }
         Err(e) => (false, vec![Said::Error(format!("{e:#}"))]),
     }
+}
+
+/// [`merge_parts`] into a target in another format than CityGML (`target`: the file and its
+/// format): the parts merged into a staged CityGML document ([`Staging::merged`]), then that
+/// converted to `target` from a streamed read ([`crate::export::write_streamed_as`]; read
+/// whole where the stream declines). The output is the CityGML merge converted, named in the
+/// OBJ's comment line by the inputs it holds ([`crate::export::merged`]).
+pub fn merge_converted(
+    parts: &[PathBuf],
+    names: &[PathBuf],
+    (target, format): (&Path, Format),
+    staging: &Staging,
+    opts: &WriteOptions,
+    inputs: usize,
+) -> (bool, Vec<Said>) {
+    if parts.is_empty() {
+        let e = format!(
+            "nothing to merge (every input failed); {} not written",
+            target.display()
+        );
+        return (false, vec![Said::Error(e)]);
+    }
+    if let Err(e) =
+        crate::io::citygml::write::check_target(target, opts, parts.iter().map(PathBuf::as_path))
+    {
+        return (false, vec![Said::Error(format!("{e:#}"))]);
+    }
+    let staged = staging.merged();
+    let sopts = WriteOptions {
+        overwrite: true,
+        ..opts.clone()
+    };
+    let m = match merge_named(parts, names, &staged, &sopts) {
+        Ok(m) => m,
+        Err(e) => return (false, vec![Said::Error(format!("{e:#}"))]),
+    };
+    let first = names
+        .first()
+        .map_or(String::new(), |p| crate::model::shown(p).to_string());
+    let label = match names.len() {
+        0 | 1 => first,
+        n => format!("{first} and {} more", n - 1),
+    };
+    let r = convert_staged(&staged, &label, target, format, opts);
+    let _ = std::fs::remove_file(&staged);
+    match r {
+        Ok(e) => {
+            let mut said = Vec::new();
+            if parts.len() < inputs {
+                said.push(Said::Warning(format!(
+                    "warning: {} holds {} of the {} inputs (the others failed)",
+                    target.display(),
+                    parts.len(),
+                    inputs
+                )));
+            }
+            said.push(Said::Summary(format!(
+                "merged {} file(s) into {} ({format}): {} member(s), {} gml:id(s) renamed",
+                m.files,
+                target.display(),
+                m.members,
+                m.ids_renamed
+            )));
+            said.push(Said::Summary(e.describe(format, Path::new(&label), target)));
+            (true, said)
+        }
+        Err(e) => (false, vec![Said::Error(format!("{e:#}"))]),
+    }
+}
+
+/// The staged merge at `staged` written to `target` in `format`, streamed (or read whole).
+fn convert_staged(
+    staged: &Path,
+    label: &str,
+    target: &Path,
+    format: Format,
+    opts: &WriteOptions,
+) -> Result<crate::export::ExportSummary, crate::io::citygml::WriteError> {
+    let read = crate::io::citygml::read::ReadOptions::default();
+    let chunk = crate::io::citygml::read::CHUNK_BYTES;
+    let none = |_: usize, _: u64| {};
+    let streamed = crate::export::write_streamed_as(
+        format,
+        staged,
+        Some(label),
+        &read,
+        chunk,
+        &none,
+        target,
+        opts,
+    )?;
+    if let Some((e, _)) = streamed {
+        return Ok(e);
+    }
+    let mut model = crate::io::citygml::read_file(staged)?;
+    if let Some(f) = model.files.first_mut() {
+        f.path = label.into();
+    }
+    let mut summary = crate::export::ExportSummary::default();
+    let bytes = crate::io::citygml::write::atomic_write(target, |w| {
+        summary = crate::export::write_to(format, &model, 0, crate::export::Content::Full, w)?;
+        Ok(summary.bytes)
+    })?;
+    summary.bytes = bytes;
+    Ok(summary)
 }
 
 /// The line said after a merge.

@@ -4,13 +4,14 @@
 //! is printed: what to tell the user comes back in order.
 
 use super::Result;
+use crate::export::Format;
 use crate::io::citygml::write::{check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
 use crate::model::runtime::progress::Progress;
 use crate::model::CityModel;
 use crate::pipeline::batch::outputs::Plan;
 use crate::pipeline::batch::run::{merge_parts, Batch, Said};
-use crate::pipeline::{write_all, Levels};
+use crate::pipeline::{buildings_without_kept_assets, write_all, write_merged_levels, Levels};
 use std::path::{Path, PathBuf};
 
 /// Why the outputs of a `lod` run cannot be laid out.
@@ -116,6 +117,11 @@ impl LodLayout {
         let shown = |out: &Path| batch.shown(out).display().to_string();
         let format = batch.format;
         let wopts = &batch.targets.write_opts;
+        if let (Some(_), Plan::Merge(t)) = (&batch.targets.staging, &batch.plan) {
+            if format != Format::CityGml {
+                return Ok(merged_export(model, &targets, t, lv, batch));
+            }
+        }
         let results = write_all(model, &targets, lv, format, wopts, progress)?;
         let mut done = LodWritten {
             written: vec![None; model.files.len()],
@@ -166,6 +172,43 @@ impl LodLayout {
         }
         Ok(done)
     }
+}
+
+/// Several inputs merged into one OBJ / CityJSON / CityJSONSeq file `target`, written from
+/// the model in memory ([`crate::pipeline::write_merged_levels`]): one line for the merged
+/// file, every input's buildings dropped counted under the target's name.
+fn merged_export(
+    model: &CityModel,
+    targets: &[(usize, PathBuf)],
+    target: &Path,
+    lv: &Levels,
+    batch: &Batch,
+) -> LodWritten {
+    let files: Vec<usize> = targets.iter().map(|(f, _)| *f).collect();
+    let mut done = LodWritten {
+        written: vec![None; model.files.len()],
+        ..LodWritten::default()
+    };
+    match write_merged_levels(model, &files, lv, target, batch.format, &batch.wopts) {
+        Ok(s) => {
+            if let Some(e) = &s.export {
+                let label = crate::export::merged::label(model, &files);
+                let line = e.describe(batch.format, Path::new(&label), target);
+                done.files.push(FileOutcome::Written(line));
+            }
+            for &f in &files {
+                let (b, p) = buildings_without_kept_assets(model, f, lv.levels());
+                if let Some(w) = done.written.get_mut(f) {
+                    *w = Some((target.display().to_string(), b + p));
+                }
+            }
+        }
+        Err(e) => {
+            done.files.push(FileOutcome::Failed(e));
+            done.failed = true;
+        }
+    }
+    done
 }
 
 /// Check the report's target `report` before any work: not standard output when the model

@@ -14,7 +14,8 @@ pub struct OutputArgs {
     /// Output file for one input (`-` for standard output; `.gz` compresses; the format
     /// follows the name: .gml/.xml CityGML, .obj OBJ, .city.json CityJSON, .city.jsonl
     /// CityJSONSeq); a directory that mirrors the input tree (created if missing); or, for
-    /// several inputs, one CityGML file (or `-`) that merges them.
+    /// several inputs, one file (or `-`) that merges them (lod: CityGML, OBJ or CityJSON, one
+    /// origin for all; rough: CityGML).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output format when the output's name does not tell it (in a directory: the format of

@@ -23,8 +23,9 @@ pub struct Args {
     inputs: Vec<PathBuf>,
     /// Output: a file for one input (`-` for standard output; .gml/.xml (.gz to compress)
     /// CityGML, .obj OBJ, .city.json CityJSON 2.0, .city.jsonl CityJSONSeq); a directory
-    /// that mirrors the input tree; or, for several inputs, one CityGML file (or `-`) that
-    /// merges them (one CityModel, colliding gml:ids of later inputs renamed `<id>__<k>`).
+    /// that mirrors the input tree; or, for several inputs, one file (or `-`) that merges
+    /// them (CityGML: one CityModel; OBJ, CityJSON: that merge converted, one origin;
+    /// colliding gml:ids of later inputs renamed `<id>__<k>`).
     #[arg(short, long)]
     output: PathBuf,
     /// Output format when the output's name does not tell it.
@@ -74,10 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         todo.par_iter()
             .map(|(k, out)| {
                 let (k, out) = (*k, out.clone());
-                let chunk = args
-                    .stream
-                    .chunk_for(&paths[k])
-                    .filter(|_| fmt != Format::CityGml);
+                let chunk = args.stream.chunk_for(&paths[k]);
                 let r = match chunk.map(|c| {
                     let p = &paths[k];
                     crate::commands::stream::export(fmt, p, &out, c, write_opts, mirror, &progress)

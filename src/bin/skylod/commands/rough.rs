@@ -46,6 +46,17 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // (exit 1) without being read; the others are done. A merge writes every input to a
     // staging directory, then merges them into the target.
     let batch = outputs::batch("rough", &inputs, out, false, shard)?;
+    // OBJ and CityJSON merges are `convert`'s and `lod`'s; rough merges CityGML only.
+    if matches!(batch.plan, skylod::batch::outputs::Plan::Merge(_))
+        && batch.format != Format::CityGml
+    {
+        return Err(outputs::usage(
+            skylod::batch::outputs::PlanError::NotMergeable {
+                format: batch.format,
+                inputs: inputs.len(),
+            },
+        ));
+    }
     let Targets {
         todo,
         mirror,

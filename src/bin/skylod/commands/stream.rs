@@ -83,6 +83,9 @@ pub fn export(
         crate::outputs::create_parent(out)?;
     }
     let ropts = ReadOptions::default();
+    if format == Format::CityGml {
+        return document(input, out, chunk, opts, &passed);
+    }
     let Some((s, sum)) =
         skylod::export::write_streamed(format, input, &ropts, chunk, &passed, out, opts)
             .map_err(|e| anyhow::anyhow!("writing {}: {e}", out.display()))?
@@ -98,5 +101,39 @@ pub fn export(
         line: None,
         warnings: sum.warnings,
         polygons: (0, 0),
+    }))
+}
+
+/// `input` written back as CityGML to `out` (envelopes recomputed) from two streamed reads
+/// ([`skylod::citygml::write::write_document_streamed`]: the same bytes as from the whole
+/// read); `Ok(None)` where the stream declines.
+fn document(
+    input: &Path,
+    out: &Path,
+    chunk: u64,
+    opts: &WriteOptions,
+    passed: &dyn Fn(usize, u64),
+) -> anyhow::Result<Option<Done>> {
+    let ropts = ReadOptions::default();
+    let r =
+        skylod::citygml::write::write_document_streamed(input, &ropts, chunk, passed, out, opts)?;
+    let Some(d) = r else {
+        crate::log::info!(
+            "{}: read whole (the stream declined)",
+            skylod::model::shown(input)
+        );
+        return Ok(None);
+    };
+    Ok(Some(Done {
+        line: Some(format!(
+            "{} -> {}: {}, {} envelope(s) recomputed, {} warning(s)",
+            skylod::model::shown(input),
+            out.display(),
+            crate::outputs::size_note(out, d.summary.bytes),
+            d.summary.edits,
+            d.stream.warnings
+        )),
+        warnings: d.stream.warnings,
+        polygons: (d.polygons, d.polygons),
     }))
 }

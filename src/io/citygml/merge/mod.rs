@@ -263,6 +263,51 @@ impl From<crate::io::files::FileError> for MergeError {
     }
 }
 
+/// The renaming of a merge (module docs, "Identifiers"): for the `gml:id`s of each input in
+/// document order (`ids[k]` those of input `k`, 0-based), the ids of that input that are
+/// renamed and their new names. The first input keeps its own; a later input renames what an
+/// earlier one used. The merged OBJ and CityJSON ([`crate::export::merged`]) name their
+/// objects by the same rule.
+///
+/// ```
+/// use skylod::io::citygml::merge::rename_ids;
+/// let a = ["b".to_string(), "w".to_string()];
+/// let b = ["b".to_string(), "x".to_string()];
+/// let r = rename_ids(&[&a[..], &b[..]]);
+/// assert!(r[0].is_empty());
+/// assert_eq!(r[1].get("b").map(String::as_str), Some("b__2"));
+/// assert_eq!(r[1].len(), 1);
+/// ```
+pub fn rename_ids(ids: &[&[String]]) -> Vec<HashMap<String, String>> {
+    let mut taken: HashSet<String> = ids.iter().flat_map(|s| s.iter().cloned()).collect();
+    let mut used: HashSet<String> = HashSet::new();
+    let mut renames: Vec<HashMap<String, String>> = Vec::with_capacity(ids.len());
+    for (k, s) in ids.iter().enumerate() {
+        let mut map = HashMap::new();
+        for id in s.iter() {
+            if used.contains(id) {
+                let new = renamed_id(id, k + 1, &taken);
+                taken.insert(new.clone());
+                used.insert(new.clone());
+                map.insert(id.clone(), new);
+            } else {
+                used.insert(id.clone());
+            }
+        }
+        renames.push(map);
+    }
+    renames
+}
+
+/// Every `gml:id` of the CityGML document at `path` (plain or gzip), in document order, each
+/// once: what [`rename_ids`] takes for one input of a merge.
+///
+/// # Errors
+/// [`ReadError`] for a document that cannot be read or is not well-formed.
+pub fn document_ids(path: &Path) -> Result<Vec<String>, ReadError> {
+    Ok(scan(path)?.ids)
+}
+
 /// Merge the CityGML documents `inputs` (plain or gzip) into `out` (gzip when it ends in `.gz`;
 /// `-` for standard output), written atomically. See the module docs for the rules.
 pub fn merge_files(
@@ -333,26 +378,9 @@ fn merge_into(
         .enumerate()
         .find_map(|(k, s)| s.srs.as_deref().map(|n| (k, n)));
 
-    // Ids: the first input keeps its own; later inputs rename what an earlier one used.
-    let mut taken: HashSet<String> = scans.iter().flat_map(|s| s.ids.iter().cloned()).collect();
-    let mut used: HashSet<String> = HashSet::new();
-    let mut renames: Vec<HashMap<String, String>> = Vec::with_capacity(scans.len());
-    let mut ids_renamed = 0;
-    for (k, s) in scans.iter().enumerate() {
-        let mut map = HashMap::new();
-        for id in &s.ids {
-            if used.contains(id) {
-                let new = renamed_id(id, k + 1, &taken);
-                taken.insert(new.clone());
-                used.insert(new.clone());
-                map.insert(id.clone(), new);
-                ids_renamed += 1;
-            } else {
-                used.insert(id.clone());
-            }
-        }
-        renames.push(map);
-    }
+    let id_lists: Vec<&[String]> = scans.iter().map(|s| s.ids.as_slice()).collect();
+    let renames = rename_ids(&id_lists);
+    let ids_renamed = renames.iter().map(HashMap::len).sum();
 
     // Namespaces: the root's, plus what later inputs declare; conflicting prefixes go on the
     // members of the input that binds them differently.
