@@ -389,3 +389,54 @@ fn citygml3_outputs_stay_xsd_valid() {
         assert!(r.is_ok(), "{}: {}", p.display(), r.unwrap_err());
     }
 }
+
+/// `subset` and `filter-lods` with `--jobs 1` and `--jobs 2` over a directory of shared files:
+/// the same files with the same bytes, and the same lines in the same order.
+#[test]
+fn jobs_give_the_same_bytes_and_lines() {
+    let Some(data) = shared_data() else { return };
+    let tiles = data.join("ingolstadt-lod3");
+    let dir = tempfile::tempdir().unwrap();
+    for (cmd, rule) in [
+        ("subset", ["--type", "Building"]),
+        ("filter-lods", ["--lod", "2"]),
+    ] {
+        let mut outs = Vec::new();
+        for j in ["1", "2"] {
+            let out = dir.path().join(format!("{cmd}-{j}"));
+            let mut a = vec![cmd, tiles.to_str().unwrap(), "--jobs", j, "-o"];
+            a.push(out.to_str().unwrap());
+            a.extend(rule);
+            let said = skylod_ok(&a);
+            let lines: Vec<String> = said
+                .lines()
+                .filter(|l| l.contains(" -> "))
+                .map(|l| l.replace(out.to_str().unwrap(), "OUT"))
+                .collect();
+            outs.push((out, lines));
+        }
+        let (a, b) = (&outs[0], &outs[1]);
+        assert!(a.1.len() >= 50, "{cmd}: {} lines", a.1.len());
+        assert_eq!(a.1, b.1, "{cmd}: lines differ");
+        let files = |d: &Path| -> Vec<PathBuf> {
+            let mut v: Vec<PathBuf> = std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().path().strip_prefix(d).unwrap().to_path_buf())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(files(&a.0), files(&b.0), "{cmd}");
+        for f in files(&a.0) {
+            let (x, y) = (
+                std::fs::read(a.0.join(&f)).unwrap(),
+                std::fs::read(b.0.join(&f)).unwrap(),
+            );
+            assert!(
+                x == y,
+                "{cmd}: {} differs between --jobs 1 and 2",
+                f.display()
+            );
+        }
+    }
+}

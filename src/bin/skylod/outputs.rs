@@ -172,20 +172,11 @@ pub type Edit<'a> = dyn Fn(&Path, &Path, &Path, &WriteOptions) -> Result<String,
     + Sync
     + 'a;
 
-/// Run `edit` on every input of `a` as `cmd`, CityGML in and out (`subset`, `filter-lods`):
-/// a [`Batch`] (targets checked before any work, an error per input does not stop it,
-/// several inputs into one file merged).
-pub fn per_input(
-    a: &crate::args::citygml_io::CityGmlIoArgs,
-    cmd: &str,
-    edit: &Edit<'_>,
-) -> anyhow::Result<crate::Outcome> {
-    per_input_jobs(a, cmd, None, edit)
-}
-
-/// [`per_input`] with `--jobs` inputs at once (`None`: one after the other, outside any
-/// pool); the lines said in input order, the outputs the same whatever the number
-/// (`upgrade --jobs`).
+/// Run `edit` on every input of `a` as `cmd`, CityGML in and out (`subset`, `filter-lods`,
+/// `upgrade`): a [`Batch`] (targets checked before any work, an error per input does not stop
+/// it, several inputs into one file merged), with `--jobs` inputs at once (`None`: one after
+/// the other, outside any pool); the lines said in input order, the outputs the same whatever
+/// the number.
 pub fn per_input_jobs(
     a: &crate::args::citygml_io::CityGmlIoArgs,
     cmd: &str,

@@ -9,6 +9,8 @@ use skylod::citygml::edit::{filter_lods, LodMode, Lods};
 pub struct Args {
     #[command(flatten)]
     io: CityGmlIoArgs,
+    #[command(flatten)]
+    jobs: crate::args::jobs::JobsArgs,
     /// LoDs (0 to 4) the mode applies to.
     #[arg(short, long, required = true, num_args = 1.., value_delimiter = ',',
           value_parser = clap::value_parser!(u8).range(0..=4))]
@@ -28,7 +30,10 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         mode: args.mode,
         keep_empty: args.keep_empty,
     };
-    crate::outputs::per_input(&args.io, "filter-lods", &|input, out, shown, opts| {
-        Ok(filter_lods(input, out, &rule, opts)?.describe(input, shown))
-    })
+    crate::outputs::per_input_jobs(
+        &args.io,
+        "filter-lods",
+        Some(&args.jobs),
+        &|input, out, shown, opts| Ok(filter_lods(input, out, &rule, opts)?.describe(input, shown)),
+    )
 }

@@ -11,6 +11,8 @@ use skylod::crs::Crs;
 pub struct Args {
     #[command(flatten)]
     io: CityGmlIoArgs,
+    #[command(flatten)]
+    jobs: crate::args::jobs::JobsArgs,
     /// Keep city objects whose box meets X0,Y0,X1,Y1 (in the document's CRS, or --bbox-crs).
     #[arg(
         long,
@@ -62,7 +64,10 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         invert: args.invert,
         limit: args.limit,
     };
-    crate::outputs::per_input(&args.io, "subset", &|input, out, shown, opts| {
-        Ok(subset(input, out, &rule, opts)?.describe(input, shown))
-    })
+    crate::outputs::per_input_jobs(
+        &args.io,
+        "subset",
+        Some(&args.jobs),
+        &|input, out, shown, opts| Ok(subset(input, out, &rule, opts)?.describe(input, shown)),
+    )
 }
