@@ -10,9 +10,8 @@
 
 use crate::util::{fixture, missing, os, python_has, run, shared_data, stderr};
 use serde_json::Value;
-use std::ffi::OsStr;
 use std::io::Write;
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 
 /// Run python3 `code` with `input` on stdin, its stdout as JSON.
 fn python_json(code: &str, input: &str) -> Value {

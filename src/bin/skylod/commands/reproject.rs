@@ -130,7 +130,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
-        if !crate::outputs::merge(&parts, &names, t, &wopts, total) {
+        let (merged, said) = skylod::batch::run::merge_parts(&parts, &names, t, &wopts, total);
+        crate::outputs::say(said);
+        if !merged {
             failed = total;
         }
     }
