@@ -400,20 +400,7 @@ pub fn write_citygml<R: BufRead>(
 
 /// `metadata.referenceSystem` as an OGC URN (as given when it names no EPSG code).
 fn srs_name(v: &serde_json::Value) -> Option<String> {
-    let text = match v {
-        serde_json::Value::String(s) => s.clone(),
-        serde_json::Value::Object(o) => {
-            let code = o
-                .get("code")
-                .map(|c| c.to_string().trim_matches('"').to_string())?;
-            let auth = o
-                .get("authority")
-                .and_then(|a| a.as_str())
-                .unwrap_or("EPSG");
-            format!("{auth}:{code}")
-        }
-        _ => return None,
-    };
+    let text = crate::io::cityjson::reference_system_text(v)?;
     match crate::model::crs::CrsName::parse(&text) {
         Some(c) => Some(c.urn()),
         None => Some(text).filter(|t| !t.trim().is_empty()),

@@ -31,6 +31,7 @@
 mod doc;
 pub mod map;
 mod seq;
+pub(crate) use seq::reference_system_text;
 
 pub use map::Origin;
 pub use seq::{read_reader, read_slice, read_slice_with_origins};

@@ -104,21 +104,7 @@ fn read_values(
         .metadata
         .as_ref()
         .and_then(|m| m.reference_system.as_ref())
-        .and_then(|v| match v {
-            serde_json::Value::String(s) => Some(s.clone()),
-            // 1.x extended forms: {"base_url": ..., "authority": "EPSG", "code": 7415, ...}
-            serde_json::Value::Object(o) => {
-                let code = o
-                    .get("code")
-                    .map(|c| c.to_string().trim_matches('"').to_string())?;
-                let auth = o
-                    .get("authority")
-                    .and_then(|a| a.as_str())
-                    .unwrap_or("EPSG");
-                Some(format!("{auth}:{code}"))
-            }
-            _ => None,
-        });
+        .and_then(reference_system_text);
     let transform = head.transform;
     let template_list: Vec<DVec3> = head
         .templates
@@ -187,4 +173,24 @@ fn read_values(
         },
         origins,
     ))
+}
+
+/// `metadata.referenceSystem` as the text of a CRS name: the string as given (2.0's URL, a
+/// URN), or 1.x's extended form `{"base_url": ..., "authority": "EPSG", "code": 7415}` as
+/// `EPSG:7415`; `None` for anything else.
+pub(crate) fn reference_system_text(v: &serde_json::Value) -> Option<String> {
+    match v {
+        serde_json::Value::String(s) => Some(s.clone()),
+        serde_json::Value::Object(o) => {
+            let code = o
+                .get("code")
+                .map(|c| c.to_string().trim_matches('"').to_string())?;
+            let auth = o
+                .get("authority")
+                .and_then(|a| a.as_str())
+                .unwrap_or("EPSG");
+            Some(format!("{auth}:{code}"))
+        }
+        _ => None,
+    }
 }
