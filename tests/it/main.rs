@@ -75,6 +75,8 @@ mod region;
 // `reproject` agrees with pyproj on every coordinate, keeps heights, round-trips (feature `proj`).
 #[cfg(feature = "proj")]
 mod reproject;
+// The rewrite behind `reproject` in passes writes the whole rewrite's bytes; its CRS rules.
+mod reproject_passes;
 // Without the feature `proj`, `reproject` is a usage error naming the feature.
 #[cfg(not(feature = "proj"))]
 mod reproject_without_proj;

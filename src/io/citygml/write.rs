@@ -328,7 +328,7 @@ fn root_site_of(model: &CityModel) -> Option<u64> {
 /// The source from `cursor` to the last of `edits` (sorted, not nested) copied to `w` with
 /// them applied; `cursor` moves past it. `(len, src, out)`: the source's length and the
 /// names of the source and the output. The bytes written.
-fn apply_edits(
+pub(crate) fn apply_edits(
     reader: &mut dyn Read,
     w: &mut dyn Write,
     edits: &[Edit],
@@ -363,7 +363,7 @@ fn apply_edits(
     Ok(written)
 }
 
-fn copy(
+pub(crate) fn copy(
     reader: &mut dyn Read,
     w: &mut dyn Write,
     len: u64,
@@ -385,7 +385,7 @@ fn copy(
 /// Sort edits and drop those nested in an earlier one. Zero-length edits (insertions) at the
 /// start or at the end of another edit are kept: an insertion sorts before an edit that starts
 /// at the same offset; insertions at the same offset keep their order.
-fn normalise(mut edits: Vec<Edit>) -> Vec<Edit> {
+pub(crate) fn normalise(mut edits: Vec<Edit>) -> Vec<Edit> {
     edits.sort_by(|a, b| {
         a.span
             .start

@@ -3,7 +3,7 @@
 //!
 //! One streaming pass over the source ([`quick_xml::NsReader`]) finds every coordinate in the
 //! GML namespace and replaces the text of its element; everything else is copied byte for byte
-//! by [`write_document`]:
+//! by [`write_document`](super::write::write_document):
 //!
 //! * `posList`, `pos`, `coordinates` (its `cs`, `ts` and `decimal` kept), `lowerCorner` /
 //!   `upperCorner` outside envelopes, and the `X`, `Y`, `Z` of a GML 2 `coord`. The dimension
@@ -30,8 +30,11 @@
 //!   the writer writes envelopes ([`envelope_xml`]); an owner with no coordinate at all gets
 //!   the bounding box of its old envelope's eight corners, transformed.
 //!
-//! Memory: the replacement texts are held until the end (envelopes come before what they
-//! bound), about the size of the document's coordinate text.
+//! Memory: [`rewrite_edits`] holds the replacement texts until the end (envelopes come before
+//! what they bound), about the size of the document's coordinate text; from [`STREAM_BYTES`]
+//! on, [`rewrite_file`] rewrites in passes instead and holds the envelopes and the boxes of
+//! the ids that references name ([`RewriteSource`]: a 400 MB LoD3 document in 41 MiB of heap,
+//! 888 MiB whole).
 //!
 //! # Example
 //! ```
@@ -64,16 +67,17 @@
 //! ```
 
 mod file;
+mod streamed;
 
-pub use file::ReprojectError;
 #[cfg(feature = "proj")]
-pub use file::{reproject_file, ReprojectSummary};
+pub use file::reproject_file;
+pub use file::{reproject_with, CrsTransform, ReprojectError, ReprojectSummary};
+pub use streamed::{RewriteSource, STREAM_BYTES};
 
 use super::error::{ReadError, WriteError};
 use super::ns::{self, Module, Ns};
-use super::read_file;
 use super::source;
-use super::write::{envelope_xml, escape_attr, push_num, write_document, Edit, WriteOptions};
+use super::write::{envelope_xml, escape_attr, push_num, Edit, WriteOptions};
 use crate::model::{Bbox, EnvelopeSite};
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;
@@ -109,9 +113,9 @@ pub struct RewriteSummary {
 }
 
 /// Write `src` to `out` with every coordinate passed through `transform` and every `srsName`
-/// set to `target_srs` (module docs). The source is read first ([`read_file`]) so that a
-/// broken input fails with the reader's error; `opts.keep_envelopes` is ignored (envelopes are
-/// always recomputed: the old ones are in the old CRS).
+/// set to `target_srs` (module docs): [`RewriteSource::read`] then
+/// [`RewriteSource::rewrite`] (in passes from [`STREAM_BYTES`] on). `opts.keep_envelopes` is
+/// ignored (envelopes are always recomputed: the old ones are in the old CRS).
 pub fn rewrite_file(
     src: &Path,
     out: &Path,
@@ -119,14 +123,7 @@ pub fn rewrite_file(
     target_srs: &str,
     opts: &WriteOptions,
 ) -> Result<RewriteSummary, WriteError> {
-    let model = read_file(src)?;
-    let (edits, mut summary) = rewrite_edits(src, transform, target_srs)?;
-    let wopts = WriteOptions {
-        keep_envelopes: true,
-        ..opts.clone()
-    };
-    summary.bytes = write_document(&model, 0, edits, out, &wopts)?.bytes;
-    Ok(summary)
+    RewriteSource::read(src)?.rewrite(out, transform, target_srs, opts, |_| Ok(()))
 }
 
 fn xml_err(path: &Path, at: u64, message: String) -> WriteError {
@@ -251,8 +248,23 @@ fn push_value(s: &mut String, new: f64, old: f64, old_text: &str) {
     }
 }
 
+/// What a pass over the document does (the streamed rewrite makes two: [`streamed`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Mode {
+    /// Boxes and edits, all held until the end: [`rewrite_edits`].
+    Whole,
+    /// Boxes and envelopes only (every point transformed, no text kept).
+    Boxes,
+    /// Edits only, handed over as they come; no box is tracked.
+    Write,
+}
+
 struct Scanner<'t, 'a> {
     path: &'a Path,
+    mode: Mode,
+    /// The ids worth a box (hashed by [`streamed::id_hash`]): those some `xlink:href` names;
+    /// `None`: every id.
+    wanted: Option<HashSet<u64>>,
     transform: &'t PointTransform<'t>,
     target_srs: &'a str,
     edits: Vec<Edit>,
@@ -271,7 +283,55 @@ struct Scanner<'t, 'a> {
     warned: HashSet<&'static str>,
 }
 
-impl Scanner<'_, '_> {
+impl<'t, 'a> Scanner<'t, 'a> {
+    fn new(
+        path: &'a Path,
+        transform: &'t PointTransform<'t>,
+        target_srs: &'a str,
+        mode: Mode,
+    ) -> Self {
+        Scanner {
+            path,
+            mode,
+            wanted: None,
+            transform,
+            target_srs,
+            edits: Vec::new(),
+            summary: RewriteSummary::default(),
+            stack: Vec::with_capacity(64),
+            tracks: Vec::new(),
+            ids: HashMap::new(),
+            envs: Vec::new(),
+            env_open: None,
+            template_depth: None,
+            ref_point_depth: None,
+            implicit: None,
+            coord: None,
+            capture: None,
+            srs_seen: HashSet::new(),
+            warned: HashSet::new(),
+        }
+    }
+
+    /// Whether boxes are tracked (not in [`Mode::Write`]).
+    fn tracking(&self) -> bool {
+        self.mode != Mode::Write
+    }
+
+    /// Whether edits are made (not in [`Mode::Boxes`]).
+    fn recording(&self) -> bool {
+        self.mode != Mode::Boxes
+    }
+
+    /// Whether the element with gml:id `id` gets a box of its own.
+    fn wants(&self, id: &str) -> bool {
+        self.tracking()
+            && self
+                .wanted
+                .as_ref()
+                .is_none_or(|w| w.contains(&streamed::id_hash(id)))
+    }
+
     fn warn(&mut self, key: &'static str, message: String) {
         if self.warned.insert(key) {
             self.summary.warnings.push(message);
@@ -329,10 +389,12 @@ impl Scanner<'_, '_> {
                     }
                     // +1: the tag's bytes start after '<'.
                     let at = pos + 1 + span.start as u64;
-                    self.edits.push(Edit {
-                        span: at..at + span.len() as u64,
-                        replacement: escape_attr(self.target_srs).into_bytes(),
-                    });
+                    if self.recording() {
+                        self.edits.push(Edit {
+                            span: at..at + span.len() as u64,
+                            replacement: escape_attr(self.target_srs).into_bytes(),
+                        });
+                    }
                     self.summary.srs_names += 1;
                 }
                 b"srsDimension" if !prefixed => {
@@ -373,7 +435,7 @@ impl Scanner<'_, '_> {
                     .last()
                     .is_some_and(|p| p.local == b"boundedBy" && p.gml);
             if let (Some(od), true) = (owner_depth, under_bounded_by) {
-                if self.tracks.last().is_none_or(|t| t.depth != od) {
+                if self.tracking() && self.tracks.last().is_none_or(|t| t.depth != od) {
                     self.tracks.push(Track {
                         depth: od,
                         bbox: Bbox::EMPTY,
@@ -409,7 +471,8 @@ impl Scanner<'_, '_> {
                 );
             }
         }
-        if !empty && gml && id.is_some() && !in_template && self.env_open.is_none() {
+        let wanted = id.as_deref().is_some_and(|id| self.wants(id));
+        if !empty && gml && wanted && !in_template && self.env_open.is_none() {
             self.tracks.push(Track {
                 depth,
                 bbox: Bbox::EMPTY,
@@ -513,7 +576,7 @@ impl Scanner<'_, '_> {
                 if self.envs[i].dim == 0 {
                     self.envs[i].dim = if c.iter().all(|p| p.z.is_nan()) { 2 } else { 3 };
                 }
-                if c.len() == 2 {
+                if c.len() == 2 && self.tracking() {
                     let (lo, hi) = (c[0], c[1]);
                     let z = |p: DVec3| if p.z.is_nan() { 0.0 } else { p.z };
                     let mut pts: Vec<DVec3> = (0..8)
@@ -529,6 +592,10 @@ impl Scanner<'_, '_> {
                     self.envs[i].corners = pts;
                 }
                 self.env_open = None;
+                if !self.tracking() {
+                    // nothing refers to an envelope of the writing pass once it is read
+                    self.envs.clear();
+                }
             }
         }
         if self.template_depth == Some(depth) {
@@ -550,8 +617,13 @@ impl Scanner<'_, '_> {
         if self.tracks.last().is_some_and(|t| t.depth == depth) {
             if let Some(t) = self.tracks.pop() {
                 for &e in &t.envelopes {
-                    self.envs[e].bbox = t.bbox;
-                    self.envs[e].refs.clone_from(&t.refs);
+                    let env = &mut self.envs[e];
+                    env.bbox = t.bbox;
+                    env.refs.clone_from(&t.refs);
+                    if !t.bbox.is_empty() {
+                        // the fallback corners are for an owner without coordinates
+                        env.corners = Vec::new();
+                    }
                 }
                 if let Some(parent) = self.tracks.last_mut() {
                     parent.bbox.union(&t.bbox);
@@ -685,6 +757,14 @@ impl Scanner<'_, '_> {
                 imp.reference = Some(*p);
             }
         }
+        for p in &pts {
+            self.add_point(*p);
+        }
+        self.summary.points += pts.len();
+        self.summary.elements += 1;
+        if !self.recording() {
+            return Ok(());
+        }
         let mut s = String::with_capacity(c.text.len() + 16);
         let mut k = 0;
         for (i, (&n, p)) in tuples.iter().zip(&pts).enumerate() {
@@ -715,10 +795,7 @@ impl Scanner<'_, '_> {
                 }
             }
             k += n;
-            self.add_point(*p);
         }
-        self.summary.points += pts.len();
-        self.summary.elements += 1;
         self.edits.push(Edit {
             span: c.start..pos,
             replacement: s.into_bytes(),
@@ -738,7 +815,8 @@ impl Scanner<'_, '_> {
         let z = vals[2].as_ref().map_or(0.0, |v| v.0);
         let mut p = [DVec3::new(x.0, y.0, z)];
         self.apply(&mut p, pos)?;
-        for (k, v) in vals.iter().enumerate() {
+        let recording = self.recording();
+        for (k, v) in vals.iter().enumerate().filter(|_| recording) {
             if let Some((old, text)) = v {
                 let mut s = String::new();
                 push_value(&mut s, p[0][k], *old, text);
@@ -770,6 +848,16 @@ impl Scanner<'_, '_> {
         let mut pts = [r, r + d];
         self.apply(&mut pts, pos)?;
         let nd = pts[1] - pts[0];
+        self.summary.implicit += 1;
+        self.warn(
+            "implicit",
+            "implicit geometries: reference point and matrix translation transformed; the \
+             template and the matrix's linear part stay in the template's units"
+                .into(),
+        );
+        if !self.recording() {
+            return Ok(());
+        }
         let mut s = String::new();
         for (i, t) in toks.iter().enumerate() {
             if i > 0 {
@@ -786,13 +874,6 @@ impl Scanner<'_, '_> {
             span,
             replacement: s.into_bytes(),
         });
-        self.summary.implicit += 1;
-        self.warn(
-            "implicit",
-            "implicit geometries: reference point and matrix translation transformed; the \
-             template and the matrix's linear part stay in the template's units"
-                .into(),
-        );
         Ok(())
     }
 
@@ -809,7 +890,8 @@ impl Scanner<'_, '_> {
         }
     }
 
-    fn envelope_edits(&mut self) {
+    /// The edits of every envelope, in document order; counted in the summary.
+    fn envelope_edits(&mut self) -> Vec<Edit> {
         let mut edits = Vec::new();
         // A document that named no CRS at all names the new one on its first envelope.
         let unnamed = self.summary.source_srs_names.is_empty();
@@ -836,42 +918,37 @@ impl Scanner<'_, '_> {
             }
         }
         self.summary.envelopes = edits.len();
-        self.edits.extend(edits);
+        edits
     }
 }
 
 /// The edits that rewrite the document at `path` (module docs), and what they do, for
-/// [`write_document`] with [`WriteOptions::keep_envelopes`] set (the envelope edits are among
+/// [`write_document`](super::write::write_document) with [`WriteOptions::keep_envelopes`] set (the envelope edits are among
 /// them). [`rewrite_file`] is this plus the write.
 pub fn rewrite_edits(
     path: &Path,
     transform: &PointTransform<'_>,
     target_srs: &str,
 ) -> Result<(Vec<Edit>, RewriteSummary), WriteError> {
+    let mut sc = Scanner::new(path, transform, target_srs, Mode::Whole);
+    scan(&mut sc, &mut |_, _| Ok(()))?;
+    let envelopes = sc.envelope_edits();
+    sc.edits.extend(envelopes);
+    Ok((sc.edits, sc.summary))
+}
+
+/// One pass of `sc` over its document; `after_end(sc, at)` after each end tag (`at`: the
+/// byte after it). The document's length (decompressed).
+fn scan(
+    sc: &mut Scanner<'_, '_>,
+    after_end: &mut dyn FnMut(&mut Scanner<'_, '_>, u64) -> Result<(), WriteError>,
+) -> Result<u64, WriteError> {
+    let path = sc.path;
     let (mut reader, _) = source::open(path)?;
     let base = source::skip_bom(&mut reader, path)?;
     let mut reader = NsReader::from_reader(reader);
     reader.config_mut().trim_text(false);
     reader.config_mut().check_end_names = true;
-    let mut sc = Scanner {
-        path,
-        transform,
-        target_srs,
-        edits: Vec::new(),
-        summary: RewriteSummary::default(),
-        stack: Vec::with_capacity(64),
-        tracks: Vec::new(),
-        ids: HashMap::new(),
-        envs: Vec::new(),
-        env_open: None,
-        template_depth: None,
-        ref_point_depth: None,
-        implicit: None,
-        coord: None,
-        capture: None,
-        srs_seen: HashSet::new(),
-        warned: HashSet::new(),
-    };
     let mut buf = Vec::with_capacity(64 * 1024);
     loop {
         let pos = reader.buffer_position() + base;
@@ -883,7 +960,10 @@ pub fn rewrite_edits(
         match ev {
             Event::Start(ref e) => sc.start(&reader, e, pos, after, false)?,
             Event::Empty(ref e) => sc.start(&reader, e, pos, after, true)?,
-            Event::End(_) => sc.end(pos, after)?,
+            Event::End(_) => {
+                sc.end(pos, after)?;
+                after_end(sc, after)?;
+            }
             Event::Text(ref t) => {
                 if let Some(c) = &mut sc.capture {
                     c.text.extend_from_slice(t);
@@ -899,13 +979,11 @@ pub fn rewrite_edits(
                     c.broken = true;
                 }
             }
-            Event::Eof => break,
+            Event::Eof => return Ok(pos),
             _ => {}
         }
         buf.clear();
     }
-    sc.envelope_edits();
-    Ok((sc.edits, sc.summary))
 }
 
 #[cfg(test)]

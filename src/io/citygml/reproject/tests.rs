@@ -28,12 +28,43 @@ fn doc(body: &str) -> String {
 }
 
 fn rewrite(body: &str, t: &PointTransform<'_>) -> (String, RewriteSummary) {
+    rewrite_doc(&doc(body), t)
+}
+
+/// `text` rewritten whole and in passes ([`RewriteSource::read_with`]): the same bytes and
+/// the same summary, or the same error (nothing written).
+fn rewrite_doc(text: &str, t: &PointTransform<'_>) -> (String, RewriteSummary) {
+    let (whole, passes) = (both(text, t, u64::MAX), both(text, t, 0));
+    match (whole, passes) {
+        (Ok(w), Ok(p)) => {
+            assert_eq!(w, p, "whole vs passes");
+            w
+        }
+        (w, p) => panic!("whole: {w:?}, passes: {p:?}"),
+    }
+}
+
+fn both(
+    text: &str,
+    t: &PointTransform<'_>,
+    stream_from: u64,
+) -> Result<(String, RewriteSummary), String> {
     let dir = tempfile::tempdir().unwrap();
     let src = dir.path().join("in.gml");
-    std::fs::write(&src, doc(body)).unwrap();
+    std::fs::write(&src, text).unwrap();
     let out = dir.path().join("out.gml");
-    let s = rewrite_file(&src, &out, t, "EPSG:2", &WriteOptions::default()).unwrap();
-    (std::fs::read_to_string(&out).unwrap(), s)
+    let doc = RewriteSource::read_with(&src, stream_from).map_err(|e| e.to_string())?;
+    assert_eq!(doc.in_passes(), stream_from == 0);
+    let r = doc.rewrite(&out, t, "EPSG:2", &WriteOptions::default(), |_| {
+        Ok::<(), WriteError>(())
+    });
+    match r {
+        Ok(s) => Ok((std::fs::read_to_string(&out).unwrap(), s)),
+        Err(e) => {
+            assert!(!out.exists(), "{e}");
+            Err(e.to_string())
+        }
+    }
 }
 
 /// Swap x and y, add 100 to both: a change a test can see in every position.
@@ -135,20 +166,12 @@ fn envelope_follows_references_and_falls_back_to_corners() {
 
 #[test]
 fn a_document_without_crs_gets_the_target_on_its_first_envelope() {
-    let dir = tempfile::tempdir().unwrap();
-    let src = dir.path().join("in.gml");
     let body = r#"<core:cityObjectMember><gen:GenericCityObject gml:id="g">
 <gen:lod1Geometry><gml:Point><gml:pos>1 2 3</gml:pos></gml:Point></gen:lod1Geometry>
 </gen:GenericCityObject></core:cityObjectMember>"#;
-    std::fs::write(
-        &src,
-        doc(body).replace(r#" srsName="urn:ogc:def:crs:EPSG::1""#, ""),
-    )
-    .unwrap();
-    let out = dir.path().join("out.gml");
-    let s = rewrite_file(&src, &out, &swap, "EPSG:2", &WriteOptions::default()).unwrap();
+    let unnamed = doc(body).replace(r#" srsName="urn:ogc:def:crs:EPSG::1""#, "");
+    let (text, s) = rewrite_doc(&unnamed, &swap);
     assert!(s.source_srs_names.is_empty());
-    let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.contains(r#"<gml:Envelope srsName="EPSG:2" srsDimension="3"><gml:lowerCorner>102 101 3</gml:lowerCorner>"#), "{text}");
 }
 
@@ -162,6 +185,15 @@ fn bad_numbers_and_transform_errors_are_reported() {
     let e = rewrite_file(&src, &out, &fail, "EPSG:2", &WriteOptions::default()).unwrap_err();
     assert!(e.to_string().contains("outside"), "{e}");
     assert!(!out.exists());
+    for (body, what) in [
+        ("<gml:pos>1 2 3 4</gml:pos>", "4 numbers"),
+        ("<gml:pos>1 2<!-- z: --> 3</gml:pos>", "cannot be rewritten"),
+    ] {
+        for from in [0, u64::MAX] {
+            let e = both(&doc(body), &swap, from).unwrap_err();
+            assert!(e.contains(what), "{e}");
+        }
+    }
     std::fs::write(&src, doc("<gml:pos>1 2 3 4</gml:pos>")).unwrap();
     let e = rewrite_file(&src, &out, &swap, "EPSG:2", &WriteOptions::default()).unwrap_err();
     assert!(e.to_string().contains("4 numbers"), "{e}");
@@ -169,4 +201,36 @@ fn bad_numbers_and_transform_errors_are_reported() {
     let e = rewrite_file(&src, &out, &swap, "EPSG:2", &WriteOptions::default()).unwrap_err();
     assert!(e.to_string().contains("cannot be rewritten"), "{e}");
     assert!(!out.exists());
+}
+
+/// Objects in one `gml:featureMembers` (no member ends at depth 1 to write at), each with an
+/// envelope, an implicit geometry (its matrix written after its reference point is read), a
+/// GML 2 coord and a reference to the next object's geometry: more edits than the writing
+/// pass holds, so it writes inside the wrapper; the bytes are the whole rewrite's.
+#[test]
+fn passes_write_inside_one_wrapper_as_the_whole_rewrite() {
+    let mut body = String::from("<gml:featureMembers>");
+    for i in 0..1500 {
+        body.push_str(&format!(
+            r##"<gen:GenericCityObject gml:id="g{i}"><gml:boundedBy><gml:Envelope srsName="EPSG:1"><gml:lowerCorner>0 0 0</gml:lowerCorner><gml:upperCorner>1 1 1</gml:upperCorner></gml:Envelope></gml:boundedBy>
+<gen:lod1Geometry xlink:href="#p{next}"/>
+<gen:lod2Geometry><gml:Point gml:id="p{i}" srsName="EPSG:1"><gml:pos>{i} {i}.5 3</gml:pos></gml:Point></gen:lod2Geometry>
+<gen:lod3Geometry><gml:Point><gml:coord><gml:X>{i}</gml:X><gml:Y>7</gml:Y><gml:Z>1</gml:Z></gml:coord></gml:Point></gen:lod3Geometry>
+<gen:lod2ImplicitRepresentation><core:ImplicitGeometry><core:transformationMatrix>1 0 0 2 0 1 0 3 0 0 1 4 0 0 0 1</core:transformationMatrix>
+<core:referencePoint><gml:Point><gml:pos>10 {i} 30</gml:pos></gml:Point></core:referencePoint></core:ImplicitGeometry></gen:lod2ImplicitRepresentation>
+</gen:GenericCityObject>"##,
+            next = (i + 1) % 1500
+        ));
+    }
+    body.push_str("</gml:featureMembers>");
+    let text = doc(&body);
+    let (out, s) = rewrite_doc(&text, &swap);
+    assert_eq!((s.envelopes, s.implicit), (1501, 1500));
+    assert!(
+        s.srs_names + s.elements > super::streamed::FLUSH_EDITS,
+        "{s:?}"
+    );
+    // g0 bounds its own point (0, 0.5, 3), its coord (0, 7, 1), its implicit reference point
+    // (10, 0, 30) and p1 (1, 1.5, 3), all swapped and shifted by 100.
+    assert!(out.contains(r#"gml:id="g0"><gml:boundedBy><gml:Envelope srsName="EPSG:2" srsDimension="3"><gml:lowerCorner>100 100 1</gml:lowerCorner><gml:upperCorner>107 110 30</gml:upperCorner>"#), "{}", &out[..2000]);
 }
