@@ -17,9 +17,11 @@
 //! # Ok::<(), skylod::Error>(())
 //! ```
 
+pub mod bound_plan;
 mod error;
 mod lod;
 pub mod lod_write;
+pub mod site;
 pub mod weather;
 
 pub use error::{Error, Result};
