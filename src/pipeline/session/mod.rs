@@ -21,7 +21,9 @@ pub mod bound_plan;
 mod error;
 mod lod;
 pub mod lod_write;
+pub mod pictures;
 pub mod site;
+pub mod tracing;
 pub mod weather;
 
 pub use error::{Error, Result};
