@@ -187,6 +187,7 @@ mod tests {
     fn each_poi_s_picture_is_captioned_with_its_figures() {
         let scene = Scene::load(&[fixture()], &SceneOptions::default(), &Silent).unwrap();
         let mut pois = grid_pois(scene.model(), 2);
+        pois[0].normal = Some(glam::DVec3::Z);
         pois[1].normal = None;
         let study = scene.frame(pois).unwrap();
         let site = study.sun_paths_site(None).unwrap();
@@ -230,7 +231,7 @@ mod tests {
             assert!(p.svg.contains(&at), "{at}");
         }
         assert!(got[1].1.svg.contains("no normal (horizontal)"));
-        assert!(!got[0].1.svg.contains("no normal (horizontal)"));
+        assert!(got[0].1.svg.contains(", normal (0.00, 0.00, 1.00)"));
         // Without sun paths, no line on them.
         let plain = Pictures::new(300, Projection::Stereographic).unwrap();
         study
