@@ -121,7 +121,6 @@ impl PoiArgs {
             summary!("{cmd}: {n}");
         }
         Ok(Session {
-            inputs: study.input_names(),
             read_ms: study.read_ms(),
             study,
             shard,

@@ -31,8 +31,6 @@ pub struct TracingArgs {
 pub struct Session {
     pub study: Study,
     pub shard: Option<Shard>,
-    /// The inputs read, as reports name them (`-` for standard input).
-    pub inputs: Vec<String>,
     /// Milliseconds reading, rounded to 0.1.
     pub read_ms: f64,
     /// Some input could not be read (each was reported).

@@ -27,10 +27,7 @@ pub struct WeatherArgs {
 impl WeatherArgs {
     /// Usage checks before any input is read.
     pub fn check(&self) -> anyhow::Result<()> {
-        if !(0.0..=1.0).contains(&self.albedo) {
-            bail!("--albedo must be in 0..1 (got {})", self.albedo);
-        }
-        Ok(())
+        albedo(self.albedo)
     }
 
     /// The weather year of `--weather` (`None` without it), the sun placed at `site`'s
@@ -50,6 +47,14 @@ impl WeatherArgs {
             .with_context(|| format!("{cmd}: placing the sun for {}", path.display()))?;
         Ok(Some(year))
     }
+}
+
+/// `--albedo` in range.
+pub fn albedo(a: f64) -> anyhow::Result<()> {
+    if !(0.0..=1.0).contains(&a) {
+        bail!("--albedo must be in 0..1 (got {a})");
+    }
+    Ok(())
 }
 
 /// The sun's site for a weather year ([`skylod::pipeline::session::weather::weather_site`]: --lat/--lon,

@@ -128,7 +128,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             pictures
         }
     };
-    let pois = s.study.pois();
+    let (pois, inputs) = (s.study.pois(), s.study.input_names().join(", "));
     let each = |k: usize, pic: PictureSvg| -> anyhow::Result<()> {
         let (poi, out) = (&pois[k], &outputs[k]);
         crate::commands::warn_flags(std::slice::from_ref(poi), std::slice::from_ref(&pic.flags));
@@ -136,7 +136,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         crate::log::summary!(
             "{}: {} -> {} ({} cells, {:.1} % sky, SVF {:.3})",
             poi.id,
-            s.inputs.join(", "),
+            inputs,
             out.display(),
             pictures.cells(),
             pic.sky * 100.0,

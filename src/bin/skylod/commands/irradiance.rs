@@ -4,7 +4,7 @@ use crate::args::site::SiteArgs;
 use crate::args::weather::weather_site;
 use crate::commands::{emit, ms};
 use crate::Outcome;
-use anyhow::{bail, Context};
+use anyhow::Context;
 use skylod::export::report::irradiance::write_csv;
 use skylod::pipeline::session::tracing::IrradianceRequest;
 use skylod::solar::irradiance::SkyModel;
@@ -53,9 +53,7 @@ pub struct Args {
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.site.check("irradiance", true)?;
-    if !(0.0..=1.0).contains(&args.albedo) {
-        bail!("--albedo must be in 0..1 (got {})", args.albedo);
-    }
+    crate::args::weather::albedo(args.albedo)?;
     if let Some(h) = &args.hourly {
         skylod::io::check_target(h, [], args.overwrite)?;
     }
