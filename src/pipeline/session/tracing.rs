@@ -377,3 +377,134 @@ impl IrradianceRun {
         write_hourly_csv(out, weather, &ids, &series)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::export::report::text::Document;
+    use crate::model::runtime::progress::Silent;
+    use crate::pipeline::session::{Error, Scene, SceneOptions};
+    use crate::pipeline::test_support::{fixture, grid_pois};
+
+    fn study(n: usize) -> Study {
+        let scene = Scene::load(&[fixture()], &SceneOptions::default(), &Silent).unwrap();
+        let pois = grid_pois(scene.model(), n);
+        scene.frame(pois).unwrap()
+    }
+
+    #[test]
+    fn svf_and_sun_hours_documents_hold_the_study_s_figures() {
+        let s = study(3);
+        let inputs = vec![fixture().display().to_string()];
+        let bundles = SkyBundles::new(400, 5).unwrap();
+        let a = s.svf_output(&bundles, (400, 5), &Silent).unwrap();
+        let direct = s.svf(&bundles, &Silent).unwrap();
+        assert_eq!((a.doc.rays, a.doc.seed), (400, 5));
+        assert_eq!(a.doc.inputs, inputs);
+        assert_eq!(a.doc.polygons, s.source().polygon_count());
+        assert_eq!(a.doc.timings_ms.read, s.read_ms());
+        assert_eq!(a.flags, direct.flags);
+        assert!(a.summary.is_empty());
+        for ((row, v), p) in a.doc.pois.iter().zip(&direct.results).zip(s.pois()) {
+            assert_eq!(row.id, p.id);
+            assert_eq!(row.values.svf, v.svf);
+            assert_eq!(row.values.sky_exposure, v.sky_exposure);
+        }
+        assert_eq!(a.doc.pois.len(), 3);
+        // Sun hours at a site, months in a time zone, over a year in 2 h steps.
+        let (site, when) = ((41.39, 2.17), (2024, 120));
+        let h = s
+            .sun_hours_output(site, when, "Europe/Madrid", &Silent)
+            .unwrap();
+        let tz = Site::new(41.39, 2.17)
+            .with_time_zone("Europe/Madrid")
+            .unwrap();
+        let table = SunTable::year(2024, 120, &tz).unwrap();
+        assert_eq!(h.doc.steps, table.len());
+        assert_eq!(h.doc.sun, SunSetting::new(41.39, 2.17, 2024, 120));
+        assert_eq!(h.doc.timezone, "Europe/Madrid");
+        let direct = crate::pipeline::sun_hours(&s.framed(), &table, &Silent).unwrap();
+        for (row, v) in h.doc.pois.iter().zip(&direct.results) {
+            assert_eq!(row.values.sun_hours, v.hours);
+            assert_eq!(row.values.monthly, v.monthly);
+        }
+        let e = s.sun_hours_output(site, when, "Mars/Olympus", &Silent);
+        assert!(matches!(e, Err(Error::Solar(_))), "{e:?}");
+    }
+
+    #[test]
+    fn horizon_says_one_line_per_poi_and_evaluate_its_totals() {
+        let s = study(2);
+        let opts = HorizonOptions::default().with_step(30.0);
+        let a = s.horizon_output(&opts, &Silent).unwrap();
+        let direct = s.horizon(&opts, &Silent).unwrap();
+        assert_eq!(a.doc.pois.len(), 2);
+        assert_eq!(a.doc.pois[0].values.azimuth.len(), 12);
+        let lines: Vec<String> = (s.pois().iter().zip(&direct.results))
+            .map(|(p, h)| profile_summary(&p.id, h))
+            .collect();
+        assert_eq!(a.summary, lines);
+        let cx = s.text_context(true);
+        assert!(!a.doc.summary(&cx).is_empty());
+        // evaluate, without sun and with a weather year
+        let mut lod = LodOptions::default();
+        (lod.select.rays, lod.select.seed) = (300, 4);
+        let req = EvaluateRequest::new(lod.clone(), 300);
+        let e = s.evaluate_output(req, Instant::now(), &Silent).unwrap();
+        assert_eq!((e.doc.rays, e.doc.svf_rays, e.doc.seed), (300, 300, 4));
+        assert!(e.doc.sun.is_none() && e.doc.weather.is_none());
+        assert_eq!((e.doc.pois.len(), e.flags.len()), (2, 2));
+        assert_eq!(e.summary.len(), 1);
+        assert!(
+            e.summary[0].starts_with("2 POI(s); selection 300 rays, SVF 300 rays; read "),
+            "{}",
+            e.summary[0]
+        );
+        let w = crate::pipeline::session::weather::tests::weather();
+        let at = (w.site.latitude, w.site.longitude);
+        let year = WeatherYear::new("w.epw".as_ref(), &w, at, SkyModel::Isotropic, 0.2).unwrap();
+        let mut req = EvaluateRequest::new(lod, 300);
+        req.weather = Some(year);
+        let e = s.evaluate_output(req, Instant::now(), &Silent).unwrap();
+        let ew = e.doc.weather.as_ref().unwrap();
+        assert_eq!((ew.site, ew.albedo), ([at.0, at.1], 0.2));
+        assert_eq!(e.summary.len(), 2);
+        let l = &e.summary[1];
+        assert!(l.starts_with("irradiance: 1 hours of Somewhere (GHI 0 kWh/m²) at (41.3900, 2.1700), Isotropic sky, albedo 0.2; largest LoD error "), "{l}");
+        assert!(l.ends_with('%'), "{l}");
+    }
+
+    #[test]
+    fn irradiance_gives_its_document_annual_values_and_hours() {
+        let s = study(2);
+        let w = crate::pipeline::session::weather::tests::weather();
+        let bundles = SkyBundles::new(300, 1).unwrap();
+        let req = IrradianceRequest {
+            path: "w.epw".as_ref(),
+            weather: &w,
+            weather_ms: 1.5,
+            site: [41.39, 2.17],
+            sky: SkyModel::Perez,
+            albedo: 0.1,
+            bundles: &bundles,
+            rays: 300,
+            hourly: true,
+        };
+        let run = s.irradiance_output(&req, &Silent).unwrap();
+        let d = &run.doc.doc;
+        assert_eq!((d.site, d.albedo, d.rays), ([41.39, 2.17], 0.1, 300));
+        assert_eq!(d.weather.file, "w.epw");
+        assert!(d.timings_ms.sun >= 1.5);
+        let annual = run.annual_global();
+        assert_eq!(annual.len(), 2);
+        for (row, a) in d.pois.iter().zip(&annual) {
+            assert_eq!(row.values.global_kwh_m2, *a);
+        }
+        let mut csv = Vec::new();
+        run.write_hourly(&mut csv, &w).unwrap();
+        let csv = String::from_utf8(csv).unwrap();
+        let mut lines = csv.lines();
+        assert_eq!(lines.next(), Some("time_utc,p0,p1"));
+        assert_eq!(lines.count(), w.hours.len());
+    }
+}
