@@ -449,7 +449,7 @@ mod tests {
         // evaluate, without sun and with a weather year
         let mut lod = LodOptions::default();
         (lod.select.rays, lod.select.seed) = (300, 4);
-        let req = EvaluateRequest::new(lod.clone(), 300);
+        let req = EvaluateRequest::new(lod, 300);
         let e = s.evaluate_output(req, Instant::now(), &Silent).unwrap();
         assert_eq!((e.doc.rays, e.doc.svf_rays, e.doc.seed), (300, 300, 4));
         assert!(e.doc.sun.is_none() && e.doc.weather.is_none());
