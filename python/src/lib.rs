@@ -10,16 +10,11 @@ mod write;
 
 use pyo3::prelude::*;
 use relay::{message, run, SkylodError};
-use setup::{load, ms, s_to_ms, Setup};
-use skylod::output::evaluate::{EvaluateOutput, EvaluateTimings};
-use skylod::output::horizon::{round_deg, HorizonOutput, HorizonPoi};
-use skylod::output::irradiance::{IrradianceOutput, IrradiancePoi, IrradianceTimings};
-use skylod::output::sun_hours::{SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting};
-use skylod::output::svf::{SvfOutput, SvfPoi, TraceTimings};
-use skylod::pipeline::evaluation::EvalOptions;
-use skylod::pipeline::EvaluateOptions;
-use skylod::session::weather::{weather_site, weather_summary};
-use skylod::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
+use setup::{load, ms, Setup};
+use skylod::output::sun_hours::SunSetting;
+use skylod::pipeline::session::tracing::{EvaluateRequest, IrradianceRequest};
+use skylod::session::weather::weather_site;
+use skylod::solar::irradiance::SkyModel;
 use skylod::solar::weather::read_weather;
 use skylod::solar::{HorizonOptions, Site, SkyBundles, SunTable};
 use std::path::PathBuf;
@@ -54,17 +49,8 @@ fn svf(
     run(py, progress, move |p| {
         let bundles = SkyBundles::new(rays, seed).map_err(|e| message(&e))?;
         let l = load(&setup, p)?;
-        let t = l.study.svf(&bundles, p).map_err(|e| message(&e))?;
-        let rows = t.rows(l.study.pois(), SvfPoi::new);
-        let timings = TraceTimings {
-            read: l.read_ms,
-            bvh: s_to_ms(t.bvh_s),
-            trace: s_to_ms(t.trace_s),
-        };
-        let polygons = l.study.source().polygon_count();
-        json(&SvfOutput::new(
-            rows, rays, seed, l.inputs, polygons, timings,
-        ))
+        let a = (l.study.svf_output(&bundles, (rays, seed), p)).map_err(|e| message(&e))?;
+        json(&a.doc)
     })
 }
 
@@ -82,31 +68,12 @@ fn sun_hours(
 ) -> PyResult<String> {
     run(py, progress, move |p| {
         let l = load(&setup, p)?;
-        let (lat, lon) = self::site(&l.study, site)?;
-        let s = Site::new(lat, lon)
-            .with_time_zone(&timezone)
+        let site = self::site(&l.study, site)?;
+        let a = l
+            .study
+            .sun_hours_output(site, (year, step), &timezone, p)
             .map_err(|e| message(&e))?;
-        let t0 = Instant::now();
-        let table = SunTable::year(year, step, &s).map_err(|e| message(&e))?;
-        let sun_ms = ms(t0);
-        let framed = l.study.framed();
-        let t = skylod::pipeline::sun_hours(&framed, &table, p).map_err(|e| message(&e))?;
-        let rows = t.rows(l.study.pois(), SunHoursPoi::new);
-        let timings = SunHoursTimings {
-            read: l.read_ms,
-            sun: sun_ms,
-            bvh: s_to_ms(t.bvh_s),
-            trace: s_to_ms(t.trace_s),
-        };
-        json(&SunHoursOutput::new(
-            rows,
-            SunSetting::new(lat, lon, year, step),
-            timezone,
-            table.len(),
-            l.inputs,
-            l.study.source().polygon_count(),
-            timings,
-        ))
+        json(&a.doc)
     })
 }
 
@@ -124,29 +91,8 @@ fn horizon(
         opts.validate()
             .map_err(|e| format!("step: {}", message(&e)))?;
         let l = load(&setup, p)?;
-        let t = l.study.horizon(&opts, p).map_err(|e| message(&e))?;
-        let rows = t.rows(l.study.pois(), |poi, h, flags| {
-            HorizonPoi::new(
-                poi,
-                h.azimuth.iter().map(|a| round_deg(*a)).collect(),
-                h.elevation.iter().map(|e| round_deg(*e)).collect(),
-                flags,
-            )
-            .with_overhang(h.overhang.iter().map(|o| o.map(round_deg)).collect())
-        });
-        let timings = TraceTimings {
-            read: l.read_ms,
-            bvh: s_to_ms(t.bvh_s),
-            trace: s_to_ms(t.trace_s),
-        };
-        json(&HorizonOutput::new(
-            rows,
-            step,
-            opts.tolerance_deg,
-            l.inputs,
-            l.study.source().polygon_count(),
-            timings,
-        ))
+        let a = l.study.horizon_output(&opts, p).map_err(|e| message(&e))?;
+        json(&a.doc)
     })
 }
 
@@ -189,35 +135,19 @@ fn irradiance(
         let at = weather_site(site, model, &w).map_err(|e| {
             format!("irradiance: {e}; give site=(lat, lon) to use this weather anyway")
         })?;
-        let (lat, lon) = at.lat_lon();
-        let t1 = Instant::now();
-        let table = IrradianceTable::new(&w, &Site::new(lat, lon), sky).map_err(|e| message(&e))?;
-        let sun_ms = weather_ms + ms(t1);
-        let opts = IrradianceOptions { sky, albedo };
-        let framed = l.study.framed();
-        let t = skylod::pipeline::irradiance(&framed, &bundles, &table, &opts, false, p)
-            .map_err(|e| message(&e))?;
-        let rows = t.rows(l.study.pois(), |poi, r, f| {
-            IrradiancePoi::new(poi, &r.annual, f)
-        });
-        let summary = weather_summary(&weather, &w);
-        let timings = IrradianceTimings {
-            read: l.read_ms,
-            sun: sun_ms,
-            bvh: s_to_ms(t.bvh_s),
-            trace: s_to_ms(t.trace_s),
-        };
-        json(&IrradianceOutput::new(
-            rows,
-            summary,
-            [lat, lon],
+        let req = IrradianceRequest {
+            path: &weather,
+            weather: &w,
+            weather_ms,
+            site: at.lat_lon().into(),
             sky,
             albedo,
+            bundles: &bundles,
             rays,
-            l.inputs,
-            l.study.source().polygon_count(),
-            timings,
-        ))
+            hourly: false,
+        };
+        let run = (l.study.irradiance_output(&req, p)).map_err(|e| message(&e))?;
+        json(&run.doc.doc)
     })
 }
 
@@ -244,36 +174,14 @@ fn evaluate(
             true => Some(self::site(&l.study, site)?),
             false => None,
         };
-        let table = match site {
-            Some((lat, lon)) => {
-                Some(SunTable::year(year, step, &Site::new(lat, lon)).map_err(|e| message(&e))?)
-            }
-            None => None,
-        };
-        let opts = EvaluateOptions {
-            eval: EvalOptions {
-                lod: lod_opts,
-                svf_rays,
-                ..Default::default()
-            },
-            sun: table,
-            irradiance: None,
-        };
-        let e = l.study.evaluate(&opts, p).map_err(|e| message(&e))?;
-        json(&EvaluateOutput::new(
-            l.inputs,
-            lod.rays,
-            svf_rays,
-            lod.seed,
-            site.map(|(lat, lon)| SunSetting::new(lat, lon, year, step)),
-            e.pois,
-            EvaluateTimings {
-                read: l.read_ms,
-                rough: e.rough_ms,
-                selection_bvh: e.selection_bvh_ms,
-                total: ms(t_all),
-            },
-        ))
+        let mut req = EvaluateRequest::new(lod_opts, svf_rays);
+        if let Some((lat, lon)) = site {
+            let table =
+                SunTable::year(year, step, &Site::new(lat, lon)).map_err(|e| message(&e))?;
+            req.sun = Some((SunSetting::new(lat, lon, year, step), table));
+        }
+        let a = l.study.evaluate_output(req, t_all, p);
+        json(&a.map_err(|e| message(&e))?.doc)
     })
 }
 

@@ -41,11 +41,9 @@ pub struct Setup {
     pub allow_mixed_crs: bool,
 }
 
-/// A study and what the JSON documents need besides it.
+/// A study and the milliseconds of its reading, as the documents of `lod` give them.
 pub struct Loaded {
     pub study: Study,
-    /// The inputs read, as the documents name them.
-    pub inputs: Vec<String>,
     /// Milliseconds reading (as the CLI rounds them).
     pub read_ms: f64,
 }
@@ -127,17 +125,8 @@ pub fn load(s: &Setup, progress: &dyn Progress) -> Result<Loaded, String> {
     let scene = Scene::load_inputs(inputs, &opts, progress).map_err(|e| message(&e))?;
     let read_ms = ms(t);
     failures(scene.failures())?;
-    let names = scene
-        .inputs()
-        .iter()
-        .map(|i| i.path.display().to_string())
-        .collect();
     let study = scene.frame(pois).map_err(|e| message(&e))?;
-    Ok(Loaded {
-        study,
-        inputs: names,
-        read_ms,
-    })
+    Ok(Loaded { study, read_ms })
 }
 
 /// Every input that could not be read, one per line: an error.

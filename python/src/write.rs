@@ -10,15 +10,18 @@ use skylod::citygml::merge::merge_named;
 use skylod::citygml::write::{write_document, WriteOptions};
 use skylod::citygml::{read_file_observed, ReadOptions};
 use skylod::export::{Content, Format};
-use skylod::lod::bound::BoundOptions;
 use skylod::lod::rough::RoughOptions;
 use skylod::lod::select::SelectOptions;
 use skylod::lod::LodOptions;
+use skylod::model::crs::model_site;
+use skylod::model::runtime::progress::Silent;
 use skylod::output::report::{Guarantee, Timings};
 use skylod::output::stats::{FileStats, Stats, StatsOutput};
+use skylod::pipeline::session::bound_plan::BoundRequest;
+use skylod::pipeline::session::site::SiteError;
+use skylod::pipeline::session::weather::SunSite;
 use skylod::pipeline::{write_all, BoundSpec, LevelsOptions};
 use skylod::runtime::progress::Stage;
-use skylod::solar::{Site, SunTable};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -83,62 +86,30 @@ pub struct BoundArgs {
     pub step: u32,
 }
 
-/// The default error allowed (1 %), as `skylod lod`.
-const DEFAULT_MAX_ERROR: f64 = 0.01;
-
 impl BoundArgs {
-    /// The bound and what the report says of it, as `skylod lod` decides them.
+    /// The bound and what the report says of it, as `skylod lod` decides them
+    /// ([`BoundRequest`]), the options named as Python names them.
     fn spec(
         &self,
         study: &skylod::session::Study,
         seed: u64,
     ) -> Result<(Option<BoundSpec>, Guarantee), String> {
-        let mut guarantee = Guarantee::default();
-        if !self.bound {
-            let why = "SVF and sun hours: no error bound (bound=False)";
-            guarantee.not_bounded.push(why.into());
-            return Ok((None, guarantee));
-        }
-        let svf = self.max_svf_error.unwrap_or(DEFAULT_MAX_ERROR);
-        guarantee.svf_error = Some(svf);
-        let model_site = study.site().map(|s| (s.lat, s.lon));
-        let site = match (self.site, model_site) {
-            (Some(s), _) | (None, Ok(s)) => Some(s),
-            (None, Err(why)) => {
-                if self.max_sun_hours_error.is_some() {
-                    return Err(format!(
-                        "max_sun_hours_error needs the site (lat, lon): {why}"
-                    ));
-                }
-                let line = format!("sun hours: no site ({why}; give site=(lat, lon))");
-                guarantee.not_bounded.push(line);
-                None
-            }
+        let mut r = BoundRequest::new(self.bound_rays, seed);
+        r.bound = self.bound;
+        (r.max_svf_error, r.max_sun_hours_error) = (self.max_svf_error, self.max_sun_hours_error);
+        (r.year, r.step_min) = (self.year, self.step);
+        (r.no_bound_option, r.site_option) = ("bound=False".into(), "site=(lat, lon)".into());
+        let site = match self.site {
+            Some((a, o)) => Ok(SunSite::Given(a, o)),
+            None => model_site(study.source(), study.crs())
+                .map(|s| SunSite::Model(s.lat, s.lon, s.crs.name))
+                .map_err(SiteError::from),
         };
-        let sun_error = site.map(|_| self.max_sun_hours_error.unwrap_or(DEFAULT_MAX_ERROR));
-        let sun = match site {
-            Some((lat, lon)) => Some(
-                SunTable::year(self.year, self.step, &Site::new(lat, lon))
-                    .map_err(|e| message(&e))?,
-            ),
-            None => None,
-        };
-        guarantee.sun_hours_error = sun_error;
-        let options = BoundOptions {
-            max_svf_error: Some(svf),
-            max_sun_error: sun_error,
-            svf_rays: self.bound_rays,
-            svf_seed: seed,
-            ..Default::default()
-        };
-        Ok((
-            Some(BoundSpec {
-                options,
-                sun,
-                irradiance: None,
-            }),
-            guarantee,
-        ))
+        let plan = r
+            .plan(site)
+            .map_err(|why| format!("max_sun_hours_error needs the site (lat, lon): {why}"))?;
+        let sun = plan.sun_table(&Silent).map_err(|e| message(&e))?;
+        Ok(plan.finish(sun, None))
     }
 }
 

@@ -17,9 +17,13 @@
 //! # Ok::<(), skylod::Error>(())
 //! ```
 
+pub mod bound_plan;
 mod error;
 mod lod;
 pub mod lod_write;
+pub mod pictures;
+pub mod site;
+pub mod tracing;
 pub mod weather;
 
 pub use error::{Error, Result};

@@ -145,12 +145,12 @@ impl WeatherYear {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::crs::Crs;
 
     /// Noon on 1 January at a station in Barcelona (as `solar::weather`'s example).
-    fn weather() -> Weather {
+    pub(crate) fn weather() -> Weather {
         let mut epw = String::from("LOCATION,Somewhere,,XX,test,000000,41.39,2.17,1.0,12.0\n");
         for l in [
             "DESIGN CONDITIONS,0",

@@ -4,18 +4,15 @@
 //! with `--weather`, the annual irradiation within 1 % (`--max-irradiance-error`).
 
 use crate::args::non_negative;
-use crate::args::site::{model_site, SiteArgs};
+use crate::args::site::{flags, SiteArgs};
 use crate::args::sun::SunArgs;
 use crate::args::weather::WeatherArgs;
 use anyhow::bail;
-use skylod::lod::bound::BoundOptions;
+use skylod::export::report::report::Guarantee;
 use skylod::model::CityModel;
-use skylod::output::report::Guarantee;
+use skylod::pipeline::session::bound_plan::BoundRequest;
+use skylod::pipeline::session::site::site_of;
 use skylod::pipeline::BoundSpec;
-use skylod::solar::{Site, SunTable};
-
-/// The relative error `lod` bounds by default (SVF, and sun hours where the site is known).
-pub const DEFAULT_MAX_ERROR: f64 = 0.01;
 
 #[derive(clap::Args, Debug)]
 pub struct BoundArgs {
@@ -59,7 +56,7 @@ impl BoundArgs {
 
     /// Usage checks before any input is read.
     pub fn check(&self) -> anyhow::Result<()> {
-        self.site.check_given("lod")?;
+        self.site.check("lod", true)?;
         self.weather.check()?;
         if self.max_irradiance_error.is_some() && self.weather.weather.is_none() {
             bail!(
@@ -69,69 +66,30 @@ impl BoundArgs {
         Ok(())
     }
 
-    /// The bound to run after the selection ([`skylod::pipeline::levels`]) and what it
+    /// The bound to run after the selection ([`skylod::pipeline::session::bound_plan`]) and what it
     /// guarantees; `source` (the model as read) gives the sun's site.
     pub fn spec(
         &self,
         source: &CityModel,
         seed: u64,
     ) -> anyhow::Result<(Option<BoundSpec>, Guarantee)> {
-        let mut guarantee = Guarantee::default();
-        if self.no_bound {
-            guarantee
-                .not_bounded
-                .push("SVF and sun hours: no error bound (--no-bound)".into());
-            return Ok((None, guarantee));
+        let mut r = BoundRequest::new(self.bound_rays, seed);
+        r.bound = !self.no_bound;
+        (r.max_svf_error, r.max_sun_hours_error) = (self.max_svf_error, self.max_sun_hours_error);
+        r.max_irradiance_error = self.max_irradiance_error;
+        (r.year, r.step_min) = (self.sun.year, self.sun.step);
+        let site = site_of(self.site.lat, self.site.lon, source);
+        let plan = r
+            .plan(site)
+            .map_err(|e| flags(e, "lod --max-sun-hours-error"))?;
+        if let Some(n) = plan.site.as_ref().and_then(|s| s.note("")) {
+            if self.max_sun_hours_error.is_some() {
+                crate::log::summary!("lod --max-sun-hours-error: {n}");
+            }
+            crate::log::summary!("lod: {n}");
         }
-        let svf = self.max_svf_error.unwrap_or(DEFAULT_MAX_ERROR);
-        guarantee.svf_error = Some(svf);
-        let sun_error = match (self.max_sun_hours_error, self.site.given()) {
-            (Some(e), _) => {
-                let _ = self.site.resolve(source, "lod --max-sun-hours-error")?;
-                Some(e)
-            }
-            (None, Some(_)) => Some(DEFAULT_MAX_ERROR),
-            (None, None) => match model_site(source) {
-                Ok(_) => Some(DEFAULT_MAX_ERROR),
-                Err(why) => {
-                    guarantee
-                        .not_bounded
-                        .push(format!("sun hours: no site ({why}; give --lat/--lon)"));
-                    None
-                }
-            },
-        };
-        let sun = match sun_error {
-            Some(_) => {
-                let (lat, lon) = self.site.resolve(source, "lod")?;
-                Some(SunTable::year_with(
-                    self.sun.year,
-                    self.sun.step,
-                    &Site::new(lat, lon),
-                    &crate::log::reporter(),
-                )?)
-            }
-            None => None,
-        };
-        guarantee.sun_hours_error = sun_error;
+        let sun = plan.sun_table(&crate::log::reporter())?;
         let year = self.weather.year(&self.site, source, "lod")?;
-        let irradiance_error =
-            (year.as_ref()).map(|_| self.max_irradiance_error.unwrap_or(DEFAULT_MAX_ERROR));
-        guarantee.irradiance_error = irradiance_error;
-        let options = BoundOptions {
-            max_svf_error: Some(svf),
-            max_sun_error: sun_error,
-            max_irradiance_error: irradiance_error,
-            svf_rays: self.bound_rays,
-            svf_seed: seed,
-            ..Default::default()
-        };
-        let irradiance = year.map(|y| y.setting);
-        let spec = BoundSpec {
-            options,
-            sun,
-            irradiance,
-        };
-        Ok((Some(spec), guarantee))
+        Ok(plan.finish(sun, year))
     }
 }

@@ -8,11 +8,11 @@ use crate::args::tracing::Session;
 use crate::inputs::Spool;
 use crate::log::{error, summary, warning};
 use anyhow::bail;
-use skylod::batch::inputs::Input;
-use skylod::batch::shard::Shard;
-use skylod::poi::checks::DEFAULT_POI_MARGIN;
-use skylod::poi::{check_pois, parse_poi_at, read_pois_csv, Located, Poi};
-use skylod::session::{Scene, SceneOptions};
+use skylod::lod::poi::checks::DEFAULT_POI_MARGIN;
+use skylod::lod::poi::{check_pois, parse_poi_at, read_pois_csv, Located, Poi};
+use skylod::pipeline::batch::inputs::Input;
+use skylod::pipeline::batch::shard::Shard;
+use skylod::pipeline::session::{Scene, SceneOptions};
 use std::path::PathBuf;
 
 /// Inputs and points of interest.
@@ -121,12 +121,7 @@ impl PoiArgs {
             summary!("{cmd}: {n}");
         }
         Ok(Session {
-            inputs: study
-                .inputs()
-                .iter()
-                .map(|i| i.path.display().to_string())
-                .collect(),
-            read_ms: (study.read_s() * 1e4).round() / 10.0,
+            read_ms: study.read_ms(),
             study,
             shard,
             failed,

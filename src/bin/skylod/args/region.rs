@@ -1,13 +1,13 @@
 //! `--facade ID` / `--region WKT --height Z` with `--spacing M`: POIs sampled over a surface
-//! or an area ([`skylod::poi::region`]), on `lod`, `svf`, `sun-hours` and `evaluate`. They are
+//! or an area ([`skylod::lod::poi::region`]), on `lod`, `svf`, `sun-hours` and `evaluate`. They are
 //! added after the `--poi`/`--pois` points, in the model's CRS.
 
 use crate::args::poi::PoiArgs;
 use crate::args::positive;
 use anyhow::bail;
+use skylod::lod::poi::region::RegionSpec;
+use skylod::lod::poi::Poi;
 use skylod::model::CityModel;
-use skylod::poi::region::RegionSpec;
-use skylod::poi::Poi;
 
 #[derive(clap::Args, Debug)]
 pub struct RegionArgs {

@@ -1,10 +1,10 @@
-//! `--scene-radius M`: read only the inputs within reach of the POIs ([`skylod::batch::scene_radius`]).
+//! `--scene-radius M`: read only the inputs within reach of the POIs ([`skylod::pipeline::batch::scene_radius`]).
 
 use crate::args::poi::PoiArgs;
 use anyhow::bail;
-use skylod::batch::scene_radius::keep_within;
-use skylod::batch::shard::Shard;
-use skylod::poi::Poi;
+use skylod::lod::poi::Poi;
+use skylod::pipeline::batch::scene_radius::keep_within;
+use skylod::pipeline::batch::shard::Shard;
 
 /// The scene options of the commands that trace POIs.
 #[derive(clap::Args, Debug, Clone, Default)]

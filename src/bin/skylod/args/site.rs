@@ -1,22 +1,9 @@
-//! `--lat`, `--lon`: the site of the sun, given or from the model's CRS.
+//! `--lat`, `--lon`: the site of the sun, given or from the model's CRS
+//! ([`skylod::pipeline::session::site`]); the messages name the flags.
 
-use crate::log::summary;
-use anyhow::bail;
-use skylod::crs::Crs;
+use anyhow::anyhow;
 use skylod::model::CityModel;
-
-/// Check `--lat`/`--lon` given together, or say that they are needed.
-pub fn lat_lon(lat: Option<f64>, lon: Option<f64>, cmd: &str) -> anyhow::Result<(f64, f64)> {
-    match (lat, lon) {
-        (Some(a), Some(o)) => {
-            if !(-90.0..=90.0).contains(&a) || !(-180.0..=180.0).contains(&o) {
-                bail!("--lat must be in -90..90 and --lon in -180..180 (got {a}, {o})");
-            }
-            Ok((a, o))
-        }
-        _ => bail!("{cmd} needs both --lat and --lon of the site, in degrees (WGS84)"),
-    }
-}
+use skylod::pipeline::session::site::{given_site, site_of, SiteError};
 
 /// The site of the sun position: `--lat`/`--lon`, both or neither (then from the model's CRS).
 #[derive(clap::Args, Debug)]
@@ -36,75 +23,31 @@ impl SiteArgs {
         self.lat.zip(self.lon)
     }
 
-    /// Usage check before any input is read: both flags or neither.
-    pub fn check(&self, cmd: &str) -> anyhow::Result<()> {
-        if self.lat.is_some() != self.lon.is_some() {
-            lat_lon(self.lat, self.lon, cmd)?;
-        }
-        Ok(())
+    /// Usage check before any input is read: both flags or neither (with `range`: in range).
+    pub fn check(&self, cmd: &str, range: bool) -> anyhow::Result<()> {
+        let given = given_site(self.lat, self.lon, range);
+        given.map(drop).map_err(|e| flags(e, cmd))
     }
 
-    /// [`SiteArgs::check`], and the flags' ranges when they are given.
-    pub fn check_given(&self, cmd: &str) -> anyhow::Result<()> {
-        self.check(cmd)?;
-        if let Some((lat, lon)) = self.given() {
-            lat_lon(Some(lat), Some(lon), cmd)?;
-        }
-        Ok(())
-    }
-
-    /// The site of the sun paths: the flags, or else the centre of `model` in `crs`
-    /// ([`skylod::crs::model_site`], said on stderr, prefixed by `cmd`); `None` when neither
-    /// gives one.
-    pub fn for_sun_paths(&self, model: &CityModel, crs: &Crs, cmd: &str) -> Option<(f64, f64)> {
-        if let Some(s) = self.given() {
-            return Some(s);
-        }
-        match skylod::crs::model_site(model, crs) {
-            Ok(s) => {
-                summary!(
-                    "{cmd}: site lat {:.5}, lon {:.5}: the centre of the model in {crs}",
-                    s.lat,
-                    s.lon
-                );
-                Some((s.lat, s.lon))
-            }
-            Err(_) => {
-                summary!("{cmd}: no sun paths: the CRS ({crs}) is not one skylod converts; give --lat/--lon");
-                None
-            }
-        }
-    }
-
-    /// The site, from the flags or from `model` ([`site_lat_lon`]).
+    /// The site, from the flags or from `model`'s centre (said on stderr, prefixed by `cmd`).
     pub fn resolve(&self, model: &CityModel, cmd: &str) -> anyhow::Result<(f64, f64)> {
-        site_lat_lon(self.lat, self.lon, model, cmd)
-    }
-}
-
-/// The site for the sun position: `--lat`/`--lon` when given (both), otherwise the centre of
-/// the model converted from its CRS when that is a UTM CRS skylod knows ([`skylod::crs`]).
-pub fn site_lat_lon(
-    lat: Option<f64>,
-    lon: Option<f64>,
-    model: &CityModel,
-    cmd: &str,
-) -> anyhow::Result<(f64, f64)> {
-    if lat.is_some() || lon.is_some() {
-        return lat_lon(lat, lon, cmd);
-    }
-    match model_site(model) {
-        Ok((a, o, srs)) => {
-            summary!("{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}");
-            Ok((a, o))
+        let s = site_of(self.lat, self.lon, model).map_err(|e| flags(e, cmd))?;
+        if let Some(n) = s.note("") {
+            crate::log::summary!("{cmd}: {n}");
         }
-        Err(why) => bail!("{cmd} needs the site's --lat and --lon (WGS84 degrees): {why}"),
+        Ok(s.lat_lon())
     }
 }
 
-/// The centre of `model` in WGS84 degrees (lat, lon) with the srsName it was converted from,
-/// or why there is none ([`skylod::crs::model_site`]).
-pub fn model_site(model: &CityModel) -> Result<(f64, f64, String), skylod::crs::NoSite> {
-    let s = skylod::crs::model_site(model, &skylod::crs::model_crs(model, None))?;
-    Ok((s.lat, s.lon, s.crs.name))
+/// `e` in the words of the flags that fix it.
+pub fn flags(e: SiteError, cmd: &str) -> anyhow::Error {
+    match e {
+        SiteError::OutOfRange { lat, lon } => {
+            anyhow!("--lat must be in -90..90 and --lon in -180..180 (got {lat}, {lon})")
+        }
+        SiteError::Half => {
+            anyhow!("{cmd} needs both --lat and --lon of the site, in degrees (WGS84)")
+        }
+        e => anyhow!("{cmd} needs the site's --lat and --lon (WGS84 degrees): {e}"),
+    }
 }

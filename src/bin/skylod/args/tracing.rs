@@ -9,12 +9,10 @@ use crate::args::scene::SceneArgs;
 use crate::args::shard::ShardArgs;
 use crate::inputs::{expand_inputs, Spool};
 use crate::Outcome;
-use skylod::batch::shard::Shard;
-use skylod::output::svf::TraceTimings;
-use skylod::output::text::TextContext;
-use skylod::pipeline::Traced;
-use skylod::poi::checks::PoiFlag;
-use skylod::session::Study;
+use skylod::export::report::text::TextContext;
+use skylod::lod::poi::checks::PoiFlag;
+use skylod::pipeline::batch::shard::Shard;
+use skylod::pipeline::session::Study;
 
 #[derive(clap::Args, Debug)]
 pub struct TracingArgs {
@@ -33,8 +31,6 @@ pub struct TracingArgs {
 pub struct Session {
     pub study: Study,
     pub shard: Option<Shard>,
-    /// The inputs read, as reports name them (`-` for standard input).
-    pub inputs: Vec<String>,
     /// Milliseconds reading, rounded to 0.1.
     pub read_ms: f64,
     /// Some input could not be read (each was reported).
@@ -56,14 +52,7 @@ impl Session {
 
     /// What the text of the command's document says beyond its JSON.
     pub fn text(&self) -> TextContext {
-        let source = self.study.source();
-        let decimals = self.study.crs().plan_decimals();
-        TextContext::new(source.traced_polygon_count(), decimals, self.header())
-    }
-
-    /// The read, BVH and trace milliseconds of `traced`.
-    pub fn timings<T>(&self, traced: &Traced<T>) -> TraceTimings {
-        TraceTimings::new(self.read_ms, traced.bvh_s, traced.trace_s)
+        self.study.text_context(self.header())
     }
 
     /// Say each POI's flags as a warning on stderr.

@@ -5,7 +5,7 @@
 use crate::args::site::SiteArgs;
 use anyhow::{anyhow, bail, Context};
 use skylod::model::CityModel;
-use skylod::session::weather::{weather_site as sun_site, SunSite, WeatherYear};
+use skylod::pipeline::session::weather::{weather_site as sun_site, WeatherYear};
 use skylod::solar::irradiance::SkyModel;
 use skylod::solar::weather::{read_weather, Weather};
 use std::path::PathBuf;
@@ -27,10 +27,7 @@ pub struct WeatherArgs {
 impl WeatherArgs {
     /// Usage checks before any input is read.
     pub fn check(&self) -> anyhow::Result<()> {
-        if !(0.0..=1.0).contains(&self.albedo) {
-            bail!("--albedo must be in 0..1 (got {})", self.albedo);
-        }
-        Ok(())
+        albedo(self.albedo)
     }
 
     /// The weather year of `--weather` (`None` without it), the sun placed at `site`'s
@@ -52,7 +49,15 @@ impl WeatherArgs {
     }
 }
 
-/// The sun's site for a weather year ([`skylod::session::weather::weather_site`]: --lat/--lon,
+/// `--albedo` in range.
+pub fn albedo(a: f64) -> anyhow::Result<()> {
+    if !(0.0..=1.0).contains(&a) {
+        bail!("--albedo must be in 0..1 (got {a})");
+    }
+    Ok(())
+}
+
+/// The sun's site for a weather year ([`skylod::pipeline::session::weather::weather_site`]: --lat/--lon,
 /// else the model's centre, else the station's), said on stderr.
 pub fn weather_site(
     args: &SiteArgs,
@@ -60,21 +65,11 @@ pub fn weather_site(
     weather: &Weather,
     cmd: &str,
 ) -> anyhow::Result<(f64, f64)> {
-    let site = skylod::crs::model_site(model, &skylod::crs::model_crs(model, None));
+    let site = skylod::model::crs::model_site(model, &skylod::model::crs::model_crs(model, None));
     let s = sun_site(args.given(), site, weather)
         .map_err(|e| anyhow!("{cmd}: {e}; give --lat/--lon to use this weather anyway"))?;
-    let w = &weather.site;
-    match &s {
-        SunSite::Model(a, o, srs) => crate::log::summary!(
-            "{cmd}: site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}"
-        ),
-        SunSite::Station(.., why) => crate::log::summary!(
-            "{cmd}: site of the weather station {:?} (lat {}, lon {}): {why}",
-            w.name,
-            w.latitude,
-            w.longitude
-        ),
-        _ => {}
+    if let Some(n) = s.note(&weather.site.name) {
+        crate::log::summary!("{cmd}: {n}");
     }
     Ok(s.lat_lon())
 }

@@ -4,13 +4,12 @@ use crate::args::rough::RoughArgs;
 use crate::args::select::SelectArgs;
 use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
-use crate::commands::{ms, out_err};
+use crate::commands::out_err;
 use crate::Outcome;
+use skylod::export::report::evaluate::write_table;
+use skylod::export::report::sun_hours::SunSetting;
 use skylod::lod::LodOptions;
-use skylod::output::evaluate::{EvaluateOutput, EvaluateTimings, EvaluateWeather};
-use skylod::output::sun_hours::SunSetting;
-use skylod::pipeline::evaluation::EvalOptions;
-use skylod::pipeline::EvaluateOptions;
+use skylod::pipeline::session::tracing::EvaluateRequest;
 use skylod::solar::{Site, SunTable};
 use std::io::Write;
 use std::time::Instant;
@@ -41,114 +40,38 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    args.site.check("evaluate")?;
+    args.site.check("evaluate", false)?;
     args.weather.check()?;
     let rough_opts = args.rough.options()?;
     let t_all = Instant::now();
     let Some(s) = args.tracing.study("evaluate", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);
     };
-    let site = if args.no_sun {
-        None
-    } else {
-        let (lat, lon) = args
-            .site
-            .resolve(s.study.source(), "evaluate (or give --no-sun)")?;
-        Some(Site::new(lat, lon))
+    let lod = LodOptions {
+        rough: rough_opts,
+        select: args.select.options(),
     };
-    let table = match &site {
-        Some(s) => Some(SunTable::year_with(
-            args.sun.year,
-            args.sun.step,
-            s,
-            &crate::log::reporter(),
-        )?),
-        None => None,
-    };
-    let opts = EvaluateOptions {
-        eval: EvalOptions {
-            lod: LodOptions {
-                rough: rough_opts,
-                select: args.select.options(),
-            },
-            svf_rays: args.svf_rays,
-            ..Default::default()
-        },
-        sun: table,
-        irradiance: None,
-    };
-    let year = (args.weather).year(&args.site, s.study.source(), "evaluate --weather")?;
-    let opts = EvaluateOptions {
-        irradiance: year.as_ref().map(|y| y.setting.clone()),
-        ..opts
-    };
-    let e = s.study.evaluate(&opts, &crate::log::reporter())?;
-    let flags: Vec<_> = e.pois.iter().map(|p| p.flags.clone()).collect();
-    s.warn_flags(&flags);
+    let mut req = EvaluateRequest::new(lod, args.svf_rays);
+    if !args.no_sun {
+        let cmd = "evaluate (or give --no-sun)";
+        let (lat, lon) = args.site.resolve(s.study.source(), cmd)?;
+        let (year, step) = (args.sun.year, args.sun.step);
+        let table = SunTable::year_with(year, step, &Site::new(lat, lon), &crate::log::reporter())?;
+        req.sun = Some((SunSetting::new(lat, lon, year, step), table));
+    }
+    req.weather = (args.weather).year(&args.site, s.study.source(), "evaluate --weather")?;
+    let a = s
+        .study
+        .evaluate_output(req, t_all, &crate::log::reporter())?;
+    s.warn_flags(&a.flags);
     let mut out = std::io::stdout().lock();
     if args.json {
-        let doc = EvaluateOutput::new(
-            s.inputs.clone(),
-            args.select.rays,
-            args.svf_rays,
-            args.select.seed,
-            site.map(|s| SunSetting::new(s.latitude, s.longitude, args.sun.year, args.sun.step)),
-            e.pois.clone(),
-            EvaluateTimings {
-                read: s.read_ms,
-                rough: e.rough_ms,
-                selection_bvh: e.selection_bvh_ms,
-                total: ms(t_all),
-            },
-        );
-        let doc = match &year {
-            Some(y) => doc.with_weather(EvaluateWeather {
-                weather: y.summary.clone(),
-                sky: y.sky(),
-                albedo: y.setting.opts.albedo,
-                site: y.site,
-            }),
-            None => doc,
-        };
-        out_err(writeln!(out, "{}", serde_json::to_string_pretty(&doc)?))?;
+        out_err(writeln!(out, "{}", serde_json::to_string_pretty(&a.doc)?))?;
     } else {
-        out_err(skylod::output::evaluate::write_table(
-            &mut out,
-            &e.pois,
-            s.header(),
-        ))?;
-        crate::log::summary!(
-            "{} POI(s); selection {} rays, SVF {} rays; read {:.0} ms, rough {:.0} ms (shared), selection BVH {:.0} ms (shared), total {:.0} ms",
-            e.pois.len(),
-            args.select.rays,
-            args.svf_rays,
-            s.read_ms,
-            e.rough_ms,
-            e.selection_bvh_ms,
-            ms(t_all)
-        );
-        if let Some(y) = &year {
-            crate::log::summary!(
-                "irradiance: {} hours of {} (GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {:?} sky, albedo {}; largest LoD error {}",
-                y.setting.table.len(),
-                y.summary.station,
-                y.summary.ghi_kwh_m2,
-                y.site[0],
-                y.site[1],
-                y.setting.opts.sky,
-                y.setting.opts.albedo,
-                largest_irradiance_error(&e.pois)
-            );
+        out_err(write_table(&mut out, &a.doc.pois, s.header()))?;
+        for line in &a.summary {
+            crate::log::summary!("{line}");
         }
     }
     Ok(s.outcome())
-}
-
-/// The largest relative irradiance error of the LoD model over the POIs, as a percentage.
-fn largest_irradiance_error(pois: &[skylod::pipeline::evaluation::PoiEval]) -> String {
-    let e = pois
-        .iter()
-        .filter_map(|p| p.lod_irradiance_error)
-        .fold(0.0, f64::max);
-    format!("{:.3}%", 100.0 * e)
 }

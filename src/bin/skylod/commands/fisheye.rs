@@ -5,14 +5,11 @@ use crate::args::rough::RoughArgs;
 use crate::args::site::SiteArgs;
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::batch::outputs::per_poi;
-use skylod::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
+use skylod::io::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use skylod::lod::LodOptions;
-use skylod::model::AssetKind;
-use skylod::pipeline::{sky_pictures, SkyPictureOptions};
-use skylod::solar::fisheye::{cell_shares, fisheye_svg, sun_paths, FisheyeOptions, Projection};
-use skylod::solar::sky::{SkyPartition, SkyVariant};
-use skylod::solar::{Site, SkyBundles};
+use skylod::pipeline::batch::outputs::per_poi;
+use skylod::pipeline::session::pictures::{PictureSvg, Pictures};
+use skylod::solar::fisheye::Projection;
 use std::path::PathBuf;
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -79,13 +76,17 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let spool = crate::inputs::expand_inputs(&mut args.pois.inputs)?;
     let shard = args.shard.resolve()?;
     let pois = args.pois.points()?;
-    let partition = SkyPartition::new(args.rays, SkyVariant::EqualSolidAngle)?;
-    let bundles = SkyBundles::new(args.rays.max(10_000), 1)?;
-    args.site.check_given("fisheye")?;
+    let projection = match args.projection {
+        ProjectionArg::EqualArea => Projection::EqualArea,
+        ProjectionArg::Stereographic => Projection::Stereographic,
+    };
+    let pictures = Pictures::new(args.rays, projection)?;
+    args.site.check("fisheye", true)?;
     let lod_opts = LodOptions {
         rough: args.rough.options()?,
         select: args.silhouette.options(args.select_rays, args.seed),
     };
+    let pictures = pictures.with_levels((args.colour_by == ColourBy::Level).then_some(lod_opts));
     // Named from all POIs, so a shard writes the files the serial run would.
     let many = pois.len() > 1;
     args.scene
@@ -114,84 +115,36 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         return Ok(Outcome::SomeFailed);
     };
     let s = args.pois.study(scene, pois, shard, spool, "fisheye")?;
-    let framed = s.study.framed();
-    let site = args
-        .site
-        .for_sun_paths(framed.source, &framed.crs, "fisheye");
-    let paths = match site {
-        Some((lat, lon)) => sun_paths(&Site::new(lat, lon), args.year)?,
-        None => Vec::new(),
-    };
-    let kinds: Vec<AssetKind> = framed.model.assets.iter().map(|a| a.kind).collect();
-    let projection = match args.projection {
-        ProjectionArg::EqualArea => Projection::EqualArea,
-        ProjectionArg::Stereographic => Projection::Stereographic,
-    };
-    let popts = SkyPictureOptions {
-        partition: &partition,
-        bundles: &bundles,
-        levels: (args.colour_by == ColourBy::Level).then_some(lod_opts),
-    };
-    let degrees = framed.crs.plan_decimals() == 8;
-    let dp = if degrees { 8 } else { 2 };
-    sky_pictures(
-        &framed,
-        &popts,
-        &crate::log::reporter(),
-        |k, pic| -> anyhow::Result<()> {
-            let (poi, out) = (&framed.pois[k], &outputs[k]);
-            crate::commands::warn_flags(
-                std::slice::from_ref(poi),
-                std::slice::from_ref(&pic.flags),
-            );
-            let p = poi.position;
-            let mut caption = vec![format!(
-                "POI ({:.dp$}, {:.dp$}, {:.2}){}",
-                p.x,
-                p.y,
-                p.z,
-                poi.normal
-                    .map_or(", no normal (horizontal)".to_string(), |n| format!(
-                        ", normal ({:.2}, {:.2}, {:.2})",
-                        n.x, n.y, n.z
-                    ))
-            )];
-            caption.push(format!(
-                "SVF {:.3}, sky exposure {:.3} ({} rays per bundle); input: {}",
-                pic.view.svf,
-                pic.view.sky_exposure,
-                bundles.len(),
-                s.inputs.join(", ")
-            ));
-            if let Some((lat, lon)) = site {
-                caption.push(format!("sun paths {} at lat {lat}, lon {lon}", args.year));
+    let pictures = match s.study.sun_paths_site(args.site.given()) {
+        Ok(site) => {
+            if let Some(n) = site.note("") {
+                crate::log::summary!("fisheye: {n}");
             }
-            let opts = FisheyeOptions {
-                projection,
-                title: format!("Sky from {}", poi.id),
-                caption,
-                sun_paths: paths.clone(),
-                ..FisheyeOptions::default()
-            };
-            let levels = pic.levels.as_deref();
-            let doc = fisheye_svg(&partition, &pic.cells, &kinds, levels, &opts);
-            let text = doc.to_string();
-            atomic_write_bytes(out, text.as_bytes()).context("writing the picture")?;
-            let sky = cell_shares(&pic.cells, &kinds, levels)
-                .into_iter()
-                .find(|s| s.0 == "sky")
-                .map_or(0.0, |s| s.1);
-            crate::log::summary!(
-                "{}: {} -> {} ({} cells, {:.1} % sky, SVF {:.3})",
-                poi.id,
-                s.inputs.join(", "),
-                out.display(),
-                partition.len(),
-                sky * 100.0,
-                pic.view.svf
-            );
-            Ok(())
-        },
-    )?;
+            pictures.with_sun_paths(site.lat_lon(), args.year)?
+        }
+        Err(_) => {
+            let crs = s.study.crs();
+            crate::log::summary!("fisheye: no sun paths: the CRS ({crs}) is not one skylod converts; give --lat/--lon");
+            pictures
+        }
+    };
+    let (pois, inputs) = (s.study.pois(), s.study.input_names().join(", "));
+    let each = |k: usize, pic: PictureSvg| -> anyhow::Result<()> {
+        let (poi, out) = (&pois[k], &outputs[k]);
+        crate::commands::warn_flags(std::slice::from_ref(poi), std::slice::from_ref(&pic.flags));
+        atomic_write_bytes(out, pic.svg.as_bytes()).context("writing the picture")?;
+        crate::log::summary!(
+            "{}: {} -> {} ({} cells, {:.1} % sky, SVF {:.3})",
+            poi.id,
+            inputs,
+            out.display(),
+            pictures.cells(),
+            pic.sky * 100.0,
+            pic.svf
+        );
+        Ok(())
+    };
+    s.study
+        .fisheye_svgs(&pictures, &crate::log::reporter(), each)?;
     Ok(s.outcome())
 }

@@ -1,11 +1,10 @@
 //! `skylod horizon`: horizon profiles of POIs (PVGIS / pvlib convention) as CSV or JSON.
 
-use crate::commands::{out_err, polygons};
+use crate::commands::out_err;
 use crate::Outcome;
 use anyhow::Context;
-use skylod::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
-use skylod::output::horizon::{profile_summary, HorizonOutput, HorizonPoi};
-use skylod::output::text::Document;
+use skylod::export::report::text::Document;
+use skylod::io::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
 use skylod::solar::HorizonOptions;
 use std::io::Write;
 use std::path::PathBuf;
@@ -46,25 +45,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     else {
         return Ok(Outcome::SomeFailed);
     };
-    // Traced in the local metric frame (y = north): azimuths are from north there.
-    let traced = s.study.horizon(&opts, &crate::log::reporter())?;
-    s.warn_flags(&traced.flags);
-    let timings = s.timings(&traced);
-    let doc = HorizonOutput::new(
-        traced.rows(s.study.pois(), HorizonPoi::from_profile),
-        args.step,
-        opts.tolerance_deg,
-        s.inputs.clone(),
-        polygons(s.study.source()),
-        timings,
-    );
+    let a = s.study.horizon_output(&opts, &crate::log::reporter())?;
+    s.warn_flags(&a.flags);
     let (cx, mut text) = (s.text(), Vec::new());
     if args.json {
-        text = (serde_json::to_string_pretty(&doc)? + "\n").into_bytes();
+        text = (serde_json::to_string_pretty(&a.doc)? + "\n").into_bytes();
     } else {
         // Shards after the first leave out the header line: concatenated in shard order,
         // the shards' files are the serial run's.
-        doc.write_table(&mut text, &cx)?;
+        a.doc.write_table(&mut text, &cx)?;
     }
     match &args.output {
         Some(out) => {
@@ -72,10 +61,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
         None => out_err(std::io::stdout().lock().write_all(&text))?,
     }
-    for (p, h) in s.study.pois().iter().zip(&traced.results) {
-        crate::log::summary!("{}", profile_summary(&p.id, h));
-    }
-    for line in doc.summary(&cx) {
+    for line in a.summary.iter().chain(&a.doc.summary(&cx)) {
         crate::log::summary!("{line}");
     }
     Ok(s.outcome())

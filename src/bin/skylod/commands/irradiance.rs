@@ -2,16 +2,14 @@
 
 use crate::args::site::SiteArgs;
 use crate::args::weather::weather_site;
-use crate::commands::{emit, ms, polygons};
+use crate::commands::{emit, ms};
 use crate::Outcome;
-use anyhow::{bail, Context};
-use skylod::output::irradiance::{
-    write_csv, write_hourly_csv, IrradianceOutput, IrradiancePoi, IrradianceTimings,
-};
-use skylod::session::weather::weather_summary;
-use skylod::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
+use anyhow::Context;
+use skylod::export::report::irradiance::write_csv;
+use skylod::pipeline::session::tracing::IrradianceRequest;
+use skylod::solar::irradiance::SkyModel;
 use skylod::solar::weather::read_weather;
-use skylod::solar::{Site, SkyBundles};
+use skylod::solar::SkyBundles;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -54,10 +52,8 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    args.site.check_given("irradiance")?;
-    if !(0.0..=1.0).contains(&args.albedo) {
-        bail!("--albedo must be in 0..1 (got {})", args.albedo);
-    }
+    args.site.check("irradiance", true)?;
+    crate::args::weather::albedo(args.albedo)?;
     if let Some(h) = &args.hourly {
         skylod::io::check_target(h, [], args.overwrite)?;
     }
@@ -71,58 +67,34 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         return Ok(Outcome::SomeFailed);
     };
     let (lat, lon) = weather_site(&args.site, s.study.source(), &weather, "irradiance")?;
-    let (sky, albedo) = (args.sky, args.albedo);
-    let opts = IrradianceOptions { sky, albedo };
-    let t = Instant::now();
-    let table = IrradianceTable::new(&weather, &Site::new(lat, lon), sky)?;
-    let sun_ms = weather_ms + ms(t);
-    let traced = s.study.irradiance(
-        &bundles,
-        &table,
-        &opts,
-        args.hourly.is_some(),
-        &crate::log::reporter(),
-    )?;
-    s.warn_flags(&traced.flags);
-    let pois = s.study.pois();
-    let rows = traced.rows(pois, |p, r, f| IrradiancePoi::new(p, &r.annual, f));
-    let values: Vec<f64> = traced
-        .results
-        .iter()
-        .map(|r| r.annual.global_kwh_m2)
-        .collect();
-    if let Some(n) = args
-        .attributes
-        .write(&s.study.framed(), &values, args.overwrite)?
-    {
+    let req = IrradianceRequest {
+        path: &args.weather,
+        weather: &weather,
+        weather_ms,
+        site: [lat, lon],
+        sky: args.sky,
+        albedo: args.albedo,
+        bundles: &bundles,
+        rays: args.rays,
+        hourly: args.hourly.is_some(),
+    };
+    let run = s.study.irradiance_output(&req, &crate::log::reporter())?;
+    s.warn_flags(&run.doc.flags);
+    let values = run.annual_global();
+    if let Some(n) = (args.attributes).write(&s.study.framed(), &values, args.overwrite)? {
         crate::log::summary!("irradiance: {n} surface(s) given skylodAnnualIrradiation");
     }
     if let Some(path) = &args.hourly {
-        let ids: Vec<&str> = pois.iter().map(|p| p.id.as_str()).collect();
-        let series: Vec<&[f64]> = traced.results.iter().map(|r| r.hourly.as_slice()).collect();
         skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
-            write_hourly_csv(w, &weather, &ids, &series)?;
+            run.write_hourly(w, &weather)?;
             Ok(0)
         })
         .with_context(|| format!("writing {}", path.display()))?;
     }
-    let summary = weather_summary(&args.weather, &weather);
-    let timings = IrradianceTimings::new(s.timings(&traced), sun_ms);
-    let doc = IrradianceOutput::new(
-        rows,
-        summary,
-        [lat, lon],
-        sky,
-        args.albedo,
-        args.rays,
-        s.inputs.clone(),
-        polygons(s.study.source()),
-        timings,
-    );
     if args.csv {
-        write_csv(std::io::stdout().lock(), &doc.pois).context("writing to stdout")?;
+        write_csv(std::io::stdout().lock(), &run.doc.doc.pois).context("writing to stdout")?;
     } else {
-        emit(&doc, args.json, &s.text())?;
+        emit(&run.doc.doc, args.json, &s.text())?;
     }
     Ok(s.outcome())
 }

@@ -2,12 +2,8 @@
 
 use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
-use crate::commands::{emit, ms, polygons};
+use crate::commands::emit;
 use crate::Outcome;
-use skylod::output::sun_hours::{SunHoursOutput, SunHoursPoi, SunHoursTimings, SunSetting};
-use skylod::session::SunOptions;
-use skylod::solar::Site;
-use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -27,28 +23,18 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    args.site.check("sun-hours")?;
+    args.site.check("sun-hours", false)?;
     let Some(s) = args.tracing.study("sun-hours", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);
     };
-    let (lat, lon) = args.site.resolve(s.study.source(), "sun-hours")?;
-    let site = Site::new(lat, lon).with_time_zone(&args.timezone)?;
-    let sun = SunOptions::new(Some(site), args.sun.year, args.sun.step);
-    let t = Instant::now();
-    let table = s.study.sun_table_with(&sun, &crate::log::reporter())?;
-    let sun_ms = ms(t);
-    let traced = s.study.sun_hours(&sun, &crate::log::reporter())?;
-    s.warn_flags(&traced.flags);
-    let timings = SunHoursTimings::new(s.timings(&traced), sun_ms);
-    let doc = SunHoursOutput::new(
-        traced.rows(s.study.pois(), SunHoursPoi::new),
-        SunSetting::new(lat, lon, args.sun.year, args.sun.step),
-        args.timezone.clone(),
-        table.len(),
-        s.inputs.clone(),
-        polygons(s.study.source()),
-        timings,
+    let site = args.site.resolve(s.study.source(), "sun-hours")?;
+    let (year, tz, progress) = (
+        (args.sun.year, args.sun.step),
+        &args.timezone,
+        crate::log::reporter(),
     );
-    emit(&doc, args.json, &s.text())?;
+    let a = s.study.sun_hours_output(site, year, tz, &progress)?;
+    s.warn_flags(&a.flags);
+    emit(&a.doc, args.json, &s.text())?;
     Ok(s.outcome())
 }

@@ -1,8 +1,7 @@
 //! `skylod svf`.
 
-use crate::commands::{emit, polygons};
+use crate::commands::emit;
 use crate::Outcome;
-use skylod::output::svf::{SvfOutput, SvfPoi};
 use skylod::solar::SkyBundles;
 
 #[derive(clap::Args, Debug)]
@@ -25,19 +24,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let Some(s) = args.tracing.study("svf", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);
     };
-    let traced = s.study.svf(&bundles, &crate::log::reporter())?;
-    s.warn_flags(&traced.flags);
-    let timings = s.timings(&traced);
-    let rows = traced.rows(s.study.pois(), SvfPoi::new);
-    let polygons = polygons(s.study.source());
-    let doc = SvfOutput::new(
-        rows,
-        args.rays,
-        args.seed,
-        s.inputs.clone(),
-        polygons,
-        timings,
-    );
-    emit(&doc, args.json, &s.text())?;
+    let rays = (args.rays, args.seed);
+    let a = s
+        .study
+        .svf_output(&bundles, rays, &crate::log::reporter())?;
+    s.warn_flags(&a.flags);
+    emit(&a.doc, args.json, &s.text())?;
     Ok(s.outcome())
 }

@@ -1,0 +1,156 @@
+//! The site of the sun as a caller gives it: a latitude and a longitude given together (or
+//! neither), in range, else the centre of the model from its CRS ([`site_of`]), with the
+//! note a program tells its user when the site comes from the model ([`SunSite::note`]).
+
+use super::weather::SunSite;
+use crate::model::crs::{model_crs, model_site, NoSite};
+use crate::model::CityModel;
+
+/// Why a site cannot be used. The caller names its own options in what it says.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SiteError {
+    /// Only one of the latitude and the longitude is given.
+    #[error("the site needs both a latitude and a longitude (WGS84 degrees)")]
+    Half,
+    /// The latitude is outside -90..90 or the longitude outside -180..180.
+    #[error("latitude must be in -90..90 and longitude in -180..180 (got {lat}, {lon})")]
+    OutOfRange {
+        /// The latitude given.
+        lat: f64,
+        /// The longitude given.
+        lon: f64,
+    },
+    /// None given, and the model gives none (empty, or a CRS not converted).
+    #[error(transparent)]
+    NoSite(#[from] NoSite),
+}
+
+/// The latitude and longitude given: both (`Some`) or neither (`None`); one alone is
+/// [`SiteError::Half`]. With `in_range`, a pair outside -90..90, -180..180 is
+/// [`SiteError::OutOfRange`].
+///
+/// # Errors
+/// [`SiteError::Half`], [`SiteError::OutOfRange`].
+pub fn given_site(
+    lat: Option<f64>,
+    lon: Option<f64>,
+    in_range: bool,
+) -> Result<Option<(f64, f64)>, SiteError> {
+    match (lat, lon) {
+        (None, None) => Ok(None),
+        (Some(lat), Some(lon)) => {
+            let ok = (-90.0..=90.0).contains(&lat) && (-180.0..=180.0).contains(&lon);
+            if in_range && !ok {
+                return Err(SiteError::OutOfRange { lat, lon });
+            }
+            Ok(Some((lat, lon)))
+        }
+        _ => Err(SiteError::Half),
+    }
+}
+
+/// The site of the sun: the latitude and longitude given (both, in range), or when neither
+/// is given the centre of `model` in its own CRS ([`model_site`]).
+///
+/// # Errors
+/// As [`given_site`]; [`SiteError::NoSite`] when the model gives none.
+pub fn site_of(
+    lat: Option<f64>,
+    lon: Option<f64>,
+    model: &CityModel,
+) -> Result<SunSite, SiteError> {
+    if let Some((a, o)) = given_site(lat, lon, true)? {
+        return Ok(SunSite::Given(a, o));
+    }
+    let s = model_site(model, &model_crs(model, None))?;
+    Ok(SunSite::Model(s.lat, s.lon, s.crs.name))
+}
+
+impl SunSite {
+    /// What to tell the user of a site taken from the model or a weather station
+    /// (`station`: its name), `None` for a site given.
+    pub fn note(&self, station: &str) -> Option<String> {
+        match self {
+            SunSite::Given(..) => None,
+            SunSite::Model(a, o, srs) => Some(format!(
+                "site lat {a:.5}, lon {o:.5}: the centre of the model in {srs}"
+            )),
+            SunSite::Station(a, o, why) => Some(format!(
+                "site of the weather station {station:?} (lat {a}, lon {o}): {why}"
+            )),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::test_support::fixture_inputs;
+
+    #[test]
+    fn a_site_given_is_a_pair_in_range() {
+        assert_eq!(given_site(None, None, true), Ok(None));
+        assert_eq!(given_site(Some(41.0), None, false), Err(SiteError::Half));
+        assert_eq!(given_site(None, Some(2.0), true), Err(SiteError::Half));
+        assert_eq!(
+            given_site(Some(41.0), Some(2.0), true),
+            Ok(Some((41.0, 2.0)))
+        );
+        let out = SiteError::OutOfRange {
+            lat: 91.0,
+            lon: 2.0,
+        };
+        assert_eq!(given_site(Some(91.0), Some(2.0), true), Err(out));
+        assert_eq!(
+            given_site(Some(41.0), Some(-181.0), true),
+            Err(SiteError::OutOfRange {
+                lat: 41.0,
+                lon: -181.0
+            })
+        );
+        // Unchecked: the pair as given (the range is checked later).
+        assert_eq!(
+            given_site(Some(91.0), Some(2.0), false),
+            Ok(Some((91.0, 2.0)))
+        );
+        assert_eq!(
+            given_site(Some(-90.0), Some(180.0), true),
+            Ok(Some((-90.0, 180.0)))
+        );
+    }
+
+    #[test]
+    fn the_site_is_given_or_the_model_s_centre() {
+        let m = fixture_inputs().model;
+        assert_eq!(
+            site_of(Some(1.0), Some(2.0), &m),
+            Ok(SunSite::Given(1.0, 2.0))
+        );
+        let s = site_of(None, None, &m).unwrap();
+        let (lat, lon) = s.lat_lon();
+        assert!(
+            (lat - 41.377).abs() < 0.01 && (lon - 2.162).abs() < 0.01,
+            "{s:?}"
+        );
+        let note = s.note("").unwrap();
+        assert!(
+            note.starts_with(&format!("site lat {lat:.5}, lon {lon:.5}: ")),
+            "{note}"
+        );
+        assert!(note.contains("centre of the model in EPSG:25831"), "{note}");
+        assert_eq!(SunSite::Given(1.0, 2.0).note("x"), None);
+        assert_eq!(site_of(Some(1.0), None, &m), Err(SiteError::Half));
+        // An empty model: no site, and why.
+        let e = site_of(None, None, &CityModel::default()).unwrap_err();
+        assert!(matches!(e, SiteError::NoSite(_)), "{e:?}");
+        let why = NoSite { crs: None };
+        let station = SunSite::Station(41.5, 2.5, why.clone())
+            .note("BCN")
+            .unwrap();
+        assert_eq!(
+            station,
+            format!("site of the weather station \"BCN\" (lat 41.5, lon 2.5): {why}")
+        );
+    }
+}
