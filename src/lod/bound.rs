@@ -34,6 +34,13 @@
 //! model is built at once, as before ([`Reference::whole`]). Measured (BENCHMARKS.md, "The
 //! default error bound"): on the paper district, the 6 POIs' rays reach 2,500 of 57,530 assets.
 //!
+//! **Two halves.** The full model's answers depend on the POIs, the rays and the model, not
+//! on the levels: [`full_answers`] makes them ([`FullAnswers`]) and [`bound_against`] checks
+//! a set of levels against them and promotes; [`bound_with`] is the one after the other.
+//! `lod` ([`crate::pipeline::levels`]) makes the first half beside the rough model and the
+//! selection, so that each fills the other's one-core stretches (the boxes' index and the
+//! part's BVH are built on one core, as are the selection scene and the POI checks).
+//!
 //! **Irradiance** ([`bound_with`] and a weather year): the annual global irradiation of the
 //! POI's plane ([`crate::solar::irradiance`]) from the SVF rays above and one sun ray per
 //! hour the sun is up in front of the plane ([`PlaneRays`]); both models' figures equal
