@@ -34,6 +34,13 @@
 //! model is built at once, as before ([`Reference::whole`]). Measured (BENCHMARKS.md, "The
 //! default error bound"): on the paper district, the 6 POIs' rays reach 2,500 of 57,530 assets.
 //!
+//! **Two halves.** The full model's answers depend on the POIs, the rays and the model, not
+//! on the levels: [`full_answers`] makes them ([`FullAnswers`]) and [`bound_against`] checks
+//! a set of levels against them and promotes; [`bound_with`] is the one after the other.
+//! `lod` ([`crate::pipeline::levels`]) makes the first half beside the rough model and the
+//! selection, so that each fills the other's one-core stretches (the boxes' index and the
+//! part's BVH are built on one core, as are the selection scene and the POI checks).
+//!
 //! **Irradiance** ([`bound_with`] and a weather year): the annual global irradiation of the
 //! POI's plane ([`crate::solar::irradiance`]) from the SVF rays above and one sun ray per
 //! hour the sun is up in front of the plane ([`PlaneRays`]); both models' figures equal
@@ -229,10 +236,9 @@ fn probe(
         .unwrap_or(DVec3::Z);
     let frame = Frame::from_normal(n);
     let svf_dirs: Vec<DVec3> = bundles
-        .for_poi(poi)
-        .projected_dirs()
-        .iter()
-        .map(|&l| frame.to_world(l))
+        .projected_dirs_for(poi)
+        .into_iter()
+        .map(|l| frame.to_world(l))
         .filter(|d| d.z > 0.0)
         .collect();
     let plane = irr.map(|w| PlaneRays::new(&w.table, poi.normal, &svf_dirs, bundles.len()));
@@ -605,6 +611,13 @@ pub fn bound_with(
     table: Option<&SunTable>,
     irradiance: Option<&IrradianceSetting>,
 ) -> Result<Bounded, BoundError> {
+    mismatch(model, rough, levels)?;
+    let full = full_answers(model, pois, opts, table, irradiance)?;
+    bound_against(model, rough, levels, &full)
+}
+
+/// The levels and rough geometries must be one per asset.
+fn mismatch(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Result<(), BoundError> {
     let n = model.assets.len();
     if levels.len() != n || rough.len() != n {
         return Err(BoundError::Mismatch {
@@ -613,6 +626,53 @@ pub fn bound_with(
             rough: rough.len(),
         });
     }
+    Ok(())
+}
+
+/// The full model's side of [`bound_with`], which does not depend on the levels: the rays
+/// of every POI and their first hits in the full model (module docs, "Reference"). Made by
+/// [`full_answers`], e.g. beside the selection ([`crate::pipeline::levels`]); used by
+/// [`bound_against`] with the model it was made from.
+pub struct FullAnswers<'a> {
+    pois: &'a [Poi],
+    opts: BoundOptions,
+    /// The sun table when sun hours are bounded.
+    table: Option<&'a SunTable>,
+    irr: Option<&'a IrradianceSetting>,
+    /// Rays of the SVF bundle, and hours of a sun step.
+    total: f64,
+    step_h: f64,
+    probes: Vec<Probe>,
+    /// Per POI, what each of its rays brings to the irradiation (all rays, 0 but for the
+    /// SVF and irradiance ones).
+    weights: Vec<Option<Vec<f64>>>,
+    tags: Vec<Vec<Option<u32>>>,
+    reference: Reference,
+    assets: usize,
+}
+
+impl std::fmt::Debug for FullAnswers<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FullAnswers")
+            .field("pois", &self.pois.len())
+            .field("rays", &self.probes.iter().map(Probe::len).sum::<usize>())
+            .field("reference", &self.reference)
+            .finish()
+    }
+}
+
+/// The full model's answers to every ray of the bound of `opts` at `pois` ([`FullAnswers`]):
+/// the first half of [`bound_with`], which needs no levels.
+///
+/// # Errors
+/// As [`bound_with`], but for [`BoundError::Mismatch`].
+pub fn full_answers<'a>(
+    model: &CityModel,
+    pois: &'a [Poi],
+    opts: &BoundOptions,
+    table: Option<&'a SunTable>,
+    irradiance: Option<&'a IrradianceSetting>,
+) -> Result<FullAnswers<'a>, BoundError> {
     let max_irr = opts.max_irradiance_error;
     for b in [opts.max_svf_error, opts.max_sun_error, max_irr]
         .into_iter()
@@ -637,17 +697,70 @@ pub fn bound_with(
     } else {
         None
     };
-    let boxes = AssetBoxes::new(model);
-    let probes: Vec<Probe> = (pois.iter())
-        .map(|p| probe(p, &bundles, table, irr))
-        .collect();
-    // per POI, what each of its rays brings to the irradiation (all rays, 0 but for the
-    // SVF and irradiance ones)
+    // the boxes' index is built on one core: the probes beside it
+    let (boxes, probes) = rayon::join(
+        || AssetBoxes::new(model),
+        || -> Vec<Probe> {
+            (pois.par_iter())
+                .map(|p| probe(p, &bundles, table, irr))
+                .collect()
+        },
+    );
     let weights: Vec<Option<Vec<f64>>> = (probes.iter())
         .map(|p| Some(irradiance_weights(p, irr?)))
         .collect();
-    let (full_tags, reference) = full_tags(model, &probes, &boxes);
-    drop(boxes);
+    let (tags, reference) = full_tags(model, &probes, &boxes);
+    Ok(FullAnswers {
+        pois,
+        opts: *opts,
+        table,
+        irr,
+        total,
+        step_h,
+        probes,
+        weights,
+        tags,
+        reference,
+        assets: model.assets.len(),
+    })
+}
+
+/// The second half of [`bound_with`]: the LoD model of `levels` against `full` (made from
+/// the same `model` by [`full_answers`]), assets promoted until every POI holds.
+///
+/// # Errors
+/// [`BoundError::Mismatch`] when `levels` or `rough` are not one per asset of the model
+/// `full` was made from.
+pub fn bound_against(
+    model: &CityModel,
+    rough: &[RoughGeometry],
+    levels: &[u8],
+    full: &FullAnswers<'_>,
+) -> Result<Bounded, BoundError> {
+    mismatch(model, rough, levels)?;
+    if full.assets != model.assets.len() {
+        return Err(BoundError::Mismatch {
+            assets: full.assets,
+            levels: levels.len(),
+            rough: rough.len(),
+        });
+    }
+    let n = model.assets.len();
+    let FullAnswers {
+        pois,
+        opts,
+        table,
+        irr,
+        total,
+        step_h,
+        ref probes,
+        ref weights,
+        tags: ref full_tags,
+        reference,
+        ..
+    } = *full;
+    let opts = &opts;
+    let max_irr = opts.max_irradiance_error;
 
     let mut levels: Vec<u8> = levels.iter().map(|&l| l.min(2)).collect();
     let mut promotions = Vec::new();

@@ -1,9 +1,10 @@
 //! Step 3: rough model, selection scene, selection and error bound.
 
 use super::{Framed, PipelineError};
-use crate::lod::bound::{bound_with, BoundOptions, BoundReport};
+use crate::lod::bound::{bound_against, full_answers, BoundOptions, BoundReport, FullAnswers};
 use crate::lod::rough::RoughGeometry;
 use crate::lod::{lod_with, LodOptions, LodResult};
+use crate::model::runtime::mem::GIVE_BACK_MIN_ASSETS;
 use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::CityModel;
 use crate::solar::SunTable;
@@ -43,7 +44,8 @@ pub struct Levels {
     /// The bound's report, when one was asked for (`met` says whether it holds; when it
     /// does not, nothing should be written).
     pub bound: Option<BoundReport>,
-    /// Seconds of the bound check.
+    /// Seconds of the bound check after the selection (its full-model side, when
+    /// [`levels`] traced it beside the selection, not counted).
     pub bound_s: f64,
 }
 
@@ -68,6 +70,11 @@ impl Levels {
 /// Rough model ([`Stage::Rough`]) → selection scene ([`Stage::Bvh`]) → selection
 /// ([`Stage::Select`], per POI, cancellable) → error bound ([`Stage::Trace`]) when asked.
 ///
+/// The bound's full-model side ([`full_answers`]: the reference trace, which needs no
+/// levels) runs beside the rough model and the selection, each filling the other's
+/// one-core stretches, for models under [`GIVE_BACK_MIN_ASSETS`] assets (a larger model's
+/// peak memory keeps them one after the other); the answers are the same either way.
+///
 /// # Errors
 /// [`PipelineError::Select`], [`PipelineError::Bound`], [`PipelineError::Cancelled`].
 pub fn levels(
@@ -75,8 +82,31 @@ pub fn levels(
     opts: &LevelsOptions,
     progress: &dyn Progress,
 ) -> Result<Levels, PipelineError> {
-    let lod = lod_with(&framed.model, &framed.local_pois, &opts.lod, progress)?;
-    levels_of(framed, opts, lod, progress)
+    let (model, pois) = (&*framed.model, &framed.local_pois[..]);
+    let beside = opts
+        .bound
+        .as_ref()
+        .filter(|_| model.assets.len() < GIVE_BACK_MIN_ASSETS);
+    let Some(spec) = beside else {
+        let lod = lod_with(model, pois, &opts.lod, progress)?;
+        return levels_of(framed, opts, lod, progress);
+    };
+    let (lod, full) = rayon::join(
+        || lod_with(model, pois, &opts.lod, progress),
+        || full_of(model, pois, spec),
+    );
+    let lod = lod?;
+    finish(framed, opts, lod, Some(full?), progress)
+}
+
+/// [`full_answers`] of `spec` at `pois`.
+fn full_of<'a>(
+    model: &CityModel,
+    pois: &'a [crate::model::Poi],
+    spec: &'a BoundSpec,
+) -> Result<FullAnswers<'a>, crate::lod::bound::BoundError> {
+    let (sun, irr) = (spec.sun.as_ref(), spec.irradiance.as_ref());
+    full_answers(model, pois, &spec.options, sun, irr)
 }
 
 /// The rest of [`levels`] for a selection made elsewhere (e.g. the levels of every shard of
@@ -87,7 +117,18 @@ pub fn levels(
 pub fn levels_of(
     framed: &Framed<'_>,
     opts: &LevelsOptions,
+    lod: LodResult,
+    progress: &dyn Progress,
+) -> Result<Levels, PipelineError> {
+    finish(framed, opts, lod, None, progress)
+}
+
+/// [`levels_of`] with the bound's full-model side `full` when it was made already.
+fn finish(
+    framed: &Framed<'_>,
+    opts: &LevelsOptions,
     mut lod: LodResult,
+    full: Option<FullAnswers<'_>>,
     progress: &dyn Progress,
 ) -> Result<Levels, PipelineError> {
     let model: &CityModel = &framed.model;
@@ -102,15 +143,11 @@ pub fn levels_of(
             pois.len() as u64,
             0,
             || {
-                bound_with(
-                    model,
-                    &lod.rough,
-                    &lod.selection.levels,
-                    pois,
-                    &spec.options,
-                    spec.sun.as_ref(),
-                    spec.irradiance.as_ref(),
-                )
+                let full = match full {
+                    Some(f) => f,
+                    None => full_of(model, pois, spec)?,
+                };
+                bound_against(model, &lod.rough, &lod.selection.levels, &full)
             },
         )?;
         bound_report = Some(BoundReport::new(&b, &spec.options));
@@ -143,6 +180,39 @@ mod tests {
     use crate::pipeline::test_support::*;
     use crate::pipeline::{frame, read_inputs, FrameOptions};
     use std::sync::atomic::Ordering;
+
+    /// The bound's full-model side traced beside the selection ([`levels`]) gives the
+    /// levels and report of the same bound after it ([`levels_of`]).
+    #[test]
+    fn the_bound_beside_the_selection_gives_the_bound_after_it() {
+        let mut inputs =
+            read_inputs(&[fixture()], &crate::model::runtime::progress::Silent).unwrap();
+        let pois = grid_pois(&inputs.model, 4);
+        let framed = frame(&mut inputs.model, pois, &FrameOptions::default()).unwrap();
+        let site = crate::solar::Site::new(41.39, 2.17);
+        let opts = LevelsOptions {
+            lod: LodOptions::default(),
+            bound: Some(BoundSpec {
+                options: BoundOptions {
+                    max_svf_error: Some(0.001),
+                    max_sun_error: Some(0.001),
+                    svf_rays: 2000,
+                    ..Default::default()
+                },
+                sun: Some(SunTable::year(2025, 180, &site).unwrap()),
+                irradiance: None,
+            }),
+        };
+        let silent = &crate::model::runtime::progress::Silent;
+        let beside = levels(&framed, &opts, silent).unwrap();
+        let lod = lod_with(&framed.model, &framed.local_pois, &opts.lod, silent).unwrap();
+        let after = levels_of(&framed, &opts, lod, silent).unwrap();
+        assert_eq!(beside.levels(), after.levels());
+        assert_eq!(beside.bound, after.bound);
+        let b = beside.bound.as_ref().unwrap();
+        assert_eq!(b.pois.len(), 4);
+        assert!(b.pois.iter().all(|p| p.sun_hours_error.is_some()));
+    }
 
     #[test]
     fn selection_stops_when_cancelled() {

@@ -106,6 +106,12 @@ impl SkyBundles {
         self.reseeded(poi.ray_seed(self.seed))
     }
 
+    /// The local directions of the projected-area bundle of one POI: those of
+    /// [`SkyBundles::for_poi`], without sampling its solid-angle bundle.
+    pub fn projected_dirs_for(&self, poi: &Poi) -> Vec<DVec3> {
+        self.projected.sample(poi.ray_seed(self.seed))
+    }
+
     /// Number of rays per bundle.
     pub fn len(&self) -> usize {
         self.projected_dirs.len()
@@ -187,6 +193,21 @@ pub fn sky_view(
 mod tests {
     use super::*;
     use std::f64::consts::{FRAC_PI_2, PI};
+
+    #[test]
+    fn a_poi_s_projected_dirs_are_those_of_its_bundles() {
+        let b = SkyBundles::new(500, 3).unwrap();
+        for id in ["a", "B4_2_1_o6", ""] {
+            let poi = Poi {
+                id: id.into(),
+                position: DVec3::new(1.0, 2.0, 3.0),
+                normal: None,
+            };
+            let dirs = b.projected_dirs_for(&poi);
+            assert_eq!(dirs, b.for_poi(&poi).projected_dirs());
+            assert_ne!(dirs, b.projected_dirs());
+        }
+    }
 
     #[test]
     fn default_bundles_are_the_cli_s() {

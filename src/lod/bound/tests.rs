@@ -162,6 +162,33 @@ fn sun_hours_bound() {
     assert!(p.sun_hours_full.unwrap() > 0.0);
 }
 
+/// The full model's answers made first ([`full_answers`], before any level is known) and
+/// used for two sets of levels give what [`bound`] gives; against another model they are
+/// refused.
+#[test]
+fn full_answers_made_first_give_the_bound_of_any_levels() {
+    let (m, rough, _) = scene();
+    let pois = [poi()];
+    let opts = svf_opts(0.01, 3000);
+    let full = full_answers(&m, &pois, &opts, None, None).unwrap();
+    for levels in [vec![1, 0], vec![0, 0], vec![2, 2]] {
+        let once = bound_against(&m, &rough, &levels, &full).unwrap();
+        assert_eq!(
+            once,
+            bound(&m, &rough, &levels, &pois, &opts, None).unwrap()
+        );
+    }
+    assert!(format!("{full:?}").contains("rays"));
+    let mut other = m.clone();
+    other.assets.pop();
+    let e = bound_against(&other, &rough[..1], &[1], &full).unwrap_err();
+    assert!(matches!(e, BoundError::Mismatch { assets: 2, .. }), "{e}");
+    assert!(matches!(
+        full_answers(&m, &pois, &svf_opts(-1.0, 100), None, None),
+        Err(BoundError::BadBound(_))
+    ));
+}
+
 /// The lazy reference trace gives every ray the answer of the whole-model scene (same
 /// asset, same distance to the bit) on a synth district with low sun rays, while it
 /// builds only part of the model.
