@@ -20,6 +20,7 @@
 mod error;
 mod lod;
 pub mod lod_write;
+pub mod report;
 pub mod weather;
 
 pub use error::{Error, Result};
