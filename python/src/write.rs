@@ -7,17 +7,19 @@ use pyo3::prelude::*;
 use skylod::batch::inputs::{expand, Input};
 use skylod::batch::outputs::{create_parent, plan, Plan, Targets};
 use skylod::citygml::merge::merge_named;
-use skylod::citygml::write::{write_document, WriteOptions};
-use skylod::citygml::{read_file_observed, ReadOptions};
-use skylod::export::{Content, Format};
+use skylod::citygml::write::WriteOptions;
+use skylod::export::citygml_from_cityjson::TargetVersion;
+use skylod::export::Format;
 use skylod::lod::rough::RoughOptions;
 use skylod::lod::select::SelectOptions;
 use skylod::lod::LodOptions;
 use skylod::model::crs::model_site;
 use skylod::model::runtime::progress::Silent;
-use skylod::output::report::{Guarantee, Timings};
+use skylod::output::report::Guarantee;
 use skylod::output::stats::{FileStats, Stats, StatsOutput};
+use skylod::pipeline::batch::convert::{convert_file, file_stats, ConvertOptions};
 use skylod::pipeline::session::bound_plan::BoundRequest;
+use skylod::pipeline::session::report::RunMs;
 use skylod::pipeline::session::site::SiteError;
 use skylod::pipeline::session::weather::SunSite;
 use skylod::pipeline::{write_all, BoundSpec, LevelsOptions};
@@ -168,15 +170,16 @@ pub fn stats(
             if p.is_cancelled() {
                 return Err("cancelled while reading inputs".into());
             }
-            match read_file_observed(&i.path, &ReadOptions::default(), &|_| ()) {
-                Ok(mut m) => {
-                    if let Some(c) = &source {
-                        m.files
-                            .iter_mut()
-                            .for_each(|f| f.srs_name = Some(c.name.clone()));
-                    }
-                    files.push(FileStats::new(i.path.display().to_string(), Stats::of(&m)));
-                }
+            let read = file_stats(
+                &i.path,
+                source.as_ref(),
+                (None, false),
+                &Silent,
+                &|_| (),
+                false,
+            );
+            match read {
+                Ok(r) => files.push(FileStats::new(i.path.display().to_string(), r.stats)),
                 Err(e) => failed.push(e),
             }
             p.advance(Stage::Read, 1, 0, None);
@@ -246,21 +249,9 @@ pub fn lod(
         let names: Vec<PathBuf> = model.files.iter().map(|f| f.path.clone()).collect();
         let parts: Vec<PathBuf> = targets.todo.iter().map(|(_, o)| o.clone()).collect();
         merge(&plan, &parts, &names, &wopts)?;
-        let result = &lv.lod;
-        let timings = Timings {
-            read: l.read_ms,
-            rough: result.rough_s * 1e3,
-            bvh: result.bvh_s * 1e3,
-            select: result.select_s * 1e3,
-            write: ms(t_write),
-            total: ms(t_all),
-        };
-        let mut report = study.report(&lv, &lod_opts, timings);
-        for (f, shown, dropped) in written {
-            let in_file = model.buildings.iter().filter(|b| b.file == f).count();
-            report.record_output(f, shown, in_file, dropped);
-        }
-        report.guarantee = guarantee;
+        let (read, write, total) = (l.read_ms, ms(t_write), ms(t_all));
+        let run = RunMs { read, write, total };
+        let report = study.lod_report(&lv, &lod_opts, run, guarantee, written);
         serde_json::to_string_pretty(&report).map_err(|e| e.to_string())
     })
 }
@@ -294,17 +285,15 @@ pub fn convert(
                 ));
             }
             let input = &inputs[*k].path;
-            let model = read_file_observed(input, &ReadOptions::default(), &|_| ())
-                .map_err(|e| message(&e))?;
-            if targets.mirror {
-                create_parent(out).map_err(|e| message(&e))?;
-            }
-            let w = &targets.write_opts;
-            match fmt {
-                Format::CityGml => write_document(&model, 0, Vec::new(), out, w).map(|_| ()),
-                f => skylod::export::write(f, &model, 0, Content::Full, out, w).map(|_| ()),
-            }
-            .map_err(|e| message(&e))?;
+            // As `skylod convert` (CityJSON inputs to CityGML feature by feature).
+            let o = ConvertOptions {
+                format: fmt,
+                version: TargetVersion::V2_0,
+                write: &targets.write_opts,
+                mirror: targets.mirror,
+                chunk: None,
+            };
+            convert_file(input, out, &o, &Silent, &|_| ()).map_err(|e| message(&e))?;
             parts.push(out.clone());
             names.push(input.clone());
             p.advance(Stage::Read, 1, 0, None);

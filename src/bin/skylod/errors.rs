@@ -7,6 +7,8 @@ use skylod::citygml::WriteError;
 use skylod::crs::FrameWarning;
 use skylod::io::TargetError;
 use skylod::lod::bound::BoundError;
+use skylod::pipeline::batch::convert::ConvertError;
+use skylod::pipeline::batch::synth::SynthFilesError;
 use skylod::pipeline::{PipelineError, PoiCrsError};
 use skylod::poi::checks::TrustError;
 use skylod::poi::region::RegionError;
@@ -42,6 +44,12 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
         return trust(t);
     }
     if let Some(w) = e.downcast_ref::<WriteError>() {
+        return write(w);
+    }
+    if let Some(ConvertError::Write(w)) = e.downcast_ref::<ConvertError>() {
+        return write(w);
+    }
+    if let Some(SynthFilesError::Write(w)) = e.downcast_ref::<SynthFilesError>() {
         return write(w);
     }
     if let Some(RegionError::DuplicateId(id)) = e.downcast_ref::<RegionError>() {

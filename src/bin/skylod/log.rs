@@ -87,11 +87,6 @@ pub fn on_interrupt() {
     }
 }
 
-/// Whether a signal asked the run to stop (commands that loop over files check it per file).
-pub fn cancelled() -> bool {
-    interrupted().load(Ordering::Relaxed)
-}
-
 /// The exit code a command stopped by a signal ends with: 128 + the signal's number for
 /// SIGTERM (143) and SIGHUP (129), as a shell reports a process the signal killed; `None` when
 /// no signal came or it was Ctrl-C (whose cancellation is a fatal error, exit 2).

@@ -10,11 +10,11 @@ use skylod::batch::outputs::{PlanError, Targets};
 use skylod::batch::run::{Batch, Said};
 use skylod::batch::shard::Shard;
 use skylod::citygml::write::WriteOptions;
-use skylod::export::{Content, ExportSummary, Format};
+use skylod::export::{Content, Format};
 use skylod::model::CityModel;
 use std::path::{Path, PathBuf};
 
-pub use skylod::batch::run::{size_note, Done};
+pub use skylod::batch::run::Done;
 
 /// A layout error in the flags' words (`-o DIR`, `-o FILE`).
 pub fn usage(e: PlanError) -> anyhow::Error {
@@ -89,7 +89,7 @@ fn refused_said(
 }
 
 /// Write file `file` of `model` in `format` (not CityGML: [`skylod::export::write`]) and
-/// print its summary line.
+/// print its summary line ([`skylod::export::ExportSummary::describe`]).
 pub fn export(
     format: Format,
     model: &CityModel,
@@ -99,23 +99,9 @@ pub fn export(
     wopts: &WriteOptions,
 ) -> anyhow::Result<()> {
     let s = skylod::export::write(format, model, file, content, out, wopts)?;
-    summary!("{}", describe(&s, format, model, file, out));
+    let input = model.files.get(file).map_or(Path::new(""), |f| &f.path);
+    summary!("{}", s.describe(format, input, out));
     Ok(())
-}
-
-/// [`skylod::export::ExportSummary::describe`] of file `file` of `model`.
-pub fn describe(
-    s: &ExportSummary,
-    format: Format,
-    model: &CityModel,
-    file: usize,
-    out: &Path,
-) -> String {
-    let input = model
-        .files
-        .get(file)
-        .map_or(Path::new(""), |f| f.path.as_path());
-    s.describe(format, input, out)
 }
 
 /// Create the parent directory of an output path (nothing for `-`).
@@ -183,37 +169,19 @@ pub fn per_input_jobs(
     jobs: Option<&crate::args::jobs::JobsArgs>,
     edit: &Edit<'_>,
 ) -> anyhow::Result<crate::Outcome> {
-    use rayon::prelude::*;
     let t0 = std::time::Instant::now();
     let shard = a.shard.resolve()?;
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&a.inputs)?;
     let out = (a.output.as_path(), Some(Format::CityGml), a.overwrite);
     let mut b = batch(cmd, &inputs, out, true, shard)?;
     b.counts_polygons = false;
-    let t = &b.targets;
-    let work = |(k, out): &(usize, PathBuf)| {
-        let input = inputs[*k].path.clone();
-        let parent = if t.mirror { create_parent(out) } else { Ok(()) };
-        let r = parent.and_then(|()| {
-            let line = edit(&input, out, b.shown(out), &t.write_opts)
-                .map_err(|e| anyhow!(crate::errors::cli_text(&e)))?;
-            Ok(Done {
-                line: Some(line),
-                ..Done::default()
-            })
-        });
-        (input, out.clone(), r)
+    let each = |i: &Path, o: &Path, shown: &Path, w: &WriteOptions| {
+        edit(i, o, shown, w).map_err(|e| anyhow!(crate::errors::cli_text(&e)))
     };
     let results = match jobs {
-        Some(j) => j.install(|| t.todo.par_iter().map(work).collect())?,
-        None => t.todo.iter().map(work).collect(),
+        Some(j) => j.install(|| b.run_each(&inputs, true, &each))?,
+        None => b.run_each(&inputs, false, &each),
     };
-    Ok(finish(
-        &b,
-        cmd,
-        results,
-        |e| e.to_string(),
-        inputs.len(),
-        t0,
-    ))
+    let failure = |e: &anyhow::Error| e.to_string();
+    Ok(finish(&b, cmd, results, failure, inputs.len(), t0))
 }

@@ -4,6 +4,7 @@
 //!
 //! * [`inputs`]: arguments (files, directories, globs, `-`) → the input files, with the
 //!   relative path each mirrors under `-o DIR`.
+//! * [`convert`]: one input of `stats` and `convert`, streamed where it is large.
 //! * [`outputs`]: an output name → one output per input, a mirrored tree, or a merge.
 //! * [`run`]: a batch that writes per input: its outputs planned, its inputs' results
 //!   gathered and merged, what to tell the user returned (never printed).
@@ -11,7 +12,9 @@
 //! * [`shard_levels`]: the levels files `lod` shards write and `--reduce` combines.
 //! * [`reduce`]: the levels files of every shard → the levels one serial run selects.
 //! * [`scene_radius`]: file envelopes → the inputs within `--scene-radius` of the POIs.
+//! * [`synth`]: the files of `synth`, the model and its POIs.
 
+pub mod convert;
 pub mod inputs;
 pub mod outputs;
 pub mod reduce;
@@ -19,3 +22,4 @@ pub mod run;
 pub mod scene_radius;
 pub mod shard;
 pub mod shard_levels;
+pub mod synth;

@@ -5,7 +5,7 @@
 //! to tell the user ([`Said`]), in order.
 
 use super::inputs::Input;
-use super::outputs::{plan, Plan, PlanError, Staging, Targets};
+use super::outputs::{create_parent, plan, Plan, PlanError, Staging, Targets};
 use super::shard::Shard;
 use crate::export::Format;
 use crate::io::citygml::merge::{merge_named, MergeSummary};
@@ -55,6 +55,10 @@ pub struct Done {
     pub polygons: (usize, usize),
 }
 
+/// What [`Batch::run_each`] runs on one input: `(input, output, shown, options)` to its
+/// line.
+pub type Each<'a, E> = dyn Fn(&Path, &Path, &Path, &WriteOptions) -> Result<String, E> + Sync + 'a;
+
 /// The end of a batch: what to say, and how many inputs failed.
 #[derive(Debug, Clone, Default)]
 pub struct Finished {
@@ -100,6 +104,37 @@ impl Batch {
         match (&self.targets.staging, &self.plan) {
             (Some(_), Plan::Merge(target)) => target,
             _ => out,
+        }
+    }
+
+    /// Run `each(input, output, shown, options)` on every input to do (shown: the name the
+    /// output is said by, [`Batch::shown`]), its line its result: in parallel on the current
+    /// rayon pool when `parallel`, else one after the other; a mirrored output's directory
+    /// made first (its error the input's). The results in input order, for
+    /// [`Batch::finish`].
+    pub fn run_each<E: From<PlanError> + Send>(
+        &self,
+        inputs: &[Input],
+        parallel: bool,
+        each: &Each<'_, E>,
+    ) -> Vec<(PathBuf, PathBuf, Result<Done, E>)> {
+        use rayon::prelude::*;
+        let t = &self.targets;
+        let work = |(k, out): &(usize, PathBuf)| {
+            let input = inputs[*k].path.clone();
+            let parent = if t.mirror { create_parent(out) } else { Ok(()) };
+            let r = parent.map_err(E::from).and_then(|()| {
+                let line = each(&input, out, self.shown(out), &t.write_opts)?;
+                Ok(Done {
+                    line: Some(line),
+                    ..Done::default()
+                })
+            });
+            (input, out.clone(), r)
+        };
+        match parallel {
+            true => t.todo.par_iter().map(work).collect(),
+            false => t.todo.iter().map(work).collect(),
         }
     }
 
@@ -390,6 +425,45 @@ mod tests {
         // Nothing to merge: every input failed, the target is not written.
         let (ok, said) = merge_parts(&[], &[], &dir.path().join("x.gml"), &b.wopts, 2);
         assert!(!ok && matches!(&said[0], Said::Error(e) if e.starts_with("nothing to merge")));
+    }
+
+    #[test]
+    fn each_input_run_in_order_mirrored_its_error_its_own() {
+        let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml");
+        let dir = tempfile::tempdir().unwrap();
+        let ins = [dir.path().join("a.gml"), dir.path().join("b.gml")];
+        for i in &ins {
+            std::fs::copy(&fix, i).unwrap();
+        }
+        let inputs: Vec<Input> = ins.iter().map(|p| input(p)).collect();
+        let out = dir.path().join("out/deep");
+        let b = Batch::new(&inputs, (&out, None, false), false, None).unwrap();
+        assert!(b.targets.mirror);
+        let each = |i: &Path, o: &Path, shown: &Path, _: &WriteOptions| {
+            if i.ends_with("b.gml") {
+                return Err(PlanError::Format(crate::export::UnknownFormat("b".into())));
+            }
+            std::fs::copy(i, o).map_err(|e| {
+                PlanError::Format(crate::export::UnknownFormat(e.to_string().into()))
+            })?;
+            Ok(format!("{} -> {}", i.display(), shown.display()))
+        };
+        for parallel in [false, true] {
+            let r = b.run_each(&inputs, parallel, &each);
+            assert_eq!(r.len(), 2);
+            assert_eq!((&r[0].0, &r[1].0), (&ins[0], &ins[1]), "input order");
+            let done = r[0].2.as_ref().unwrap();
+            assert_eq!(
+                done.line.as_deref(),
+                Some(format!("{} -> {}", ins[0].display(), r[0].1.display()).as_str())
+            );
+            assert!(
+                r[0].1.starts_with(&out) && r[0].1.exists(),
+                "mirrored, made"
+            );
+            assert!(r[1].2.is_err());
+            std::fs::remove_file(&r[0].1).unwrap();
+        }
     }
 
     #[test]

@@ -22,6 +22,7 @@ mod error;
 mod lod;
 pub mod lod_write;
 pub mod pictures;
+pub mod report;
 pub mod site;
 pub mod tracing;
 pub mod weather;

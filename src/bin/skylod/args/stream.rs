@@ -15,23 +15,9 @@ pub struct StreamArgs {
 }
 
 impl StreamArgs {
-    /// The chunk size to stream `path` with, or `None` to read it whole (small files and
-    /// standard input are read whole, and CityJSON). A gzip-compressed file counts as ten times its size
-    /// (CityGML compresses 10 to 20 times): it is streamed from a temporary file.
+    /// The chunk size to stream `path` with, or `None` to read it whole
+    /// ([`skylod::pipeline::batch::convert::chunk_for`]).
     pub fn chunk_for(&self, path: &Path) -> Option<u64> {
-        let len = std::fs::metadata(path).ok()?.len();
-        let mut head = [0u8; 2];
-        let gzip = std::fs::File::open(path)
-            .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
-            .is_ok()
-            && skylod::io::is_gzip(&head);
-        let len = if gzip { len.saturating_mul(10) } else { len };
-        // CityJSON is read whole (its reader is not the chunked CityGML one).
-        let mut opened = skylod::citygml::source::open(path).ok()?.0;
-        let json = std::io::BufRead::fill_buf(&mut opened)
-            .map(|head| skylod::cityjson::sniff(head) == skylod::cityjson::Sniffed::Json)
-            .unwrap_or(false);
-        (!json && self.stream_chunk > 0 && len >= self.stream_chunk.saturating_mul(4))
-            .then_some(self.stream_chunk)
+        skylod::pipeline::batch::convert::chunk_for(path, self.stream_chunk)
     }
 }

@@ -21,7 +21,6 @@ pub mod lod;
 pub mod reproject;
 pub mod rough;
 pub mod stats;
-pub mod stream;
 pub mod subset;
 pub mod sun_hours;
 pub mod svf;

@@ -1,11 +1,11 @@
-//! `skylod stats`.
+//! `skylod stats`: each input's counts from [`skylod::pipeline::batch::convert::file_stats`].
 
 use crate::args::crs::SourceCrsArgs;
 use crate::commands::out_err;
 use crate::Outcome;
 use rayon::prelude::*;
-use skylod::citygml::{read_file_observed, ReadOptions};
 use skylod::output::stats::{FileStats, Stats, StatsOutput};
+use skylod::pipeline::batch::convert::{file_stats, StatsRead};
 use skylod::runtime::progress::{Progress, Stage};
 use std::io::Write;
 use std::path::PathBuf;
@@ -52,28 +52,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         .filter_map(|p| p.metadata().ok())
         .map(|m| m.len());
     progress.start(Stage::Read, args.inputs.len() as u64, bytes.sum());
+    let (crs, note) = (args.crs.source_crs.as_ref(), |l: String| {
+        crate::log::info!("{l}")
+    });
     let results: Vec<_> = args.jobs.install(|| {
-        args.inputs
-            .par_iter()
+        (args.inputs.par_iter())
             .map(|p| {
-                let passed = |n| progress.advance(Stage::Read, 0, n, None);
-                let r = match args.stream.chunk_for(p) {
-                    Some(chunk) => {
-                        crate::commands::stream::stats(p, &args.crs, args.verbose, chunk, &passed)
-                    }
-                    None => None,
-                };
-                let r = r.map(Ok).unwrap_or_else(|| {
-                    read_file_observed(p, &ReadOptions::default(), &passed).map(|mut m| {
-                        args.crs.apply(&mut m);
-                        let stats = Stats::of(&m);
-                        let warnings = std::mem::take(&mut m.warnings);
-                        if single {
-                            std::mem::forget(m);
-                        }
-                        (stats, warnings)
-                    })
-                });
+                let chunk = (args.stream.chunk_for(p), args.verbose);
+                let r = file_stats(p, crs, chunk, &progress, &note, single);
                 progress.advance(Stage::Read, 1, 0, None);
                 r
             })
@@ -84,7 +70,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let mut failed = false;
     for (path, r) in args.inputs.iter().zip(results) {
         match r {
-            Ok((s, warnings)) => {
+            Ok(StatsRead { stats: s, warnings }) => {
                 if args.verbose {
                     for w in &warnings {
                         crate::log::warning!("warning: {w}");

@@ -1,10 +1,9 @@
-//! `skylod synth`.
+//! `skylod synth`: the files written by [`skylod::pipeline::batch::synth`].
 
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
-use skylod::citygml::WriteError;
-use skylod::synth::{generate, pois, pois_path, write_pois_csv, Preset, SynthOptions};
+use skylod::pipeline::batch::synth::write_synth;
+use skylod::synth::{Preset, SynthOptions};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -65,63 +64,17 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         opts.blocks_x = x.trim().parse().with_context(|| format!("--blocks {b}"))?;
         opts.blocks_y = y.trim().parse().with_context(|| format!("--blocks {b}"))?;
     }
-    let wopts = WriteOptions {
-        overwrite: args.overwrite,
-        ..Default::default()
-    };
-    let csv = match &args.pois_output {
-        Some(p) => Some(p.clone()),
-        None if is_stdout(&args.output) => None,
-        None => Some(pois_path(&args.output)),
-    };
-    if csv.as_deref().is_some_and(is_stdout) && is_stdout(&args.output) {
-        bail!("the model and the POIs cannot both go to standard output");
-    }
-    check_target(&args.output, &wopts, std::iter::empty())?;
-    if let Some(csv) = &csv {
-        check_target(csv, &wopts, std::iter::empty())?;
-    }
     let t = Instant::now();
-    let mut summary = None;
-    atomic_write(&args.output, |w| {
-        let s = generate(&opts, w).map_err(|e| WriteError::Io {
-            file: args.output.clone(),
-            source: std::io::Error::other(e.to_string()),
-        })?;
-        let n = s.bytes;
-        summary = Some(s);
-        Ok(n)
-    })?;
-    let points = pois(&opts);
-    if let Some(csv) = &csv {
-        atomic_write(csv, |w| {
-            write_pois_csv(&points, w).map_err(|e| WriteError::Io {
-                file: csv.clone(),
-                source: std::io::Error::other(e.to_string()),
-            })?;
-            Ok(0)
-        })?;
-    }
-    let dt = t.elapsed().as_secs_f64();
-    if let Some(s) = summary {
-        crate::log::summary!(
-            "{}: {} buildings, {} polygons, {} windows, {} installations, {:.1} MB{} in {:.2} s; {} POIs -> {}",
-            args.output.display(),
-            s.buildings,
-            s.polygons,
-            s.windows,
-            s.installations_total(),
-            std::fs::metadata(&args.output).map_or(s.bytes, |m| m.len()) as f64 / 1e6,
-            if args.output.extension().is_some_and(|e| e == "gz") {
-                " (compressed)"
-            } else {
-                ""
-            },
-            dt,
-            points.len(),
-            csv.as_ref()
-                .map_or("not written (give --pois-output)".into(), |c| c.display().to_string())
-        );
-    }
+    let w = write_synth(
+        &opts,
+        &args.output,
+        args.pois_output.as_deref(),
+        args.overwrite,
+    )?;
+    let csv = (w.csv.as_ref()).map_or("not written (give --pois-output)".into(), |c| {
+        c.display().to_string()
+    });
+    let line = w.line(&args.output, t.elapsed().as_secs_f64());
+    crate::log::summary!("{line}; {} POIs -> {csv}", w.pois);
     Ok(Outcome::Ok)
 }

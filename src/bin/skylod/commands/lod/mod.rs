@@ -1,9 +1,8 @@
 //! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs, step by step:
 //! outputs laid out and checked ([`layout`]), inputs read, levels selected (or reduced from
 //! the shards' levels files, [`shard`]), the error bound, outputs written
-//! ([`skylod::session::lod_write`]) and the report ([`report`]).
+//! ([`skylod::session::lod_write`]) and the report ([`skylod::session::report`]).
 
-pub mod report;
 pub mod shard;
 
 use crate::args::output::OutputArgs;
@@ -13,10 +12,12 @@ use crate::args::select::SelectArgs;
 use crate::commands::ms;
 use crate::log::{error, summary};
 use crate::Outcome;
+use anyhow::Context;
 use skylod::batch::inputs::Input;
+use skylod::citygml::write::atomic_write_bytes;
 use skylod::lod::LodOptions;
-use skylod::output::report::Guarantee;
-use skylod::pipeline::{Levels, LevelsOptions};
+use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
+use skylod::pipeline::LevelsOptions;
 use skylod::session::lod_write::{check_report, FileOutcome, LodLayout, ReportTargetError};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -91,7 +92,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         None => study.levels(&opts, &progress)?,
     };
     session.warn_flags(&lv.lod.flags);
-    if !bound_holds(&lv, &guarantee) {
+    let (said, failed) = bound_lines(&lv, &guarantee);
+    said.iter().for_each(|l| summary!("{l}"));
+    if let Some(e) = failed {
+        error!("{e}");
         return Ok(Outcome::SomeFailed);
     }
     // Written geometry and the report are in the input's CRS.
@@ -104,17 +108,24 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     crate::outputs::say(w.merge);
-    let (written, write_failed) = (w.written, w.failed);
-    let timings = report::timings(&lv, session.read_ms, ms(t_write), t_all);
-    let mut report = study.report(&lv, &opts.lod, timings);
-    report.guarantee = guarantee;
-    report::finish(&mut report, study, &lv, written, args.region.active());
-    report::write(&args, &report)?;
+    let written = (w.written.into_iter().enumerate())
+        .filter_map(|(f, w)| w.map(|(path, dropped)| (f, path, dropped)));
+    let (read, write, total) = (session.read_ms, ms(t_write), ms(t_all));
+    let run = RunMs { read, write, total };
+    let report = study.lod_report(&lv, &opts.lod, run, guarantee, written);
+    for l in lod_lines(&report, &lv, study.pois().len(), args.region.active()) {
+        summary!("{l}");
+    }
+    if let Some(path) = &args.report {
+        let mut json = serde_json::to_vec_pretty(&report)?;
+        json.push(b'\n');
+        atomic_write_bytes(path, &json).context("writing the report")?;
+    }
     // The process ends here: handing a city's model back to the allocator piece by piece
     // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
     std::mem::forget(report);
     std::mem::forget(lv);
-    let failed = session.failed || write_failed;
+    let failed = session.failed || w.failed;
     let crate::args::tracing::Session { study, _spool, .. } = session;
     std::mem::forget(study);
     Ok(Outcome::failed_if(failed))
@@ -134,28 +145,4 @@ fn layout(args: &Args, inputs: &[Input]) -> anyhow::Result<LodLayout> {
         })?;
     }
     Ok(layout)
-}
-
-/// The error bound's lines, or why it cannot be met (nothing is written then): false.
-fn bound_holds(lv: &Levels, guarantee: &Guarantee) -> bool {
-    summary!("{}", guarantee.line());
-    let Some(b) = &lv.bound else { return true };
-    summary!(
-        "error bound: {} promotion(s) in {} round(s), largest SVF error {:.3}%, {:.0} ms",
-        b.promotions.len(),
-        b.rounds,
-        100.0 * b.pois.iter().map(|p| p.svf_error).fold(0.0, f64::max),
-        lv.bound_s * 1e3
-    );
-    let irr = b.pois.iter().filter_map(|p| p.irradiance_error);
-    if let Some(e) = irr.reduce(f64::max) {
-        summary!("error bound: largest irradiation error {:.3}%", 100.0 * e);
-    }
-    if !b.met {
-        error!(
-            "the error bound cannot be met at these POIs (nothing written):\n{}",
-            b.failing_lines()
-        );
-    }
-    b.met
 }

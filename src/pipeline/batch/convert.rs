@@ -1,0 +1,450 @@
+//! One input of `stats` and of `convert`: read whole, or a chunk of whole top-level members
+//! at a time where the file is large ([`chunk_for`], [`crate::io::citygml::read::stream`]:
+//! the same output as from the whole model, memory that follows the chunk). Where the
+//! stream declines, the file is read whole and the caller is told why (`note`). Nothing is
+//! printed: the bytes read go to a [`Progress`] ([`Stage::Read`]).
+
+use super::outputs::{create_parent, PlanError};
+use super::run::{size_note, Done};
+use crate::export::citygml_from_cityjson::{
+    citygml_from_cityjson, is_json_file, FromCityJsonError, TargetVersion,
+};
+use crate::export::report::stats::Stats;
+use crate::export::{Content, Format};
+use crate::io::citygml::read::{read_file_observed, stream, ReadOptions, Streamed};
+use crate::io::citygml::write::{write_document, write_document_streamed, WriteOptions};
+use crate::io::citygml::{ReadError, WriteError};
+use crate::model::crs::Crs;
+use crate::model::runtime::progress::{Progress, Stage};
+use crate::model::{shown, Warning};
+use std::path::Path;
+
+/// The chunk size to stream `path` with (`chunk` bytes), or `None` to read it whole: small
+/// files (under four chunks), standard input, CityJSON, and every file when `chunk` is 0. A
+/// gzip-compressed file counts as ten times its size (CityGML compresses 10 to 20 times): it
+/// is streamed from a temporary file.
+pub fn chunk_for(path: &Path, chunk: u64) -> Option<u64> {
+    let len = std::fs::metadata(path).ok()?.len();
+    let mut head = [0u8; 2];
+    let gzip = std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
+        .is_ok()
+        && crate::io::is_gzip(&head);
+    let len = if gzip { len.saturating_mul(10) } else { len };
+    // CityJSON is read whole (its reader is not the chunked CityGML one).
+    let mut opened = crate::io::citygml::source::open(path).ok()?.0;
+    let json = std::io::BufRead::fill_buf(&mut opened)
+        .map(|head| crate::io::cityjson::sniff(head) == crate::io::cityjson::Sniffed::Json)
+        .unwrap_or(false);
+    (!json && chunk > 0 && len >= chunk.saturating_mul(4)).then_some(chunk)
+}
+
+/// The line that says a file meant to be streamed was read whole, and why.
+fn read_whole(input: &Path, why: &str) -> String {
+    format!("{}: read whole ({why})", shown(input))
+}
+
+/// The statistics of one file ([`file_stats`]).
+#[derive(Debug)]
+pub struct StatsRead {
+    /// Its counts (the `srsName` replaced by the source CRS when one is given).
+    pub stats: Stats,
+    /// Its warnings (streamed: only when asked for, else only counted).
+    pub warnings: Vec<Warning>,
+}
+
+/// The statistics of the file at `path` ([`Stats::of`] its model, with `source_crs` as the
+/// `srsName` of every file when given): streamed a `chunk` at a time when given (the same
+/// counts as the whole read; `warnings`: keep the warnings, else count them only), else read
+/// whole (`note`: the line that says why a file meant to be streamed was, said before it
+/// is). The bytes read advance [`Stage::Read`] of `progress`. `leak`: the process ends soon, so the model read
+/// whole is not handed back to the allocator piece by piece (a fifth of the run on a 3 MB
+/// tile) but left to the end of the process.
+///
+/// # Errors
+/// The file could not be read ([`ReadError`]; a stream that fails is retried whole).
+pub fn file_stats(
+    path: &Path,
+    source_crs: Option<&Crs>,
+    (chunk, warnings): (Option<u64>, bool),
+    progress: &dyn Progress,
+    note: &(dyn Fn(String) + Sync),
+    leak: bool,
+) -> Result<StatsRead, ReadError> {
+    let passed = |n| progress.advance(Stage::Read, 0, n, None);
+    if let Some(chunk) = chunk {
+        match streamed_stats(path, source_crs, warnings, chunk, &passed) {
+            Some(Ok(s)) => return Ok(s),
+            Some(Err(why)) => note(read_whole(path, &why)),
+            None => {}
+        }
+    }
+    let mut m = read_file_observed(path, &ReadOptions::default(), &passed)?;
+    if let Some(c) = source_crs {
+        for f in &mut m.files {
+            f.srs_name = Some(c.name.clone());
+        }
+    }
+    let stats = Stats::of(&m);
+    let warnings = std::mem::take(&mut m.warnings);
+    if leak {
+        std::mem::forget(m);
+    }
+    Ok(StatsRead { stats, warnings })
+}
+
+/// [`file_stats`] from a streamed read: `None` when the stream fails, `Some(Err(why))` when
+/// it declines.
+fn streamed_stats(
+    path: &Path,
+    source_crs: Option<&Crs>,
+    keep: bool,
+    chunk: u64,
+    passed: &(dyn Fn(u64) + Sync),
+) -> Option<Result<StatsRead, String>> {
+    let mut total = Stats::default();
+    let mut warnings = Vec::new();
+    let end = stream(path, &ReadOptions::default(), chunk, passed, |mut c| {
+        total.add(&Stats::of(&c.model));
+        if keep {
+            warnings.append(&mut c.model.warnings);
+        }
+        Ok::<(), ()>(())
+    })
+    .ok()?;
+    let sum = match end {
+        Streamed::Done(sum) => sum,
+        Streamed::Declined(why) => return Some(Err(why)),
+    };
+    sum.patch_warnings(&mut warnings);
+    total.warnings += sum.trailing.len();
+    total.citygml_version = sum.version.map(|v| v.to_string());
+    total.srs_name = match source_crs {
+        Some(c) => Some(c.name.clone()),
+        None => sum.srs_name,
+    };
+    Some(Ok(StatsRead {
+        stats: total,
+        warnings,
+    }))
+}
+
+/// Why one input of [`convert_file`] failed (each in the library's terms; the outputs are
+/// named).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConvertError {
+    /// The input could not be read.
+    #[error(transparent)]
+    Read(#[from] ReadError),
+    /// The output could not be written (a refused target, I/O).
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    /// The output's directory could not be made.
+    #[error(transparent)]
+    Plan(#[from] PlanError),
+    /// A CityJSON input could not be converted to CityGML.
+    #[error(transparent)]
+    FromCityJson(#[from] FromCityJsonError),
+    /// A streamed OBJ or CityJSON output could not be written (`error` is said in the
+    /// message, not kept as a cause).
+    #[error("writing {}: {error}", out.display())]
+    Streamed {
+        /// The output.
+        out: std::path::PathBuf,
+        /// What went wrong.
+        error: WriteError,
+    },
+    /// The caller asked to stop before the input was read.
+    #[error("{}: cancelled before reading", shown(input))]
+    Cancelled {
+        /// The input.
+        input: std::path::PathBuf,
+    },
+}
+
+/// What [`convert_file`] did with one input.
+#[derive(Debug, Default)]
+pub struct Converted {
+    /// Its result in the batch ([`super::run::Batch::finish`] says its line in input order).
+    pub done: Done,
+    /// The line of an OBJ or CityJSON output, to say as soon as it is written.
+    pub written: Option<String>,
+}
+
+/// How [`convert_file`] writes.
+#[derive(Debug, Clone, Copy)]
+pub struct ConvertOptions<'a> {
+    /// The format written.
+    pub format: Format,
+    /// The CityGML version written for a CityJSON input (CityGML inputs keep theirs).
+    pub version: TargetVersion,
+    /// The target checks, envelopes.
+    pub write: &'a WriteOptions,
+    /// Whether the output's directory is made first (`-o DIR`).
+    pub mirror: bool,
+    /// The chunk to stream the input with ([`chunk_for`]), `None` to read it whole.
+    pub chunk: Option<u64>,
+}
+
+/// Read `input` and write it to `out` (`convert`): CityGML written back with its envelopes
+/// recomputed, CityJSON converted to CityGML feature by feature, or OBJ, CityJSON,
+/// CityJSONSeq; streamed when [`ConvertOptions::chunk`] says so (the same bytes).
+/// The bytes of `input` read advance [`Stage::Read`] of `progress` (each pass of a streamed
+/// output for its share, so the total is the file's size); a file meant to be streamed but
+/// read whole is said to `note` first, and is not read once `progress` is cancelled. A
+/// failed write leaves no output or temporary file behind.
+///
+/// # Errors
+/// [`ConvertError`].
+pub fn convert_file(
+    input: &Path,
+    out: &Path,
+    o: &ConvertOptions<'_>,
+    progress: &dyn Progress,
+    note: &(dyn Fn(String) + Sync),
+) -> Result<Converted, ConvertError> {
+    let passed = |n| progress.advance(Stage::Read, 0, n, None);
+    if let Some(chunk) = o.chunk {
+        match convert_streamed(input, out, o, chunk, &passed)? {
+            Ok(c) => return Ok(c),
+            Err(why) => note(read_whole(input, why)),
+        }
+    }
+    if progress.is_cancelled() {
+        return Err(ConvertError::Cancelled {
+            input: input.to_path_buf(),
+        });
+    }
+    convert_whole(input, out, o, &passed)
+}
+
+/// A CityGML output's line: its size, envelopes recomputed, warnings.
+fn document_line(input: &Path, out: &Path, bytes: u64, edits: usize, warnings: usize) -> String {
+    format!(
+        "{} -> {}: {}, {edits} envelope(s) recomputed, {warnings} warning(s)",
+        shown(input),
+        out.display(),
+        size_note(out, bytes),
+    )
+}
+
+/// [`convert_file`] from a streamed read; `Err(why)` where the stream declines.
+fn convert_streamed(
+    input: &Path,
+    out: &Path,
+    o: &ConvertOptions<'_>,
+    chunk: u64,
+    passed: &(dyn Fn(u64) + Sync),
+) -> Result<Result<Converted, &'static str>, ConvertError> {
+    // the bar's share of each pass: OBJ origin 1/2, objects 1/2; CityJSONSeq plan 1/2,
+    // buildings 1/2; CityJSON plan, vertex uses and objects 1/3 each (the passes over the
+    // objects outside buildings, when a file has them, are not counted)
+    let thirds = o.format == Format::CityJson;
+    let pass = |pass, n: u64| {
+        let share = match (thirds, pass) {
+            (false, 0) => n.div_ceil(2),
+            (false, 1) => n / 2,
+            (true, 0) => n.div_ceil(3),
+            (true, 1 | 3) => n / 3,
+            _ => 0,
+        };
+        if share > 0 {
+            passed(share);
+        }
+    };
+    const DECLINED: &str = "the stream declined";
+    if o.mirror {
+        create_parent(out)?;
+    }
+    let ropts = ReadOptions::default();
+    if o.format == Format::CityGml {
+        let Some(d) = write_document_streamed(input, &ropts, chunk, &pass, out, o.write)? else {
+            return Ok(Err(DECLINED));
+        };
+        let (bytes, edits, w) = (d.summary.bytes, d.summary.edits, d.stream.warnings);
+        let done = Done {
+            line: Some(document_line(input, out, bytes, edits, w)),
+            warnings: w,
+            polygons: (d.polygons, d.polygons),
+        };
+        return Ok(Ok(Converted {
+            done,
+            ..Converted::default()
+        }));
+    }
+    let r = crate::export::write_streamed(o.format, input, &ropts, chunk, &pass, out, o.write);
+    let Some((s, sum)) = r.map_err(|error| ConvertError::Streamed {
+        out: out.to_path_buf(),
+        error,
+    })?
+    else {
+        return Ok(Err(DECLINED));
+    };
+    Ok(Ok(Converted {
+        done: Done {
+            line: None,
+            warnings: sum.warnings,
+            polygons: (0, 0),
+        },
+        written: Some(s.describe(o.format, input, out)),
+    }))
+}
+
+/// [`convert_file`] from the whole model.
+fn convert_whole(
+    input: &Path,
+    out: &Path,
+    o: &ConvertOptions<'_>,
+    passed: &(dyn Fn(u64) + Sync),
+) -> Result<Converted, ConvertError> {
+    let done = |line, warnings, polygons| Converted {
+        done: Done {
+            line,
+            warnings,
+            polygons,
+        },
+        ..Converted::default()
+    };
+    if o.format == Format::CityGml && is_json_file(input) {
+        // CityJSON → CityGML from the document itself, feature by feature.
+        if o.mirror {
+            create_parent(out)?;
+        }
+        let s = citygml_from_cityjson(input, out, o.version, o.write)?;
+        let line = s.describe(input, out).replace(
+            &format!(", {} bytes", s.bytes_out),
+            &format!(", {}", size_note(out, s.bytes_out)),
+        );
+        let warnings = s.dropped.values().sum();
+        return Ok(done(Some(line), warnings, (s.polygons, s.polygons)));
+    }
+    let model = read_file_observed(input, &ReadOptions::default(), passed)?;
+    let polygons = model.polygon_count();
+    let warnings = model.warnings.len();
+    if o.mirror {
+        create_parent(out)?;
+    }
+    if o.format != Format::CityGml {
+        // The export's errors name the output.
+        let s = crate::export::write(o.format, &model, 0, Content::Full, out, o.write)?;
+        let shown_input = model.files.first().map_or(Path::new(""), |f| &f.path);
+        let mut c = done(None, warnings, (polygons, polygons));
+        c.written = Some(s.describe(o.format, shown_input, out));
+        return Ok(c);
+    }
+    let s = write_document(&model, 0, Vec::new(), out, o.write)?;
+    let line = document_line(input, out, s.bytes, s.edits, warnings);
+    Ok(done(Some(line), warnings, (polygons, polygons)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::runtime::progress::Silent;
+    use std::path::PathBuf;
+
+    /// A streamed read that declines would say so: these fixtures stream.
+    fn no_note(n: String) {
+        panic!("read whole: {n}");
+    }
+
+    /// A CityGML file of three buildings, 300 KB.
+    fn big_fixture() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml")
+    }
+
+    #[test]
+    fn chunks_only_for_large_citygml() {
+        let f = big_fixture();
+        let len = f.metadata().unwrap().len();
+        assert_eq!(chunk_for(&f, len / 4), Some(len / 4));
+        assert_eq!(chunk_for(&f, len / 4 + 1), None, "under four chunks");
+        assert_eq!(chunk_for(&f, 0), None, "0: always whole");
+        assert_eq!(chunk_for(Path::new("/nonexistent.gml"), 1), None);
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("a.city.json");
+        std::fs::write(
+            &json,
+            format!("{{\"type\": \"CityJSON\"{}}}", " ".repeat(4000)),
+        )
+        .unwrap();
+        assert_eq!(chunk_for(&json, 10), None, "CityJSON is read whole");
+    }
+
+    #[test]
+    fn streamed_stats_are_the_whole_read_s() {
+        let f = big_fixture();
+        let len = f.metadata().unwrap().len();
+        let whole = file_stats(&f, None, (None, true), &Silent, &no_note, false).unwrap();
+        assert!(whole.stats.buildings > 0);
+        let crs = Crs::parse_named("EPSG:25832").unwrap();
+        let chunk = (Some(len / 8), true);
+        let s = file_stats(&f, Some(&crs), chunk, &Silent, &no_note, false).unwrap();
+        assert_eq!(s.stats.buildings, whole.stats.buildings);
+        assert_eq!(s.stats.polygons, whole.stats.polygons);
+        assert_eq!(s.warnings.len(), whole.warnings.len());
+        assert_eq!(s.stats.srs_name.as_deref(), Some(crs.name.as_str()));
+        let nowhere = Path::new("/nonexistent.gml");
+        assert!(file_stats(nowhere, None, (None, false), &Silent, &no_note, false).is_err());
+    }
+
+    #[test]
+    fn convert_writes_citygml_and_obj_the_same_streamed_or_whole() {
+        let f = big_fixture();
+        let len = f.metadata().unwrap().len();
+        let dir = tempfile::tempdir().unwrap();
+        let wopts = WriteOptions::default();
+        for format in [Format::CityGml, Format::Obj] {
+            let ext = if format == Format::Obj { "obj" } else { "gml" };
+            let mut outs = Vec::new();
+            for chunk in [None, Some(len / 8)] {
+                let out = dir.path().join(format!("sub/{}.{ext}", chunk.is_some()));
+                let o = ConvertOptions {
+                    format,
+                    version: TargetVersion::V2_0,
+                    write: &wopts,
+                    mirror: true,
+                    chunk,
+                };
+                let c = convert_file(&f, &out, &o, &Silent, &no_note).unwrap();
+                match format {
+                    Format::CityGml => {
+                        let line = c.done.line.unwrap();
+                        assert!(line.contains("envelope(s) recomputed"), "{line}");
+                        assert!(c.written.is_none());
+                    }
+                    _ => assert!(c.written.unwrap().contains(&out.display().to_string())),
+                }
+                outs.push(std::fs::read(&out).unwrap());
+            }
+            assert_eq!(outs[0], outs[1], "{format:?}: streamed = whole");
+        }
+        // A target that exists is refused, named by the output.
+        let out = dir.path().join("sub/false.gml");
+        let o = ConvertOptions {
+            format: Format::CityGml,
+            version: TargetVersion::V2_0,
+            write: &wopts,
+            mirror: false,
+            chunk: None,
+        };
+        let e = convert_file(&f, &out, &o, &Silent, &no_note).unwrap_err();
+        assert!(
+            matches!(e, ConvertError::Write(WriteError::Exists(_))),
+            "{e}"
+        );
+        let o = ConvertOptions {
+            chunk: Some(len / 8),
+            format: Format::Obj,
+            ..o
+        };
+        let out = dir.path().join("sub/false.obj");
+        let e = convert_file(&f, &out, &o, &Silent, &no_note).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with(&format!("writing {}: ", out.display())),
+            "{e}"
+        );
+    }
+}
