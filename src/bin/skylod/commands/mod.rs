@@ -3,7 +3,6 @@
 
 use crate::log::warning;
 use anyhow::Context;
-use skylod::model::CityModel;
 use skylod::output::text::{Document, TextContext};
 use skylod::poi::checks::PoiFlag;
 use skylod::poi::Poi;
@@ -30,11 +29,6 @@ pub mod upgrade;
 /// Milliseconds since `t`, rounded to 0.1.
 pub fn ms(t: Instant) -> f64 {
     (t.elapsed().as_secs_f64() * 1e4).round() / 10.0
-}
-
-/// The model's polygons ([`CityModel::polygon_count`]: all LoDs, as `stats` counts them).
-pub fn polygons(m: &CityModel) -> usize {
-    m.polygon_count()
 }
 
 /// Context helper for writing to stdout.
