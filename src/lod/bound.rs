@@ -78,6 +78,7 @@
 //! ```
 
 use crate::lod::poi::{Poi, POI_OFFSET};
+use crate::lod::evaluation::rel;
 use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{detail_boxes, full_scene, full_scene_part, mixed_scene};
 use crate::model::{Bbox, CityModel};
@@ -191,19 +192,6 @@ impl Bounded {
             .filter(|p| !p.holds)
             .map(|p| p.id.as_str())
             .collect()
-    }
-}
-
-/// Relative error of `a` against `b` (0 when both are 0, infinite when only `b` is).
-fn rel(a: f64, b: f64) -> f64 {
-    if b == 0.0 {
-        if a == 0.0 {
-            0.0
-        } else {
-            f64::INFINITY
-        }
-    } else {
-        (a - b).abs() / b.abs()
     }
 }
 

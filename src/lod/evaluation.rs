@@ -100,7 +100,9 @@ pub struct ModelFigures {
     pub global_kwh_m2: Option<f64>,
 }
 
-fn rel(a: f64, b: f64) -> f64 {
+/// Relative error of `a` against `b` (0 when both are 0, infinite when only `b` is): the
+/// figure of [`ModelFigures`]' errors and of the error bound (`lod::bound`).
+pub(crate) fn rel(a: f64, b: f64) -> f64 {
     if b == 0.0 {
         if a == 0.0 {
             0.0
@@ -343,4 +345,18 @@ pub fn evaluate_irradiance(
         rough_ms,
         selection_bvh_ms,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::rel;
+
+    #[test]
+    fn relative_error_against_the_reference() {
+        assert_eq!(rel(3.0, 2.0), 0.5);
+        assert_eq!(rel(1.0, -2.0), 1.5);
+        assert_eq!(rel(0.0, 0.0), 0.0);
+        assert_eq!(rel(0.1, 0.0), f64::INFINITY);
+        assert_eq!(rel(0.0, 2.0), 1.0);
+    }
 }
