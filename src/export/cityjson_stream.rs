@@ -32,7 +32,8 @@
 //! outside buildings.
 
 use super::cityjson::{
-    scale_for, standalone_or_installation, write_vertices, Feature, Plan, Vertices,
+    scale_for, standalone_or_installation, write_head_open, write_members, write_vertices,
+    Feature, Plan, Vertices,
 };
 use super::{asset_name_as, Content, ExportSummary};
 use crate::io::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
@@ -178,24 +179,11 @@ pub(super) fn write_streamed(
                 let done = pass(1 + k, &mut |c: Chunk| {
                     let plan = frame.plan(&c, &mut ids);
                     if !head_done {
-                        let mut head = plan.header_in(srs.as_deref());
-                        head.remove("vertices");
-                        head.remove("CityObjects");
-                        let head = serde_json::to_string(&Value::Object(head))?;
-                        w.write_all(&head.as_bytes()[..head.len() - 1])?;
-                        w.write_all(b",\"CityObjects\":{")?;
+                        write_head_open(plan.header_in(srs.as_deref()), w)?;
                         head_done = true;
                     }
                     for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
-                        for (id, obj) in plan.objects(*f, &mut verts, &mut s) {
-                            if !first {
-                                w.write_all(b",")?;
-                            }
-                            first = false;
-                            serde_json::to_writer(&mut *w, &id)?;
-                            w.write_all(b":")?;
-                            serde_json::to_writer(&mut *w, &obj)?;
-                        }
+                        write_members(&plan.objects(*f, &mut verts, &mut s), &mut first, w)?;
                     }
                     verts.check()
                 })?;
