@@ -546,6 +546,42 @@ pub struct Building {
 }
 
 impl Building {
+    /// Its element name: `BuildingPart` or `Building`.
+    pub fn element(&self) -> &'static str {
+        if self.is_part {
+            "BuildingPart"
+        } else {
+            "Building"
+        }
+    }
+
+    /// The rule of every reader for a building without shell surfaces: when none of the
+    /// `assets` it owns is a shell surface ([`AssetKind::is_shell_surface`]) and it has
+    /// geometry of its own, that geometry is taken out of it as a [`AssetKind::Body`] asset of
+    /// building `b` with its id, element, span and line (in file 0, as the readers number
+    /// files); otherwise `None`. The caller adds the asset to the model and to
+    /// [`Building::assets`].
+    pub fn take_body(&mut self, b: usize, assets: &[Asset]) -> Option<Asset> {
+        let has_surfaces = self
+            .assets
+            .iter()
+            .any(|&a| assets.get(a).is_some_and(|a| a.kind.is_shell_surface()));
+        if has_surfaces || self.geometries.is_empty() {
+            return None;
+        }
+        Some(Asset {
+            building: Some(b),
+            span: self.span.clone(),
+            line: self.line,
+            ..Asset::new(
+                AssetKind::Body,
+                self.id.as_deref(),
+                self.element(),
+                std::mem::take(&mut self.geometries),
+            )
+        })
+    }
+
     /// A building (not a part) with `gml:id` `id` that owns `assets`, in file 0, with no
     /// geometry of its own, at span `0..0` of line 1: what tests and examples build by hand
     /// (the reader fills every field). Other fields by struct update, as [`Asset::new`].
@@ -847,6 +883,44 @@ impl CityModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_building_without_shell_surfaces_gives_its_geometry_as_a_body() {
+        let geom = || {
+            vec![LodGeometry {
+                lod: 1,
+                ..LodGeometry::default()
+            }]
+        };
+        let assets = vec![
+            Asset::new(AssetKind::Installation, Some("i"), "BuildingInstallation", geom()),
+            Asset::new(AssetKind::Roof, Some("r"), "RoofSurface", geom()),
+        ];
+        // an installation is no shell surface: the part's own geometry becomes its body
+        let mut part = Building {
+            is_part: true,
+            span: 5..50,
+            line: 3,
+            geometries: geom(),
+            ..Building::new(Some("p"), vec![0])
+        };
+        let body = part.take_body(7, &assets).unwrap();
+        assert_eq!(body.kind, AssetKind::Body);
+        assert_eq!((body.id.as_deref(), &*body.element), (Some("p"), "BuildingPart"));
+        assert_eq!((body.building, body.span, body.line), (Some(7), 5..50, 3));
+        assert_eq!(body.geometries, geom());
+        assert!(part.geometries.is_empty());
+        // taken once; nothing without geometry
+        assert!(part.take_body(7, &assets).is_none());
+        // a roof among its assets: the geometry stays with the building
+        let mut b = Building {
+            geometries: geom(),
+            ..Building::new(Some("b"), vec![0, 1])
+        };
+        assert!(b.take_body(0, &assets).is_none());
+        assert_eq!(b.geometries, geom());
+        assert_eq!(b.element(), "Building");
+    }
 
     #[test]
     fn area_with_hole() {

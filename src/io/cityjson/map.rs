@@ -405,25 +405,9 @@ impl Mapper {
             }
         }
         for b in 0..self.buildings.len() {
-            let has_surfaces = self.buildings[b]
-                .assets
-                .iter()
-                .any(|&a| self.assets[a].kind.is_shell_surface());
-            if !has_surfaces && !self.buildings[b].geometries.is_empty() {
-                let geoms = std::mem::take(&mut self.buildings[b].geometries);
-                let bd = &self.buildings[b];
-                let id = bd.id.clone().unwrap_or_default();
-                let element = if bd.is_part {
-                    "BuildingPart"
-                } else {
-                    "Building"
-                };
-                let a = Asset {
-                    building: Some(b),
-                    line: bd.line,
-                    ..Asset::new(AssetKind::Body, Some(&id), element, geoms)
-                };
-                self.push_asset(a, &id, None);
+            if let Some(body) = self.buildings[b].take_body(b, &self.assets) {
+                let id = body.id.as_deref().unwrap_or_default().to_string();
+                self.push_asset(body, &id, None);
             }
         }
         let counts = Counts {
