@@ -512,15 +512,33 @@ impl Asset {
     /// Box of all polygons of all LoDs.
     pub fn bbox(&self) -> Bbox {
         let mut b = Bbox::EMPTY;
-        for g in &self.geometries {
-            for p in &g.polygons {
-                for q in p.points() {
-                    b.add(*q);
-                }
-            }
-        }
+        add_geometries(&mut b, &self.geometries);
         b
     }
+}
+
+/// Every point of every polygon of `geometries` added to `b`.
+fn add_geometries(b: &mut Bbox, geometries: &[LodGeometry]) {
+    for g in geometries {
+        for p in &g.polygons {
+            for q in p.points() {
+                b.add(*q);
+            }
+        }
+    }
+}
+
+/// The box of a root envelope: every polygon of the `assets` and of the `buildings`' own
+/// geometry (the reader's recomputed envelopes, the writer's over a streamed chunk).
+pub fn content_bbox(assets: &[Asset], buildings: &[Building]) -> Bbox {
+    let mut b = Bbox::EMPTY;
+    for a in assets {
+        b.union(&a.bbox());
+    }
+    for bd in buildings {
+        add_geometries(&mut b, &bd.geometries);
+    }
+    b
 }
 
 /// A `Building` or `BuildingPart`.
@@ -883,6 +901,22 @@ impl CityModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_content_box_holds_assets_and_the_buildings_own_geometry() {
+        let geom = |pts: &[[f64; 3]]| LodGeometry {
+            polygons: vec![Polygon::new(pts.iter().map(|p| DVec3::from(*p)).collect())],
+            ..LodGeometry::default()
+        };
+        let a = Asset::new(AssetKind::Roof, None, "RoofSurface", vec![geom(&[[0.0, 1.0, 2.0]])]);
+        let b = Building {
+            geometries: vec![geom(&[[-1.0, 5.0, 0.5], [3.0, 0.0, 1.0]])],
+            ..Building::new(None, vec![0])
+        };
+        let bb = content_bbox(&[a], &[b]);
+        assert_eq!((bb.min, bb.max), (DVec3::new(-1.0, 0.0, 0.5), DVec3::new(3.0, 5.0, 2.0)));
+        assert!(content_bbox(&[], &[]).is_empty());
+    }
 
     #[test]
     fn a_building_without_shell_surfaces_gives_its_geometry_as_a_body() {

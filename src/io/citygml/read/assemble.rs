@@ -93,22 +93,7 @@ impl Parser<'_> {
             .env_owners
             .iter()
             .map(|o| match o {
-                EnvOwner::Root => {
-                    let mut b = Bbox::EMPTY;
-                    for a in &self.assets {
-                        b.union(&a.bbox());
-                    }
-                    for bd in &self.buildings {
-                        for g in &bd.geometries {
-                            for p in &g.polygons {
-                                for q in p.points() {
-                                    b.add(*q);
-                                }
-                            }
-                        }
-                    }
-                    b
-                }
+                EnvOwner::Root => crate::model::content_bbox(&self.assets, &self.buildings),
                 EnvOwner::Building(b) => self.building_bbox(*b),
                 EnvOwner::Asset(a) => {
                     let mut b = self.assets.get(*a).map(|x| x.bbox()).unwrap_or_default();
