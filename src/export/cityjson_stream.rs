@@ -32,8 +32,8 @@
 //! outside buildings.
 
 use super::cityjson::{
-    scale_for, standalone_or_installation, write_head_open, write_members, write_vertices,
-    Feature, Plan, Vertices,
+    scale_for, standalone_or_installation, write_head_open, write_members, write_vertices, Feature,
+    Plan, Vertices,
 };
 use super::{asset_name_as, Content, ExportSummary};
 use crate::io::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};

@@ -77,8 +77,8 @@
 //! assert!(out.levels.iter().zip(&r.selection.levels).all(|(a, b)| a >= b));
 //! ```
 
-use crate::lod::poi::{Poi, POI_OFFSET};
 use crate::lod::evaluation::rel;
+use crate::lod::poi::{Poi, POI_OFFSET};
 use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{detail_boxes, full_scene, full_scene_part, mixed_scene};
 use crate::model::{Bbox, CityModel};

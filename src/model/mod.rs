@@ -908,13 +908,21 @@ mod tests {
             polygons: vec![Polygon::new(pts.iter().map(|p| DVec3::from(*p)).collect())],
             ..LodGeometry::default()
         };
-        let a = Asset::new(AssetKind::Roof, None, "RoofSurface", vec![geom(&[[0.0, 1.0, 2.0]])]);
+        let a = Asset::new(
+            AssetKind::Roof,
+            None,
+            "RoofSurface",
+            vec![geom(&[[0.0, 1.0, 2.0]])],
+        );
         let b = Building {
             geometries: vec![geom(&[[-1.0, 5.0, 0.5], [3.0, 0.0, 1.0]])],
             ..Building::new(None, vec![0])
         };
         let bb = content_bbox(&[a], &[b]);
-        assert_eq!((bb.min, bb.max), (DVec3::new(-1.0, 0.0, 0.5), DVec3::new(3.0, 5.0, 2.0)));
+        assert_eq!(
+            (bb.min, bb.max),
+            (DVec3::new(-1.0, 0.0, 0.5), DVec3::new(3.0, 5.0, 2.0))
+        );
         assert!(content_bbox(&[], &[]).is_empty());
     }
 
@@ -927,7 +935,12 @@ mod tests {
             }]
         };
         let assets = vec![
-            Asset::new(AssetKind::Installation, Some("i"), "BuildingInstallation", geom()),
+            Asset::new(
+                AssetKind::Installation,
+                Some("i"),
+                "BuildingInstallation",
+                geom(),
+            ),
             Asset::new(AssetKind::Roof, Some("r"), "RoofSurface", geom()),
         ];
         // an installation is no shell surface: the part's own geometry becomes its body
@@ -940,7 +953,10 @@ mod tests {
         };
         let body = part.take_body(7, &assets).unwrap();
         assert_eq!(body.kind, AssetKind::Body);
-        assert_eq!((body.id.as_deref(), &*body.element), (Some("p"), "BuildingPart"));
+        assert_eq!(
+            (body.id.as_deref(), &*body.element),
+            (Some("p"), "BuildingPart")
+        );
         assert_eq!((body.building, body.span, body.line), (Some(7), 5..50, 3));
         assert_eq!(body.geometries, geom());
         assert!(part.geometries.is_empty());

@@ -190,7 +190,9 @@ pub fn merge_parts(
     }
     match merge_named(parts, names, target, opts) {
         Ok(s) => {
-            let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs).into_iter().collect();
+            let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs)
+                .into_iter()
+                .collect();
             said.push(Said::Summary(merge_line(&s, target)));
             (true, said)
         }
@@ -259,7 +261,9 @@ pub fn merge_converted(
     let _ = std::fs::remove_file(&staged);
     match r {
         Ok(e) => {
-            let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs).into_iter().collect();
+            let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs)
+                .into_iter()
+                .collect();
             said.push(Said::Summary(format!(
                 "merged {} file(s) into {} ({format}): {} member(s), {} gml:id(s) renamed",
                 m.files,
@@ -400,7 +404,10 @@ mod tests {
         let o = WriteOptions::default();
         let (a, said_a) = merge_parts(&[], &[], &t, &o, 2);
         let (b, said_b) = merge_converted(&[], &[], (&t, Format::Obj), &staging, &o, 2);
-        let e = format!("nothing to merge (every input failed); {} not written", t.display());
+        let e = format!(
+            "nothing to merge (every input failed); {} not written",
+            t.display()
+        );
         for (ok, said) in [(a, said_a), (b, said_b)] {
             assert!(!ok && matches!(&said[..], [Said::Error(l)] if *l == e));
         }
