@@ -213,19 +213,15 @@ impl Mapper {
             } else {
                 let installation =
                     o.ty == "BuildingInstallation" || o.ty == "BuildingConstructiveElement";
-                let element = match o.attributes.as_ref().and_then(|a| a.citygml_type.as_ref()) {
+                let element = match o.attribute("citygml_type") {
                     Some(Value::String(t)) if o.ty == "GenericCityObject" => t.clone(),
                     _ => o.ty.clone(),
                 };
-                let function = o
-                    .attributes
-                    .as_ref()
-                    .and_then(|a| a.function.as_ref())
-                    .and_then(|f| match f {
-                        Value::String(s) => Some(s.clone()),
-                        Value::Number(n) => Some(n.to_string()),
-                        _ => None,
-                    });
+                let function = o.attribute("function").and_then(|f| match f {
+                    Value::String(s) => Some(s.clone()),
+                    Value::Number(n) => Some(n.to_string()),
+                    _ => None,
+                });
                 let kind = if installation {
                     AssetKind::Installation
                 } else {
