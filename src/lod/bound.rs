@@ -77,7 +77,6 @@
 //! assert!(out.levels.iter().zip(&r.selection.levels).all(|(a, b)| a >= b));
 //! ```
 
-use crate::lod::evaluation::rel;
 use crate::lod::poi::{Poi, POI_OFFSET};
 use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{detail_boxes, full_scene, full_scene_part, mixed_scene};
@@ -192,6 +191,20 @@ impl Bounded {
             .filter(|p| !p.holds)
             .map(|p| p.id.as_str())
             .collect()
+    }
+}
+
+/// Relative error of `a` against `b` (0 when both are 0, infinite when only `b` is): the
+/// figure of the error bound and of `lod::evaluation`'s model figures.
+pub(crate) fn rel(a: f64, b: f64) -> f64 {
+    if b == 0.0 {
+        if a == 0.0 {
+            0.0
+        } else {
+            f64::INFINITY
+        }
+    } else {
+        (a - b).abs() / b.abs()
     }
 }
 

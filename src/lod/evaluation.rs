@@ -27,6 +27,7 @@
 //! assert!(p.lod.svf_rel_error(&p.full) < 0.05);
 //! ```
 
+use crate::lod::bound::rel;
 use crate::lod::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::lod::rough::{all_boxes, rough_model};
 use crate::lod::scene::{full_scene, mixed_scene, rough_scene, selection_scene};
@@ -98,20 +99,6 @@ pub struct ModelFigures {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(range(min = 0))]
     pub global_kwh_m2: Option<f64>,
-}
-
-/// Relative error of `a` against `b` (0 when both are 0, infinite when only `b` is): the
-/// figure of [`ModelFigures`]' errors and of the error bound (`lod::bound`).
-pub(crate) fn rel(a: f64, b: f64) -> f64 {
-    if b == 0.0 {
-        if a == 0.0 {
-            0.0
-        } else {
-            f64::INFINITY
-        }
-    } else {
-        (a - b).abs() / b.abs()
-    }
 }
 
 impl ModelFigures {
@@ -345,18 +332,4 @@ pub fn evaluate_irradiance(
         rough_ms,
         selection_bvh_ms,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::rel;
-
-    #[test]
-    fn relative_error_against_the_reference() {
-        assert_eq!(rel(3.0, 2.0), 0.5);
-        assert_eq!(rel(1.0, -2.0), 1.5);
-        assert_eq!(rel(0.0, 0.0), 0.0);
-        assert_eq!(rel(0.1, 0.0), f64::INFINITY);
-        assert_eq!(rel(0.0, 2.0), 1.0);
-    }
 }
