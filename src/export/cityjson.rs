@@ -108,24 +108,11 @@ pub fn write_cityjson_with(
     plan.source = from_source(model, file)?;
     let mut s = ExportSummary::default();
     let mut verts = Vertices::new(plan.translate, plan.scale);
-    let mut head = plan.header();
-    head.remove("vertices");
-    head.remove("CityObjects");
-    let head = serde_json::to_string(&Value::Object(head)).map_err(io::Error::other)?;
     // `{...header` without its closing brace, then the city objects, then the vertices.
-    w.write_all(&head.as_bytes()[..head.len() - 1])?;
-    w.write_all(b",\"CityObjects\":{")?;
+    write_head_open(plan.header(), w)?;
     let mut first = true;
     for f in &plan.features {
-        for (id, obj) in plan.objects(*f, &mut verts, &mut s) {
-            if !first {
-                w.write_all(b",")?;
-            }
-            first = false;
-            serde_json::to_writer(&mut *w, &id)?;
-            w.write_all(b":")?;
-            serde_json::to_writer(&mut *w, &obj)?;
-        }
+        write_members(&plan.objects(*f, &mut verts, &mut s), &mut first, w)?;
     }
     w.write_all(b"},\"vertices\":[")?;
     write_vertices(w, &verts.list)?;
@@ -175,19 +162,40 @@ pub(super) fn write_feature_line(
     w.write_all(b"{\"type\":\"CityJSONFeature\",\"id\":")?;
     serde_json::to_writer(&mut *w, &plan.feature_id(f))?;
     w.write_all(b",\"CityObjects\":{")?;
-    for (k, (oid, obj)) in objs.iter().enumerate() {
-        if k > 0 {
-            w.write_all(b",")?;
-        }
-        serde_json::to_writer(&mut *w, oid)?;
-        w.write_all(b":")?;
-        serde_json::to_writer(&mut *w, obj)?;
-    }
+    write_members(&objs, &mut true, w)?;
     w.write_all(b"},\"vertices\":[")?;
     write_vertices(w, &verts.list)?;
     w.write_all(b"]}\n")?;
     s.vertices += verts.list.len();
     s.features += 1;
+    Ok(())
+}
+
+/// A CityJSON document's header (`header`, without its `vertices` and `CityObjects`) up to
+/// the opening of `"CityObjects":{`, for city objects written one by one ([`write_members`]).
+pub(super) fn write_head_open(mut header: Map<String, Value>, w: &mut dyn Write) -> io::Result<()> {
+    header.remove("vertices");
+    header.remove("CityObjects");
+    let head = serde_json::to_string(&Value::Object(header))?;
+    w.write_all(&head.as_bytes()[..head.len() - 1])?;
+    w.write_all(b",\"CityObjects\":{")
+}
+
+/// City objects as `"id":{...}` members of `CityObjects`, a comma before each one but the
+/// first of the object (`first`, cleared once one is written).
+pub(super) fn write_members(
+    objs: &[(String, Value)],
+    first: &mut bool,
+    w: &mut dyn Write,
+) -> io::Result<()> {
+    for (id, obj) in objs {
+        if !std::mem::take(first) {
+            w.write_all(b",")?;
+        }
+        serde_json::to_writer(&mut *w, id)?;
+        w.write_all(b":")?;
+        serde_json::to_writer(&mut *w, obj)?;
+    }
     Ok(())
 }
 
@@ -904,6 +912,26 @@ mod tests {
         assert!(v
             .ring(&[DVec3::ZERO, DVec3::X * 1e-5, DVec3::Y * 1e-5])
             .is_none());
+    }
+
+    #[test]
+    fn members_are_written_between_the_head_and_the_vertices() {
+        let mut head = Map::new();
+        head.insert("type".into(), json!("CityJSON"));
+        head.insert("CityObjects".into(), json!({}));
+        head.insert("version".into(), json!("2.0"));
+        let mut w = Vec::new();
+        write_head_open(head, &mut w).unwrap();
+        let mut first = true;
+        write_members(&[], &mut first, &mut w).unwrap();
+        assert!(first);
+        let a = [("a".to_string(), json!({"type": "Building"}))];
+        let bc = [("b".to_string(), json!(1)), ("c".to_string(), json!(2))];
+        write_members(&a, &mut first, &mut w).unwrap();
+        write_members(&bc, &mut first, &mut w).unwrap();
+        let s = String::from_utf8(w).unwrap();
+        let want = r#"{"type":"CityJSON","version":"2.0","CityObjects":{"a":{"type":"Building"},"b":1,"c":2"#;
+        assert_eq!(s, want);
     }
 
     #[test]

@@ -32,7 +32,8 @@
 //! outside buildings.
 
 use super::cityjson::{
-    scale_for, standalone_or_installation, write_vertices, Feature, Plan, Vertices,
+    scale_for, standalone_or_installation, write_head_open, write_members, write_vertices, Feature,
+    Plan, Vertices,
 };
 use super::{asset_name_as, Content, ExportSummary};
 use crate::io::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
@@ -130,25 +131,34 @@ pub(super) fn write_streamed(
     let parts: &[bool] = if others { &[false, true] } else { &[false] };
     let mut s = ExportSummary::default();
     let mut verts = Vertices::new(translate, scale);
+    // the passes over the parts (buildings, then the other city objects) from pass `first`
+    // on: `each` sees every chunk's plan and the part; false when the stream declines
+    let mut passes = |first: usize,
+                      each: &mut dyn FnMut(&Plan<'_>, bool) -> io::Result<()>|
+     -> io::Result<bool> {
+        for (k, &standalone) in parts.iter().enumerate() {
+            let done = pass(first + k, &mut |c: Chunk| {
+                each(&frame.plan(&c, &mut ids), standalone)
+            })?;
+            if done.is_none() {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    };
     match kind {
         Kind::Seq => {
             let mut head_done = false;
-            for (k, &standalone) in parts.iter().enumerate() {
-                let done = pass(1 + k, &mut |c: Chunk| {
-                    let plan = frame.plan(&c, &mut ids);
-                    if !head_done {
-                        serde_json::to_writer(
-                            &mut *w,
-                            &Value::Object(plan.header_in(srs.as_deref())),
-                        )?;
-                        w.write_all(b"\n")?;
-                        head_done = true;
-                    }
-                    write_features(&plan, standalone, &mut verts, &mut s, w)
-                })?;
-                if done.is_none() {
-                    return Ok(None);
+            let done = passes(1, &mut |plan, standalone| {
+                if !head_done {
+                    serde_json::to_writer(&mut *w, &Value::Object(plan.header_in(srs.as_deref())))?;
+                    w.write_all(b"\n")?;
+                    head_done = true;
                 }
+                write_features(plan, standalone, &mut verts, &mut s, w)
+            })?;
+            if !done {
+                return Ok(None);
             }
         }
         Kind::CityJson => {
@@ -156,17 +166,14 @@ pub(super) fn write_streamed(
                 .clamp(1, MAX_BUCKETS) as usize;
             verts.external = Some(External::Record(Recorder::new(buckets)?));
             let mut throwaway = ExportSummary::default();
-            for (k, &standalone) in parts.iter().enumerate() {
-                let done = pass(3 + k, &mut |c: Chunk| {
-                    let plan = frame.plan(&c, &mut ids);
-                    for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
-                        plan.objects(*f, &mut verts, &mut throwaway);
-                    }
-                    verts.check()
-                })?;
-                if done.is_none() {
-                    return Ok(None);
+            let done = passes(3, &mut |plan, standalone| {
+                for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
+                    plan.objects(*f, &mut verts, &mut throwaway);
                 }
+                verts.check()
+            })?;
+            if !done {
+                return Ok(None);
             }
             let Some(External::Record(rec)) = verts.external.take() else {
                 return Err(io::Error::other("vertex index lost"));
@@ -174,34 +181,18 @@ pub(super) fn write_streamed(
             verts.external = Some(External::Replay(rec.resolve()?));
             let mut first = true;
             let mut head_done = false;
-            for (k, &standalone) in parts.iter().enumerate() {
-                let done = pass(1 + k, &mut |c: Chunk| {
-                    let plan = frame.plan(&c, &mut ids);
-                    if !head_done {
-                        let mut head = plan.header_in(srs.as_deref());
-                        head.remove("vertices");
-                        head.remove("CityObjects");
-                        let head = serde_json::to_string(&Value::Object(head))?;
-                        w.write_all(&head.as_bytes()[..head.len() - 1])?;
-                        w.write_all(b",\"CityObjects\":{")?;
-                        head_done = true;
-                    }
-                    for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
-                        for (id, obj) in plan.objects(*f, &mut verts, &mut s) {
-                            if !first {
-                                w.write_all(b",")?;
-                            }
-                            first = false;
-                            serde_json::to_writer(&mut *w, &id)?;
-                            w.write_all(b":")?;
-                            serde_json::to_writer(&mut *w, &obj)?;
-                        }
-                    }
-                    verts.check()
-                })?;
-                if done.is_none() {
-                    return Ok(None);
+            let done = passes(1, &mut |plan, standalone| {
+                if !head_done {
+                    write_head_open(plan.header_in(srs.as_deref()), w)?;
+                    head_done = true;
                 }
+                for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
+                    write_members(&plan.objects(*f, &mut verts, &mut s), &mut first, w)?;
+                }
+                verts.check()
+            })?;
+            if !done {
+                return Ok(None);
             }
             let Some(External::Replay(rep)) = verts.external.take() else {
                 return Err(io::Error::other("vertex index lost"));

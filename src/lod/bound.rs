@@ -201,8 +201,9 @@ impl Bounded {
     }
 }
 
-/// Relative error of `a` against `b` (0 when both are 0, infinite when only `b` is).
-fn rel(a: f64, b: f64) -> f64 {
+/// Relative error of `a` against `b` (0 when both are 0, infinite when only `b` is): the
+/// figure of the error bound and of `lod::evaluation`'s model figures.
+pub(crate) fn rel(a: f64, b: f64) -> f64 {
     if b == 0.0 {
         if a == 0.0 {
             0.0

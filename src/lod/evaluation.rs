@@ -27,6 +27,7 @@
 //! assert!(p.lod.svf_rel_error(&p.full) < 0.05);
 //! ```
 
+use crate::lod::bound::rel;
 use crate::lod::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::lod::rough::{all_boxes, rough_model};
 use crate::lod::scene::{full_scene, mixed_scene, rough_scene, selection_scene};
@@ -98,18 +99,6 @@ pub struct ModelFigures {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(range(min = 0))]
     pub global_kwh_m2: Option<f64>,
-}
-
-fn rel(a: f64, b: f64) -> f64 {
-    if b == 0.0 {
-        if a == 0.0 {
-            0.0
-        } else {
-            f64::INFINITY
-        }
-    } else {
-        (a - b).abs() / b.abs()
-    }
 }
 
 impl ModelFigures {

@@ -663,6 +663,15 @@ mod tests {
         m
     }
 
+    /// A POI `id` at 1.5 m above the street at the origin of the test scenes.
+    fn street_poi(id: &str, normal: Option<DVec3>) -> Poi {
+        Poi {
+            id: id.into(),
+            position: DVec3::new(0.0, 0.0, 1.5),
+            normal,
+        }
+    }
+
     fn run(m: &CityModel, poi: Poi, rays: usize) -> Selection {
         let rough = rough_model(m, &RoughOptions::default());
         let scene = crate::lod::scene::rough_scene(&rough);
@@ -682,11 +691,7 @@ mod tests {
     #[test]
     fn levels_from_the_street() {
         let m = scene_model();
-        let poi = Poi {
-            id: "p".into(),
-            position: DVec3::new(0.0, 0.0, 1.5),
-            normal: None,
-        };
+        let poi = street_poi("p", None);
         let s = run(&m, poi, 20_000);
         assert_eq!(
             s.levels[0], 0,
@@ -727,11 +732,7 @@ mod tests {
         let walls = boxed(20.0, -20.0, 0.0, 40.0, 20.0, 10.0)[2..].to_vec();
         m.assets
             .push(asset(AssetKind::Wall, "walls", Some(0), walls));
-        let poi = Poi {
-            id: "street".into(),
-            position: DVec3::new(0.0, 0.0, 1.5),
-            normal: None,
-        };
+        let poi = street_poi("street", None);
         let s = run(&m, poi, 20_000);
         assert!(s.hits[0] > 0);
         assert_eq!(s.levels[0], 2, "the near slope's ridge is the skyline");
@@ -743,11 +744,7 @@ mod tests {
     fn normal_restricts_the_bundle() {
         let m = scene_model();
         // Facing west, away from the building: nothing is hit.
-        let poi = Poi {
-            id: "w".into(),
-            position: DVec3::new(0.0, 0.0, 1.5),
-            normal: Some(DVec3::NEG_X),
-        };
+        let poi = street_poi("w", Some(DVec3::NEG_X));
         let s = run(&m, poi, 5_000);
         assert_eq!(s.levels, vec![0, 0, 0, 0]);
         assert!(s.pois[0].rays > 2_000 && s.pois[0].rays < 3_000);
@@ -757,11 +754,7 @@ mod tests {
     #[test]
     fn thread_count_does_not_change_levels() {
         let m = scene_model();
-        let poi = Poi {
-            id: "p".into(),
-            position: DVec3::new(0.0, 0.0, 1.5),
-            normal: None,
-        };
+        let poi = street_poi("p", None);
         let a = run(&m, poi.clone(), 10_000);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
@@ -833,11 +826,7 @@ mod tests {
             None,
             vec![wall(-5.0), wall(5.0)],
         ));
-        let poi = Poi {
-            id: "between".into(),
-            position: DVec3::new(0.0, 0.0, 1.5),
-            normal: None,
-        };
+        let poi = street_poi("between", None);
         let rough = rough_model(&m, &RoughOptions::default());
         assert!(rough[0].obb.is_some_and(|b| b.contains(poi.position, 0.0)));
         assert!(rough_holds_poi_full_not(

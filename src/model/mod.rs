@@ -512,15 +512,33 @@ impl Asset {
     /// Box of all polygons of all LoDs.
     pub fn bbox(&self) -> Bbox {
         let mut b = Bbox::EMPTY;
-        for g in &self.geometries {
-            for p in &g.polygons {
-                for q in p.points() {
-                    b.add(*q);
-                }
-            }
-        }
+        add_geometries(&mut b, &self.geometries);
         b
     }
+}
+
+/// Every point of every polygon of `geometries` added to `b`.
+fn add_geometries(b: &mut Bbox, geometries: &[LodGeometry]) {
+    for g in geometries {
+        for p in &g.polygons {
+            for q in p.points() {
+                b.add(*q);
+            }
+        }
+    }
+}
+
+/// The box of a root envelope: every polygon of the `assets` and of the `buildings`' own
+/// geometry (the reader's recomputed envelopes, the writer's over a streamed chunk).
+pub fn content_bbox(assets: &[Asset], buildings: &[Building]) -> Bbox {
+    let mut b = Bbox::EMPTY;
+    for a in assets {
+        b.union(&a.bbox());
+    }
+    for bd in buildings {
+        add_geometries(&mut b, &bd.geometries);
+    }
+    b
 }
 
 /// A `Building` or `BuildingPart`.
@@ -546,6 +564,42 @@ pub struct Building {
 }
 
 impl Building {
+    /// Its element name: `BuildingPart` or `Building`.
+    pub fn element(&self) -> &'static str {
+        if self.is_part {
+            "BuildingPart"
+        } else {
+            "Building"
+        }
+    }
+
+    /// The rule of every reader for a building without shell surfaces: when none of the
+    /// `assets` it owns is a shell surface ([`AssetKind::is_shell_surface`]) and it has
+    /// geometry of its own, that geometry is taken out of it as a [`AssetKind::Body`] asset of
+    /// building `b` with its id, element, span and line (in file 0, as the readers number
+    /// files); otherwise `None`. The caller adds the asset to the model and to
+    /// [`Building::assets`].
+    pub fn take_body(&mut self, b: usize, assets: &[Asset]) -> Option<Asset> {
+        let has_surfaces = self
+            .assets
+            .iter()
+            .any(|&a| assets.get(a).is_some_and(|a| a.kind.is_shell_surface()));
+        if has_surfaces || self.geometries.is_empty() {
+            return None;
+        }
+        Some(Asset {
+            building: Some(b),
+            span: self.span.clone(),
+            line: self.line,
+            ..Asset::new(
+                AssetKind::Body,
+                self.id.as_deref(),
+                self.element(),
+                std::mem::take(&mut self.geometries),
+            )
+        })
+    }
+
     /// A building (not a part) with `gml:id` `id` that owns `assets`, in file 0, with no
     /// geometry of its own, at span `0..0` of line 1: what tests and examples build by hand
     /// (the reader fills every field). Other fields by struct update, as [`Asset::new`].
@@ -843,6 +897,9 @@ impl CityModel {
         self.warnings.append(&mut other.warnings);
     }
 }
+
+#[cfg(test)]
+mod body_tests;
 
 #[cfg(test)]
 mod tests {

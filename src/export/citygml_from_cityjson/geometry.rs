@@ -387,7 +387,7 @@ pub(super) fn implicit(
             g.template
         ));
     };
-    let Some(lod) = t.lod() else {
+    let Some(lod) = t.whole_lod() else {
         return Ok(None);
     };
     let point = g

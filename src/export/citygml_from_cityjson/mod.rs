@@ -60,7 +60,6 @@
 //! dropped before the next, so memory follows the largest feature. A `.city.json` document
 //! is one JSON value: read whole, then written member by member.
 
-mod doc;
 mod geometry;
 mod object;
 mod types;
@@ -71,7 +70,7 @@ pub use values::gml_id;
 use crate::io::citygml::error::{ReadError, WriteError};
 use crate::io::citygml::upgrade::{upgrade, UpgradeOptions};
 use crate::io::citygml::write::{check_target, WriteOptions};
-use doc::Doc;
+use crate::io::cityjson::doc::{self, Doc};
 use geometry::Verts;
 use object::{write_object, Tally, Unit};
 use std::collections::BTreeMap;
@@ -311,10 +310,7 @@ pub fn write_citygml<R: BufRead>(
     let transform = head.transform;
     let coords = Coords::new(transform.map(|t| t.scale));
     let list = real(&head.vertices, transform, name, 0)?;
-    let extent = bbox(&list).or_else(|| {
-        let e = meta.and_then(|m| m.extent.as_ref())?;
-        (e.len() == 6).then(|| [e[0], e[1], e[2], e[3], e[4], e[5]])
-    });
+    let extent = bbox(&list).or_else(|| meta?.extent());
     let mut root = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<core:CityModel");
     root += types::ROOT_NAMESPACES;
     root += ">\n";

@@ -175,7 +175,7 @@ pub(super) fn write_object(
             Prop::Tin => {
                 let tin = o.geometry.iter().find_map(|g| {
                     let parsed = parse(g, verts.list.len()).ok()?;
-                    Some((g.lod().unwrap_or(2), parsed))
+                    Some((g.whole_lod().unwrap_or(2), parsed))
                 });
                 let Some((lod, parsed)) = tin else {
                     t.drop("TINRelief without surfaces".into());
@@ -254,7 +254,7 @@ fn geometry(
         }
         return Ok(());
     }
-    let Some(lod) = g.lod() else {
+    let Some(lod) = g.whole_lod() else {
         t.drop(format!("{} geometry without a LoD in 0..3", g.ty));
         return Ok(());
     };
@@ -277,12 +277,7 @@ fn geometry(
         .props
         .iter()
         .any(|pr| matches!(pr, Prop::Bounded | Prop::Traffic));
-    let ty_of = |i: usize| {
-        sems.get(i)
-            .and_then(|m| m.get("type"))
-            .and_then(Value::as_str)
-            .unwrap_or("")
-    };
+    let ty_of = |i: usize| sems.get(i).map_or("", |m| m.ty.as_str());
     let targets: Vec<Target> = (0..sems.len())
         .map(|i| {
             if !has_surfaces || lod < 2 {
@@ -291,10 +286,7 @@ fn geometry(
             if let Some(th) = surface(p, ty_of(i)) {
                 return Target::Thematic(th);
             }
-            let parent = sems[i]
-                .get("parent")
-                .and_then(Value::as_u64)
-                .map(|x| x as usize);
+            let parent = sems[i].parent;
             let parent = parent.filter(|q| *q < sems.len() && surface(p, ty_of(*q)).is_some());
             match (is_opening(p, ty_of(i)), parent) {
                 (Some(op), Some(q)) if lod >= 3 => Target::Opening(op, q),
@@ -394,7 +386,7 @@ fn geometry(
                         .filter(|k| polys[*k].sem == Some(j))
                         .collect();
                     let ms = multi(verts, &polys, &ks, solid.then_some(&pid), t);
-                    let _ = write!(inner, "<{p}:opening><{p}:{op}>{}<{p}:lod{lod}MultiSurface>{ms}</{p}:lod{lod}MultiSurface></{p}:{op}></{p}:opening>", attrs_of(&sems[j], t));
+                    let _ = write!(inner, "<{p}:opening><{p}:{op}>{}<{p}:lod{lod}MultiSurface>{ms}</{p}:lod{lod}MultiSurface></{p}:{op}></{p}:opening>", attrs_of(&sems[j].others, t));
                 }
             }
         }
@@ -404,7 +396,7 @@ fn geometry(
         let x = if p == "wtr" {
             let ms = multi(verts, &polys, &mine, solid.then_some(&pid), t)
                 .replace("gml:MultiSurface>", "gml:CompositeSurface>");
-            format!("<wtr:boundedBy><wtr:{th}>{}<wtr:lod{lod}Surface>{ms}</wtr:lod{lod}Surface></wtr:{th}></wtr:boundedBy>", attrs_of(&sems[i], t))
+            format!("<wtr:boundedBy><wtr:{th}>{}<wtr:lod{lod}Surface>{ms}</wtr:lod{lod}Surface></wtr:{th}></wtr:boundedBy>", attrs_of(&sems[i].others, t))
         } else {
             let ms = if mine.is_empty() {
                 String::new()
@@ -419,7 +411,7 @@ fn geometry(
             };
             format!(
                 "<{p}:{prop}><{p}:{th}>{}{ms}{inner}</{p}:{th}></{p}:{prop}>",
-                attrs_of(&sems[i], t)
+                attrs_of(&sems[i].others, t)
             )
         };
         *t.objects.entry(th.to_string()).or_default() += 1;

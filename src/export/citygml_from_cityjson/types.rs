@@ -68,64 +68,62 @@ fn geoms(lods: std::ops::RangeInclusive<u8>, shapes: &[Shape]) -> Vec<Prop> {
     v
 }
 
+/// The properties of a building, bridge or tunnel (or a part), which CityGML 2.0 orders
+/// alike (`_AbstractBuilding`, `_AbstractBridge`, `_AbstractTunnel`): class, function,
+/// usage, the years of construction and demolition, the type's own `attrs`, LoD 1 and 2
+/// geometry, its `children` (installations, constructions), the thematic surfaces, LoD 3
+/// geometry, and last its `part`s.
+fn construction(attrs: &[Prop], children: &[Prop], part: Prop) -> Vec<Prop> {
+    let mut p = CFU.to_vec();
+    p.extend([
+        Attr("yearOfConstruction", Year, false),
+        Attr("yearOfDemolition", Year, false),
+    ]);
+    p.extend_from_slice(attrs);
+    p.extend(geoms(1..=1, &[Solid, MultiSurface]));
+    p.extend([Geom(2, Solid), Geom(2, MultiSurface), Geom(2, MultiCurve)]);
+    p.extend_from_slice(children);
+    p.push(Bounded);
+    p.extend([Geom(3, Solid), Geom(3, MultiSurface), Geom(3, MultiCurve)]);
+    p.push(part);
+    p
+}
+
 /// The spec of a CityJSON type (`None`: no CityGML 2.0 counterpart written: the object is
 /// dropped and counted).
 pub(super) fn spec(ty: &str) -> Option<Spec> {
     let (prefix, element, props): (&'static str, &str, Vec<Prop>) = match ty {
         "Building" | "BuildingPart" => {
-            let mut p = CFU.to_vec();
-            p.extend([
-                Attr("yearOfConstruction", Year, false),
-                Attr("yearOfDemolition", Year, false),
+            let attrs = [
                 Attr("roofType", Code, false),
                 Attr("measuredHeight", Length, false),
                 Attr("storeysAboveGround", Count, false),
                 Attr("storeysBelowGround", Count, false),
                 Geom(0, FootPrint),
-            ]);
-            p.extend(geoms(1..=1, &[Solid, MultiSurface]));
-            p.extend([Geom(2, Solid), Geom(2, MultiSurface), Geom(2, MultiCurve)]);
-            p.push(Child(
+            ];
+            let children = [Child(
                 "outerBuildingInstallation",
                 &["BuildingInstallation"],
-            ));
-            p.push(Bounded);
-            p.extend([Geom(3, Solid), Geom(3, MultiSurface), Geom(3, MultiCurve)]);
-            p.push(Child("consistsOfBuildingPart", &["BuildingPart"]));
-            ("bldg", ty, p)
+            )];
+            let part = Child("consistsOfBuildingPart", &["BuildingPart"]);
+            ("bldg", ty, construction(&attrs, &children, part))
         }
         "Bridge" | "BridgePart" => {
-            let mut p = CFU.to_vec();
-            p.extend([
-                Attr("yearOfConstruction", Year, false),
-                Attr("yearOfDemolition", Year, false),
-                Attr("isMovable", Bool, false),
-            ]);
-            p.extend(geoms(1..=1, &[Solid, MultiSurface]));
-            p.extend([Geom(2, Solid), Geom(2, MultiSurface), Geom(2, MultiCurve)]);
-            p.push(Child(
-                "outerBridgeConstruction",
-                &["BridgeConstructiveElement", "BridgeConstructionElement"],
-            ));
-            p.push(Child("outerBridgeInstallation", &["BridgeInstallation"]));
-            p.push(Bounded);
-            p.extend([Geom(3, Solid), Geom(3, MultiSurface), Geom(3, MultiCurve)]);
-            p.push(Child("consistsOfBridgePart", &["BridgePart"]));
-            ("brid", ty, p)
+            let attrs = [Attr("isMovable", Bool, false)];
+            let children = [
+                Child(
+                    "outerBridgeConstruction",
+                    &["BridgeConstructiveElement", "BridgeConstructionElement"],
+                ),
+                Child("outerBridgeInstallation", &["BridgeInstallation"]),
+            ];
+            let part = Child("consistsOfBridgePart", &["BridgePart"]);
+            ("brid", ty, construction(&attrs, &children, part))
         }
         "Tunnel" | "TunnelPart" => {
-            let mut p = CFU.to_vec();
-            p.extend([
-                Attr("yearOfConstruction", Year, false),
-                Attr("yearOfDemolition", Year, false),
-            ]);
-            p.extend(geoms(1..=1, &[Solid, MultiSurface]));
-            p.extend([Geom(2, Solid), Geom(2, MultiSurface), Geom(2, MultiCurve)]);
-            p.push(Child("outerTunnelInstallation", &["TunnelInstallation"]));
-            p.push(Bounded);
-            p.extend([Geom(3, Solid), Geom(3, MultiSurface), Geom(3, MultiCurve)]);
-            p.push(Child("consistsOfTunnelPart", &["TunnelPart"]));
-            ("tun", ty, p)
+            let children = [Child("outerTunnelInstallation", &["TunnelInstallation"])];
+            let part = Child("consistsOfTunnelPart", &["TunnelPart"]);
+            ("tun", ty, construction(&[], &children, part))
         }
         "BuildingInstallation" | "BridgeInstallation" | "TunnelInstallation" => {
             let mut p = CFU.to_vec();
@@ -285,3 +283,44 @@ pub(super) const ROOT_NAMESPACES: &str = concat!(
     "http://www.opengis.net/citygml/relief/2.0 http://schemas.opengis.net/citygml/relief/2.0/relief.xsd ",
     "http://www.opengis.net/citygml/cityobjectgroup/2.0 http://schemas.opengis.net/citygml/cityobjectgroup/2.0/cityObjectGroup.xsd\""
 );
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn buildings_bridges_and_tunnels_order_their_properties_alike() {
+        let props = |ty| spec(ty).unwrap().props;
+        let tunnel = props("TunnelPart");
+        let want = [
+            CFU[0],
+            CFU[1],
+            CFU[2],
+            Attr("yearOfConstruction", Year, false),
+            Attr("yearOfDemolition", Year, false),
+            Geom(1, Solid),
+            Geom(1, MultiSurface),
+            Geom(2, Solid),
+            Geom(2, MultiSurface),
+            Geom(2, MultiCurve),
+            Child("outerTunnelInstallation", &["TunnelInstallation"]),
+            Bounded,
+            Geom(3, Solid),
+            Geom(3, MultiSurface),
+            Geom(3, MultiCurve),
+            Child("consistsOfTunnelPart", &["TunnelPart"]),
+        ];
+        assert_eq!(tunnel, want);
+        // a building: its attributes and footprint before LoD 1, its installations before
+        // the surfaces, its parts last
+        let b = props("Building");
+        let at = |p: Prop| b.iter().position(|x| *x == p).unwrap();
+        assert_eq!(at(Geom(0, FootPrint)) + 1, at(Geom(1, Solid)));
+        assert_eq!(at(Bounded), at(Geom(2, MultiCurve)) + 2);
+        assert!(matches!(b.last(), Some(Child("consistsOfBuildingPart", _))));
+        let bridge = props("Bridge");
+        assert_eq!(bridge.len(), tunnel.len() + 2);
+        assert!(matches!(bridge[12], Child("outerBridgeInstallation", _)));
+        assert_eq!(bridge[13], Bounded);
+    }
+}

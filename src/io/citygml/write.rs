@@ -211,7 +211,7 @@ pub fn write_document_streamed(
     let mut root_site: Option<u64> = None;
     let mut unsure = false;
     let first = stream(input, read, chunk_bytes, &|n| passed(0, n), |c: Chunk| {
-        let b = chunk_box(&c.model);
+        let b = crate::model::content_bbox(&c.model.assets, &c.model.buildings);
         if c.index == 0 {
             root_site = root_site_of(&c.model);
             unsure = root_site.is_some() && b.is_empty();
@@ -290,25 +290,6 @@ pub fn write_document_streamed(
         (Err(WriteError::Invalid(_)), None) | (Ok(_), None) => Ok(None),
         (Err(e), _) => Err(e),
     }
-}
-
-/// The box the whole read gives the root envelope, over one chunk's model: its assets and
-/// the buildings' own geometry.
-fn chunk_box(model: &CityModel) -> crate::model::Bbox {
-    let mut b = crate::model::Bbox::EMPTY;
-    for a in &model.assets {
-        b.union(&a.bbox());
-    }
-    for bd in &model.buildings {
-        for g in &bd.geometries {
-            for p in &g.polygons {
-                for q in p.points() {
-                    b.add(*q);
-                }
-            }
-        }
-    }
-    b
 }
 
 /// Where the root's envelope starts in the first chunk's model: its first envelope, when

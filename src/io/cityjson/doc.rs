@@ -1,14 +1,18 @@
-//! The CityJSON document as serde reads it: only what the model needs (every other member,
-//! such as `appearance` or `extensions`, is passed over).
+//! The CityJSON document as serde reads it, for the model reader ([`super::map`]) and the
+//! CityGML writer (`crate::export::citygml_from_cityjson`): one set of types. What the model
+//! needs is typed; what only the writer uses is kept as it is (attributes, `children`, the
+//! semantic objects' other members, `metadata.geographicalExtent`) or only noted as present
+//! (appearances, materials, textures, addresses: the writer counts what it does not write).
+//! Any other member, such as `extensions`, is passed over.
 
-use serde::de::{Deserializer, MapAccess, Visitor};
+use serde::de::{Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
-use serde_json::Value;
+use serde_json::{Map, Value};
 use std::fmt;
 
 /// A CityJSON document, the header line of CityJSONSeq, or one `CityJSONFeature` line.
 #[derive(Debug, Deserialize)]
-pub(super) struct Doc {
+pub(crate) struct Doc {
     /// `"CityJSON"` or `"CityJSONFeature"`.
     #[serde(rename = "type")]
     pub ty: String,
@@ -28,25 +32,46 @@ pub(super) struct Doc {
     pub vertices: Vec<[f64; 3]>,
     #[serde(rename = "geometry-templates", default)]
     pub templates: Option<Templates>,
+    /// Materials and textures: present or not (never read).
+    #[serde(default)]
+    pub appearance: Option<IgnoredAny>,
 }
 
 /// `transform`: real = integer × scale + translate.
-#[derive(Debug, Deserialize)]
-pub(super) struct Transform {
+#[derive(Debug, Deserialize, Clone, Copy)]
+pub(crate) struct Transform {
     pub scale: [f64; 3],
     pub translate: [f64; 3],
 }
 
-/// `metadata`: the reference system only.
+/// `metadata`: the reference system and the extent.
 #[derive(Debug, Deserialize)]
-pub(super) struct Metadata {
+pub(crate) struct Metadata {
     #[serde(rename = "referenceSystem", default)]
     pub reference_system: Option<Value>,
+    /// `geographicalExtent` as written ([`Metadata::extent`]).
+    #[serde(rename = "geographicalExtent", default)]
+    pub extent: Option<Value>,
+}
+
+impl Metadata {
+    /// `geographicalExtent` (min x, y, z, max x, y, z), `None` unless it is six numbers.
+    pub fn extent(&self) -> Option<[f64; 6]> {
+        let e = self.extent.as_ref()?.as_array()?;
+        let mut out = [0.0; 6];
+        if e.len() != out.len() {
+            return None;
+        }
+        for (o, v) in out.iter_mut().zip(e) {
+            *o = v.as_f64()?;
+        }
+        Some(out)
+    }
 }
 
 /// `geometry-templates`.
 #[derive(Debug, Deserialize)]
-pub(super) struct Templates {
+pub(crate) struct Templates {
     #[serde(default)]
     pub templates: Vec<Geometry>,
     /// Real coordinates (never compressed by `transform`).
@@ -56,7 +81,7 @@ pub(super) struct Templates {
 
 /// `CityObjects` in document order.
 #[derive(Debug, Default)]
-pub(super) struct Objects(pub Vec<(String, CityObject)>);
+pub(crate) struct Objects(pub Vec<(String, CityObject)>);
 
 impl<'de> Deserialize<'de> for Objects {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
@@ -80,7 +105,7 @@ impl<'de> Deserialize<'de> for Objects {
 
 /// One city object.
 #[derive(Debug, Deserialize)]
-pub(super) struct CityObject {
+pub(crate) struct CityObject {
     #[serde(rename = "type")]
     pub ty: String,
     #[serde(default)]
@@ -88,22 +113,26 @@ pub(super) struct CityObject {
     #[serde(default)]
     pub parents: Vec<String>,
     #[serde(default)]
-    pub attributes: Option<Attributes>,
+    pub children: Vec<String>,
+    /// All attributes; the model reads `function` and `citygml_type` (the CityGML type of a
+    /// `GenericCityObject` written by skylod's own export), the writer all of them.
+    #[serde(default)]
+    pub attributes: Option<Map<String, Value>>,
+    /// CityJSON 1.1+/2.0 `address`: present or not (never read).
+    #[serde(default)]
+    pub address: Option<IgnoredAny>,
 }
 
-/// The attributes the model keeps (the others are copied from the source by the writer).
-#[derive(Debug, Deserialize)]
-pub(super) struct Attributes {
-    #[serde(default)]
-    pub function: Option<Value>,
-    /// The CityGML type of a `GenericCityObject` written by skylod's own export.
-    #[serde(default)]
-    pub citygml_type: Option<Value>,
+impl CityObject {
+    /// Attribute `name`, if the object has it.
+    pub fn attribute(&self, name: &str) -> Option<&Value> {
+        self.attributes.as_ref()?.get(name)
+    }
 }
 
 /// One geometry; `boundaries` are read by type ([`super::map`]).
 #[derive(Debug, Deserialize)]
-pub(super) struct Geometry {
+pub(crate) struct Geometry {
     #[serde(rename = "type")]
     pub ty: String,
     #[serde(default)]
@@ -118,18 +147,31 @@ pub(super) struct Geometry {
     /// `GeometryInstance`: 4×4, row by row.
     #[serde(rename = "transformationMatrix", default)]
     pub matrix: Option<Vec<f64>>,
+    /// Material and texture references: present or not (never read).
+    #[serde(default)]
+    pub material: Option<IgnoredAny>,
+    #[serde(default)]
+    pub texture: Option<IgnoredAny>,
+}
+
+impl Geometry {
+    /// The whole LoD (`"2.2"` → 2, `1` → 1), `None` when there is none in 0..=3.
+    pub fn whole_lod(&self) -> Option<u8> {
+        let v = self.lod.as_ref()?.value()?;
+        Some(v.floor() as u8)
+    }
 }
 
 /// `lod`: a string (`"2.2"`) since CityJSON 1.1, a number in 1.0.
 #[derive(Debug, Deserialize, Clone)]
 #[serde(untagged)]
-pub(super) enum Lod {
+pub(crate) enum Lod {
     Text(String),
     Number(f64),
 }
 
 impl Lod {
-    /// The LoD as a number (`"2.2"` → 2.2), `None` when it is not one.
+    /// The LoD as a number (`"2.2"` → 2.2), `None` when it is not one in `0..4`.
     pub fn value(&self) -> Option<f64> {
         let v = match self {
             Lod::Text(s) => s.trim().parse::<f64>().ok()?,
@@ -141,7 +183,7 @@ impl Lod {
 
 /// `semantics`.
 #[derive(Debug, Deserialize)]
-pub(super) struct Semantics {
+pub(crate) struct Semantics {
     #[serde(default)]
     pub surfaces: Vec<Surface>,
     #[serde(default)]
@@ -150,11 +192,72 @@ pub(super) struct Semantics {
 
 /// A semantic surface object.
 #[derive(Debug, Deserialize)]
-pub(super) struct Surface {
+pub(crate) struct Surface {
     #[serde(rename = "type")]
     pub ty: String,
     #[serde(default)]
     pub parent: Option<usize>,
     #[serde(default)]
     pub id: Option<Value>,
+    /// Its other members in document order (`children` and its own attributes).
+    #[serde(flatten)]
+    pub others: Map<String, Value>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_document_type_for_the_reader_and_the_writer() {
+        let d: Doc = serde_json::from_str(
+            r#"{"type":"CityJSON","version":"2.0","transform":{"scale":[1,1,1],"translate":[0,0,0]},
+            "metadata":{"geographicalExtent":[0,1,2,3,4,5.5]},"appearance":{"materials":[]},
+            "CityObjects":{"b":{"type":"Building","children":["p"],"address":[{"x":1}],
+              "attributes":{"function":"1000","n":2},
+              "geometry":[{"type":"MultiSurface","lod":"2.2","boundaries":[[[0,1,2]]],"material":{},
+                "semantics":{"surfaces":[{"type":"RoofSurface","slope":3,"id":"r1"},
+                  {"type":"Window","parent":0,"children":[]}],"values":[0]}}]},
+              "p":{"type":"BuildingPart","parents":["b"],"geometry":[{"type":"Solid","lod":1,"boundaries":[]}]}},
+            "vertices":[[0,0,0],[1,0,0],[0,1,0]]}"#,
+        )
+        .unwrap();
+        assert!(d.appearance.is_some() && d.id.is_none());
+        let meta = d.metadata.as_ref().unwrap();
+        assert_eq!(meta.extent(), Some([0.0, 1.0, 2.0, 3.0, 4.0, 5.5]));
+        let (id, b) = &d.objects.0[0];
+        assert_eq!(
+            (id.as_str(), &b.children[..]),
+            ("b", &["p".to_string()][..])
+        );
+        assert!(b.address.is_some());
+        assert_eq!(b.attribute("function"), Some(&Value::from("1000")));
+        assert_eq!(b.attribute("citygml_type"), None);
+        let g = &b.geometry[0];
+        assert_eq!(
+            (g.whole_lod(), g.lod.as_ref().and_then(Lod::value)),
+            (Some(2), Some(2.2))
+        );
+        assert!(g.material.is_some() && g.texture.is_none());
+        let s = &g.semantics.as_ref().unwrap().surfaces;
+        assert_eq!(
+            (s[0].ty.as_str(), s[0].parent, s[1].parent),
+            ("RoofSurface", None, Some(0))
+        );
+        assert_eq!(s[0].id, Some(Value::from("r1")));
+        let others: Vec<&str> = s[0].others.keys().map(String::as_str).collect();
+        assert_eq!(
+            (others, s[1].others.contains_key("children")),
+            (vec!["slope"], true)
+        );
+        let p = &d.objects.0[1].1;
+        assert_eq!((p.parents.len(), p.geometry[0].whole_lod()), (1, Some(1)));
+        let bad = |e: &str| Metadata {
+            reference_system: None,
+            extent: serde_json::from_str(e).ok(),
+        };
+        assert_eq!(bad("[0,1,2]").extent(), None);
+        assert_eq!(bad(r#"[0,1,2,3,4,"5"]"#).extent(), None);
+        assert_eq!(bad("{}").extent(), None);
+    }
 }

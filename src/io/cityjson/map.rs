@@ -213,19 +213,15 @@ impl Mapper {
             } else {
                 let installation =
                     o.ty == "BuildingInstallation" || o.ty == "BuildingConstructiveElement";
-                let element = match o.attributes.as_ref().and_then(|a| a.citygml_type.as_ref()) {
+                let element = match o.attribute("citygml_type") {
                     Some(Value::String(t)) if o.ty == "GenericCityObject" => t.clone(),
                     _ => o.ty.clone(),
                 };
-                let function = o
-                    .attributes
-                    .as_ref()
-                    .and_then(|a| a.function.as_ref())
-                    .and_then(|f| match f {
-                        Value::String(s) => Some(s.clone()),
-                        Value::Number(n) => Some(n.to_string()),
-                        _ => None,
-                    });
+                let function = o.attribute("function").and_then(|f| match f {
+                    Value::String(s) => Some(s.clone()),
+                    Value::Number(n) => Some(n.to_string()),
+                    _ => None,
+                });
                 let kind = if installation {
                     AssetKind::Installation
                 } else {
@@ -405,25 +401,9 @@ impl Mapper {
             }
         }
         for b in 0..self.buildings.len() {
-            let has_surfaces = self.buildings[b]
-                .assets
-                .iter()
-                .any(|&a| self.assets[a].kind.is_shell_surface());
-            if !has_surfaces && !self.buildings[b].geometries.is_empty() {
-                let geoms = std::mem::take(&mut self.buildings[b].geometries);
-                let bd = &self.buildings[b];
-                let id = bd.id.clone().unwrap_or_default();
-                let element = if bd.is_part {
-                    "BuildingPart"
-                } else {
-                    "Building"
-                };
-                let a = Asset {
-                    building: Some(b),
-                    line: bd.line,
-                    ..Asset::new(AssetKind::Body, Some(&id), element, geoms)
-                };
-                self.push_asset(a, &id, None);
+            if let Some(body) = self.buildings[b].take_body(b, &self.assets) {
+                let id = body.id.as_deref().unwrap_or_default().to_string();
+                self.push_asset(body, &id, None);
             }
         }
         let counts = Counts {

@@ -28,7 +28,7 @@
 //! assert_eq!(model.assets[0].detail_polygons()[0].exterior()[1].x, 1001.0);
 //! ```
 
-mod doc;
+pub(crate) mod doc;
 pub mod map;
 mod seq;
 pub(crate) use seq::reference_system_text;

@@ -297,3 +297,12 @@ fn reference_frame_is_the_full_scene_box() {
         assert!(frame.max.x < 900.0, "{far}: {:?}", frame.max);
     }
 }
+
+#[test]
+fn relative_error_against_the_reference() {
+    assert_eq!(super::rel(3.0, 2.0), 0.5);
+    assert_eq!(super::rel(1.0, -2.0), 1.5);
+    assert_eq!(super::rel(0.0, 0.0), 0.0);
+    assert_eq!(super::rel(0.1, 0.0), f64::INFINITY);
+    assert_eq!(super::rel(0.0, 2.0), 1.0);
+}

@@ -397,26 +397,17 @@ mod tests {
             (Plan::PerInput(vec!["o.obj".into()]), Format::Obj)
         );
         assert!(plan(&one, Path::new("o.txt"), None).is_err());
-        assert_eq!(
-            p(&two, "m.gml.gz", None),
-            (Plan::Merge("m.gml.gz".into()), Format::CityGml)
-        );
-        assert_eq!(
-            p(&two, "-", None),
-            (Plan::Merge("-".into()), Format::CityGml)
-        );
-        assert_eq!(
-            p(&two, "m.obj", None),
-            (Plan::Merge("m.obj".into()), Format::Obj)
-        );
-        assert_eq!(
-            p(&two, "-", Some(Format::CityJson)),
-            (Plan::Merge("-".into()), Format::CityJson)
-        );
-        assert_eq!(
-            p(&two, "m.city.jsonl", None),
-            (Plan::Merge("m.city.jsonl".into()), Format::CityJsonSeq)
-        );
+        // several inputs and a file (or `-`): a merge, in the format named or asked for
+        let merges = [
+            ("m.gml.gz", None, Format::CityGml),
+            ("-", None, Format::CityGml),
+            ("m.obj", None, Format::Obj),
+            ("-", Some(Format::CityJson), Format::CityJson),
+            ("m.city.jsonl", None, Format::CityJsonSeq),
+        ];
+        for (o, asked, format) in merges {
+            assert_eq!(p(&two, o, asked), (Plan::Merge(o.into()), format), "{o}");
+        }
         assert_eq!(
             p(&two, "outdir", None),
             (

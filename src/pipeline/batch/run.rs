@@ -221,28 +221,38 @@ pub fn merge_parts(
     inputs: usize,
 ) -> (bool, Vec<Said>) {
     if parts.is_empty() {
-        let e = format!(
-            "nothing to merge (every input failed); {} not written",
-            target.display()
-        );
-        return (false, vec![Said::Error(e)]);
+        return nothing_to_merge(target);
     }
     match merge_named(parts, names, target, opts) {
         Ok(s) => {
-            let mut said = Vec::new();
-            if parts.len() < inputs {
-                said.push(Said::Warning(format!(
-                    "warning: {} holds {} of the {} inputs (the others failed)",
-                    target.display(),
-                    parts.len(),
-                    inputs
-                )));
-            }
+            let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs)
+                .into_iter()
+                .collect();
             said.push(Said::Summary(merge_line(&s, target)));
             (true, said)
         }
         Err(e) => (false, vec![Said::Error(format!("{e:#}"))]),
     }
+}
+
+/// What a merge says when every input failed: nothing written (the shared first step of
+/// [`merge_parts`] and [`merge_converted`]).
+fn nothing_to_merge(target: &Path) -> (bool, Vec<Said>) {
+    let e = format!(
+        "nothing to merge (every input failed); {} not written",
+        target.display()
+    );
+    (false, vec![Said::Error(e)])
+}
+
+/// The warning of a merge written from `parts` of the `inputs` (none when every input is in).
+fn partial_merge(target: &Path, parts: usize, inputs: usize) -> Option<Said> {
+    (parts < inputs).then(|| {
+        Said::Warning(format!(
+            "warning: {} holds {parts} of the {inputs} inputs (the others failed)",
+            target.display()
+        ))
+    })
 }
 
 /// [`merge_parts`] into a target in another format than CityGML (`target`: the file and its
@@ -259,11 +269,7 @@ pub fn merge_converted(
     inputs: usize,
 ) -> (bool, Vec<Said>) {
     if parts.is_empty() {
-        let e = format!(
-            "nothing to merge (every input failed); {} not written",
-            target.display()
-        );
-        return (false, vec![Said::Error(e)]);
+        return nothing_to_merge(target);
     }
     if let Err(e) =
         crate::io::citygml::write::check_target(target, opts, parts.iter().map(PathBuf::as_path))
@@ -290,15 +296,9 @@ pub fn merge_converted(
     let _ = std::fs::remove_file(&staged);
     match r {
         Ok(e) => {
-            let mut said = Vec::new();
-            if parts.len() < inputs {
-                said.push(Said::Warning(format!(
-                    "warning: {} holds {} of the {} inputs (the others failed)",
-                    target.display(),
-                    parts.len(),
-                    inputs
-                )));
-            }
+            let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs)
+                .into_iter()
+                .collect();
             said.push(Said::Summary(format!(
                 "merged {} file(s) into {} ({format}): {} member(s), {} gml:id(s) renamed",
                 m.files,
@@ -464,6 +464,28 @@ mod tests {
             assert!(r[1].2.is_err());
             std::fs::remove_file(&r[0].1).unwrap();
         }
+    }
+
+    #[test]
+    fn both_merges_say_the_same_when_inputs_fail() {
+        let t = Path::new("m.gml");
+        assert!(partial_merge(t, 2, 2).is_none());
+        let w = "warning: m.gml holds 1 of the 3 inputs (the others failed)";
+        assert!(matches!(partial_merge(t, 1, 3), Some(Said::Warning(l)) if l == w));
+        let dir = tempfile::tempdir().unwrap();
+        let t = dir.path().join("m.obj");
+        let staging = Staging::new(&t).unwrap();
+        let o = WriteOptions::default();
+        let (a, said_a) = merge_parts(&[], &[], &t, &o, 2);
+        let (b, said_b) = merge_converted(&[], &[], (&t, Format::Obj), &staging, &o, 2);
+        let e = format!(
+            "nothing to merge (every input failed); {} not written",
+            t.display()
+        );
+        for (ok, said) in [(a, said_a), (b, said_b)] {
+            assert!(!ok && matches!(&said[..], [Said::Error(l)] if *l == e));
+        }
+        assert!(!t.exists());
     }
 
     #[test]

@@ -94,22 +94,13 @@ impl BoxIndex {
     /// A box (grown by the margin) that the ray `origin + t dir` (`t >= 0`) crosses first, or
     /// one crossed nearly as soon (the search prunes in f32); `None` when it crosses none.
     pub fn nearest(&self, origin: DVec3, dir: DVec3) -> Option<u32> {
-        let (bvh, ids) = self.bvh.as_ref()?;
-        let ray = self.local_ray(origin, dir, f64::INFINITY)?;
-        let g = DVec3::splat(self.margin);
         let mut best: Option<(f64, u32)> = None;
-        let mut hit = RayHit::none();
-        bvh.ray_traverse(ray, &mut hit, |_, slot| {
-            let Some((i, b)) = self.slot_box(bvh, ids, slot) else {
-                return f32::INFINITY;
-            };
-            match super::ray::ray_aabb(origin, dir, b.min - g, b.max + g, 0.0, f64::INFINITY) {
-                Some((t0, _)) if best.is_none_or(|(bt, _)| t0 < bt) => {
-                    best = Some((t0, i));
-                    // prune a little beyond: f32 node entries are rounded
-                    (t0 * (1.0 + 1e-6) + 1e-3) as f32
-                }
-                _ => f32::INFINITY,
+        self.traverse(origin, dir, f64::INFINITY, |t0, i| {
+            if best.is_none_or(|(bt, _)| t0 < bt) {
+                best = Some((t0, i));
+                t0
+            } else {
+                f64::INFINITY
             }
         });
         best.map(|(_, i)| i)
@@ -120,39 +111,51 @@ impl BoxIndex {
     /// nearest first, ties by box index. One traversal that prunes beyond the `k`-th entry
     /// found so far, so it costs about what [`BoxIndex::nearest`] does.
     pub fn nearest_k(&self, origin: DVec3, dir: DVec3, k: usize, out: &mut Vec<(f64, u32)>) {
-        let Some((bvh, ids)) = &self.bvh else {
-            return;
-        };
         if k == 0 {
             return;
         }
-        let Some(ray) = self.local_ray(origin, dir, f64::INFINITY) else {
+        let start = out.len();
+        self.traverse(origin, dir, f64::INFINITY, |t0, i| {
+            let list = &mut out[start..];
+            let at = list.partition_point(|x| x.0 < t0 || (x.0 == t0 && x.1 < i));
+            if list.len() == k {
+                if at == k {
+                    return f64::INFINITY;
+                }
+                out.pop();
+            }
+            out.insert(start + at, (t0, i));
+            out[start..].get(k - 1).map_or(f64::INFINITY, |&(tk, _)| tk)
+        });
+    }
+
+    /// The traversal of the three searches: `visit(t0, i)` for each box `i` (grown by the
+    /// margin) that the ray `origin + t dir` crosses with `0 <= t <= tmax` (decided in f64,
+    /// [`crate::solar::trace::ray::ray_aabb`]; `t0` the entry distance), in the order the tree
+    /// gives. `visit` returns the distance beyond which no box is wanted any more
+    /// (`f64::INFINITY`: every box); nodes entered a little beyond it are pruned (f32 node
+    /// entries are rounded).
+    fn traverse(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmax: f64,
+        mut visit: impl FnMut(f64, u32) -> f64,
+    ) {
+        let Some((bvh, ids)) = &self.bvh else {
             return;
         };
-        let start = out.len();
+        let Some(ray) = self.local_ray(origin, dir, tmax) else {
+            return;
+        };
         let g = DVec3::splat(self.margin);
         let mut hit = RayHit::none();
         bvh.ray_traverse(ray, &mut hit, |_, slot| {
             let Some((i, b)) = self.slot_box(bvh, ids, slot) else {
                 return f32::INFINITY;
             };
-            let Some((t0, _)) =
-                super::ray::ray_aabb(origin, dir, b.min - g, b.max + g, 0.0, f64::INFINITY)
-            else {
-                return f32::INFINITY;
-            };
-            let list = &mut out[start..];
-            let at = list.partition_point(|x| x.0 < t0 || (x.0 == t0 && x.1 < i));
-            if list.len() == k {
-                if at == k {
-                    return f32::INFINITY;
-                }
-                out.pop();
-            }
-            out.insert(start + at, (t0, i));
-            match out[start..].get(k - 1) {
-                // prune a little beyond the k-th: f32 node entries are rounded
-                Some(&(tk, _)) => (tk * (1.0 + 1e-6) + 1e-3) as f32,
+            match super::ray::ray_aabb(origin, dir, b.min - g, b.max + g, 0.0, tmax) {
+                Some((t0, _)) => (visit(t0, i) * (1.0 + 1e-6) + 1e-3) as f32,
                 None => f32::INFINITY,
             }
         });
@@ -185,26 +188,11 @@ impl BoxIndex {
     /// (ties by box index). The entry distance is 0 for a box around the origin. The
     /// crossing is decided in f64 ([`crate::solar::trace::ray::ray_aabb`]).
     pub fn crossed(&self, origin: DVec3, dir: DVec3, tmax: f64, out: &mut Vec<(f64, u32)>) {
-        let Some((bvh, ids)) = &self.bvh else {
-            return;
-        };
-        let Some(ray) = self.local_ray(origin, dir, tmax) else {
-            return;
-        };
         let start = out.len();
-        let g = DVec3::splat(self.margin);
-        let mut hit = RayHit::none();
-        bvh.ray_traverse(ray, &mut hit, |_, slot| {
-            let Some((i, b)) = self.slot_box(bvh, ids, slot) else {
-                return f32::INFINITY;
-            };
-            if let Some((t0, _)) =
-                super::ray::ray_aabb(origin, dir, b.min - g, b.max + g, 0.0, tmax)
-            {
-                out.push((t0, i));
-            }
+        self.traverse(origin, dir, tmax, |t0, i| {
+            out.push((t0, i));
             // never a hit: every node the ray crosses is visited
-            f32::INFINITY
+            f64::INFINITY
         });
         out[start..].sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     }

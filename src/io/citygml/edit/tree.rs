@@ -4,6 +4,7 @@
 //! [`super::lods`] decide on this tree which spans to cut; the tree never holds more than one
 //! member, so memory follows the largest member, not the file.
 
+use super::walk::MemberDoc;
 use crate::io::citygml::ns::{classify, Module, Ns};
 use crate::io::citygml::read::coords::parse_gml_points;
 use crate::model::Bbox;
@@ -78,13 +79,8 @@ impl Tree {
     /// The member at `member` (the bytes of one element), in a document whose root start tag
     /// is `root` (its namespace declarations are in scope).
     pub(super) fn parse(root: &[u8], member: &[u8]) -> Result<Tree, TreeError> {
-        let mut doc = Vec::with_capacity(root.len() + member.len() + 8);
-        doc.extend_from_slice(root);
-        doc.extend_from_slice(member);
-        doc.extend_from_slice(b"</r>");
-        let base = root.len();
-        let mut reader = NsReader::from_reader(&doc[..]);
-        reader.config_mut().check_end_names = false;
+        let doc = MemberDoc::new(root, member);
+        let mut reader = doc.reader();
         let mut tree = Tree::default();
         let mut stack: Vec<usize> = Vec::new();
         let mut depth = 0usize;
@@ -94,17 +90,9 @@ impl Tree {
         // depth at which an implicit geometry's prototype or an envelope began
         let mut skip_from: Option<usize> = None;
         loop {
-            let before = reader.buffer_position() as usize;
-            let at = before.saturating_sub(base);
-            let err = |e: &dyn std::fmt::Display| TreeError {
-                at,
-                message: e.to_string(),
-            };
-            let (ns, ev) = reader.read_resolved_event().map_err(|e| err(&e))?;
-            let uri = match ns {
-                ResolveResult::Bound(n) => n.into_inner().to_vec(),
-                _ => Vec::new(),
-            };
+            let (at, uri, ev) = doc
+                .next(&mut reader)
+                .map_err(|(at, message)| TreeError { at, message })?;
             match ev {
                 Event::Start(e) | Event::Empty(e) if depth == 0 => {
                     let _ = e;
@@ -112,7 +100,7 @@ impl Tree {
                 }
                 Event::Start(ref e) | Event::Empty(ref e) => {
                     let empty = matches!(ev, Event::Empty(_));
-                    let end = reader.buffer_position() as usize - base;
+                    let end = doc.offset(&reader);
                     // a tag starts at its `<` (the reader may count it with the text before)
                     let at = memchr::memrchr(b'<', &member[..end.min(member.len())]).unwrap_or(at);
                     let idx = tree.nodes.len();
@@ -166,7 +154,7 @@ impl Tree {
                     let Some(idx) = stack.pop() else {
                         break;
                     };
-                    let end = reader.buffer_position() as usize - base;
+                    let end = doc.offset(&reader);
                     if let Some((c, dim)) = capture.take() {
                         if c == idx {
                             close_capture(&mut tree.nodes[idx], dim, &text)

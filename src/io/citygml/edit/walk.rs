@@ -5,6 +5,8 @@
 use crate::io::citygml::error::{Location, ReadError};
 use crate::io::citygml::source;
 use quick_xml::events::Event;
+use quick_xml::name::ResolveResult;
+use quick_xml::NsReader;
 use std::io::{self, BufRead, Read};
 use std::path::Path;
 
@@ -164,6 +166,60 @@ pub(crate) fn walk<E: From<ReadError>>(
     Ok(base + log.len() as u64)
 }
 
+/// One child of the root (a member) as a document of its own, for the parsers that build
+/// its element tree (`edit`'s rules, `upgrade`): the root's start tag (its namespace
+/// declarations in scope), the member, a closing `</r>`. Offsets are counted from the start
+/// of the member.
+pub(crate) struct MemberDoc {
+    doc: Vec<u8>,
+    base: usize,
+}
+
+impl MemberDoc {
+    /// The member `member` (the bytes of one element) under the root start tag `root`.
+    pub(crate) fn new(root: &[u8], member: &[u8]) -> MemberDoc {
+        let mut doc = Vec::with_capacity(root.len() + member.len() + 8);
+        doc.extend_from_slice(root);
+        doc.extend_from_slice(member);
+        doc.extend_from_slice(b"</r>");
+        MemberDoc {
+            doc,
+            base: root.len(),
+        }
+    }
+
+    /// A namespace-resolving reader over the document (end names not checked: `</r>` closes
+    /// whatever the root is called).
+    pub(crate) fn reader(&self) -> NsReader<&[u8]> {
+        let mut reader = NsReader::from_reader(&self.doc[..]);
+        reader.config_mut().check_end_names = false;
+        reader
+    }
+
+    /// Where `reader` is, as an offset in the member (0 within the root's start tag).
+    pub(crate) fn offset(&self, reader: &NsReader<&[u8]>) -> usize {
+        (reader.buffer_position() as usize).saturating_sub(self.base)
+    }
+
+    /// The next event of `reader`, with the offset it starts at ([`MemberDoc::offset`]) and
+    /// the namespace URI of its name (empty when it has none); an XML error as its offset and
+    /// message.
+    pub(crate) fn next<'d>(
+        &self,
+        reader: &mut NsReader<&'d [u8]>,
+    ) -> Result<(usize, Vec<u8>, Event<'d>), (usize, String)> {
+        let at = self.offset(reader);
+        let (ns, ev) = reader
+            .read_resolved_event()
+            .map_err(|e| (at, e.to_string()))?;
+        let uri = match ns {
+            ResolveResult::Bound(n) => n.into_inner().to_vec(),
+            _ => Vec::new(),
+        };
+        Ok((at, uri, ev))
+    }
+}
+
 fn lines(b: &[u8]) -> u64 {
     memchr::memchr_iter(b'\n', b).count() as u64
 }
@@ -202,4 +258,45 @@ fn root_check(
             String::from_utf8_lossy(e.name().into_inner())
         ),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::MemberDoc;
+    use quick_xml::events::Event;
+
+    #[test]
+    fn a_member_reads_in_its_root_namespaces_with_offsets_in_the_member() {
+        let root = br#"<core:CityModel xmlns:core="urn:c" xmlns:b="urn:b">"#;
+        let member = b"<b:Building><b:x>1</b:x></b:Building>";
+        let doc = MemberDoc::new(root, member);
+        let mut reader = doc.reader();
+        let mut starts = Vec::new();
+        loop {
+            let (at, uri, ev) = doc.next(&mut reader).unwrap();
+            match ev {
+                Event::Start(e) => starts.push((at, uri, e.local_name().as_ref().to_vec())),
+                Event::End(_) => assert!(doc.offset(&reader) <= member.len() + 4),
+                Event::Eof => break,
+                _ => {}
+            }
+        }
+        let want: Vec<(usize, Vec<u8>, Vec<u8>)> = vec![
+            (0, b"urn:c".to_vec(), b"CityModel".to_vec()),
+            (0, b"urn:b".to_vec(), b"Building".to_vec()),
+            (12, b"urn:b".to_vec(), b"x".to_vec()),
+        ];
+        assert_eq!(starts, want);
+        let bad = MemberDoc::new(root, b"<!x>");
+        let mut reader = bad.reader();
+        let err = loop {
+            match bad.next(&mut reader) {
+                Ok((_, _, Event::Eof)) => panic!("no error"),
+                Ok(_) => {}
+                Err(e) => break e,
+            }
+        };
+        assert_eq!(err.0, 0);
+        assert!(!err.1.is_empty());
+    }
 }

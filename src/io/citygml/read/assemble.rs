@@ -4,7 +4,7 @@
 use super::state::{EnvOwner, Owner, Parser};
 use super::xlink::{PolyRef, Walk};
 use crate::io::citygml::error::{Location, ReadError};
-use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon, SourceFile, Warning};
+use crate::model::{Bbox, CityModel, Polygon, SourceFile, Warning};
 
 /// Drop the polygons at the end of the arena that no reference needs any more (`uses` 0),
 /// and give the arena's memory back once it is less than half used.
@@ -78,32 +78,9 @@ impl Parser<'_> {
         }
         // Body assets: a building's own geometry when it has no thematic surfaces
         for b in 0..self.buildings.len() {
-            let has_surfaces = self.buildings[b]
-                .assets
-                .iter()
-                .any(|&a| self.assets[a].kind.is_shell_surface());
-            if !has_surfaces && !self.buildings[b].geometries.is_empty() {
-                let geoms = std::mem::take(&mut self.buildings[b].geometries);
-                let idx = self.assets.len();
-                let bb = &self.buildings[b];
-                self.assets.push(Asset {
-                    kind: AssetKind::Body,
-                    id: bb.id.as_deref().map(Into::into),
-                    element: if bb.is_part {
-                        "BuildingPart"
-                    } else {
-                        "Building"
-                    }
-                    .into(),
-                    building: Some(b),
-                    parent: None,
-                    span: bb.span.clone(),
-                    line: bb.line,
-                    function: None,
-                    geometries: geoms,
-                    file: 0,
-                });
-                self.buildings[b].assets.push(idx);
+            if let Some(body) = self.buildings[b].take_body(b, &self.assets) {
+                self.buildings[b].assets.push(self.assets.len());
+                self.assets.push(body);
             }
         }
         // the model's lists at their size (a split read appended the parts' lists)
@@ -116,22 +93,7 @@ impl Parser<'_> {
             .env_owners
             .iter()
             .map(|o| match o {
-                EnvOwner::Root => {
-                    let mut b = Bbox::EMPTY;
-                    for a in &self.assets {
-                        b.union(&a.bbox());
-                    }
-                    for bd in &self.buildings {
-                        for g in &bd.geometries {
-                            for p in &g.polygons {
-                                for q in p.points() {
-                                    b.add(*q);
-                                }
-                            }
-                        }
-                    }
-                    b
-                }
+                EnvOwner::Root => crate::model::content_bbox(&self.assets, &self.buildings),
                 EnvOwner::Building(b) => self.building_bbox(*b),
                 EnvOwner::Asset(a) => {
                     let mut b = self.assets.get(*a).map(|x| x.bbox()).unwrap_or_default();

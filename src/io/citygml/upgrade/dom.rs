@@ -3,6 +3,7 @@
 //! The tree never holds more than one member, so memory follows the largest member.
 
 use super::names::Src;
+use crate::io::citygml::edit::walk::MemberDoc;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::name::ResolveResult;
 use quick_xml::NsReader;
@@ -153,25 +154,14 @@ pub(super) struct DomError {
 /// The member at `member` (the bytes of one element) in a document whose root start tag is
 /// `root` (its namespace declarations are in scope).
 pub(super) fn parse(root: &[u8], member: &[u8]) -> Result<El, DomError> {
-    let mut doc = Vec::with_capacity(root.len() + member.len() + 8);
-    doc.extend_from_slice(root);
-    doc.extend_from_slice(member);
-    doc.extend_from_slice(b"</r>");
-    let base = root.len();
-    let mut reader = NsReader::from_reader(&doc[..]);
-    reader.config_mut().check_end_names = false;
+    let doc = MemberDoc::new(root, member);
+    let mut reader = doc.reader();
     let mut stack: Vec<El> = Vec::new();
     let mut depth = 0usize;
     loop {
-        let at = (reader.buffer_position() as usize).saturating_sub(base);
-        let (ns, ev) = reader.read_resolved_event().map_err(|e| DomError {
-            at,
-            message: e.to_string(),
-        })?;
-        let uri = match ns {
-            ResolveResult::Bound(n) => n.into_inner().to_vec(),
-            _ => Vec::new(),
-        };
+        let (_, uri, ev) = doc
+            .next(&mut reader)
+            .map_err(|(at, message)| DomError { at, message })?;
         match ev {
             Event::Start(_) | Event::Empty(_) if depth == 0 => depth = 1,
             Event::Start(ref e) | Event::Empty(ref e) => {
