@@ -66,12 +66,15 @@ use std::hash::BuildHasher;
 use std::io::{BufRead, Write};
 use std::path::Path;
 
+/// `transform` as `(scale, translate)`.
+pub(crate) type Transform = ([f64; 3], [f64; 3]);
+
 /// What a rule knows of the document besides the tree.
 pub(crate) struct Ctx<'a> {
     /// The vertices the tree's boundaries index (the document's, or the feature's).
     pub verts: &'a [Value],
     /// `transform` as `(scale, translate)`.
-    pub transform: Option<([f64; 3], [f64; 3])>,
+    pub transform: Option<Transform>,
     /// `geometry-templates.templates`.
     pub templates: Option<&'a [Value]>,
     /// `metadata.referenceSystem` as text.
@@ -280,7 +283,7 @@ fn prune(objects: &mut Map<String, Value>, removed: &HashSet<u64>, counts: &mut 
 fn renumber(
     objects: &mut Map<String, Value>,
     vertices: &mut Vec<Value>,
-    ctx_transform: Option<([f64; 3], [f64; 3])>,
+    ctx_transform: Option<Transform>,
 ) -> Result<Applied, String> {
     let n = vertices.len();
     let mut map = vec![u32::MAX; n];
@@ -341,7 +344,7 @@ fn renumber(
 }
 
 /// `transform` of a document as `(scale, translate)`.
-fn transform_of(head: &Value) -> Option<([f64; 3], [f64; 3])> {
+fn transform_of(head: &Value) -> Option<Transform> {
     let t = head.get("transform")?;
     let three = |k: &str| -> Option<[f64; 3]> {
         let a = t.get(k)?.as_array()?;
@@ -528,7 +531,7 @@ fn edit_feature(
     input: &Path,
     line: u64,
     f: &mut Value,
-    (transform, templates, srs): (Option<([f64; 3], [f64; 3])>, Option<&[Value]>, Option<&str>),
+    (transform, templates, srs): (Option<Transform>, Option<&[Value]>, Option<&str>),
     rule: &mut dyn TreeRule,
     counts: &mut EditSummary,
     removed: &mut HashSet<u64>,
