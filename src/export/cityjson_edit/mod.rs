@@ -49,9 +49,11 @@
 //! assert_eq!(doc["metadata"]["geographicalExtent"], serde_json::json!([0.0,0.0,0.0,2.0,1.0,3.0]));
 //! ```
 
+mod reproject;
 mod rules;
 mod upgrade;
 
+pub use reproject::{reproject_cityjson, CityJsonReproject};
 pub use rules::{filter_lods, subset};
 pub use upgrade::{upgrade_cityjson, CityJsonUpgrade};
 
@@ -343,6 +345,11 @@ fn renumber(
     Ok(Applied { kept })
 }
 
+/// `metadata.referenceSystem` of a header as CRS text.
+fn srs_of(head: &Value) -> Option<String> {
+    crate::io::cityjson::reference_system_text(head.get("metadata")?.get("referenceSystem")?)
+}
+
 /// `transform` of a document as `(scale, translate)`.
 fn transform_of(head: &Value) -> Option<Transform> {
     let t = head.get("transform")?;
@@ -455,7 +462,7 @@ pub(crate) fn run<'r>(
     // CityJSONSeq, pass 1: decisions, the box of what stays, the ids that go.
     let transform = transform_of(&head);
     let templates = templates_of(&head);
-    let srs = crate::io::cityjson::reference_system_text(&head);
+    let srs = srs_of(&head);
     let mut removed = HashSet::new();
     let mut kept = Bbox::EMPTY;
     let mut scratch = EditSummary::default();
@@ -598,7 +605,7 @@ fn run_document(
     let mut counts = EditSummary::default();
     let transform = transform_of(&head);
     let templates = templates_of(&head);
-    let srs = crate::io::cityjson::reference_system_text(&head);
+    let srs = srs_of(&head);
     let Some(h) = head.as_object_mut() else {
         return Err(cj(input, 1, None, "not a JSON object".into()));
     };

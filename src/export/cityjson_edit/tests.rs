@@ -64,6 +64,15 @@ fn subset_by_box_keeps_whole_trees_renumbers_and_recomputes_the_extent() {
         json!([100.0, 200.0, 0.0, 102.0, 201.0, 4.0])
     );
     assert_eq!(out["transform"], doc()["transform"]);
+    // the box in a named CRS: converted into the document's (here the same one)
+    let named = Subset {
+        bbox_crs: Some(crate::model::crs::Crs::parse("EPSG:7415")),
+        ..rule.clone()
+    };
+    let (s, _) = run_on(&doc(), "a.city.json", &|i, o| {
+        rules::subset(i, o, &named, &Default::default()).unwrap()
+    });
+    assert_eq!(s.members_kept, 1);
     // within: `a` reaches x 102 > 101.5, so nothing is within
     let within = Subset {
         mode: BboxMode::Within,
