@@ -145,7 +145,8 @@ pub fn reproject_cityjson(
         let mut line = 1;
         while let Some(mut f) = values.next()? {
             line += 1;
-            convert(&mut f, line, &mut Bbox::EMPTY, &mut s.vertices)?;
+            let mut scratch = Bbox::EMPTY;
+            convert(&mut f, line, &mut scratch, &mut s.vertices)?;
             n += write_line(w, &f).map_err(io)?;
         }
         Ok(n)
