@@ -1,6 +1,9 @@
 //! Step 4: each input file written with its assets at their levels.
 
 use super::Levels;
+use crate::export::citygml_via_cityjson::{
+    is_cityjson_source, write_citygml_levels, write_citygml_levels_to,
+};
 use crate::export::{Content, Format};
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::WriteError;
@@ -56,6 +59,10 @@ pub fn write_levels(
             })?;
         }
     }
+    if format == Format::CityGml && is_cityjson_source(model, file) {
+        let s = write_citygml_levels(model, file, content(levels), out, wopts)?;
+        return Ok(via_cityjson_written(model, file, levels, &s));
+    }
     if format == Format::CityGml {
         let s = write_mixed(
             model,
@@ -85,6 +92,10 @@ pub fn write_levels_to(
     format: Format,
     wopts: &WriteOptions,
 ) -> Result<Written, WriteError> {
+    if format == Format::CityGml && is_cityjson_source(model, file) {
+        let s = write_citygml_levels_to(model, file, content(levels), w)?;
+        return Ok(via_cityjson_written(model, file, levels, &s));
+    }
     if format == Format::CityGml {
         let (rough, lv) = (levels.rough_source(), levels.levels());
         let s = write_mixed_to(model, file, rough, lv, w, wopts)?;
@@ -98,6 +109,39 @@ fn content(levels: &Levels) -> Content<'_> {
     Content::Levels {
         rough: levels.rough_source(),
         levels: levels.levels(),
+    }
+}
+
+/// What CityGML written from a CityJSON source ([`crate::export::citygml_via_cityjson`])
+/// reports: the file's assets per level, their detail polygons, the polygons written.
+fn via_cityjson_written(
+    model: &CityModel,
+    file: usize,
+    levels: &Levels,
+    s: &crate::export::citygml_from_cityjson::FromCityJsonSummary,
+) -> Written {
+    let mut per_level = [0usize; 3];
+    let mut polygons_in = 0;
+    for (i, a) in model
+        .assets
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| a.file == file)
+    {
+        let l = levels.levels().get(i).copied().unwrap_or(2).min(2);
+        per_level[usize::from(l)] += 1;
+        polygons_in += a.detail_polygons().len();
+    }
+    let (buildings_dropped, parts_dropped) =
+        buildings_without_kept_assets(model, file, levels.levels());
+    Written {
+        bytes: s.bytes_out,
+        levels: per_level,
+        polygons_in,
+        polygons_out: s.polygons,
+        buildings_dropped,
+        parts_dropped,
+        export: None,
     }
 }
 

@@ -7,8 +7,8 @@
 //! * Real CityJSON of the CityJSON project (`fixtures/cityjson/`, SOURCES.md): counts against
 //!   an independent Python reading of the JSON (`tests/oracle/cityjson_assets.py`, which
 //!   also loads the file with cjio); the CityJSON 1.1 files against `cjio upgrade` of them.
-//! * Every command takes CityJSON (files, directories, `-`); the CityGML-only steps refuse it
-//!   with exit 1 and a message; broken CityJSON fails with file, line:column or object id.
+//! * Every command takes CityJSON (files, directories, `-`); `subset` and `filter-lods` refuse
+//!   a CityGML name for its output with exit 1 and a message (edits: tests/it/cityjson_edit.rs); broken CityJSON fails with file, line:column or object id.
 //! * `lod … -o y.city.json` from CityJSON keeps attributes and semantics; cjval-valid.
 
 use crate::util::*;
@@ -460,33 +460,23 @@ fn every_command_reads_cityjson() {
 }
 
 #[test]
-fn citygml_only_steps_refuse_cityjson_clearly() {
+fn citygml_names_for_cityjson_edits_are_refused_clearly() {
     let dir = tempfile::tempdir().unwrap();
     let input = scene();
-    let m = read_file(&input).unwrap();
-    let poi = scene_poi(&m);
-    // (`convert` writes CityJSON as CityGML: tests/it/cityjson_to_citygml.rs)
-    let o: Vec<PathBuf> = ["c", "r", "l", "s", "f"]
+    // (`convert`, `upgrade`, `rough` and `lod` write CityGML from CityJSON:
+    // tests/it/cityjson_to_citygml.rs, tests/it/cityjson_edit.rs)
+    let o: Vec<PathBuf> = ["s", "f"]
         .iter()
         .map(|n| dir.path().join(format!("{n}.gml")))
         .collect();
     let cases: Vec<Vec<&std::ffi::OsStr>> = vec![
-        vec![os("rough"), os(&input), os("-o"), os(&o[1])],
-        vec![
-            os("lod"),
-            os(&input),
-            os("--poi"),
-            os(&poi),
-            os("-o"),
-            os(&o[2]),
-        ],
         vec![
             os("subset"),
             os(&input),
             os("--id"),
             os("x"),
             os("-o"),
-            os(&o[3]),
+            os(&o[0]),
         ],
         vec![
             os("filter-lods"),
@@ -494,14 +484,17 @@ fn citygml_only_steps_refuse_cityjson_clearly() {
             os("--lod"),
             os("2"),
             os("-o"),
-            os(&o[4]),
+            os(&o[1]),
         ],
     ];
     for args in cases {
         let o = run(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
         let e = stderr(&o);
-        assert!(e.contains("this is CityJSON"), "{args:?}: {e}");
+        assert!(
+            e.contains("a CityJSON input is written as CityJSON"),
+            "{args:?}: {e}"
+        );
         assert!(!e.contains("panicked"), "{args:?}: {e}");
     }
 }

@@ -27,6 +27,7 @@ mod etl;
 // `subset` and `filter-lods` against an independent reader and the XSDs.
 mod edit;
 // CityJSON and CityJSONSeq output is valid for `cjval` and read by `cjio` with skylod's counts.
+mod cityjson_edit;
 mod cityjson_export;
 // CityJSON and CityJSONSeq as inputs of every command (issue 24).
 mod cityjson_input;

@@ -243,7 +243,7 @@ pub fn is_json_file(path: &Path) -> bool {
 
 /// Open a (possibly gzip-compressed) file, or standard input for `-` (its bytes as kept by
 /// [`crate::io::files::stdin_bytes`]).
-fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
+pub(crate) fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
     let io = |source| ReadError::Io {
         file: input.to_path_buf(),
         source,

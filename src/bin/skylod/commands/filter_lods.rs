@@ -1,9 +1,11 @@
-//! `skylod filter-lods`: keep or remove LoD representations of the city objects of CityGML
-//! documents (citygml-tools' `filter-lods`), streamed: memory follows the largest city object.
+//! `skylod filter-lods`: keep or remove LoD representations of the city objects of CityGML or
+//! CityJSON documents (citygml-tools' `filter-lods`; CityJSON: `skylod::export::cityjson_edit`),
+//! streamed: memory follows the largest city object.
 
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
-use skylod::citygml::edit::{filter_lods, LodMode, Lods};
+use skylod::export::citygml_from_cityjson::is_json_file;
+use skylod::io::citygml::edit::{filter_lods, LodMode, Lods};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -34,6 +36,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         &args.io,
         "filter-lods",
         Some(&args.jobs),
-        &|input, out, shown, opts| Ok(filter_lods(input, out, &rule, opts)?.describe(input, shown)),
+        &|input, out, shown, opts| {
+            let s = if is_json_file(input) {
+                skylod::export::cityjson_edit::filter_lods(input, out, &rule, opts)?
+            } else {
+                filter_lods(input, out, &rule, opts)?
+            };
+            Ok(s.describe(input, shown))
+        },
     )
 }

@@ -123,6 +123,24 @@ fn one(
             polygons: (0, 0),
         });
     }
+    if skylod::export::citygml_via_cityjson::is_cityjson_source(&model, 0) {
+        // A CityJSON source has no XML to copy: its CityJSON output converted to CityGML 2.0.
+        let content = Content::Levels {
+            rough: &rough,
+            levels: &levels,
+        };
+        let s = skylod::export::citygml_via_cityjson::write_citygml_levels(
+            &model, 0, content, out, wopts,
+        )?;
+        return Ok(Done {
+            line: Some(s.describe(input, out)),
+            warnings: model.warnings.len(),
+            polygons: (
+                model.assets.iter().map(|a| a.detail_polygons().len()).sum(),
+                s.polygons,
+            ),
+        });
+    }
     let s = write_mixed(&model, 0, &rough, &levels, out, wopts)?;
     Ok(Done {
         line: Some(s.rough_line(input, out)),

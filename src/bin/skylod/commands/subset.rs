@@ -1,11 +1,13 @@
-//! `skylod subset`: keep the top-level city objects of CityGML documents that match a box,
-//! ids or types (citygml-tools' `subset`), streamed: memory follows the largest city object.
+//! `skylod subset`: keep the top-level city objects of CityGML or CityJSON documents that match
+//! a box, ids or types (citygml-tools' `subset`; CityJSON: `skylod::export::cityjson_edit`),
+//! streamed: memory follows the largest city object.
 
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
 use anyhow::Context;
-use skylod::citygml::edit::{subset, BboxMode, Subset};
-use skylod::crs::Crs;
+use skylod::export::citygml_from_cityjson::is_json_file;
+use skylod::io::citygml::edit::{subset, BboxMode, Subset};
+use skylod::model::crs::Crs;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -68,6 +70,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         &args.io,
         "subset",
         Some(&args.jobs),
-        &|input, out, shown, opts| Ok(subset(input, out, &rule, opts)?.describe(input, shown)),
+        &|input, out, shown, opts| {
+            let s = if is_json_file(input) {
+                skylod::export::cityjson_edit::subset(input, out, &rule, opts)?
+            } else {
+                subset(input, out, &rule, opts)?
+            };
+            Ok(s.describe(input, shown))
+        },
     )
 }

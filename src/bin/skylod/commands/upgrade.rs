@@ -1,10 +1,14 @@
-//! `skylod upgrade`: CityGML 1.0 / 2.0 → 3.0 (citygml-tools' `upgrade`), streamed: memory
+//! `skylod upgrade`: CityGML 1.0 / 2.0 → 3.0 (citygml-tools' `upgrade`); CityJSON → CityGML 3.0
+//! (a `.gml` output) or CityJSON 1.0 / 1.1 → 2.0 (`cjio upgrade`); streamed: memory
 //! follows the largest city object; files in parallel (`--jobs`), the same bytes whatever
 //! the number.
 
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
-use skylod::citygml::upgrade::{upgrade, UpgradeOptions};
+use skylod::export::citygml_from_cityjson::{citygml_from_cityjson, is_json_file, TargetVersion};
+use skylod::export::cityjson_edit::upgrade_cityjson;
+use skylod::io::citygml::upgrade::{upgrade, UpgradeOptions};
+use skylod::pipeline::batch::inputs::is_citygml_name;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -36,6 +40,16 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         &args.io,
         "upgrade",
         Some(jobs),
-        &|input, out, shown, opts| Ok(upgrade(input, out, &options, opts)?.describe(input, shown)),
+        &|input, out, shown, opts| {
+            if !is_json_file(input) {
+                return Ok(upgrade(input, out, &options, opts)?.describe(input, shown));
+            }
+            // CityJSON: CityGML 3.0 for a CityGML name, else CityJSON 2.0 (as `cjio upgrade`).
+            if is_citygml_name(&out.to_string_lossy()) {
+                let v = TargetVersion::V3_0;
+                return Ok(citygml_from_cityjson(input, out, v, opts)?.describe(input, shown));
+            }
+            Ok(upgrade_cityjson(input, out, opts)?.describe(input, shown))
+        },
     )
 }

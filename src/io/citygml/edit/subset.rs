@@ -60,7 +60,7 @@ impl Subset {
     }
 
     /// The box in the document's CRS `srs_name`.
-    fn box_in(&self, srs_name: Option<&str>) -> Result<Option<[f64; 4]>, String> {
+    pub(crate) fn box_in(&self, srs_name: Option<&str>) -> Result<Option<[f64; 4]>, String> {
         let (Some(q), Some(from)) = (self.bbox, &self.bbox_crs) else {
             return Ok(self.bbox);
         };
@@ -91,7 +91,7 @@ impl Subset {
     }
 }
 
-fn box_test(mode: BboxMode, q: &[f64; 4], b: &[f64; 4]) -> bool {
+pub(crate) fn box_test(mode: BboxMode, q: &[f64; 4], b: &[f64; 4]) -> bool {
     match mode {
         BboxMode::Intersects => b[0] <= q[2] && b[2] >= q[0] && b[1] <= q[3] && b[3] >= q[1],
         BboxMode::Within => b[0] >= q[0] && b[2] <= q[2] && b[1] >= q[1] && b[3] <= q[3],

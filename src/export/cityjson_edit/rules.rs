@@ -1,0 +1,197 @@
+//! The rules of [`crate::io::citygml::edit`]'s `subset` and `filter-lods` on CityJSON trees.
+
+use super::{run, Ctx, Decision, TreeRule};
+use crate::io::citygml::edit::subset::box_test;
+use crate::io::citygml::edit::{EditSummary, Lods, Subset};
+use crate::io::citygml::error::WriteError;
+use crate::io::citygml::write::WriteOptions;
+use crate::model::Bbox;
+use serde_json::{Map, Value};
+use std::path::Path;
+
+struct SubsetRule<'a> {
+    s: &'a Subset,
+    /// The box in the document's CRS, once known.
+    bbox: Option<Option<[f64; 4]>>,
+    kept: usize,
+}
+
+impl TreeRule for SubsetRule<'_> {
+    fn tree(
+        &mut self,
+        ids: &[String],
+        objects: &mut Map<String, Value>,
+        ctx: &Ctx<'_>,
+        _counts: &mut EditSummary,
+    ) -> Result<Decision, String> {
+        let q = match self.bbox {
+            Some(q) => q,
+            None => *self.bbox.insert(self.s.box_in(ctx.srs)?),
+        };
+        let Some(top) = ids.first() else {
+            return Ok(Decision::Drop);
+        };
+        let id_ok = self.s.ids.is_empty() || self.s.ids.iter().any(|i| i == top);
+        let ty = objects
+            .get(top.as_str())
+            .and_then(|o| o.get("type"))
+            .and_then(Value::as_str)
+            .unwrap_or("");
+        let type_ok = self.s.types.is_empty() || self.s.types.iter().any(|t| t == ty);
+        let box_ok = q.is_none_or(|q| {
+            let mut b = Bbox::EMPTY;
+            for g in ids.iter().flat_map(|id| geometries(objects, id)) {
+                ctx.add_box(g, &mut b);
+            }
+            !b.is_empty() && box_test(self.s.mode, &q, &[b.min.x, b.min.y, b.max.x, b.max.y])
+        });
+        let matches = (id_ok && type_ok && box_ok) != self.s.invert;
+        if !matches || self.s.limit.is_some_and(|l| self.kept >= l) {
+            return Ok(Decision::Drop);
+        }
+        self.kept += 1;
+        Ok(Decision::Keep(Vec::new()))
+    }
+}
+
+/// The geometries of object `id`.
+fn geometries<'a>(objects: &'a Map<String, Value>, id: &str) -> &'a [Value] {
+    objects
+        .get(id)
+        .and_then(|o| o.get("geometry"))
+        .and_then(Value::as_array)
+        .map_or(&[], Vec::as_slice)
+}
+
+struct LodRule<'a>(&'a Lods);
+
+impl TreeRule for LodRule<'_> {
+    fn tree(
+        &mut self,
+        ids: &[String],
+        objects: &mut Map<String, Value>,
+        ctx: &Ctx<'_>,
+        counts: &mut EditSummary,
+    ) -> Result<Decision, String> {
+        let mut has: Vec<u8> = ids
+            .iter()
+            .flat_map(|id| geometries(objects, id))
+            .filter_map(|g| ctx.lod(g))
+            .collect();
+        has.sort_unstable();
+        has.dedup();
+        let kept = self.0.kept(&has);
+        // geometries removed per object (a geometry without a LoD stays)
+        let mut lost = vec![false; ids.len()];
+        let mut removed = 0usize;
+        for (k, id) in ids.iter().enumerate() {
+            let Some(Value::Array(gs)) = objects
+                .get_mut(id.as_str())
+                .and_then(|o| o.get_mut("geometry"))
+            else {
+                continue;
+            };
+            let before = gs.len();
+            gs.retain(|g| ctx.lod(g).is_none_or(|n| kept.contains(&n)));
+            if gs.len() < before {
+                lost[k] = true;
+                removed += before - gs.len();
+            }
+        }
+        counts.lod_properties_removed += removed;
+        if removed == 0 || self.0.keep_empty {
+            return Ok(Decision::Keep(Vec::new()));
+        }
+        let has_geometry =
+            |objects: &Map<String, Value>, id: &str| !geometries(objects, id).is_empty();
+        if !ids.iter().any(|id| has_geometry(objects, id)) {
+            counts.lod_properties_removed -= removed;
+            return Ok(Decision::Drop);
+        }
+        // nested objects that lost geometry and have none left in their subtree go, with it
+        let mut gone: Vec<String> = Vec::new();
+        for (k, id) in ids.iter().enumerate().skip(1) {
+            if !lost[k] || gone.contains(id) {
+                continue;
+            }
+            let sub = subtree(objects, ids, id);
+            if sub.iter().any(|s| has_geometry(objects, s)) {
+                continue;
+            }
+            counts.features_removed += 1;
+            for s in sub {
+                if !gone.contains(&s) {
+                    gone.push(s);
+                }
+            }
+        }
+        Ok(Decision::Keep(gone))
+    }
+}
+
+/// `id` and its descendants among `ids` (the tree).
+fn subtree(objects: &Map<String, Value>, ids: &[String], id: &str) -> Vec<String> {
+    let mut out = vec![id.to_string()];
+    let mut at = 0;
+    while at < out.len() {
+        let kids: Vec<String> = objects
+            .get(out[at].as_str())
+            .and_then(|o| o.get("children"))
+            .and_then(Value::as_array)
+            .map(|a| {
+                a.iter()
+                    .filter_map(Value::as_str)
+                    .filter(|k| ids.iter().any(|i| i == k))
+                    .map(str::to_string)
+                    .collect()
+            })
+            .unwrap_or_default();
+        for k in kids {
+            if !out.contains(&k) {
+                out.push(k);
+            }
+        }
+        at += 1;
+    }
+    out
+}
+
+/// [`crate::io::citygml::edit::subset`] of a CityJSON / CityJSONSeq document: the trees
+/// (top-level objects with their descendants) that `rule` keeps, written to `out` as CityJSON
+/// (CityJSONSeq for CityJSONSeq; atomically; `-` for standard output; gzip for a name ending
+/// in `.gz`; see [`super`]).
+///
+/// # Errors
+/// A refused target (a CityGML name among them), a source that cannot be read or is not
+/// CityJSON, a box that cannot be converted into the document's CRS, I/O errors.
+pub fn subset(
+    input: &Path,
+    out: &Path,
+    rule: &Subset,
+    opts: &WriteOptions,
+) -> Result<EditSummary, WriteError> {
+    run(input, out, opts, &|| {
+        Box::new(SubsetRule {
+            s: rule,
+            bbox: None,
+            kept: 0,
+        })
+    })
+}
+
+/// [`crate::io::citygml::edit::filter_lods`] of a CityJSON / CityJSONSeq document: a
+/// geometry's LoD is its integer part (`"2.2"` → 2; a `GeometryInstance`'s is its
+/// template's); the mode picks, per tree, the LoDs that stay; the other geometries go; a
+/// nested object that lost geometry and has none left in its subtree goes, a tree left
+/// without geometry goes whole (unless [`Lods::keep_empty`]); written as [`subset`] writes.
+///
+/// # Errors
+/// As [`subset`].
+pub fn filter_lods(
+    input: &Path,
+    out: &Path,
+    rule: &Lods,
+    opts: &WriteOptions,
+) -> Result<EditSummary, WriteError> {
+    run(input, out, opts, &|| Box::new(LodRule(rule)))
+}

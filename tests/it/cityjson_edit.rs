@@ -1,0 +1,542 @@
+//! `subset`, `filter-lods`, `upgrade`, `rough` and `lod` on CityJSON inputs (issue 24), against
+//! the CityJSON project's tools:
+//!
+//! * `subset --bbox` vs cjio's `subset --bbox` (tests/oracle/cjio_edit.py) on the same file:
+//!   cjio takes a city object whose vertex centroid is in the box, so its top-level objects
+//!   must lie between ours with `--bbox-mode within` and with `intersects`; outputs
+//!   cjval-valid, every vertex used, the extent that of the vertices;
+//! * `filter-lods --keep-empty` vs cjio's `lod_filter` (files whose LoDs are one per integer
+//!   LoD): the same geometries per city object;
+//! * CityJSONSeq: the same city objects as the `.city.json` of the same model, streamed;
+//! * `upgrade` of CityJSON 1.1 vs `cjio upgrade` (the same city objects); `upgrade`, `rough`
+//!   and `lod` with a `.gml` output: XSD-valid CityGML (xmllint, ../shared/schemas).
+
+use crate::util::*;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn fixture_dir() -> PathBuf {
+    manifest_dir().join("fixtures/cityjson")
+}
+
+fn have(tool: &str, install: &str) -> bool {
+    let ok = Command::new(tool)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        missing(install);
+    }
+    ok
+}
+
+fn ok(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    let o = run(args);
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    o
+}
+
+fn load(p: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+}
+
+/// cjio's answer (tests/oracle/cjio_edit.py).
+fn cjio_edit(args: &[&str]) -> Value {
+    let script = manifest_dir().join("tests/oracle/cjio_edit.py");
+    let o = Command::new("python3")
+        .arg(script)
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "cjio_edit {args:?}: {}", stderr(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// cjval's verdict (`--report`), `None` when cjval is missing.
+fn cjval(file: &Path) -> Option<bool> {
+    let home = std::env::var_os("HOME").map(|h| Path::new(&h).join(".cargo/bin/cjval"));
+    let bin = [Some(PathBuf::from("cjval")), home]
+        .into_iter()
+        .flatten()
+        .find(|c| {
+            Command::new(c)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        })?;
+    let o = Command::new(bin)
+        .arg("--report")
+        .arg(file)
+        .output()
+        .unwrap();
+    let r: Value = serde_json::from_slice(&o.stdout).unwrap_or(Value::Null);
+    Some(r["valid"] == Value::Bool(true))
+}
+
+fn tops(d: &Value) -> Vec<String> {
+    let mut t: Vec<String> = d["CityObjects"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .filter(|(_, o)| o.get("parents").is_none())
+        .map(|(k, _)| k.clone())
+        .collect();
+    t.sort();
+    t
+}
+
+/// Every vertex used, every index in range, the extent that of the vertices.
+fn check_vertices(d: &Value, what: &str) {
+    fn walk(v: &Value, used: &mut Vec<bool>) {
+        match v {
+            Value::Array(a) => a.iter().for_each(|x| walk(x, used)),
+            Value::Number(n) => used[n.as_u64().unwrap() as usize] = true,
+            _ => {}
+        }
+    }
+    let vs = d["vertices"].as_array().unwrap();
+    let mut used = vec![false; vs.len()];
+    for o in d["CityObjects"].as_object().unwrap().values() {
+        for g in o["geometry"].as_array().into_iter().flatten() {
+            walk(&g["boundaries"], &mut used);
+        }
+    }
+    assert!(used.iter().all(|u| *u), "{what}: unused vertices");
+    let (s, t) = (&d["transform"]["scale"], &d["transform"]["translate"]);
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for v in vs {
+        for k in 0..3 {
+            let c = v[k].as_f64().unwrap() * s[k].as_f64().unwrap() + t[k].as_f64().unwrap();
+            lo[k] = lo[k].min(c);
+            hi[k] = hi[k].max(c);
+        }
+    }
+    let e = &d["metadata"]["geographicalExtent"];
+    if vs.is_empty() {
+        assert!(e.is_null(), "{what}");
+        return;
+    }
+    for k in 0..3 {
+        assert!((e[k].as_f64().unwrap() - lo[k]).abs() < 1e-9, "{what}: {e}");
+        assert!(
+            (e[k + 3].as_f64().unwrap() - hi[k]).abs() < 1e-9,
+            "{what}: {e}"
+        );
+    }
+}
+
+/// CityJSON made by our own `convert` from shared data (several buildings, parts,
+/// installations, LoD 0 to 3), with the real CityJSON of cjio's tests.
+fn inputs(dir: &Path) -> Vec<PathBuf> {
+    let mut out = vec![fixture_dir().join("cjio-rotterdam_subset.city.json")];
+    let Some(data) = shared_data() else {
+        return out;
+    };
+    for (src, name) in [
+        (
+            "libcitygml/berlin_open_data_sample_data.citygml",
+            "berlin.city.json",
+        ),
+        (
+            "plateau/yokosuka/52397519_bldg_6697_op.gml",
+            "yokosuka.city.json",
+        ),
+        ("ingolstadt-lod3", "ingolstadt.city.json"),
+    ] {
+        let p = dir.join(name);
+        ok(&[os("convert"), os(&data.join(src)), os("-o"), os(&p)]);
+        out.push(p);
+    }
+    out
+}
+
+/// The box between the quartiles of a document's vertices in x and y (outliers, such as one
+/// building far from the others, do not leave it empty).
+fn middle(d: &Value) -> [f64; 4] {
+    let (sc, t) = (&d["transform"]["scale"], &d["transform"]["translate"]);
+    let real = |v: &Value, k: usize| {
+        v[k].as_f64().unwrap() * sc[k].as_f64().unwrap() + t[k].as_f64().unwrap()
+    };
+    let vs = d["vertices"].as_array().unwrap();
+    let mut out = [0.0; 4];
+    for k in 0..2 {
+        let mut c: Vec<f64> = vs.iter().map(|v| real(v, k)).collect();
+        c.sort_by(f64::total_cmp);
+        out[k] = c[c.len() / 4];
+        out[k + 2] = c[3 * c.len() / 4];
+    }
+    out
+}
+
+/// JSON values equal, numbers within a relative 1e-6 (cjio writes floats rounded).
+fn same_json(a: &Value, b: &Value) -> bool {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            (x - y).abs() <= 1e-6 * x.abs().max(y.abs()).max(1.0)
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| same_json(p, q))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len()
+                && x.iter()
+                    .all(|(k, v)| y.get(k).is_some_and(|w| same_json(v, w)))
+        }
+        _ => a == b,
+    }
+}
+
+#[test]
+fn subset_by_box_lies_between_within_and_intersects_of_cjio() {
+    if !have("cjio", "cjio (pip install cjio)") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut compared = 0;
+    for input in inputs(dir.path()) {
+        let name = short(&input);
+        let b = middle(&load(&input));
+        let bs: Vec<String> = b.iter().map(|x| format!("{x}")).collect();
+        let want = cjio_edit(
+            &[
+                &["bbox", input.to_str().unwrap()][..],
+                &[&bs[0], &bs[1], &bs[2], &bs[3]],
+            ]
+            .concat(),
+        );
+        let cj: Vec<String> = want["top"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap().to_string())
+            .collect();
+        let mut got = Vec::new();
+        for mode in ["within", "intersects"] {
+            let out = dir.path().join(format!(
+                "{mode}-{}",
+                input.file_name().unwrap().to_string_lossy()
+            ));
+            let arg = format!("--bbox={}", bs.join(","));
+            ok(&[
+                os("subset"),
+                os(&input),
+                os(&arg),
+                os("--bbox-mode"),
+                os(mode),
+                os("-o"),
+                os(&out),
+            ]);
+            let d = load(&out);
+            check_vertices(&d, &name);
+            if let Some(v) = cjval(&out) {
+                assert!(v, "{name} {mode}: cjval says invalid");
+            }
+            got.push(tops(&d));
+        }
+        let (within, intersects) = (&got[0], &got[1]);
+        assert!(!intersects.is_empty(), "{name}: nothing in the middle box");
+        for t in within {
+            assert!(
+                cj.contains(t),
+                "{name}: {t} within the box, not in cjio's subset"
+            );
+        }
+        for t in &cj {
+            assert!(
+                intersects.contains(t),
+                "{name}: {t} in cjio's subset, not intersecting"
+            );
+        }
+        // the rest of the document: --invert keeps exactly the others
+        let inv = dir.path().join("inv.city.json");
+        let arg = format!("--bbox={}", bs.join(","));
+        ok(&[
+            os("subset"),
+            os(&input),
+            os(&arg),
+            os("--invert"),
+            os("-o"),
+            os(&inv),
+            os("--overwrite"),
+        ]);
+        let all = tops(&load(&input));
+        let rest = tops(&load(&inv));
+        assert_eq!(rest.len() + intersects.len(), all.len(), "{name}");
+        compared += 1;
+    }
+    assert!(compared >= 1);
+}
+
+#[test]
+fn filter_lods_keeps_the_geometries_cjio_keeps() {
+    if !have("cjio", "cjio (pip install cjio)") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut cases = vec![(fixture_dir().join("cjio-multi_lod.city.json"), "2.2", "2")];
+    if let Some(data) = shared_data() {
+        let p = dir.path().join("yokosuka.city.json");
+        let src = data.join("plateau/yokosuka/52397519_bldg_6697_op.gml");
+        ok(&[os("convert"), os(&src), os("-o"), os(&p)]);
+        cases.push((p.clone(), "1", "1"));
+        cases.push((p, "0", "0"));
+    }
+    for (input, cj_lod, lod) in cases {
+        let name = format!("{} lod {lod}", short(&input));
+        let want = cjio_edit(&["lod", input.to_str().unwrap(), cj_lod]);
+        let out = dir.path().join(format!("lod{lod}.city.json"));
+        ok(&[
+            os("filter-lods"),
+            os(&input),
+            os("--lod"),
+            os(lod),
+            os("--keep-empty"),
+            os("-o"),
+            os(&out),
+        ]);
+        let d = load(&out);
+        let got: serde_json::Map<String, Value> = d["CityObjects"]
+            .as_object()
+            .unwrap()
+            .iter()
+            .map(|(k, o)| {
+                let mut l: Vec<String> = o["geometry"]
+                    .as_array()
+                    .into_iter()
+                    .flatten()
+                    .map(|g| g["lod"].as_str().unwrap().to_string())
+                    .collect();
+                l.sort();
+                (k.clone(), serde_json::json!(l))
+            })
+            .collect();
+        assert_eq!(Value::Object(got), want["objects"], "{name}");
+        check_vertices(&d, &name);
+        if let Some(v) = cjval(&out) {
+            assert!(v, "{name}: cjval says invalid");
+        }
+        // without --keep-empty the objects left without geometry go
+        let out2 = dir.path().join(format!("lod{lod}-drop.city.json"));
+        ok(&[
+            os("filter-lods"),
+            os(&input),
+            os("--lod"),
+            os(lod),
+            os("-o"),
+            os(&out2),
+        ]);
+        let d2 = load(&out2);
+        for (id, o) in d2["CityObjects"].as_object().unwrap() {
+            let geometry = |o: &Value| o["geometry"].as_array().is_some_and(|g| !g.is_empty());
+            let family = o["children"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .chain(o["parents"].as_array().into_iter().flatten());
+            assert!(
+                geometry(o)
+                    || family
+                        .into_iter()
+                        .any(|c| geometry(&d2["CityObjects"][c.as_str().unwrap()])),
+                "{name}: {id} kept without geometry"
+            );
+        }
+    }
+}
+
+#[test]
+fn cityjsonseq_edits_stream_the_same_objects_as_the_document() {
+    let dir = tempfile::tempdir().unwrap();
+    let doc = fixture_dir().join("cjio-rotterdam_subset.city.json");
+    let seq = dir.path().join("r.city.jsonl");
+    ok(&[os("convert"), os(&doc), os("-o"), os(&seq)]);
+    let one = dir.path().join("r.city.json");
+    ok(&[os("convert"), os(&doc), os("-o"), os(&one)]);
+    let b = middle(&load(&one));
+    let arg = format!("--bbox={},{},{},{}", b[0], b[1], b[2], b[3]);
+    let (a, s) = (
+        dir.path().join("a.city.json"),
+        dir.path().join("a.city.jsonl"),
+    );
+    ok(&[os("subset"), os(&one), os(&arg), os("-o"), os(&a)]);
+    ok(&[os("subset"), os(&seq), os(&arg), os("-o"), os(&s)]);
+    let text = std::fs::read_to_string(&s).unwrap();
+    let lines: Vec<Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let da = load(&a);
+    let mut seq_ids: Vec<String> = lines[1..]
+        .iter()
+        .flat_map(|f| {
+            f["CityObjects"]
+                .as_object()
+                .unwrap()
+                .keys()
+                .cloned()
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    seq_ids.sort();
+    let mut doc_ids: Vec<String> = da["CityObjects"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .cloned()
+        .collect();
+    doc_ids.sort();
+    assert!(!doc_ids.is_empty());
+    assert_eq!(seq_ids, doc_ids);
+    assert_eq!(
+        lines[0]["metadata"]["geographicalExtent"],
+        da["metadata"]["geographicalExtent"]
+    );
+    for f in &lines[1..] {
+        assert_eq!(f["type"], "CityJSONFeature");
+        // each feature's own vertices, all used
+        let mut used = vec![false; f["vertices"].as_array().unwrap().len()];
+        fn walk(v: &Value, used: &mut Vec<bool>) {
+            match v {
+                Value::Array(a) => a.iter().for_each(|x| walk(x, used)),
+                Value::Number(n) => used[n.as_u64().unwrap() as usize] = true,
+                _ => {}
+            }
+        }
+        for o in f["CityObjects"].as_object().unwrap().values() {
+            for g in o["geometry"].as_array().into_iter().flatten() {
+                walk(&g["boundaries"], &mut used);
+            }
+        }
+        assert!(used.iter().all(|u| *u));
+    }
+    // filter-lods on the sequence: the same objects as on the document
+    let (fa, fs) = (
+        dir.path().join("f.city.json"),
+        dir.path().join("f.city.jsonl"),
+    );
+    ok(&[
+        os("filter-lods"),
+        os(&one),
+        os("--lod"),
+        os("2"),
+        os("-o"),
+        os(&fa),
+    ]);
+    ok(&[
+        os("filter-lods"),
+        os(&seq),
+        os("--lod"),
+        os("2"),
+        os("-o"),
+        os(&fs),
+    ]);
+    let n_doc = load(&fa)["CityObjects"].as_object().unwrap().len();
+    let n_seq: usize = std::fs::read_to_string(&fs)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            serde_json::from_str::<Value>(l).unwrap()["CityObjects"]
+                .as_object()
+                .unwrap()
+                .len()
+        })
+        .sum();
+    assert_eq!(n_doc, n_seq);
+}
+
+#[test]
+fn upgrade_of_cityjson_as_cjio_and_to_citygml_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let cj = have("cjio", "cjio (pip install cjio)");
+    for name in [
+        "cjio-DH_01_subs-v1.1.city.json",
+        "cjio-delft_1b-v1.1.city.json",
+    ] {
+        let old = fixture_dir().join(name);
+        let ours = dir.path().join(format!("ours-{name}"));
+        ok(&[os("upgrade"), os(&old), os("-o"), os(&ours)]);
+        let d = load(&ours);
+        assert_eq!(d["version"], "2.0", "{name}");
+        if let Some(v) = cjval(&ours) {
+            assert!(v, "{name}: cjval says invalid");
+        }
+        if cj {
+            let theirs = dir.path().join(format!("cjio-{name}"));
+            let o = Command::new("cjio")
+                .args([os(&old), os("upgrade"), os("save"), os(&theirs)])
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", stderr(&o));
+            let t = load(&theirs);
+            assert_eq!(
+                d["CityObjects"]
+                    .as_object()
+                    .unwrap()
+                    .keys()
+                    .collect::<Vec<_>>()
+                    .len(),
+                t["CityObjects"].as_object().unwrap().len()
+            );
+            for (id, o) in d["CityObjects"].as_object().unwrap() {
+                assert_eq!(o["type"], t["CityObjects"][id]["type"], "{name}: {id}");
+                let (ours, theirs) = (&o["attributes"], &t["CityObjects"][id]["attributes"]);
+                assert!(same_json(ours, theirs), "{name}: {id}: {ours} / {theirs}");
+            }
+        }
+        if have_xmllint() {
+            let gml = dir.path().join(name.replace(".city.json", ".gml"));
+            ok(&[os("upgrade"), os(&old), os("-o"), os(&gml)]);
+            let text = std::fs::read_to_string(&gml).unwrap();
+            assert!(
+                text.contains("http://www.opengis.net/citygml/3.0"),
+                "{name}"
+            );
+            xmllint_validate(&gml, "3.0").unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+    }
+}
+
+#[test]
+fn rough_and_lod_write_citygml_from_cityjson() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = fixture_dir().join("cjio-rotterdam_subset.city.json");
+    let m = skylod::io::citygml::read_file(&input).unwrap();
+    let poi = crate::cityjson_input::pois(&m).remove(0);
+    let r = dir.path().join("r.gml");
+    ok(&[os("rough"), os(&input), os("-o"), os(&r)]);
+    let l = dir.path().join("l.gml");
+    ok(&[
+        os("lod"),
+        os(&input),
+        os("--poi"),
+        os(&poi),
+        os("-o"),
+        os(&l),
+    ]);
+    for p in [&r, &l] {
+        let back = skylod::io::citygml::read_file(p).unwrap();
+        assert!(back.polygon_count() > 0, "{}", p.display());
+        assert!(back.buildings.len() <= m.buildings.len());
+        if have_xmllint() {
+            xmllint_validate(p, "2.0").unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        }
+    }
+    // every building kept by `rough`, with its attributes
+    let back = skylod::io::citygml::read_file(&r).unwrap();
+    assert_eq!(back.buildings.len(), m.buildings.len());
+    // a CityGML name for a CityJSON edit is refused with a way out
+    let o = run(&[
+        os("subset"),
+        os(&input),
+        os("--id"),
+        os("x"),
+        os("-o"),
+        os(&dir.path().join("s.gml")),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("written as CityJSON"), "{}", stderr(&o));
+}
