@@ -156,7 +156,7 @@ fn subtree(objects: &Map<String, Value>, ids: &[String], id: &str) -> Vec<String
     out
 }
 
-/// [`crate::io::citygml::edit::subset`] of a CityJSON / CityJSONSeq document: the trees
+/// [`subset`](fn@crate::io::citygml::edit::subset) of a CityJSON / CityJSONSeq document: the trees
 /// (top-level objects with their descendants) that `rule` keeps, written to `out` as CityJSON
 /// (CityJSONSeq for CityJSONSeq; atomically; `-` for standard output; gzip for a name ending
 /// in `.gz`; see [`super`]).
