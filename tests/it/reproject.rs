@@ -349,3 +349,60 @@ fn implicit_geometry_follows_pyproj() {
         xmllint_validate(&out, "2.0").unwrap();
     }
 }
+
+/// A CityJSON input (Ingolstadt converted by `convert`) is reprojected as CityJSON: every
+/// vertex equal to pyproj's within the new transform's 1 mm, heights kept, the new
+/// `referenceSystem`; a merge of CityJSON inputs is refused.
+#[test]
+fn cityjson_is_reprojected_as_cityjson() {
+    let Some(data) = shared_data() else {
+        return;
+    };
+    if !python_has("pyproj", "pip install pyproj") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (src, out) = (
+        dir.path().join("in.city.json"),
+        dir.path().join("out.city.json"),
+    );
+    let gml = data.join("ingolstadt-lod3/4018106.xml.gz");
+    let o = run(&[os("convert"), os(&gml), os("-o"), os(&src)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    reproject(&src, &out, "EPSG:3857", Some("EPSG:32632"));
+    let script = r#"
+import json, sys
+from pyproj import Transformer
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+real = lambda d: [[v[k] * d["transform"]["scale"][k] + d["transform"]["translate"][k] for k in range(3)] for v in d["vertices"]]
+t = Transformer.from_crs("EPSG:32632", "EPSG:3857", always_xy=True)
+worst = 0.0
+for p, q in zip(real(a), real(b)):
+    x, y = t.transform(p[0], p[1])
+    worst = max(worst, abs(x - q[0]), abs(y - q[1]), abs(p[2] - q[2]))
+print(json.dumps({"n": len(a["vertices"]), "m": len(b["vertices"]), "worst": worst, "crs": b["metadata"]["referenceSystem"]}))
+"#;
+    let o = Command::new("python3")
+        .args([os("-c"), os(script), os(&src), os(&out)])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(f(&v, "n") > 500.0 && f(&v, "n") == f(&v, "m"), "{v}");
+    assert!(f(&v, "worst") < 1e-3, "{v}");
+    assert!(v["crs"].as_str().unwrap().ends_with("/EPSG/0/3857"), "{v}");
+    let merged = dir.path().join("both.city.json");
+    let o = run(&[
+        os("reproject"),
+        os(&src),
+        os(&out),
+        os("-t"),
+        os("EPSG:3857"),
+        os("-s"),
+        os("EPSG:32632"),
+        os("-o"),
+        os(&merged),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not merged"), "{}", stderr(&o));
+}

@@ -7,7 +7,8 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// CityGML files (.gml, .xml, .gz), directories, glob patterns, or - for standard input.
+    /// CityGML files (.gml, .xml, .gz), CityJSON (.city.json, .city.jsonl: written as
+    /// CityJSON), directories, glob patterns, or - for standard input.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// Target CRS: EPSG:n, EPSG:h+v (compound), or an OGC URN. A 2-D target keeps the
@@ -46,6 +47,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use skylod::citygml::reproject::{reproject_file, ReprojectError};
     use skylod::citygml::write::WriteOptions;
     use skylod::crs::CrsName;
+    use skylod::export::cityjson_edit::reproject_cityjson;
+    use skylod::model::crs::Crs;
 
     let parse = |flag: &str, text: &str| {
         CrsName::parse(text)
@@ -97,6 +100,37 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         let input = &args.inputs[*k];
         if mirror {
             crate::outputs::create_parent(out)?;
+        }
+        if skylod::export::citygml_from_cityjson::is_json_file(input) {
+            // CityJSON / CityJSONSeq: vertices through PROJ, the same format written.
+            let (from, to) = (
+                args.source.as_deref().map(Crs::parse),
+                Crs::parse(&args.target),
+            );
+            let t = skylod::model::crs::ProjTransform;
+            let r = if staging.is_some() {
+                Err(anyhow::anyhow!(
+                    "CityJSON inputs are not merged: give -o DIR"
+                ))
+            } else {
+                reproject_cityjson(input, out, from.as_ref(), &to, &t, &write_opts)
+                    .map_err(|e| anyhow::anyhow!(crate::errors::cli_text(&e)))
+            };
+            match r {
+                Ok(s) => crate::log::summary!(
+                    "{} -> {}: {} -> {}, {} vertices",
+                    skylod::model::shown(input),
+                    out.display(),
+                    s.from,
+                    s.to,
+                    s.vertices
+                ),
+                Err(e) => {
+                    crate::log::error!("{}: {e}", skylod::model::shown(input));
+                    failed += 1;
+                }
+            }
+            continue;
         }
         match reproject_file(input, out, source, target, &write_opts) {
             Ok(s) => {
