@@ -132,36 +132,10 @@ fn write_edits(
     let edits = normalise(edits);
     let n_edits = edits.len();
     let (mut reader, _) = source::open_source(&src.source, &src.path)?;
-    let io_out = |source| WriteError::Io {
-        file: out.to_path_buf(),
-        source,
-    };
-    let io_src = |source| WriteError::Io {
-        file: src.path.clone(),
-        source,
-    };
     let mut cursor = 0u64;
-    let mut written = 0u64;
-    for e in &edits {
-        if e.span.start < cursor || e.span.end > src.len {
-            continue;
-        }
-        written += copy(&mut reader, w, e.span.start - cursor, &src.path, out)?;
-        w.write_all(&e.replacement).map_err(io_out)?;
-        written += e.replacement.len() as u64;
-        let skip = e.span.end - e.span.start;
-        let skipped =
-            std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(io_src)?;
-        if skipped != skip {
-            return Err(WriteError::SourceChanged(src.path.clone()));
-        }
-        cursor = e.span.end;
-    }
-    written += copy(&mut reader, w, src.len - cursor, &src.path, out)?;
-    let mut rest = [0u8; 1];
-    if reader.read(&mut rest).map_err(io_src)? != 0 {
-        return Err(WriteError::SourceChanged(src.path.clone()));
-    }
+    let names = (src.len, src.path.as_path(), out);
+    let mut written = apply_edits(&mut reader, w, &edits, &mut cursor, names)?;
+    written += copy_rest(&mut reader, w, cursor, names)?;
     Ok(WriteSummary {
         bytes: written,
         edits: n_edits,
@@ -263,15 +237,7 @@ pub fn write_document_streamed(
             // nothing is kept of a declined stream's output
             return Err(WriteError::Invalid("declined".into()));
         };
-        written += copy(&mut reader, w, len.saturating_sub(cursor), input, out)?;
-        let mut rest = [0u8; 1];
-        let extra = reader.read(&mut rest).map_err(|source| WriteError::Io {
-            file: input.to_path_buf(),
-            source,
-        })?;
-        if extra != 0 {
-            return Err(WriteError::SourceChanged(input.to_path_buf()));
-        }
+        written += copy_rest(&mut reader, w, cursor, (len, input, out))?;
         done = Some(StreamedDocument {
             summary: WriteSummary {
                 bytes: written,
@@ -340,6 +306,27 @@ pub(crate) fn apply_edits(
             return Err(WriteError::SourceChanged(src.to_path_buf()));
         }
         *cursor = e.span.end;
+    }
+    Ok(written)
+}
+
+/// The source after `cursor` copied to `w`, up to its end at `len`; an error if it holds more
+/// (it changed since it was read). `(len, src, out)` as for [`apply_edits`]. The bytes
+/// copied.
+pub(crate) fn copy_rest(
+    reader: &mut dyn Read,
+    w: &mut dyn Write,
+    cursor: u64,
+    (len, src, out): (u64, &Path, &Path),
+) -> Result<u64, WriteError> {
+    let written = copy(reader, w, len.saturating_sub(cursor), src, out)?;
+    let mut rest = [0u8; 1];
+    let extra = reader.read(&mut rest).map_err(|source| WriteError::Io {
+        file: src.to_path_buf(),
+        source,
+    })?;
+    if extra != 0 {
+        return Err(WriteError::SourceChanged(src.to_path_buf()));
     }
     Ok(written)
 }

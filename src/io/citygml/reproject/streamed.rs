@@ -25,12 +25,13 @@ use crate::io::citygml::error::{ReadError, WriteError};
 use crate::io::citygml::read::{read_file, stream, ReadOptions, Streamed, CHUNK_BYTES};
 use crate::io::citygml::source;
 use crate::io::citygml::write::{
-    apply_edits, atomic_write, check_target, copy, normalise, write_document, Edit, WriteOptions,
+    apply_edits, atomic_write, check_target, copy_rest, normalise, write_document, Edit,
+    WriteOptions,
 };
 use crate::model::CityModel;
 use foldhash::{HashSet, HashSetExt};
 use quick_xml::events::Event;
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Documents of this many bytes (on disk) or more are rewritten in passes (module docs).
@@ -241,14 +242,6 @@ fn write_pass(
         &mut cursor,
         (len, path, out),
     )?;
-    written += copy(&mut reader, w, len.saturating_sub(cursor), path, out)?;
-    let mut rest = [0u8; 1];
-    let extra = reader.read(&mut rest).map_err(|source| WriteError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
-    if extra != 0 {
-        return Err(WriteError::SourceChanged(path.to_path_buf()));
-    }
+    written += copy_rest(&mut reader, w, cursor, (len, path, out))?;
     Ok(written)
 }
