@@ -2,7 +2,7 @@
 //! counts and cancels.
 
 use super::{frame, FrameOptions, Framed, Inputs};
-use crate::model::runtime::progress::{Progress, Stage};
+use crate::model::runtime::progress::{Progress, Silent, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
 use std::path::PathBuf;
@@ -12,9 +12,18 @@ pub(crate) fn fixture() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml")
 }
 
+/// A study of the [`fixture`] with `n` POIs ([`grid_pois`]), built and returned: nothing
+/// borrowed.
+pub(crate) fn study(n: usize) -> super::session::Study {
+    use super::session::{Scene, SceneOptions};
+    let scene = Scene::load(&[fixture()], &SceneOptions::default(), &Silent).unwrap();
+    let pois = grid_pois(scene.model(), n);
+    scene.frame(pois).unwrap()
+}
+
 /// The [`fixture`] read.
 pub(crate) fn fixture_inputs() -> Inputs {
-    super::read_inputs(&[fixture()], &crate::model::runtime::progress::Silent).unwrap()
+    super::read_inputs(&[fixture()], &Silent).unwrap()
 }
 
 /// Counts POIs of `stage` (selected or traced); cancels after `stop_after` of them.

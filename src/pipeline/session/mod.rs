@@ -630,13 +630,6 @@ mod tests {
     use crate::model::runtime::progress::Silent;
     use crate::pipeline::test_support::*;
 
-    /// A study built in a function and returned: nothing borrowed.
-    fn study(n: usize) -> Study {
-        let scene = Scene::load(&[fixture()], &SceneOptions::default(), &Silent).unwrap();
-        let pois = grid_pois(scene.model(), n);
-        scene.frame(pois).unwrap()
-    }
-
     #[test]
     fn full_scene_and_sun_table_are_built_once_and_give_the_pipeline_s_answers() {
         let s = study(4);

@@ -383,14 +383,8 @@ mod tests {
     use super::*;
     use crate::export::report::text::Document;
     use crate::model::runtime::progress::Silent;
-    use crate::pipeline::session::{Error, Scene, SceneOptions};
-    use crate::pipeline::test_support::{fixture, grid_pois};
-
-    fn study(n: usize) -> Study {
-        let scene = Scene::load(&[fixture()], &SceneOptions::default(), &Silent).unwrap();
-        let pois = grid_pois(scene.model(), n);
-        scene.frame(pois).unwrap()
-    }
+    use crate::pipeline::session::Error;
+    use crate::pipeline::test_support::{fixture, study};
 
     #[test]
     fn svf_and_sun_hours_documents_hold_the_study_s_figures() {
