@@ -234,19 +234,63 @@ fn different_crss_refused() {
     );
 }
 
-/// `rough` merges CityGML only: several inputs into one OBJ are refused before any work.
+/// `rough` of the tiles into one OBJ / CityJSON / CityJSONSeq equals `rough` of the tiles into
+/// one CityGML merge, converted; and `rough` of the CityGML merge of the tiles, converted.
+/// Ids unique, the CityJSON valid.
 #[test]
-fn rough_refuses_a_merge_into_obj() {
+fn rough_ingolstadt_tiles_into_one_file() {
+    let Some(data) = shared_data() else { return };
+    let tiles = citygml_files(&data.join("ingolstadt-lod3"));
+    assert!(tiles.len() >= 50, "Ingolstadt tiles missing");
     let dir = tempfile::tempdir().unwrap();
-    let (a, b) = (dir.path().join("a.gml"), dir.path().join("b.gml"));
-    std::fs::copy(fixture("synth-small.gml"), &a).unwrap();
-    std::fs::copy(fixture("synth-small.gml"), &b).unwrap();
+    let d = dir.path();
+    let (gml, rough_gml) = (d.join("m.gml"), d.join("rough.gml"));
+    skylod(&args(&["rough", "-q"], &tiles, &[&"-o", &rough_gml]));
+    skylod(&args(&["convert", "-q"], &tiles, &[&"-o", &gml]));
+    let rough_of_merge = d.join("rough-of-merge.gml");
+    skylod(&args(
+        &["rough", "-q"],
+        std::slice::from_ref(&gml),
+        &[&"-o", &rough_of_merge],
+    ));
+    for ext in ["obj", "city.json", "city.jsonl"] {
+        let merged = d.join(format!("rough.{ext}"));
+        skylod(&args(&["rough", "-q"], &tiles, &[&"-o", &merged]));
+        for source in [&rough_gml, &rough_of_merge] {
+            let two_step = d.join(format!("two-step.{ext}"));
+            let o: &[&dyn AsRef<OsStr>] = &[&"-o", &two_step, &"--overwrite"];
+            skylod(&args(&["convert", "-q"], std::slice::from_ref(source), o));
+            same_output(&merged, &two_step, &tiles[0], tiles.len());
+        }
+        if ext != "obj" {
+            cjval_valid(&merged);
+        }
+    }
+    let names = obj_names(&d.join("rough.obj"));
+    assert!(!names.is_empty());
+    let unique: std::collections::HashSet<&String> = names.iter().collect();
+    assert_eq!(unique.len(), names.len(), "OBJ object names not unique");
+    let one = std::fs::read_to_string(d.join("rough.obj")).unwrap();
+    let origins = one.lines().filter(|l| l.starts_with("# origin ")).count();
+    assert_eq!(origins, 1, "one origin");
+}
+
+/// `rough` into one OBJ: inputs in different CRSs refused before any work, nothing left.
+#[test]
+fn rough_refuses_different_crss() {
+    let Some(data) = shared_data() else { return };
+    let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("m.obj");
-    let v = args(&["rough"], &[a, b], &[&"-o", &out]);
-    let v: Vec<&OsStr> = v.iter().map(OsString::as_os_str).collect();
-    let o = run(&v);
+    let inputs = vec![
+        data.join("kit-fzk-haus/citygml2/fzk_haus_lod2_v2.gml"),
+        data.join("plateau/sapporo/64413325_bldg_6697_op.gml"),
+    ];
+    let a = args(&["rough"], &inputs, &[&"-o", &out]);
+    let a: Vec<&OsStr> = a.iter().map(OsString::as_os_str).collect();
+    let o = run(&a);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("cannot be merged into one obj file"), "{err}");
+    assert!(err.contains("different CRSs"), "{err}");
     assert!(!out.exists());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }

@@ -46,17 +46,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // (exit 1) without being read; the others are done. A merge writes every input to a
     // staging directory, then merges them into the target.
     let batch = outputs::batch("rough", &inputs, out, false, shard)?;
-    // OBJ and CityJSON merges are `convert`'s and `lod`'s; rough merges CityGML only.
-    if matches!(batch.plan, skylod::batch::outputs::Plan::Merge(_))
-        && batch.format != Format::CityGml
-    {
-        return Err(outputs::usage(
-            skylod::batch::outputs::PlanError::NotMergeable {
-                format: batch.format,
-                inputs: inputs.len(),
-            },
-        ));
-    }
+    // A merge into OBJ or CityJSON stages CityGML parts, merged then converted (as `convert`).
+    let format = batch
+        .targets
+        .staging
+        .as_ref()
+        .map_or(batch.format, |_| Format::CityGml);
     let Targets {
         todo,
         mirror,
@@ -73,8 +68,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 } else {
                     Ok(())
                 };
-                let r =
-                    r.and_then(|()| one(input, out, batch.format, &opts, write_opts, &args.crs));
+                let r = r.and_then(|()| one(input, out, format, &opts, write_opts, &args.crs));
                 (input.clone(), out.clone(), r)
             })
             .collect()
