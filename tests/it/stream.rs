@@ -382,6 +382,51 @@ fn a_large_file_is_read_in_little_memory() {
     assert!(whole > limit, "whole read: peak {whole} kB");
 }
 
+/// Issue 22: `lod` of a ~225 MB file (the street repeated) with two POIs in the first copy
+/// of the street peaks under 1.2× the file's size (before the gml:id registry kept no text:
+/// 1.29×, 284,500 kB; after: 1.12×, 247,360 kB, release build, BENCHMARKS.md). Run with
+/// `cargo test --test it -- --ignored stream::lod_`.
+#[test]
+#[ignore]
+fn lod_of_a_large_file_peaks_under_the_file_size_and_a_fifth() {
+    let Some(data) = util::shared_data() else {
+        return;
+    };
+    let tool = util::manifest_dir().join("../shared/tools/bench_inputs.py");
+    if !tool.is_file() || !Path::new("/usr/bin/time").is_file() {
+        util::missing("the generator or /usr/bin/time");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.gml");
+    let out = std::process::Command::new("python3")
+        .arg(&tool)
+        .arg(&data)
+        .arg(&big)
+        .arg("200")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", util::stderr(&out));
+    let size_kb = std::fs::metadata(&big).unwrap().len() / 1024;
+    let gml = dir.path().join("lod.gml");
+    let peak = peak_kb(&[
+        util::os("lod"),
+        util::os("-q"),
+        big.as_os_str(),
+        util::os("--poi"),
+        util::os("678095,5403890,418"),
+        util::os("--poi"),
+        util::os("678150,5403776,419"),
+        util::os("-o"),
+        gml.as_os_str(),
+    ]);
+    assert!(gml.is_file());
+    assert!(
+        peak * 5 < size_kb * 6,
+        "lod: peak {peak} kB for a file of {size_kb} kB"
+    );
+}
+
 /// OBJ, CityJSON and CityJSONSeq written from a streamed read in chunks of 4 KiB (many
 /// chunks: CityJSON's vertex numbering on disk, ids made unique across chunks) are the bytes
 /// the whole model gives, on every file of the shared data and the fixtures.

@@ -38,7 +38,7 @@ impl Parser<'_> {
         let mut uses = vec![0u32; self.polys.len()];
         let wanted = self.href_targets();
         let mut walk = Walk {
-            index: self.registry.index(&wanted),
+            index: (self.registry).index(&wanted, |pos, hash| self.id_text_at(pos, hash)),
             budget: self
                 .opts
                 .max_href_work

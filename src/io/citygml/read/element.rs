@@ -233,8 +233,7 @@ impl Parser<'_> {
                     } else {
                         start
                     };
-                    let text = self.open_ids.get(a..b).unwrap_or("");
-                    self.registry.add(hash, text, (start, end));
+                    self.register(hash, (a, b), frame.start, (start, end));
                 }
             }
             Kind::GeomProp { lod, start, owner } => {
@@ -314,8 +313,7 @@ impl Parser<'_> {
         }
         if let (Some(start), Some((a, b, hash))) = (frame.register, frame.id) {
             let end = self.parts.len() as u32;
-            let text = self.open_ids.get(a..b).unwrap_or("");
-            self.registry.add(hash, text, (start, end));
+            self.register(hash, (a, b), frame.start, (start, end));
         }
         if let Some((a, _, _)) = id_span {
             self.open_ids.truncate(a);

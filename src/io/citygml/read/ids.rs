@@ -178,7 +178,13 @@ impl Parser<'_> {
     /// The text of a logged gml:id: the attribute of the element's start tag whose value has
     /// the logged hash.
     pub(super) fn id_text(&self, r: &IdRec) -> Option<String> {
-        let tag = self.doc.get(usize::try_from(r.pos).ok()?..)?;
+        self.id_text_at(r.pos, r.hash)
+    }
+
+    /// The gml:id with hash `hash` of the element whose start tag is at file offset `pos` in
+    /// the document in memory.
+    pub(super) fn id_text_at(&self, pos: u64, hash: u64) -> Option<String> {
+        let tag = self.doc.get(usize::try_from(pos).ok()?..)?;
         let mut reader = quick_xml::Reader::from_reader(tag);
         let e = match reader.read_event().ok()? {
             Event::Start(e) | Event::Empty(e) => e,
@@ -191,7 +197,7 @@ impl Parser<'_> {
             }
             let v = a.unescape_value().ok()?;
             let h = std::hash::BuildHasher::hash_one(&self.id_hasher, v.as_ref() as &str);
-            (h == r.hash).then(|| v.into_owned())
+            (h == hash).then(|| v.into_owned())
         })
     }
 }

@@ -9,62 +9,92 @@ use glam::DVec3;
 
 /// The gml:ids of geometry elements and the range of geometry parts each stands for.
 ///
-/// Reading only appends (one text arena, one list: no allocation per id, no hash table);
-/// after the last event, [`Registry::index`] indexes just the ids that references name.
-/// The first registration of an id wins.
+/// Reading only appends (one list, and while streaming one text arena: no allocation per id,
+/// no hash table); after the last event, [`Registry::index`] indexes just the ids that
+/// references name. A document in memory keeps no id text: each entry holds its element's
+/// offset and the id is read back from the document for the ids that references name
+/// ([`Parser::id_text`]), as the duplicate check does. The first registration of an id wins.
 #[derive(Debug, Default)]
 pub(super) struct Registry {
     text: String,
     entries: Vec<RegEntry>,
 }
 
-/// 24 bytes: an id's text starts where the previous entry's ends (the text only grows).
+/// 24 bytes. `at`: the element's file offset (a document in memory), or where the id's text
+/// ends in [`Registry::text`] (streaming: it starts where the previous entry's ends).
 #[derive(Debug)]
 struct RegEntry {
     hash: u64,
-    to: usize,
+    at: u64,
     range: (u32, u32),
 }
 
+/// Where a registered id is: its element's file offset in the document in memory, or its
+/// text (streaming).
+pub(super) enum IdAt<'a> {
+    Doc(u64),
+    Text(&'a str),
+}
+
 impl Registry {
-    /// Record `id` (with its `hash`) for the parts `range`.
-    pub(super) fn add(&mut self, hash: u64, id: &str, range: (u32, u32)) {
-        self.text.push_str(id);
-        self.entries.push(RegEntry {
-            hash,
-            to: self.text.len(),
-            range,
-        });
+    /// Record the id at `id` (with its `hash`) for the parts `range`.
+    pub(super) fn add(&mut self, hash: u64, id: IdAt<'_>, range: (u32, u32)) {
+        let at = match id {
+            IdAt::Doc(pos) => pos,
+            IdAt::Text(t) => {
+                self.text.push_str(t);
+                self.text.len() as u64
+            }
+        };
+        self.entries.push(RegEntry { hash, at, range });
     }
 
     /// Append the registrations of a later part of the document whose parts start at
-    /// `parts_offset` in the merged arena (a split read).
+    /// `parts_offset` in the merged arena (a split read: offsets into the document stay,
+    /// text ends move by the text before them).
     pub(super) fn append(&mut self, other: Registry, parts_offset: u32) {
-        let base = self.text.len();
+        let base = self.text.len() as u64;
+        let text_ends = !other.text.is_empty();
         self.text.push_str(&other.text);
+        self.entries.reserve_exact(other.entries.len());
         self.entries
             .extend(other.entries.into_iter().map(|e| RegEntry {
                 hash: e.hash,
-                to: e.to + base,
+                at: if text_ends { e.at + base } else { e.at },
                 range: (e.range.0 + parts_offset, e.range.1 + parts_offset),
             }));
     }
 
     /// The ids whose hash is in `wanted`, each with its first registered range (the text is
-    /// compared, so two ids with the same hash stay apart).
-    pub(super) fn index(&self, wanted: &HashSet<u64>) -> HashMap<&str, (u32, u32)> {
+    /// compared, so two ids with the same hash stay apart); `read_back(offset, hash)` reads
+    /// an id back from the document in memory (entries without text).
+    pub(super) fn index(
+        &self,
+        wanted: &HashSet<u64>,
+        read_back: impl Fn(u64, u64) -> Option<String>,
+    ) -> HashMap<String, (u32, u32)> {
         let mut map = HashMap::with_capacity(wanted.len());
         if wanted.is_empty() {
             return map;
         }
+        let in_text = !self.text.is_empty();
         let mut from = 0;
         for e in &self.entries {
             if wanted.contains(&e.hash) {
-                if let Some(t) = self.text.get(from..e.to) {
+                let t = match in_text {
+                    true => usize::try_from(e.at)
+                        .ok()
+                        .and_then(|to| self.text.get(from..to))
+                        .map(str::to_string),
+                    false => read_back(e.at, e.hash),
+                };
+                if let Some(t) = t {
                     map.entry(t).or_insert(e.range);
                 }
             }
-            from = e.to;
+            if in_text {
+                from = usize::try_from(e.at).unwrap_or(usize::MAX);
+            }
         }
         map
     }
@@ -72,8 +102,8 @@ impl Registry {
 
 /// What resolving references needs besides the parser: the ids that references name, and the
 /// work left before the expansion limit.
-pub(super) struct Walk<'a> {
-    pub(super) index: HashMap<&'a str, (u32, u32)>,
+pub(super) struct Walk {
+    pub(super) index: HashMap<String, (u32, u32)>,
     pub(super) budget: usize,
 }
 
@@ -85,6 +115,17 @@ impl Parser<'_> {
             .filter_map(|h| h.target.strip_prefix('#'))
             .map(|t| std::hash::BuildHasher::hash_one(&self.id_hasher, t))
             .collect()
+    }
+
+    /// Register the geometry element starting at `pos` whose gml:id (hashed: `hash`) is at
+    /// `id` in [`Parser::open_ids`], for the parts `range`: by its offset when the document
+    /// is in memory, else by its text.
+    pub(super) fn register(&mut self, hash: u64, id: (usize, usize), pos: u64, range: (u32, u32)) {
+        let at = match self.doc.is_empty() {
+            false => IdAt::Doc(pos),
+            true => IdAt::Text(self.open_ids.get(id.0..id.1).unwrap_or("")),
+        };
+        self.registry.add(hash, at, range);
     }
 
     pub(super) fn push_href(&mut self, href: &str, _pos: u64) {
@@ -109,7 +150,7 @@ impl Parser<'_> {
         depth: usize,
         implicit: Option<u32>,
         out: &mut Vec<PolyRef>,
-        walk: &mut Walk<'_>,
+        walk: &mut Walk,
     ) -> Result<(), ReadError> {
         let mut i = range.0 as usize;
         let end = (range.1 as usize).min(self.parts.len());
@@ -240,15 +281,34 @@ mod tests {
     #[test]
     fn registry_first_registration_wins_and_text_is_compared() {
         let mut r = Registry::default();
-        r.add(7, "a", (0, 1));
-        r.add(7, "b", (1, 2)); // same hash, other id: kept apart
-        r.add(7, "a", (5, 6)); // a duplicate id: the first range stays
-        r.add(9, "c", (2, 3));
+        r.add(7, IdAt::Text("a"), (0, 1));
+        r.add(7, IdAt::Text("b"), (1, 2)); // same hash, other id: kept apart
+        r.add(7, IdAt::Text("a"), (5, 6)); // a duplicate id: the first range stays
+        r.add(9, IdAt::Text("c"), (2, 3));
         let wanted: HashSet<u64> = [7u64].into_iter().collect();
-        let idx = r.index(&wanted);
+        let none = |_: u64, _: u64| -> Option<String> { None };
+        let idx = r.index(&wanted, none);
         assert_eq!(idx.get("a"), Some(&(0, 1)));
         assert_eq!(idx.get("b"), Some(&(1, 2)));
         assert_eq!(idx.get("c"), None, "not wanted, not indexed");
-        assert!(r.index(&HashSet::default()).is_empty());
+        assert!(r.index(&HashSet::default(), none).is_empty());
+    }
+
+    #[test]
+    fn registry_of_a_document_reads_ids_back_and_appends_parts() {
+        let doc = ["a", "b", "a", "c"];
+        let back = |at: u64, _: u64| doc.get(at as usize).map(|s| s.to_string());
+        let (mut r, mut later) = (Registry::default(), Registry::default());
+        r.add(7, IdAt::Doc(0), (0, 1));
+        r.add(7, IdAt::Doc(1), (1, 2));
+        later.add(7, IdAt::Doc(2), (0, 1)); // a duplicate in a later part: the first wins
+        later.add(9, IdAt::Doc(3), (1, 2));
+        r.append(later, 10);
+        assert!(r.text.is_empty(), "no id text kept");
+        let wanted: HashSet<u64> = [7u64, 9].into_iter().collect();
+        let idx = r.index(&wanted, back);
+        assert_eq!(idx.get("a"), Some(&(0, 1)));
+        assert_eq!(idx.get("b"), Some(&(1, 2)));
+        assert_eq!(idx.get("c"), Some(&(11, 12)));
     }
 }
