@@ -306,6 +306,27 @@ fn peak_kb(args: &[&std::ffi::OsStr]) -> u64 {
     line[5..].trim().parse().unwrap()
 }
 
+/// A file of about `mb` MB made in `dir` by the shared generator (the Ingolstadt street
+/// repeated); `None` (said) without the shared data, the generator or `/usr/bin/time`.
+fn generated(dir: &Path, mb: &str) -> Option<std::path::PathBuf> {
+    let data = util::shared_data()?;
+    let tool = util::manifest_dir().join("../shared/tools/bench_inputs.py");
+    if !tool.is_file() || !Path::new("/usr/bin/time").is_file() {
+        util::missing("the generator or /usr/bin/time");
+        return None;
+    }
+    let big = dir.join("big.gml");
+    let out = std::process::Command::new("python3")
+        .arg(&tool)
+        .arg(&data)
+        .arg(&big)
+        .arg(mb)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", util::stderr(&out));
+    Some(big)
+}
+
 /// Issue 22: `stats` and `convert -o x.obj` (`.city.json`, `.city.jsonl`) of a 400 MB file,
 /// and `stats` of it gzip-compressed, stay under 256 MiB resident
 /// (read whole, the model alone is about the file's size). Slow in a debug build: run with
@@ -313,24 +334,10 @@ fn peak_kb(args: &[&std::ffi::OsStr]) -> u64 {
 #[test]
 #[ignore]
 fn a_large_file_is_read_in_little_memory() {
-    let Some(data) = util::shared_data() else {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(big) = generated(dir.path(), "400") else {
         return;
     };
-    let tool = util::manifest_dir().join("../shared/tools/bench_inputs.py");
-    if !tool.is_file() || !Path::new("/usr/bin/time").is_file() {
-        util::missing("the generator or /usr/bin/time");
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let big = dir.path().join("big.gml");
-    let out = std::process::Command::new("python3")
-        .arg(&tool)
-        .arg(&data)
-        .arg(&big)
-        .arg("400")
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", util::stderr(&out));
     let limit = 256 * 1024;
     let stats = peak_kb(&[util::os("stats"), util::os("--json"), big.as_os_str()]);
     assert!(stats < limit, "stats: peak {stats} kB");
@@ -390,24 +397,10 @@ fn a_large_file_is_read_in_little_memory() {
 #[test]
 #[ignore]
 fn lod_of_a_large_file_peaks_under_a_quarter_more_than_the_file() {
-    let Some(data) = util::shared_data() else {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(big) = generated(dir.path(), "200") else {
         return;
     };
-    let tool = util::manifest_dir().join("../shared/tools/bench_inputs.py");
-    if !tool.is_file() || !Path::new("/usr/bin/time").is_file() {
-        util::missing("the generator or /usr/bin/time");
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let big = dir.path().join("big.gml");
-    let out = std::process::Command::new("python3")
-        .arg(&tool)
-        .arg(&data)
-        .arg(&big)
-        .arg("200")
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", util::stderr(&out));
     let size_kb = std::fs::metadata(&big).unwrap().len() / 1024;
     let gml = dir.path().join("lod.gml");
     let peak = peak_kb(&[
