@@ -152,22 +152,15 @@ pub fn finish(
     crate::Outcome::failed_if(f.failed > 0)
 }
 
-/// The summary line of one input written to `out`, named `shown` (the merge target for a
-/// staged part of a merge).
-pub type Edit<'a> = dyn Fn(&Path, &Path, &Path, &WriteOptions) -> Result<String, skylod::citygml::WriteError>
-    + Sync
-    + 'a;
-
-/// Run `edit` on every input of `a` as `cmd`, CityGML in and out (`subset`, `filter-lods`,
-/// `upgrade`): a [`Batch`] (targets checked before any work, an error per input does not stop
-/// it, several inputs into one file merged), with `--jobs` inputs at once (`None`: one after
-/// the other, outside any pool); the lines said in input order, the outputs the same whatever
-/// the number.
+/// Run `edit` on every input of `a` as `cmd` (`subset`, `filter-lods`, `upgrade`): a
+/// [`Batch`] (targets checked before any work, an error per input does not stop it, several
+/// inputs into one file merged), with `--jobs` inputs at once; the lines said in input order,
+/// the outputs the same whatever the number.
 pub fn per_input_jobs(
     a: &crate::args::citygml_io::CityGmlIoArgs,
     cmd: &str,
-    jobs: Option<&crate::args::jobs::JobsArgs>,
-    edit: &Edit<'_>,
+    jobs: &crate::args::jobs::JobsArgs,
+    edit: skylod::pipeline::batch::edit::Edit,
 ) -> anyhow::Result<crate::Outcome> {
     let t0 = std::time::Instant::now();
     let shard = a.shard.resolve()?;
@@ -176,12 +169,9 @@ pub fn per_input_jobs(
     let mut b = batch(cmd, &inputs, out, true, shard)?;
     b.counts_polygons = false;
     let each = |i: &Path, o: &Path, shown: &Path, w: &WriteOptions| {
-        edit(i, o, shown, w).map_err(|e| anyhow!(crate::errors::cli_text(&e)))
+        (edit.apply(i, o, shown, w)).map_err(|e| anyhow!(crate::errors::cli_text(&e)))
     };
-    let results = match jobs {
-        Some(j) => j.install(|| b.run_each(&inputs, true, &each))?,
-        None => b.run_each(&inputs, false, &each),
-    };
+    let results = jobs.install(|| b.run_each(&inputs, true, &each))?;
     let failure = |e: &anyhow::Error| e.to_string();
     Ok(finish(&b, cmd, results, failure, inputs.len(), t0))
 }

@@ -5,6 +5,7 @@
 //! * [`inputs`]: arguments (files, directories, globs, `-`) → the input files, with the
 //!   relative path each mirrors under `-o DIR`.
 //! * [`convert`]: one input of `stats` and `convert`, streamed where it is large.
+//! * [`edit`]: `subset`, `filter-lods`, `upgrade` of one input, CityGML or CityJSON.
 //! * [`outputs`]: an output name → one output per input, a mirrored tree, or a merge.
 //! * [`run`]: a batch that writes per input: its outputs planned, its inputs' results
 //!   gathered and merged, what to tell the user returned (never printed).
@@ -15,6 +16,7 @@
 //! * [`synth`]: the files of `synth`, the model and its POIs.
 
 pub mod convert;
+pub mod edit;
 pub mod inputs;
 pub mod outputs;
 pub mod reduce;

@@ -4,8 +4,8 @@
 
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
-use skylod::export::citygml_from_cityjson::is_json_file;
-use skylod::io::citygml::edit::{filter_lods, LodMode, Lods};
+use skylod::io::citygml::edit::{LodMode, Lods};
+use skylod::pipeline::batch::edit::Edit;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -32,17 +32,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         mode: args.mode,
         keep_empty: args.keep_empty,
     };
-    crate::outputs::per_input_jobs(
-        &args.io,
-        "filter-lods",
-        Some(&args.jobs),
-        &|input, out, shown, opts| {
-            let s = if is_json_file(input) {
-                skylod::export::cityjson_edit::filter_lods(input, out, &rule, opts)?
-            } else {
-                filter_lods(input, out, &rule, opts)?
-            };
-            Ok(s.describe(input, shown))
-        },
-    )
+    crate::outputs::per_input_jobs(&args.io, "filter-lods", &args.jobs, Edit::FilterLods(rule))
 }

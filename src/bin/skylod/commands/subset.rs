@@ -5,9 +5,9 @@
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
 use anyhow::Context;
-use skylod::export::citygml_from_cityjson::is_json_file;
-use skylod::io::citygml::edit::{subset, BboxMode, Subset};
+use skylod::io::citygml::edit::{BboxMode, Subset};
 use skylod::model::crs::Crs;
+use skylod::pipeline::batch::edit::Edit;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -66,17 +66,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         invert: args.invert,
         limit: args.limit,
     };
-    crate::outputs::per_input_jobs(
-        &args.io,
-        "subset",
-        Some(&args.jobs),
-        &|input, out, shown, opts| {
-            let s = if is_json_file(input) {
-                skylod::export::cityjson_edit::subset(input, out, &rule, opts)?
-            } else {
-                subset(input, out, &rule, opts)?
-            };
-            Ok(s.describe(input, shown))
-        },
-    )
+    crate::outputs::per_input_jobs(&args.io, "subset", &args.jobs, Edit::Subset(rule))
 }
