@@ -10,8 +10,7 @@ use skylod::batch::outputs::{PlanError, Targets};
 use skylod::batch::run::{Batch, Said};
 use skylod::batch::shard::Shard;
 use skylod::citygml::write::WriteOptions;
-use skylod::export::{Content, Format};
-use skylod::model::CityModel;
+use skylod::export::Format;
 use std::path::{Path, PathBuf};
 
 pub use skylod::batch::run::Done;
@@ -86,22 +85,6 @@ fn refused_said(
         refused(&anyhow!("{}", crate::errors::cli_text(&e)));
     }
     n
-}
-
-/// Write file `file` of `model` in `format` (not CityGML: [`skylod::export::write`]) and
-/// print its summary line ([`skylod::export::ExportSummary::describe`]).
-pub fn export(
-    format: Format,
-    model: &CityModel,
-    file: usize,
-    content: Content<'_>,
-    out: &Path,
-    wopts: &WriteOptions,
-) -> anyhow::Result<()> {
-    let s = skylod::export::write(format, model, file, content, out, wopts)?;
-    let input = model.files.get(file).map_or(Path::new(""), |f| &f.path);
-    summary!("{}", s.describe(format, input, out));
-    Ok(())
 }
 
 /// Create the parent directory of an output path (nothing for `-`).

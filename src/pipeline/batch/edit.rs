@@ -101,10 +101,11 @@ mod tests {
 
     #[test]
     fn each_format_goes_to_its_own_editor() {
+        let (lods, mode) = (vec![2], LodMode::Remove);
         let lods = Lods {
-            lods: vec![2],
-            mode: LodMode::Remove,
-            keep_empty: false,
+            lods,
+            mode,
+            ..Lods::default()
         };
         let e = Edit::FilterLods(lods.clone());
         let gml = fixture("chimney-citygml2.gml");

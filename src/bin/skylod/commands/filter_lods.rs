@@ -2,7 +2,7 @@
 //! CityJSON documents (citygml-tools' `filter-lods`; CityJSON: `skylod::export::cityjson_edit`),
 //! streamed: memory follows the largest city object.
 
-use crate::args::citygml_io::CityGmlIoArgs;
+use crate::args::citygml_io::EditArgs;
 use crate::Outcome;
 use skylod::io::citygml::edit::{LodMode, Lods};
 use skylod::pipeline::batch::edit::Edit;
@@ -10,9 +10,7 @@ use skylod::pipeline::batch::edit::Edit;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    io: CityGmlIoArgs,
-    #[command(flatten)]
-    jobs: crate::args::jobs::JobsArgs,
+    edit: EditArgs,
     /// LoDs (0 to 4) the mode applies to.
     #[arg(short, long, required = true, num_args = 1.., value_delimiter = ',',
           value_parser = clap::value_parser!(u8).range(0..=4))]
@@ -32,5 +30,10 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         mode: args.mode,
         keep_empty: args.keep_empty,
     };
-    crate::outputs::per_input_jobs(&args.io, "filter-lods", &args.jobs, Edit::FilterLods(rule))
+    crate::outputs::per_input_jobs(
+        &args.edit.io,
+        "filter-lods",
+        &args.edit.jobs,
+        Edit::FilterLods(rule),
+    )
 }

@@ -2,7 +2,7 @@
 //! a box, ids or types (citygml-tools' `subset`; CityJSON: `skylod::export::cityjson_edit`),
 //! streamed: memory follows the largest city object.
 
-use crate::args::citygml_io::CityGmlIoArgs;
+use crate::args::citygml_io::EditArgs;
 use crate::Outcome;
 use anyhow::Context;
 use skylod::io::citygml::edit::{BboxMode, Subset};
@@ -12,9 +12,7 @@ use skylod::pipeline::batch::edit::Edit;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    io: CityGmlIoArgs,
-    #[command(flatten)]
-    jobs: crate::args::jobs::JobsArgs,
+    edit: EditArgs,
     /// Keep city objects whose box meets X0,Y0,X1,Y1 (in the document's CRS, or --bbox-crs).
     #[arg(
         long,
@@ -66,5 +64,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         invert: args.invert,
         limit: args.limit,
     };
-    crate::outputs::per_input_jobs(&args.io, "subset", &args.jobs, Edit::Subset(rule))
+    crate::outputs::per_input_jobs(&args.edit.io, "subset", &args.edit.jobs, Edit::Subset(rule))
 }
