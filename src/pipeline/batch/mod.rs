@@ -6,6 +6,7 @@
 //!   relative path each mirrors under `-o DIR`.
 //! * [`convert`]: one input of `stats` and `convert`, streamed where it is large.
 //! * [`edit`]: `subset`, `filter-lods`, `upgrade` of one input, CityGML or CityJSON.
+//! * [`convert_all`]: every input of a `convert` batch, with progress.
 //! * [`outputs`]: an output name → one output per input, a mirrored tree, or a merge.
 //! * [`rough`]: one input of `rough`, generalised and written.
 //! * [`run`]: a batch that writes per input: its outputs planned, its inputs' results
@@ -18,6 +19,7 @@
 //! * [`synth`]: the files of `synth`, the model and its POIs.
 
 pub mod convert;
+pub mod convert_all;
 pub mod edit;
 pub mod inputs;
 pub mod outputs;
