@@ -20,7 +20,7 @@
 //! document the chunked reader declines (see [`stream`]) is read whole and rewritten as a
 //! small one.
 
-use super::{rewrite_edits, scan, xml_err, Mode, PointTransform, RewriteSummary, Scanner};
+use super::{rewrite_edits, scan, Mode, PointTransform, RewriteSummary, Scanner};
 use crate::io::citygml::error::{ReadError, WriteError};
 use crate::io::citygml::read::{read_file, stream, ReadOptions, Streamed, CHUNK_BYTES};
 use crate::io::citygml::source;
@@ -57,7 +57,13 @@ fn href_targets(path: &Path) -> Result<HashSet<u64>, WriteError> {
     loop {
         let ev = match reader.read_event_into(&mut buf) {
             Ok(ev) => ev,
-            Err(e) => return Err(xml_err(path, reader.error_position(), e.to_string())),
+            Err(e) => {
+                return Err(WriteError::xml_at_byte(
+                    path,
+                    reader.error_position(),
+                    e.to_string(),
+                ))
+            }
         };
         match ev {
             Event::Start(ref e) | Event::Empty(ref e) => {
