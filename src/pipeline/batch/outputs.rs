@@ -100,6 +100,17 @@ pub enum PlanError {
         /// The merge target.
         target: PathBuf,
     },
+    /// An edit (`subset`, `filter-lods`, `upgrade`, `reproject`) asked to merge CityJSON
+    /// inputs with CityGML ones (`other`), or CityJSON inputs into a CityGML name (`None`).
+    #[error("{}", mixed_text(.target, .json, .other.as_deref()))]
+    MixedMerge {
+        /// The merge target.
+        target: PathBuf,
+        /// A CityJSON input.
+        json: PathBuf,
+        /// A CityGML input.
+        other: Option<PathBuf>,
+    },
     /// The merge target is refused.
     #[error(transparent)]
     Target(#[from] WriteError),
@@ -122,6 +133,22 @@ pub enum PlanError {
         /// Cause.
         source: std::io::Error,
     },
+}
+
+fn mixed_text(target: &Path, json: &Path, other: Option<&Path>) -> String {
+    let (t, j) = (target.display(), crate::model::shown(json));
+    match other {
+        Some(o) => format!(
+            "{t}: an edit writes CityJSON as CityJSON and CityGML as CityGML, so the CityJSON \
+             {j} and the CityGML {} cannot be merged into one file (merge each format apart, \
+             or `skylod convert` one into the other first)",
+            crate::model::shown(o)
+        ),
+        None => format!(
+            "{t}: CityJSON inputs ({j}, ...) are merged into CityJSON: name the target \
+             .city.json or .city.jsonl (`skylod convert` writes CityGML from them)"
+        ),
+    }
 }
 
 fn names_directory(out: &Path) -> bool {
@@ -216,6 +243,9 @@ pub struct Targets {
     /// How each output is written: the given options, or for a merge's staged parts the
     /// same with `overwrite` (the merge target was checked instead).
     pub write_opts: WriteOptions,
+    /// Whether the staged parts are CityJSON, merged as CityJSON
+    /// ([`crate::export::cityjson_edit::merge_cityjson`]; [`Plan::edit_targets`]).
+    pub cityjson: bool,
 }
 
 impl Plan {
@@ -235,6 +265,35 @@ impl Plan {
         wopts: &WriteOptions,
         shard: Option<Shard>,
         keeps_crs: bool,
+    ) -> Result<Targets, PlanError> {
+        self.lay_out(inputs, wopts, shard, keeps_crs, false)
+    }
+
+    /// [`Plan::targets`] for an edit that writes each input in its own format (`subset`,
+    /// `filter-lods`, `upgrade`, `reproject`): a merge of CityJSON inputs stages CityJSON
+    /// parts ([`Staging::json_part`], [`Targets::cityjson`]) to be merged as CityJSON. CityJSON
+    /// and CityGML inputs together, or CityJSON inputs into a CityGML name, are refused
+    /// ([`PlanError::MixedMerge`]) before any work.
+    ///
+    /// # Errors
+    /// As [`Plan::targets`], and [`PlanError::MixedMerge`].
+    pub fn edit_targets(
+        &self,
+        inputs: &[PathBuf],
+        wopts: &WriteOptions,
+        shard: Option<Shard>,
+        keeps_crs: bool,
+    ) -> Result<Targets, PlanError> {
+        self.lay_out(inputs, wopts, shard, keeps_crs, true)
+    }
+
+    fn lay_out(
+        &self,
+        inputs: &[PathBuf],
+        wopts: &WriteOptions,
+        shard: Option<Shard>,
+        keeps_crs: bool,
+        edits: bool,
     ) -> Result<Targets, PlanError> {
         let protect = || inputs.iter().map(PathBuf::as_path);
         match self {
@@ -256,6 +315,7 @@ impl Plan {
                     staging: None,
                     mirror: matches!(self, Plan::Mirror(_)),
                     write_opts: wopts.clone(),
+                    cityjson: false,
                 })
             }
             Plan::Merge(target) => {
@@ -266,17 +326,33 @@ impl Plan {
                     });
                 }
                 check_target(target, wopts, protect())?;
-                // CityJSON inputs are written as CityGML first; their parts are checked
-                // when merged.
-                let xml: Vec<PathBuf> = inputs
+                // CityJSON inputs are written as CityGML first (or, by an edit, merged as
+                // CityJSON); their parts are checked when merged.
+                let (json, xml): (Vec<PathBuf>, Vec<PathBuf>) = inputs
                     .iter()
-                    .filter(|p| !crate::export::citygml_from_cityjson::is_json_file(p))
                     .cloned()
-                    .collect();
+                    .partition(|p| crate::export::citygml_from_cityjson::is_json_file(p));
+                let cityjson = edits && !json.is_empty();
+                if cityjson {
+                    let gml_name = !is_stdout(target)
+                        && Format::from_path(target).is_none_or(|f| f == Format::CityGml);
+                    if let (Some(j), true) = (json.first(), gml_name || !xml.is_empty()) {
+                        return Err(PlanError::MixedMerge {
+                            target: target.clone(),
+                            json: j.clone(),
+                            other: xml.first().cloned(),
+                        });
+                    }
+                }
                 check_mergeable(&xml, keeps_crs)?;
                 let staging = Staging::new(target)?;
+                let part = |k| match cityjson {
+                    true => staging.json_part(k),
+                    false => staging.part(k),
+                };
                 Ok(Targets {
-                    todo: (0..inputs.len()).map(|k| (k, staging.part(k))).collect(),
+                    cityjson,
+                    todo: (0..inputs.len()).map(|k| (k, part(k))).collect(),
                     refused: Vec::new(),
                     staging: Some(staging),
                     mirror: false,
@@ -337,6 +413,12 @@ impl Staging {
     /// Where the `k`-th input's document is written.
     pub fn part(&self, k: usize) -> PathBuf {
         self.dir.path().join(format!("{k:06}.gml"))
+    }
+
+    /// Where the `k`-th CityJSON input's edited document is written (a merge of CityJSON
+    /// inputs by an edit).
+    pub fn json_part(&self, k: usize) -> PathBuf {
+        self.dir.path().join(format!("{k:06}.city.json"))
     }
 
     /// Where the merged CityGML document is staged when the target is another format.

@@ -78,6 +78,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             staging,
             mirror,
             write_opts,
+            cityjson,
             ..
         },
         refused,
@@ -108,19 +109,18 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 Crs::parse(&args.target),
             );
             let t = skylod::model::crs::ProjTransform;
-            let r = if staging.is_some() {
-                Err(anyhow::anyhow!(
-                    "CityJSON inputs are not merged: give -o DIR"
-                ))
-            } else {
-                reproject_cityjson(input, out, from.as_ref(), &to, &t, &write_opts)
-                    .map_err(|e| anyhow::anyhow!(crate::errors::cli_text(&e)))
-            };
+            let r = reproject_cityjson(input, out, from.as_ref(), &to, &t, &write_opts)
+                .map_err(|e| anyhow::anyhow!(crate::errors::cli_text(&e)));
+            if r.is_ok() {
+                parts.push(out.clone());
+                names.push(input.clone());
+            }
+            let shown = if staging.is_some() { target_name } else { out };
             match r {
                 Ok(s) => crate::log::summary!(
                     "{} -> {}: {} -> {}, {} vertices",
                     skylod::model::shown(input),
-                    out.display(),
+                    shown.display(),
                     s.from,
                     s.to,
                     s.vertices
@@ -164,7 +164,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
-        let (merged, said) = skylod::batch::run::merge_parts(&parts, &names, t, &wopts, total);
+        let merge = match cityjson {
+            true => skylod::batch::run::merge_json_parts,
+            false => skylod::batch::run::merge_parts,
+        };
+        let (merged, said) = merge(&parts, &names, t, &wopts, total);
         crate::outputs::say(said);
         if !merged {
             failed = total;
