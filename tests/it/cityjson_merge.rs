@@ -156,7 +156,7 @@ fn renamed(o: &Value, renames: &Map<String, Value>) -> Value {
 
 /// The merge `merged` holds the union of `separate` (in input order): the same objects, each
 /// resolved to the same values; an id an earlier output used is named `<id>__<k>`.
-fn check_union(merged: &Path, separate: &[PathBuf], what: &str) {
+pub(crate) fn check_union(merged: &Path, separate: &[PathBuf], what: &str) {
     let m = resolved(merged);
     let mut want = BTreeMap::new();
     for (k, s) in separate.iter().enumerate() {
@@ -435,35 +435,26 @@ fn mixed_crss_and_formats_are_refused() {
         );
         assert!(!d("m.city.json").exists());
     }
-    // CityJSON with CityGML, CityJSON into a CityGML name: refused before any work
+    // CityJSON with CityGML, CityJSON into a CityGML name: refused before any work (exit 2)
     let gml = manifest_dir().join("fixtures/chimney-citygml2.gml");
-    let o = run(&[
-        os("subset"),
-        os(&nl),
-        os(&gml),
-        os("-o"),
-        os(&d("m.city.json")),
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("cannot be merged into one file"),
-        "{}",
-        stderr(&o)
-    );
-    let o = run(&[
-        os("filter-lods"),
-        os(&nl),
-        os(&jp),
-        os("--lod"),
-        os("2"),
-        os("-o"),
-        os(&d("m.gml")),
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("name the target .city.json"),
-        "{}",
-        stderr(&o)
-    );
+    let cases = [
+        (
+            "subset",
+            &gml,
+            "m.city.json",
+            "cannot be merged into one file",
+        ),
+        ("filter-lods", &jp, "m.gml", "name the target .city.json"),
+    ];
+    for (cmd, other, target, says) in cases {
+        let t = d(target);
+        let mut a = vec![os(cmd), os(&nl), os(other), os("-o"), os(&t)];
+        if cmd == "filter-lods" {
+            a.extend([os("--lod"), os("2")]);
+        }
+        let o = run(&a);
+        assert_eq!(o.status.code(), Some(2), "{cmd}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{cmd}: {}", stderr(&o));
+    }
     assert!(!d("m.city.json").exists() && !d("m.gml").exists());
 }

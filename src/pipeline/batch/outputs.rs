@@ -266,35 +266,6 @@ impl Plan {
         shard: Option<Shard>,
         keeps_crs: bool,
     ) -> Result<Targets, PlanError> {
-        self.lay_out(inputs, wopts, shard, keeps_crs, false)
-    }
-
-    /// [`Plan::targets`] for an edit that writes each input in its own format (`subset`,
-    /// `filter-lods`, `upgrade`, `reproject`): a merge of CityJSON inputs stages CityJSON
-    /// parts ([`Staging::json_part`], [`Targets::cityjson`]) to be merged as CityJSON. CityJSON
-    /// and CityGML inputs together, or CityJSON inputs into a CityGML name, are refused
-    /// ([`PlanError::MixedMerge`]) before any work.
-    ///
-    /// # Errors
-    /// As [`Plan::targets`], and [`PlanError::MixedMerge`].
-    pub fn edit_targets(
-        &self,
-        inputs: &[PathBuf],
-        wopts: &WriteOptions,
-        shard: Option<Shard>,
-        keeps_crs: bool,
-    ) -> Result<Targets, PlanError> {
-        self.lay_out(inputs, wopts, shard, keeps_crs, true)
-    }
-
-    fn lay_out(
-        &self,
-        inputs: &[PathBuf],
-        wopts: &WriteOptions,
-        shard: Option<Shard>,
-        keeps_crs: bool,
-        edits: bool,
-    ) -> Result<Targets, PlanError> {
         let protect = || inputs.iter().map(PathBuf::as_path);
         match self {
             Plan::PerInput(outs) | Plan::Mirror(outs) => {
@@ -326,33 +297,18 @@ impl Plan {
                     });
                 }
                 check_target(target, wopts, protect())?;
-                // CityJSON inputs are written as CityGML first (or, by an edit, merged as
-                // CityJSON); their parts are checked when merged.
-                let (json, xml): (Vec<PathBuf>, Vec<PathBuf>) = inputs
+                // CityJSON inputs are written as CityGML first; their parts are checked
+                // when merged.
+                let xml: Vec<PathBuf> = inputs
                     .iter()
+                    .filter(|p| !crate::export::citygml_from_cityjson::is_json_file(p))
                     .cloned()
-                    .partition(|p| crate::export::citygml_from_cityjson::is_json_file(p));
-                let cityjson = edits && !json.is_empty();
-                if cityjson {
-                    let gml_name = !is_stdout(target)
-                        && Format::from_path(target).is_none_or(|f| f == Format::CityGml);
-                    if let (Some(j), true) = (json.first(), gml_name || !xml.is_empty()) {
-                        return Err(PlanError::MixedMerge {
-                            target: target.clone(),
-                            json: j.clone(),
-                            other: xml.first().cloned(),
-                        });
-                    }
-                }
+                    .collect();
                 check_mergeable(&xml, keeps_crs)?;
                 let staging = Staging::new(target)?;
-                let part = |k| match cityjson {
-                    true => staging.json_part(k),
-                    false => staging.part(k),
-                };
                 Ok(Targets {
-                    cityjson,
-                    todo: (0..inputs.len()).map(|k| (k, part(k))).collect(),
+                    cityjson: false,
+                    todo: (0..inputs.len()).map(|k| (k, staging.part(k))).collect(),
                     refused: Vec::new(),
                     staging: Some(staging),
                     mirror: false,
@@ -363,6 +319,48 @@ impl Plan {
                 })
             }
         }
+    }
+}
+
+impl Plan {
+    /// [`Plan::targets`] for an edit that writes each input in its own format (`subset`,
+    /// `filter-lods`, `upgrade`, `reproject`): a merge of CityJSON inputs stages CityJSON
+    /// parts ([`Staging::json_part`], [`Targets::cityjson`]) to be merged as CityJSON
+    /// ([`crate::pipeline::batch::run::merge_parts`]). CityJSON and CityGML inputs together,
+    /// or CityJSON inputs into a CityGML name, are refused ([`PlanError::MixedMerge`]) before
+    /// any work.
+    ///
+    /// # Errors
+    /// As [`Plan::targets`], and [`PlanError::MixedMerge`].
+    pub fn edit_targets(
+        &self,
+        inputs: &[PathBuf],
+        wopts: &WriteOptions,
+        shard: Option<Shard>,
+        keeps_crs: bool,
+    ) -> Result<Targets, PlanError> {
+        let (json, xml): (Vec<&PathBuf>, Vec<&PathBuf>) = inputs
+            .iter()
+            .partition(|p| crate::export::citygml_from_cityjson::is_json_file(p));
+        if let (Plan::Merge(target), Some(j)) = (self, json.first()) {
+            let gml_name = !is_stdout(target)
+                && Format::from_path(target).is_none_or(|f| f == Format::CityGml);
+            if gml_name || !xml.is_empty() {
+                return Err(PlanError::MixedMerge {
+                    target: target.clone(),
+                    json: j.to_path_buf(),
+                    other: xml.first().map(|p| p.to_path_buf()),
+                });
+            }
+        }
+        let mut t = self.targets(inputs, wopts, shard, keeps_crs)?;
+        if let (Some(st), false) = (&t.staging, json.is_empty()) {
+            for (k, out) in &mut t.todo {
+                *out = st.json_part(*k);
+            }
+            t.cityjson = true;
+        }
+        Ok(t)
     }
 }
 

@@ -86,7 +86,7 @@ impl Batch {
 
     /// [`Batch::new`] for an edit that writes each input in its own format (`subset`,
     /// `filter-lods`, `upgrade`): CityJSON inputs merged into one file are merged as CityJSON
-    /// ([`Plan::edit_targets`], [`merge_json_parts`]).
+    /// ([`Plan::edit_targets`], [`merge_parts`]).
     ///
     /// # Errors
     /// As [`Batch::new`], and [`PlanError::MixedMerge`].
@@ -203,7 +203,7 @@ impl Batch {
         if let (true, Plan::Merge(target)) = (staged, &self.plan) {
             let (merged, s) = match &self.targets.staging {
                 _ if self.targets.cityjson => {
-                    merge_json_parts(&parts, &names, target, &self.wopts, inputs)
+                    merge_parts(&parts, &names, target, &self.wopts, inputs)
                 }
                 Some(st) if self.format != Format::CityGml => {
                     let to = (target.as_path(), self.format);
@@ -240,7 +240,8 @@ pub fn summary_line(
     )
 }
 
-/// Merge `parts` (in input order; written from the inputs `names`) into `target`, the last
+/// Merge `parts` (in input order; written from the inputs `names`) into `target` (CityJSON
+/// parts, named so, as CityJSON: [`crate::export::cityjson_edit::merge_cityjson`]), the last
 /// step of every batch that merges: whether `target` was written, and what to say — the
 /// merge line, with a warning when some of the `inputs` failed and the target holds only
 /// the others, or why nothing was written (then every input counts as failed).
@@ -254,51 +255,33 @@ pub fn merge_parts(
     if parts.is_empty() {
         return nothing_to_merge(target);
     }
-    let r = merge_named(parts, names, target, opts);
-    merge_said(r, target, parts.len(), inputs)
-}
-
-/// What a merge of `parts` of the `inputs` into `target` says, and whether it was written.
-fn merge_said(
-    r: Result<MergeSummary, crate::io::citygml::merge::MergeError>,
-    target: &Path,
-    parts: usize,
-    inputs: usize,
-) -> (bool, Vec<Said>) {
+    let json = |p: &PathBuf| crate::pipeline::batch::inputs::is_cityjson_name(&p.to_string_lossy());
+    let r = match parts.iter().all(json) {
+        // CityJSON parts (an edit's: [`Plan::edit_targets`]): CityJSONSeq for a `.jsonl` target,
+        // or for `-` when the first input is named so.
+        true => {
+            let seq_name = |p: &Path| {
+                let n = p.to_string_lossy().to_ascii_lowercase();
+                n.strip_suffix(".gz").unwrap_or(&n).ends_with(".jsonl")
+            };
+            let seq = match is_stdout(target) {
+                true => names.first().is_some_and(|n| seq_name(n)),
+                false => seq_name(target),
+            };
+            crate::export::cityjson_edit::merge_cityjson(parts, names, target, seq, opts)
+        }
+        false => merge_named(parts, names, target, opts),
+    };
     match r {
         Ok(s) => {
-            let mut said: Vec<Said> = partial_merge(target, parts, inputs).into_iter().collect();
+            let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs)
+                .into_iter()
+                .collect();
             said.push(Said::Summary(merge_line(&s, target)));
             (true, said)
         }
         Err(e) => (false, vec![Said::Error(format!("{e:#}"))]),
     }
-}
-
-/// [`merge_parts`] of CityJSON parts (edited CityJSON / CityJSONSeq inputs) into `target`
-/// ([`crate::export::cityjson_edit::merge_cityjson`]): CityJSONSeq for a `.city.jsonl` /
-/// `.jsonl` target, or for `-` when the first input is named so; a CityJSON document
-/// otherwise.
-pub fn merge_json_parts(
-    parts: &[PathBuf],
-    names: &[PathBuf],
-    target: &Path,
-    opts: &WriteOptions,
-    inputs: usize,
-) -> (bool, Vec<Said>) {
-    if parts.is_empty() {
-        return nothing_to_merge(target);
-    }
-    let seq_name = |p: &Path| {
-        let n = p.to_string_lossy().to_ascii_lowercase();
-        n.strip_suffix(".gz").unwrap_or(&n).ends_with(".jsonl")
-    };
-    let seq = match is_stdout(target) {
-        true => names.first().is_some_and(|n| seq_name(n)),
-        false => seq_name(target),
-    };
-    let r = crate::export::cityjson_edit::merge_cityjson(parts, names, target, seq, opts);
-    merge_said(r, target, parts.len(), inputs)
 }
 
 /// What a merge says when every input failed: nothing written (the shared first step of

@@ -78,7 +78,6 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             staging,
             mirror,
             write_opts,
-            cityjson,
             ..
         },
         refused,
@@ -115,7 +114,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 parts.push(out.clone());
                 names.push(input.clone());
             }
-            let shown = if staging.is_some() { target_name } else { out };
+            let shown = if staging.is_some() {
+                target_name
+            } else {
+                out.as_path()
+            };
             match r {
                 Ok(s) => crate::log::summary!(
                     "{} -> {}: {} -> {}, {} vertices",
@@ -164,11 +167,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
-        let merge = match cityjson {
-            true => skylod::batch::run::merge_json_parts,
-            false => skylod::batch::run::merge_parts,
-        };
-        let (merged, said) = merge(&parts, &names, t, &wopts, total);
+        let (merged, said) = skylod::batch::run::merge_parts(&parts, &names, t, &wopts, total);
         crate::outputs::say(said);
         if !merged {
             failed = total;
