@@ -63,7 +63,7 @@ pub fn targets(
     refused: impl Fn(&anyhow::Error),
 ) -> anyhow::Result<(Targets, usize)> {
     let mut t = plan
-        .targets(inputs, wopts, shard, keeps_crs)
+        .edit_targets(inputs, wopts, shard, keeps_crs)
         .map_err(usage)?;
     let n = refused_said(&mut t, shard, inputs.len(), cmd, refused);
     Ok((t, n))
@@ -149,7 +149,8 @@ pub fn per_input_jobs(
     let shard = a.shard.resolve()?;
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&a.inputs)?;
     let out = (a.output.as_path(), Some(Format::CityGml), a.overwrite);
-    let mut b = batch(cmd, &inputs, out, true, shard)?;
+    let mut b = Batch::for_edits(&inputs, out, true, shard).map_err(usage)?;
+    refused_said(&mut b.targets, shard, inputs.len(), cmd, |e| error!("{e}"));
     b.counts_polygons = false;
     let each = |i: &Path, o: &Path, shown: &Path, w: &WriteOptions| {
         (edit.apply(i, o, shown, w)).map_err(|e| anyhow!(crate::errors::cli_text(&e)))
