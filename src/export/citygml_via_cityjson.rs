@@ -63,9 +63,7 @@ pub fn write_citygml_levels(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<FromCityJsonSummary, WriteError> {
-    let Some(src) = model.files.get(file) else {
-        return Err(WriteError::Invalid(format!("no source file {file}")));
-    };
+    let src = crate::io::citygml::write::source_file(model, file)?;
     check_target(out, opts, src.source.path())?;
     let mut summary = FromCityJsonSummary::default();
     let bytes = atomic_write(out, |w| {
@@ -86,9 +84,7 @@ pub fn write_citygml_levels_to(
     content: Content<'_>,
     w: &mut dyn Write,
 ) -> Result<FromCityJsonSummary, WriteError> {
-    let Some(src) = model.files.get(file) else {
-        return Err(WriteError::Invalid(format!("no source file {file}")));
-    };
+    let src = crate::io::citygml::write::source_file(model, file)?;
     let mut json = Vec::new();
     super::write_to(Format::CityJson, model, file, content, &mut json)?;
     Ok(write_citygml(std::io::Cursor::new(json), &src.path, w)?)

@@ -155,9 +155,7 @@ pub fn write(
     opts: &WriteOptions,
 ) -> Result<ExportSummary, WriteError> {
     content.check(model)?;
-    let Some(src) = model.files.get(file) else {
-        return Err(WriteError::Invalid(format!("no source file {file}")));
-    };
+    let src = crate::io::citygml::write::source_file(model, file)?;
     crate::io::citygml::write::check_target(out, opts, src.source.path())?;
     let mut summary = ExportSummary::default();
     let bytes = crate::io::citygml::write::atomic_write(out, |w| {
@@ -181,9 +179,7 @@ pub fn write_to(
     w: &mut dyn std::io::Write,
 ) -> Result<ExportSummary, WriteError> {
     content.check(model)?;
-    if model.files.get(file).is_none() {
-        return Err(WriteError::Invalid(format!("no source file {file}")));
-    }
+    crate::io::citygml::write::source_file(model, file)?;
     let io = |e| WriteError::Io {
         file: crate::io::files::WRITER_NAME.into(),
         source: e,

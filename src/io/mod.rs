@@ -1,7 +1,8 @@
 //! Files and the city formats: the file helpers every reader and writer shares ([`files`]:
 //! gzip, standard input and output, target checks, atomic writes), CityGML ([`citygml`]:
 //! the streaming reader, the span-preserving writer, merge, reprojection, edits, upgrade)
-//! and CityJSON ([`cityjson`]), both read into the same [`crate::model::CityModel`].
+//! and CityJSON ([`cityjson`]), both read into the same [`crate::model::CityModel`]; an
+//! error's chain as one message ([`message`]).
 
 // CityGML 1.0/2.0/3.0: the streaming reader, the span-preserving writer, merge, reprojection.
 pub mod citygml;
@@ -9,6 +10,8 @@ pub mod citygml;
 pub mod cityjson;
 // Files in and out: gzip, standard output, target checks, atomic writes.
 pub mod files;
+// An error and its causes as one message.
+pub mod message;
 
 // The paths of release 0.1 (`skylod::io::files::atomic_write`, ...), kept for one release.
 #[doc(hidden)]

@@ -1,8 +1,9 @@
 //! Step 5: the POIs traced against the full-detail scene (SVF, sun hours, horizon) and
 //! the evaluation of the LoD model.
 
-use super::{Framed, PipelineError};
-use crate::lod::evaluation::{evaluate_irradiance, EvalError, EvalOptions, Evaluation};
+use super::session::Error;
+use super::Framed;
+use crate::lod::evaluation::{evaluate_irradiance, EvalOptions, Evaluation};
 use crate::lod::poi::checks::{self, PoiFlag};
 use crate::lod::scene::full_scene;
 use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
@@ -149,13 +150,13 @@ pub fn sun_hours(
 /// through [`trace`].
 ///
 /// # Errors
-/// [`PipelineError::Solar`] for invalid options (checked before any work),
-/// [`PipelineError::Cancelled`].
+/// [`Error::Solar`] for invalid options (checked before any work),
+/// [`Error::Cancelled`].
 pub fn horizon(
     framed: &Framed<'_>,
     opts: &HorizonOptions,
     progress: &dyn Progress,
-) -> Result<Traced<HorizonProfile>, PipelineError> {
+) -> Result<Traced<HorizonProfile>, Error> {
     opts.validate()?;
     let t = trace(framed, |s, p| poi_horizon(s, p, opts), |_| None, progress)?;
     Ok(Traced {
@@ -182,12 +183,12 @@ pub struct EvaluateOptions {
 /// ([`Stage::Trace`], cancellable before each POI).
 ///
 /// # Errors
-/// [`PipelineError::Eval`], [`PipelineError::Cancelled`].
+/// [`Error::Eval`], [`Error::Cancelled`].
 pub fn evaluate(
     framed: &Framed<'_>,
     opts: &EvaluateOptions,
     progress: &dyn Progress,
-) -> Result<Evaluation, PipelineError> {
+) -> Result<Evaluation, Error> {
     evaluate_irradiance(
         &framed.model,
         &framed.local_pois,
@@ -196,10 +197,7 @@ pub fn evaluate(
         opts.irradiance.as_ref(),
         progress,
     )
-    .map_err(|e| match e {
-        EvalError::Cancelled(c) => PipelineError::Cancelled(c),
-        e => PipelineError::Eval(e),
-    })
+    .map_err(Error::from)
 }
 
 #[cfg(test)]
@@ -255,7 +253,7 @@ mod tests {
         let stop = Stopper::new(Stage::Trace, 2);
         assert!(matches!(
             horizon(&framed, &hopts, &stop),
-            Err(PipelineError::Cancelled(Cancelled {
+            Err(Error::Cancelled(Cancelled {
                 stage: Stage::Trace
             }))
         ));
@@ -264,7 +262,7 @@ mod tests {
         let bad = HorizonOptions::default().with_step(0.0);
         assert!(matches!(
             horizon(&framed, &bad, &tally),
-            Err(PipelineError::Solar(_))
+            Err(Error::Solar(_))
         ));
         assert_eq!(tally.sum(Stage::Bvh, "start").0, 0);
     }
@@ -319,7 +317,7 @@ mod tests {
         assert!(
             matches!(
                 r,
-                Err(PipelineError::Cancelled(Cancelled {
+                Err(Error::Cancelled(Cancelled {
                     stage: Stage::Trace
                 }))
             ),

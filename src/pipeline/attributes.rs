@@ -181,10 +181,7 @@ pub fn write_attributes(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<usize, WriteError> {
-    let src = model
-        .files
-        .get(file)
-        .ok_or_else(|| WriteError::Invalid(format!("no source file {file} in the model")))?;
+    let src = crate::io::citygml::write::source_file(model, file)?;
     let io = |source| WriteError::Io {
         file: src.path.clone(),
         source,

@@ -1,6 +1,7 @@
 //! Step 5, pictured: the fisheye picture of each POI.
 
-use super::{Framed, PipelineError};
+use super::session::Error;
+use super::Framed;
 use crate::lod::poi::checks::{self, PoiFlag};
 use crate::lod::rough::rough_model;
 use crate::lod::scene::{full_scene, selection_scene};
@@ -46,15 +47,15 @@ pub struct SkyPicture {
 /// each) its cells, SVF, flags and levels.
 ///
 /// # Errors
-/// [`PipelineError::Select`], [`PipelineError::Cancelled`] (as `E`), or what `each` returns.
-pub fn sky_pictures<E: From<PipelineError>>(
+/// [`Error::Select`], [`Error::Cancelled`] (as `E`), or what `each` returns.
+pub fn sky_pictures<E: From<Error>>(
     framed: &Framed<'_>,
     opts: &SkyPictureOptions<'_>,
     progress: &dyn Progress,
     mut each: impl FnMut(usize, SkyPicture) -> Result<(), E>,
 ) -> Result<(), E> {
     let model: &CityModel = &framed.model;
-    check(progress, Stage::Bvh).map_err(PipelineError::from)?;
+    check(progress, Stage::Bvh).map_err(Error::from)?;
     let n = if opts.levels.is_some() { 2 } else { 1 };
     progress.start(Stage::Bvh, n, 0);
     let scene = full_scene(model);
@@ -73,7 +74,7 @@ pub fn sky_pictures<E: From<PipelineError>>(
         .iter()
         .enumerate()
         .try_for_each(|(k, poi)| {
-            check(progress, Stage::Trace).map_err(PipelineError::from)?;
+            check(progress, Stage::Trace).map_err(Error::from)?;
             let cells = classify_cells(
                 opts.partition,
                 &scene,
@@ -94,7 +95,7 @@ pub fn sky_pictures<E: From<PipelineError>>(
                         std::slice::from_ref(poi),
                         &lod.select,
                     )
-                    .map_err(PipelineError::from)?;
+                    .map_err(Error::from)?;
                     Some(shown_levels(model, sel.levels))
                 }
             };
@@ -152,15 +153,10 @@ mod tests {
         };
         let tally = Tally::default();
         let mut got = Vec::new();
-        sky_pictures(
-            &framed,
-            &opts,
-            &tally,
-            |k, p| -> Result<(), PipelineError> {
-                got.push((k, p));
-                Ok(())
-            },
-        )
+        sky_pictures(&framed, &opts, &tally, |k, p| -> Result<(), Error> {
+            got.push((k, p));
+            Ok(())
+        })
         .unwrap();
         assert_eq!(got.iter().map(|g| g.0).collect::<Vec<_>>(), [0, 1, 2, 3, 4]);
         assert_eq!(tally.sum(Stage::Trace, "start").0, 5);
@@ -180,13 +176,13 @@ mod tests {
         // Cancelled after the first picture: `each` saw one, the trace stage is named.
         let stop = Stopper::new(Stage::Trace, 1);
         let mut seen = 0;
-        let r = sky_pictures(&framed, &opts, &stop, |_, _| -> Result<(), PipelineError> {
+        let r = sky_pictures(&framed, &opts, &stop, |_, _| -> Result<(), Error> {
             seen += 1;
             Ok(())
         });
         assert!(matches!(
             r,
-            Err(PipelineError::Cancelled(Cancelled {
+            Err(Error::Cancelled(Cancelled {
                 stage: Stage::Trace
             }))
         ));
@@ -195,13 +191,13 @@ mod tests {
         let mut calls = 0;
         let r = sky_pictures(&framed, &opts, &Silent, |_, _| {
             calls += 1;
-            Err::<(), _>(PipelineError::Cancelled(Cancelled {
+            Err::<(), _>(Error::Cancelled(Cancelled {
                 stage: Stage::Write,
             }))
         });
         assert!(matches!(
             r,
-            Err(PipelineError::Cancelled(Cancelled {
+            Err(Error::Cancelled(Cancelled {
                 stage: Stage::Write
             }))
         ));

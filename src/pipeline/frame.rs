@@ -1,6 +1,7 @@
 //! Step 2: the model and the POIs in the local metric frame the tracing works in.
 
-use super::{PipelineError, PoiCrsError};
+use super::session::Error;
+use super::PoiCrsError;
 use crate::lod::poi::checks::extent::distance_to_box;
 use crate::lod::poi::{check_poi, check_poi_list, checks};
 use crate::model::crs::{build_transform, model_crs, Crs, CrsKind, LocalFrame, PointTransform};
@@ -62,13 +63,13 @@ pub struct Framed<'a> {
 /// everything into the frame; refuse POIs farther than `poi_margin` outside the scene.
 ///
 /// # Errors
-/// [`PipelineError::Poi`], [`PipelineError::PoiCrs`],
-/// [`PipelineError::Trust`].
+/// [`Error::Poi`], [`Error::PoiCrs`],
+/// [`Error::Trust`].
 pub fn frame<'a>(
     model: &'a mut CityModel,
     pois: Vec<Poi>,
     opts: &FrameOptions,
-) -> Result<Framed<'a>, PipelineError> {
+) -> Result<Framed<'a>, Error> {
     check_poi_list(&pois)?;
     if let Some(c) = &opts.source_crs {
         for f in &mut model.files {
@@ -178,21 +179,21 @@ mod tests {
         nan[1].position.x = f64::NAN;
         let r = frame(&mut inputs.model, nan, &FrameOptions::default());
         assert!(
-            matches!(&r, Err(PipelineError::Poi(PoiError::NotFinite { at, .. })) if at == "POI 2"),
+            matches!(&r, Err(Error::Poi(PoiError::NotFinite { at, .. })) if at == "POI 2"),
             "{r:?}"
         );
         let mut flat = good.clone();
         flat[0].normal = Some(DVec3::ZERO);
         let r = frame(&mut inputs.model, flat, &FrameOptions::default());
         assert!(
-            matches!(&r, Err(PipelineError::Poi(PoiError::ZeroNormal { .. }))),
+            matches!(&r, Err(Error::Poi(PoiError::ZeroNormal { .. }))),
             "{r:?}"
         );
         let mut twice = good.clone();
         twice[1].id = twice[0].id.clone();
         let r = frame(&mut inputs.model, twice, &FrameOptions::default());
         assert!(
-            matches!(&r, Err(PipelineError::Poi(PoiError::DuplicateId { .. }))),
+            matches!(&r, Err(Error::Poi(PoiError::DuplicateId { .. }))),
             "{r:?}"
         );
         // The same POIs, valid, are traced.

@@ -1,6 +1,7 @@
 //! Step 3: rough model, selection scene, selection and error bound.
 
-use super::{Framed, PipelineError};
+use super::session::Error;
+use super::Framed;
 use crate::lod::bound::{bound_against, full_answers, BoundOptions, BoundReport, FullAnswers};
 use crate::lod::rough::RoughGeometry;
 use crate::lod::{lod_with, LodOptions, LodResult};
@@ -76,12 +77,12 @@ impl Levels {
 /// peak memory keeps them one after the other); the answers are the same either way.
 ///
 /// # Errors
-/// [`PipelineError::Select`], [`PipelineError::Bound`], [`PipelineError::Cancelled`].
+/// [`Error::Select`], [`Error::Bound`], [`Error::Cancelled`].
 pub fn levels(
     framed: &Framed<'_>,
     opts: &LevelsOptions,
     progress: &dyn Progress,
-) -> Result<Levels, PipelineError> {
+) -> Result<Levels, Error> {
     let (model, pois) = (&*framed.model, &framed.local_pois[..]);
     let beside = opts
         .bound
@@ -113,13 +114,13 @@ fn full_of<'a>(
 /// an array job combined): the error bound when asked, the rough model back to the source CRS.
 ///
 /// # Errors
-/// [`PipelineError::Bound`], [`PipelineError::Cancelled`].
+/// [`Error::Bound`], [`Error::Cancelled`].
 pub fn levels_of(
     framed: &Framed<'_>,
     opts: &LevelsOptions,
     lod: LodResult,
     progress: &dyn Progress,
-) -> Result<Levels, PipelineError> {
+) -> Result<Levels, Error> {
     finish(framed, opts, lod, None, progress)
 }
 
@@ -130,7 +131,7 @@ fn finish(
     mut lod: LodResult,
     full: Option<FullAnswers<'_>>,
     progress: &dyn Progress,
-) -> Result<Levels, PipelineError> {
+) -> Result<Levels, Error> {
     let model: &CityModel = &framed.model;
     let pois = &framed.local_pois;
     let mut bound_report = None;
@@ -175,7 +176,6 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lod::select::SelectError;
     use crate::model::runtime::progress::Cancelled;
     use crate::pipeline::test_support::*;
     use crate::pipeline::{frame, read_inputs, FrameOptions};
@@ -236,9 +236,9 @@ mod tests {
         assert!(
             matches!(
                 r,
-                Err(PipelineError::Select(SelectError::Cancelled(Cancelled {
+                Err(Error::Cancelled(Cancelled {
                     stage: Stage::Select
-                })))
+                }))
             ),
             "{r:?}"
         );

@@ -20,7 +20,7 @@ fn fixture_dir() -> PathBuf {
     manifest_dir().join("fixtures/cityjson")
 }
 
-fn have(tool: &str, install: &str) -> bool {
+pub(crate) fn have(tool: &str, install: &str) -> bool {
     let ok = Command::new(tool)
         .arg("--version")
         .output()
@@ -37,12 +37,12 @@ fn ok(args: &[&std::ffi::OsStr]) -> std::process::Output {
     o
 }
 
-fn load(p: &Path) -> Value {
+pub(crate) fn load(p: &Path) -> Value {
     serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
 }
 
 /// cjio's answer (tests/oracle/cjio_edit.py).
-fn cjio_edit(args: &[&str]) -> Value {
+pub(crate) fn cjio_edit(args: &[&str]) -> Value {
     let script = manifest_dir().join("tests/oracle/cjio_edit.py");
     let o = Command::new("python3")
         .arg(script)
@@ -54,7 +54,7 @@ fn cjio_edit(args: &[&str]) -> Value {
 }
 
 /// cjval's verdict (`--report`), `None` when cjval is missing.
-fn cjval(file: &Path) -> Option<bool> {
+pub(crate) fn cjval(file: &Path) -> Option<bool> {
     let home = std::env::var_os("HOME").map(|h| Path::new(&h).join(".cargo/bin/cjval"));
     let bin = [Some(PathBuf::from("cjval")), home]
         .into_iter()

@@ -352,7 +352,8 @@ fn implicit_geometry_follows_pyproj() {
 
 /// A CityJSON input (Ingolstadt converted by `convert`) is reprojected as CityJSON: every
 /// vertex equal to pyproj's within the new transform's 1 mm, heights kept, the new
-/// `referenceSystem`; a merge of CityJSON inputs is refused.
+/// `referenceSystem`; a merge of two CityJSON inputs holds the union of their separate
+/// outputs.
 #[test]
 fn cityjson_is_reprojected_as_cityjson() {
     let Some(data) = shared_data() else {
@@ -391,11 +392,19 @@ print(json.dumps({"n": len(a["vertices"]), "m": len(b["vertices"]), "worst": wor
     assert!(f(&v, "n") > 500.0 && f(&v, "n") == f(&v, "m"), "{v}");
     assert!(f(&v, "worst") < 1e-3, "{v}");
     assert!(v["crs"].as_str().unwrap().ends_with("/EPSG/0/3857"), "{v}");
+    let (src2, out2) = (
+        dir.path().join("in2.city.json"),
+        dir.path().join("out2.city.json"),
+    );
+    let gml2 = data.join("ingolstadt-lod3/4018115.xml.gz");
+    let o = run(&[os("convert"), os(&gml2), os("-o"), os(&src2)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    reproject(&src2, &out2, "EPSG:3857", Some("EPSG:32632"));
     let merged = dir.path().join("both.city.json");
     let o = run(&[
         os("reproject"),
         os(&src),
-        os(&out),
+        os(&src2),
         os("-t"),
         os("EPSG:3857"),
         os("-s"),
@@ -403,6 +412,7 @@ print(json.dumps({"n": len(a["vertices"]), "m": len(b["vertices"]), "worst": wor
         os("-o"),
         os(&merged),
     ]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("not merged"), "{}", stderr(&o));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("merged 2 file(s)"), "{}", stderr(&o));
+    crate::cityjson_merge::check_union(&merged, &[out, out2], "reproject");
 }

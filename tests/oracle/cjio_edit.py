@@ -53,6 +53,8 @@ def main():
         for co in j["CityObjects"].values():
             objects[co["type"]] = objects.get(co["type"], 0) + 1
             for g in co.get("geometry", []):
+                if "lod" not in g:  # a GeometryInstance: its template's
+                    g = j["geometry-templates"]["templates"][g["template"]]
                 lods.add(str(g["lod"]))
         out = {"objects": objects, "vertices": len(j["vertices"]), "lods": sorted(lods)}
     else:

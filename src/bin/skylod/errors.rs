@@ -59,10 +59,7 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
         return format!("{}: output exists (use --overwrite)", p.display());
     }
     // A full disk in plain words, as the library's file errors say it.
-    if let Some(io) = e.downcast_ref::<std::io::Error>() {
-        return skylod::io::describe_io(io);
-    }
-    e.to_string()
+    skylod::io::message::plain_text(e)
 }
 
 fn poi_crs(e: &PoiCrsError) -> String {

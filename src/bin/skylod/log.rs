@@ -11,11 +11,12 @@
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use skylod::runtime::progress::{Progress, Stage};
+use skylod::runtime::progress_text::{Detail, ProgressText};
 use std::collections::HashMap;
 use std::io::IsTerminal;
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// How much is said on standard error.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -51,7 +52,6 @@ pub struct LogArgs {
 
 struct Logger {
     level: Level,
-    quiet: bool,
     bars: Option<MultiProgress>,
 }
 
@@ -111,7 +111,6 @@ pub fn init(args: &LogArgs) {
         } else {
             args.log_level
         },
-        quiet: args.quiet,
         bars,
     });
 }
@@ -119,14 +118,8 @@ pub fn init(args: &LogArgs) {
 fn logger() -> &'static Logger {
     LOGGER.get_or_init(|| Logger {
         level: Level::Warn,
-        quiet: false,
         bars: None,
     })
-}
-
-/// Whether messages of `level` are written.
-pub fn enabled(level: Level) -> bool {
-    logger().level >= level
 }
 
 /// Write `text` on standard error when `level` is enabled, above the bars when there are.
@@ -160,19 +153,19 @@ macro_rules! info {
 #[allow(unused_imports)]
 pub(crate) use {error, info, summary, warning};
 
-/// The progress of the library on standard error: bars on a terminal, lines at `info`
-/// (stages, files) and `debug` (POIs by tenths) otherwise, nothing with `--quiet`.
+/// The progress of the library on standard error: bars on a terminal, else the lines of
+/// [`ProgressText`] at `info` (stages, files) and `debug` (POIs by tenths), nothing with `--quiet`.
 pub struct Reporter {
     bars: Option<MultiProgress>,
-    state: Mutex<HashMap<Stage, StageState>>,
+    state: Mutex<HashMap<Stage, StageBar>>,
+    text: ProgressText,
 }
 
-struct StageState {
-    bar: Option<ProgressBar>,
+struct StageBar {
+    bar: ProgressBar,
     items: u64,
-    done: AtomicU64,
+    done: u64,
     bytes: u64,
-    t: Instant,
 }
 
 /// The progress reporter for the current flags.
@@ -180,6 +173,7 @@ pub fn reporter() -> Reporter {
     Reporter {
         bars: logger().bars.clone(),
         state: Mutex::new(HashMap::new()),
+        text: ProgressText::default(),
     }
 }
 
@@ -187,13 +181,18 @@ fn style(template: &str) -> ProgressStyle {
     ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar())
 }
 
-fn mb(bytes: u64) -> f64 {
-    bytes as f64 / 1e6
+/// Write a line of [`ProgressText`] at its detail.
+fn text_line(l: Option<skylod::runtime::progress_text::Line>) {
+    let Some(l) = l else { return };
+    let level = match l.detail {
+        Detail::Info => Level::Info,
+        Detail::Debug => Level::Debug,
+    };
+    line(level, &l.text);
 }
 
 impl Reporter {
-    fn bar(&self, stage: Stage, items: u64, bytes: u64) -> Option<ProgressBar> {
-        let m = self.bars.as_ref()?;
+    fn bar(m: &MultiProgress, stage: Stage, items: u64, bytes: u64) -> ProgressBar {
         let bar = if bytes > 0 {
             ProgressBar::new(bytes).with_style(style(
                 "{spinner} {prefix:<26} [{bar:30}] {bytes}/{total_bytes} {msg} ({bytes_per_sec}, ETA {eta})",
@@ -213,7 +212,7 @@ impl Reporter {
             bar.set_message(format!("{}s", stage.item()));
         }
         bar.enable_steady_tick(Duration::from_millis(100));
-        Some(bar)
+        bar
     }
 }
 
@@ -223,79 +222,46 @@ impl Progress for Reporter {
     }
 
     fn start(&self, stage: Stage, items: u64, bytes: u64) {
-        let bar = self.bar(stage, items, bytes);
-        if bar.is_none() && items <= 1 && bytes == 0 {
-            info!("{}", stage.doing());
-        } else if bar.is_none() {
-            let size = if bytes > 0 {
-                format!(", {:.1} MB", mb(bytes))
-            } else {
-                String::new()
-            };
-            info!("{}: {items} {}(s){size}", stage.doing(), stage.item());
-        }
+        let Some(m) = &self.bars else {
+            return text_line(Some(self.text.start(stage, items, bytes)));
+        };
+        let bar = Reporter::bar(m, stage, items, bytes);
         if let Ok(mut s) = self.state.lock() {
+            let done = 0;
             s.insert(
                 stage,
-                StageState {
+                StageBar {
                     bar,
                     items,
-                    done: AtomicU64::new(0),
+                    done,
                     bytes,
-                    t: Instant::now(),
                 },
             );
         }
     }
 
     fn advance(&self, stage: Stage, items: u64, bytes: u64, name: Option<&str>) {
-        let Ok(s) = self.state.lock() else { return };
-        let Some(st) = s.get(&stage) else { return };
-        let done = st.done.fetch_add(items, Ordering::Relaxed) + items;
-        match &st.bar {
-            Some(bar) => {
-                if st.bytes > 0 {
-                    bar.inc(bytes);
-                    bar.set_message(format!("{done}/{} {}s", st.items, stage.item()));
-                } else {
-                    bar.inc(items);
-                }
-            }
-            None => {
-                if let Some(n) = name {
-                    info!("{} {done}/{}: {n}", stage.doing(), st.items);
-                } else if enabled(Level::Debug) && st.items >= 10 {
-                    let tenth = st.items.div_ceil(10);
-                    if done % tenth == 0 || done == st.items {
-                        line(
-                            Level::Debug,
-                            &format!("{}: {done}/{} {}s", stage.doing(), st.items, stage.item()),
-                        );
-                    }
-                }
-            }
+        if self.bars.is_none() {
+            return text_line(self.text.advance(stage, items, name));
+        }
+        let Ok(mut s) = self.state.lock() else { return };
+        let Some(st) = s.get_mut(&stage) else { return };
+        st.done += items;
+        if st.bytes > 0 {
+            st.bar.inc(bytes);
+            (st.bar).set_message(format!("{}/{} {}s", st.done, st.items, stage.item()));
+        } else {
+            st.bar.inc(items);
         }
     }
 
     fn finish(&self, stage: Stage) {
+        if self.bars.is_none() {
+            return text_line(self.text.finish(stage));
+        }
         let Ok(mut s) = self.state.lock() else { return };
-        let Some(st) = s.remove(&stage) else { return };
-        let secs = st.t.elapsed().as_secs_f64();
-        match st.bar {
-            Some(bar) => bar.finish_and_clear(),
-            None if st.items <= 1 => info!("{}: done in {secs:.2} s", stage.doing()),
-            None => info!(
-                "{}: done, {} {}(s) in {secs:.2} s",
-                stage.doing(),
-                st.done.load(Ordering::Relaxed),
-                stage.item()
-            ),
+        if let Some(st) = s.remove(&stage) {
+            st.bar.finish_and_clear();
         }
     }
-}
-
-/// Whether `--quiet` was given.
-#[allow(dead_code)]
-pub fn quiet() -> bool {
-    logger().quiet
 }

@@ -3,6 +3,7 @@
 //! by SIGTERM / SIGHUP) and progress.
 
 use clap::{Parser, Subcommand};
+use skylod::io::message::{chain_message, is_broken_pipe};
 use std::process::ExitCode;
 
 mod args;
@@ -125,7 +126,7 @@ fn main() -> ExitCode {
         Ok(Outcome::SomeFailed) => ExitCode::from(1),
         // The reader of our standard output went away (`skylod stats … | head`): nothing
         // is wrong with the work, so end quietly and successfully, as ripgrep does.
-        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) if is_broken_pipe(e.as_ref()) => ExitCode::SUCCESS,
         Err(e) => {
             log::line(
                 log::Level::Error,
@@ -136,29 +137,10 @@ fn main() -> ExitCode {
     }
 }
 
-/// Whether an I/O error somewhere in the chain is a closed pipe.
-fn is_broken_pipe(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| {
-        c.downcast_ref::<std::io::Error>()
-            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
-    })
-}
-
-/// The error and its causes joined by ": ", each thing said once: a cause whose text the
-/// message already holds (library errors quote their source) is not repeated.
+/// The error and its causes joined by ": ", each thing said once, in the CLI's words
+/// ([`skylod::io::message::chain_message`]).
 fn message(e: &anyhow::Error) -> String {
-    let mut out = String::new();
-    for cause in e.chain() {
-        let text = errors::cli_text(cause);
-        if text.is_empty() || out.contains(&text) {
-            continue;
-        }
-        if !out.is_empty() {
-            out.push_str(": ");
-        }
-        out.push_str(&text);
-    }
-    out
+    chain_message(e.as_ref(), errors::cli_text)
 }
 
 #[cfg(test)]
@@ -169,38 +151,5 @@ mod tests {
     fn arguments_are_consistent() {
         use clap::CommandFactory;
         Cli::command().debug_assert();
-    }
-
-    #[test]
-    fn causes_said_once() {
-        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
-        let e = anyhow::Error::new(skylod::poi::PoiError::Io {
-            file: "nope.csv".into(),
-            source: io,
-        })
-        .context("reading POIs");
-        assert_eq!(message(&e), "reading POIs: nope.csv: No such file");
-    }
-
-    #[test]
-    fn a_full_disk_is_said_once_in_plain_words() {
-        let full = std::io::Error::from_raw_os_error(28);
-        let e = anyhow::Error::new(skylod::io::FileError::new("out.gml", full));
-        assert_eq!(message(&e), "out.gml: no space left on device");
-        let e = anyhow::Error::new(std::io::Error::from_raw_os_error(28))
-            .context("writing to standard output");
-        assert_eq!(
-            message(&e),
-            "writing to standard output: no space left on device"
-        );
-    }
-
-    #[test]
-    fn broken_pipe_found_in_chain() {
-        let io = std::io::Error::new(std::io::ErrorKind::BrokenPipe, "pipe");
-        let e = anyhow::Error::new(io).context("writing to stdout");
-        assert!(is_broken_pipe(&e));
-        let e = anyhow::anyhow!("other");
-        assert!(!is_broken_pipe(&e));
     }
 }

@@ -10,8 +10,7 @@ use skylod::batch::outputs::{PlanError, Targets};
 use skylod::batch::run::{Batch, Said};
 use skylod::batch::shard::Shard;
 use skylod::citygml::write::WriteOptions;
-use skylod::export::{Content, Format};
-use skylod::model::CityModel;
+use skylod::export::Format;
 use std::path::{Path, PathBuf};
 
 pub use skylod::batch::run::Done;
@@ -64,7 +63,7 @@ pub fn targets(
     refused: impl Fn(&anyhow::Error),
 ) -> anyhow::Result<(Targets, usize)> {
     let mut t = plan
-        .targets(inputs, wopts, shard, keeps_crs)
+        .edit_targets(inputs, wopts, shard, keeps_crs)
         .map_err(usage)?;
     let n = refused_said(&mut t, shard, inputs.len(), cmd, refused);
     Ok((t, n))
@@ -86,22 +85,6 @@ fn refused_said(
         refused(&anyhow!("{}", crate::errors::cli_text(&e)));
     }
     n
-}
-
-/// Write file `file` of `model` in `format` (not CityGML: [`skylod::export::write`]) and
-/// print its summary line ([`skylod::export::ExportSummary::describe`]).
-pub fn export(
-    format: Format,
-    model: &CityModel,
-    file: usize,
-    content: Content<'_>,
-    out: &Path,
-    wopts: &WriteOptions,
-) -> anyhow::Result<()> {
-    let s = skylod::export::write(format, model, file, content, out, wopts)?;
-    let input = model.files.get(file).map_or(Path::new(""), |f| &f.path);
-    summary!("{}", s.describe(format, input, out));
-    Ok(())
 }
 
 /// Create the parent directory of an output path (nothing for `-`).
@@ -152,36 +135,27 @@ pub fn finish(
     crate::Outcome::failed_if(f.failed > 0)
 }
 
-/// The summary line of one input written to `out`, named `shown` (the merge target for a
-/// staged part of a merge).
-pub type Edit<'a> = dyn Fn(&Path, &Path, &Path, &WriteOptions) -> Result<String, skylod::citygml::WriteError>
-    + Sync
-    + 'a;
-
-/// Run `edit` on every input of `a` as `cmd`, CityGML in and out (`subset`, `filter-lods`,
-/// `upgrade`): a [`Batch`] (targets checked before any work, an error per input does not stop
-/// it, several inputs into one file merged), with `--jobs` inputs at once (`None`: one after
-/// the other, outside any pool); the lines said in input order, the outputs the same whatever
-/// the number.
+/// Run `edit` on every input of `a` as `cmd` (`subset`, `filter-lods`, `upgrade`): a
+/// [`Batch`] (targets checked before any work, an error per input does not stop it, several
+/// inputs into one file merged), with `--jobs` inputs at once; the lines said in input order,
+/// the outputs the same whatever the number.
 pub fn per_input_jobs(
     a: &crate::args::citygml_io::CityGmlIoArgs,
     cmd: &str,
-    jobs: Option<&crate::args::jobs::JobsArgs>,
-    edit: &Edit<'_>,
+    jobs: &crate::args::jobs::JobsArgs,
+    edit: skylod::pipeline::batch::edit::Edit,
 ) -> anyhow::Result<crate::Outcome> {
     let t0 = std::time::Instant::now();
     let shard = a.shard.resolve()?;
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&a.inputs)?;
     let out = (a.output.as_path(), Some(Format::CityGml), a.overwrite);
-    let mut b = batch(cmd, &inputs, out, true, shard)?;
+    let mut b = Batch::for_edits(&inputs, out, true, shard).map_err(usage)?;
+    refused_said(&mut b.targets, shard, inputs.len(), cmd, |e| error!("{e}"));
     b.counts_polygons = false;
     let each = |i: &Path, o: &Path, shown: &Path, w: &WriteOptions| {
-        edit(i, o, shown, w).map_err(|e| anyhow!(crate::errors::cli_text(&e)))
+        (edit.apply(i, o, shown, w)).map_err(|e| anyhow!(crate::errors::cli_text(&e)))
     };
-    let results = match jobs {
-        Some(j) => j.install(|| b.run_each(&inputs, true, &each))?,
-        None => b.run_each(&inputs, false, &each),
-    };
+    let results = jobs.install(|| b.run_each(&inputs, true, &each))?;
     let failure = |e: &anyhow::Error| e.to_string();
     Ok(finish(&b, cmd, results, failure, inputs.len(), t0))
 }

@@ -49,10 +49,12 @@
 //! assert_eq!(doc["metadata"]["geographicalExtent"], serde_json::json!([0.0,0.0,0.0,2.0,1.0,3.0]));
 //! ```
 
+mod merge;
 mod reproject;
 mod rules;
 mod upgrade;
 
+pub use merge::merge_cityjson;
 pub use reproject::{reproject_cityjson, CityJsonReproject};
 pub use rules::{filter_lods, subset};
 pub use upgrade::{upgrade_cityjson, CityJsonUpgrade};

@@ -7,8 +7,18 @@
 //! for a projected target and 1e-9 degrees (about 0.1 mm) for a geographic one in x and y,
 //! heights (never changed) with the old `scale`. `metadata.referenceSystem` becomes
 //! `https://www.opengis.net/def/crs/EPSG/0/<code>` and `metadata.geographicalExtent` the box of
-//! the converted vertices. Geometry templates stay in their own local units. CityJSONSeq is
-//! streamed in two passes (the extent, then the lines).
+//! the converted vertices. CityJSONSeq is streamed in two passes (the extent, then the lines).
+//!
+//! # Geometry templates
+//! A template's vertices are shared by its instances and live in a local frame: an instance
+//! puts vertex `v` at `ref + M·(v, 1)`, `ref` its reference point (a vertex, converted as every
+//! vertex is) and `M` its 4×4 `transformationMatrix`. The templates are left as they are and
+//! each instance's `M` is converted to first order instead: `J`, the Jacobian of the
+//! conversion (heights kept) at the reference point, by central differences (a step of 1 m, or
+//! 1e-5° in x and y from a geographic CRS), is folded into it — new linear part `J·L`, new
+//! translation `J·t` for `M`'s linear part `L` and translation `t`. A template vertex `d` metres
+//! from its reference point then lands within the conversion's curvature over `d` of its
+//! converted position (about a millimetre at 80 m from UTM to WGS 84).
 
 use super::{check_json_target, cj, transform_of, write_line, Transform, Values};
 use crate::io::citygml::error::WriteError;
@@ -80,7 +90,16 @@ pub fn reproject_cityjson(
         to: target.name.clone(),
         ..CityJsonReproject::default()
     };
+    let step = match from.kind {
+        CrsKind::Geographic { .. } => [1e-5, 1e-5, 1.0],
+        _ => [1.0; 3],
+    };
+    let map = |p: DVec3| -> Result<DVec3, String> {
+        let q = t.position(&from, target, p).map_err(|e| e.to_string())?;
+        Ok(DVec3::new(q.x, q.y, p.z))
+    };
     let convert = |f: &mut Value, line: u64, b: &mut Bbox, n: &mut usize| {
+        reframe_instances(f, old, step, &map).map_err(|e| err(line, e))?;
         let Some(Value::Array(vs)) = f.get_mut("vertices") else {
             return Ok(());
         };
@@ -154,9 +173,182 @@ pub fn reproject_cityjson(
     Ok(s)
 }
 
+/// The Jacobian of `f` at `p`, by central differences of `step` per axis: `j[r][c]` =
+/// ∂f_r/∂x_c.
+fn jacobian(
+    f: &dyn Fn(DVec3) -> Result<DVec3, String>,
+    p: DVec3,
+    step: [f64; 3],
+) -> Result<[[f64; 3]; 3], String> {
+    let mut j = [[0.0; 3]; 3];
+    for (c, h) in step.into_iter().enumerate() {
+        let mut e = DVec3::ZERO;
+        e[c] = h;
+        let d = (f(p + e)? - f(p - e)?) / (2.0 * h);
+        for (r, row) in j.iter_mut().enumerate() {
+            row[c] = d[r];
+        }
+    }
+    Ok(j)
+}
+
+/// Fold the Jacobian of `f` (real coordinates in, real coordinates out) at the reference
+/// point of each `GeometryInstance` of `doc` (a document or a feature, its vertices stored
+/// with `old`) into the instance's `transformationMatrix` (module docs); the instances
+/// changed.
+fn reframe_instances(
+    doc: &mut Value,
+    old: Transform,
+    step: [f64; 3],
+    f: &dyn Fn(DVec3) -> Result<DVec3, String>,
+) -> Result<usize, String> {
+    let Some(o) = doc.as_object_mut() else {
+        return Ok(0);
+    };
+    let verts = o
+        .get_mut("vertices")
+        .map(Value::take)
+        .unwrap_or(Value::Null);
+    let point = |i: u64| -> Option<DVec3> {
+        let v = verts.get(usize::try_from(i).ok()?)?;
+        let c = |k: usize| Some(v.get(k)?.as_f64()? * old.0[k] + old.1[k]);
+        Some(DVec3::new(c(0)?, c(1)?, c(2)?))
+    };
+    let mut n = 0;
+    let mut r = Ok(());
+    let objects = o.get_mut("CityObjects").and_then(Value::as_object_mut);
+    for (id, obj) in objects.into_iter().flatten() {
+        let Some(Value::Array(gs)) = obj.get_mut("geometry") else {
+            continue;
+        };
+        for g in gs {
+            if g.get("type").and_then(Value::as_str) != Some("GeometryInstance") {
+                continue;
+            }
+            let at = g.pointer("/boundaries/0").and_then(Value::as_u64);
+            let Some(p) = at.and_then(point) else {
+                r = Err(format!(
+                    "city object {id}: an instance without a reference point"
+                ));
+                continue;
+            };
+            let m: Option<Vec<f64>> = g
+                .get("transformationMatrix")
+                .and_then(Value::as_array)
+                .map(|a| a.iter().filter_map(Value::as_f64).collect());
+            let Some(m) = m.filter(|m| m.len() == 16) else {
+                r = Err(format!(
+                    "city object {id}: an instance needs a transformationMatrix of 16 numbers"
+                ));
+                continue;
+            };
+            let j = match jacobian(f, p, step) {
+                Ok(j) => j,
+                Err(e) => {
+                    r = Err(e);
+                    continue;
+                }
+            };
+            let mut new = m.clone();
+            for row in 0..3 {
+                for col in 0..4 {
+                    new[row * 4 + col] = (0..3).map(|k| j[row][k] * m[k * 4 + col]).sum();
+                }
+            }
+            g["transformationMatrix"] = serde_json::json!(new);
+            n += 1;
+        }
+    }
+    if let Some(v) = o.get_mut("vertices") {
+        *v = verts;
+    }
+    r.map(|()| n)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn template_instances_land_where_their_points_are_converted() {
+        // cjio's dummy file (a template instanced once) placed in Ingolstadt, UTM 32N; its
+        // instance scaled, turned 30° and moved
+        let fx = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/cityjson/cjio-dummy.city.json"
+        );
+        let mut doc: Value = serde_json::from_slice(&std::fs::read(fx).unwrap()).unwrap();
+        doc["transform"]["translate"] = serde_json::json!([678083.0, 5403796.0, 413.0]);
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let m = [
+            2.0 * c,
+            -2.0 * s,
+            0.0,
+            5.0,
+            2.0 * s,
+            2.0 * c,
+            0.0,
+            -3.0,
+            0.0,
+            0.0,
+            1.5,
+            2.0,
+            0.0,
+            0.0,
+            0.0,
+            1.0,
+        ];
+        doc["CityObjects"]["1243"]["geometry"][0]["transformationMatrix"] = serde_json::json!(m);
+        let dir = tempfile::tempdir().unwrap();
+        let src = dir.path().join("a.city.json");
+        std::fs::write(&src, serde_json::to_vec(&doc).unwrap()).unwrap();
+        let out = dir.path().join("b.city.json");
+        let (utm, wgs, t) = (
+            Crs::epsg(32632),
+            Crs::epsg(4326),
+            crate::model::crs::Builtin,
+        );
+        reproject_cityjson(&src, &out, Some(&utm), &wgs, &t, &Default::default()).unwrap();
+        let g: Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+        assert_eq!(g["geometry-templates"], doc["geometry-templates"]);
+        let inst = |d: &Value| d["CityObjects"]["1243"]["geometry"][0].clone();
+        let (a, b) = (inst(&doc), inst(&g));
+        let tv = doc["geometry-templates"]["vertices-templates"]
+            .as_array()
+            .unwrap();
+        let point = |d: &Value, i: &Value| {
+            let k = i["boundaries"][0].as_u64().unwrap() as usize;
+            let v = &d["vertices"][k];
+            let c = |n: usize| {
+                v[n].as_f64().unwrap() * d["transform"]["scale"][n].as_f64().unwrap()
+                    + d["transform"]["translate"][n].as_f64().unwrap()
+            };
+            DVec3::new(c(0), c(1), c(2))
+        };
+        let placed = |i: &Value, at: DVec3, v: &Value| {
+            let m = |k: usize| i["transformationMatrix"][k].as_f64().unwrap();
+            let x = |k: usize| v[k].as_f64().unwrap();
+            let r = |row: usize| {
+                m(row * 4) * x(0) + m(row * 4 + 1) * x(1) + m(row * 4 + 2) * x(2) + m(row * 4 + 3)
+            };
+            at + DVec3::new(r(0), r(1), r(2))
+        };
+        assert_ne!(a["transformationMatrix"], b["transformationMatrix"]);
+        let (ra, rb) = (point(&doc, &a), point(&g, &b));
+        let mut far = 0.0f64;
+        for v in tv {
+            let w = placed(&a, ra, v);
+            let want = t.position(&utm, &wgs, w).unwrap();
+            let got = placed(&b, rb, v);
+            far = far.max((w - ra).length());
+            // 5e-8 degrees: about 5 mm; heights kept
+            assert!((got.x - want.x).abs() < 5e-8, "{got} {want}");
+            assert!((got.y - want.y).abs() < 5e-8, "{got} {want}");
+            assert!((got.z - w.z).abs() < 5e-3, "{got} {w}");
+        }
+        // the check covers points well away from the reference point
+        assert!(far > 50.0, "{far}");
+    }
 
     #[test]
     fn utm_to_wgs84_and_back_within_a_millimetre() {

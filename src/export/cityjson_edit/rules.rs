@@ -1,7 +1,7 @@
 //! The rules of [`crate::io::citygml::edit`]'s `subset` and `filter-lods` on CityJSON trees.
 
 use super::{run, Ctx, Decision, TreeRule};
-use crate::io::citygml::edit::subset::box_test;
+use crate::io::citygml::edit::subset::Matcher;
 use crate::io::citygml::edit::{EditSummary, Lods, Subset};
 use crate::io::citygml::error::WriteError;
 use crate::io::citygml::write::WriteOptions;
@@ -9,12 +9,7 @@ use crate::model::Bbox;
 use serde_json::{Map, Value};
 use std::path::Path;
 
-struct SubsetRule<'a> {
-    s: &'a Subset,
-    /// The box in the document's CRS, once known.
-    bbox: Option<Option<[f64; 4]>>,
-    kept: usize,
-}
+struct SubsetRule<'a>(Matcher<'a>);
 
 impl TreeRule for SubsetRule<'_> {
     fn tree(
@@ -24,33 +19,27 @@ impl TreeRule for SubsetRule<'_> {
         ctx: &Ctx<'_>,
         _counts: &mut EditSummary,
     ) -> Result<Decision, String> {
-        let q = match self.bbox {
-            Some(q) => q,
-            None => *self.bbox.insert(self.s.box_in(ctx.srs)?),
-        };
+        let q = self.0.bbox(ctx.srs)?;
         let Some(top) = ids.first() else {
             return Ok(Decision::Drop);
         };
-        let id_ok = self.s.ids.is_empty() || self.s.ids.iter().any(|i| i == top);
         let ty = objects
             .get(top.as_str())
             .and_then(|o| o.get("type"))
             .and_then(Value::as_str)
             .unwrap_or("");
-        let type_ok = self.s.types.is_empty() || self.s.types.iter().any(|t| t == ty);
-        let box_ok = q.is_none_or(|q| {
+        let boxed = || {
             let mut b = Bbox::EMPTY;
             for g in ids.iter().flat_map(|id| geometries(objects, id)) {
                 ctx.add_box(g, &mut b);
             }
-            !b.is_empty() && box_test(self.s.mode, &q, &[b.min.x, b.min.y, b.max.x, b.max.y])
-        });
-        let matches = (id_ok && type_ok && box_ok) != self.s.invert;
-        if !matches || self.s.limit.is_some_and(|l| self.kept >= l) {
-            return Ok(Decision::Drop);
-        }
-        self.kept += 1;
-        Ok(Decision::Keep(Vec::new()))
+            b
+        };
+        Ok(if self.0.keep(q, Some(top.as_str()), Some(ty), boxed) {
+            Decision::Keep(Vec::new())
+        } else {
+            Decision::Drop
+        })
     }
 }
 
@@ -73,13 +62,11 @@ impl TreeRule for LodRule<'_> {
         ctx: &Ctx<'_>,
         counts: &mut EditSummary,
     ) -> Result<Decision, String> {
-        let mut has: Vec<u8> = ids
+        let has: Vec<u8> = ids
             .iter()
             .flat_map(|id| geometries(objects, id))
             .filter_map(|g| ctx.lod(g))
             .collect();
-        has.sort_unstable();
-        has.dedup();
         let kept = self.0.kept(&has);
         // geometries removed per object (a geometry without a LoD stays)
         let mut lost = vec![false; ids.len()];
@@ -171,11 +158,7 @@ pub fn subset(
     opts: &WriteOptions,
 ) -> Result<EditSummary, WriteError> {
     run(input, out, opts, &|| {
-        Box::new(SubsetRule {
-            s: rule,
-            bbox: None,
-            kept: 0,
-        })
+        Box::new(SubsetRule(Matcher::new(rule)))
     })
 }
 

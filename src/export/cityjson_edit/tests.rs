@@ -33,6 +33,38 @@ fn run_on(v: &Value, name: &str, f: &dyn Fn(&Path, &Path) -> EditSummary) -> (Ed
     (s, serde_json::from_slice(&text).unwrap())
 }
 
+/// [`rules::subset`] of [`doc`] by `rule`: the summary and the document written.
+fn subset_doc(rule: &Subset) -> (EditSummary, Value) {
+    run_on(&doc(), "a.city.json", &|i, o| {
+        rules::subset(i, o, rule, &Default::default()).unwrap()
+    })
+}
+
+/// [`rules::filter_lods`] of [`doc`] by `rule`: the summary and the document written.
+fn filter_doc(rule: &Lods) -> (EditSummary, Value) {
+    run_on(&doc(), "a.city.json", &|i, o| {
+        rules::filter_lods(i, o, rule, &Default::default()).unwrap()
+    })
+}
+
+/// `lods` applied in `mode`, trees left empty removed.
+fn lods(lods: &[u8], mode: LodMode) -> Lods {
+    Lods {
+        lods: lods.to_vec(),
+        mode,
+        keep_empty: false,
+    }
+}
+
+/// The lines of the CityJSONSeq file at `path`.
+fn seq_lines(path: &Path) -> Vec<Value> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
 #[test]
 fn trees_follow_children_in_document_order() {
     let d = doc();
@@ -46,9 +78,7 @@ fn subset_by_box_keeps_whole_trees_renumbers_and_recomputes_the_extent() {
         bbox: Some([99.0, 199.0, 101.5, 201.0]),
         ..Subset::default()
     };
-    let (s, out) = run_on(&doc(), "a.city.json", &|i, o| {
-        rules::subset(i, o, &rule, &Default::default()).unwrap()
-    });
+    let (s, out) = subset_doc(&rule);
     assert_eq!((s.members, s.members_kept), (2, 1));
     let objects = out["CityObjects"].as_object().unwrap();
     assert_eq!(objects.keys().collect::<Vec<_>>(), ["a", "a1", "a2"]);
@@ -69,18 +99,14 @@ fn subset_by_box_keeps_whole_trees_renumbers_and_recomputes_the_extent() {
         bbox_crs: Some(crate::model::crs::Crs::parse("EPSG:7415")),
         ..rule.clone()
     };
-    let (s, _) = run_on(&doc(), "a.city.json", &|i, o| {
-        rules::subset(i, o, &named, &Default::default()).unwrap()
-    });
+    let (s, _) = subset_doc(&named);
     assert_eq!(s.members_kept, 1);
     // within: `a` reaches x 102 > 101.5, so nothing is within
     let within = Subset {
         mode: BboxMode::Within,
         ..rule.clone()
     };
-    let (s, out) = run_on(&doc(), "a.city.json", &|i, o| {
-        rules::subset(i, o, &within, &Default::default()).unwrap()
-    });
+    let (s, out) = subset_doc(&within);
     assert_eq!(s.members_kept, 0);
     assert!(out["metadata"].get("geographicalExtent").is_none());
     assert_eq!(out["vertices"], json!([]));
@@ -93,31 +119,21 @@ fn subset_by_type_invert_and_limit() {
         invert: true,
         ..Subset::default()
     };
-    let (s, _) = run_on(&doc(), "a.city.json", &|i, o| {
-        rules::subset(i, o, &rule, &Default::default()).unwrap()
-    });
+    let (s, _) = subset_doc(&rule);
     assert_eq!(s.members_kept, 0);
     let rule = Subset {
         limit: Some(1),
         ..Subset::default()
     };
-    let (s, out) = run_on(&doc(), "a.city.json", &|i, o| {
-        rules::subset(i, o, &rule, &Default::default()).unwrap()
-    });
+    let (s, out) = subset_doc(&rule);
     assert_eq!(s.members_kept, 1);
     assert!(out["CityObjects"]["b"].is_null());
 }
 
 #[test]
 fn filter_lods_removes_geometries_and_emptied_nested_objects() {
-    let keep2 = Lods {
-        lods: vec![2],
-        mode: LodMode::Keep,
-        keep_empty: false,
-    };
-    let (s, out) = run_on(&doc(), "a.city.json", &|i, o| {
-        rules::filter_lods(i, o, &keep2, &Default::default()).unwrap()
-    });
+    let keep2 = lods(&[2], LodMode::Keep);
+    let (s, out) = filter_doc(&keep2);
     // a1 keeps its LoD 2; a2 (LoD 3 only) goes with its reference in a; b's "2.2" counts as 2
     assert_eq!(s.lod_properties_removed, 2);
     assert_eq!(s.features_removed, 1);
@@ -128,34 +144,20 @@ fn filter_lods_removes_geometries_and_emptied_nested_objects() {
     assert_eq!(o["a1"]["geometry"].as_array().unwrap().len(), 1);
     assert_eq!(o["a1"]["geometry"][0]["lod"], "2");
     // maximum: a keeps LoD 3 (its highest listed), b its 2
-    let max = Lods {
-        lods: vec![1, 2, 3],
-        mode: LodMode::Maximum,
-        keep_empty: false,
-    };
-    let (_, out) = run_on(&doc(), "a.city.json", &|i, o| {
-        rules::filter_lods(i, o, &max, &Default::default()).unwrap()
-    });
+    let max = lods(&[1, 2, 3], LodMode::Maximum);
+    let (_, out) = filter_doc(&max);
     let o = &out["CityObjects"];
     assert!(o["a1"].is_null() && o["a2"].is_object() && o["b"].is_object());
     // keep 0: everything emptied goes, unless --keep-empty
-    let zero = Lods {
-        lods: vec![0],
-        mode: LodMode::Keep,
-        keep_empty: false,
-    };
-    let (s, out) = run_on(&doc(), "a.city.json", &|i, o| {
-        rules::filter_lods(i, o, &zero, &Default::default()).unwrap()
-    });
+    let zero = lods(&[0], LodMode::Keep);
+    let (s, out) = filter_doc(&zero);
     assert_eq!((s.members_kept, s.lod_properties_removed), (0, 0));
     assert_eq!(out["CityObjects"], json!({}));
     let empty = Lods {
         keep_empty: true,
         ..zero
     };
-    let (s, out) = run_on(&doc(), "a.city.json", &|i, o| {
-        rules::filter_lods(i, o, &empty, &Default::default()).unwrap()
-    });
+    let (s, out) = filter_doc(&empty);
     assert_eq!((s.members_kept, s.lod_properties_removed), (2, 4));
     assert_eq!(out["CityObjects"].as_object().unwrap().len(), 4);
 }
@@ -190,11 +192,7 @@ fn subset_of_cityjsonseq_is_streamed_feature_by_feature() {
     };
     let s = rules::subset(&src, &out, &rule, &Default::default()).unwrap();
     assert_eq!((s.members, s.members_kept), (2, 1));
-    let text = std::fs::read_to_string(&out).unwrap();
-    let lines: Vec<Value> = text
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines = seq_lines(&out);
     assert_eq!(lines.len(), 2);
     assert_eq!(
         lines[0]["metadata"]["geographicalExtent"],
@@ -202,19 +200,11 @@ fn subset_of_cityjsonseq_is_streamed_feature_by_feature() {
     );
     assert_eq!(lines[1]["id"], "b");
     // filter-lods on the sequence: keep 3 drops b's feature, keeps a with a2 only
-    let keep3 = Lods {
-        lods: vec![3],
-        mode: LodMode::Keep,
-        keep_empty: false,
-    };
+    let keep3 = lods(&[3], LodMode::Keep);
     let out = dir.path().join("c.city.jsonl");
     let s = rules::filter_lods(&src, &out, &keep3, &Default::default()).unwrap();
     assert_eq!((s.members, s.members_kept, s.features_removed), (2, 1, 1));
-    let text = std::fs::read_to_string(&out).unwrap();
-    let lines: Vec<Value> = text
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines = seq_lines(&out);
     assert_eq!(lines.len(), 2);
     assert_eq!(lines[1]["CityObjects"]["a"]["children"], json!(["a2"]));
     assert_eq!(lines[1]["vertices"].as_array().unwrap().len(), 3);
@@ -224,29 +214,22 @@ fn subset_of_cityjsonseq_is_streamed_feature_by_feature() {
 fn a_citygml_name_and_a_bad_index_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let src = dir.path().join("a.city.json");
-    std::fs::write(&src, serde_json::to_vec(&doc()).unwrap()).unwrap();
-    let e = rules::subset(
-        &src,
-        &dir.path().join("a.gml"),
-        &Subset::default(),
-        &Default::default(),
-    )
-    .unwrap_err();
-    assert!(e.to_string().contains("written as CityJSON"), "{e}");
     let mut bad = doc();
     bad["CityObjects"]["b"]["geometry"][0]["boundaries"] = json!([[[[5, 6, 70]]]]);
-    std::fs::write(&src, serde_json::to_vec(&bad).unwrap()).unwrap();
-    let e = rules::subset(
-        &src,
-        &dir.path().join("b.city.json"),
-        &Subset::default(),
-        &Default::default(),
-    )
-    .unwrap_err();
-    assert!(
-        e.to_string().contains("vertex index 70 out of range"),
-        "{e}"
-    );
+    for (d, out, why) in [
+        (doc(), "a.gml", "written as CityJSON"),
+        (bad, "b.city.json", "vertex index 70 out of range"),
+    ] {
+        std::fs::write(&src, serde_json::to_vec(&d).unwrap()).unwrap();
+        let e = rules::subset(
+            &src,
+            &dir.path().join(out),
+            &Subset::default(),
+            &Default::default(),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains(why), "{e}");
+    }
 }
 
 #[test]

@@ -211,3 +211,10 @@ impl ReadError {
         }
     }
 }
+
+impl WriteError {
+    /// [`ReadError::xml_at_byte`] met by a writer reading its source.
+    pub(crate) fn xml_at_byte(path: &Path, at: u64, message: String) -> Self {
+        WriteError::Read(ReadError::xml_at_byte(path, at, message))
+    }
+}

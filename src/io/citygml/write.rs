@@ -101,8 +101,9 @@ pub fn write_document_to(
     write_edits(model, file, edits, w, opts.keep_envelopes, name)
 }
 
-/// The source file `file` of `model`.
-fn source_file(model: &CityModel, file: usize) -> Result<&SourceFile, WriteError> {
+/// The source file `file` of `model`; [`WriteError::Invalid`] when it has none (every
+/// writer's first check).
+pub(crate) fn source_file(model: &CityModel, file: usize) -> Result<&SourceFile, WriteError> {
     model
         .files
         .get(file)

@@ -27,7 +27,7 @@
 use super::content_ids::{gml_ids, is_end_tag, Prescan, Taken, CHUNK_BYTES};
 use super::doc::{Doc, Name, Node, NsKind, RefKind, NONE};
 use super::push_back::{PushBack, Source};
-use crate::io::citygml::error::{ReadError, WriteError};
+use crate::io::citygml::error::WriteError;
 use crate::io::citygml::ns::{self, Module, Ns};
 use crate::io::citygml::read::ReadOptions;
 use crate::io::citygml::source::{self, Limited, SkipAhead, Stream};
@@ -48,10 +48,6 @@ fn ns_kind(uri: Option<&[u8]>) -> NsKind {
         Some(Ns::CityGml(..)) => NsKind::OtherCityGml,
         _ => NsKind::Other,
     }
-}
-
-fn xml_err(path: &Path, at: u64, message: String) -> WriteError {
-    WriteError::Read(ReadError::xml_at_byte(path, at, message))
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -187,7 +183,7 @@ impl<'p> Indexer<'p> {
         };
         let idx = doc.nodes.len() as u32;
         let Ok(tag_len) = u32::try_from(content_start.saturating_sub(pos)) else {
-            return Err(xml_err(
+            return Err(WriteError::xml_at_byte(
                 self.path,
                 pos,
                 "a start tag of 4 GiB or more".into(),
@@ -213,7 +209,7 @@ impl<'p> Indexer<'p> {
         };
         self.stack.push(idx);
         if self.stack.len() > self.opts.max_depth {
-            return Err(xml_err(
+            return Err(WriteError::xml_at_byte(
                 self.path,
                 pos,
                 format!("elements nested deeper than {}", self.opts.max_depth),
@@ -282,13 +278,17 @@ impl<'p> Indexer<'p> {
     /// The document ended at `at` (the index is sealed by the caller: [`Doc::seal`]).
     fn finish(self, at: u64) -> Result<Doc, WriteError> {
         if !self.stack.is_empty() || self.doc.nodes.is_empty() {
-            return Err(xml_err(self.path, at, "unexpected end of document".into()));
+            return Err(WriteError::xml_at_byte(
+                self.path,
+                at,
+                "unexpected end of document".into(),
+            ));
         }
         Ok(self.doc)
     }
 
     fn token_limit(&self, pos: u64) -> WriteError {
-        xml_err(
+        WriteError::xml_at_byte(
             self.path,
             pos,
             format!(
@@ -336,7 +336,7 @@ fn scan_stream<R: BufRead + SkipAhead>(
                 if reader.get_mut().inner.exceeded() {
                     return Err(ix.token_limit(pos));
                 }
-                return Err(xml_err(path, at, e.to_string()));
+                return Err(WriteError::xml_at_byte(path, at, e.to_string()));
             }
         };
         match ev {
@@ -493,12 +493,15 @@ fn scan_attrs<R>(
         .local
         .clone();
     for attr in e.attributes().with_checks(false) {
-        let attr = attr.map_err(|err| xml_err(path, 0, format!("bad attribute: {err}")))?;
+        let attr =
+            attr.map_err(|err| WriteError::xml_at_byte(path, 0, format!("bad attribute: {err}")))?;
         let key = attr.key.as_ref();
         let value = || -> Result<String, WriteError> {
             attr.unescape_value()
                 .map(|v| v.into_owned())
-                .map_err(|err| xml_err(path, 0, format!("bad attribute value: {err}")))
+                .map_err(|err| {
+                    WriteError::xml_at_byte(path, 0, format!("bad attribute value: {err}"))
+                })
         };
         if key == b"xmlns" || key.starts_with(b"xmlns:") {
             let prefix = String::from_utf8_lossy(key.get(6..).unwrap_or_default()).into_owned();
@@ -519,7 +522,7 @@ fn scan_attrs<R>(
                 match (lname.as_ref(), ns::classify(n.0)) {
                     (b"id", Ns::Gml) => {
                         let v = attr.unescape_value().map_err(|err| {
-                            xml_err(path, 0, format!("bad attribute value: {err}"))
+                            WriteError::xml_at_byte(path, 0, format!("bad attribute value: {err}"))
                         })?;
                         doc.ids.push(v.as_bytes(), idx);
                     }

@@ -275,9 +275,7 @@ fn mixed_edits(
     check: impl FnOnce(&crate::model::SourceFile) -> Result<(), WriteError>,
 ) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
     check_per_asset(model, rough, levels)?;
-    let Some(src) = model.files.get(file) else {
-        return Err(WriteError::Invalid(format!("no source file {file}")));
-    };
+    let src = crate::io::citygml::write::source_file(model, file)?;
     check(src)?;
     plan_file(model, file, rough, levels, opts.keep_envelopes, true)
 }

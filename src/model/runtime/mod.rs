@@ -1,5 +1,6 @@
 //! How a run behaves while it works, apart from what it computes: progress and
-//! cancellation ([`progress`]) and giving memory back between stages ([`mem`]).
+//! cancellation ([`progress`]), progress as log lines ([`progress_text`]) and giving memory back between stages ([`mem`]).
 
 pub mod mem;
 pub mod progress;
+pub mod progress_text;

@@ -100,6 +100,17 @@ pub enum PlanError {
         /// The merge target.
         target: PathBuf,
     },
+    /// An edit (`subset`, `filter-lods`, `upgrade`, `reproject`) asked to merge CityJSON
+    /// inputs with CityGML ones (`other`), or CityJSON inputs into a CityGML name (`None`).
+    #[error("{}", mixed_text(.target, .json, .other.as_deref()))]
+    MixedMerge {
+        /// The merge target.
+        target: PathBuf,
+        /// A CityJSON input.
+        json: PathBuf,
+        /// A CityGML input.
+        other: Option<PathBuf>,
+    },
     /// The merge target is refused.
     #[error(transparent)]
     Target(#[from] WriteError),
@@ -122,6 +133,22 @@ pub enum PlanError {
         /// Cause.
         source: std::io::Error,
     },
+}
+
+fn mixed_text(target: &Path, json: &Path, other: Option<&Path>) -> String {
+    let (t, j) = (target.display(), crate::model::shown(json));
+    match other {
+        Some(o) => format!(
+            "{t}: an edit writes CityJSON as CityJSON and CityGML as CityGML, so the CityJSON \
+             {j} and the CityGML {} cannot be merged into one file (merge each format apart, \
+             or `skylod convert` one into the other first)",
+            crate::model::shown(o)
+        ),
+        None => format!(
+            "{t}: CityJSON inputs ({j}, ...) are merged into CityJSON: name the target \
+             .city.json or .city.jsonl (`skylod convert` writes CityGML from them)"
+        ),
+    }
 }
 
 fn names_directory(out: &Path) -> bool {
@@ -216,6 +243,9 @@ pub struct Targets {
     /// How each output is written: the given options, or for a merge's staged parts the
     /// same with `overwrite` (the merge target was checked instead).
     pub write_opts: WriteOptions,
+    /// Whether the staged parts are CityJSON, merged as CityJSON
+    /// ([`crate::export::cityjson_edit::merge_cityjson`]; [`Plan::edit_targets`]).
+    pub cityjson: bool,
 }
 
 impl Plan {
@@ -256,6 +286,7 @@ impl Plan {
                     staging: None,
                     mirror: matches!(self, Plan::Mirror(_)),
                     write_opts: wopts.clone(),
+                    cityjson: false,
                 })
             }
             Plan::Merge(target) => {
@@ -276,6 +307,7 @@ impl Plan {
                 check_mergeable(&xml, keeps_crs)?;
                 let staging = Staging::new(target)?;
                 Ok(Targets {
+                    cityjson: false,
                     todo: (0..inputs.len()).map(|k| (k, staging.part(k))).collect(),
                     refused: Vec::new(),
                     staging: Some(staging),
@@ -287,6 +319,48 @@ impl Plan {
                 })
             }
         }
+    }
+}
+
+impl Plan {
+    /// [`Plan::targets`] for an edit that writes each input in its own format (`subset`,
+    /// `filter-lods`, `upgrade`, `reproject`): a merge of CityJSON inputs stages CityJSON
+    /// parts ([`Staging::json_part`], [`Targets::cityjson`]) to be merged as CityJSON
+    /// ([`crate::pipeline::batch::run::merge_parts`]). CityJSON and CityGML inputs together,
+    /// or CityJSON inputs into a CityGML name, are refused ([`PlanError::MixedMerge`]) before
+    /// any work.
+    ///
+    /// # Errors
+    /// As [`Plan::targets`], and [`PlanError::MixedMerge`].
+    pub fn edit_targets(
+        &self,
+        inputs: &[PathBuf],
+        wopts: &WriteOptions,
+        shard: Option<Shard>,
+        keeps_crs: bool,
+    ) -> Result<Targets, PlanError> {
+        let (json, xml): (Vec<&PathBuf>, Vec<&PathBuf>) = inputs
+            .iter()
+            .partition(|p| crate::export::citygml_from_cityjson::is_json_file(p));
+        if let (Plan::Merge(target), Some(j)) = (self, json.first()) {
+            let gml_name = !is_stdout(target)
+                && Format::from_path(target).is_none_or(|f| f == Format::CityGml);
+            if gml_name || !xml.is_empty() {
+                return Err(PlanError::MixedMerge {
+                    target: target.clone(),
+                    json: j.to_path_buf(),
+                    other: xml.first().map(|p| p.to_path_buf()),
+                });
+            }
+        }
+        let mut t = self.targets(inputs, wopts, shard, keeps_crs)?;
+        if let (Some(st), false) = (&t.staging, json.is_empty()) {
+            for (k, out) in &mut t.todo {
+                *out = st.json_part(*k);
+            }
+            t.cityjson = true;
+        }
+        Ok(t)
     }
 }
 
@@ -337,6 +411,12 @@ impl Staging {
     /// Where the `k`-th input's document is written.
     pub fn part(&self, k: usize) -> PathBuf {
         self.dir.path().join(format!("{k:06}.gml"))
+    }
+
+    /// Where the `k`-th CityJSON input's edited document is written (a merge of CityJSON
+    /// inputs by an edit).
+    pub fn json_part(&self, k: usize) -> PathBuf {
+        self.dir.path().join(format!("{k:06}.city.json"))
     }
 
     /// Where the merged CityGML document is staged when the target is another format.

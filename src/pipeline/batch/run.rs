@@ -77,9 +77,34 @@ impl Batch {
     /// As [`plan`] and [`Plan::targets`].
     pub fn new(
         inputs: &[Input],
+        out: (&Path, Option<Format>, bool),
+        keep_envelopes: bool,
+        shard: Option<Shard>,
+    ) -> Result<Batch, PlanError> {
+        Batch::make(inputs, out, keep_envelopes, shard, false)
+    }
+
+    /// [`Batch::new`] for an edit that writes each input in its own format (`subset`,
+    /// `filter-lods`, `upgrade`): CityJSON inputs merged into one file are merged as CityJSON
+    /// ([`Plan::edit_targets`], [`merge_parts`]).
+    ///
+    /// # Errors
+    /// As [`Batch::new`], and [`PlanError::MixedMerge`].
+    pub fn for_edits(
+        inputs: &[Input],
+        out: (&Path, Option<Format>, bool),
+        keep_envelopes: bool,
+        shard: Option<Shard>,
+    ) -> Result<Batch, PlanError> {
+        Batch::make(inputs, out, keep_envelopes, shard, true)
+    }
+
+    fn make(
+        inputs: &[Input],
         (out, format, overwrite): (&Path, Option<Format>, bool),
         keep_envelopes: bool,
         shard: Option<Shard>,
+        edits: bool,
     ) -> Result<Batch, PlanError> {
         let (plan, format) = plan(inputs, out, format)?;
         let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
@@ -88,7 +113,10 @@ impl Batch {
             protect: paths.clone(),
             keep_envelopes,
         };
-        let targets = plan.targets(&paths, &wopts, shard, true)?;
+        let targets = match edits {
+            true => plan.edit_targets(&paths, &wopts, shard, true)?,
+            false => plan.targets(&paths, &wopts, shard, true)?,
+        };
         Ok(Batch {
             counts_polygons: format == Format::CityGml,
             refused: targets.refused.len(),
@@ -174,6 +202,9 @@ impl Batch {
         }
         if let (true, Plan::Merge(target)) = (staged, &self.plan) {
             let (merged, s) = match &self.targets.staging {
+                _ if self.targets.cityjson => {
+                    merge_parts(&parts, &names, target, &self.wopts, inputs)
+                }
                 Some(st) if self.format != Format::CityGml => {
                     let to = (target.as_path(), self.format);
                     merge_converted(&parts, &names, to, st, &self.wopts, inputs)
@@ -209,7 +240,8 @@ pub fn summary_line(
     )
 }
 
-/// Merge `parts` (in input order; written from the inputs `names`) into `target`, the last
+/// Merge `parts` (in input order; written from the inputs `names`) into `target` (CityJSON
+/// parts, named so, as CityJSON: [`crate::export::cityjson_edit::merge_cityjson`]), the last
 /// step of every batch that merges: whether `target` was written, and what to say — the
 /// merge line, with a warning when some of the `inputs` failed and the target holds only
 /// the others, or why nothing was written (then every input counts as failed).
@@ -223,7 +255,24 @@ pub fn merge_parts(
     if parts.is_empty() {
         return nothing_to_merge(target);
     }
-    match merge_named(parts, names, target, opts) {
+    let json = |p: &PathBuf| crate::pipeline::batch::inputs::is_cityjson_name(&p.to_string_lossy());
+    let r = match parts.iter().all(json) {
+        // CityJSON parts (an edit's: [`Plan::edit_targets`]): CityJSONSeq for a `.jsonl` target,
+        // or for `-` when the first input is named so.
+        true => {
+            let seq_name = |p: &Path| {
+                let n = p.to_string_lossy().to_ascii_lowercase();
+                n.strip_suffix(".gz").unwrap_or(&n).ends_with(".jsonl")
+            };
+            let seq = match is_stdout(target) {
+                true => names.first().is_some_and(|n| seq_name(n)),
+                false => seq_name(target),
+            };
+            crate::export::cityjson_edit::merge_cityjson(parts, names, target, seq, opts)
+        }
+        false => merge_named(parts, names, target, opts),
+    };
+    match r {
         Ok(s) => {
             let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs)
                 .into_iter()

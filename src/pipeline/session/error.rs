@@ -7,12 +7,12 @@ use crate::lod::poi::PoiError;
 use crate::lod::select::SelectError;
 use crate::model::crs::CrsError;
 use crate::model::runtime::progress::Cancelled;
-use crate::pipeline::{PipelineError, PoiCrsError};
+use crate::pipeline::PoiCrsError;
 use crate::solar::SolarError;
 
-/// The one error of the library ([`crate::Error`]): every sub-error converts into
-/// it (`?` works on all of them), and a [`PipelineError`] is flattened into its cause, so a
-/// program matches one enum. Messages are in the library's terms (no command-line flags).
+/// The one error of the library ([`crate::Error`]), the pipeline's calls' among them: every
+/// sub-error converts into it (`?` works on all of them; a stage's cancellation becomes
+/// [`Error::Cancelled`]), so a program matches one enum. Messages are in the library's terms (no command-line flags).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
@@ -46,13 +46,13 @@ pub enum Error {
     Solar(SolarError),
     /// The selection failed.
     #[error(transparent)]
-    Select(#[from] SelectError),
+    Select(SelectError),
     /// The error bound could not be computed.
     #[error(transparent)]
     Bound(#[from] BoundError),
     /// The evaluation could not be made.
     #[error(transparent)]
-    Eval(#[from] EvalError),
+    Eval(EvalError),
     /// The outputs could not be planned (mirror, merge).
     #[error(transparent)]
     Plan(#[from] crate::pipeline::batch::outputs::PlanError),
@@ -85,19 +85,20 @@ impl From<SolarError> for Error {
     }
 }
 
-impl From<PipelineError> for Error {
-    fn from(e: PipelineError) -> Self {
+impl From<SelectError> for Error {
+    fn from(e: SelectError) -> Self {
         match e {
-            PipelineError::Poi(e) => Error::Poi(e),
-            PipelineError::Trust(e) => Error::Trust(e),
-            PipelineError::PoiCrs(e) => Error::PoiCrs(e),
-            PipelineError::Select(SelectError::Cancelled(c)) => Error::Cancelled(c),
-            PipelineError::Select(e) => Error::Select(e),
-            PipelineError::Bound(e) => Error::Bound(e),
-            PipelineError::Eval(EvalError::Cancelled(c)) => Error::Cancelled(c),
-            PipelineError::Eval(e) => Error::Eval(e),
-            PipelineError::Solar(e) => e.into(),
-            PipelineError::Cancelled(c) => Error::Cancelled(c),
+            SelectError::Cancelled(c) => Error::Cancelled(c),
+            e => Error::Select(e),
+        }
+    }
+}
+
+impl From<EvalError> for Error {
+    fn from(e: EvalError) -> Self {
+        match e {
+            EvalError::Cancelled(c) => Error::Cancelled(c),
+            e => Error::Eval(e),
         }
     }
 }
@@ -108,23 +109,31 @@ mod tests {
     use crate::model::runtime::progress::Stage;
 
     #[test]
-    fn pipeline_errors_flatten_and_keep_their_message() {
+    fn cancellations_flatten_and_messages_are_kept() {
         let c = Cancelled {
             stage: Stage::Select,
         };
-        let e: Error = PipelineError::Select(SelectError::Cancelled(c)).into();
-        assert!(matches!(
-            e,
-            Error::Cancelled(Cancelled {
-                stage: Stage::Select
-            })
-        ));
-        let p = PipelineError::from(PoiCrsError::UnknownModelCrs {
+        for e in [
+            Error::from(SelectError::Cancelled(c)),
+            Error::from(EvalError::Cancelled(c)),
+        ] {
+            assert!(
+                matches!(
+                    e,
+                    Error::Cancelled(Cancelled {
+                        stage: Stage::Select
+                    })
+                ),
+                "{e:?}"
+            );
+        }
+        let p = PoiCrsError::UnknownModelCrs {
             from: "EPSG:4326".into(),
             model: "none".into(),
-        });
+        };
         let text = p.to_string();
-        let e: Error = p.into();
+        let e = Error::from(p);
+        assert!(matches!(e, Error::PoiCrs(_)), "{e:?}");
         assert_eq!(e.to_string(), text);
         // Library terms: no command-line flag in the message.
         assert!(!text.contains("--"), "{text}");

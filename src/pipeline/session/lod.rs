@@ -34,7 +34,7 @@ impl Study {
     ) -> Result<Levels> {
         let framed = self.framed();
         let lod = crate::pipeline::batch::reduce::lod_result(&framed.model, combined, &opts.lod);
-        Ok(levels_of(&framed, opts, lod, progress)?)
+        levels_of(&framed, opts, lod, progress)
     }
 
     /// The report of `lv` made with `opts` (schemas/report.schema.json): parameters, POIs

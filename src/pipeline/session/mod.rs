@@ -403,7 +403,7 @@ impl Study {
     /// # Errors
     /// [`Error::Select`], [`Error::Bound`], [`Error::Cancelled`].
     pub fn levels(&self, opts: &LevelsOptions, progress: &dyn Progress) -> Result<Levels> {
-        Ok(levels(&self.framed(), opts, progress)?)
+        levels(&self.framed(), opts, progress)
     }
 
     /// The full-detail scene (built on first use) and the seconds this call spent building it.
@@ -502,7 +502,7 @@ impl Study {
         progress: &dyn Progress,
     ) -> Result<Traced<HorizonProfile>> {
         if self.full.get().is_none() {
-            return Ok(horizon(&self.framed(), opts, progress)?);
+            return horizon(&self.framed(), opts, progress);
         }
         opts.validate()?;
         let f = |s: &_, p: &Poi| poi_horizon(s, p, opts);
@@ -539,7 +539,7 @@ impl Study {
     /// # Errors
     /// [`Error::Eval`], [`Error::Cancelled`].
     pub fn evaluate(&self, opts: &EvaluateOptions, progress: &dyn Progress) -> Result<Evaluation> {
-        Ok(evaluate(&self.framed(), opts, progress)?)
+        evaluate(&self.framed(), opts, progress)
     }
 
     /// Write every input at `levels` to `out` in `format` (`None`: from `out`'s ending, else

@@ -9,7 +9,8 @@ use crate::lod::LodOptions;
 use crate::model::crs::{model_site, NoSite};
 use crate::model::runtime::progress::Progress;
 use crate::model::{AssetKind, Poi};
-use crate::pipeline::{sky_pictures, PipelineError, SkyPictureOptions};
+use crate::pipeline::session::Error;
+use crate::pipeline::{sky_pictures, SkyPictureOptions};
 use crate::solar::fisheye::SunPath;
 use crate::solar::fisheye::{cell_shares, fisheye_svg, sun_paths, FisheyeOptions, Projection};
 use crate::solar::sky::{SkyError, SkyPartition, SkyVariant};
@@ -127,9 +128,9 @@ impl Study {
     /// handed to `each` (POI index, picture) as soon as it is made.
     ///
     /// # Errors
-    /// [`PipelineError::Select`], [`PipelineError::Cancelled`] (as `E`), or what `each`
+    /// [`Error::Select`], [`Error::Cancelled`] (as `E`), or what `each`
     /// returns.
-    pub fn fisheye_svgs<E: From<PipelineError>>(
+    pub fn fisheye_svgs<E: From<Error>>(
         &self,
         pictures: &Pictures,
         progress: &dyn Progress,
@@ -204,7 +205,7 @@ mod tests {
         let pics = pics.with_sun_paths((41.5, 2.25), 2024).unwrap();
         let mut got = Vec::new();
         study
-            .fisheye_svgs(&pics, &Silent, |k, p| -> Result<(), PipelineError> {
+            .fisheye_svgs(&pics, &Silent, |k, p| -> Result<(), Error> {
                 got.push((k, p));
                 Ok(())
             })
@@ -235,7 +236,7 @@ mod tests {
         // Without sun paths, no line on them.
         let plain = Pictures::new(300, Projection::Stereographic).unwrap();
         study
-            .fisheye_svgs(&plain, &Silent, |_, p| -> Result<(), PipelineError> {
+            .fisheye_svgs(&plain, &Silent, |_, p| -> Result<(), Error> {
                 assert!(!p.svg.contains("sun paths"));
                 Ok(())
             })

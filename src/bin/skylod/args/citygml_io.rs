@@ -18,3 +18,12 @@ pub struct CityGmlIoArgs {
     #[command(flatten)]
     pub shard: crate::args::shard::ShardArgs,
 }
+
+/// [`CityGmlIoArgs`], then `--jobs` (`subset`, `filter-lods`).
+#[derive(clap::Args, Debug)]
+pub struct EditArgs {
+    #[command(flatten)]
+    pub io: CityGmlIoArgs,
+    #[command(flatten)]
+    pub jobs: crate::args::jobs::JobsArgs,
+}

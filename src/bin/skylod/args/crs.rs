@@ -3,7 +3,6 @@
 //! reports and outputs stay in the input's CRS.
 
 use skylod::crs::Crs;
-use skylod::model::CityModel;
 use skylod::pipeline::FrameOptions;
 
 /// Parse a CRS flag: any `srsName` spelling that names a CRS ([`Crs::parse_named`]).
@@ -19,18 +18,6 @@ pub struct SourceCrsArgs {
     /// feet CRSs (EPSG:2263, ...) scaled to metres; outputs keep the input's coordinates.
     #[arg(long, value_name = "CRS", value_parser = parse_crs)]
     pub source_crs: Option<Crs>,
-}
-
-impl SourceCrsArgs {
-    /// Replace the `srsName` of every file by `--source-crs`, so that everything that looks
-    /// at the model's CRS (frame, site of the sun, stats, report) sees the override.
-    pub fn apply(&self, model: &mut CityModel) {
-        if let Some(c) = &self.source_crs {
-            for f in &mut model.files {
-                f.srs_name = Some(c.name.clone());
-            }
-        }
-    }
 }
 
 /// `--source-crs` and `--poi-crs`, for the commands that take POIs.

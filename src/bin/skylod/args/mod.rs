@@ -8,6 +8,7 @@ pub mod citygml_io;
 pub mod crs;
 pub mod jobs;
 pub mod output;
+pub mod per_file;
 pub mod poi;
 pub mod region;
 pub mod rough;

@@ -1,8 +1,8 @@
 //! `--stream-chunk`: how `stats` and `convert` read a large file (hidden: for tests and
-//! measurements; the default suits every file).
+//! measurements; the default suits every file): the chunk of
+//! [`skylod::pipeline::batch::convert::chunk_for`].
 
 use skylod::citygml::read::CHUNK_BYTES;
-use std::path::Path;
 
 /// `--stream-chunk BYTES`.
 #[derive(clap::Args, Debug, Clone, Copy)]
@@ -12,12 +12,4 @@ pub struct StreamArgs {
     /// every file whole.
     #[arg(long, hide = true, value_name = "BYTES", default_value_t = CHUNK_BYTES)]
     pub stream_chunk: u64,
-}
-
-impl StreamArgs {
-    /// The chunk size to stream `path` with, or `None` to read it whole
-    /// ([`skylod::pipeline::batch::convert::chunk_for`]).
-    pub fn chunk_for(&self, path: &Path) -> Option<u64> {
-        skylod::pipeline::batch::convert::chunk_for(path, self.stream_chunk)
-    }
 }

@@ -26,6 +26,23 @@ pub struct TracingArgs {
     pub scene: SceneArgs,
 }
 
+/// The inputs and POIs of a command that needs the sun's site (`sun-hours`, `evaluate`).
+#[derive(clap::Args, Debug)]
+pub struct SunTracingArgs {
+    #[command(flatten)]
+    pub tracing: TracingArgs,
+    #[command(flatten)]
+    pub site: crate::args::site::SiteArgs,
+}
+
+impl SunTracingArgs {
+    /// `--lat`/`--lon` checked (both or neither), then [`TracingArgs::study`].
+    pub fn study(&mut self, cmd: &str) -> anyhow::Result<Option<Session>> {
+        self.site.check(cmd, false)?;
+        self.tracing.study(cmd, |_| Ok(()))
+    }
+}
+
 /// A tracing command's [`Study`] (model read and checked, this shard's POIs framed) with
 /// what the CLI says about it.
 pub struct Session {

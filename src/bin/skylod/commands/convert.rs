@@ -1,16 +1,14 @@
 //! `skylod convert`: read CityGML and write it back (envelopes recomputed) or in another
 //! format; several inputs go to a mirrored directory or are merged into one document
 //! ([`crate::outputs`]), files in parallel (`--jobs`), the same bytes whatever the number;
-//! each input: [`skylod::pipeline::batch::convert`].
+//! the inputs: [`skylod::pipeline::batch::convert_all`].
 
 use crate::args::jobs::JobsArgs;
 use crate::outputs;
 use crate::Outcome;
-use rayon::prelude::*;
 use skylod::export::citygml_from_cityjson::TargetVersion;
 use skylod::export::Format;
-use skylod::pipeline::batch::convert::{convert_file, ConvertOptions};
-use skylod::runtime::progress::{Progress, Stage};
+use skylod::pipeline::batch::convert_all::convert_all;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -52,39 +50,19 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let out = (args.output.as_path(), args.format, args.overwrite);
     let batch = outputs::batch("convert", &inputs, out, false, shard)?;
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
-    let t = &batch.targets;
-    // A merge into another format than CityGML stages CityGML parts.
-    let format = t.staging.as_ref().map_or(batch.format, |_| Format::CityGml);
-    // Files in parallel; messages in input order whatever finished first.
-    let progress = crate::log::reporter();
-    let size = |k: usize| paths[k].metadata().map_or(0, |m| m.len());
-    let bytes: u64 = t.todo.iter().map(|(k, _)| size(*k)).sum();
-    progress.start(Stage::Read, t.todo.len() as u64, bytes);
+    // Files in parallel; messages in input order whatever finished first (an OBJ or
+    // CityJSON file's line as soon as it is written).
+    let (progress, o) = (
+        crate::log::reporter(),
+        (args.citygml_version, args.stream.stream_chunk),
+    );
     let note = |l: String| crate::log::info!("{l}");
-    let results = args.jobs.install(|| {
-        (t.todo.par_iter())
-            .map(|(k, out)| {
-                let o = ConvertOptions {
-                    format,
-                    version: args.citygml_version,
-                    write: &t.write_opts,
-                    mirror: t.mirror,
-                    chunk: args.stream.chunk_for(&paths[*k]),
-                };
-                let r = convert_file(&paths[*k], out, &o, &progress, &note);
-                if let Ok(Some(line)) = r.as_ref().map(|c| &c.written) {
-                    crate::log::summary!("{line}");
-                }
-                progress.advance(Stage::Read, 1, 0, None);
-                (
-                    paths[*k].clone(),
-                    out.clone(),
-                    r.map(|c| c.done).map_err(Into::into),
-                )
-            })
-            .collect()
-    })?;
-    progress.finish(Stage::Read);
+    let written = |l: String| crate::log::summary!("{l}");
+    let results =
+        (args.jobs).install(|| convert_all(&batch, &paths, o, &progress, &note, &written))?;
+    let results = (results.into_iter())
+        .map(|(i, o, r)| (i, o, r.map_err(Into::into)))
+        .collect();
     let failure = |e: &anyhow::Error| crate::message(e);
     Ok(outputs::finish(
         &batch,

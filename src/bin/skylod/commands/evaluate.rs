@@ -2,7 +2,6 @@
 
 use crate::args::rough::RoughArgs;
 use crate::args::select::SelectArgs;
-use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
 use crate::commands::out_err;
 use crate::Outcome;
@@ -17,9 +16,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    tracing: crate::args::tracing::TracingArgs,
-    #[command(flatten)]
-    site: SiteArgs,
+    on: crate::args::tracing::SunTracingArgs,
     /// Skip sun hours (then --lat/--lon are not needed).
     #[arg(long)]
     no_sun: bool,
@@ -40,11 +37,11 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    args.site.check("evaluate", false)?;
+    args.on.site.check("evaluate", false)?;
     args.weather.check()?;
     let rough_opts = args.rough.options()?;
     let t_all = Instant::now();
-    let Some(s) = args.tracing.study("evaluate", |_| Ok(()))? else {
+    let Some(s) = args.on.tracing.study("evaluate", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);
     };
     let lod = LodOptions {
@@ -54,12 +51,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let mut req = EvaluateRequest::new(lod, args.svf_rays);
     if !args.no_sun {
         let cmd = "evaluate (or give --no-sun)";
-        let (lat, lon) = args.site.resolve(s.study.source(), cmd)?;
+        let (lat, lon) = args.on.site.resolve(s.study.source(), cmd)?;
         let (year, step) = (args.sun.year, args.sun.step);
         let table = SunTable::year_with(year, step, &Site::new(lat, lon), &crate::log::reporter())?;
         req.sun = Some((SunSetting::new(lat, lon, year, step), table));
     }
-    req.weather = (args.weather).year(&args.site, s.study.source(), "evaluate --weather")?;
+    req.weather = (args.weather).year(&args.on.site, s.study.source(), "evaluate --weather")?;
     let a = s
         .study
         .evaluate_output(req, t_all, &crate::log::reporter())?;

@@ -2,17 +2,15 @@
 //! CityJSON documents (citygml-tools' `filter-lods`; CityJSON: `skylod::export::cityjson_edit`),
 //! streamed: memory follows the largest city object.
 
-use crate::args::citygml_io::CityGmlIoArgs;
+use crate::args::citygml_io::EditArgs;
 use crate::Outcome;
-use skylod::export::citygml_from_cityjson::is_json_file;
-use skylod::io::citygml::edit::{filter_lods, LodMode, Lods};
+use skylod::io::citygml::edit::{LodMode, Lods};
+use skylod::pipeline::batch::edit::Edit;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    io: CityGmlIoArgs,
-    #[command(flatten)]
-    jobs: crate::args::jobs::JobsArgs,
+    edit: EditArgs,
     /// LoDs (0 to 4) the mode applies to.
     #[arg(short, long, required = true, num_args = 1.., value_delimiter = ',',
           value_parser = clap::value_parser!(u8).range(0..=4))]
@@ -33,16 +31,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         keep_empty: args.keep_empty,
     };
     crate::outputs::per_input_jobs(
-        &args.io,
+        &args.edit.io,
         "filter-lods",
-        Some(&args.jobs),
-        &|input, out, shown, opts| {
-            let s = if is_json_file(input) {
-                skylod::export::cityjson_edit::filter_lods(input, out, &rule, opts)?
-            } else {
-                filter_lods(input, out, &rule, opts)?
-            };
-            Ok(s.describe(input, shown))
-        },
+        &args.edit.jobs,
+        Edit::FilterLods(rule),
     )
 }

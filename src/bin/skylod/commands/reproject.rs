@@ -108,19 +108,22 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 Crs::parse(&args.target),
             );
             let t = skylod::model::crs::ProjTransform;
-            let r = if staging.is_some() {
-                Err(anyhow::anyhow!(
-                    "CityJSON inputs are not merged: give -o DIR"
-                ))
+            let r = reproject_cityjson(input, out, from.as_ref(), &to, &t, &write_opts)
+                .map_err(|e| anyhow::anyhow!(crate::errors::cli_text(&e)));
+            if r.is_ok() {
+                parts.push(out.clone());
+                names.push(input.clone());
+            }
+            let shown = if staging.is_some() {
+                target_name
             } else {
-                reproject_cityjson(input, out, from.as_ref(), &to, &t, &write_opts)
-                    .map_err(|e| anyhow::anyhow!(crate::errors::cli_text(&e)))
+                out.as_path()
             };
             match r {
                 Ok(s) => crate::log::summary!(
                     "{} -> {}: {} -> {}, {} vertices",
                     skylod::model::shown(input),
-                    out.display(),
+                    shown.display(),
                     s.from,
                     s.to,
                     s.vertices

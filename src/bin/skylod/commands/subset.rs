@@ -2,19 +2,17 @@
 //! a box, ids or types (citygml-tools' `subset`; CityJSON: `skylod::export::cityjson_edit`),
 //! streamed: memory follows the largest city object.
 
-use crate::args::citygml_io::CityGmlIoArgs;
+use crate::args::citygml_io::EditArgs;
 use crate::Outcome;
 use anyhow::Context;
-use skylod::export::citygml_from_cityjson::is_json_file;
-use skylod::io::citygml::edit::{subset, BboxMode, Subset};
+use skylod::io::citygml::edit::{BboxMode, Subset};
 use skylod::model::crs::Crs;
+use skylod::pipeline::batch::edit::Edit;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    io: CityGmlIoArgs,
-    #[command(flatten)]
-    jobs: crate::args::jobs::JobsArgs,
+    edit: EditArgs,
     /// Keep city objects whose box meets X0,Y0,X1,Y1 (in the document's CRS, or --bbox-crs).
     #[arg(
         long,
@@ -66,17 +64,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         invert: args.invert,
         limit: args.limit,
     };
-    crate::outputs::per_input_jobs(
-        &args.io,
-        "subset",
-        Some(&args.jobs),
-        &|input, out, shown, opts| {
-            let s = if is_json_file(input) {
-                skylod::export::cityjson_edit::subset(input, out, &rule, opts)?
-            } else {
-                subset(input, out, &rule, opts)?
-            };
-            Ok(s.describe(input, shown))
-        },
-    )
+    crate::outputs::per_input_jobs(&args.edit.io, "subset", &args.edit.jobs, Edit::Subset(rule))
 }

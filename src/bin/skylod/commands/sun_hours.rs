@@ -1,6 +1,5 @@
 //! `skylod sun-hours`.
 
-use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
 use crate::commands::emit;
 use crate::Outcome;
@@ -8,9 +7,7 @@ use crate::Outcome;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
-    tracing: crate::args::tracing::TracingArgs,
-    #[command(flatten)]
-    site: SiteArgs,
+    on: crate::args::tracing::SunTracingArgs,
     #[command(flatten)]
     sun: SunArgs,
     /// Time zone for attributing steps to months: IANA name ("Europe/Madrid"), "UTC" or
@@ -23,11 +20,10 @@ pub struct Args {
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
-    args.site.check("sun-hours", false)?;
-    let Some(s) = args.tracing.study("sun-hours", |_| Ok(()))? else {
+    let Some(s) = args.on.study("sun-hours")? else {
         return Ok(Outcome::SomeFailed);
     };
-    let site = args.site.resolve(s.study.source(), "sun-hours")?;
+    let site = args.on.site.resolve(s.study.source(), "sun-hours")?;
     let (year, tz, progress) = (
         (args.sun.year, args.sun.step),
         &args.timezone,

@@ -5,10 +5,8 @@
 
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
-use skylod::export::citygml_from_cityjson::{citygml_from_cityjson, is_json_file, TargetVersion};
-use skylod::export::cityjson_edit::upgrade_cityjson;
-use skylod::io::citygml::upgrade::{upgrade, UpgradeOptions};
-use skylod::pipeline::batch::inputs::is_citygml_name;
+use skylod::io::citygml::upgrade::UpgradeOptions;
+use skylod::pipeline::batch::edit::Edit;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -35,21 +33,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         args.map_lod0_roof_edge,
         args.map_lod1_multi_surfaces,
     );
-    let jobs = &args.jobs;
-    crate::outputs::per_input_jobs(
-        &args.io,
-        "upgrade",
-        Some(jobs),
-        &|input, out, shown, opts| {
-            if !is_json_file(input) {
-                return Ok(upgrade(input, out, &options, opts)?.describe(input, shown));
-            }
-            // CityJSON: CityGML 3.0 for a CityGML name, else CityJSON 2.0 (as `cjio upgrade`).
-            if is_citygml_name(&out.to_string_lossy()) {
-                let v = TargetVersion::V3_0;
-                return Ok(citygml_from_cityjson(input, out, v, opts)?.describe(input, shown));
-            }
-            Ok(upgrade_cityjson(input, out, opts)?.describe(input, shown))
-        },
-    )
+    crate::outputs::per_input_jobs(&args.io, "upgrade", &args.jobs, Edit::Upgrade(options))
 }

@@ -53,7 +53,8 @@ pub struct Lods {
 }
 
 impl Lods {
-    /// Of the LoDs a top-level city object has (`has`), those that stay.
+    /// Of the LoDs a top-level city object has (`has`, in any order, repeats allowed), those
+    /// that stay (sorted, once each).
     pub fn kept(&self, has: &[u8]) -> Vec<u8> {
         let listed = |n: &u8| self.lods.contains(n);
         let mut out: Vec<u8> = match self.mode {
@@ -93,9 +94,7 @@ impl Rule for LodRule<'_> {
             Kind::Lod(n) => Some(n),
             _ => None,
         };
-        let mut has: Vec<u8> = (0..tree.nodes.len()).filter_map(lod).collect();
-        has.sort_unstable();
-        has.dedup();
+        let has: Vec<u8> = (0..tree.nodes.len()).filter_map(lod).collect();
         let kept = self.0.kept(&has);
         let cut: Vec<usize> = (0..tree.nodes.len())
             .filter(|&i| lod(i).is_some_and(|n| !kept.contains(&n)))

@@ -91,19 +91,67 @@ impl Subset {
     }
 }
 
-pub(crate) fn box_test(mode: BboxMode, q: &[f64; 4], b: &[f64; 4]) -> bool {
+fn box_test(mode: BboxMode, q: &[f64; 4], b: &[f64; 4]) -> bool {
     match mode {
         BboxMode::Intersects => b[0] <= q[2] && b[2] >= q[0] && b[1] <= q[3] && b[3] >= q[1],
         BboxMode::Within => b[0] >= q[0] && b[2] <= q[2] && b[1] >= q[1] && b[3] <= q[3],
     }
 }
 
-struct SubsetRule<'a> {
+/// A [`Subset`] applied to one document's members in order, whatever the format (the CityGML
+/// rule here and the CityJSON one of [`crate::export::cityjson_edit`]): the box in the
+/// document's CRS, once known, and how many members were kept.
+pub(crate) struct Matcher<'a> {
     s: &'a Subset,
     /// The box in the document's CRS, once known.
     bbox: Option<Option<[f64; 4]>>,
     kept: usize,
 }
+
+impl<'a> Matcher<'a> {
+    pub(crate) fn new(s: &'a Subset) -> Self {
+        Matcher {
+            s,
+            bbox: None,
+            kept: 0,
+        }
+    }
+
+    /// The box of [`Subset::bbox`] in the document's CRS `srs_name` (converted once).
+    pub(crate) fn bbox(&mut self, srs_name: Option<&str>) -> Result<Option<[f64; 4]>, String> {
+        match self.bbox {
+            Some(q) => Ok(q),
+            None => Ok(*self.bbox.insert(self.s.box_in(srs_name)?)),
+        }
+    }
+
+    /// Whether the next member stays (and count it if so): its feature's `id` and `ty`pe,
+    /// `bbox` the box of its coordinates (asked only when there is a box to test), `q` the
+    /// box from [`Matcher::bbox`].
+    pub(crate) fn keep(
+        &mut self,
+        q: Option<[f64; 4]>,
+        id: Option<&str>,
+        ty: Option<&str>,
+        bbox: impl FnOnce() -> crate::model::Bbox,
+    ) -> bool {
+        let s = self.s;
+        let id_ok = s.ids.is_empty() || id.is_some_and(|id| s.ids.iter().any(|i| i == id));
+        let type_ok = s.types.is_empty() || ty.is_some_and(|t| s.types.iter().any(|x| x == t));
+        let box_ok = q.is_none_or(|q| {
+            let b = bbox();
+            !b.is_empty() && box_test(s.mode, &q, &[b.min.x, b.min.y, b.max.x, b.max.y])
+        });
+        let matches = (id_ok && type_ok && box_ok) != s.invert;
+        if !matches || s.limit.is_some_and(|l| self.kept >= l) {
+            return false;
+        }
+        self.kept += 1;
+        true
+    }
+}
+
+struct SubsetRule<'a>(Matcher<'a>);
 
 impl Rule for SubsetRule<'_> {
     fn member(
@@ -112,20 +160,8 @@ impl Rule for SubsetRule<'_> {
         ctx: &Context<'_>,
         _counts: &mut EditSummary,
     ) -> Result<Decision, String> {
-        let q = match self.bbox {
-            Some(q) => q,
-            None => *self.bbox.insert(self.s.box_in(ctx.srs_name)?),
-        };
-        let id_ok = self.s.ids.is_empty()
-            || tree
-                .feature_id
-                .as_deref()
-                .is_some_and(|id| self.s.ids.iter().any(|i| i == id));
-        let type_ok = self.s.types.is_empty()
-            || tree
-                .feature_type()
-                .is_some_and(|t| self.s.types.iter().any(|x| x == t));
-        let box_ok = q.is_none_or(|q| {
+        let q = self.0.bbox(ctx.srs_name)?;
+        let boxed = || {
             let mut b = crate::model::Bbox::EMPTY;
             for n in &tree.nodes {
                 if !n.bbox.is_empty() {
@@ -133,14 +169,18 @@ impl Rule for SubsetRule<'_> {
                     b.add(n.bbox.max);
                 }
             }
-            !b.is_empty() && box_test(self.s.mode, &q, &[b.min.x, b.min.y, b.max.x, b.max.y])
-        });
-        let matches = (id_ok && type_ok && box_ok) != self.s.invert;
-        if !matches || self.s.limit.is_some_and(|l| self.kept >= l) {
-            return Ok(Decision::Drop);
-        }
-        self.kept += 1;
-        Ok(Decision::Keep(Vec::new()))
+            b
+        };
+        Ok(
+            if self
+                .0
+                .keep(q, tree.feature_id.as_deref(), tree.feature_type(), boxed)
+            {
+                Decision::Keep(Vec::new())
+            } else {
+                Decision::Drop
+            },
+        )
     }
 }
 
@@ -157,10 +197,6 @@ pub fn subset(
     opts: &WriteOptions,
 ) -> Result<EditSummary, WriteError> {
     run(input, out, opts, &|| {
-        Box::new(SubsetRule {
-            s: rule,
-            bbox: None,
-            kept: 0,
-        })
+        Box::new(SubsetRule(Matcher::new(rule)))
     })
 }

@@ -108,6 +108,18 @@ pub enum MergeError {
         /// Its version.
         other_version: String,
     },
+    /// CityJSON inputs of different versions.
+    #[error("cannot merge CityJSON {first_version} ({first}) with CityJSON {other_version} ({other})", first = crate::model::shown(.first), other = crate::model::shown(.other))]
+    CityJsonVersion {
+        /// The first input.
+        first: PathBuf,
+        /// Its version.
+        first_version: String,
+        /// An input of another version.
+        other: PathBuf,
+        /// Its version.
+        other_version: String,
+    },
     /// Inputs in different CRSs.
     #[error("cannot merge inputs in different CRSs: {} ({first_srs}) and {} ({other_srs})", crate::model::shown(.first), crate::model::shown(.other))]
     Crs {

@@ -32,8 +32,7 @@ pub(super) fn read_sized<R: BufRead>(
     let mut p = Parser::new(path, opts.clone(), &[]);
     p.expect_bytes(size_hint);
     let base = source::skip_bom(&mut reader, path)?;
-    let mut reader = NsReader::from_reader(source::Limited::new(reader, opts.max_event_bytes));
-    configure(&mut reader);
+    let mut reader = configured(source::Limited::new(reader, opts.max_event_bytes));
     let mut buf = Vec::with_capacity(64 * 1024);
     let mut saw_root = false;
     loop {
@@ -82,8 +81,7 @@ pub(super) fn read_slice(
         Some(body) => (body, 3),
         None => (doc, 0),
     };
-    let mut reader = NsReader::from_reader(body);
-    configure(&mut reader);
+    let mut reader = configured(body);
     let mut saw_root = false;
     let step = RELEASE_STEP;
     parse_events(
@@ -149,9 +147,29 @@ pub(super) fn parse_events(
     }
 }
 
-pub(super) fn configure<R>(reader: &mut NsReader<R>) {
+/// A namespace-aware reader over `source`, configured as every read wants it (text kept
+/// whole, end names checked).
+pub(super) fn configured<R>(source: R) -> NsReader<R> {
+    let mut reader = NsReader::from_reader(source);
     reader.config_mut().trim_text(false);
     reader.config_mut().check_end_names = true;
+    reader
+}
+
+/// A reader over `text` (a document's start, `base` its offset in the file) whose events
+/// `p` has been given until the root element started (the reader is just past its start
+/// tag); `None` where it did not start there (not well-formed, no root, an error). `step`:
+/// as in [`parse_events`], nothing released.
+pub(super) fn start_root<'t>(
+    p: &mut Parser<'_>,
+    text: &'t [u8],
+    base: u64,
+    step: u64,
+) -> Option<NsReader<&'t [u8]>> {
+    let mut reader = configured(text);
+    let mut saw_root = false;
+    let started = parse_events(p, &mut reader, base, &mut saw_root, (&|_| {}, step), true);
+    matches!(started, Ok(true)).then_some(reader)
 }
 
 pub(super) fn finish(

@@ -259,18 +259,8 @@ mod tests {
             let logged = in_memory(&d);
             assert_eq!(logged.warnings, streamed.warnings, "{n} members");
             // split in three parts: the parts' logs and marks merged
-            let opts = ReadOptions {
-                split_min_bytes: 0,
-                split_parts: 3,
-                ..ReadOptions::default()
-            };
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(2)
-                .build()
-                .unwrap();
-            let split = pool.install(|| {
-                super::super::split::read_split(d.as_bytes(), Path::new("d.gml"), &opts, &|_, _| {})
-            });
+            let split =
+                super::super::split::read_split_on_two_threads(d.as_bytes(), Path::new("d.gml"), 3);
             if n >= 5 {
                 let split = split.expect("split read");
                 assert_eq!(split.warnings, streamed.warnings, "{n} members, split");

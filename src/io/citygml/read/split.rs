@@ -15,7 +15,7 @@
 //! Lines are counted per part from the part's start (on demand, as the serial read does) and
 //! made absolute when the parts are merged: a part's first line continues the line before it.
 
-use super::events::{configure, finish, parse_events, BOM, RELEASE_STEP};
+use super::events::{finish, parse_events, start_root, BOM, RELEASE_STEP};
 use super::ids::INVALID_IDS_LISTED;
 use super::state::{EnvOwner, IdRec, LineMark, Owner, Parser, Part, NO_REC};
 use super::ReadOptions;
@@ -49,20 +49,9 @@ pub(super) fn parse_head<'d>(
     let bom = if doc.starts_with(&BOM) { 3 } else { 0 };
     let body = &doc[bom..];
     let mut parser = Parser::new(path, opts.clone(), doc);
-    let mut reader = NsReader::from_reader(body);
-    configure(&mut reader);
-    let mut saw_root = false;
-    let started = parse_events(
-        &mut parser,
-        &mut reader,
-        bom as u64,
-        &mut saw_root,
-        (&|_| {}, RELEASE_STEP),
-        true,
-    );
-    if !matches!(started, Ok(true)) || parser.stack.len() != 1 || !parser.root_is_model {
-        return Err("no CityModel root");
-    }
+    let reader = start_root(&mut parser, body, bom as u64, RELEASE_STEP)
+        .filter(|_| parser.stack.len() == 1 && parser.root_is_model)
+        .ok_or("no CityModel root")?;
     let root_end = usize::try_from(reader.buffer_position()).map_err(|_| "no CityModel root")?;
     let prolog = body.get(..root_end).ok_or("no CityModel root")?;
     if memchr::memmem::find(prolog, b"<!DOCTYPE").is_some() {
@@ -143,20 +132,8 @@ pub(super) fn read_split(
                     let from_doc = (from + bom) as u64;
                     let mut p = Parser::new(path, opts.clone(), doc);
                     p.expect_bytes(part_bytes);
-                    let mut reader = NsReader::from_reader(prolog);
-                    configure(&mut reader);
-                    let mut saw_root = false;
-                    let started = parse_events(
-                        &mut p,
-                        &mut reader,
-                        bom as u64,
-                        &mut saw_root,
-                        (&|_| {}, RELEASE_STEP),
-                        true,
-                    );
-                    if !matches!(started, Ok(true)) {
-                        return None;
-                    }
+                    let mut reader = start_root(&mut p, prolog, bom as u64, RELEASE_STEP)?;
+                    let mut saw_root = true;
                     p.forget_root_start()?;
                     p.lines.set(LineMark {
                         line: 1,
@@ -486,6 +463,25 @@ impl Parser<'_> {
     }
 }
 
+/// [`read_split`] of `doc` in `parts` parts on two threads, whatever its size (for tests).
+#[cfg(test)]
+pub(super) fn read_split_on_two_threads(
+    doc: &[u8],
+    path: &Path,
+    parts: usize,
+) -> Option<CityModel> {
+    let opts = ReadOptions {
+        split_min_bytes: 0,
+        split_parts: parts,
+        ..ReadOptions::default()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    pool.install(|| read_split(doc, path, &opts, &|_, _| {}))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -543,36 +539,29 @@ mod tests {
 "#
             )
         };
-        let opts = ReadOptions {
-            split_min_bytes: 0,
-            split_parts: 2,
-            ..ReadOptions::default()
-        };
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
         let path = Path::new("relief.gml");
+        let opts = ReadOptions::default();
         let serial = |d: &str| {
             super::super::events::read_slice(d.as_bytes(), path, false, &opts, &|_| {}).unwrap()
         };
+        let split_read = |d: &str| read_split_on_two_threads(d.as_bytes(), path, 2);
         // relief LoD 1 set in the first part only: the split declines
         let first_only = doc("").replacen(
             "<dem:reliefComponent>",
             "<dem:lod>1</dem:lod><dem:reliefComponent>",
             1,
         );
-        let split = pool.install(|| read_split(first_only.as_bytes(), path, &opts, &|_, _| {}));
+        let split = split_read(&first_only);
         assert!(split.is_none());
         let m = serial(&first_only);
         assert!(m.assets.iter().all(|a| a.geometries[0].lod == 1));
         // set in every member: split, and the same model
         let every = doc("<dem:lod>1</dem:lod>");
-        let split = pool.install(|| read_split(every.as_bytes(), path, &opts, &|_, _| {}));
+        let split = split_read(&every);
         assert_eq!(split.as_ref(), Some(&serial(&every)));
         // never set: the default (2) everywhere
         let never = doc("");
-        let split = pool.install(|| read_split(never.as_bytes(), path, &opts, &|_, _| {}));
+        let split = split_read(&never);
         assert_eq!(split.as_ref(), Some(&serial(&never)));
     }
 }

@@ -33,13 +33,12 @@
 //! envelope is computed over the chunk. The summary of invalid gml:ids ("N more ...") is the
 //! stream's: [`StreamSummary::patch_warnings`].
 
-use super::events::{configure, finish, parse_events};
+use super::events::{configured, finish, parse_events, start_root};
 use super::ids::INVALID_IDS_LISTED;
 use super::state::{EnvOwner, LineMark, Parser, NO_REC};
 use super::ReadOptions;
 use crate::io::citygml::source;
 use crate::model::{AssetKind, CityGmlVersion, CityModel, Warning};
-use quick_xml::NsReader;
 use std::path::Path;
 
 /// Default bytes of document per chunk of [`stream`]: 16 MiB (a chunk's model of LoD3 is
@@ -368,11 +367,10 @@ fn parse_chunk<'d>(
     let mut p = Parser::new(path, opts.clone(), doc);
     p.streamed = true;
     p.expect_bytes((to - from) as u64);
-    let mut reader = NsReader::from_reader(if first { body.get(..to)? } else { prolog });
-    configure(&mut reader);
-    let mut saw_root = false;
     let release = |_: usize| {};
     if first {
+        let mut reader = configured(body.get(..to)?);
+        let mut saw_root = false;
         parse_events(
             &mut p,
             &mut reader,
@@ -384,17 +382,8 @@ fn parse_chunk<'d>(
         .ok()?;
         return Some(p);
     }
-    let started = parse_events(
-        &mut p,
-        &mut reader,
-        bom as u64,
-        &mut saw_root,
-        (&release, u64::MAX / 2),
-        true,
-    );
-    if !matches!(started, Ok(true)) {
-        return None;
-    }
+    let mut reader = start_root(&mut p, prolog, bom as u64, u64::MAX / 2)?;
+    let mut saw_root = true;
     let root = p.stack.first().map(|f| f.rec).filter(|&r| r != NO_REC);
     let root_id = root.and_then(|r| p.id_log.get(r as usize).and_then(|r| p.id_text(r)));
     p.forget_root_start()?;

@@ -74,7 +74,7 @@ pub use file::reproject_file;
 pub use file::{reproject_with, CrsTransform, ReprojectError, ReprojectSummary};
 pub use streamed::{RewriteSource, STREAM_BYTES};
 
-use super::error::{ReadError, WriteError};
+use super::error::WriteError;
 use super::ns::{self, Module, Ns};
 use super::source;
 use super::write::{envelope_xml, escape_attr, push_num, Edit, WriteOptions};
@@ -124,10 +124,6 @@ pub fn rewrite_file(
     opts: &WriteOptions,
 ) -> Result<RewriteSummary, WriteError> {
     RewriteSource::read(src)?.rewrite(out, transform, target_srs, opts, |_| Ok(()))
-}
-
-fn xml_err(path: &Path, at: u64, message: String) -> WriteError {
-    WriteError::Read(ReadError::xml_at_byte(path, at, message))
 }
 
 /// What the text of an element is.
@@ -339,8 +335,9 @@ impl<'t, 'a> Scanner<'t, 'a> {
     }
 
     fn apply(&self, pts: &mut [DVec3], at: u64) -> Result<(), WriteError> {
-        (self.transform)(pts)
-            .map_err(|m| xml_err(self.path, at, format!("cannot transform coordinates: {m}")))
+        (self.transform)(pts).map_err(|m| {
+            WriteError::xml_at_byte(self.path, at, format!("cannot transform coordinates: {m}"))
+        })
     }
 
     /// A transformed point inside the document's content: counts for the innermost frame.
@@ -558,7 +555,7 @@ impl<'t, 'a> Scanner<'t, 'a> {
         if let Some(c) = self.capture.take() {
             if c.broken {
                 // Never leave coordinates in the old CRS under the new srsName.
-                return Err(xml_err(
+                return Err(WriteError::xml_at_byte(
                     self.path,
                     c.start,
                     "a coordinate element holding elements, comments or entity references \
@@ -639,7 +636,7 @@ impl<'t, 'a> Scanner<'t, 'a> {
 
     fn finish_capture(&mut self, c: Capture, pos: u64) -> Result<(), WriteError> {
         let path = self.path;
-        let bad = |m: String| xml_err(path, c.start, m);
+        let bad = |m: String| WriteError::xml_at_byte(path, c.start, m);
         let text = String::from_utf8_lossy(&c.text).into_owned();
         match c.carrier {
             Carrier::CoordPart(k) => {
@@ -810,7 +807,11 @@ impl<'t, 'a> Scanner<'t, 'a> {
         pos: u64,
     ) -> Result<(), WriteError> {
         let (Some(x), Some(y)) = (&vals[0], &vals[1]) else {
-            return Err(xml_err(self.path, pos, "a coord without X or Y".into()));
+            return Err(WriteError::xml_at_byte(
+                self.path,
+                pos,
+                "a coord without X or Y".into(),
+            ));
         };
         let z = vals[2].as_ref().map_or(0.0, |v| v.0);
         let mut p = [DVec3::new(x.0, y.0, z)];
@@ -954,7 +955,13 @@ fn scan(
         let pos = reader.buffer_position() + base;
         let ev = match reader.read_event_into(&mut buf) {
             Ok(ev) => ev,
-            Err(e) => return Err(xml_err(path, reader.error_position() + base, e.to_string())),
+            Err(e) => {
+                return Err(WriteError::xml_at_byte(
+                    path,
+                    reader.error_position() + base,
+                    e.to_string(),
+                ))
+            }
         };
         let after = reader.buffer_position() + base;
         match ev {

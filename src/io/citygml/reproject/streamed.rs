@@ -20,7 +20,7 @@
 //! document the chunked reader declines (see [`stream`]) is read whole and rewritten as a
 //! small one.
 
-use super::{rewrite_edits, scan, xml_err, Mode, PointTransform, RewriteSummary, Scanner};
+use super::{rewrite_edits, scan, Mode, PointTransform, RewriteSummary, Scanner};
 use crate::io::citygml::error::{ReadError, WriteError};
 use crate::io::citygml::read::{read_file, stream, ReadOptions, Streamed, CHUNK_BYTES};
 use crate::io::citygml::source;
@@ -57,7 +57,13 @@ fn href_targets(path: &Path) -> Result<HashSet<u64>, WriteError> {
     loop {
         let ev = match reader.read_event_into(&mut buf) {
             Ok(ev) => ev,
-            Err(e) => return Err(xml_err(path, reader.error_position(), e.to_string())),
+            Err(e) => {
+                return Err(WriteError::xml_at_byte(
+                    path,
+                    reader.error_position(),
+                    e.to_string(),
+                ))
+            }
         };
         match ev {
             Event::Start(ref e) | Event::Empty(ref e) => {
@@ -211,16 +217,9 @@ fn write_pass(
     let (mut reader, _) = source::open(path)?;
     let mut envelopes = envelopes.into_iter().peekable();
     let (mut cursor, mut written) = (0u64, 0u64);
-    let mut sc = Scanner::new(path, transform, target_srs, Mode::Write);
-    scan(&mut sc, &mut |sc, at| {
-        let pending = sc.env_open.is_some()
-            || sc.coord.is_some()
-            || sc.implicit.is_some()
-            || sc.capture.is_some();
-        if pending || (sc.edits.len() < FLUSH_EDITS && sc.stack.len() > 1) {
-            return Ok(());
-        }
-        let mut batch = std::mem::take(&mut sc.edits);
+    // the edits so far and the envelopes that end by `at`, written
+    let mut flush = |edits: Vec<Edit>, at: u64| -> Result<(), WriteError> {
+        let mut batch = edits;
         while let Some(e) = envelopes.next_if(|e| e.span.end <= at) {
             batch.push(e);
         }
@@ -232,16 +231,19 @@ fn write_pass(
             (len, path, out),
         )?;
         Ok(())
+    };
+    let mut sc = Scanner::new(path, transform, target_srs, Mode::Write);
+    scan(&mut sc, &mut |sc, at| {
+        let pending = sc.env_open.is_some()
+            || sc.coord.is_some()
+            || sc.implicit.is_some()
+            || sc.capture.is_some();
+        if pending || (sc.edits.len() < FLUSH_EDITS && sc.stack.len() > 1) {
+            return Ok(());
+        }
+        flush(std::mem::take(&mut sc.edits), at)
     })?;
-    let mut batch = std::mem::take(&mut sc.edits);
-    batch.extend(envelopes);
-    written += apply_edits(
-        &mut reader,
-        w,
-        &normalise(batch),
-        &mut cursor,
-        (len, path, out),
-    )?;
+    flush(std::mem::take(&mut sc.edits), u64::MAX)?;
     written += copy_rest(&mut reader, w, cursor, (len, path, out))?;
     Ok(written)
 }

@@ -388,30 +388,16 @@ mod tests {
 
     #[test]
     fn names() {
-        assert_eq!(
-            feature_name(Some(Module::Bldg), "RoofSurface"),
-            "con:RoofSurface"
-        );
-        assert_eq!(
-            feature_name(Some(Module::Bldg), "Window"),
-            "con:WindowSurface"
-        );
-        assert_eq!(
-            feature_name(Some(Module::Bldg), "Room"),
-            "bldg:BuildingRoom"
-        );
-        assert_eq!(
-            feature_name(Some(Module::Bldg), "ClosureSurface"),
-            "core:ClosureSurface"
-        );
-        assert_eq!(
-            feature_name(Some(Module::Gen), "GenericCityObject"),
-            "gen:GenericOccupiedSpace"
-        );
-        assert_eq!(
-            feature_name(Some(Module::Veg), "PlantCover"),
-            "veg:PlantCover"
-        );
+        for (module, name, upgraded) in [
+            (Module::Bldg, "RoofSurface", "con:RoofSurface"),
+            (Module::Bldg, "Window", "con:WindowSurface"),
+            (Module::Bldg, "Room", "bldg:BuildingRoom"),
+            (Module::Bldg, "ClosureSurface", "core:ClosureSurface"),
+            (Module::Gen, "GenericCityObject", "gen:GenericOccupiedSpace"),
+            (Module::Veg, "PlantCover", "veg:PlantCover"),
+        ] {
+            assert_eq!(feature_name(Some(module), name), upgraded, "{name}");
+        }
         assert_eq!(lod_property("lod2MultiSurface"), Some((2, "MultiSurface")));
         assert_eq!(lod_property("lod0FootPrint"), Some((0, "FootPrint")));
         assert_eq!(lod_property("lod"), None);
