@@ -180,14 +180,29 @@ pub fn merge_cityjson(
         match sink {
             Sink::Seq(_, n) => Ok(n),
             Sink::Doc(d) => {
-                if let Some(h) = head.as_object_mut() {
-                    if let Some(a) = d.appearance.into_value() {
-                        h.insert("appearance".into(), a);
-                    }
-                    h.insert("CityObjects".into(), Value::Object(d.objects));
-                    h.insert("vertices".into(), Value::Array(d.vertices));
+                if let (Some(h), Some(a)) = (head.as_object_mut(), d.appearance.into_value()) {
+                    h.insert("appearance".into(), a);
                 }
-                write_line(w, &head).map_err(io)
+                // the header's members, then the objects and vertices gathered as text
+                let mut text = serde_json::to_vec(&head).map_err(|e| io(e.into()))?;
+                text.pop();
+                if text.len() > 1 {
+                    text.push(b',');
+                }
+                let parts: [&[u8]; 6] = [
+                    &text,
+                    b"\"CityObjects\":{",
+                    &d.objects,
+                    b"},\"vertices\":[",
+                    &d.vertices,
+                    b"]}\n",
+                ];
+                let mut n = 0;
+                for b in parts {
+                    w.write_all(b).map_err(io)?;
+                    n += b.len() as u64;
+                }
+                Ok(n)
             }
         }
     })?;
@@ -472,12 +487,26 @@ impl Appearance {
     }
 }
 
-/// A merged document being gathered.
+/// A merged document being gathered, as JSON text (a fraction of the memory of values).
 #[derive(Default)]
 struct Doc {
-    objects: Map<String, Value>,
-    vertices: Vec<Value>,
+    /// `"id":{…}` of each city object, separated by commas.
+    objects: Vec<u8>,
+    /// `[x,y,z]` of each vertex, separated by commas.
+    vertices: Vec<u8>,
+    /// How many vertices.
+    count: u64,
     appearance: Appearance,
+}
+
+impl Doc {
+    /// Append `v` to `buf` as JSON, after a comma unless `buf` is empty.
+    fn push(buf: &mut Vec<u8>, v: &impl serde::Serialize) -> Result<(), String> {
+        if !buf.is_empty() {
+            buf.push(b',');
+        }
+        serde_json::to_writer(buf, v).map_err(|e| e.to_string())
+    }
 }
 
 /// Where merged objects go: a CityJSONSeq stream (and its bytes so far), or a document.
@@ -509,14 +538,16 @@ impl Part<'_> {
         match sink {
             Sink::Doc(d) => {
                 let offsets = d.appearance.append(app);
-                let base = d.vertices.len() as u64;
-                let n = vertices.len() as u64;
+                let (base, n) = (d.count, vertices.len() as u64);
                 for v in &vertices {
-                    d.vertices.push(self.vertex(v)?);
+                    Doc::push(&mut d.vertices, &self.vertex(v)?)?;
+                    d.count += 1;
                 }
                 for (id, mut o) in objects {
                     self.geometry(&id, &mut o, offsets, &mut |i| (i < n).then_some(base + i))?;
-                    d.objects.insert(id, o);
+                    Doc::push(&mut d.objects, &id)?;
+                    d.objects.push(b':');
+                    serde_json::to_writer(&mut d.objects, &o).map_err(|e| e.to_string())?;
                 }
                 Ok(())
             }
