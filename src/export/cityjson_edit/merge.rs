@@ -31,9 +31,8 @@
 
 use super::{cj, srs_of, transform_of, trees, write_line, Transform, Values};
 use crate::io::citygml::error::WriteError;
-use crate::io::citygml::merge::{rename_ids, MergeError, MergeSummary};
+use crate::io::citygml::merge::{check_same_crs, rename_ids, MergeError, MergeSummary};
 use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
-use crate::model::crs::same_crs;
 use crate::model::Bbox;
 use glam::DVec3;
 use serde_json::{Map, Value};
@@ -269,23 +268,7 @@ fn check_heads(heads: &[Head], name: &dyn Fn(usize) -> PathBuf) -> Result<(), Me
             other_version: heads[k].version.clone(),
         });
     }
-    let mut seen: Option<(usize, &str)> = None;
-    for (k, h) in heads.iter().enumerate() {
-        let Some(s) = h.srs.as_deref() else { continue };
-        match seen {
-            None => seen = Some((k, s)),
-            Some((j, f)) if !same_crs(f, s) => {
-                return Err(MergeError::Crs {
-                    first: name(j),
-                    first_srs: f.to_string(),
-                    other: name(k),
-                    other_srs: s.to_string(),
-                })
-            }
-            _ => {}
-        }
-    }
-    Ok(())
+    check_same_crs(heads.iter().map(|h| h.srs.as_deref()), name)
 }
 
 /// The merged `transform` (module docs).

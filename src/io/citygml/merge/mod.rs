@@ -248,13 +248,26 @@ fn compare<T>(
     if !same_crs_needed {
         return Ok(());
     }
-    let mut srs: Option<(usize, &str)> = None;
-    for (k, &(_, srs_name)) in heads.iter().enumerate() {
+    check_same_crs(heads.iter().map(|&(_, srs)| srs), name)
+}
+
+/// Refuse inputs whose CRSs differ ([`same_crs`]): the first input naming one against the
+/// first that names another, each named once. An input naming no CRS agrees with any. Used
+/// by the CityGML merge and by the CityJSON merge (`metadata.referenceSystem`).
+///
+/// # Errors
+/// [`MergeError::Crs`].
+pub fn check_same_crs<'a>(
+    srs: impl IntoIterator<Item = Option<&'a str>>,
+    name: &dyn Fn(usize) -> PathBuf,
+) -> Result<(), MergeError> {
+    let mut seen: Option<(usize, &str)> = None;
+    for (k, srs_name) in srs.into_iter().enumerate() {
         let Some(srs_name) = srs_name else {
             continue;
         };
-        match srs {
-            None => srs = Some((k, srs_name)),
+        match seen {
+            None => seen = Some((k, srs_name)),
             Some((j, first_srs)) if !same_crs(first_srs, srs_name) => {
                 return Err(MergeError::Crs {
                     first: name(j),
