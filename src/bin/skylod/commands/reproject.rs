@@ -109,7 +109,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             );
             let t = skylod::model::crs::ProjTransform;
             let r = reproject_cityjson(input, out, from.as_ref(), &to, &t, &write_opts)
-                .map_err(|e| anyhow::anyhow!(crate::errors::cli_text(&e)));
+                .map_err(|e| anyhow::anyhow!(skylod::session::flags::cli_text(&e)));
             if r.is_ok() {
                 parts.push(out.clone());
                 names.push(input.clone());

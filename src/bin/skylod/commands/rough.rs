@@ -61,7 +61,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             .map(|(k, out)| {
                 let input = &args.inputs[*k];
                 let warned = |w: &FrameWarning| {
-                    let w = crate::errors::frame_warning(w);
+                    let w = skylod::session::flags::frame_warning_text(w);
                     warning!("rough: warning: {}: {w}", skylod::model::shown(input));
                 };
                 let r = if *mirror {

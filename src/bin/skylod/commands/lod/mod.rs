@@ -104,7 +104,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     for f in w.files {
         match f {
             FileOutcome::Written(line) => summary!("{line}"),
-            FileOutcome::Failed(e) => error!("{}", crate::errors::cli_text(&e)),
+            FileOutcome::Failed(e) => error!("{}", skylod::session::flags::cli_text(&e)),
         }
     }
     crate::outputs::say(w.merge);

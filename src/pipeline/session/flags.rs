@@ -1,21 +1,26 @@
-//! Library errors in the command line's words: the library says what is wrong in its own
-//! terms, the CLI adds the flag that fixes it (`--poi-crs`, `--source-crs`,
-//! `--allow-mixed-crs`, `--overwrite`, `--poi`, `--shard`, `--shards`, `--weather`).
+//! The library's errors and warnings in the words of the `skylod` command line: each error
+//! says what is wrong in the library's terms (its `Display` names no flag); this module adds
+//! the flag that fixes it (`--poi-crs`, `--source-crs`, `--allow-mixed-crs`, `--overwrite`,
+//! `--poi`, `--shard`, `--shards`, `--weather`, `--lat`/`--lon`, `-o`), for the binary and any
+//! front end that keeps its flag names. Nothing is printed: the texts come back.
 
-use skylod::batch::shard::{Setting, ShardError, ENV_VARS};
-use skylod::citygml::WriteError;
-use skylod::crs::FrameWarning;
-use skylod::io::TargetError;
-use skylod::lod::bound::BoundError;
-use skylod::pipeline::batch::convert::ConvertError;
-use skylod::pipeline::batch::synth::SynthFilesError;
-use skylod::pipeline::{PipelineError, PoiCrsError};
-use skylod::poi::checks::TrustError;
-use skylod::poi::region::RegionError;
-use skylod::Error;
+use crate::io::citygml::WriteError;
+use crate::io::files::TargetError;
+use crate::lod::bound::BoundError;
+use crate::lod::poi::checks::TrustError;
+use crate::lod::poi::region::RegionError;
+use crate::model::crs::FrameWarning;
+use crate::pipeline::batch::convert::ConvertError;
+use crate::pipeline::batch::outputs::PlanError;
+use crate::pipeline::batch::shard::{Setting, ShardError, ENV_VARS};
+use crate::pipeline::batch::synth::SynthFilesError;
+use crate::pipeline::session::site::SiteError;
+use crate::pipeline::session::Error;
+use crate::pipeline::{PipelineError, PoiCrsError};
 use std::error::Error as StdError;
 
-/// The text of `e` with the CLI's flags named where the library has a flag's equivalent.
+/// The text of `e` with the CLI's flags named where the library has a flag's equivalent
+/// (one cause of a chain: [`crate::io::message::chain_message`] joins them).
 pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
     if let Some(e) = e.downcast_ref::<Error>() {
         return match e {
@@ -35,7 +40,10 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
         };
     }
     if let Some(s) = e.downcast_ref::<ShardError>() {
-        return shard(s);
+        return shard_text(s);
+    }
+    if let Some(p) = e.downcast_ref::<PlanError>() {
+        return plan(p);
     }
     if let Some(b) = e.downcast_ref::<BoundError>() {
         return bound(b);
@@ -59,7 +67,44 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
         return format!("{}: output exists (use --overwrite)", p.display());
     }
     // A full disk in plain words, as the library's file errors say it.
-    skylod::io::message::plain_text(e)
+    crate::io::message::plain_text(e)
+}
+
+/// An output layout error in the words of `-o DIR` and `-o FILE`.
+fn plan(e: &PlanError) -> String {
+    match e {
+        PlanError::NotADirectory { output, inputs } => format!(
+            "{}: is a file; {inputs} inputs are written to a directory (-o DIR) or merged into \
+             one CityGML file (-o FILE.gml)",
+            output.display()
+        ),
+        PlanError::NotMergeable { format, inputs } => format!(
+            "{inputs} inputs cannot be merged into one {format} file by this command: give -o \
+             DIR for one output per input, or a CityGML name (.gml, .xml, .gz) to merge"
+        ),
+        PlanError::ShardedMerge { shard, target } => format!(
+            "shard {shard} cannot merge into {}: a merge needs every input (give -o DIR to the \
+             shards, then merge their outputs with `skylod convert DIR -o FILE`)",
+            target.display()
+        ),
+        PlanError::Format(e) => cli_text(e),
+        PlanError::Target(w) => write(w),
+        PlanError::Merge(e) => cli_text(e),
+        e => e.to_string(),
+    }
+}
+
+/// A site error in the words of `--lat` and `--lon`, for `cmd` (e.g. `sun-hours`).
+pub fn site_text(e: &SiteError, cmd: &str) -> String {
+    match e {
+        SiteError::OutOfRange { lat, lon } => {
+            format!("--lat must be in -90..90 and --lon in -180..180 (got {lat}, {lon})")
+        }
+        SiteError::Half => {
+            format!("{cmd} needs both --lat and --lon of the site, in degrees (WGS84)")
+        }
+        e => format!("{cmd} needs the site's --lat and --lon (WGS84 degrees): {e}"),
+    }
 }
 
 fn poi_crs(e: &PoiCrsError) -> String {
@@ -69,7 +114,6 @@ fn poi_crs(e: &PoiCrsError) -> String {
             "--poi-crs {from}: the model's CRS ({model}) is not known, so POIs cannot be \
              converted to it (give --source-crs)"
         ),
-        e => e.to_string(),
     }
 }
 
@@ -113,7 +157,7 @@ fn setting(s: &Setting) -> String {
 }
 
 /// A shard error in the words of `--shard` and `--shards`.
-pub fn shard(e: &ShardError) -> String {
+pub fn shard_text(e: &ShardError) -> String {
     const CONFLICT: &str = "conflicting shard settings";
     match e {
         ShardError::Syntax(s) => format!("--shard {s:?}: expected I/N with 0 <= I < N (e.g. 0/4)"),
@@ -143,14 +187,14 @@ pub fn shard(e: &ShardError) -> String {
         ),
         ShardError::EnvUnusable { shard: s, error } => format!(
             "{CONFLICT}: --shard {s} but the scheduler's environment is not usable: {}",
-            shard(error)
+            shard_text(error)
         ),
         e => e.to_string(),
     }
 }
 
 /// The frame's warning with the flag that fixes it.
-pub fn frame_warning(w: &FrameWarning) -> String {
+pub fn frame_warning_text(w: &FrameWarning) -> String {
     let metres = "coordinates are taken as metres";
     match w {
         FrameWarning::NoCrs => {
@@ -189,20 +233,36 @@ mod tests {
         };
         assert!(cli_text(&m).contains("--allow-mixed-crs"));
         assert!(!m.to_string().contains("--"));
-        let s = "5/4".parse::<skylod::batch::shard::Shard>().unwrap_err();
+        let s = "5/4"
+            .parse::<crate::pipeline::batch::shard::Shard>()
+            .unwrap_err();
         assert!(!s.to_string().contains("--"), "{s}");
         assert_eq!(
             cli_text(&s),
             "--shard 5/4: shard index 5 is not below the shard count 4"
         );
-        let s = skylod::batch::shard::Shard::resolve(None, Some(0), |_| None).unwrap_err();
-        assert_eq!(shard(&s), "--shards 0: the shard count must be at least 1");
+        let s = crate::pipeline::batch::shard::Shard::resolve(None, Some(0), |_| None).unwrap_err();
+        assert_eq!(
+            shard_text(&s),
+            "--shards 0: the shard count must be at least 1"
+        );
         let w = FrameWarning::UnknownCrs("X".into());
         assert!(!w.to_string().contains("--"), "{w}");
-        assert!(frame_warning(&w).ends_with("(give --source-crs EPSG:n)"));
+        assert!(frame_warning_text(&w).ends_with("(give --source-crs EPSG:n)"));
         let d = RegionError::DuplicateId("p1".into());
         assert!(!d.to_string().contains("--"), "{d}");
         assert!(cli_text(&d).ends_with("(a region POI and a --poi/--pois one?)"));
         assert!(cli_text(&BoundError::NoWeather).ends_with("weather year (--weather)"));
+        let p = PlanError::NotADirectory {
+            output: "out.gml".into(),
+            inputs: 3,
+        };
+        assert!(!p.to_string().contains("-o"), "{p}");
+        assert!(cli_text(&p).contains("(-o DIR)"));
+        let p = PlanError::Target(WriteError::Exists("o.gml".into()));
+        assert_eq!(cli_text(&p), "o.gml: output exists (use --overwrite)");
+        let h = SiteError::Half;
+        assert!(!h.to_string().contains("--"), "{h}");
+        assert!(site_text(&h, "sun-hours").starts_with("sun-hours needs both --lat and --lon"));
     }
 }
