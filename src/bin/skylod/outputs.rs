@@ -13,17 +13,7 @@ use skylod::citygml::write::WriteOptions;
 use skylod::export::Format;
 use std::path::{Path, PathBuf};
 
-pub use skylod::batch::run::Done;
-
-/// [`skylod::batch::outputs::plan`] for `-o out` and `--format` (`reproject`).
-#[cfg(feature = "proj")]
-pub fn plan(
-    inputs: &[Input],
-    out: &Path,
-    format: Option<Format>,
-) -> anyhow::Result<(skylod::batch::outputs::Plan, Format)> {
-    Ok(skylod::batch::outputs::plan(inputs, out, format)?)
-}
+use skylod::batch::run::Done;
 
 /// [`skylod::batch::outputs::Plan::targets`] for `cmd`: this shard's files said on stderr, each refused target
 /// reported with `refused` (its input fails without being read); the number refused
@@ -59,11 +49,6 @@ fn refused_said(
         refused(&anyhow!("{}", skylod::session::flags::cli_text(&e)));
     }
     n
-}
-
-/// Create the parent directory of an output path (nothing for `-`).
-pub fn create_parent(out: &Path) -> anyhow::Result<()> {
-    Ok(skylod::batch::outputs::create_parent(out)?)
 }
 
 /// Print what the library said, each line at its level.
@@ -127,7 +112,8 @@ pub fn per_input_jobs(
     refused_said(&mut b.targets, shard, inputs.len(), cmd, |e| error!("{e}"));
     b.counts_polygons = false;
     let each = |i: &Path, o: &Path, shown: &Path, w: &WriteOptions| {
-        (edit.apply(i, o, shown, w)).map_err(|e| anyhow!(skylod::session::flags::cli_text(&e)))
+        let done = edit.apply(i, o, shown, w).map(Done::with_line);
+        done.map_err(|e| anyhow!(skylod::session::flags::cli_text(&e)))
     };
     let results = jobs.install(|| b.run_each(&inputs, true, &each))?;
     let failure = |e: &anyhow::Error| e.to_string();

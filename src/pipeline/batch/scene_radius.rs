@@ -324,6 +324,21 @@ impl Kept {
             .map(|p| crate::model::shown(p).to_string())
             .collect()
     }
+
+    /// What to say of them for a scene of `radius` metres: kept of given, the POIs, the
+    /// inputs not read and those pre-scanned, the names kept.
+    pub fn line(&self, radius: f64) -> String {
+        let kept = self.inputs.len();
+        format!(
+            "scene radius {radius} m: {kept} of {} input(s) within reach of {} POI(s) ({} not \
+             read; {} without an envelope, pre-scanned): {}",
+            self.total,
+            self.pois,
+            self.total - kept,
+            self.scanned,
+            self.names().join(", ")
+        )
+    }
 }
 
 /// `inputs` within `radius` of `pois` ([`within_reach`]), or of `shard`'s part of them: the

@@ -356,6 +356,14 @@ impl Shard {
         let hi = cuts.get(self.index + 1).copied().unwrap_or(points.len());
         lo..hi
     }
+
+    /// What to say of this shard's part `range` ([`Shard::files`], [`Shard::pois`]) of
+    /// `total` items called `what` (`files`, `POIs`).
+    pub fn part_line(&self, range: Range<usize>, total: usize, what: &str) -> String {
+        let n = range.len().min(total.saturating_sub(range.start));
+        let (start, end) = (range.start, range.end);
+        format!("shard {self}: {what} {start}..{end} of {total} ({n})")
+    }
 }
 
 /// `n * k / parts`, rounded down, without overflow for any realistic `n`.

@@ -10,9 +10,11 @@ use crate::lod::bound::BoundError;
 use crate::lod::poi::checks::TrustError;
 use crate::lod::poi::region::RegionError;
 use crate::model::crs::FrameWarning;
+use crate::pipeline::attributes::AttributesError;
 use crate::pipeline::batch::convert::ConvertError;
 use crate::pipeline::batch::outputs::PlanError;
 use crate::pipeline::batch::shard::{Setting, ShardError, ENV_VARS};
+use crate::pipeline::batch::shard_levels::LevelsTargetError;
 use crate::pipeline::batch::synth::SynthFilesError;
 use crate::pipeline::session::site::SiteError;
 use crate::pipeline::session::Error;
@@ -44,6 +46,12 @@ pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
     }
     if let Some(p) = e.downcast_ref::<PlanError>() {
         return plan(p);
+    }
+    if let Some(AttributesError::Target(t)) = e.downcast_ref::<AttributesError>() {
+        return cli_text(t);
+    }
+    if let Some(t) = e.downcast_ref::<LevelsTargetError>() {
+        return levels_target(t);
     }
     if let Some(b) = e.downcast_ref::<BoundError>() {
         return bound(b);
@@ -91,6 +99,19 @@ fn plan(e: &PlanError) -> String {
         PlanError::Target(w) => write(w),
         PlanError::Merge(e) => cli_text(e),
         e => e.to_string(),
+    }
+}
+
+/// A shard's levels file target in the words of `-o` and `--reduce`.
+fn levels_target(e: &LevelsTargetError) -> String {
+    match e {
+        LevelsTargetError::NotLevels { shard } => format!(
+            "shard {shard} writes its levels, not a model: -o names its levels file (e.g. -o \
+             levels-{}.jsonl); then `skylod lod INPUTS -o OUT --reduce levels-*.jsonl` writes \
+             the model",
+            shard.index()
+        ),
+        LevelsTargetError::Target(w) => write(w),
     }
 }
 
@@ -263,6 +284,10 @@ mod tests {
         assert_eq!(cli_text(&p), "o.gml: output exists (use --overwrite)");
         let h = SiteError::Half;
         assert!(!h.to_string().contains("--"), "{h}");
+        let s = "1/4".parse().unwrap();
+        let l = LevelsTargetError::NotLevels { shard: s };
+        assert!(!l.to_string().contains("-o"), "{l}");
+        assert!(cli_text(&l).contains("(e.g. -o levels-1.jsonl)"));
         assert!(site_text(&h, "sun-hours").starts_with("sun-hours needs both --lat and --lon"));
     }
 }

@@ -71,12 +71,7 @@ fn keep<T>(
 
 /// Say on stderr that shard `s` does `range` of `total` items.
 pub fn say(s: Shard, range: std::ops::Range<usize>, total: usize, cmd: &str, what: &str) {
-    let n = range.len().min(total.saturating_sub(range.start));
-    crate::log::summary!(
-        "{cmd}: shard {s}: {what} {}..{} of {total} ({n})",
-        range.start,
-        range.end,
-    );
+    crate::log::summary!("{cmd}: {}", s.part_line(range, total, what));
 }
 
 /// Whether this run prints a table's header: always without a shard, else shard 0 only, so
