@@ -18,64 +18,65 @@ use crate::pipeline::batch::shard_levels::LevelsTargetError;
 use crate::pipeline::batch::synth::SynthFilesError;
 use crate::pipeline::session::site::SiteError;
 use crate::pipeline::session::Error;
-use crate::pipeline::{PipelineError, PoiCrsError};
+use crate::pipeline::PoiCrsError;
 use std::error::Error as StdError;
 
 /// The text of `e` with the CLI's flags named where the library has a flag's equivalent
 /// (one cause of a chain: [`crate::io::message::chain_message`] joins them).
 pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
-    if let Some(e) = e.downcast_ref::<Error>() {
-        return match e {
-            Error::Trust(t) => trust(t),
-            Error::PoiCrs(e) => poi_crs(e),
-            Error::Write(w) => write(w),
-            Error::Bound(b) => bound(b),
-            e => e.to_string(),
-        };
-    }
-    if let Some(e) = e.downcast_ref::<PipelineError>() {
-        return match e {
-            PipelineError::Trust(t) => trust(t),
-            PipelineError::PoiCrs(e) => poi_crs(e),
-            PipelineError::Bound(b) => bound(b),
-            e => e.to_string(),
-        };
-    }
-    if let Some(s) = e.downcast_ref::<ShardError>() {
-        return shard_text(s);
-    }
-    if let Some(p) = e.downcast_ref::<PlanError>() {
-        return plan(p);
-    }
-    if let Some(AttributesError::Target(t)) = e.downcast_ref::<AttributesError>() {
-        return cli_text(t);
-    }
-    if let Some(t) = e.downcast_ref::<LevelsTargetError>() {
-        return levels_target(t);
-    }
-    if let Some(b) = e.downcast_ref::<BoundError>() {
-        return bound(b);
-    }
-    if let Some(t) = e.downcast_ref::<TrustError>() {
-        return trust(t);
-    }
-    if let Some(w) = e.downcast_ref::<WriteError>() {
-        return write(w);
-    }
-    if let Some(ConvertError::Write(w)) = e.downcast_ref::<ConvertError>() {
-        return write(w);
-    }
-    if let Some(SynthFilesError::Write(w)) = e.downcast_ref::<SynthFilesError>() {
-        return write(w);
-    }
-    if let Some(RegionError::DuplicateId(id)) = e.downcast_ref::<RegionError>() {
-        return format!("POI id {id:?} is given twice (a region POI and a --poi/--pois one?)");
-    }
-    if let Some(TargetError::Exists(p)) = e.downcast_ref::<TargetError>() {
-        return format!("{}: output exists (use --overwrite)", p.display());
-    }
     // A full disk in plain words, as the library's file errors say it.
-    crate::io::message::plain_text(e)
+    (TEXTS.iter().find_map(|text| text(e))).unwrap_or_else(|| crate::io::message::plain_text(e))
+}
+
+/// The wording of one kind of error, `None` for an error of another kind (or a variant
+/// that keeps the library's words).
+type Text = fn(&(dyn StdError + 'static)) -> Option<String>;
+
+/// Every kind of error with words of its own, each with its wording (the kinds are
+/// distinct types: at most one applies).
+const TEXTS: [Text; 12] = [
+    |e| e.downcast_ref().map(library),
+    |e| e.downcast_ref().map(shard_text),
+    |e| e.downcast_ref().map(plan),
+    |e| e.downcast_ref().map(levels_target),
+    |e| e.downcast_ref().map(bound),
+    |e| e.downcast_ref().map(trust),
+    |e| e.downcast_ref().map(write),
+    |e| match e.downcast_ref() {
+        Some(AttributesError::Target(t)) => Some(cli_text(t)),
+        _ => None,
+    },
+    |e| match e.downcast_ref() {
+        Some(ConvertError::Write(w)) => Some(write(w)),
+        _ => None,
+    },
+    |e| match e.downcast_ref() {
+        Some(SynthFilesError::Write(w)) => Some(write(w)),
+        _ => None,
+    },
+    |e| match e.downcast_ref() {
+        Some(RegionError::DuplicateId(id)) => Some(format!(
+            "POI id {id:?} is given twice (a region POI and a --poi/--pois one?)"
+        )),
+        _ => None,
+    },
+    |e| match e.downcast_ref() {
+        Some(TargetError::Exists(p)) => {
+            Some(format!("{}: output exists (use --overwrite)", p.display()))
+        }
+        _ => None,
+    },
+];
+
+/// The library's one error (also `PipelineError`, its old name): its sub-errors with a flag.
+fn library(e: &Error) -> String {
+    match e {
+        Error::Trust(t) => trust(t),
+        Error::PoiCrs(e) => poi_crs(e),
+        Error::Write(w) => write(w),
+        Error::Bound(b) => bound(b),
+        e => e.to_string(),
+    }
 }
 
 /// An output layout error in the words of `-o DIR` and `-o FILE`.
@@ -243,7 +244,7 @@ mod tests {
         assert_eq!(cli_text(&w), "out.gml: output exists (use --overwrite)");
         let e = Error::from(WriteError::Exists("o.gml".into()));
         assert!(cli_text(&e).ends_with("(use --overwrite)"));
-        let p = PipelineError::from(PoiCrsError::UnknownModelCrs {
+        let p = crate::pipeline::PipelineError::from(PoiCrsError::UnknownModelCrs {
             from: "EPSG:4326".into(),
             model: "none".into(),
         });
