@@ -373,6 +373,21 @@ mod tests {
     use super::*;
 
     #[test]
+    fn kept_inputs_are_said_with_the_ones_left_out_and_scanned() {
+        let k = Kept {
+            inputs: vec!["t/a.gml".into()],
+            total: 3,
+            pois: 2,
+            scanned: 1,
+        };
+        assert_eq!(
+            k.line(50.0),
+            "scene radius 50 m: 1 of 3 input(s) within reach of 2 POI(s) (2 not read; 1 \
+             without an envelope, pre-scanned): t/a.gml"
+        );
+    }
+
+    #[test]
     fn inputs_out_of_reach_of_the_shard_s_pois_are_left_out() {
         let d = tempfile::tempdir().unwrap();
         let env = |x: f64| {

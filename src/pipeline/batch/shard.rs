@@ -415,6 +415,19 @@ mod tests {
     use super::*;
     use std::collections::HashMap;
 
+    #[test]
+    fn a_shard_says_its_part_and_how_many_it_holds() {
+        let s: Shard = "1/4".parse().unwrap();
+        assert_eq!(
+            s.part_line(2..4, 10, "files"),
+            "shard 1/4: files 2..4 of 10 (2)"
+        );
+        assert_eq!(
+            s.part_line(9..12, 10, "POIs"),
+            "shard 1/4: POIs 9..12 of 10 (1)"
+        );
+    }
+
     fn env(vars: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
         let m: HashMap<String, String> = vars
             .iter()

@@ -647,12 +647,52 @@ mod tests {
 
     fn write(dir: &Path, shard: Shard, m: &CityModel, pois: &[Poi], o: &LodOptions) -> PathBuf {
         let r = lod(m, pois, o).unwrap();
-        let h = header(shard, m, o, &r.selection, r.triangles);
         let path = dir.join(format!("levels-{}.jsonl", shard.index()));
-        let mut buf = Vec::new();
-        write_levels(&mut buf, &h, m, pois, &r.selection, &r.flags).unwrap();
-        std::fs::write(&path, buf).unwrap();
+        let w = write_shard(&path, shard, m, pois, o, &r).unwrap();
+        let said = (w.pois, w.levels, w.select_ms);
+        assert_eq!(
+            said,
+            (pois.len(), r.selection.level_counts(), r.select_s * 1e3)
+        );
         path
+    }
+
+    #[test]
+    fn a_levels_target_is_a_jsonl_file_never_a_model_nor_an_input() {
+        let dir = tempfile::tempdir().unwrap();
+        let s: Shard = "1/4".parse().unwrap();
+        let input = dir.path().join("in.jsonl");
+        std::fs::write(&input, b"x").unwrap();
+        let ok = dir.path().join("levels-1.jsonl");
+        assert!(check_levels_target(&ok, s, false, std::slice::from_ref(&input)).is_ok());
+        for bad in ["m.city.jsonl", "m.gml", "-"] {
+            let e = check_levels_target(Path::new(bad), s, false, &[]).unwrap_err();
+            assert!(
+                matches!(e, LevelsTargetError::NotLevels { shard } if shard == s),
+                "{bad}"
+            );
+        }
+        let e = check_levels_target(&input, s, true, std::slice::from_ref(&input)).unwrap_err();
+        assert!(matches!(e, LevelsTargetError::Target(_)), "{e}");
+        std::fs::write(&ok, b"").unwrap();
+        assert!(check_levels_target(&ok, s, false, &[]).is_err());
+        assert!(check_levels_target(&ok, s, true, &[]).is_ok());
+    }
+
+    #[test]
+    fn a_shard_says_its_pois_levels_and_times() {
+        let w = ShardWritten {
+            shard: "1/4".parse().unwrap(),
+            out: "l.jsonl".into(),
+            pois: 3,
+            levels: [1, 2, 3],
+            select_ms: 12.4,
+        };
+        assert_eq!(
+            w.line(5.0, 20.6),
+            "shard 1/4: 3 POI(s) -> l.jsonl: assets at level 0/1/2 = 1/2/3; read 5 ms, select \
+             12 ms, total 21 ms"
+        );
     }
 
     #[test]
