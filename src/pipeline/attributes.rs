@@ -2,7 +2,8 @@
 //! the thematic surface that holds each POI ([`holding_surfaces`]), the mean of a value over
 //! the POIs of each surface ([`surface_means`]), and a copy of the CityGML document with a
 //! generic attribute added to each such surface by span edits ([`write_attributes`]):
-//! everything else is copied byte for byte.
+//! everything else is copied byte for byte; or, for CityJSON, an attribute of each surface's
+//! semantic object ([`write_surface_means`] picks by the output's name).
 //!
 //! # Example
 //! ```
@@ -13,16 +14,20 @@
 //! ```
 
 use super::Framed;
+use crate::export::cityjson::write_cityjson_with;
+use crate::export::{Content, Format};
 use crate::io::citygml::ns::CORE_LEADING;
 use crate::io::citygml::write::{escape_attr, write_document, Edit, WriteOptions};
 use crate::io::citygml::WriteError;
+use crate::io::files::{atomic_write, check_target, FileError, TargetError};
 use crate::lod::scene::full_scene;
 use crate::model::{CityGmlVersion, CityModel};
 use glam::DVec3;
 use quick_xml::events::Event;
+use serde_json::{Map, Value};
 use std::collections::BTreeMap;
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// How far behind a POI (along its normal reversed; down when it has none) its surface may
 /// lie, in metres: facade POIs sit 5 cm out.
@@ -212,6 +217,79 @@ pub fn write_attributes(
     };
     write_document(model, file, edits, out, &opts)?;
     Ok(n)
+}
+
+/// Why [`write_surface_means`] failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum AttributesError {
+    /// The target is refused (an input, or an existing file without `overwrite`).
+    #[error(transparent)]
+    Target(#[from] TargetError),
+    /// The CityJSON output could not be written.
+    #[error("writing {}", .out.display())]
+    CityJson {
+        /// The output.
+        out: PathBuf,
+        /// Cause.
+        source: FileError,
+    },
+    /// The CityGML output could not be written.
+    #[error(transparent)]
+    Write(#[from] WriteError),
+}
+
+/// Write the model of `framed` (file 0: its one input) to `out` with the mean of `values`
+/// (one per POI) over the POIs of each surface that holds POIs ([`holding_surfaces`],
+/// [`surface_means`]) as [`IRRADIATION_ATTRIBUTE`]: CityJSON for a `.city.json` name (an
+/// attribute of the surface's semantic object), else CityGML by span edits
+/// ([`write_attributes`]). Never over an input, nor over an existing file without
+/// `overwrite`. The number of surfaces given it.
+///
+/// # Errors
+/// [`AttributesError`].
+pub fn write_surface_means(
+    framed: &Framed<'_>,
+    values: &[f64],
+    out: &Path,
+    overwrite: bool,
+) -> Result<usize, AttributesError> {
+    let model = framed.source;
+    let means = surface_means(&holding_surfaces(framed), values);
+    let means: BTreeMap<usize, f64> = means.into_iter().map(|(i, (m, _))| (i, m)).collect();
+    let inputs = model.files.iter().map(|f| f.path.as_path());
+    check_target(out, inputs, overwrite)?;
+    if Format::from_path(out) == Some(Format::CityJson) {
+        let attrs: BTreeMap<usize, Map<String, Value>> = (means.iter())
+            .map(|(&i, &m)| {
+                (
+                    i,
+                    Map::from_iter([(IRRADIATION_ATTRIBUTE.to_string(), m.into())]),
+                )
+            })
+            .collect();
+        atomic_write(out, |w| {
+            let written = write_cityjson_with(model, 0, Content::Full, Some(&attrs), w);
+            written.map(|_| 0).map_err(|e| FileError::new(out, e))
+        })
+        .map_err(|source| AttributesError::CityJson {
+            out: out.to_path_buf(),
+            source,
+        })?;
+        return Ok(means.len());
+    }
+    let opts = WriteOptions {
+        overwrite,
+        ..Default::default()
+    };
+    Ok(write_attributes(
+        model,
+        0,
+        IRRADIATION_ATTRIBUTE,
+        &means,
+        out,
+        &opts,
+    )?)
 }
 
 #[cfg(test)]

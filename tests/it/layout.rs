@@ -7,7 +7,8 @@
 //! - plain data (`model/`) imports no other group, tracing (`solar/trace/`) knows no levels,
 //!   the reader (`io/citygml/read/`) imports neither the writer nor `lod`;
 //! - the library never prints; no source file outside `src/model/synth/` passes 1,000 lines;
-//!   at most six folders or files at the top of `src/` besides `lib.rs` and `bin/`.
+//!   at most six folders or files at the top of `src/` besides `lib.rs` and `bin/`; the binary
+//!   (`src/bin/`) at most 3,000 lines, each command at most 200.
 //!
 //! Imports are read from the text: every `crate::path` (and each part of `crate::{a, b}`)
 //! outside comments and outside the `#[cfg(test)] mod tests` block at the end of a file
@@ -638,5 +639,19 @@ fn each_command_of_the_binary_stays_short() {
     assert!(
         long.is_empty(),
         "a command maps flags to library calls: {long:?}"
+    );
+}
+
+#[test]
+fn the_binary_stays_thin() {
+    let files = rust_files(&src().join("bin"));
+    assert!(!files.is_empty(), "no binary found");
+    let lines: usize = (files.iter())
+        .map(|p| std::fs::read_to_string(p).unwrap().lines().count())
+        .sum();
+    assert!(
+        lines <= 3_000,
+        "the binary maps flags to library calls and prints: {lines} lines (at most 3,000; \
+         library work goes to the library)"
     );
 }

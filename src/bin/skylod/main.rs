@@ -4,11 +4,11 @@
 
 use clap::{Parser, Subcommand};
 use skylod::io::message::{chain_message, is_broken_pipe};
+use skylod::session::flags::cli_text;
 use std::process::ExitCode;
 
 mod args;
 mod commands;
-mod errors;
 mod inputs;
 mod log;
 mod outputs;
@@ -138,9 +138,9 @@ fn main() -> ExitCode {
 }
 
 /// The error and its causes joined by ": ", each thing said once, in the CLI's words
-/// ([`skylod::io::message::chain_message`]).
+/// ([`skylod::io::message::chain_message`], [`skylod::session::flags::cli_text`]).
 fn message(e: &anyhow::Error) -> String {
-    chain_message(e.as_ref(), errors::cli_text)
+    chain_message(e.as_ref(), cli_text)
 }
 
 #[cfg(test)]

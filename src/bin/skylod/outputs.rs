@@ -1,53 +1,19 @@
 //! `-o` of the commands that write per input (`convert`, `rough`, `lod`, `reproject`,
 //! `subset`, `filter-lods`): the library lays the outputs out, merges and says what to tell
-//! the user ([`skylod::batch::outputs`], [`skylod::batch::run`]); this module says it in the
-//! flags' words and prints it.
+//! the user ([`skylod::batch::outputs`], [`skylod::batch::run`]); this module prints it (in
+//! the flags' words: [`skylod::session::flags`]).
 
 use crate::log::{error, summary, warning};
 use anyhow::anyhow;
 use skylod::batch::inputs::Input;
-use skylod::batch::outputs::{PlanError, Targets};
+use skylod::batch::outputs::Targets;
 use skylod::batch::run::{Batch, Said};
 use skylod::batch::shard::Shard;
 use skylod::citygml::write::WriteOptions;
 use skylod::export::Format;
 use std::path::{Path, PathBuf};
 
-pub use skylod::batch::run::Done;
-
-/// A layout error in the flags' words (`-o DIR`, `-o FILE`).
-pub fn usage(e: PlanError) -> anyhow::Error {
-    match e {
-        PlanError::NotADirectory { output, inputs } => anyhow!(
-            "{}: is a file; {inputs} inputs are written to a directory (-o DIR) or merged into \
-             one CityGML file (-o FILE.gml)",
-            output.display()
-        ),
-        PlanError::NotMergeable { format, inputs } => anyhow!(
-            "{inputs} inputs cannot be merged into one {format} file by this command: give -o \
-             DIR for one output per input, or a CityGML name (.gml, .xml, .gz) to merge"
-        ),
-        PlanError::ShardedMerge { shard, target } => anyhow!(
-            "shard {shard} cannot merge into {}: a merge needs every input (give -o DIR to the \
-             shards, then merge their outputs with `skylod convert DIR -o FILE`)",
-            target.display()
-        ),
-        PlanError::Format(e) => e.into(),
-        PlanError::Target(e) => e.into(),
-        PlanError::Merge(e) => e.into(),
-        e => e.into(),
-    }
-}
-
-/// [`skylod::batch::outputs::plan`] for `-o out` and `--format` (`reproject`).
-#[cfg(feature = "proj")]
-pub fn plan(
-    inputs: &[Input],
-    out: &Path,
-    format: Option<Format>,
-) -> anyhow::Result<(skylod::batch::outputs::Plan, Format)> {
-    skylod::batch::outputs::plan(inputs, out, format).map_err(usage)
-}
+use skylod::batch::run::Done;
 
 /// [`skylod::batch::outputs::Plan::targets`] for `cmd`: this shard's files said on stderr, each refused target
 /// reported with `refused` (its input fails without being read); the number refused
@@ -62,9 +28,7 @@ pub fn targets(
     keeps_crs: bool,
     refused: impl Fn(&anyhow::Error),
 ) -> anyhow::Result<(Targets, usize)> {
-    let mut t = plan
-        .edit_targets(inputs, wopts, shard, keeps_crs)
-        .map_err(usage)?;
+    let mut t = plan.edit_targets(inputs, wopts, shard, keeps_crs)?;
     let n = refused_said(&mut t, shard, inputs.len(), cmd, refused);
     Ok((t, n))
 }
@@ -82,14 +46,9 @@ fn refused_said(
     }
     let n = t.refused.len();
     for e in std::mem::take(&mut t.refused) {
-        refused(&anyhow!("{}", crate::errors::cli_text(&e)));
+        refused(&anyhow!("{}", skylod::session::flags::cli_text(&e)));
     }
     n
-}
-
-/// Create the parent directory of an output path (nothing for `-`).
-pub fn create_parent(out: &Path) -> anyhow::Result<()> {
-    Ok(skylod::batch::outputs::create_parent(out)?)
 }
 
 /// Print what the library said, each line at its level.
@@ -112,7 +71,7 @@ pub fn batch(
     keep_envelopes: bool,
     shard: Option<Shard>,
 ) -> anyhow::Result<Batch> {
-    let mut b = Batch::new(inputs, out, keep_envelopes, shard).map_err(usage)?;
+    let mut b = Batch::new(inputs, out, keep_envelopes, shard)?;
     refused_said(&mut b.targets, shard, inputs.len(), cmd, |e| error!("{e}"));
     Ok(b)
 }
@@ -149,11 +108,12 @@ pub fn per_input_jobs(
     let shard = a.shard.resolve()?;
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&a.inputs)?;
     let out = (a.output.as_path(), Some(Format::CityGml), a.overwrite);
-    let mut b = Batch::for_edits(&inputs, out, true, shard).map_err(usage)?;
+    let mut b = Batch::for_edits(&inputs, out, true, shard)?;
     refused_said(&mut b.targets, shard, inputs.len(), cmd, |e| error!("{e}"));
     b.counts_polygons = false;
     let each = |i: &Path, o: &Path, shown: &Path, w: &WriteOptions| {
-        (edit.apply(i, o, shown, w)).map_err(|e| anyhow!(crate::errors::cli_text(&e)))
+        let done = edit.apply(i, o, shown, w).map(Done::with_line);
+        done.map_err(|e| anyhow!(skylod::session::flags::cli_text(&e)))
     };
     let results = jobs.install(|| b.run_each(&inputs, true, &each))?;
     let failure = |e: &anyhow::Error| e.to_string();

@@ -67,6 +67,12 @@ impl Reduce {
         self.files.len()
     }
 
+    /// What the reduce says it does: the levels files and the shards of the run.
+    pub fn line(&self) -> String {
+        let (files, shards) = (self.files(), self.header.count);
+        format!("reducing {files} levels file(s) of a {shards}-shard run")
+    }
+
     /// The header of the lowest shard given.
     pub fn header(&self) -> &Header {
         &self.header

@@ -55,9 +55,19 @@ pub struct Done {
     pub polygons: (usize, usize),
 }
 
-/// What [`Batch::run_each`] runs on one input: `(input, output, shown, options)` to its
-/// line.
-pub type Each<'a, E> = dyn Fn(&Path, &Path, &Path, &WriteOptions) -> Result<String, E> + Sync + 'a;
+impl Done {
+    /// An input done with its line (no warnings, no polygons counted).
+    pub fn with_line(line: String) -> Done {
+        Done {
+            line: Some(line),
+            ..Done::default()
+        }
+    }
+}
+
+/// What [`Batch::run_each`] runs on one input: `(input, output, shown, options)` to what it
+/// gave (e.g. [`Done::with_line`]).
+pub type Each<'a, E> = dyn Fn(&Path, &Path, &Path, &WriteOptions) -> Result<Done, E> + Sync + 'a;
 
 /// The end of a batch: what to say, and how many inputs failed.
 #[derive(Debug, Clone, Default)]
@@ -136,7 +146,7 @@ impl Batch {
     }
 
     /// Run `each(input, output, shown, options)` on every input to do (shown: the name the
-    /// output is said by, [`Batch::shown`]), its line its result: in parallel on the current
+    /// output is said by, [`Batch::shown`]), what it gave its result: in parallel on the current
     /// rayon pool when `parallel`, else one after the other; a mirrored output's directory
     /// made first (its error the input's). The results in input order, for
     /// [`Batch::finish`].
@@ -151,13 +161,9 @@ impl Batch {
         let work = |(k, out): &(usize, PathBuf)| {
             let input = inputs[*k].path.clone();
             let parent = if t.mirror { create_parent(out) } else { Ok(()) };
-            let r = parent.map_err(E::from).and_then(|()| {
-                let line = each(&input, out, self.shown(out), &t.write_opts)?;
-                Ok(Done {
-                    line: Some(line),
-                    ..Done::default()
-                })
-            });
+            let r = parent
+                .map_err(E::from)
+                .and_then(|()| each(&input, out, self.shown(out), &t.write_opts));
             (input, out.clone(), r)
         };
         match parallel {
@@ -495,7 +501,11 @@ mod tests {
             std::fs::copy(i, o).map_err(|e| {
                 PlanError::Format(crate::export::UnknownFormat(e.to_string().into()))
             })?;
-            Ok(format!("{} -> {}", i.display(), shown.display()))
+            Ok(Done::with_line(format!(
+                "{} -> {}",
+                i.display(),
+                shown.display()
+            )))
         };
         for parallel in [false, true] {
             let r = b.run_each(&inputs, parallel, &each);

@@ -324,6 +324,21 @@ impl Kept {
             .map(|p| crate::model::shown(p).to_string())
             .collect()
     }
+
+    /// What to say of them for a scene of `radius` metres: kept of given, the POIs, the
+    /// inputs not read and those pre-scanned, the names kept.
+    pub fn line(&self, radius: f64) -> String {
+        let kept = self.inputs.len();
+        format!(
+            "scene radius {radius} m: {kept} of {} input(s) within reach of {} POI(s) ({} not \
+             read; {} without an envelope, pre-scanned): {}",
+            self.total,
+            self.pois,
+            self.total - kept,
+            self.scanned,
+            self.names().join(", ")
+        )
+    }
 }
 
 /// `inputs` within `radius` of `pois` ([`within_reach`]), or of `shard`'s part of them: the
@@ -356,6 +371,21 @@ pub fn keep_within(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn kept_inputs_are_said_with_the_ones_left_out_and_scanned() {
+        let k = Kept {
+            inputs: vec!["t/a.gml".into()],
+            total: 3,
+            pois: 2,
+            scanned: 1,
+        };
+        assert_eq!(
+            k.line(50.0),
+            "scene radius 50 m: 1 of 3 input(s) within reach of 2 POI(s) (2 not read; 1 \
+             without an envelope, pre-scanned): t/a.gml"
+        );
+    }
 
     #[test]
     fn inputs_out_of_reach_of_the_shard_s_pois_are_left_out() {

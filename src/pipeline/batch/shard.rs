@@ -356,6 +356,14 @@ impl Shard {
         let hi = cuts.get(self.index + 1).copied().unwrap_or(points.len());
         lo..hi
     }
+
+    /// What to say of this shard's part `range` ([`Shard::files`], [`Shard::pois`]) of
+    /// `total` items called `what` (`files`, `POIs`).
+    pub fn part_line(&self, range: Range<usize>, total: usize, what: &str) -> String {
+        let n = range.len().min(total.saturating_sub(range.start));
+        let (start, end) = (range.start, range.end);
+        format!("shard {self}: {what} {start}..{end} of {total} ({n})")
+    }
 }
 
 /// `n * k / parts`, rounded down, without overflow for any realistic `n`.
@@ -406,6 +414,19 @@ pub fn place_cuts(points: &[DVec3], parts: usize) -> Vec<usize> {
 mod tests {
     use super::*;
     use std::collections::HashMap;
+
+    #[test]
+    fn a_shard_says_its_part_and_how_many_it_holds() {
+        let s: Shard = "1/4".parse().unwrap();
+        assert_eq!(
+            s.part_line(2..4, 10, "files"),
+            "shard 1/4: files 2..4 of 10 (2)"
+        );
+        assert_eq!(
+            s.part_line(9..12, 10, "POIs"),
+            "shard 1/4: POIs 9..12 of 10 (1)"
+        );
+    }
 
     fn env(vars: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
         let m: HashMap<String, String> = vars

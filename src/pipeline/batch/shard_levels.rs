@@ -21,11 +21,11 @@
 //! selection of it.
 
 use crate::export::report::report::PoiSeen;
-use crate::io::citygml::write::atomic_write;
+use crate::io::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
 use crate::lod::poi::checks::PoiFlag;
 use crate::lod::select::{PoiSelection, Selection};
-use crate::lod::LodOptions;
+use crate::lod::{LodOptions, LodResult};
 use crate::model::CityModel;
 use crate::model::Poi;
 use crate::pipeline::batch::shard::Shard;
@@ -278,6 +278,105 @@ pub fn write_levels_file(
             file: out.to_path_buf(),
             source,
         })
+    })
+}
+
+/// Why a shard's levels file target is refused ([`check_levels_target`]).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LevelsTargetError {
+    /// The output is not named as a levels file: it must end in `.jsonl` (not
+    /// `.city.jsonl`, a model) and not be standard output.
+    #[error(
+        "shard {shard} writes its levels, not a model: its output must be a levels file (.jsonl)"
+    )]
+    NotLevels {
+        /// The shard.
+        shard: Shard,
+    },
+    /// The target is refused (an input, or an existing file without `overwrite`).
+    #[error(transparent)]
+    Target(#[from] WriteError),
+}
+
+/// Check `out` as the levels file of `shard` before any work: named `.jsonl` (not a
+/// CityJSONSeq model, not standard output), never over one of `inputs`, never over an
+/// existing file without `overwrite`.
+///
+/// # Errors
+/// [`LevelsTargetError`].
+pub fn check_levels_target(
+    out: &Path,
+    shard: Shard,
+    overwrite: bool,
+    inputs: &[PathBuf],
+) -> Result<(), LevelsTargetError> {
+    let name = out.to_string_lossy().to_ascii_lowercase();
+    if !name.ends_with(".jsonl") || name.ends_with(".city.jsonl") || is_stdout(out) {
+        return Err(LevelsTargetError::NotLevels { shard });
+    }
+    let wopts = WriteOptions {
+        overwrite,
+        protect: inputs.to_vec(),
+        keep_envelopes: false,
+    };
+    check_target(out, &wopts, inputs.iter().map(PathBuf::as_path))?;
+    Ok(())
+}
+
+/// What [`write_shard`] wrote: one shard's levels file, and what to say of it.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct ShardWritten {
+    /// The shard.
+    pub shard: Shard,
+    /// Its levels file.
+    pub out: PathBuf,
+    /// Its POIs.
+    pub pois: usize,
+    /// Assets at level 0, 1, 2.
+    pub levels: [usize; 3],
+    /// Milliseconds of the selection.
+    pub select_ms: f64,
+}
+
+impl ShardWritten {
+    /// The closing line of the shard's run, with the reading and total times the caller
+    /// measured (ms).
+    pub fn line(&self, read_ms: f64, total_ms: f64) -> String {
+        let [l0, l1, l2] = self.levels;
+        format!(
+            "shard {}: {} POI(s) -> {}: assets at level 0/1/2 = {l0}/{l1}/{l2}; read {read_ms:.0} \
+             ms, select {:.0} ms, total {total_ms:.0} ms",
+            self.shard,
+            self.pois,
+            self.out.display(),
+            self.select_ms
+        )
+    }
+}
+
+/// Write shard `shard`'s levels file `out` ([`header`] then [`write_levels_file`]) for
+/// `pois` of `model`, selected with `opts` as `lod`.
+///
+/// # Errors
+/// [`WriteError`] of the target or of writing.
+pub fn write_shard(
+    out: &Path,
+    shard: Shard,
+    model: &CityModel,
+    pois: &[Poi],
+    opts: &LodOptions,
+    lod: &LodResult,
+) -> Result<ShardWritten, WriteError> {
+    let header = header(shard, model, opts, &lod.selection, lod.triangles);
+    write_levels_file(out, &header, model, pois, &lod.selection, &lod.flags)?;
+    Ok(ShardWritten {
+        shard,
+        out: out.to_path_buf(),
+        pois: pois.len(),
+        levels: lod.selection.level_counts(),
+        select_ms: lod.select_s * 1e3,
     })
 }
 
@@ -548,12 +647,52 @@ mod tests {
 
     fn write(dir: &Path, shard: Shard, m: &CityModel, pois: &[Poi], o: &LodOptions) -> PathBuf {
         let r = lod(m, pois, o).unwrap();
-        let h = header(shard, m, o, &r.selection, r.triangles);
         let path = dir.join(format!("levels-{}.jsonl", shard.index()));
-        let mut buf = Vec::new();
-        write_levels(&mut buf, &h, m, pois, &r.selection, &r.flags).unwrap();
-        std::fs::write(&path, buf).unwrap();
+        let w = write_shard(&path, shard, m, pois, o, &r).unwrap();
+        let said = (w.pois, w.levels, w.select_ms);
+        assert_eq!(
+            said,
+            (pois.len(), r.selection.level_counts(), r.select_s * 1e3)
+        );
         path
+    }
+
+    #[test]
+    fn a_levels_target_is_a_jsonl_file_never_a_model_nor_an_input() {
+        let dir = tempfile::tempdir().unwrap();
+        let s: Shard = "1/4".parse().unwrap();
+        let input = dir.path().join("in.jsonl");
+        std::fs::write(&input, b"x").unwrap();
+        let ok = dir.path().join("levels-1.jsonl");
+        assert!(check_levels_target(&ok, s, false, std::slice::from_ref(&input)).is_ok());
+        for bad in ["m.city.jsonl", "m.gml", "-"] {
+            let e = check_levels_target(Path::new(bad), s, false, &[]).unwrap_err();
+            assert!(
+                matches!(e, LevelsTargetError::NotLevels { shard } if shard == s),
+                "{bad}"
+            );
+        }
+        let e = check_levels_target(&input, s, true, std::slice::from_ref(&input)).unwrap_err();
+        assert!(matches!(e, LevelsTargetError::Target(_)), "{e}");
+        std::fs::write(&ok, b"").unwrap();
+        assert!(check_levels_target(&ok, s, false, &[]).is_err());
+        assert!(check_levels_target(&ok, s, true, &[]).is_ok());
+    }
+
+    #[test]
+    fn a_shard_says_its_pois_levels_and_times() {
+        let w = ShardWritten {
+            shard: "1/4".parse().unwrap(),
+            out: "l.jsonl".into(),
+            pois: 3,
+            levels: [1, 2, 3],
+            select_ms: 12.4,
+        };
+        assert_eq!(
+            w.line(5.0, 20.6),
+            "shard 1/4: 3 POI(s) -> l.jsonl: assets at level 0/1/2 = 1/2/3; read 5 ms, select \
+             12 ms, total 21 ms"
+        );
     }
 
     #[test]

@@ -4,8 +4,9 @@
 //! is printed: what to tell the user comes back in order.
 
 use super::Result;
+use crate::export::report::report::Report;
 use crate::export::Format;
-use crate::io::citygml::write::{check_target, is_stdout, WriteOptions};
+use crate::io::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
 use crate::model::runtime::progress::Progress;
 use crate::model::CityModel;
@@ -59,6 +60,20 @@ pub struct LodWritten {
     pub written: Vec<Option<(String, usize)>>,
     /// Whether some output failed.
     pub failed: bool,
+}
+
+impl LodWritten {
+    /// What to tell the user, in order, taken out of `files` and `merge`: each file's line
+    /// (a failure in the command line's words, [`super::flags::cli_text`]), then the merge's.
+    pub fn said(&mut self) -> Vec<Said> {
+        let files = std::mem::take(&mut self.files)
+            .into_iter()
+            .map(|f| match f {
+                FileOutcome::Written(line) => Said::Summary(line),
+                FileOutcome::Failed(e) => Said::Error(super::flags::cli_text(&e)),
+            });
+        files.chain(std::mem::take(&mut self.merge)).collect()
+    }
 }
 
 impl LodLayout {
@@ -232,6 +247,18 @@ pub fn check_report(
     };
     check_target(report, &opts, inputs.iter().map(PathBuf::as_path))
         .map_err(ReportTargetError::Target)
+}
+
+/// Write the `lod` report `report` to `path` (checked by [`check_report`]) as pretty JSON and
+/// a newline, atomically (`-`: standard output); the bytes written.
+///
+/// # Errors
+/// [`WriteError`] of the target or of writing.
+pub fn write_report(path: &Path, report: &Report) -> std::result::Result<u64, WriteError> {
+    let json = serde_json::to_vec_pretty(report).map_err(|e| WriteError::Invalid(e.to_string()));
+    let mut json = json?;
+    json.push(b'\n');
+    atomic_write_bytes(path, &json)
 }
 
 /// Why the report's target is refused ([`check_report`]).

@@ -19,6 +19,7 @@
 
 pub mod bound_plan;
 mod error;
+pub mod flags;
 mod lod;
 pub mod lod_write;
 pub mod pictures;

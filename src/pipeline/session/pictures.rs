@@ -15,6 +15,7 @@ use crate::solar::fisheye::SunPath;
 use crate::solar::fisheye::{cell_shares, fisheye_svg, sun_paths, FisheyeOptions, Projection};
 use crate::solar::sky::{SkyError, SkyPartition, SkyVariant};
 use crate::solar::{Site, SkyBundles, SolarError};
+use std::path::Path;
 
 /// How the pictures are made: the cells, the bundles of the SVF said in the caption, the
 /// projection, the sun paths and, when given, the levels each asset is coloured by.
@@ -108,6 +109,16 @@ pub struct PictureSvg {
     pub sky: f64,
     /// The POI's SVF against the full-detail scene.
     pub svf: f64,
+}
+
+impl PictureSvg {
+    /// What to say of the picture of POI `poi` over `inputs` (their names) written to
+    /// `out`, of `cells` cells.
+    pub fn line(&self, poi: &str, inputs: &str, out: &Path, cells: usize) -> String {
+        let (sky, svf) = (self.sky * 100.0, self.svf);
+        let out = out.display();
+        format!("{poi}: {inputs} -> {out} ({cells} cells, {sky:.1} % sky, SVF {svf:.3})")
+    }
 }
 
 impl Study {

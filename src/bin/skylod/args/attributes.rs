@@ -1,18 +1,13 @@
 //! `--output-attributes -o OUT` of `irradiance`: with `--facade` or `--region`, the model
 //! written again with each thematic surface that holds POIs given the mean annual irradiation
-//! of its POIs ([`skylod::pipeline::attributes`]): CityGML by span edits (a generic attribute
-//! `skylodAnnualIrradiation`, everything else byte for byte), or CityJSON (an attribute of
-//! the surface's semantic object).
+//! of its POIs ([`skylod::pipeline::attributes::write_surface_means`]): CityGML by span edits
+//! (a generic attribute `skylodAnnualIrradiation`, everything else byte for byte), or
+//! CityJSON (an attribute of the surface's semantic object).
 
-use anyhow::{bail, Context};
-use serde_json::{Map, Value};
-use skylod::citygml::write::WriteOptions;
-use skylod::export::{cityjson::write_cityjson_with, Content, Format};
-use skylod::pipeline::attributes::{
-    holding_surfaces, surface_means, write_attributes, IRRADIATION_ATTRIBUTE,
-};
+use anyhow::bail;
+use skylod::export::Format;
+use skylod::pipeline::attributes::write_surface_means;
 use skylod::pipeline::Framed;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -67,30 +62,7 @@ impl AttributeArgs {
                 model.files.len()
             );
         }
-        let means = surface_means(&holding_surfaces(framed), values);
-        let means: BTreeMap<usize, f64> = means.into_iter().map(|(i, (m, _))| (i, m)).collect();
-        let inputs = model.files.iter().map(|f| f.path.as_path());
-        skylod::io::check_target(out, inputs, overwrite)?;
-        if Format::from_path(out) == Some(Format::CityJson) {
-            let attrs: BTreeMap<usize, Map<String, Value>> = (means.iter())
-                .map(|(&i, &m)| {
-                    let mut a = Map::new();
-                    a.insert(IRRADIATION_ATTRIBUTE.into(), m.into());
-                    (i, a)
-                })
-                .collect();
-            skylod::io::atomic_write(out, |w| -> anyhow::Result<u64> {
-                write_cityjson_with(model, 0, Content::Full, Some(&attrs), w)?;
-                Ok(0)
-            })
-            .with_context(|| format!("writing {}", out.display()))?;
-            return Ok(Some(means.len()));
-        }
-        let opts = WriteOptions {
-            overwrite,
-            ..Default::default()
-        };
-        let n = write_attributes(model, 0, IRRADIATION_ATTRIBUTE, &means, out, &opts)?;
+        let n = write_surface_means(framed, values, out, overwrite)?;
         Ok(Some(n))
     }
 }

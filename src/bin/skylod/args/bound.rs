@@ -4,13 +4,14 @@
 //! with `--weather`, the annual irradiation within 1 % (`--max-irradiance-error`).
 
 use crate::args::non_negative;
-use crate::args::site::{flags, SiteArgs};
+use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
 use crate::args::weather::WeatherArgs;
-use anyhow::bail;
+use anyhow::{anyhow, bail};
 use skylod::export::report::report::Guarantee;
 use skylod::model::CityModel;
 use skylod::pipeline::session::bound_plan::BoundRequest;
+use skylod::pipeline::session::flags::site_text;
 use skylod::pipeline::session::site::site_of;
 use skylod::pipeline::BoundSpec;
 
@@ -81,7 +82,7 @@ impl BoundArgs {
         let site = site_of(self.site.lat, self.site.lon, source);
         let plan = r
             .plan(site)
-            .map_err(|e| flags(e, "lod --max-sun-hours-error"))?;
+            .map_err(|e| anyhow!(site_text(&e, "lod --max-sun-hours-error")))?;
         if let Some(n) = plan.site.as_ref().and_then(|s| s.note("")) {
             if self.max_sun_hours_error.is_some() {
                 crate::log::summary!("lod --max-sun-hours-error: {n}");

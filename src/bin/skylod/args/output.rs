@@ -1,7 +1,7 @@
 //! `-o`, `--format`, `--overwrite`: where a command writes its model.
 
 use skylod::export::Format;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// `--format` values.
 pub fn parse_format(s: &str) -> Result<Format, String> {
@@ -25,4 +25,11 @@ pub struct OutputArgs {
     /// Replace existing output files.
     #[arg(long)]
     pub overwrite: bool,
+}
+
+impl OutputArgs {
+    /// `(-o, --format, --overwrite)`, as [`skylod::batch::run::Batch::new`] takes them.
+    pub fn target(&self) -> (&Path, Option<Format>, bool) {
+        (&self.output, self.format, self.overwrite)
+    }
 }

@@ -109,7 +109,7 @@ impl PoiArgs {
         let failed = !scene.failures().is_empty();
         let study = scene.frame(pois)?;
         let frame = study.frame_warning();
-        let frame = frame.map(|w| (w.to_string(), crate::errors::frame_warning(w)));
+        let frame = frame.map(|w| (w.to_string(), skylod::session::flags::frame_warning_text(w)));
         for w in study.warnings() {
             let w = match &frame {
                 Some((lib, cli)) if lib == w => cli,

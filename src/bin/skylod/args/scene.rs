@@ -40,16 +40,7 @@ impl SceneArgs {
         // The pre-scan runs in rayon's global pool: size it (once) before it starts.
         args.jobs.global()?;
         let kept = keep_within(std::mem::take(&mut args.inputs), pois, shard, radius);
-        crate::log::summary!(
-            "{cmd}: scene radius {radius} m: {} of {} input(s) within reach of {} POI(s) \
-             ({} not read; {} without an envelope, pre-scanned): {}",
-            kept.inputs.len(),
-            kept.total,
-            kept.pois,
-            kept.total - kept.inputs.len(),
-            kept.scanned,
-            kept.names().join(", ")
-        );
+        crate::log::summary!("{cmd}: {}", kept.line(radius));
         if kept.inputs.is_empty() && kept.pois > 0 {
             bail!("no input comes within --scene-radius {radius} of a POI (are the POIs in the model's CRS?)");
         }

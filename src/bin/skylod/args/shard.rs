@@ -3,6 +3,7 @@
 
 use skylod::batch::shard::Shard;
 use skylod::poi::Poi;
+use skylod::session::flags::shard_text;
 
 /// The shard options of a command.
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -21,7 +22,7 @@ pub struct ShardArgs {
 
 /// Parse `--shard I/N`, its errors in the flag's words.
 fn parse_shard(s: &str) -> Result<Shard, String> {
-    s.parse().map_err(|e| crate::errors::shard(&e))
+    s.parse().map_err(|e| shard_text(&e))
 }
 
 impl ShardArgs {
@@ -29,7 +30,7 @@ impl ShardArgs {
     /// neither says anything. Invalid or conflicting settings are usage errors.
     pub fn resolve(&self) -> anyhow::Result<Option<Shard>> {
         Shard::resolve(self.shard, self.shards, |k| std::env::var(k).ok())
-            .map_err(|e| anyhow::anyhow!(crate::errors::shard(&e)))
+            .map_err(|e| anyhow::anyhow!(shard_text(&e)))
     }
 }
 
@@ -70,12 +71,7 @@ fn keep<T>(
 
 /// Say on stderr that shard `s` does `range` of `total` items.
 pub fn say(s: Shard, range: std::ops::Range<usize>, total: usize, cmd: &str, what: &str) {
-    let n = range.len().min(total.saturating_sub(range.start));
-    crate::log::summary!(
-        "{cmd}: shard {s}: {what} {}..{} of {total} ({n})",
-        range.start,
-        range.end,
-    );
+    crate::log::summary!("{cmd}: {}", s.part_line(range, total, what));
 }
 
 /// Whether this run prints a table's header: always without a shard, else shard 0 only, so

@@ -3,7 +3,8 @@
 
 use anyhow::anyhow;
 use skylod::model::CityModel;
-use skylod::pipeline::session::site::{given_site, site_of, SiteError};
+use skylod::pipeline::session::flags::site_text;
+use skylod::pipeline::session::site::{given_site, site_of};
 
 /// The site of the sun position: `--lat`/`--lon`, both or neither (then from the model's CRS).
 #[derive(clap::Args, Debug)]
@@ -26,28 +27,15 @@ impl SiteArgs {
     /// Usage check before any input is read: both flags or neither (with `range`: in range).
     pub fn check(&self, cmd: &str, range: bool) -> anyhow::Result<()> {
         let given = given_site(self.lat, self.lon, range);
-        given.map(drop).map_err(|e| flags(e, cmd))
+        given.map(drop).map_err(|e| anyhow!(site_text(&e, cmd)))
     }
 
     /// The site, from the flags or from `model`'s centre (said on stderr, prefixed by `cmd`).
     pub fn resolve(&self, model: &CityModel, cmd: &str) -> anyhow::Result<(f64, f64)> {
-        let s = site_of(self.lat, self.lon, model).map_err(|e| flags(e, cmd))?;
+        let s = site_of(self.lat, self.lon, model).map_err(|e| anyhow!(site_text(&e, cmd)))?;
         if let Some(n) = s.note("") {
             crate::log::summary!("{cmd}: {n}");
         }
         Ok(s.lat_lon())
-    }
-}
-
-/// `e` in the words of the flags that fix it.
-pub fn flags(e: SiteError, cmd: &str) -> anyhow::Error {
-    match e {
-        SiteError::OutOfRange { lat, lon } => {
-            anyhow!("--lat must be in -90..90 and --lon in -180..180 (got {lat}, {lon})")
-        }
-        SiteError::Half => {
-            anyhow!("{cmd} needs both --lat and --lon of the site, in degrees (WGS84)")
-        }
-        e => anyhow!("{cmd} needs the site's --lat and --lon (WGS84 degrees): {e}"),
     }
 }

@@ -133,15 +133,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         let (poi, out) = (&pois[k], &outputs[k]);
         crate::commands::warn_flags(std::slice::from_ref(poi), std::slice::from_ref(&pic.flags));
         atomic_write_bytes(out, pic.svg.as_bytes()).context("writing the picture")?;
-        crate::log::summary!(
-            "{}: {} -> {} ({} cells, {:.1} % sky, SVF {:.3})",
-            poi.id,
-            inputs,
-            out.display(),
-            pictures.cells(),
-            pic.sky * 100.0,
-            pic.svf
-        );
+        crate::log::summary!("{}", pic.line(&poi.id, &inputs, out, pictures.cells()));
         Ok(())
     };
     s.study

@@ -2,10 +2,11 @@
 
 use crate::args::site::SiteArgs;
 use crate::args::weather::weather_site;
-use crate::commands::{emit, ms};
+use crate::commands::emit;
 use crate::Outcome;
 use anyhow::Context;
 use skylod::export::report::irradiance::write_csv;
+use skylod::pipeline::session::tracing::ms_since;
 use skylod::pipeline::session::tracing::IrradianceRequest;
 use skylod::solar::irradiance::SkyModel;
 use skylod::solar::weather::read_weather;
@@ -61,7 +62,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.attributes.check(region, args.overwrite)?;
     let t = Instant::now();
     let weather = read_weather(&args.weather)?;
-    let weather_ms = ms(t);
+    let weather_ms = ms_since(t);
     let bundles = SkyBundles::new(args.rays, args.seed)?;
     let Some(s) = args.tracing.study("irradiance", |_| Ok(()))? else {
         return Ok(Outcome::SomeFailed);

@@ -7,7 +7,6 @@ use skylod::output::text::{Document, TextContext};
 use skylod::poi::checks::PoiFlag;
 use skylod::poi::Poi;
 use std::io::Write;
-use std::time::Instant;
 
 pub mod completions;
 pub mod convert;
@@ -25,11 +24,6 @@ pub mod sun_hours;
 pub mod svf;
 pub mod synth;
 pub mod upgrade;
-
-/// Milliseconds since `t`, rounded to 0.1.
-pub fn ms(t: Instant) -> f64 {
-    (t.elapsed().as_secs_f64() * 1e4).round() / 10.0
-}
 
 /// Context helper for writing to stdout.
 pub fn out_err<T>(r: std::io::Result<T>) -> anyhow::Result<T> {

@@ -63,8 +63,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         skylod::crs::proj::crs_info(s.horizontal).context("-s")?;
     }
     let shard = args.shard.resolve()?;
-    let (plan, _) =
-        crate::outputs::plan(&inputs, &args.output, Some(skylod::export::Format::CityGml))?;
+    let citygml = Some(skylod::export::Format::CityGml);
+    let (plan, _) = skylod::batch::outputs::plan(&inputs, &args.output, citygml)?;
     let wopts = WriteOptions {
         overwrite: args.overwrite,
         protect: args.inputs.clone(),
@@ -99,8 +99,14 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     for (k, out) in &todo {
         let input = &args.inputs[*k];
         if mirror {
-            crate::outputs::create_parent(out)?;
+            skylod::batch::outputs::create_parent(out)?;
         }
+        // A staged part's path means nothing to the user: the merge line follows.
+        let shown = if staging.is_some() {
+            target_name
+        } else {
+            out.as_path()
+        };
         if skylod::export::citygml_from_cityjson::is_json_file(input) {
             // CityJSON / CityJSONSeq: vertices through PROJ, the same format written.
             let (from, to) = (
@@ -109,16 +115,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             );
             let t = skylod::model::crs::ProjTransform;
             let r = reproject_cityjson(input, out, from.as_ref(), &to, &t, &write_opts)
-                .map_err(|e| anyhow::anyhow!(crate::errors::cli_text(&e)));
+                .map_err(|e| anyhow::anyhow!(skylod::session::flags::cli_text(&e)));
             if r.is_ok() {
                 parts.push(out.clone());
                 names.push(input.clone());
             }
-            let shown = if staging.is_some() {
-                target_name
-            } else {
-                out.as_path()
-            };
             match r {
                 Ok(s) => crate::log::summary!(
                     "{} -> {}: {} -> {}, {} vertices",
@@ -139,12 +140,6 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             Ok(s) => {
                 parts.push(out.clone());
                 names.push(input.clone());
-                // A staged part's path means nothing to the user: the merge line follows.
-                let shown = if staging.is_some() {
-                    target_name
-                } else {
-                    out.as_path()
-                };
                 crate::log::summary!(
                     "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
                     skylod::model::shown(input),

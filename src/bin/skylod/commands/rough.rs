@@ -1,14 +1,13 @@
 //! `skylod rough`: the rough model (every asset at level 1) written as CityGML.
 
 use crate::log::{summary, warning};
-use crate::outputs::{self, Done};
+use crate::outputs;
 use crate::Outcome;
-use rayon::prelude::*;
-use skylod::batch::outputs::Targets;
+use skylod::citygml::write::WriteOptions;
 use skylod::crs::FrameWarning;
 use skylod::export::Format;
 use skylod::pipeline::batch::rough::{rough_file, RoughFile};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -30,56 +29,33 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
     let opts = args.rough.options()?;
-    let out = (
-        args.out.output.as_path(),
-        args.out.format,
-        args.out.overwrite,
-    );
     // Every target is checked before any work: an input whose output is refused fails
     // (exit 1) without being read; the others are done. A merge writes every input to a
     // staging directory, then merges them into the target.
-    let batch = outputs::batch("rough", &inputs, out, false, shard)?;
+    let batch = outputs::batch("rough", &inputs, args.out.target(), false, shard)?;
     // A merge into OBJ or CityJSON stages CityGML parts, merged then converted (as `convert`).
     let format = (batch.targets.staging.as_ref()).map_or(batch.format, |_| Format::CityGml);
-    let Targets {
-        todo,
-        mirror,
-        write_opts,
-        ..
-    } = &batch.targets;
     let source_crs = args.files.crs.source_crs.as_ref();
     let o = RoughFile {
         format,
         rough: &opts,
-        write: write_opts,
+        write: &batch.targets.write_opts,
         source_crs,
     };
     // Files in parallel (--jobs); messages in input order, whatever finished first (an OBJ
     // or CityJSON file's line is said as it is written).
-    let results = args.files.jobs.install(|| {
-        todo.par_iter()
-            .map(|(k, out)| {
-                let input = &args.inputs[*k];
-                let warned = |w: &FrameWarning| {
-                    let w = crate::errors::frame_warning(w);
-                    warning!("rough: warning: {}: {w}", skylod::model::shown(input));
-                };
-                let r = if *mirror {
-                    crate::outputs::create_parent(out)
-                } else {
-                    Ok(())
-                };
-                let r = r.and_then(|()| Ok(rough_file(input, out, &o, &warned)?));
-                let r = r.map(|mut d: Done| {
-                    if format != Format::CityGml {
-                        d.line.take().into_iter().for_each(|l| summary!("{l}"));
-                    }
-                    d
-                });
-                (input.clone(), out.clone(), r)
-            })
-            .collect()
-    })?;
+    let each = |input: &Path, out: &Path, _: &Path, _: &WriteOptions| {
+        let warned = |w: &FrameWarning| {
+            let w = skylod::session::flags::frame_warning_text(w);
+            warning!("rough: warning: {}: {w}", skylod::model::shown(input));
+        };
+        let mut d = rough_file(input, out, &o, &warned)?;
+        if format != Format::CityGml {
+            d.line.take().into_iter().for_each(|l| summary!("{l}"));
+        }
+        anyhow::Ok(d)
+    };
+    let results = (args.files.jobs).install(|| batch.run_each(&inputs, true, &each))?;
     let failure = |e: &anyhow::Error| e.to_string();
     Ok(outputs::finish(
         &batch,

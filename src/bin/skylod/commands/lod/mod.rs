@@ -9,16 +9,15 @@ use crate::args::output::OutputArgs;
 use crate::args::poi::PoiArgs;
 use crate::args::rough::RoughArgs;
 use crate::args::select::SelectArgs;
-use crate::commands::ms;
 use crate::log::{error, summary};
 use crate::Outcome;
 use anyhow::Context;
 use skylod::batch::inputs::Input;
-use skylod::citygml::write::atomic_write_bytes;
 use skylod::lod::LodOptions;
 use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
+use skylod::pipeline::session::tracing::ms_since;
 use skylod::pipeline::LevelsOptions;
-use skylod::session::lod_write::{check_report, FileOutcome, LodLayout, ReportTargetError};
+use skylod::session::lod_write::{check_report, write_report, LodLayout, ReportTargetError};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -60,15 +59,19 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if let Some(s) = args.shard.resolve()? {
         return shard::shard(args, s, spool, t_all);
     }
-    let reduce = shard::read(&mut args)?;
+    let reduce = shard::read(&args)?;
     let pois = match &reduce {
         Some(r) => r.pois().to_vec(),
         None => args.region.points(&args.pois)?,
     };
     let layout = layout(&args, &inputs)?;
-    let lod = LodOptions {
-        rough: args.rough.options()?,
-        select: args.select.options(),
+    // A reduce writes the model exactly as the shards selected it.
+    let lod = match &reduce {
+        Some(r) => r.options(),
+        None => LodOptions {
+            rough: args.rough.options()?,
+            select: args.select.options(),
+        },
     };
     // Outputs are laid out for every input; --scene-radius then leaves out the far ones.
     let all_inputs = args.pois.inputs.clone();
@@ -84,7 +87,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     let session = args.pois.study(scene, pois, None, spool, "lod")?;
     let study = &session.study;
-    let (bound, guarantee) = args.bound.spec(study.source(), args.select.seed)?;
+    let (bound, guarantee) = args.bound.spec(study.source(), lod.select.seed)?;
     let opts = LevelsOptions { lod, bound };
     let progress = crate::log::reporter();
     let lv = match combined {
@@ -100,26 +103,18 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     // Written geometry and the report are in the input's CRS.
     let t_write = Instant::now();
-    let w = layout.write(study.source(), &all_inputs, &lv, &progress)?;
-    for f in w.files {
-        match f {
-            FileOutcome::Written(line) => summary!("{line}"),
-            FileOutcome::Failed(e) => error!("{}", crate::errors::cli_text(&e)),
-        }
-    }
-    crate::outputs::say(w.merge);
+    let mut w = layout.write(study.source(), &all_inputs, &lv, &progress)?;
+    crate::outputs::say(w.said());
     let written = (w.written.into_iter().enumerate())
         .filter_map(|(f, w)| w.map(|(path, dropped)| (f, path, dropped)));
-    let (read, write, total) = (session.read_ms, ms(t_write), ms(t_all));
+    let (read, write, total) = (session.read_ms, ms_since(t_write), ms_since(t_all));
     let run = RunMs { read, write, total };
     let report = study.lod_report(&lv, &opts.lod, run, guarantee, written);
     for l in lod_lines(&report, &lv, study.pois().len(), args.region.active()) {
         summary!("{l}");
     }
     if let Some(path) = &args.report {
-        let mut json = serde_json::to_vec_pretty(&report)?;
-        json.push(b'\n');
-        atomic_write_bytes(path, &json).context("writing the report")?;
+        write_report(path, &report).context("writing the report")?;
     }
     // The process ends here: handing a city's model back to the allocator piece by piece
     // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
@@ -134,8 +129,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
 /// Where the model goes, every target checked before any work (a refused target is fatal:
 /// one scene needs every input), and the report's target.
 fn layout(args: &Args, inputs: &[Input]) -> anyhow::Result<LodLayout> {
-    let out = (&*args.out.output, args.out.format, args.out.overwrite);
-    let batch = crate::outputs::batch("lod", inputs, out, false, None)?;
+    let batch = crate::outputs::batch("lod", inputs, args.out.target(), false, None)?;
     let layout = LodLayout::new(batch, inputs.len())?;
     if let Some(path) = &args.report {
         let (model, overwrite) = (&args.out.output, args.out.overwrite);
