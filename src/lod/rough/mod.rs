@@ -62,6 +62,35 @@ impl Default for RoughOptions {
     }
 }
 
+impl RoughOptions {
+    /// Why these options cannot build a rough model, if they cannot: an angle outside 0 to
+    /// 90 degrees, or a thickness that is negative or not a number. The reduce step checks
+    /// the options a levels file names with it (the command line's flags are checked as
+    /// they are parsed).
+    ///
+    /// ```
+    /// use skylod::lod::rough::RoughOptions;
+    /// assert_eq!(RoughOptions::default().check(), Ok(()));
+    /// let wide = RoughOptions { angle_deg: 120.0, ..RoughOptions::default() };
+    /// assert!(wide.check().unwrap_err().contains("angle"));
+    /// ```
+    pub fn check(&self) -> Result<(), String> {
+        if !(0.0..=90.0).contains(&self.angle_deg) {
+            return Err(format!(
+                "angle {} degrees: must be between 0 and 90",
+                self.angle_deg
+            ));
+        }
+        if !(self.thickness_m >= 0.0 && self.thickness_m.is_finite()) {
+            return Err(format!(
+                "thickness {} m: must be 0 or more",
+                self.thickness_m
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The rough geometry of one asset.
 ///
 /// A boxed asset keeps its [`Obb`] only (the six faces are made where they are needed,

@@ -24,6 +24,7 @@ use crate::export::report::report::PoiSeen;
 use crate::io::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
 use crate::lod::poi::checks::PoiFlag;
+use crate::lod::rough::RoughOptions;
 use crate::lod::select::{PoiSelection, Selection};
 use crate::lod::{LodOptions, LodResult};
 use crate::model::CityModel;
@@ -415,6 +416,12 @@ pub fn read_levels(path: &Path) -> Result<LevelsFile, LevelsError> {
                         ),
                     ));
                 }
+                let rough = RoughOptions {
+                    angle_deg: h.angle_deg,
+                    thickness_m: h.thickness_m,
+                    prefer_lod2: h.prefer_lod2,
+                };
+                rough.check().map_err(|m| syntax(1, m))?;
                 header = Some(h);
             }
             Line::Header(_) => return Err(syntax(i + 1, "a second header".into())),
@@ -744,5 +751,27 @@ mod tests {
         std::fs::write(&p, "not json\n").unwrap();
         assert!(read_levels(&p).unwrap_err().to_string().contains(":1:"));
         assert!(read_levels(&dir.path().join("none.jsonl")).is_err());
+    }
+
+    #[test]
+    fn a_header_with_rough_options_out_of_range_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let (m, pois) = model();
+        let o = LodOptions::default();
+        let path = write(dir.path(), "0/1".parse().unwrap(), &m, &pois, &o);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let (head, rest) = text.split_once('\n').unwrap();
+        let mut h: serde_json::Value = serde_json::from_str(head).unwrap();
+        for (key, bad) in [("angle_deg", 120.0), ("thickness_m", -1.0)] {
+            let mut edited = h.clone();
+            edited[key] = serde_json::json!(bad);
+            std::fs::write(&path, format!("{edited}\n{rest}")).unwrap();
+            let e = read_levels(&path).unwrap_err().to_string();
+            assert!(e.contains("levels-0.jsonl:1"), "{e}");
+            assert!(e.contains(key.split('_').next().unwrap()), "{e}");
+        }
+        h["angle_deg"] = serde_json::json!(90.0);
+        std::fs::write(&path, format!("{h}\n{rest}")).unwrap();
+        assert_eq!(read_levels(&path).unwrap().header.angle_deg, 90.0);
     }
 }
