@@ -714,3 +714,68 @@ fn ids_met_in_two_parts_are_warned_where_the_serial_read_warns() {
     assert!(dups.iter().any(|w| w.gml_id.as_deref() == Some("root")));
     assert!(dups.iter().any(|w| w.message.contains("p1&")));
 }
+
+/// `xlink:href`s to polygon ids that repeat in later parts, to ids first met in the last part
+/// (one from the first member: a reference forward across parts) resolve to the first element
+/// holding the id, split as serially: the split read registers ids by their entry in the
+/// merged gml:id log, which must keep the document's order.
+#[test]
+fn hrefs_to_ids_met_in_two_parts_resolve_to_the_first_element() {
+    let dir = tempfile::tempdir().unwrap();
+    let polygon = |id: String, z: f64| {
+        format!(
+            "<gml:surfaceMember><gml:Polygon gml:id=\"{id}\"><gml:exterior><gml:LinearRing>\
+             <gml:posList>0 0 {z} 1 0 {z} 1 1 {z} 0 0 {z}</gml:posList></gml:LinearRing>\
+             </gml:exterior></gml:Polygon></gml:surfaceMember>"
+        )
+    };
+    let href = |id: String| format!("<gml:surfaceMember xlink:href=\"#{id}\"/>");
+    let mut body = String::new();
+    for i in 0..12usize {
+        // member i holds polygon p{i % 4} at height i and, from member 6 on, q{i} at 100 + i;
+        // member 0 points at p1 and at q11 (the last member), members 8.. at p{(i + 1) % 4}
+        let mut surfaces = polygon(format!("p{}", i % 4), i as f64);
+        if i >= 6 {
+            surfaces.push_str(&polygon(format!("q{i}"), 100.0 + i as f64));
+        }
+        if i == 0 {
+            surfaces.push_str(&href("p1".into()));
+            surfaces.push_str(&href("q11".into()));
+        }
+        if i >= 8 {
+            surfaces.push_str(&href(format!("p{}", (i + 1) % 4)));
+        }
+        body.push_str(&format!(
+            "  <cityObjectMember><bldg:Building gml:id=\"b{i}\"><bldg:lod2MultiSurface>\
+             <gml:MultiSurface>{surfaces}</gml:MultiSurface></bldg:lod2MultiSurface>\
+             </bldg:Building></cityObjectMember>\n"
+        ));
+    }
+    let root = HEAD.replacen(
+        "<CityModel ",
+        "<CityModel xmlns:xlink=\"http://www.w3.org/1999/xlink\" ",
+        1,
+    );
+    let path = dir.path().join("hrefs.gml");
+    std::fs::write(&path, format!("{root}{body}</CityModel>\n")).unwrap();
+    assert_eq!(check(&path), 2, "both split reads taken");
+    let m = read_file_with(&path, &serial()).unwrap();
+    let heights = |i: usize| -> Vec<f64> {
+        let id = format!("b{i}");
+        let b = m
+            .buildings
+            .iter()
+            .position(|b| b.id.as_deref() == Some(&*id));
+        (m.assets.iter())
+            .filter(|a| a.building == Some(b.unwrap()))
+            .flat_map(|a| a.geometries.iter().flat_map(|g| &g.polygons))
+            .map(|p| p.exterior()[0].z)
+            .collect()
+    };
+    assert_eq!(heights(0), vec![0.0, 1.0, 111.0]);
+    for i in 8..12usize {
+        // its own polygons, then the first p{(i + 1) % 4}'s
+        let first = ((i + 1) % 4) as f64;
+        assert_eq!(heights(i), vec![i as f64, 100.0 + i as f64, first], "b{i}");
+    }
+}

@@ -1,25 +1,39 @@
 //! The writer index's table of `gml:id`s ([`IdTable`]): every id of a document, those of
 //! skipped content included, and the first element holding it.
 
-/// `gml:id`s: their bytes in one arena, found by hash (a sorted table, so that hundreds of
-/// thousands of ids cost no allocation each). An id that repeats maps to its smallest node,
-/// the first in document order. The ids of skipped content found by the prescan are kept as
-/// their hash alone ([`IdTable::push_hashed`]): a lookup matches them by their 64-bit hash,
-/// as the reader's duplicate check does (a false match needs a 64-bit collision), and a
-/// city's millions of dropped ids cost no bytes.
+/// `gml:id`s: their bytes in one arena, found by hash (a table sorted by hash once, so that
+/// hundreds of thousands of ids cost no allocation each). An id that repeats maps to its
+/// smallest node, the first in document order. The ids of skipped content found by the
+/// prescan are kept as their hash alone ([`IdTable::push_hashed`]): a lookup matches them by
+/// their 64-bit hash, as the reader's duplicate check does (a false match needs a 64-bit
+/// collision), and a city's millions of dropped ids cost no bytes.
+///
+/// 16 bytes an id ([`Entry`]) plus, for an id kept with its text, its bytes and their length
+/// (one byte below 128); [`IdTable::finish`] sorts in place (no second table at the writer's
+/// peak) and keeps a directory of one entry per two to four ids.
 #[derive(Debug, Default, PartialEq)]
 pub(super) struct IdTable {
+    /// Each id kept with its text: its length (LEB128) then its bytes.
     bytes: Vec<u8>,
-    /// (hash, start in `bytes`, length or [`HASH_ONLY`], node); sorted by hash once the scan
-    /// is done.
-    entries: Vec<(u64, usize, u32, u32)>,
+    /// Sorted by hash once the scan is done.
+    entries: Vec<Entry>,
     /// After [`IdTable::finish`]: the first entry of each range of hashes with the same top
-    /// `bits` bits (one more at the end), so that a lookup reads about one entry.
+    /// `bits` bits (one more at the end), so that a lookup reads a few entries.
     dir: Vec<u32>,
     bits: u32,
 }
 
-/// The length of an entry kept as its hash alone.
+/// One id: its hash, where its text starts in [`IdTable::bytes`] ([`HASH_ONLY`]: kept as its
+/// hash alone), its node.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct Entry {
+    hash: u64,
+    at: u32,
+    node: u32,
+}
+
+/// [`Entry::at`] of an entry kept as its hash alone (also an id whose text would start past
+/// 4 GiB of id text: matched by its hash like the ids of skipped content).
 const HASH_ONLY: u32 = u32::MAX;
 
 impl IdTable {
@@ -29,15 +43,28 @@ impl IdTable {
     }
 
     pub(super) fn push(&mut self, id: &[u8], node: u32) {
-        let start = self.bytes.len();
+        let hash = Self::hash(id);
+        let at = match u32::try_from(self.bytes.len()) {
+            Ok(at) if at < HASH_ONLY => at,
+            _ => return self.push_hashed(hash, node),
+        };
+        let mut len = id.len();
+        while len >= 0x80 {
+            self.bytes.push((len & 0x7f) as u8 | 0x80);
+            len >>= 7;
+        }
+        self.bytes.push(len as u8);
         self.bytes.extend_from_slice(id);
-        self.entries
-            .push((Self::hash(id), start, id.len() as u32, node));
+        self.entries.push(Entry { hash, at, node });
     }
 
     /// An id known by its hash alone ([`IdTable::hash`] of its unescaped value).
     pub(super) fn push_hashed(&mut self, hash: u64, node: u32) {
-        self.entries.push((hash, 0, HASH_ONLY, node));
+        self.entries.push(Entry {
+            hash,
+            at: HASH_ONLY,
+            node,
+        });
     }
 
     /// Room for the ids of a document of about `bytes` bytes (about one per 350 bytes in the
@@ -48,31 +75,46 @@ impl IdTable {
         self.bytes.reserve(ids * 16);
     }
 
-    /// Group the entries by bucket (a counting sort: the order inside a bucket does not
-    /// matter to [`IdTable::get`], which takes the smallest node of the matching ones).
+    /// Sort the entries by hash, in place, and index the ranges of their top bits.
     pub(super) fn finish(&mut self) {
-        self.bits = (self.entries.len().max(1).ilog2() + 1).min(24);
+        use rayon::slice::ParallelSliceMut;
+        self.entries.par_sort_unstable();
+        self.bits = self
+            .entries
+            .len()
+            .max(1)
+            .ilog2()
+            .saturating_sub(1)
+            .clamp(1, 24);
         let buckets = 1usize << self.bits;
         let mut dir = vec![0u32; buckets + 1];
         for e in &self.entries {
-            dir[self.bucket(e.0) + 1] += 1;
+            dir[self.bucket(e.hash) + 1] += 1;
         }
         for b in 0..buckets {
             dir[b + 1] += dir[b];
         }
-        let mut next = dir.clone();
-        let mut sorted = vec![(0, 0, 0, 0); self.entries.len()];
-        for e in &self.entries {
-            let b = self.bucket(e.0);
-            sorted[next[b] as usize] = *e;
-            next[b] += 1;
-        }
-        self.entries = sorted;
         self.dir = dir;
     }
 
     fn bucket(&self, h: u64) -> usize {
         (h >> (64 - self.bits)) as usize
+    }
+
+    /// The text of the id kept at `at` in [`IdTable::bytes`].
+    fn text(&self, at: u32) -> Option<&[u8]> {
+        let mut i = at as usize;
+        let (mut len, mut shift) = (0usize, 0u32);
+        loop {
+            let b = *self.bytes.get(i)?;
+            i += 1;
+            len |= usize::from(b & 0x7f).checked_shl(shift)?;
+            if b < 0x80 {
+                break;
+            }
+            shift += 7;
+        }
+        self.bytes.get(i..i.checked_add(len)?)
     }
 
     /// Smallest node holding `id`.
@@ -87,11 +129,9 @@ impl IdTable {
         };
         entries
             .iter()
-            .filter(|e| e.0 == h)
-            .filter(|e| {
-                e.2 == HASH_ONLY || self.bytes.get(e.1..e.1 + e.2 as usize) == Some(id.as_bytes())
-            })
-            .map(|e| e.3)
+            .filter(|e| e.hash == h)
+            .filter(|e| e.at == HASH_ONLY || self.text(e.at) == Some(id.as_bytes()))
+            .map(|e| e.node)
             .min()
     }
 }
@@ -119,5 +159,29 @@ mod tests {
         big.finish();
         assert!((0..5000u32).all(|i| big.get(&format!("id{i}")) == Some(i)));
         assert_eq!(big.get("id5000"), None);
+    }
+
+    #[test]
+    fn long_ids_and_hashed_ids_are_found_and_a_prefix_is_not() {
+        let long = "x".repeat(300); // a length of two bytes
+        let mut t = IdTable::default();
+        t.push(long.as_bytes(), 4);
+        t.push(b"short", 9);
+        t.push_hashed(IdTable::hash(b"skipped"), 2);
+        t.push(b"skipped", 6);
+        for i in 0..100u32 {
+            t.push(format!("{long}{i}").as_bytes(), 100 + i);
+        }
+        t.finish();
+        assert_eq!(t.get(&long), Some(4));
+        assert_eq!(t.get(&long[..299]), None);
+        assert_eq!(t.get("short"), Some(9));
+        assert_eq!(t.get("shor"), None);
+        assert_eq!(
+            t.get("skipped"),
+            Some(2),
+            "the first node, kept as its hash"
+        );
+        assert!((0..100u32).all(|i| t.get(&format!("{long}{i}")) == Some(100 + i)));
     }
 }

@@ -2,7 +2,7 @@
 //! envelopes, the source file's record.
 
 use super::state::{EnvOwner, Owner, Parser};
-use super::xlink::{PolyRef, Walk};
+use super::xlink::{PolyRef, Registry, Walk};
 use crate::io::citygml::error::{Location, ReadError};
 use crate::model::{Bbox, CityModel, Polygon, SourceFile, Warning};
 
@@ -30,15 +30,24 @@ impl Parser<'_> {
                 message: "no element in a CityGML 1.0, 2.0 or 3.0 namespace".into(),
             });
         };
+        // the ids that references name, while the id log is there to find them in; then
+        // the registry and the log are given back before the model is assembled
+        let wanted = self.href_targets();
+        let index = (self.registry).index(
+            &wanted,
+            |pos, hash| self.id_text_at(pos, hash),
+            |rec| self.id_log.get(rec as usize).map(|r| (r.hash, r.pos)),
+        );
+        drop(wanted);
+        self.registry = Registry::default();
         self.invalid_id_summary();
         self.duplicate_warnings();
         // resolve geometry: references first, then move or clone the polygons
         let pending = std::mem::take(&mut self.pending);
         let mut refs: Vec<Vec<PolyRef>> = Vec::with_capacity(pending.len());
         let mut uses = vec![0u32; self.polys.len()];
-        let wanted = self.href_targets();
         let mut walk = Walk {
-            index: (self.registry).index(&wanted, |pos, hash| self.id_text_at(pos, hash)),
+            index,
             budget: self
                 .opts
                 .max_href_work

@@ -233,7 +233,7 @@ impl Parser<'_> {
                     } else {
                         start
                     };
-                    self.register(hash, (a, b), frame.start, (start, end));
+                    self.register(hash, (a, b), (frame.start, frame.rec), (start, end));
                 }
             }
             Kind::GeomProp { lod, start, owner } => {
@@ -313,7 +313,7 @@ impl Parser<'_> {
         }
         if let (Some(start), Some((a, b, hash))) = (frame.register, frame.id) {
             let end = self.parts.len() as u32;
-            self.register(hash, (a, b), frame.start, (start, end));
+            self.register(hash, (a, b), (frame.start, frame.rec), (start, end));
         }
         if let Some((a, _, _)) = id_span {
             self.open_ids.truncate(a);

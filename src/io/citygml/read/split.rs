@@ -423,7 +423,7 @@ impl Parser<'_> {
             self.hrefs.push(h);
         }
         self.implicits.extend(o.implicits);
-        self.registry.append(o.registry, p0);
+        self.registry.append(o.registry, p0, log0)?;
         self.pending.extend(o.pending.into_iter().map(|mut g| {
             g.owner = match g.owner {
                 Owner::Asset(a) => Owner::Asset(a + a0),

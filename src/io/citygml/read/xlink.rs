@@ -1,7 +1,7 @@
 //! `xlink:href` geometry references: recorded as parts of the arena while reading, resolved
 //! after the last event (forward references work) within depth and work limits.
 
-use super::state::{HrefRef, Parser, Part};
+use super::state::{HrefRef, Parser, Part, NO_REC};
 use crate::io::citygml::error::ReadError;
 use crate::model::Polygon;
 use foldhash::{HashMap, HashMapExt, HashSet};
@@ -11,17 +11,23 @@ use glam::DVec3;
 ///
 /// Reading only appends (one list, and while streaming one text arena: no allocation per id,
 /// no hash table); after the last event, [`Registry::index`] indexes just the ids that
-/// references name. A document in memory keeps no id text: each entry holds its element's
-/// offset and the id is read back from the document for the ids that references name
-/// ([`Parser::id_text`]), as the duplicate check does. The first registration of an id wins.
+/// references name. A document in memory keeps no id text and no second copy of what the
+/// parser's gml:id log holds: each entry names its element's entry in that log
+/// ([`Parser::id_log`]: hash and file offset), 12 bytes, and the id is read back from the
+/// document for the ids that references name ([`Parser::id_text`]), as the duplicate check
+/// does. The first registration of an id wins.
 #[derive(Debug, Default)]
 pub(super) struct Registry {
     text: String,
     entries: Vec<RegEntry>,
+    /// Registrations by their entry in the id log, before every one of [`Registry::entries`]
+    /// (a document in memory logs every id: see [`IdAt::Log`]).
+    logged: Vec<LogEntry>,
 }
 
-/// 24 bytes. `at`: the element's file offset (a document in memory), or where the id's text
-/// ends in [`Registry::text`] (streaming: it starts where the previous entry's ends).
+/// 24 bytes. `at`: the element's file offset (a document in memory whose id could not be
+/// logged), or where the id's text ends in [`Registry::text`] (streaming: it starts where the
+/// previous entry's ends).
 #[derive(Debug)]
 struct RegEntry {
     hash: u64,
@@ -29,10 +35,18 @@ struct RegEntry {
     range: (u32, u32),
 }
 
-/// Where a registered id is: its element's file offset in the document in memory, or its
-/// text (streaming).
+/// 12 bytes: the element's entry in the id log, its parts.
+#[derive(Debug)]
+struct LogEntry {
+    rec: u32,
+    range: (u32, u32),
+}
+
+/// Where a registered id is: its element's entry in the id log of the document in memory
+/// and its file offset (kept instead when there is no entry, [`NO_REC`], or registrations by
+/// offset came first), or its text (streaming).
 pub(super) enum IdAt<'a> {
-    Doc(u64),
+    Log { rec: u32, pos: u64 },
     Text(&'a str),
 }
 
@@ -40,7 +54,10 @@ impl Registry {
     /// Record the id at `id` (with its `hash`) for the parts `range`.
     pub(super) fn add(&mut self, hash: u64, id: IdAt<'_>, range: (u32, u32)) {
         let at = match id {
-            IdAt::Doc(pos) => pos,
+            IdAt::Log { rec, .. } if rec != NO_REC && self.entries.is_empty() => {
+                return self.logged.push(LogEntry { rec, range });
+            }
+            IdAt::Log { pos, .. } => pos,
             IdAt::Text(t) => {
                 self.text.push_str(t);
                 self.text.len() as u64
@@ -50,32 +67,63 @@ impl Registry {
     }
 
     /// Append the registrations of a later part of the document whose parts start at
-    /// `parts_offset` in the merged arena (a split read: offsets into the document stay,
-    /// text ends move by the text before them).
-    pub(super) fn append(&mut self, other: Registry, parts_offset: u32) {
+    /// `parts_offset` in the merged arena and whose id log entries at `log_offset` in the
+    /// merged log (a split read: offsets into the document stay, text ends move by the
+    /// text before them); `None` when the order of registrations would change.
+    pub(super) fn append(
+        &mut self,
+        other: Registry,
+        parts_offset: u32,
+        log_offset: u32,
+    ) -> Option<()> {
+        if !self.entries.is_empty() && !other.logged.is_empty() {
+            return None;
+        }
         let base = self.text.len() as u64;
         let text_ends = !other.text.is_empty();
+        let shift = |r: (u32, u32)| (r.0 + parts_offset, r.1 + parts_offset);
         self.text.push_str(&other.text);
+        self.logged.reserve_exact(other.logged.len());
+        for e in other.logged {
+            let rec = e.rec.checked_add(log_offset)?;
+            self.logged.push(LogEntry {
+                rec,
+                range: shift(e.range),
+            });
+        }
         self.entries.reserve_exact(other.entries.len());
         self.entries
             .extend(other.entries.into_iter().map(|e| RegEntry {
                 hash: e.hash,
                 at: if text_ends { e.at + base } else { e.at },
-                range: (e.range.0 + parts_offset, e.range.1 + parts_offset),
+                range: shift(e.range),
             }));
+        Some(())
     }
 
     /// The ids whose hash is in `wanted`, each with its first registered range (the text is
     /// compared, so two ids with the same hash stay apart); `read_back(offset, hash)` reads
-    /// an id back from the document in memory (entries without text).
+    /// an id back from the document in memory (entries without text), `logged(rec)` is the
+    /// hash and file offset of entry `rec` of the id log.
     pub(super) fn index(
         &self,
         wanted: &HashSet<u64>,
         read_back: impl Fn(u64, u64) -> Option<String>,
+        logged: impl Fn(u32) -> Option<(u64, u64)>,
     ) -> HashMap<String, (u32, u32)> {
         let mut map = HashMap::with_capacity(wanted.len());
         if wanted.is_empty() {
             return map;
+        }
+        for e in &self.logged {
+            let Some((hash, pos)) = logged(e.rec) else {
+                continue;
+            };
+            if wanted.contains(&hash) {
+                if let Some(t) = read_back(pos, hash) {
+                    map.entry(t).or_insert(e.range);
+                }
+            }
         }
         let in_text = !self.text.is_empty();
         let mut from = 0;
@@ -117,12 +165,18 @@ impl Parser<'_> {
             .collect()
     }
 
-    /// Register the geometry element starting at `pos` whose gml:id (hashed: `hash`) is at
-    /// `id` in [`Parser::open_ids`], for the parts `range`: by its offset when the document
-    /// is in memory, else by its text.
-    pub(super) fn register(&mut self, hash: u64, id: (usize, usize), pos: u64, range: (u32, u32)) {
+    /// Register the geometry element starting at `pos` whose gml:id (hashed: `hash`, entry
+    /// `rec` of [`Parser::id_log`]) is at `id` in [`Parser::open_ids`], for the parts
+    /// `range`: by its log entry when the document is in memory, else by its text.
+    pub(super) fn register(
+        &mut self,
+        hash: u64,
+        id: (usize, usize),
+        (pos, rec): (u64, u32),
+        range: (u32, u32),
+    ) {
         let at = match self.doc.is_empty() {
-            false => IdAt::Doc(pos),
+            false => IdAt::Log { rec, pos },
             true => IdAt::Text(self.open_ids.get(id.0..id.1).unwrap_or("")),
         };
         self.registry.add(hash, at, range);
@@ -287,28 +341,58 @@ mod tests {
         r.add(9, IdAt::Text("c"), (2, 3));
         let wanted: HashSet<u64> = [7u64].into_iter().collect();
         let none = |_: u64, _: u64| -> Option<String> { None };
-        let idx = r.index(&wanted, none);
+        let no_log = |_: u32| -> Option<(u64, u64)> { None };
+        let idx = r.index(&wanted, none, no_log);
         assert_eq!(idx.get("a"), Some(&(0, 1)));
         assert_eq!(idx.get("b"), Some(&(1, 2)));
         assert_eq!(idx.get("c"), None, "not wanted, not indexed");
-        assert!(r.index(&HashSet::default(), none).is_empty());
+        assert!(r.index(&HashSet::default(), none, no_log).is_empty());
     }
 
     #[test]
     fn registry_of_a_document_reads_ids_back_and_appends_parts() {
-        let doc = ["a", "b", "a", "c"];
+        let doc = ["a", "b", "a", "c", "d"];
         let back = |at: u64, _: u64| doc.get(at as usize).map(|s| s.to_string());
+        // the id log of the merged document: (hash, offset) per entry
+        let log = [(7u64, 0u64), (7, 1), (8, 9), (7, 2), (9, 3)];
+        let logged = |rec: u32| log.get(rec as usize).copied();
         let (mut r, mut later) = (Registry::default(), Registry::default());
-        r.add(7, IdAt::Doc(0), (0, 1));
-        r.add(7, IdAt::Doc(1), (1, 2));
-        later.add(7, IdAt::Doc(2), (0, 1)); // a duplicate in a later part: the first wins
-        later.add(9, IdAt::Doc(3), (1, 2));
-        r.append(later, 10);
-        assert!(r.text.is_empty(), "no id text kept");
+        r.add(7, IdAt::Log { rec: 0, pos: 0 }, (0, 1));
+        r.add(7, IdAt::Log { rec: 1, pos: 1 }, (1, 2));
+        // a duplicate in a later part (log entries from 3 on): the first wins
+        later.add(7, IdAt::Log { rec: 0, pos: 2 }, (0, 1));
+        later.add(9, IdAt::Log { rec: 1, pos: 3 }, (1, 2));
+        assert_eq!(r.append(later, 10, 3), Some(()));
+        assert!(
+            r.text.is_empty() && r.entries.is_empty(),
+            "no id text, no hashes"
+        );
+        assert_eq!(r.logged.len(), 4);
         let wanted: HashSet<u64> = [7u64, 9].into_iter().collect();
-        let idx = r.index(&wanted, back);
+        let idx = r.index(&wanted, back, logged);
         assert_eq!(idx.get("a"), Some(&(0, 1)));
         assert_eq!(idx.get("b"), Some(&(1, 2)));
         assert_eq!(idx.get("c"), Some(&(11, 12)));
+        // without a log entry an id is registered by its offset, and every later one too
+        let mut r = Registry::default();
+        r.add(
+            7,
+            IdAt::Log {
+                rec: NO_REC,
+                pos: 4,
+            },
+            (0, 1),
+        );
+        r.add(7, IdAt::Log { rec: 0, pos: 0 }, (1, 2));
+        r.add(9, IdAt::Log { rec: 4, pos: 3 }, (2, 3));
+        assert_eq!((r.logged.len(), r.entries.len()), (0, 3));
+        let idx = r.index(&wanted, back, logged);
+        assert_eq!(idx.get("d"), Some(&(0, 1)));
+        assert_eq!(idx.get("a"), Some(&(1, 2)));
+        assert_eq!(idx.get("c"), Some(&(2, 3)));
+        // a part registered by log entries cannot follow one registered by offsets
+        let mut later = Registry::default();
+        later.add(7, IdAt::Log { rec: 0, pos: 0 }, (0, 1));
+        assert_eq!(r.append(later, 10, 3), None);
     }
 }
