@@ -22,12 +22,9 @@ use super::{
 };
 use crate::io::citygml::edit::EditSummary;
 use crate::io::citygml::error::WriteError;
-use crate::io::citygml::write::atomic_write;
-use crate::io::files::CountingWriter;
 use crate::model::Bbox;
 use serde_json::{Map, Value};
 use std::collections::{HashMap, HashSet};
-use std::io::Write;
 use std::path::Path;
 
 /// What the first pass keeps.
@@ -211,21 +208,18 @@ pub(super) fn run<'r>(
     let mut map = vec![u32::MAX; n];
     let mut order: Vec<u32> = Vec::new();
     let mut removed = HashSet::new();
+    let forest = (trees.as_slice(), tree_of.as_slice());
+    let pass = |counts: &mut EditSummary,
+                removed: &mut HashSet<u64>,
+                sink: &mut dyn FnMut(String, Value) -> Result<(), String>| {
+        decide_pass(input, forest, make(), ctx(), counts, removed, sink)
+    };
     // pass 2: decisions, the vertices that stay numbered
     {
         let mut scratch = EditSummary::default();
         let mut sink =
             |id: String, mut o: Value| renumber_object(&id, &mut o, &mut map, &mut order);
-        let forest = (trees.as_slice(), tree_of.as_slice());
-        decide_pass(
-            input,
-            forest,
-            make(),
-            ctx(),
-            &mut scratch,
-            &mut removed,
-            &mut sink,
-        )?;
+        pass(&mut scratch, &mut removed, &mut sink)?;
     }
     let kept_box = {
         let c = ctx();
@@ -245,75 +239,26 @@ pub(super) fn run<'r>(
     // pass 3: the same decisions, written
     let mut counts = EditSummary::default();
     let mut pruned = 0;
-    let io = |source| WriteError::Io {
-        file: out.to_path_buf(),
-        source,
+    let mut again = HashSet::new();
+    let head = match head {
+        Value::Object(m) => m,
+        _ => Map::new(),
     };
-    let bytes_out = atomic_write(out, |w| {
-        let mut w = CountingWriter::new(w);
-        let mut first_member = true;
-        w.write_all(b"{").map_err(io)?;
-        for (key, v) in head.as_object().into_iter().flatten() {
-            if !std::mem::take(&mut first_member) {
-                w.write_all(b",").map_err(io)?;
+    let bytes_out = stream::write_document(out, &head, &mut |key, entries| {
+        if key == "vertices" {
+            for &i in &order {
+                entries
+                    .vertex(&vertices[i as usize])
+                    .map_err(WriteError::Invalid)?;
             }
-            serde_json::to_writer(&mut w, key).map_err(|e| io(e.into()))?;
-            w.write_all(b":").map_err(io)?;
-            match key.as_str() {
-                "CityObjects" => {
-                    w.write_all(b"{").map_err(io)?;
-                    let mut failed = None;
-                    let mut any = false;
-                    let mut again = HashSet::new();
-                    let mut sink = |id: String, mut o: Value| {
-                        prune_object(&mut o, &removed, &mut pruned);
-                        renumber_object(&id, &mut o, &mut map, &mut order)?;
-                        let r = (|| {
-                            if std::mem::replace(&mut any, true) {
-                                w.write_all(b",")?;
-                            }
-                            serde_json::to_writer(&mut w, &id)?;
-                            w.write_all(b":")?;
-                            serde_json::to_writer(&mut w, &o)?;
-                            Ok::<(), std::io::Error>(())
-                        })();
-                        r.map_err(|e| {
-                            let m = e.to_string();
-                            failed = Some(e);
-                            m
-                        })
-                    };
-                    let forest = (trees.as_slice(), tree_of.as_slice());
-                    let r = decide_pass(
-                        input,
-                        forest,
-                        make(),
-                        ctx(),
-                        &mut counts,
-                        &mut again,
-                        &mut sink,
-                    );
-                    if let Some(e) = failed {
-                        return Err(io(e));
-                    }
-                    r?;
-                    w.write_all(b"}").map_err(io)?;
-                }
-                "vertices" => {
-                    w.write_all(b"[").map_err(io)?;
-                    for (j, &i) in order.iter().enumerate() {
-                        if j > 0 {
-                            w.write_all(b",").map_err(io)?;
-                        }
-                        vertices[i as usize].write(&mut w).map_err(io)?;
-                    }
-                    w.write_all(b"]").map_err(io)?;
-                }
-                _ => serde_json::to_writer(&mut w, v).map_err(|e| io(e.into()))?,
-            }
+            return Ok(());
         }
-        w.write_all(b"}\n").map_err(io)?;
-        Ok(w.count())
+        let mut sink = |id: String, mut o: Value| {
+            prune_object(&mut o, &removed, &mut pruned);
+            renumber_object(&id, &mut o, &mut map, &mut order)?;
+            entries.object(&id, &o)
+        };
+        pass(&mut counts, &mut again, &mut sink)
     })?;
     counts.references_pruned += pruned;
     counts.bytes_in = bytes_in;

@@ -651,13 +651,19 @@ fn check_document(
     head: &Map<String, Value>,
     seen: &stream::Seen,
 ) -> Result<(), WriteError> {
+    check_type(input, head)?;
+    if !seen.objects {
+        return Err(cj(input, 1, None, "no \"CityObjects\"".into()));
+    }
+    Ok(())
+}
+
+/// A document's members: of type `CityJSON`.
+fn check_type(input: &Path, head: &Map<String, Value>) -> Result<(), WriteError> {
     let ty = head.get("type").and_then(Value::as_str).unwrap_or("");
     if ty != "CityJSON" {
         let m = format!("the first object is of type {ty:?}, not \"CityJSON\"");
         return Err(cj(input, 1, None, m));
-    }
-    if !seen.objects {
-        return Err(cj(input, 1, None, "no \"CityObjects\"".into()));
     }
     Ok(())
 }

@@ -10,12 +10,14 @@
 
 use super::{cj, cj_error, id_hash};
 use crate::io::citygml::error::WriteError;
+use crate::io::citygml::write::atomic_write;
+use crate::io::files::CountingWriter;
 use serde::de::{DeserializeSeed, Error as _, IgnoredAny, MapAccess, SeqAccess, Visitor};
-use serde_json::Value;
+use serde_json::{Map, Value};
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::fmt;
-use std::io::{BufRead, Read};
+use std::io::{BufRead, Read, Write};
 use std::path::Path;
 use std::rc::Rc;
 
@@ -30,6 +32,8 @@ pub(crate) trait Pass {
     fn member(&mut self, _key: String, _v: Value) -> Result<(), String> {
         Ok(())
     }
+    /// `CityObjects` or `vertices` is at this place among the members (read or not).
+    fn place(&mut self, _key: &str) {}
     /// Whether `CityObjects` is read.
     fn wants_objects(&self) -> bool {
         false
@@ -68,7 +72,8 @@ pub(crate) enum Vertex {
 }
 
 impl Vertex {
-    fn from_value(v: Value) -> Vertex {
+    /// The vertex of a value.
+    pub fn from_value(v: Value) -> Vertex {
         let int = |v: &Value| -> Option<[i32; 3]> {
             let a = v.as_array().filter(|a| a.len() == 3)?;
             let c = |k: usize| i32::try_from(a[k].as_i64()?).ok();
@@ -77,6 +82,22 @@ impl Vertex {
         match int(&v) {
             Some(i) => Vertex::Int(i),
             None => Vertex::Other(Box::new(v)),
+        }
+    }
+
+    /// Coordinate `k` as stored, when it is a number.
+    pub fn coord(&self, k: usize) -> Option<f64> {
+        match self {
+            Vertex::Int(i) => i.get(k).map(|&c| f64::from(c)),
+            Vertex::Other(v) => v.get(k).and_then(Value::as_f64),
+        }
+    }
+
+    /// The vertex as a value again.
+    pub fn into_value(self) -> Value {
+        match self {
+            Vertex::Int(i) => serde_json::json!(i),
+            Vertex::Other(v) => *v,
         }
     }
 
@@ -188,6 +209,7 @@ impl<'de> Visitor<'de> for Top<'_, '_> {
                     if twice {
                         return Err(A::Error::custom(format!("{key:?} given twice")));
                     }
+                    self.pass.place(&key);
                     if objects && self.pass.wants_objects() {
                         m.next_value_seed(Objects(&mut *self.pass))?;
                     } else if !objects && self.pass.wants_vertices() {
@@ -330,4 +352,116 @@ impl Structure {
     pub fn trees(&self) -> Vec<Vec<u32>> {
         super::forest(&self.index, &self.ids, &self.parents, &self.children)
     }
+}
+
+/// A pass handing each city object to its function.
+pub(crate) struct EachObject<F>(pub F);
+
+impl<F: FnMut(String, Value) -> Result<(), String>> Pass for EachObject<F> {
+    fn wants_objects(&self) -> bool {
+        true
+    }
+    fn object(&mut self, id: String, o: Value) -> Result<(), String> {
+        (self.0)(id, o)
+    }
+}
+
+/// A pass handing each vertex to its function.
+pub(crate) struct EachVertex<F>(pub F);
+
+impl<F: FnMut(Vertex) -> Result<(), String>> Pass for EachVertex<F> {
+    fn wants_vertices(&self) -> bool {
+        true
+    }
+    fn vertex(&mut self, v: Vertex) -> Result<(), String> {
+        (self.0)(v)
+    }
+}
+
+/// The entries of `CityObjects` (`"id":{…}`) or `vertices` being written, separated by
+/// commas; the first I/O error kept (the callers of a pass see only its message).
+pub(crate) struct Entries<'w> {
+    w: &'w mut dyn Write,
+    any: bool,
+    failed: Option<std::io::Error>,
+}
+
+impl Entries<'_> {
+    fn put(&mut self, f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<(), String> {
+        let go = || {
+            if std::mem::replace(&mut self.any, true) {
+                self.w.write_all(b",")?;
+            }
+            f(&mut *self.w)
+        };
+        go().map_err(|e| {
+            let m = e.to_string();
+            self.failed.get_or_insert(e);
+            m
+        })
+    }
+
+    /// `"id":o`.
+    pub fn object(&mut self, id: &str, o: &Value) -> Result<(), String> {
+        self.put(|w| {
+            serde_json::to_writer(&mut *w, id)?;
+            w.write_all(b":")?;
+            serde_json::to_writer(w, o).map_err(std::io::Error::other)
+        })
+    }
+
+    /// One vertex.
+    pub fn vertex(&mut self, v: &Vertex) -> Result<(), String> {
+        self.put(|w| v.write(w))
+    }
+}
+
+/// Write a document to `out` (atomically): the members of `head` in its order as one line
+/// of JSON, `CityObjects` and `vertices` (placeholders in `head`) by `body`, which is given
+/// the member's name and its entries. The bytes written.
+///
+/// # Errors
+/// `body`'s, I/O errors.
+pub(crate) fn write_document(
+    out: &Path,
+    head: &Map<String, Value>,
+    body: &mut dyn FnMut(&str, &mut Entries<'_>) -> Result<(), WriteError>,
+) -> Result<u64, WriteError> {
+    let io = |source| WriteError::Io {
+        file: out.to_path_buf(),
+        source,
+    };
+    atomic_write(out, |w| {
+        let mut w = CountingWriter::new(w);
+        w.write_all(b"{").map_err(io)?;
+        for (k, (key, v)) in head.iter().enumerate() {
+            if k > 0 {
+                w.write_all(b",").map_err(io)?;
+            }
+            serde_json::to_writer(&mut w, key).map_err(|e| io(e.into()))?;
+            w.write_all(b":").map_err(io)?;
+            let brackets = match key.as_str() {
+                "CityObjects" => b"{}",
+                "vertices" => b"[]",
+                _ => {
+                    serde_json::to_writer(&mut w, v).map_err(|e| io(e.into()))?;
+                    continue;
+                }
+            };
+            w.write_all(&brackets[..1]).map_err(io)?;
+            let mut entries = Entries {
+                w: &mut w,
+                any: false,
+                failed: None,
+            };
+            let r = body(key, &mut entries);
+            if let Some(e) = entries.failed {
+                return Err(io(e));
+            }
+            r?;
+            w.write_all(&brackets[1..]).map_err(io)?;
+        }
+        w.write_all(b"}\n").map_err(io)?;
+        Ok(w.count())
+    })
 }
