@@ -17,10 +17,14 @@
 //!   coordinates: `transform` applied), removed when none stay; city objects' own
 //!   `geographicalExtent`s are kept as they are.
 //!
-//! A `.city.json` document is one JSON value: read whole, edited, written. **CityJSONSeq** is
-//! streamed in two passes, one feature line at a time (memory follows the largest feature):
-//! the first decides and records the box of what stays and the ids that go (8 bytes each),
-//! the second writes the header with the recomputed extent, then each kept feature.
+//! A `.city.json` document is streamed in three passes, one city object and one vertex at a
+//! time, its top-level members in any order (`stream.rs`, `document.rs`): memory follows the
+//! trees being decided, plus about 20 bytes per vertex (the stored vertices and their new
+//! numbers) and 50 per city object (the tree structure as id hashes), not the file.
+//! **CityJSONSeq** is streamed in two passes, one feature line at a time (memory follows the
+//! largest feature): the first decides and records the box of what stays and the ids that go
+//! (8 bytes each), the second writes the header with the recomputed extent, then each kept
+//! feature.
 //!
 //! The box of a tree (for `--bbox`) is that of its vertices, `transform` applied; a
 //! `GeometryInstance` counts by its reference point (as the CityGML edit counts an implicit
