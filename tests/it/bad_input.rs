@@ -40,11 +40,11 @@ fn read_ok(path: &Path) -> CityModel {
     }
 }
 
-struct Run {
-    code: Option<i32>,
-    stderr: String,
-    stdout: String,
-    peak_rss_kib: u64,
+pub(crate) struct Run {
+    pub code: Option<i32>,
+    pub stderr: String,
+    pub stdout: String,
+    pub peak_rss_kib: u64,
 }
 
 /// Peak resident set of a running process (Linux `VmHWM`), 0 when unknown.
@@ -60,7 +60,7 @@ fn vm_hwm_kib(pid: u32) -> u64 {
 }
 
 /// Run the binary, killing it (and failing the test) after `secs` seconds: a hang is a bug.
-fn run_timeout(args: &[&std::ffi::OsStr], secs: u64) -> Run {
+pub(crate) fn run_timeout(args: &[&std::ffi::OsStr], secs: u64) -> Run {
     let mut cmd = Command::new(BIN);
     cmd.args(args);
     run_command(cmd, secs)

@@ -391,7 +391,7 @@ fn colliding_ids_are_renamed_with_their_references() {
     ]);
     let a = load(&d("a.city.json"));
     let n = a["CityObjects"].as_object().unwrap().len();
-    assert!(e.contains(&format!("{n} gml:id(s) renamed")), "{e}");
+    assert!(e.contains(&format!(", {n} id(s) renamed")), "{e}");
     let merged = load(&m);
     let objects = merged["CityObjects"].as_object().unwrap();
     assert_eq!(objects.len(), 2 * n);

@@ -22,14 +22,21 @@
 //!   inputs before it; the other members of the first input's header (`metadata`,
 //!   `extensions` of every input joined) kept, `metadata.geographicalExtent` recomputed.
 //!
-//! A `.city.json` target is one document (held whole, as any document is). A CityJSONSeq
+//! A `.city.json` target is one document, written as it is read: the first pass over each
+//! input keeps its small members, ids, box and vertex count (a document input streamed
+//! member by member, [`super::stream`]), then the merged header (appearances gathered), the
+//! city objects of every input one at a time, and their vertices one at a time (each input
+//! read again for each). Memory: the ids of every input and the appearances, not the
+//! documents. A CityJSONSeq
 //! target (`seq`) is one header line, then one feature per line: a CityJSONSeq input's
 //! features are streamed through one at a time (memory: one feature, the ids of every input,
 //! the templates); a document input's top-level objects become features (with their
 //! descendants; a document's appearance goes whole into each of its features, its indices
-//! unchanged). Every input is read twice: first for its header, ids and box, then to write.
+//! unchanged; such a document input is still parsed whole). Every input is read twice: first
+//! for its header, ids and box, then to write.
 
-use super::{cj, srs_of, transform_of, trees, write_line, Transform, Values};
+use super::stream::{self, EachObject, EachVertex, Pass, Vertex};
+use super::{check_type, cj, srs_of, transform_of, trees, write_line, Transform, Values};
 use crate::io::citygml::error::WriteError;
 use crate::io::citygml::merge::{check_same_crs, rename_ids, MergeError, MergeSummary};
 use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
@@ -50,6 +57,48 @@ struct Head {
     bbox: Bbox,
     templates: Vec<Value>,
     template_vertices: Vec<Value>,
+    /// The small top-level members (of a CityJSONSeq input: its header's).
+    members: Map<String, Value>,
+    /// A document input: how many vertices its objects index (none without `CityObjects`);
+    /// `None` for CityJSONSeq.
+    doc: Option<u64>,
+}
+
+/// The first pass over a document (or a CityJSONSeq header): its small members, its ids, the
+/// box of its stored coordinates and how many vertices.
+#[derive(Default)]
+struct Scan {
+    members: Map<String, Value>,
+    ids: Vec<String>,
+    raw: Bbox,
+    vertices: u64,
+}
+
+impl Pass for Scan {
+    fn wants_members(&self) -> bool {
+        true
+    }
+    fn member(&mut self, key: String, v: Value) -> Result<(), String> {
+        self.members.insert(key, v);
+        Ok(())
+    }
+    fn wants_objects(&self) -> bool {
+        true
+    }
+    fn object(&mut self, id: String, _o: Value) -> Result<(), String> {
+        self.ids.push(id);
+        Ok(())
+    }
+    fn wants_vertices(&self) -> bool {
+        true
+    }
+    fn vertex(&mut self, v: Vertex) -> Result<(), String> {
+        self.vertices += 1;
+        if let Some(c) = v.coords() {
+            self.raw.add(DVec3::from_array(c));
+        }
+        Ok(())
+    }
 }
 
 /// Merge the CityJSON / CityJSONSeq documents `inputs` (plain or gzip; named `names`, the
@@ -72,24 +121,18 @@ pub fn merge_cityjson(
     let name = |k: usize| names.get(k).unwrap_or(&inputs[k]).clone();
     check_target(out, opts, inputs.iter().chain(names).map(PathBuf::as_path))?;
     let mut heads = Vec::with_capacity(inputs.len());
+    let mut app = Appearance::default();
     for (k, p) in inputs.iter().enumerate() {
-        heads.push(first_pass(p, &name(k))?);
+        heads.push(first_pass(p, &name(k), &mut app)?);
     }
     check_heads(&heads, &name)?;
     let lists: Vec<&[String]> = heads.iter().map(|h| h.ids.as_slice()).collect();
     let renames = rename_ids(&lists);
     let to = common_transform(&heads);
     // The merged header: the first input's, its objects and vertices taken out.
-    let mut values = Values::open(&inputs[0])?;
-    let mut head = values.header()?;
-    drop(values);
+    let mut head = Value::Object(heads[0].members.clone());
     if let Some(h) = head.as_object_mut() {
-        for k in [
-            "CityObjects",
-            "vertices",
-            "appearance",
-            "geometry-templates",
-        ] {
+        for k in ["appearance", "geometry-templates"] {
             h.shift_remove(k);
         }
         h.insert(
@@ -97,7 +140,7 @@ pub fn merge_cityjson(
             serde_json::json!({"scale": to.0, "translate": to.1}),
         );
     }
-    join_extensions(&mut head, inputs)?;
+    join_extensions(&mut head, &heads);
     set_srs(&mut head, heads.iter().find_map(|h| h.srs.as_deref()));
     let mut ext = Bbox::EMPTY;
     for h in &heads {
@@ -136,17 +179,24 @@ pub fn merge_cityjson(
         refs_rewritten: 0,
         bytes: 0,
     };
+    if !seq {
+        let merged = Merged {
+            inputs,
+            names: (0..inputs.len()).map(name).collect(),
+            heads: &heads,
+            renames: &renames,
+            tpl_off: &tpl_off,
+            to,
+        };
+        summary.bytes = write_merged_document(&merged, head, app, out, &mut summary)?;
+        return Ok(summary);
+    }
     let io = |e| WriteError::Io {
         file: out.to_path_buf(),
         source: e,
     };
     let bytes = atomic_write(out, |w| {
-        let mut sink = if seq {
-            let n = write_line(w, &head).map_err(io)?;
-            Sink::Seq(w, n)
-        } else {
-            Sink::Doc(Box::default())
-        };
+        let mut n = write_line(w, &head).map_err(io)?;
         for (k, p) in inputs.iter().enumerate() {
             let mut values = Values::open(p)?;
             values.input = name(k);
@@ -161,7 +211,7 @@ pub fn merge_cityjson(
             let app = h.get_mut("appearance").map(Value::take);
             if let Some(Value::Object(objects)) = h.get_mut("CityObjects").map(Value::take) {
                 let vertices = take_vertices(&mut h);
-                part.absorb(&mut sink, objects, vertices, app.as_ref(), io)
+                part.absorb((&mut *w, &mut n), objects, vertices, app.as_ref(), io)
                     .map_err(|m| cj(&values.input, 1, None, m))?;
             }
             let mut line = 1;
@@ -172,48 +222,23 @@ pub fn merge_cityjson(
                     return Err(cj(&values.input, line, None, "no \"CityObjects\"".into()));
                 };
                 let vertices = take_vertices(&mut f);
-                part.absorb(&mut sink, objects, vertices, app.as_ref(), io)
+                part.absorb((&mut *w, &mut n), objects, vertices, app.as_ref(), io)
                     .map_err(|m| cj(&values.input, line, None, m))?;
             }
         }
-        match sink {
-            Sink::Seq(_, n) => Ok(n),
-            Sink::Doc(d) => {
-                if let (Some(h), Some(a)) = (head.as_object_mut(), d.appearance.into_value()) {
-                    h.insert("appearance".into(), a);
-                }
-                // the header's members, then the objects and vertices gathered as text
-                let mut text = serde_json::to_vec(&head).map_err(|e| io(e.into()))?;
-                text.pop();
-                if text.len() > 1 {
-                    text.push(b',');
-                }
-                let parts: [&[u8]; 6] = [
-                    &text,
-                    b"\"CityObjects\":{",
-                    &d.objects,
-                    b"},\"vertices\":[",
-                    &d.vertices,
-                    b"]}\n",
-                ];
-                let mut n = 0;
-                for b in parts {
-                    w.write_all(b).map_err(io)?;
-                    n += b.len() as u64;
-                }
-                Ok(n)
-            }
-        }
+        Ok(n)
     })?;
     summary.bytes = bytes;
     Ok(summary)
 }
 
-/// The header, ids, box and templates of the document at `p` (named `name`).
-fn first_pass(p: &Path, name: &Path) -> Result<Head, WriteError> {
-    let mut values = Values::open(p)?;
-    values.input = name.to_path_buf();
-    let h = values.header()?;
+/// The header, ids, box and templates of the document at `p` (named `name`); the
+/// appearance of each of its parts appended to `app` (in the order the merge takes them).
+fn first_pass(p: &Path, name: &Path, app: &mut Appearance) -> Result<Head, WriteError> {
+    let mut scan = Scan::default();
+    let seen = stream::read(p, name, &mut scan)?;
+    check_type(name, &scan.members)?;
+    let h = Value::Object(std::mem::take(&mut scan.members));
     let transform = transform_of(&h);
     let gt = h.get("geometry-templates");
     let list = |k: &str| -> Vec<Value> {
@@ -230,29 +255,48 @@ fn first_pass(p: &Path, name: &Path) -> Result<Head, WriteError> {
             .and_then(Value::as_str)
             .unwrap_or("")
             .to_string(),
-        ids: Vec::new(),
+        ids: std::mem::take(&mut scan.ids),
         bbox: Bbox::EMPTY,
         templates: list("templates"),
         template_vertices: list("vertices-templates"),
+        members: Map::new(),
+        doc: None,
     };
-    let take = |v: &Value, head: &mut Head| {
-        if let Some(o) = v.get("CityObjects").and_then(Value::as_object) {
-            head.ids.extend(o.keys().cloned());
+    // the box of the stored coordinates, transformed: the box of the transformed ones (a
+    // transform is monotonic per axis, and so is its rounding)
+    if !scan.raw.is_empty() {
+        for c in [scan.raw.min, scan.raw.max] {
+            head.bbox.add(to_real(c.to_array(), transform));
         }
-        for x in v
-            .get("vertices")
-            .and_then(Value::as_array)
-            .into_iter()
-            .flatten()
-        {
-            if let Some(q) = real(x, transform) {
-                head.bbox.add(q);
+    }
+    if seen.objects {
+        app.append(h.get("appearance"));
+    }
+    if seen.more {
+        let mut values = Values::open(p)?;
+        values.input = name.to_path_buf();
+        values.header()?;
+        while let Some(f) = values.next()? {
+            if let Some(o) = f.get("CityObjects").and_then(Value::as_object) {
+                head.ids.extend(o.keys().cloned());
             }
+            for x in f
+                .get("vertices")
+                .and_then(Value::as_array)
+                .into_iter()
+                .flatten()
+            {
+                if let Some(q) = real(x, transform) {
+                    head.bbox.add(q);
+                }
+            }
+            app.append(f.get("appearance"));
         }
-    };
-    take(&h, &mut head);
-    while let Some(f) = values.next()? {
-        take(&f, &mut head);
+    } else {
+        head.doc = Some(if seen.objects { scan.vertices } else { 0 });
+    }
+    if let Value::Object(m) = h {
+        head.members = m;
     }
     Ok(head)
 }
@@ -300,15 +344,19 @@ fn common_transform(heads: &[Head]) -> Transform {
 fn real(v: &Value, t: Option<Transform>) -> Option<DVec3> {
     let a = v.as_array()?;
     let c = |k: usize| a.get(k).and_then(Value::as_f64);
-    let p = [c(0)?, c(1)?, c(2)?];
-    Some(match t {
+    Some(to_real([c(0)?, c(1)?, c(2)?], t))
+}
+
+/// Stored coordinates `p` as real ones.
+fn to_real(p: [f64; 3], t: Option<Transform>) -> DVec3 {
+    match t {
         Some((s, tr)) => DVec3::new(
             p[0] * s[0] + tr[0],
             p[1] * s[1] + tr[1],
             p[2] * s[2] + tr[2],
         ),
         None => DVec3::from_array(p),
-    })
+    }
 }
 
 /// `p` stored with `t` (integers), as real coordinates again.
@@ -340,12 +388,10 @@ fn take_vertices(v: &mut Value) -> Vec<Value> {
 }
 
 /// `extensions` of every input joined into the header's.
-fn join_extensions(head: &mut Value, inputs: &[PathBuf]) -> Result<(), WriteError> {
+fn join_extensions(head: &mut Value, heads: &[Head]) {
     let mut all = Map::new();
-    for p in inputs {
-        let mut values = Values::open(p)?;
-        let h = values.header()?;
-        if let Some(Value::Object(e)) = h.get("extensions") {
+    for h in heads {
+        if let Some(Value::Object(e)) = h.members.get("extensions") {
             for (k, v) in e {
                 all.entry(k.clone()).or_insert_with(|| v.clone());
             }
@@ -354,7 +400,6 @@ fn join_extensions(head: &mut Value, inputs: &[PathBuf]) -> Result<(), WriteErro
     if let (false, Some(h)) = (all.is_empty(), head.as_object_mut()) {
         h.insert("extensions".into(), Value::Object(all));
     }
-    Ok(())
 }
 
 /// `metadata.referenceSystem` of the header (kept as the first input that names one gave it).
@@ -470,34 +515,6 @@ impl Appearance {
     }
 }
 
-/// A merged document being gathered, as JSON text (a fraction of the memory of values).
-#[derive(Default)]
-struct Doc {
-    /// `"id":{…}` of each city object, separated by commas.
-    objects: Vec<u8>,
-    /// `[x,y,z]` of each vertex, separated by commas.
-    vertices: Vec<u8>,
-    /// How many vertices.
-    count: u64,
-    appearance: Appearance,
-}
-
-impl Doc {
-    /// Append `v` to `buf` as JSON, after a comma unless `buf` is empty.
-    fn push(buf: &mut Vec<u8>, v: &impl serde::Serialize) -> Result<(), String> {
-        if !buf.is_empty() {
-            buf.push(b',');
-        }
-        serde_json::to_writer(buf, v).map_err(|e| e.to_string())
-    }
-}
-
-/// Where merged objects go: a CityJSONSeq stream (and its bytes so far), or a document.
-enum Sink<'w> {
-    Seq(&'w mut dyn std::io::Write, u64),
-    Doc(Box<Doc>),
-}
-
 /// One input being merged.
 struct Part<'a> {
     from: Option<Transform>,
@@ -508,47 +525,29 @@ struct Part<'a> {
 }
 
 impl Part<'_> {
-    /// `objects` (indexing `vertices`, with the appearance `app`) of this input into `sink`.
+    /// `objects` (indexing `vertices`, with the appearance `app`) of this input as
+    /// CityJSONSeq features into `w` (its bytes so far counted).
     fn absorb(
         &mut self,
-        sink: &mut Sink<'_>,
+        (w, bytes): (&mut dyn std::io::Write, &mut u64),
         objects: Map<String, Value>,
         vertices: Vec<Value>,
         app: Option<&Value>,
         io: impl Fn(std::io::Error) -> WriteError,
     ) -> Result<(), String> {
         let objects = self.rename(objects);
-        match sink {
-            Sink::Doc(d) => {
-                let offsets = d.appearance.append(app);
-                let (base, n) = (d.count, vertices.len() as u64);
-                for v in &vertices {
-                    Doc::push(&mut d.vertices, &self.vertex(v)?)?;
-                    d.count += 1;
-                }
-                for (id, mut o) in objects {
-                    self.geometry(&id, &mut o, offsets, &mut |i| (i < n).then_some(base + i))?;
-                    Doc::push(&mut d.objects, &id)?;
-                    d.objects.push(b':');
-                    serde_json::to_writer(&mut d.objects, &o).map_err(|e| e.to_string())?;
-                }
-                Ok(())
-            }
-            Sink::Seq(w, bytes) => {
-                let app = app.filter(|a| a.as_object().is_some_and(|m| !m.is_empty()));
-                let single = objects.values().filter(|o| is_top(o)).count() <= 1;
-                let groups = if single {
-                    vec![objects]
-                } else {
-                    split(objects)
-                };
-                for group in groups.into_iter().filter(|g| !g.is_empty()) {
-                    let f = self.feature(group, &vertices, app)?;
-                    *bytes += write_line(&mut **w, &f).map_err(|e| io(e).to_string())?;
-                }
-                Ok(())
-            }
+        let app = app.filter(|a| a.as_object().is_some_and(|m| !m.is_empty()));
+        let single = objects.values().filter(|o| is_top(o)).count() <= 1;
+        let groups = if single {
+            vec![objects]
+        } else {
+            split(objects)
+        };
+        for group in groups.into_iter().filter(|g| !g.is_empty()) {
+            let f = self.feature(group, &vertices, app)?;
+            *bytes += write_line(&mut *w, &f).map_err(|e| io(e).to_string())?;
         }
+        Ok(())
     }
 
     /// One feature line of `objects` (the first the top-level one) with their own vertices.
@@ -609,28 +608,32 @@ impl Part<'_> {
     /// The ids of `objects` renamed, `parents` / `children` following; top-level objects
     /// counted.
     fn rename(&mut self, objects: Map<String, Value>) -> Map<String, Value> {
-        let mut out = Map::with_capacity(objects.len());
-        for (id, mut o) in objects {
-            if is_top(&o) {
-                self.summary.members += 1;
-            }
-            if !self.renames.is_empty() {
-                for key in ["parents", "children"] {
-                    let Some(Value::Array(a)) = o.get_mut(key) else {
-                        continue;
-                    };
-                    for r in a.iter_mut() {
-                        if let Some(new) = r.as_str().and_then(|s| self.renames.get(s)) {
-                            *r = Value::String(new.clone());
-                            self.summary.refs_rewritten += 1;
-                        }
+        objects
+            .into_iter()
+            .map(|(id, o)| self.rename_one(id, o))
+            .collect()
+    }
+
+    /// [`Part::rename`] of one object.
+    fn rename_one(&mut self, id: String, mut o: Value) -> (String, Value) {
+        if is_top(&o) {
+            self.summary.members += 1;
+        }
+        if !self.renames.is_empty() {
+            for key in ["parents", "children"] {
+                let Some(Value::Array(a)) = o.get_mut(key) else {
+                    continue;
+                };
+                for r in a.iter_mut() {
+                    if let Some(new) = r.as_str().and_then(|s| self.renames.get(s)) {
+                        *r = Value::String(new.clone());
+                        self.summary.refs_rewritten += 1;
                     }
                 }
             }
-            let id = self.renames.get(&id).cloned().unwrap_or(id);
-            out.insert(id, o);
         }
-        out
+        let id = self.renames.get(&id).cloned().unwrap_or(id);
+        (id, o)
     }
 
     /// The geometries of object `id`: vertex indices through `vmap`, template and appearance
@@ -707,4 +710,124 @@ fn split(mut objects: Map<String, Value>) -> Vec<Map<String, Value>> {
                 .collect()
         })
         .collect()
+}
+
+/// What writing a merged document needs of the first passes.
+struct Merged<'a> {
+    inputs: &'a [PathBuf],
+    names: Vec<PathBuf>,
+    heads: &'a [Head],
+    renames: &'a [HashMap<String, String>],
+    tpl_off: &'a [u64],
+    to: Transform,
+}
+
+/// The lengths of the appearance arrays of `a` (what [`Appearance::append`] adds) added to
+/// `lens`; the lengths before.
+fn advance(lens: &mut (u64, u64, u64), a: Option<&Value>) -> (u64, u64, u64) {
+    let before = *lens;
+    let n = |k: &str| {
+        a.and_then(|a| a.get(k))
+            .and_then(Value::as_array)
+            .map_or(0, |x| x.len() as u64)
+    };
+    *lens = (
+        lens.0 + n("materials"),
+        lens.1 + n("textures"),
+        lens.2 + n("vertices-texture"),
+    );
+    before
+}
+
+/// The merged document written to `out`, streamed: `head` (the merged header) with the
+/// appearance `app` gathered by the first passes, then the city objects of every input, then
+/// their vertices, each input read again once for each (module docs). The bytes written.
+fn write_merged_document(
+    m: &Merged<'_>,
+    mut head: Value,
+    app: Appearance,
+    out: &Path,
+    summary: &mut MergeSummary,
+) -> Result<u64, WriteError> {
+    if let Some(h) = head.as_object_mut() {
+        if let Some(a) = app.into_value() {
+            h.insert("appearance".into(), a);
+        }
+        h.insert("CityObjects".into(), Value::Null);
+        h.insert("vertices".into(), Value::Null);
+    }
+    let head = match head {
+        Value::Object(h) => h,
+        _ => Map::new(),
+    };
+    stream::write_document(out, &head, &mut |key, entries| {
+        let objects = key == "CityObjects";
+        let (mut base, mut lens) = (0u64, (0, 0, 0));
+        for (k, p) in m.inputs.iter().enumerate() {
+            let name = &m.names[k];
+            let mut part = Part {
+                from: m.heads[k].transform,
+                to: m.to,
+                renames: &m.renames[k],
+                tpl: m.tpl_off[k],
+                summary: &mut *summary,
+            };
+            if let Some(n) = m.heads[k].doc {
+                let offsets = advance(&mut lens, m.heads[k].members.get("appearance"));
+                if objects {
+                    let mut each = EachObject(|id: String, o: Value| {
+                        let (id, mut o) = part.rename_one(id, o);
+                        part.geometry(&id, &mut o, offsets, &mut |i| (i < n).then_some(base + i))?;
+                        entries.object(&id, &o)
+                    });
+                    stream::read(p, name, &mut each)?;
+                } else if n > 0 {
+                    let mut each = EachVertex(|v: Vertex| {
+                        let q = part.vertex(&v.into_value())?;
+                        entries.vertex(&Vertex::from_value(q))
+                    });
+                    stream::read(p, name, &mut each)?;
+                }
+                base += n;
+                continue;
+            }
+            // CityJSONSeq: the header, then each feature
+            let mut values = Values::open(p)?;
+            values.input = name.clone();
+            let mut v = Some(values.header()?);
+            let mut line = 1;
+            while let Some(mut f) = v.take() {
+                let Some(Value::Object(objs)) = f.get_mut("CityObjects").map(Value::take) else {
+                    if line > 1 {
+                        return Err(cj(name, line, None, "no \"CityObjects\"".into()));
+                    }
+                    line += 1;
+                    v = values.next()?;
+                    continue;
+                };
+                let offsets = advance(&mut lens, f.get("appearance"));
+                let vertices = take_vertices(&mut f);
+                let n = vertices.len() as u64;
+                let r = (|| {
+                    if !objects {
+                        for x in &vertices {
+                            entries.vertex(&Vertex::from_value(part.vertex(x)?))?;
+                        }
+                        return Ok(());
+                    }
+                    for (id, o) in objs {
+                        let (id, mut o) = part.rename_one(id, o);
+                        part.geometry(&id, &mut o, offsets, &mut |i| (i < n).then_some(base + i))?;
+                        entries.object(&id, &o)?;
+                    }
+                    Ok::<(), String>(())
+                })();
+                r.map_err(|e| cj(name, line, None, e))?;
+                base += n;
+                line += 1;
+                v = values.next()?;
+            }
+        }
+        Ok(())
+    })
 }

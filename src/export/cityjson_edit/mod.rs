@@ -17,10 +17,14 @@
 //!   coordinates: `transform` applied), removed when none stay; city objects' own
 //!   `geographicalExtent`s are kept as they are.
 //!
-//! A `.city.json` document is one JSON value: read whole, edited, written. **CityJSONSeq** is
-//! streamed in two passes, one feature line at a time (memory follows the largest feature):
-//! the first decides and records the box of what stays and the ids that go (8 bytes each),
-//! the second writes the header with the recomputed extent, then each kept feature.
+//! A `.city.json` document is streamed in three passes, one city object and one vertex at a
+//! time, its top-level members in any order (`stream.rs`, `document.rs`): memory follows the
+//! trees being decided, plus about 20 bytes per vertex (the stored vertices and their new
+//! numbers) and 50 per city object (the tree structure as id hashes), not the file.
+//! **CityJSONSeq** is streamed in two passes, one feature line at a time (memory follows the
+//! largest feature): the first decides and records the box of what stays and the ids that go
+//! (8 bytes each), the second writes the header with the recomputed extent, then each kept
+//! feature.
 //!
 //! The box of a tree (for `--bbox`) is that of its vertices, `transform` applied; a
 //! `GeometryInstance` counts by its reference point (as the CityGML edit counts an implicit
@@ -49,9 +53,11 @@
 //! assert_eq!(doc["metadata"]["geographicalExtent"], serde_json::json!([0.0,0.0,0.0,2.0,1.0,3.0]));
 //! ```
 
+mod document;
 mod merge;
 mod reproject;
 mod rules;
+mod stream;
 mod upgrade;
 
 pub use merge::merge_cityjson;
@@ -65,18 +71,26 @@ use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
 use crate::model::Bbox;
 use glam::DVec3;
 use serde_json::{Map, Value};
-use std::collections::HashSet;
-use std::hash::BuildHasher;
+use std::collections::{HashMap, HashSet};
+use std::hash::{BuildHasher, Hash};
 use std::io::{BufRead, Write};
 use std::path::Path;
 
 /// `transform` as `(scale, translate)`.
 pub(crate) type Transform = ([f64; 3], [f64; 3]);
 
+/// The vertices a tree's boundaries index: a CityJSONSeq feature's values, or a document's
+/// vertices as its first pass stored them.
+#[derive(Clone, Copy)]
+pub(crate) enum Verts<'a> {
+    Values(&'a [Value]),
+    Store(&'a [stream::Vertex]),
+}
+
 /// What a rule knows of the document besides the tree.
 pub(crate) struct Ctx<'a> {
     /// The vertices the tree's boundaries index (the document's, or the feature's).
-    pub verts: &'a [Value],
+    pub verts: Verts<'a>,
     /// `transform` as `(scale, translate)`.
     pub transform: Option<Transform>,
     /// `geometry-templates.templates`.
@@ -88,9 +102,14 @@ pub(crate) struct Ctx<'a> {
 impl Ctx<'_> {
     /// The real coordinates of vertex `i`.
     fn point(&self, i: usize) -> Option<DVec3> {
-        let v = self.verts.get(i)?.as_array()?;
-        let c = |k: usize| v.get(k).and_then(Value::as_f64);
-        let p = [c(0)?, c(1)?, c(2)?];
+        let p = match self.verts {
+            Verts::Values(vs) => {
+                let v = vs.get(i)?.as_array()?;
+                let c = |k: usize| v.get(k).and_then(Value::as_f64);
+                [c(0)?, c(1)?, c(2)?]
+            }
+            Verts::Store(vs) => vs.get(i)?.coords()?,
+        };
         Some(match self.transform {
             Some((s, t)) => DVec3::new(p[0] * s[0] + t[0], p[1] * s[1] + t[1], p[2] * s[2] + t[2]),
             None => DVec3::from_array(p),
@@ -165,60 +184,69 @@ pub(crate) trait TreeRule {
 /// followed by its descendants, in document order; objects reached by no top (a cycle) are
 /// trees of their own.
 pub(crate) fn trees(objects: &Map<String, Value>) -> Vec<Vec<String>> {
-    let is_top = |o: &Value| {
-        names(o, "parents")
-            .iter()
-            .all(|p| !objects.contains_key(p.as_str()))
+    let keys: Vec<&str> = objects.keys().map(String::as_str).collect();
+    let index: HashMap<&str, u32> = keys
+        .iter()
+        .enumerate()
+        .map(|(i, k)| (*k, i as u32))
+        .collect();
+    let refs = |key: &str| -> Vec<Vec<&str>> {
+        objects
+            .values()
+            .map(|o| {
+                o.get(key)
+                    .and_then(Value::as_array)
+                    .map(|a| a.iter().filter_map(Value::as_str).collect())
+                    .unwrap_or_default()
+            })
+            .collect()
     };
-    let mut seen: HashSet<&str> = HashSet::new();
+    forest(&index, &keys, &refs("parents"), &refs("children"))
+        .into_iter()
+        .map(|t| {
+            t.into_iter()
+                .map(|i| keys[i as usize].to_string())
+                .collect()
+        })
+        .collect()
+}
+
+/// [`trees`] over objects `ids` (by index; `index` finds an id's) with their `parents` and
+/// `children`.
+pub(crate) fn forest<K: Eq + Hash + Copy, L: AsRef<[K]>>(
+    index: &HashMap<K, u32>,
+    ids: &[K],
+    parents: &[L],
+    children: &[L],
+) -> Vec<Vec<u32>> {
+    let is_top = |i: usize| parents[i].as_ref().iter().all(|p| !index.contains_key(p));
+    let mut seen = vec![false; ids.len()];
     let mut out = Vec::new();
-    for (id, o) in objects {
-        if is_top(o) && !seen.contains(id.as_str()) {
-            out.push(grow(objects, id, &mut seen));
+    let grow = |top: usize, seen: &mut Vec<bool>| {
+        // `top` and its descendants not yet seen, depth first in `children` order
+        let mut tree = Vec::new();
+        let mut stack = vec![top as u32];
+        while let Some(i) = stack.pop() {
+            if std::mem::replace(&mut seen[i as usize], true) {
+                continue;
+            }
+            let kids = children[i as usize].as_ref();
+            stack.extend(kids.iter().rev().filter_map(|k| index.get(k)));
+            tree.push(i);
+        }
+        tree
+    };
+    for i in 0..ids.len() {
+        if is_top(i) && !seen[i] {
+            out.push(grow(i, &mut seen));
         }
     }
-    for id in objects.keys() {
-        if !seen.contains(id.as_str()) {
-            out.push(grow(objects, id, &mut seen));
+    for i in 0..ids.len() {
+        if !seen[i] {
+            out.push(grow(i, &mut seen));
         }
     }
     out
-}
-
-/// The ids an object lists under `key` (`children`, `parents`).
-fn names(o: &Value, key: &str) -> Vec<String> {
-    o.get(key)
-        .and_then(Value::as_array)
-        .map(|a| {
-            a.iter()
-                .filter_map(Value::as_str)
-                .map(str::to_string)
-                .collect()
-        })
-        .unwrap_or_default()
-}
-
-/// `top` and its descendants not yet seen, depth first in `children` order.
-fn grow<'a>(
-    objects: &'a Map<String, Value>,
-    top: &str,
-    seen: &mut HashSet<&'a str>,
-) -> Vec<String> {
-    let mut tree = Vec::new();
-    let mut stack = vec![top.to_string()];
-    while let Some(id) = stack.pop() {
-        let Some((key, o)) = objects.get_key_value(id.as_str()) else {
-            continue;
-        };
-        if !seen.insert(key.as_str()) {
-            continue;
-        }
-        let mut kids = names(o, "children");
-        kids.reverse();
-        stack.extend(kids);
-        tree.push(id);
-    }
-    tree
 }
 
 /// An 8-byte hash of an id (the ids that go, kept between the passes over CityJSONSeq).
@@ -267,17 +295,26 @@ fn prune(objects: &mut Map<String, Value>, removed: &HashSet<u64>, counts: &mut 
         return;
     }
     for o in objects.values_mut() {
-        let Some(o) = o.as_object_mut() else { continue };
-        for key in ["children", "parents"] {
-            let Some(Value::Array(a)) = o.get_mut(key) else {
-                continue;
-            };
-            let before = a.len();
-            a.retain(|v| v.as_str().is_none_or(|s| !removed.contains(&id_hash(s))));
-            counts.references_pruned += before - a.len();
-            if a.is_empty() {
-                o.shift_remove(key);
-            }
+        prune_object(o, removed, &mut counts.references_pruned);
+    }
+}
+
+/// Prune the `children` / `parents` entries of `o` that name removed objects, counted in
+/// `pruned`.
+fn prune_object(o: &mut Value, removed: &HashSet<u64>, pruned: &mut usize) {
+    if removed.is_empty() {
+        return;
+    }
+    let Some(o) = o.as_object_mut() else { return };
+    for key in ["children", "parents"] {
+        let Some(Value::Array(a)) = o.get_mut(key) else {
+            continue;
+        };
+        let before = a.len();
+        a.retain(|v| v.as_str().is_none_or(|s| !removed.contains(&id_hash(s))));
+        *pruned += before - a.len();
+        if a.is_empty() {
+            o.shift_remove(key);
         }
     }
 }
@@ -289,11 +326,44 @@ fn renumber(
     vertices: &mut Vec<Value>,
     ctx_transform: Option<Transform>,
 ) -> Result<Applied, String> {
-    let n = vertices.len();
-    let mut map = vec![u32::MAX; n];
-    let mut order: Vec<usize> = Vec::new();
+    let mut map = vec![u32::MAX; vertices.len()];
+    let mut order: Vec<u32> = Vec::new();
+    for (id, o) in objects.iter_mut() {
+        renumber_object(id, o, &mut map, &mut order)?;
+    }
+    let mut old = std::mem::take(vertices);
+    let mut kept = Bbox::EMPTY;
+    vertices.reserve(order.len());
+    for &i in &order {
+        let v = std::mem::take(&mut old[i as usize]);
+        vertices.push(v);
+    }
+    let ctx = Ctx {
+        verts: Verts::Values(vertices),
+        transform: ctx_transform,
+        templates: None,
+        srs: None,
+    };
+    for i in 0..vertices.len() {
+        if let Some(p) = ctx.point(i) {
+            kept.add(p);
+        }
+    }
+    Ok(Applied { kept })
+}
+
+/// Number the vertices object `id` uses through `map` (old index → new, `u32::MAX` for not
+/// yet numbered), each new one in order of first use (appended to `order`), and rewrite its
+/// boundaries with the new numbers.
+fn renumber_object(
+    id: &str,
+    o: &mut Value,
+    map: &mut [u32],
+    order: &mut Vec<u32>,
+) -> Result<(), String> {
+    let n = map.len();
     let mut bad = None;
-    fn walk(v: &mut Value, map: &mut [u32], order: &mut Vec<usize>, bad: &mut Option<u64>) {
+    fn walk(v: &mut Value, map: &mut [u32], order: &mut Vec<u32>, bad: &mut Option<u64>) {
         match v {
             Value::Array(a) => a.iter_mut().for_each(|x| walk(x, map, order, bad)),
             Value::Number(num) => {
@@ -304,47 +374,27 @@ fn renumber(
                 };
                 if *slot == u32::MAX {
                     *slot = order.len() as u32;
-                    order.push(i as usize);
+                    order.push(i as u32);
                 }
                 *v = Value::from(*slot);
             }
             _ => {}
         }
     }
-    for (id, o) in objects.iter_mut() {
-        let Some(Value::Array(gs)) = o.get_mut("geometry") else {
-            continue;
-        };
-        for g in gs {
-            if let Some(b) = g.get_mut("boundaries") {
-                walk(b, &mut map, &mut order, &mut bad);
-            }
-            if let Some(i) = bad {
-                return Err(format!(
-                    "city object {id}: vertex index {i} out of range ({n} vertices)"
-                ));
-            }
-        }
-    }
-    let mut old = std::mem::take(vertices);
-    let mut kept = Bbox::EMPTY;
-    vertices.reserve(order.len());
-    for &i in &order {
-        let v = std::mem::take(&mut old[i]);
-        vertices.push(v);
-    }
-    let ctx = Ctx {
-        verts: vertices,
-        transform: ctx_transform,
-        templates: None,
-        srs: None,
+    let Some(Value::Array(gs)) = o.get_mut("geometry") else {
+        return Ok(());
     };
-    for i in 0..ctx.verts.len() {
-        if let Some(p) = ctx.point(i) {
-            kept.add(p);
+    for g in gs {
+        if let Some(b) = g.get_mut("boundaries") {
+            walk(b, map, order, &mut bad);
+        }
+        if let Some(i) = bad {
+            return Err(format!(
+                "city object {id}: vertex index {i} out of range ({n} vertices)"
+            ));
         }
     }
-    Ok(Applied { kept })
+    Ok(())
 }
 
 /// `metadata.referenceSystem` of a header as CRS text.
@@ -401,10 +451,7 @@ struct Values {
 
 impl Values {
     fn open(input: &Path) -> Result<Values, WriteError> {
-        let mut r = crate::export::citygml_from_cityjson::open(input)?;
-        if r.fill_buf().is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF")) {
-            r.consume(3);
-        }
+        let r = stream::open_json(input)?;
         Ok(Values {
             inner: serde_json::Deserializer::from_reader(r).into_iter::<Value>(),
             input: input.to_path_buf(),
@@ -455,11 +502,17 @@ pub(crate) fn run<'r>(
 ) -> Result<EditSummary, WriteError> {
     check_target(out, opts, std::iter::once(input))?;
     check_json_target(out)?;
+    let mut collected = document::Collected::default();
+    let seen = stream::read(input, input, &mut collected)?;
+    if !seen.more {
+        check_document(input, &collected.head, &seen)?;
+        return document::run(input, out, collected, seen.bytes, make);
+    }
+    drop(collected);
     let mut values = Values::open(input)?;
     let mut head = values.header()?;
-    let first = values.next()?;
-    let Some(first) = first else {
-        return run_document(input, out, head, values.bytes(), &mut *make());
+    let Some(first) = values.next()? else {
+        return Err(cj(input, 0, None, changed()));
     };
     // CityJSONSeq, pass 1: decisions, the box of what stays, the ids that go.
     let transform = transform_of(&head);
@@ -572,7 +625,7 @@ fn edit_feature(
         }
     };
     let ctx = Ctx {
-        verts: &vertices,
+        verts: Verts::Values(&vertices),
         transform,
         templates,
         srs,
@@ -596,57 +649,32 @@ fn edit_feature(
     Ok(((!applied.kept.is_empty()).then_some(applied.kept), keep))
 }
 
-/// A `.city.json` document: edited whole, written.
-fn run_document(
+/// A document's first pass, checked: of type `CityJSON`, with `CityObjects`.
+fn check_document(
     input: &Path,
-    out: &Path,
-    mut head: Value,
-    bytes_in: u64,
-    rule: &mut dyn TreeRule,
-) -> Result<EditSummary, WriteError> {
-    let mut counts = EditSummary::default();
-    let transform = transform_of(&head);
-    let templates = templates_of(&head);
-    let srs = srs_of(&head);
-    let Some(h) = head.as_object_mut() else {
-        return Err(cj(input, 1, None, "not a JSON object".into()));
-    };
-    let mut objects = match h.shift_remove("CityObjects") {
-        Some(Value::Object(m)) => m,
-        _ => return Err(cj(input, 1, None, "no \"CityObjects\"".into())),
-    };
-    let mut vertices = match h.shift_remove("vertices") {
-        Some(Value::Array(v)) => v,
-        None => Vec::new(),
-        Some(_) => return Err(cj(input, 1, None, "\"vertices\" is not an array".into())),
-    };
-    let ctx = Ctx {
-        verts: &vertices,
-        transform,
-        templates: templates.as_deref(),
-        srs: srs.as_deref(),
-    };
-    let mut removed = HashSet::new();
-    let err = |m: String| cj(input, 0, None, m);
-    decide(&mut objects, &ctx, rule, &mut counts, &mut removed).map_err(err)?;
-    prune(&mut objects, &removed, &mut counts);
-    let applied = renumber(&mut objects, &mut vertices, transform).map_err(err)?;
-    h.insert("CityObjects".into(), Value::Object(objects));
-    h.insert("vertices".into(), Value::Array(vertices));
-    set_extent(&mut head, &applied.kept);
-    counts.bytes_in = bytes_in;
-    counts.bytes_out = write_document(out, &head)?;
-    Ok(counts)
+    head: &Map<String, Value>,
+    seen: &stream::Seen,
+) -> Result<(), WriteError> {
+    check_type(input, head)?;
+    if !seen.objects {
+        return Err(cj(input, 1, None, "no \"CityObjects\"".into()));
+    }
+    Ok(())
 }
 
-/// Write one JSON document to `out`, atomically.
-pub(crate) fn write_document(out: &Path, doc: &Value) -> Result<u64, WriteError> {
-    atomic_write(out, |w| {
-        write_line(w, doc).map_err(|source| WriteError::Io {
-            file: out.to_path_buf(),
-            source,
-        })
-    })
+/// A document's members: of type `CityJSON`.
+fn check_type(input: &Path, head: &Map<String, Value>) -> Result<(), WriteError> {
+    let ty = head.get("type").and_then(Value::as_str).unwrap_or("");
+    if ty != "CityJSON" {
+        let m = format!("the first object is of type {ty:?}, not \"CityJSON\"");
+        return Err(cj(input, 1, None, m));
+    }
+    Ok(())
+}
+
+/// The error of a source that changed between two passes over it.
+fn changed() -> String {
+    "the document changed while it was read".into()
 }
 
 /// `v` as one line of JSON.

@@ -287,3 +287,194 @@ fn upgrade_1_0_compresses_and_makes_lods_strings() {
         json!({"referenceSystem":"https://www.opengis.net/def/crs/EPSG/0/7415","title":"t"})
     );
 }
+
+/// [`doc`] with its top-level members in `order` (every member once).
+fn reordered(order: &[&str]) -> Value {
+    let d = doc();
+    let m: Map<String, Value> = order
+        .iter()
+        .map(|k| (k.to_string(), d[*k].clone()))
+        .collect();
+    assert_eq!(m.len(), d.as_object().unwrap().len());
+    Value::Object(m)
+}
+
+#[test]
+fn a_document_streams_whatever_the_order_of_its_members() {
+    // vertices before the objects, the transform after both, metadata last, ...
+    let orders: [&[&str]; 4] = [
+        &[
+            "type",
+            "version",
+            "transform",
+            "metadata",
+            "CityObjects",
+            "vertices",
+        ],
+        &[
+            "vertices",
+            "type",
+            "CityObjects",
+            "version",
+            "metadata",
+            "transform",
+        ],
+        &[
+            "CityObjects",
+            "vertices",
+            "transform",
+            "type",
+            "metadata",
+            "version",
+        ],
+        &[
+            "metadata",
+            "vertices",
+            "transform",
+            "version",
+            "CityObjects",
+            "type",
+        ],
+    ];
+    let bbox = Subset {
+        bbox: Some([99.0, 199.0, 101.5, 201.0]),
+        ..Subset::default()
+    };
+    let keep2 = lods(&[2], LodMode::Keep);
+    let run_all = |d: &Value| {
+        let (s1, a) = run_on(d, "a.city.json", &|i, o| {
+            rules::subset(i, o, &bbox, &Default::default()).unwrap()
+        });
+        let (s2, b) = run_on(d, "a.city.json", &|i, o| {
+            rules::filter_lods(i, o, &keep2, &Default::default()).unwrap()
+        });
+        let (_, c) = run_on(d, "a.city.json", &|i, o| {
+            upgrade_cityjson(i, o, &Default::default()).unwrap();
+            EditSummary::default()
+        });
+        let counts = |s: &EditSummary| {
+            (
+                s.members,
+                s.members_kept,
+                s.lod_properties_removed,
+                s.references_pruned,
+            )
+        };
+        ((counts(&s1), a), (counts(&s2), b), c)
+    };
+    let want = run_all(&doc());
+    // what the other tests check of the usual order holds here too
+    assert_eq!((want.0).0, (2, 1, 0, 0));
+    assert_eq!((want.1).0, (2, 2, 2, 1));
+    assert_eq!(want.2, doc());
+    for order in orders {
+        let got = run_all(&reordered(order));
+        assert_eq!(got, want, "{order:?}");
+        // the members are written in the source's order, the objects and vertices last
+        let mut keys: Vec<&str> = order
+            .iter()
+            .copied()
+            .filter(|k| !matches!(*k, "CityObjects" | "vertices"))
+            .collect();
+        keys.extend(["CityObjects", "vertices"]);
+        let written: Vec<&str> = (got.0)
+            .1
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        assert_eq!(written, keys, "{order:?}");
+    }
+}
+
+#[test]
+fn a_truncated_document_and_a_bad_vertex_are_errors_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("cut.city.json");
+    let text = serde_json::to_string(&doc()).unwrap();
+    let out = dir.path().join("out.city.json");
+    // cut inside the city objects, inside the vertices, after the last member
+    for cut in [
+        text.find("\"a1\"").unwrap() + 10,
+        text.find("[90000").unwrap() + 3,
+        text.len() - 1,
+    ] {
+        std::fs::write(&src, &text[..cut]).unwrap();
+        let errors = [
+            rules::subset(&src, &out, &Subset::default(), &Default::default()).unwrap_err(),
+            rules::filter_lods(&src, &out, &lods(&[2], LodMode::Keep), &Default::default())
+                .unwrap_err(),
+            upgrade_cityjson(&src, &out, &Default::default()).unwrap_err(),
+        ];
+        for e in errors {
+            let e = e.to_string();
+            assert!(e.contains("cut.city.json:1:"), "{e}");
+            assert!(e.contains("EOF while parsing"), "{e}");
+        }
+        assert!(!out.exists());
+    }
+    // a vertex index past the end: the file, the object and the index named
+    let mut bad = doc();
+    bad["CityObjects"]["a2"]["geometry"][0]["boundaries"] = json!([[[2, 3, 9]]]);
+    std::fs::write(&src, serde_json::to_vec(&bad).unwrap()).unwrap();
+    let e = rules::subset(&src, &out, &Subset::default(), &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cut.city.json"), "{e}");
+    assert!(
+        e.contains("city object a2: vertex index 9 out of range (9 vertices)"),
+        "{e}"
+    );
+    assert!(!out.exists());
+    // a city object given twice
+    let text = serde_json::to_string(&doc())
+        .unwrap()
+        .replacen("\"b\":{", "\"a1\":{", 1);
+    std::fs::write(&src, text).unwrap();
+    let e = rules::subset(&src, &out, &Subset::default(), &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("city object id \"a1\" given twice"), "{e}");
+}
+
+#[test]
+fn a_merge_of_documents_streams_whatever_the_order_of_their_members() {
+    let dir = tempfile::tempdir().unwrap();
+    let merged = |a: &Value, b: &Value| {
+        let (pa, pb) = (
+            dir.path().join("a.city.json"),
+            dir.path().join("b.city.json"),
+        );
+        std::fs::write(&pa, serde_json::to_vec(a).unwrap()).unwrap();
+        std::fs::write(&pb, serde_json::to_vec(b).unwrap()).unwrap();
+        let out = dir.path().join("m.city.json");
+        let inputs = [pa, pb];
+        let s = merge_cityjson(&inputs, &inputs, &out, false, &Default::default()).unwrap();
+        let v: Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+        std::fs::remove_file(&out).unwrap();
+        ((s.members, s.ids_renamed, s.refs_rewritten), v)
+    };
+    let want = merged(&doc(), &doc());
+    // the second input's ids renamed, its vertices after the first's
+    assert_eq!(want.0, (4, 4, 4));
+    let objects = want.1["CityObjects"].as_object().unwrap();
+    assert_eq!(objects.len(), 8);
+    assert_eq!(objects["a__2"]["children"], json!(["a1__2", "a2__2"]));
+    assert_eq!(
+        objects["b__2"]["geometry"][0]["boundaries"],
+        json!([[[[14, 15, 16]]]])
+    );
+    assert_eq!(want.1["vertices"].as_array().unwrap().len(), 18);
+    let late = reordered(&[
+        "vertices",
+        "CityObjects",
+        "metadata",
+        "type",
+        "version",
+        "transform",
+    ]);
+    for (a, b) in [(&late, &doc()), (&doc(), &late), (&late, &late)] {
+        assert_eq!(merged(a, b), want);
+    }
+}

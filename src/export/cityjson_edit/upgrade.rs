@@ -13,11 +13,18 @@
 //!   `transform` gets one (millimetres, translated to its lowest corner) and integer vertices.
 //!
 //! A 2.0 source is written unchanged (its `version` already says so).
+//!
+//! A `.city.json` document is streamed ([`super::stream`]): a first pass reads its small
+//! members, counts its city objects, notes the members of 1.0 groups and the lowest corner of
+//! the vertices; then the document is written member by member, the city objects and the
+//! vertices read again one at a time.
 
-use super::{check_json_target, write_line, Values};
+use super::stream::{self, EachObject, EachVertex, Pass, Vertex};
+use super::{check_json_target, check_type, write_line, Values};
 use crate::io::citygml::error::WriteError;
 use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
 use serde_json::{Map, Value};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// What [`upgrade_cityjson`] did.
@@ -72,10 +79,13 @@ pub fn upgrade_cityjson(
 ) -> Result<CityJsonUpgrade, WriteError> {
     check_target(out, opts, std::iter::once(input))?;
     check_json_target(out)?;
-    let mut values = Values::open(input)?;
-    let mut head = values.header()?;
+    let mut scan = Scan::default();
+    let seen = stream::read(input, input, &mut scan)?;
+    if !seen.more {
+        check_type(input, &scan.head)?;
+    }
     let mut s = CityJsonUpgrade {
-        from: match head.get("version") {
+        from: match scan.head.get("version") {
             Some(Value::String(v)) => v.clone(),
             Some(v) => v.to_string(),
             None => String::new(),
@@ -94,7 +104,15 @@ pub fn upgrade_cityjson(
         ));
     }
     let from = s.from.clone();
-    let generic = upgrade_header(&mut head, &from, &mut s);
+    if !seen.more {
+        s.bytes_in = seen.bytes;
+        s.bytes_out = upgrade_document(input, out, scan, &from, &mut s)?;
+        return Ok(s);
+    }
+    drop(scan);
+    let mut values = Values::open(input)?;
+    let mut head = values.header()?;
+    let generic = upgrade_header(&mut head, &from, &mut s, None);
     let io = |e| WriteError::Io {
         file: out.to_path_buf(),
         source: e,
@@ -117,9 +135,107 @@ pub fn upgrade_cityjson(
     Ok(s)
 }
 
-/// The header (the whole document for `.city.json`) to 2.0; whether cjio's `Generic`
-/// extension was removed (its `+GenericCityObject`s to rename in the features too).
-fn upgrade_header(head: &mut Value, from: &str, s: &mut CityJsonUpgrade) -> bool {
+/// What the first pass over a document learns.
+#[derive(Default)]
+struct Scan {
+    /// The small members, `CityObjects` and `vertices` as `null` in their places.
+    head: Map<String, Value>,
+    /// Each object a 1.0 group lists as a member, with its groups in document order.
+    groups: HashMap<String, Vec<String>>,
+    /// The lowest corner of the vertices.
+    lo: Option<[f64; 3]>,
+}
+
+impl Pass for Scan {
+    fn wants_members(&self) -> bool {
+        true
+    }
+    fn member(&mut self, key: String, v: Value) -> Result<(), String> {
+        self.head.insert(key, v);
+        Ok(())
+    }
+    fn place(&mut self, key: &str) {
+        self.head.insert(key.to_string(), Value::Null);
+    }
+    fn wants_objects(&self) -> bool {
+        true
+    }
+    fn object(&mut self, id: String, o: Value) -> Result<(), String> {
+        for m in group_members(&o) {
+            self.groups
+                .entry(m.to_string())
+                .or_default()
+                .push(id.clone());
+        }
+        Ok(())
+    }
+    fn wants_vertices(&self) -> bool {
+        true
+    }
+    fn vertex(&mut self, v: Vertex) -> Result<(), String> {
+        let lo = self.lo.get_or_insert([f64::INFINITY; 3]);
+        lowest(lo, |k| v.coord(k));
+        Ok(())
+    }
+}
+
+/// The members a 1.0 `CityObjectGroup` lists.
+fn group_members(o: &Value) -> impl Iterator<Item = &str> {
+    let group = o.get("type").and_then(Value::as_str) == Some("CityObjectGroup");
+    o.get("members")
+        .and_then(Value::as_array)
+        .filter(|_| group)
+        .into_iter()
+        .flatten()
+        .filter_map(Value::as_str)
+}
+
+/// The document scanned as `scan` upgraded from `from` into `out`: the bytes written.
+fn upgrade_document(
+    input: &Path,
+    out: &Path,
+    scan: Scan,
+    from: &str,
+    s: &mut CityJsonUpgrade,
+) -> Result<u64, WriteError> {
+    let Scan { head, groups, lo } = scan;
+    let mut head = Value::Object(head);
+    let lo = floor_corner(lo.unwrap_or([f64::INFINITY; 3]));
+    let compress = (from == "1.0" && head.get("transform").is_none()).then_some(lo);
+    let generic = upgrade_header(&mut head, from, s, Some(lo));
+    let head = match head {
+        Value::Object(m) => m,
+        _ => Map::new(),
+    };
+    stream::write_document(out, &head, &mut |key, entries| {
+        if key == "vertices" {
+            let mut each = EachVertex(|v: Vertex| match compress {
+                Some(lo) => {
+                    let mut v = v.into_value();
+                    quantize(&mut v, lo);
+                    entries.vertex(&Vertex::from_value(v))
+                }
+                None => entries.vertex(&v),
+            });
+            return stream::read(input, input, &mut each).map(drop);
+        }
+        let mut each = EachObject(|id: String, mut o: Value| {
+            upgrade_object(&id, &mut o, from, generic, &groups, s);
+            entries.object(&id, &o)
+        });
+        stream::read(input, input, &mut each).map(drop)
+    })
+}
+
+/// The header (the whole document for a CityJSONSeq header) to 2.0; whether cjio's `Generic`
+/// extension was removed (its `+GenericCityObject`s to rename in the features too). `lo`: the
+/// lowest corner of a streamed document's vertices (else taken from the header's).
+fn upgrade_header(
+    head: &mut Value,
+    from: &str,
+    s: &mut CityJsonUpgrade,
+    lo: Option<[f64; 3]>,
+) -> bool {
     let Some(h) = head.as_object_mut() else {
         return false;
     };
@@ -132,7 +248,7 @@ fn upgrade_header(head: &mut Value, from: &str, s: &mut CityJsonUpgrade) -> bool
     h.insert("version".into(), Value::String("2.0".into()));
     if from == "1.0" {
         if !h.contains_key("transform") {
-            compress(h, s);
+            compress(h, s, lo);
         }
         if let Some(ts) = h
             .get_mut("geometry-templates")
@@ -186,71 +302,78 @@ fn upgrade_objects(
     generic: bool,
     s: &mut CityJsonUpgrade,
 ) {
-    s.objects += objects.len();
+    let mut groups: HashMap<String, Vec<String>> = HashMap::new();
+    for (id, o) in objects.iter() {
+        for m in group_members(o) {
+            groups.entry(m.to_string()).or_default().push(id.clone());
+        }
+    }
+    for (id, o) in objects.iter_mut() {
+        upgrade_object(id, o, from, generic, &groups, s);
+    }
+}
+
+/// City object `id` to 2.0; `groups`: the 1.0 groups that list each object as a member.
+fn upgrade_object(
+    id: &str,
+    o: &mut Value,
+    from: &str,
+    generic: bool,
+    groups: &HashMap<String, Vec<String>>,
+    s: &mut CityJsonUpgrade,
+) {
+    s.objects += 1;
     if from == "2.0" {
         return;
     }
+    let Some(o) = o.as_object_mut() else { return };
     if from == "1.0" {
-        let mut parents: Vec<(String, String)> = Vec::new();
-        for (id, o) in objects.iter_mut() {
-            let Some(o) = o.as_object_mut() else { continue };
-            if let Some(Value::Array(gs)) = o.get_mut("geometry") {
-                for g in gs.iter_mut() {
-                    if g.get("type").and_then(Value::as_str) != Some("GeometryInstance") {
-                        lod_as_string(g, s);
-                    }
-                }
-                if gs.is_empty() {
-                    o.shift_remove("geometry");
-                    s.note("empty geometry removed");
+        if let Some(Value::Array(gs)) = o.get_mut("geometry") {
+            for g in gs.iter_mut() {
+                if g.get("type").and_then(Value::as_str) != Some("GeometryInstance") {
+                    lod_as_string(g, s);
                 }
             }
-            let ty = o
-                .get("type")
-                .and_then(Value::as_str)
-                .unwrap_or("")
-                .to_string();
-            if ty == "BridgeConstructionElement" {
-                o.insert("type".into(), "BridgeConstructiveElement".into());
-                s.note("BridgeConstructionElement renamed");
-            }
-            if ty == "CityObjectGroup" {
-                if let Some(m) = o.shift_remove("members") {
-                    for c in m.as_array().into_iter().flatten().filter_map(Value::as_str) {
-                        parents.push((c.to_string(), id.clone()));
-                    }
-                    o.insert("children".into(), m);
-                    s.note("group members as children");
-                }
-            }
-            if let Some(a) = o.get_mut("address") {
-                if !a.is_array() {
-                    *a = Value::Array(vec![a.take()]);
-                    s.note("address as an array");
-                }
+            if gs.is_empty() {
+                o.shift_remove("geometry");
+                s.note("empty geometry removed");
             }
         }
-        for (child, group) in parents {
-            let Some(c) = objects.get_mut(&child).and_then(Value::as_object_mut) else {
-                continue;
-            };
-            let p = c
+        let ty = o
+            .get("type")
+            .and_then(Value::as_str)
+            .unwrap_or("")
+            .to_string();
+        if ty == "BridgeConstructionElement" {
+            o.insert("type".into(), "BridgeConstructiveElement".into());
+            s.note("BridgeConstructionElement renamed");
+        }
+        if ty == "CityObjectGroup" {
+            if let Some(m) = o.shift_remove("members") {
+                o.insert("children".into(), m);
+                s.note("group members as children");
+            }
+        }
+        if let Some(a) = o.get_mut("address") {
+            if !a.is_array() {
+                *a = Value::Array(vec![a.take()]);
+                s.note("address as an array");
+            }
+        }
+        for group in groups.get(id).into_iter().flatten() {
+            let p = o
                 .entry("parents")
                 .or_insert_with(|| Value::Array(Vec::new()));
             if let Some(p) = p.as_array_mut() {
                 if !p.iter().any(|x| x.as_str() == Some(group.as_str())) {
-                    p.push(Value::String(group));
+                    p.push(Value::String(group.clone()));
                 }
             }
         }
     }
-    if generic {
-        for o in objects.values_mut() {
-            if o.get("type").and_then(Value::as_str) == Some("+GenericCityObject") {
-                o["type"] = Value::String("GenericCityObject".into());
-                s.note("+GenericCityObject as GenericCityObject");
-            }
-        }
+    if generic && o.get("type").and_then(Value::as_str) == Some("+GenericCityObject") {
+        o.insert("type".into(), Value::String("GenericCityObject".into()));
+        s.note("+GenericCityObject as GenericCityObject");
     }
 }
 
@@ -300,28 +423,44 @@ fn metadata_1_1(m: &mut Map<String, Value>, s: &mut CityJsonUpgrade) {
     }
 }
 
-/// A 1.0 document without `transform`: millimetre integers from its lowest corner.
-fn compress(h: &mut Map<String, Value>, s: &mut CityJsonUpgrade) {
-    let Some(Value::Array(vs)) = h.get_mut("vertices") else {
-        return;
-    };
-    let mut lo = [f64::INFINITY; 3];
-    for v in vs.iter() {
-        for (k, l) in lo.iter_mut().enumerate() {
-            if let Some(c) = v.get(k).and_then(Value::as_f64) {
-                *l = l.min(c);
+/// A 1.0 document without `transform`: millimetre integers from its lowest corner (`lo`,
+/// floored, when the vertices are streamed; else found in and applied to the header's).
+fn compress(h: &mut Map<String, Value>, s: &mut CityJsonUpgrade, lo: Option<[f64; 3]>) {
+    let lo = match (lo, h.get_mut("vertices")) {
+        (_, None) => return,
+        (Some(lo), Some(_)) => lo,
+        (None, Some(Value::Array(vs))) => {
+            let mut lo = [f64::INFINITY; 3];
+            for v in vs.iter() {
+                lowest(&mut lo, |k| v.get(k).and_then(Value::as_f64));
             }
+            let lo = floor_corner(lo);
+            for v in vs.iter_mut() {
+                quantize(v, lo);
+            }
+            lo
         }
-    }
-    let lo = lo.map(|c| if c.is_finite() { c.floor() } else { 0.0 });
-    for v in vs.iter_mut() {
-        quantize(v, lo);
-    }
+        (None, Some(_)) => return,
+    };
     h.insert(
         "transform".into(),
         serde_json::json!({"scale": [0.001, 0.001, 0.001], "translate": lo}),
     );
     s.note("transform added");
+}
+
+/// `lo` lowered to the coordinates `c` gives.
+fn lowest(lo: &mut [f64; 3], c: impl Fn(usize) -> Option<f64>) {
+    for (k, l) in lo.iter_mut().enumerate() {
+        if let Some(c) = c(k) {
+            *l = l.min(c);
+        }
+    }
+}
+
+/// A lowest corner floored to whole units (0 where there was none).
+fn floor_corner(lo: [f64; 3]) -> [f64; 3] {
+    lo.map(|c| if c.is_finite() { c.floor() } else { 0.0 })
 }
 
 fn quantize(v: &mut Value, lo: [f64; 3]) {

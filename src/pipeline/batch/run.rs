@@ -262,7 +262,8 @@ pub fn merge_parts(
         return nothing_to_merge(target);
     }
     let json = |p: &PathBuf| crate::pipeline::batch::inputs::is_cityjson_name(&p.to_string_lossy());
-    let r = match parts.iter().all(json) {
+    let cityjson = parts.iter().all(json);
+    let r = match cityjson {
         // CityJSON parts (an edit's: [`Plan::edit_targets`]): CityJSONSeq for a `.jsonl` target,
         // or for `-` when the first input is named so.
         true => {
@@ -283,7 +284,7 @@ pub fn merge_parts(
             let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs)
                 .into_iter()
                 .collect();
-            said.push(Said::Summary(merge_line(&s, target)));
+            said.push(Said::Summary(merge_line(&s, target, cityjson)));
             (true, said)
         }
         Err(e) => (false, vec![Said::Error(format!("{e:#}"))]),
@@ -405,15 +406,17 @@ fn convert_staged(
     Ok(summary)
 }
 
-/// The line said after a merge.
-pub fn merge_line(s: &MergeSummary, target: &Path) -> String {
+/// The line said after a merge (of CityJSON documents when `cityjson`: their ids are not
+/// `gml:id`s).
+pub fn merge_line(s: &MergeSummary, target: &Path, cityjson: bool) -> String {
     format!(
-        "merged {} file(s) into {}: {} member(s), {} gml:id(s) renamed, {} reference(s) \
+        "merged {} file(s) into {}: {} member(s), {} {}id(s) renamed, {} reference(s) \
          rewritten, {}",
         s.files,
         target.display(),
         s.members,
         s.ids_renamed,
+        if cityjson { "" } else { "gml:" },
         s.refs_rewritten,
         size_note(target, s.bytes)
     )

@@ -1,0 +1,467 @@
+//! A `.city.json` document read in passes without holding it: serde's streaming
+//! deserializer over the top-level object hands each member to a [`Pass`] — the small ones
+//! (`metadata`, `transform`, `appearance`, `geometry-templates`, `extensions`, ...) whole, the
+//! `CityObjects` one object at a time, the `vertices` one vertex at a time — in whatever order
+//! the document has them. A pass says which it wants; the rest is skipped unparsed.
+//!
+//! What stays between passes is kept small: the vertices as [`Vertex`] (16 bytes each for
+//! integer triples), the tree structure of the city objects as id hashes
+//! ([`Structure`], about 50 bytes an object).
+
+use super::{cj, cj_error, id_hash};
+use crate::io::citygml::error::WriteError;
+use crate::io::citygml::write::atomic_write;
+use crate::io::files::CountingWriter;
+use serde::de::{DeserializeSeed, Error as _, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use serde_json::{Map, Value};
+use std::cell::Cell;
+use std::collections::HashMap;
+use std::fmt;
+use std::io::{BufRead, Read, Write};
+use std::path::Path;
+use std::rc::Rc;
+
+/// What one pass over a document wants; every callback's error names what is wrong (the
+/// reader adds the file, line and column).
+pub(crate) trait Pass {
+    /// Whether the small top-level members are read (else skipped).
+    fn wants_members(&self) -> bool {
+        false
+    }
+    /// One small top-level member.
+    fn member(&mut self, _key: String, _v: Value) -> Result<(), String> {
+        Ok(())
+    }
+    /// `CityObjects` or `vertices` is at this place among the members (read or not).
+    fn place(&mut self, _key: &str) {}
+    /// Whether `CityObjects` is read.
+    fn wants_objects(&self) -> bool {
+        false
+    }
+    /// One city object, in document order.
+    fn object(&mut self, _id: String, _o: Value) -> Result<(), String> {
+        Ok(())
+    }
+    /// Whether `vertices` is read.
+    fn wants_vertices(&self) -> bool {
+        false
+    }
+    /// One vertex, in document order.
+    fn vertex(&mut self, _v: Vertex) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// What [`read`] saw besides what it handed the pass.
+pub(crate) struct Seen {
+    /// Bytes read (decompressed): the document's size when it is one.
+    pub bytes: u64,
+    /// Another JSON value follows the first: CityJSONSeq, not a document.
+    pub more: bool,
+    /// Whether the document has `CityObjects` (an object) and `vertices` (an array).
+    pub objects: bool,
+    pub vertices: bool,
+}
+
+/// A vertex as stored: an integer triple (the form `transform` gives), or any other value
+/// kept as it was.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Vertex {
+    Int([i32; 3]),
+    Other(Box<Value>),
+}
+
+impl Vertex {
+    /// The vertex of a value.
+    pub fn from_value(v: Value) -> Vertex {
+        let int = |v: &Value| -> Option<[i32; 3]> {
+            let a = v.as_array().filter(|a| a.len() == 3)?;
+            let c = |k: usize| i32::try_from(a[k].as_i64()?).ok();
+            Some([c(0)?, c(1)?, c(2)?])
+        };
+        match int(&v) {
+            Some(i) => Vertex::Int(i),
+            None => Vertex::Other(Box::new(v)),
+        }
+    }
+
+    /// Coordinate `k` as stored, when it is a number.
+    pub fn coord(&self, k: usize) -> Option<f64> {
+        match self {
+            Vertex::Int(i) => i.get(k).map(|&c| f64::from(c)),
+            Vertex::Other(v) => v.get(k).and_then(Value::as_f64),
+        }
+    }
+
+    /// The vertex as a value again.
+    pub fn into_value(self) -> Value {
+        match self {
+            Vertex::Int(i) => serde_json::json!(i),
+            Vertex::Other(v) => *v,
+        }
+    }
+
+    /// The stored coordinates (before `transform`), when they are three numbers.
+    pub fn coords(&self) -> Option<[f64; 3]> {
+        match self {
+            Vertex::Int(i) => Some(i.map(f64::from)),
+            Vertex::Other(v) => {
+                let c = |k: usize| v.get(k).and_then(Value::as_f64);
+                Some([c(0)?, c(1)?, c(2)?])
+            }
+        }
+    }
+
+    /// The vertex as JSON, as serde_json writes its value.
+    pub fn write(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        match self {
+            Vertex::Int([x, y, z]) => write!(w, "[{x},{y},{z}]"),
+            Vertex::Other(v) => serde_json::to_writer(w, v).map_err(std::io::Error::other),
+        }
+    }
+}
+
+/// A reader that counts the bytes it gives.
+struct Counted<R> {
+    inner: R,
+    n: Rc<Cell<u64>>,
+}
+
+impl<R: Read> Read for Counted<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let k = self.inner.read(buf)?;
+        self.n.set(self.n.get() + k as u64);
+        Ok(k)
+    }
+}
+
+/// The (decompressed) JSON text of `input`, a byte-order mark skipped.
+pub(crate) fn open_json(input: &Path) -> Result<Box<dyn BufRead + Send>, WriteError> {
+    let mut r = crate::export::citygml_from_cityjson::open(input)?;
+    if r.fill_buf().is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF")) {
+        r.consume(3);
+    }
+    Ok(r)
+}
+
+/// Read the first JSON value of `input` (named `name` in errors) through `pass`.
+///
+/// # Errors
+/// The source cannot be read, is empty, is not JSON, is not an object, or the pass refuses
+/// something (its message with the file, line and column).
+pub(crate) fn read(input: &Path, name: &Path, pass: &mut dyn Pass) -> Result<Seen, WriteError> {
+    let mut r = open_json(input)?;
+    if r.fill_buf().is_ok_and(<[u8]>::is_empty) {
+        return Err(cj(name, 0, None, "empty document".into()));
+    }
+    let n = Rc::new(Cell::new(0));
+    let counted = Counted {
+        inner: r,
+        n: n.clone(),
+    };
+    let mut de = serde_json::Deserializer::from_reader(counted);
+    let mut seen = Seen {
+        bytes: 0,
+        more: false,
+        objects: false,
+        vertices: false,
+    };
+    let json = |e: serde_json::Error| cj_error(crate::io::cityjson::Error::json(name, &e));
+    Top {
+        pass,
+        seen: &mut seen,
+    }
+    .deserialize(&mut de)
+    .map_err(json)?;
+    seen.more = de.end().is_err();
+    seen.bytes = n.get();
+    Ok(seen)
+}
+
+/// The top-level object.
+struct Top<'p, 'q> {
+    pass: &'p mut dyn Pass,
+    seen: &'q mut Seen,
+}
+
+impl<'de> DeserializeSeed<'de> for Top<'_, '_> {
+    type Value = ();
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_map(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Top<'_, '_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a CityJSON object")
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<(), A::Error> {
+        while let Some(key) = m.next_key::<String>()? {
+            match key.as_str() {
+                "CityObjects" | "vertices" => {
+                    let objects = key == "CityObjects";
+                    let twice = match objects {
+                        true => std::mem::replace(&mut self.seen.objects, true),
+                        false => std::mem::replace(&mut self.seen.vertices, true),
+                    };
+                    if twice {
+                        return Err(A::Error::custom(format!("{key:?} given twice")));
+                    }
+                    self.pass.place(&key);
+                    if objects && self.pass.wants_objects() {
+                        m.next_value_seed(Objects(&mut *self.pass))?;
+                    } else if !objects && self.pass.wants_vertices() {
+                        m.next_value_seed(Vertices(&mut *self.pass))?;
+                    } else {
+                        // checked for its kind (an object, an array), else skipped
+                        m.next_value_seed(Skip(objects))?;
+                    }
+                }
+                _ if self.pass.wants_members() => {
+                    let v: Value = m.next_value()?;
+                    self.pass.member(key, v).map_err(A::Error::custom)?;
+                }
+                _ => {
+                    m.next_value::<IgnoredAny>()?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `CityObjects` (`true`) or `vertices` skipped, their kind checked.
+struct Skip(bool);
+
+impl<'de> DeserializeSeed<'de> for Skip {
+    type Value = ();
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        match self.0 {
+            true => d.deserialize_map(self),
+            false => d.deserialize_seq(self),
+        }
+    }
+}
+
+impl<'de> Visitor<'de> for Skip {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str(match self.0 {
+            true => "\"CityObjects\" as an object",
+            false => "\"vertices\" as an array",
+        })
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<(), A::Error> {
+        while m.next_entry::<IgnoredAny, IgnoredAny>()?.is_some() {}
+        Ok(())
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut s: A) -> Result<(), A::Error> {
+        while s.next_element::<IgnoredAny>()?.is_some() {}
+        Ok(())
+    }
+}
+
+/// `CityObjects`, one object at a time.
+struct Objects<'p>(&'p mut dyn Pass);
+
+impl<'de> DeserializeSeed<'de> for Objects<'_> {
+    type Value = ();
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_map(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Objects<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("\"CityObjects\" as an object")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<(), A::Error> {
+        while let Some(id) = m.next_key::<String>()? {
+            let o: Value = m.next_value()?;
+            self.0.object(id, o).map_err(A::Error::custom)?;
+        }
+        Ok(())
+    }
+}
+
+/// `vertices`, one at a time.
+struct Vertices<'p>(&'p mut dyn Pass);
+
+impl<'de> DeserializeSeed<'de> for Vertices<'_> {
+    type Value = ();
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Vertices<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("\"vertices\" as an array")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut s: A) -> Result<(), A::Error> {
+        while let Some(v) = s.next_element::<Value>()? {
+            self.0
+                .vertex(Vertex::from_value(v))
+                .map_err(A::Error::custom)?;
+        }
+        Ok(())
+    }
+}
+
+/// The tree structure of a document's city objects (by index in document order): which
+/// tree each is in, and each tree's objects (its top-level object first, then its
+/// descendants, as [`super::trees`] orders them).
+#[derive(Default)]
+pub(crate) struct Structure {
+    ids: Vec<u64>,
+    index: HashMap<u64, u32>,
+    parents: Vec<Box<[u64]>>,
+    children: Vec<Box<[u64]>>,
+}
+
+impl Structure {
+    /// Add the next object; a repeated id is refused.
+    pub fn add(&mut self, id: &str, o: &Value) -> Result<(), String> {
+        let h = id_hash(id);
+        let k = u32::try_from(self.ids.len()).map_err(|_| "too many city objects".to_string())?;
+        if self.index.insert(h, k).is_some() {
+            return Err(format!("city object id {id:?} given twice"));
+        }
+        let hashes = |key: &str| -> Box<[u64]> {
+            o.get(key)
+                .and_then(Value::as_array)
+                .map(|a| a.iter().filter_map(Value::as_str).map(id_hash).collect())
+                .unwrap_or_default()
+        };
+        self.ids.push(h);
+        self.parents.push(hashes("parents"));
+        self.children.push(hashes("children"));
+        Ok(())
+    }
+
+    /// How many objects.
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// The trees, in [`super::trees`]' order.
+    pub fn trees(&self) -> Vec<Vec<u32>> {
+        super::forest(&self.index, &self.ids, &self.parents, &self.children)
+    }
+}
+
+/// A pass handing each city object to its function.
+pub(crate) struct EachObject<F>(pub F);
+
+impl<F: FnMut(String, Value) -> Result<(), String>> Pass for EachObject<F> {
+    fn wants_objects(&self) -> bool {
+        true
+    }
+    fn object(&mut self, id: String, o: Value) -> Result<(), String> {
+        (self.0)(id, o)
+    }
+}
+
+/// A pass handing each vertex to its function.
+pub(crate) struct EachVertex<F>(pub F);
+
+impl<F: FnMut(Vertex) -> Result<(), String>> Pass for EachVertex<F> {
+    fn wants_vertices(&self) -> bool {
+        true
+    }
+    fn vertex(&mut self, v: Vertex) -> Result<(), String> {
+        (self.0)(v)
+    }
+}
+
+/// The entries of `CityObjects` (`"id":{…}`) or `vertices` being written, separated by
+/// commas; the first I/O error kept (the callers of a pass see only its message).
+pub(crate) struct Entries<'w> {
+    w: &'w mut dyn Write,
+    any: bool,
+    failed: Option<std::io::Error>,
+}
+
+impl Entries<'_> {
+    fn put(&mut self, f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<(), String> {
+        let go = || {
+            if std::mem::replace(&mut self.any, true) {
+                self.w.write_all(b",")?;
+            }
+            f(&mut *self.w)
+        };
+        go().map_err(|e| {
+            let m = e.to_string();
+            self.failed.get_or_insert(e);
+            m
+        })
+    }
+
+    /// `"id":o`.
+    pub fn object(&mut self, id: &str, o: &Value) -> Result<(), String> {
+        self.put(|w| {
+            serde_json::to_writer(&mut *w, id)?;
+            w.write_all(b":")?;
+            serde_json::to_writer(w, o).map_err(std::io::Error::other)
+        })
+    }
+
+    /// One vertex.
+    pub fn vertex(&mut self, v: &Vertex) -> Result<(), String> {
+        self.put(|w| v.write(w))
+    }
+}
+
+/// Write a document to `out` (atomically): the members of `head` in its order as one line
+/// of JSON, `CityObjects` and `vertices` (placeholders in `head`) by `body`, which is given
+/// the member's name and its entries. The bytes written.
+///
+/// # Errors
+/// `body`'s, I/O errors.
+pub(crate) fn write_document(
+    out: &Path,
+    head: &Map<String, Value>,
+    body: &mut dyn FnMut(&str, &mut Entries<'_>) -> Result<(), WriteError>,
+) -> Result<u64, WriteError> {
+    let io = |source| WriteError::Io {
+        file: out.to_path_buf(),
+        source,
+    };
+    atomic_write(out, |w| {
+        let mut w = CountingWriter::new(w);
+        w.write_all(b"{").map_err(io)?;
+        for (k, (key, v)) in head.iter().enumerate() {
+            if k > 0 {
+                w.write_all(b",").map_err(io)?;
+            }
+            serde_json::to_writer(&mut w, key).map_err(|e| io(e.into()))?;
+            w.write_all(b":").map_err(io)?;
+            let brackets = match key.as_str() {
+                "CityObjects" => b"{}",
+                "vertices" => b"[]",
+                _ => {
+                    serde_json::to_writer(&mut w, v).map_err(|e| io(e.into()))?;
+                    continue;
+                }
+            };
+            w.write_all(&brackets[..1]).map_err(io)?;
+            let mut entries = Entries {
+                w: &mut w,
+                any: false,
+                failed: None,
+            };
+            let r = body(key, &mut entries);
+            if let Some(e) = entries.failed {
+                return Err(io(e));
+            }
+            r?;
+            w.write_all(&brackets[1..]).map_err(io)?;
+        }
+        w.write_all(b"}\n").map_err(io)?;
+        Ok(w.count())
+    })
+}
