@@ -97,7 +97,7 @@ fn surfaces(b: &Value, values: Option<&Value>, n: usize) -> Result<Vec<Poly>, St
 /// Read `g`'s boundaries against `n` vertices.
 pub(super) fn parse(g: &Geometry, n: usize) -> Result<Parsed, String> {
     let values = g.semantics.as_ref().map(|s| &s.values);
-    let b = &g.boundaries;
+    let b = &g.boundaries();
     let shells = |b: &Value, v: Option<&Value>| -> Result<Vec<Vec<Poly>>, String> {
         arr(b)?
             .iter()
@@ -391,7 +391,7 @@ pub(super) fn implicit(
         return Ok(None);
     };
     let point = g
-        .boundaries
+        .boundaries()
         .get(0)
         .and_then(Value::as_u64)
         .map(|i| i as usize)

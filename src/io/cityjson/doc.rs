@@ -7,6 +7,7 @@
 
 use serde::de::{Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
+use serde_json::value::RawValue;
 use serde_json::{Map, Value};
 use std::fmt;
 
@@ -137,8 +138,11 @@ pub(crate) struct Geometry {
     pub ty: String,
     #[serde(default)]
     pub lod: Option<Lod>,
-    #[serde(default)]
-    pub boundaries: Value,
+    /// `boundaries` kept as their JSON text until they are read ([`Geometry::boundaries`]):
+    /// as values, nested arrays of indices take about eight times the bytes of their text,
+    /// and a document holds every geometry's at once.
+    #[serde(default, rename = "boundaries")]
+    pub boundaries_text: Option<Box<RawValue>>,
     #[serde(default)]
     pub semantics: Option<Semantics>,
     /// `GeometryInstance`: index into the templates.
@@ -155,6 +159,15 @@ pub(crate) struct Geometry {
 }
 
 impl Geometry {
+    /// `boundaries` as a value (`Null` when absent), parsed from the text kept: each
+    /// geometry's only while it is read.
+    pub fn boundaries(&self) -> Value {
+        self.boundaries_text
+            .as_ref()
+            .and_then(|t| serde_json::from_str(t.get()).ok())
+            .unwrap_or(Value::Null)
+    }
+
     /// The whole LoD (`"2.2"` → 2, `1` → 1), `None` when there is none in 0..=3.
     pub fn whole_lod(&self) -> Option<u8> {
         let v = self.lod.as_ref()?.value()?;
@@ -250,8 +263,13 @@ mod tests {
             (others, s[1].others.contains_key("children")),
             (vec!["slope"], true)
         );
+        assert_eq!(g.boundaries_text.as_ref().unwrap().get(), "[[[0,1,2]]]");
+        assert_eq!(g.boundaries(), serde_json::json!([[[0, 1, 2]]]));
         let p = &d.objects.0[1].1;
         assert_eq!((p.parents.len(), p.geometry[0].whole_lod()), (1, Some(1)));
+        assert_eq!(p.geometry[0].boundaries(), serde_json::json!([]));
+        let none: Geometry = serde_json::from_str(r#"{"type":"MultiSurface"}"#).unwrap();
+        assert_eq!(none.boundaries(), Value::Null);
         let bad = |e: &str| Metadata {
             reference_system: None,
             extent: serde_json::from_str(e).ok(),

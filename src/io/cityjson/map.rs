@@ -455,7 +455,7 @@ impl Mapper {
                     "GeometryInstance: template {t} is not in geometry-templates"
                 )));
             };
-            let refpt: Vec<usize> = Vec::deserialize(&g.boundaries)
+            let refpt: Vec<usize> = Vec::deserialize(&g.boundaries())
                 .map_err(|e| err(format!("GeometryInstance boundaries: {e}")))?;
             let p = refpt
                 .first()
@@ -518,7 +518,7 @@ impl Mapper {
         let mut flat: Vec<(Vec<Vec<usize>>, Option<usize>)> = Vec::new();
         match g.ty.as_str() {
             "MultiSurface" | "CompositeSurface" => {
-                let b: Vec<Vec<Vec<usize>>> = Vec::deserialize(&g.boundaries).map_err(bad)?;
+                let b: Vec<Vec<Vec<usize>>> = Vec::deserialize(&g.boundaries()).map_err(bad)?;
                 let v: Vec<Option<usize>> = match values {
                     Some(v) => Vec::deserialize(v).map_err(sem_bad)?,
                     None => Vec::new(),
@@ -528,7 +528,8 @@ impl Mapper {
                 }
             }
             "Solid" => {
-                let b: Vec<Vec<Vec<Vec<usize>>>> = Vec::deserialize(&g.boundaries).map_err(bad)?;
+                let b: Vec<Vec<Vec<Vec<usize>>>> =
+                    Vec::deserialize(&g.boundaries()).map_err(bad)?;
                 let v: Vec<Vec<Option<usize>>> = match values {
                     Some(v) => Vec::deserialize(v).map_err(sem_bad)?,
                     None => Vec::new(),
@@ -541,7 +542,7 @@ impl Mapper {
             }
             "MultiSolid" | "CompositeSolid" => {
                 let b: Vec<Vec<Vec<Vec<Vec<usize>>>>> =
-                    Vec::deserialize(&g.boundaries).map_err(bad)?;
+                    Vec::deserialize(&g.boundaries()).map_err(bad)?;
                 let v: Vec<Vec<Vec<Option<usize>>>> = match values {
                     Some(v) => Vec::deserialize(v).map_err(sem_bad)?,
                     None => Vec::new(),
