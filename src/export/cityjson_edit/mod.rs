@@ -447,6 +447,8 @@ struct Values {
         Value,
     >,
     input: std::path::PathBuf,
+    /// Values read so far: the line of the last one (a CityJSONSeq has one a line).
+    line: u64,
 }
 
 impl Values {
@@ -455,15 +457,42 @@ impl Values {
         Ok(Values {
             inner: serde_json::Deserializer::from_reader(r).into_iter::<Value>(),
             input: input.to_path_buf(),
+            line: 0,
         })
     }
 
     fn next(&mut self) -> Result<Option<Value>, WriteError> {
         match self.inner.next() {
             None => Ok(None),
-            Some(Ok(v)) => Ok(Some(v)),
+            Some(Ok(v)) => {
+                self.line += 1;
+                Ok(Some(v))
+            }
             Some(Err(e)) => Err(cj_error(crate::io::cityjson::Error::json(&self.input, &e))),
         }
+    }
+
+    /// Write `head`, then each further value that `each` keeps (edited in place; given its
+    /// line), to `out` as CityJSONSeq, atomically: the bytes written.
+    fn write_seq(
+        &mut self,
+        out: &Path,
+        head: &Value,
+        mut each: impl FnMut(u64, &mut Value) -> Result<bool, WriteError>,
+    ) -> Result<u64, WriteError> {
+        let io = |e| WriteError::Io {
+            file: out.to_path_buf(),
+            source: e,
+        };
+        atomic_write(out, |w| {
+            let mut n = write_line(w, head).map_err(io)?;
+            while let Some(mut f) = self.next()? {
+                if each(self.line, &mut f)? {
+                    n += write_line(w, &f).map_err(io)?;
+                }
+            }
+            Ok(n)
+        })
     }
 
     /// The header: the first value, of type `CityJSON`.
@@ -548,34 +577,21 @@ pub(crate) fn run<'r>(
     let mut rule = make();
     let mut values = Values::open(input)?;
     values.header()?;
-    let io = |e| WriteError::Io {
-        file: out.to_path_buf(),
-        source: e,
-    };
-    let bytes_out = atomic_write(out, |w| {
-        let mut n = write_line(w, &head).map_err(io)?;
-        let mut line = 1u64;
-        let mut again = HashSet::new();
-        while let Some(mut f) = values.next()? {
-            line += 1;
-            let (_, keep) = edit_feature(
-                input,
-                line,
-                &mut f,
-                (transform, templates.as_deref(), srs.as_deref()),
-                &mut *rule,
-                &mut counts,
-                &mut again,
-                Some(&removed),
-            )?;
-            if keep {
-                n += write_line(w, &f).map_err(io)?;
-            }
-        }
-        counts.bytes_in = values.bytes();
-        Ok(n)
+    let mut again = HashSet::new();
+    counts.bytes_out = values.write_seq(out, &head, |line, f| {
+        let (_, keep) = edit_feature(
+            input,
+            line,
+            f,
+            (transform, templates.as_deref(), srs.as_deref()),
+            &mut *rule,
+            &mut counts,
+            &mut again,
+            Some(&removed),
+        )?;
+        Ok(keep)
     })?;
-    counts.bytes_out = bytes_out;
+    counts.bytes_in = values.bytes();
     Ok(counts)
 }
 

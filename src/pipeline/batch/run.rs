@@ -377,19 +377,11 @@ fn convert_staged(
     format: Format,
     opts: &WriteOptions,
 ) -> Result<crate::export::ExportSummary, crate::io::citygml::WriteError> {
-    let read = crate::io::citygml::read::ReadOptions::default();
-    let chunk = crate::io::citygml::read::CHUNK_BYTES;
-    let none = |_: usize, _: u64| {};
-    let streamed = crate::export::write_streamed_as(
-        format,
-        staged,
-        Some(label),
-        &read,
-        chunk,
-        &none,
-        target,
-        opts,
-    )?;
+    use crate::io::citygml::read::{Passes, ReadOptions, CHUNK_BYTES};
+    let read = ReadOptions::default();
+    let passes = Passes::new(&read, CHUNK_BYTES, &|_, _| {});
+    let streamed =
+        crate::export::write_streamed(format, staged, Some(label), &passes, target, opts)?;
     if let Some((e, _)) = streamed {
         return Ok(e);
     }
