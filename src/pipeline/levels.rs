@@ -233,15 +233,7 @@ mod tests {
         };
         let stop = Stopper::new(Stage::Select, 2);
         let r = levels(&framed, &opts, &stop);
-        assert!(
-            matches!(
-                r,
-                Err(Error::Cancelled(Cancelled {
-                    stage: Stage::Select
-                }))
-            ),
-            "{r:?}"
-        );
+        assert_cancelled(&r, Stage::Select);
         // Without cancellation the same call selects every POI.
         let all = Stopper {
             stop_after: u64::MAX,

@@ -47,17 +47,14 @@ impl CityJsonUpgrade {
     /// `a.city.json -> b.city.json: CityJSON 1.1 -> 2.0, 12 city object(s), ...`.
     pub fn describe(&self, input: &Path, out: &Path) -> String {
         let mut s = format!(
-            "{} -> {}: CityJSON {} -> 2.0, {} city object(s)",
-            crate::model::shown(input),
-            crate::model::shown(out),
-            self.from,
-            self.objects
+            "CityJSON {} -> 2.0, {} city object(s)",
+            self.from, self.objects
         );
         for (what, n) in &self.changes {
             s += &format!(", {what} {n}");
         }
         s += &format!(", {} -> {} bytes", self.bytes_in, self.bytes_out);
-        s
+        crate::model::made_line(input, out, &s)
     }
 
     fn note(&mut self, what: &str) {
