@@ -176,7 +176,6 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::runtime::progress::Cancelled;
     use crate::pipeline::test_support::*;
     use crate::pipeline::{frame, read_inputs, FrameOptions};
     use std::sync::atomic::Ordering;

@@ -313,7 +313,7 @@ fn partial_merge(target: &Path, parts: usize, inputs: usize) -> Option<Said> {
 
 /// [`merge_parts`] into a target in another format than CityGML (`target`: the file and its
 /// format): the parts merged into a staged CityGML document ([`Staging::merged`]), then that
-/// converted to `target` from a streamed read ([`crate::export::write_streamed_as`]; read
+/// converted to `target` from a streamed read ([`crate::export::write_streamed`]; read
 /// whole where the stream declines). The output is the CityGML merge converted, named in the
 /// OBJ's comment line by the inputs it holds ([`crate::export::merged`]).
 pub fn merge_converted(
