@@ -36,7 +36,7 @@ use super::cityjson::{
     Plan, Vertices,
 };
 use super::{asset_name_as, Content, ExportSummary};
-use crate::io::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
+use crate::io::citygml::read::{Chunk, Passes, StreamSummary};
 use crate::model::Bbox;
 use foldhash::{HashMap, HashMapExt, HashSet};
 use glam::DVec3;
@@ -69,32 +69,24 @@ pub(super) enum Kind {
 }
 
 /// [`super::cityjson::write_cityjson`] (or `write_cityjsonseq`) of the whole file at `path`
-/// with [`Content::Full`], from a streamed read in chunks of `chunk_bytes` (module docs).
-/// `passed(k, n)`: `n` more bytes read in pass `k` (0 the plan; 1 and 2 the objects, CityJSON
-/// only: written; 3 and 4 the objects counted first, CityJSON only). `Ok(None)` where the
-/// stream declines: read the whole file then (what was written is to be dropped).
+/// with [`Content::Full`], from streamed reads ([`Passes`]; module docs): pass 0 the plan; 1
+/// and 2 the objects, CityJSON only: written; 3 and 4 the objects counted first, CityJSON
+/// only. `Ok(None)` where the stream declines: read the whole file then (what was written is
+/// to be dropped).
 ///
 /// # Errors
 /// I/O errors of `w` and of the temporary files.
 pub(super) fn write_streamed(
     kind: Kind,
     path: &Path,
-    opts: &ReadOptions,
-    chunk_bytes: u64,
-    passed: &dyn Fn(usize, u64),
+    passes: &Passes<'_>,
     w: &mut dyn Write,
 ) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
-    let pass = |k: usize, each: &mut dyn FnMut(Chunk) -> io::Result<()>| {
-        stream(path, opts, chunk_bytes, &|n| passed(k, n), each).map(|r| match r {
-            Streamed::Done(s) => Some(s),
-            Streamed::Declined(_) => None,
-        })
-    };
     // 1. the plan
     let mut ids = Ids::default();
     let mut bbox = Bbox::EMPTY;
     let mut others = false;
-    let Some(sum) = pass(0, &mut |c: Chunk| {
+    let Some(sum) = passes.pass(path, 0, |c: Chunk| -> io::Result<()> {
         let plan = Plan::bare(&c.model, 0, Content::Full);
         bbox.union(&plan.bbox);
         others |= plan
@@ -133,11 +125,11 @@ pub(super) fn write_streamed(
     let mut verts = Vertices::new(translate, scale);
     // the passes over the parts (buildings, then the other city objects) from pass `first`
     // on: `each` sees every chunk's plan and the part; false when the stream declines
-    let mut passes = |first: usize,
-                      each: &mut dyn FnMut(&Plan<'_>, bool) -> io::Result<()>|
+    let mut over_parts = |first: usize,
+                          each: &mut dyn FnMut(&Plan<'_>, bool) -> io::Result<()>|
      -> io::Result<bool> {
         for (k, &standalone) in parts.iter().enumerate() {
-            let done = pass(first + k, &mut |c: Chunk| {
+            let done = passes.pass(path, first + k, |c: Chunk| {
                 each(&frame.plan(&c, &mut ids), standalone)
             })?;
             if done.is_none() {
@@ -149,7 +141,7 @@ pub(super) fn write_streamed(
     match kind {
         Kind::Seq => {
             let mut head_done = false;
-            let done = passes(1, &mut |plan, standalone| {
+            let done = over_parts(1, &mut |plan, standalone| {
                 if !head_done {
                     serde_json::to_writer(&mut *w, &Value::Object(plan.header_in(srs.as_deref())))?;
                     w.write_all(b"\n")?;
@@ -166,7 +158,7 @@ pub(super) fn write_streamed(
                 .clamp(1, MAX_BUCKETS) as usize;
             verts.external = Some(External::Record(Recorder::new(buckets)?));
             let mut throwaway = ExportSummary::default();
-            let done = passes(3, &mut |plan, standalone| {
+            let done = over_parts(3, &mut |plan, standalone| {
                 for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
                     plan.objects(*f, &mut verts, &mut throwaway);
                 }
@@ -181,7 +173,7 @@ pub(super) fn write_streamed(
             verts.external = Some(External::Replay(rec.resolve()?));
             let mut first = true;
             let mut head_done = false;
-            let done = passes(1, &mut |plan, standalone| {
+            let done = over_parts(1, &mut |plan, standalone| {
                 if !head_done {
                     write_head_open(plan.header_in(srs.as_deref()), w)?;
                     head_done = true;

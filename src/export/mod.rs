@@ -42,6 +42,7 @@ pub mod report;
 
 pub use format::{Format, UnknownFormat};
 
+use crate::io::citygml::read::{Passes, StreamSummary};
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::WriteError;
 use crate::lod::rough::RoughGeometry;
@@ -201,63 +202,29 @@ pub fn write_to(
     Ok(summary)
 }
 
-/// [`write()`] of the whole file at `input` as OBJ from a streamed read
-/// ([`obj::write_obj_streamed`]): [`write_streamed`] with [`Format::Obj`].
-///
-/// # Errors
-/// As [`write()`].
-pub fn write_obj_streamed(
-    input: &Path,
-    read: &crate::io::citygml::read::ReadOptions,
-    chunk_bytes: u64,
-    passed: &dyn Fn(usize, u64),
-    out: &Path,
-    opts: &WriteOptions,
-) -> Result<Option<(ExportSummary, crate::io::citygml::read::StreamSummary)>, WriteError> {
-    write_streamed(Format::Obj, input, read, chunk_bytes, passed, out, opts)
-}
-
 /// [`write()`] of the whole file at `input` in `format` (OBJ, CityJSON or CityJSONSeq) from
-/// a streamed read (chunks of `chunk_bytes`, memory follows the chunk, the same bytes as
-/// [`write()`] of the whole model with [`Content::Full`]), atomically. OBJ:
-/// [`obj::write_obj_streamed`]; CityJSON and CityJSONSeq read the file in several passes, and
-/// CityJSON numbers its shared vertices in temporary files (in `TMPDIR`: about 32 bytes a
-/// vertex use; see the module `cityjson_stream`'s docs in the source). `passed(k, n)`: `n`
-/// more bytes read in pass `k` (OBJ: 0 the origin, 1 and 2 the objects; CityJSON: 0 the
-/// plan, 3 and 4 the vertex uses, 1 and 2 the objects written; CityJSONSeq: 0 the plan, 1
-/// and 2 the objects; a pass 2 or 4 only for a file with such objects). `Ok(None)`, nothing
-/// written, where the stream declines: read the whole file and [`write()`] it then.
+/// streamed reads ([`Passes`]: chunks of `passes.chunk_bytes`, memory follows the chunk, the
+/// same bytes as [`write()`] of the whole model with [`Content::Full`]), atomically. OBJ:
+/// [`obj::write_obj_streamed`], its comment line naming `label` instead of `input` when given
+/// (a merge's staged document is named by the inputs it holds: [`merged`]); CityJSON and
+/// CityJSONSeq read the file in several passes, and CityJSON numbers its shared vertices in
+/// temporary files (in `TMPDIR`: about 32 bytes a vertex use; see the module
+/// `cityjson_stream`'s docs in the source). The passes (`passes.passed(k, n)`): OBJ: 0 the
+/// origin, 1 and 2 the objects; CityJSON: 0 the plan, 3 and 4 the vertex uses, 1 and 2 the
+/// objects written; CityJSONSeq: 0 the plan, 1 and 2 the objects; a pass 2 or 4 only for a
+/// file with such objects. `Ok(None)`, nothing written, where the stream declines: read the
+/// whole file and [`write()`] it then.
 ///
 /// # Errors
 /// As [`write()`]; [`WriteError::Invalid`] for [`Format::CityGml`].
 pub fn write_streamed(
     format: Format,
     input: &Path,
-    read: &crate::io::citygml::read::ReadOptions,
-    chunk_bytes: u64,
-    passed: &dyn Fn(usize, u64),
-    out: &Path,
-    opts: &WriteOptions,
-) -> Result<Option<(ExportSummary, crate::io::citygml::read::StreamSummary)>, WriteError> {
-    write_streamed_as(format, input, None, read, chunk_bytes, passed, out, opts)
-}
-
-/// [`write_streamed`], the OBJ's comment line naming `label` instead of `input` when given
-/// (a merge's staged document is named by the inputs it holds: [`merged`]).
-///
-/// # Errors
-/// As [`write_streamed`].
-#[allow(clippy::too_many_arguments)]
-pub fn write_streamed_as(
-    format: Format,
-    input: &Path,
     label: Option<&str>,
-    read: &crate::io::citygml::read::ReadOptions,
-    chunk_bytes: u64,
-    passed: &dyn Fn(usize, u64),
+    passes: &Passes<'_>,
     out: &Path,
     opts: &WriteOptions,
-) -> Result<Option<(ExportSummary, crate::io::citygml::read::StreamSummary)>, WriteError> {
+) -> Result<Option<(ExportSummary, StreamSummary)>, WriteError> {
     let kind = match format {
         Format::Obj => None,
         Format::CityJson => Some(cityjson_stream::Kind::CityJson),
@@ -277,10 +244,8 @@ pub fn write_streamed_as(
     let r = crate::io::citygml::write::atomic_write(out, |w| {
         let mut cw = crate::io::files::CountingWriter::new(w);
         let r = match kind {
-            None => obj::write_obj_streamed_as(input, label, read, chunk_bytes, passed, &mut cw),
-            Some(k) => {
-                cityjson_stream::write_streamed(k, input, read, chunk_bytes, passed, &mut cw)
-            }
+            None => obj::write_obj_streamed(input, label, passes, &mut cw),
+            Some(k) => cityjson_stream::write_streamed(k, input, passes, &mut cw),
         };
         match r.map_err(io)? {
             Some(d) => done = Some(d),

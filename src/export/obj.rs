@@ -39,7 +39,7 @@
 //! ```
 
 use super::{asset_name, asset_name_as, assets_of, Content, ExportSummary};
-use crate::io::citygml::read::{stream, Chunk, ReadOptions, StreamSummary, Streamed};
+use crate::io::citygml::read::{Chunk, Passes, StreamSummary};
 use crate::lod::level::traced as level_polygons;
 use crate::model::triangulate;
 use crate::model::{Bbox, CityModel, Polygon};
@@ -197,48 +197,27 @@ fn write_asset(
 }
 
 /// [`write_obj`] of the whole file at `path` (with [`Content::Full`], as `convert` writes
-/// it) from a streamed read ([`crate::io::citygml::read::stream`], chunks of `chunk_bytes`):
-/// memory follows the chunk, the bytes are [`write_obj`]'s of the whole model. Passes over
-/// the file: one for the origin (the centre of all the geometry), one writing the assets,
-/// and, for a file with body assets (buildings without thematic surfaces, last in the whole
-/// model), one more writing them. `passed(k, n)`: `n` more bytes read in pass `k` (0: the origin,
-/// 1: the assets, 2: the bodies).
+/// it) from streamed reads ([`Passes`]): memory follows the chunk, the bytes are
+/// [`write_obj`]'s of the whole model, the comment line naming `label` (when given) instead
+/// of `path`. Passes over the file: one for the origin (the centre of all the geometry), one
+/// writing the assets, and, for a file with body assets (buildings without thematic
+/// surfaces, last in the whole model), one more writing them (pass 0: the origin, 1: the
+/// assets, 2: the bodies).
 ///
 /// With what was written, the stream's summary (of the first pass). `Ok(None)` where the
-/// stream declines ([`Streamed::Declined`]): read the whole file then.
+/// stream declines ([`crate::io::citygml::read::Streamed::Declined`]): read the whole file
+/// then.
 ///
 /// # Errors
 /// I/O errors of `w`.
 pub fn write_obj_streamed(
     path: &std::path::Path,
-    opts: &ReadOptions,
-    chunk_bytes: u64,
-    passed: &dyn Fn(usize, u64),
-    w: &mut dyn Write,
-) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
-    write_obj_streamed_as(path, None, opts, chunk_bytes, passed, w)
-}
-
-/// [`write_obj_streamed`], the comment line naming `label` (when given) instead of `path`.
-///
-/// # Errors
-/// I/O errors of `w`.
-pub fn write_obj_streamed_as(
-    path: &std::path::Path,
     label: Option<&str>,
-    opts: &ReadOptions,
-    chunk_bytes: u64,
-    passed: &dyn Fn(usize, u64),
+    passes: &Passes<'_>,
     w: &mut dyn Write,
 ) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
     let mut bbox = Bbox::EMPTY;
-    let pass = |k: usize, each: &mut dyn FnMut(Chunk) -> io::Result<()>| {
-        stream(path, opts, chunk_bytes, &|n| passed(k, n), each).map(|r| match r {
-            Streamed::Done(s) => Some(s),
-            Streamed::Declined(_) => None,
-        })
-    };
-    let Some(sum) = pass(0, &mut |c: Chunk| {
+    let Some(sum) = passes.pass(path, 0, |c: Chunk| -> io::Result<()> {
         for a in &c.model.assets {
             for p in level_polygons(a, None, 2).iter() {
                 for q in p.points() {
@@ -264,32 +243,36 @@ pub fn write_obj_streamed_as(
         if bodies && sum.bodies == 0 {
             break;
         }
-        let done = pass(1 + usize::from(bodies), &mut |c: Chunk| {
-            let nb = c.non_body_assets();
-            for (i, a) in c.model.assets.iter().enumerate() {
-                if (i >= nb) != bodies {
-                    continue;
+        let done = passes.pass(
+            path,
+            1 + usize::from(bodies),
+            |c: Chunk| -> io::Result<()> {
+                let nb = c.non_body_assets();
+                for (i, a) in c.model.assets.iter().enumerate() {
+                    if (i >= nb) != bodies {
+                        continue;
+                    }
+                    let global = if bodies {
+                        sum.assets + c.bodies_before + (i - nb)
+                    } else {
+                        c.assets_before + i
+                    };
+                    let name = asset_name_as(&c.model, i, global);
+                    let polys = level_polygons(a, None, 2);
+                    write_asset(
+                        w,
+                        a.kind.as_str(),
+                        &name,
+                        2,
+                        &polys,
+                        origin,
+                        &mut s,
+                        &mut scratch,
+                    )?;
                 }
-                let global = if bodies {
-                    sum.assets + c.bodies_before + (i - nb)
-                } else {
-                    c.assets_before + i
-                };
-                let name = asset_name_as(&c.model, i, global);
-                let polys = level_polygons(a, None, 2);
-                write_asset(
-                    w,
-                    a.kind.as_str(),
-                    &name,
-                    2,
-                    &polys,
-                    origin,
-                    &mut s,
-                    &mut scratch,
-                )?;
-            }
-            Ok(())
-        })?;
+                Ok(())
+            },
+        )?;
         if done.is_none() {
             return Ok(None);
         }

@@ -716,6 +716,19 @@ pub fn shown(path: &Path) -> Shown<'_> {
     Shown(path)
 }
 
+/// `IN -> OUT: what`: the line saying what was made of the file `input` in `out`, both named
+/// as [`shown`] names them.
+///
+/// ```
+/// use skylod::model::made_line;
+/// use std::path::Path;
+/// let line = made_line(Path::new("-"), Path::new("b.gml"), "3 of 4 kept");
+/// assert_eq!(line, "<stdin> -> b.gml: 3 of 4 kept");
+/// ```
+pub fn made_line(input: &Path, out: &Path, what: &str) -> String {
+    format!("{} -> {}: {what}", shown(input), shown(out))
+}
+
 /// [`shown`]: a path displayed as messages name an input.
 #[derive(Debug, Clone, Copy)]
 pub struct Shown<'a>(pub &'a Path);

@@ -251,12 +251,7 @@ mod tests {
         let stop = Stopper::new(Stage::Trace, 2);
         assert!(sun_hours(&framed, &table, &stop).is_err());
         let stop = Stopper::new(Stage::Trace, 2);
-        assert!(matches!(
-            horizon(&framed, &hopts, &stop),
-            Err(Error::Cancelled(Cancelled {
-                stage: Stage::Trace
-            }))
-        ));
+        assert_cancelled(&horizon(&framed, &hopts, &stop), Stage::Trace);
         // Invalid options are refused before any work.
         let tally = Tally::default();
         let bad = HorizonOptions::default().with_step(0.0);
@@ -314,15 +309,7 @@ mod tests {
         }
         let stop = Stopper::new(Stage::Trace, 2);
         let r = evaluate(&framed, &opts, &stop);
-        assert!(
-            matches!(
-                r,
-                Err(Error::Cancelled(Cancelled {
-                    stage: Stage::Trace
-                }))
-            ),
-            "{r:?}"
-        );
+        assert_cancelled(&r, Stage::Trace);
         assert_eq!(stop.selected.load(Ordering::SeqCst), 2);
     }
 }

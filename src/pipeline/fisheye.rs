@@ -180,12 +180,7 @@ mod tests {
             seen += 1;
             Ok(())
         });
-        assert!(matches!(
-            r,
-            Err(Error::Cancelled(Cancelled {
-                stage: Stage::Trace
-            }))
-        ));
+        assert_cancelled(&r, Stage::Trace);
         assert_eq!(seen, 1);
         // An error of `each` stops the work and is returned as is.
         let mut calls = 0;
@@ -195,12 +190,7 @@ mod tests {
                 stage: Stage::Write,
             }))
         });
-        assert!(matches!(
-            r,
-            Err(Error::Cancelled(Cancelled {
-                stage: Stage::Write
-            }))
-        ));
+        assert_cancelled(&r, Stage::Write);
         assert_eq!(calls, 1);
     }
 }

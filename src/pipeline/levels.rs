@@ -176,7 +176,6 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::runtime::progress::Cancelled;
     use crate::pipeline::test_support::*;
     use crate::pipeline::{frame, read_inputs, FrameOptions};
     use std::sync::atomic::Ordering;
@@ -233,15 +232,7 @@ mod tests {
         };
         let stop = Stopper::new(Stage::Select, 2);
         let r = levels(&framed, &opts, &stop);
-        assert!(
-            matches!(
-                r,
-                Err(Error::Cancelled(Cancelled {
-                    stage: Stage::Select
-                }))
-            ),
-            "{r:?}"
-        );
+        assert_cancelled(&r, Stage::Select);
         // Without cancellation the same call selects every POI.
         let all = Stopper {
             stop_after: u64::MAX,

@@ -112,3 +112,17 @@ pub(crate) fn framed_with(inputs: &mut Inputs, n: usize) -> Framed<'_> {
         .collect();
     frame(&mut inputs.model, pois, &FrameOptions::default()).unwrap()
 }
+
+/// `r` is the error of work cancelled in `stage` ([`super::session::Error::Cancelled`]).
+#[track_caller]
+pub(crate) fn assert_cancelled<T: std::fmt::Debug>(
+    r: &Result<T, super::session::Error>,
+    stage: Stage,
+) {
+    use super::session::Error;
+    use crate::model::runtime::progress::Cancelled;
+    assert!(
+        matches!(r, Err(Error::Cancelled(Cancelled { stage: s })) if *s == stage),
+        "{r:?}"
+    );
+}

@@ -5,7 +5,7 @@
 //! Ingolstadt street repeated) in a temporary directory.
 
 use crate::util;
-use skylod::citygml::read::{read_file_with, stream, Chunk, ReadOptions, Streamed};
+use skylod::citygml::read::{read_file_with, stream, Chunk, Passes, ReadOptions, Streamed};
 use skylod::citygml::read_file_observed;
 use skylod::model::CityModel;
 use std::path::Path;
@@ -449,8 +449,15 @@ fn streamed_exports_are_the_whole_models_bytes() {
             .enumerate()
         {
             let ropts = ReadOptions::default();
-            let s = write_streamed(format, &path, &ropts, 4096, &|_, _| {}, &b, &opts)
-                .unwrap_or_else(|e| panic!("{name} {format}: {e}"));
+            let s = write_streamed(
+                format,
+                &path,
+                None,
+                &Passes::new(&ropts, 4096, &|_, _| {}),
+                &b,
+                &opts,
+            )
+            .unwrap_or_else(|e| panic!("{name} {format}: {e}"));
             let Some((s, _)) = s else {
                 declined.push(format!("{name} {format}"));
                 continue;
@@ -494,8 +501,9 @@ fn streamed_citygml_is_the_whole_reads_bytes() {
             };
             let name = util::short(&path);
             let ropts = ReadOptions::default();
-            let s = write_document_streamed(&path, &ropts, 4096, &|_, _| {}, &b, &opts)
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let s =
+                write_document_streamed(&path, &Passes::new(&ropts, 4096, &|_, _| {}), &b, &opts)
+                    .unwrap_or_else(|e| panic!("{name}: {e}"));
             let Some(s) = s else {
                 declined.push(name);
                 continue;
@@ -584,7 +592,8 @@ fn streamed_cityjson_ids_are_the_whole_writers() {
         write(format, &model, 0, Content::Full, &a, &opts).unwrap();
         // one member a chunk
         let ropts = ReadOptions::default();
-        let s = write_streamed(format, &path, &ropts, 1, &|_, _| {}, &b, &opts).unwrap();
+        let passes = Passes::new(&ropts, 1, &|_, _| {});
+        let s = write_streamed(format, &path, None, &passes, &b, &opts).unwrap();
         assert!(s.is_some(), "{format}: declined");
         let (x, y) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
         let text = String::from_utf8_lossy(&x);

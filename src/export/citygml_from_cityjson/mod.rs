@@ -154,9 +154,7 @@ impl FromCityJsonSummary {
             .map(|(k, n)| format!("{k} {n}"))
             .collect();
         let mut s = format!(
-            "{} -> {}: CityJSON{} {} -> CityGML {}, {} member(s) ({}), {} polygon(s), {} gml:id(s) made",
-            crate::model::shown(input),
-            crate::model::shown(out),
+            "CityJSON{} {} -> CityGML {}, {} member(s) ({}), {} polygon(s), {} gml:id(s) made",
             if self.seq { "Seq" } else { "" },
             self.cityjson_version,
             self.citygml_version,
@@ -174,7 +172,7 @@ impl FromCityJsonSummary {
             s += &format!(", left out or changed: {}", d.join("; "));
         }
         s += &format!(", {} bytes", self.bytes_out);
-        s
+        crate::model::made_line(input, out, &s)
     }
 }
 

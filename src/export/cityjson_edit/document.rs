@@ -37,12 +37,8 @@ pub(super) struct Collected {
 }
 
 impl Pass for Collected {
-    fn wants_members(&self) -> bool {
-        true
-    }
-    fn member(&mut self, key: String, v: Value) -> Result<(), String> {
-        self.head.insert(key, v);
-        Ok(())
+    fn members(&mut self) -> Option<&mut Map<String, Value>> {
+        Some(&mut self.head)
     }
     fn wants_objects(&self) -> bool {
         true

@@ -75,12 +75,8 @@ struct Scan {
 }
 
 impl Pass for Scan {
-    fn wants_members(&self) -> bool {
-        true
-    }
-    fn member(&mut self, key: String, v: Value) -> Result<(), String> {
-        self.members.insert(key, v);
-        Ok(())
+    fn members(&mut self) -> Option<&mut Map<String, Value>> {
+        Some(&mut self.members)
     }
     fn wants_objects(&self) -> bool {
         true

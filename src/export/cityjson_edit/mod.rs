@@ -447,6 +447,8 @@ struct Values {
         Value,
     >,
     input: std::path::PathBuf,
+    /// Values read so far: the line of the last one (a CityJSONSeq has one a line).
+    line: u64,
 }
 
 impl Values {
@@ -455,15 +457,42 @@ impl Values {
         Ok(Values {
             inner: serde_json::Deserializer::from_reader(r).into_iter::<Value>(),
             input: input.to_path_buf(),
+            line: 0,
         })
     }
 
     fn next(&mut self) -> Result<Option<Value>, WriteError> {
         match self.inner.next() {
             None => Ok(None),
-            Some(Ok(v)) => Ok(Some(v)),
+            Some(Ok(v)) => {
+                self.line += 1;
+                Ok(Some(v))
+            }
             Some(Err(e)) => Err(cj_error(crate::io::cityjson::Error::json(&self.input, &e))),
         }
+    }
+
+    /// Write `head`, then each further value that `each` keeps (edited in place; given its
+    /// line), to `out` as CityJSONSeq, atomically: the bytes written.
+    fn write_seq(
+        &mut self,
+        out: &Path,
+        head: &Value,
+        mut each: impl FnMut(u64, &mut Value) -> Result<bool, WriteError>,
+    ) -> Result<u64, WriteError> {
+        let io = |e| WriteError::Io {
+            file: out.to_path_buf(),
+            source: e,
+        };
+        atomic_write(out, |w| {
+            let mut n = write_line(w, head).map_err(io)?;
+            while let Some(mut f) = self.next()? {
+                if each(self.line, &mut f)? {
+                    n += write_line(w, &f).map_err(io)?;
+                }
+            }
+            Ok(n)
+        })
     }
 
     /// The header: the first value, of type `CityJSON`.
@@ -515,22 +544,17 @@ pub(crate) fn run<'r>(
         return Err(cj(input, 0, None, changed()));
     };
     // CityJSONSeq, pass 1: decisions, the box of what stays, the ids that go.
-    let transform = transform_of(&head);
-    let templates = templates_of(&head);
-    let srs = srs_of(&head);
+    let seq = Seq::new(input, &head);
     let mut removed = HashSet::new();
     let mut kept = Bbox::EMPTY;
     let mut scratch = EditSummary::default();
     let mut rule = make();
     let mut feature = Some(first);
-    let mut line = 1u64;
     while let Some(mut f) = feature.take() {
-        line += 1;
         let (b, _) = edit_feature(
-            input,
-            line,
+            &seq,
+            values.line,
             &mut f,
-            (transform, templates.as_deref(), srs.as_deref()),
             &mut *rule,
             &mut scratch,
             &mut removed,
@@ -548,34 +572,13 @@ pub(crate) fn run<'r>(
     let mut rule = make();
     let mut values = Values::open(input)?;
     values.header()?;
-    let io = |e| WriteError::Io {
-        file: out.to_path_buf(),
-        source: e,
-    };
-    let bytes_out = atomic_write(out, |w| {
-        let mut n = write_line(w, &head).map_err(io)?;
-        let mut line = 1u64;
-        let mut again = HashSet::new();
-        while let Some(mut f) = values.next()? {
-            line += 1;
-            let (_, keep) = edit_feature(
-                input,
-                line,
-                &mut f,
-                (transform, templates.as_deref(), srs.as_deref()),
-                &mut *rule,
-                &mut counts,
-                &mut again,
-                Some(&removed),
-            )?;
-            if keep {
-                n += write_line(w, &f).map_err(io)?;
-            }
-        }
-        counts.bytes_in = values.bytes();
-        Ok(n)
+    let mut again = HashSet::new();
+    counts.bytes_out = values.write_seq(out, &head, |line, f| {
+        let prune = Some(&removed);
+        let (_, keep) = edit_feature(&seq, line, f, &mut *rule, &mut counts, &mut again, prune)?;
+        Ok(keep)
     })?;
-    counts.bytes_out = bytes_out;
+    counts.bytes_in = values.bytes();
     Ok(counts)
 }
 
@@ -587,18 +590,37 @@ fn templates_of(head: &Value) -> Option<Vec<Value>> {
         .cloned()
 }
 
-/// Edit one CityJSONSeq feature in place: `(box of what stays, whether anything stays)`.
-#[allow(clippy::too_many_arguments)]
+/// A CityJSONSeq being edited: what the edit of each feature takes from the header.
+struct Seq<'a> {
+    input: &'a Path,
+    transform: Option<Transform>,
+    templates: Option<Vec<Value>>,
+    srs: Option<String>,
+}
+
+impl<'a> Seq<'a> {
+    fn new(input: &'a Path, head: &Value) -> Self {
+        Seq {
+            input,
+            transform: transform_of(head),
+            templates: templates_of(head),
+            srs: srs_of(head),
+        }
+    }
+}
+
+/// Edit feature `f` of `seq` (on line `line`) in place: `(box of what stays, whether
+/// anything stays)`.
 fn edit_feature(
-    input: &Path,
+    seq: &Seq<'_>,
     line: u64,
     f: &mut Value,
-    (transform, templates, srs): (Option<Transform>, Option<&[Value]>, Option<&str>),
     rule: &mut dyn TreeRule,
     counts: &mut EditSummary,
     removed: &mut HashSet<u64>,
     prune_with: Option<&HashSet<u64>>,
 ) -> Result<(Option<Bbox>, bool), WriteError> {
+    let (input, transform) = (seq.input, seq.transform);
     let id = f.get("id").and_then(Value::as_str).map(str::to_string);
     let Some(fo) = f.as_object_mut() else {
         return Err(cj(
@@ -627,8 +649,8 @@ fn edit_feature(
     let ctx = Ctx {
         verts: Verts::Values(&vertices),
         transform,
-        templates,
-        srs,
+        templates: seq.templates.as_deref(),
+        srs: seq.srs.as_deref(),
     };
     let err = |m: String| cj(input, line, id.as_deref(), m);
     decide(&mut objects, &ctx, rule, counts, removed).map_err(err)?;

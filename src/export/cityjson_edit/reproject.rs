@@ -20,9 +20,9 @@
 //! from its reference point then lands within the conversion's curvature over `d` of its
 //! converted position (about a millimetre at 80 m from UTM to WGS 84).
 
-use super::{check_json_target, cj, transform_of, write_line, Transform, Values};
+use super::{check_json_target, cj, transform_of, Transform, Values};
 use crate::io::citygml::error::WriteError;
-use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
+use crate::io::citygml::write::{check_target, WriteOptions};
 use crate::model::crs::{Crs, CrsKind, PointTransform};
 use crate::model::Bbox;
 use glam::DVec3;
@@ -155,20 +155,10 @@ pub fn reproject_cityjson(
     super::set_extent(&mut head, &kept);
     let mut values = Values::open(input)?;
     values.header()?;
-    let io = |e| WriteError::Io {
-        file: out.to_path_buf(),
-        source: e,
-    };
-    s.bytes_out = atomic_write(out, |w| {
-        let mut n = write_line(w, &head).map_err(io)?;
-        let mut line = 1;
-        while let Some(mut f) = values.next()? {
-            line += 1;
-            let mut scratch = Bbox::EMPTY;
-            convert(&mut f, line, &mut scratch, &mut s.vertices)?;
-            n += write_line(w, &f).map_err(io)?;
-        }
-        Ok(n)
+    s.bytes_out = values.write_seq(out, &head, |line, f| {
+        let mut scratch = Bbox::EMPTY;
+        convert(f, line, &mut scratch, &mut s.vertices)?;
+        Ok(true)
     })?;
     Ok(s)
 }

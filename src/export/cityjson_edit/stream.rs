@@ -24,13 +24,9 @@ use std::rc::Rc;
 /// What one pass over a document wants; every callback's error names what is wrong (the
 /// reader adds the file, line and column).
 pub(crate) trait Pass {
-    /// Whether the small top-level members are read (else skipped).
-    fn wants_members(&self) -> bool {
-        false
-    }
-    /// One small top-level member.
-    fn member(&mut self, _key: String, _v: Value) -> Result<(), String> {
-        Ok(())
+    /// Where the small top-level members are kept, in document order (`None`: skipped).
+    fn members(&mut self) -> Option<&mut Map<String, Value>> {
+        None
     }
     /// `CityObjects` or `vertices` is at this place among the members (read or not).
     fn place(&mut self, _key: &str) {}
@@ -219,13 +215,15 @@ impl<'de> Visitor<'de> for Top<'_, '_> {
                         m.next_value_seed(Skip(objects))?;
                     }
                 }
-                _ if self.pass.wants_members() => {
-                    let v: Value = m.next_value()?;
-                    self.pass.member(key, v).map_err(A::Error::custom)?;
-                }
-                _ => {
-                    m.next_value::<IgnoredAny>()?;
-                }
+                _ => match self.pass.members() {
+                    Some(members) => {
+                        let v: Value = m.next_value()?;
+                        members.insert(key, v);
+                    }
+                    None => {
+                        m.next_value::<IgnoredAny>()?;
+                    }
+                },
             }
         }
         Ok(())

@@ -20,9 +20,9 @@
 //! vertices read again one at a time.
 
 use super::stream::{self, EachObject, EachVertex, Pass, Vertex};
-use super::{check_json_target, check_type, write_line, Values};
+use super::{check_json_target, check_type, Values};
 use crate::io::citygml::error::WriteError;
-use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
+use crate::io::citygml::write::{check_target, WriteOptions};
 use serde_json::{Map, Value};
 use std::collections::HashMap;
 use std::path::Path;
@@ -47,17 +47,14 @@ impl CityJsonUpgrade {
     /// `a.city.json -> b.city.json: CityJSON 1.1 -> 2.0, 12 city object(s), ...`.
     pub fn describe(&self, input: &Path, out: &Path) -> String {
         let mut s = format!(
-            "{} -> {}: CityJSON {} -> 2.0, {} city object(s)",
-            crate::model::shown(input),
-            crate::model::shown(out),
-            self.from,
-            self.objects
+            "CityJSON {} -> 2.0, {} city object(s)",
+            self.from, self.objects
         );
         for (what, n) in &self.changes {
             s += &format!(", {what} {n}");
         }
         s += &format!(", {} -> {} bytes", self.bytes_in, self.bytes_out);
-        s
+        crate::model::made_line(input, out, &s)
     }
 
     fn note(&mut self, what: &str) {
@@ -113,25 +110,16 @@ pub fn upgrade_cityjson(
     let mut values = Values::open(input)?;
     let mut head = values.header()?;
     let generic = upgrade_header(&mut head, &from, &mut s, None);
-    let io = |e| WriteError::Io {
-        file: out.to_path_buf(),
-        source: e,
-    };
-    let bytes_out = atomic_write(out, |w| {
-        let mut n = write_line(w, &head).map_err(io)?;
-        while let Some(mut f) = values.next()? {
-            if let Some(objects) = f.get_mut("CityObjects").and_then(Value::as_object_mut) {
-                upgrade_objects(objects, &from, generic, &mut s);
-            }
-            if from == "1.0" && f.get("transform").is_none() {
-                compress_feature(&mut f, &head);
-            }
-            n += write_line(w, &f).map_err(io)?;
+    s.bytes_out = values.write_seq(out, &head, |_, f| {
+        if let Some(objects) = f.get_mut("CityObjects").and_then(Value::as_object_mut) {
+            upgrade_objects(objects, &from, generic, &mut s);
         }
-        s.bytes_in = values.bytes();
-        Ok(n)
+        if from == "1.0" && f.get("transform").is_none() {
+            compress_feature(f, &head);
+        }
+        Ok(true)
     })?;
-    s.bytes_out = bytes_out;
+    s.bytes_in = values.bytes();
     Ok(s)
 }
 
@@ -147,12 +135,8 @@ struct Scan {
 }
 
 impl Pass for Scan {
-    fn wants_members(&self) -> bool {
-        true
-    }
-    fn member(&mut self, key: String, v: Value) -> Result<(), String> {
-        self.head.insert(key, v);
-        Ok(())
+    fn members(&mut self) -> Option<&mut Map<String, Value>> {
+        Some(&mut self.head)
     }
     fn place(&mut self, key: &str) {
         self.head.insert(key.to_string(), Value::Null);

@@ -156,14 +156,14 @@ pub struct StreamedDocument {
 }
 
 /// [`write_document`] of the whole document at `input` (no other edits than the envelopes)
-/// from two streamed reads ([`crate::io::citygml::read::stream`], chunks of `chunk_bytes` whole
-/// top-level members): memory follows the chunk, not the file, and the bytes are
+/// from two streamed reads ([`crate::io::citygml::read::Passes`], chunks of whole top-level
+/// members): memory follows the chunk, not the file, and the bytes are
 /// [`write_document`]'s of the whole read. The root's `gml:boundedBy` comes first in the
 /// document but bounds everything, so a first pass computes its box (the union of every
 /// chunk's assets and building geometry, the whole read's root envelope), and a second
 /// writes the document chunk by chunk, each chunk's envelopes recomputed from the chunk (an
-/// envelope's owner is within one top-level member). `passed(k, n)`: `n` more bytes read in
-/// pass `k` (0: the root's box, 1: the writing). `Ok(None)`, nothing written, where the
+/// envelope's owner is within one top-level member). Pass 0: the root's box, 1: the
+/// writing. `Ok(None)`, nothing written, where the
 /// stream declines (or where the first chunk holds no geometry to tell the root's envelope
 /// by): read the whole file and [`write_document`] it then.
 ///
@@ -171,13 +171,11 @@ pub struct StreamedDocument {
 /// As [`write_document`].
 pub fn write_document_streamed(
     input: &Path,
-    read: &crate::io::citygml::read::ReadOptions,
-    chunk_bytes: u64,
-    passed: &dyn Fn(usize, u64),
+    passes: &crate::io::citygml::read::Passes<'_>,
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<Option<StreamedDocument>, WriteError> {
-    use crate::io::citygml::read::{stream, Chunk, Streamed};
+    use crate::io::citygml::read::Chunk;
     use crate::model::Bbox;
     check_target(out, opts, std::iter::once(input))?;
     // Pass 0: the root envelope's box, and where that envelope is (the first chunk's
@@ -185,7 +183,7 @@ pub fn write_document_streamed(
     let mut root = Bbox::EMPTY;
     let mut root_site: Option<u64> = None;
     let mut unsure = false;
-    let first = stream(input, read, chunk_bytes, &|n| passed(0, n), |c: Chunk| {
+    let first = passes.pass(input, 0, |c: Chunk| {
         let b = crate::model::content_bbox(&c.model.assets, &c.model.buildings);
         if c.index == 0 {
             root_site = root_site_of(&c.model);
@@ -194,7 +192,7 @@ pub fn write_document_streamed(
         root.union(&b);
         Ok::<(), WriteError>(())
     })?;
-    if !matches!(first, Streamed::Done(_)) || unsure {
+    if first.is_none() || unsure {
         return Ok(None);
     }
     // Pass 1: the document, chunk by chunk.
@@ -204,7 +202,7 @@ pub fn write_document_streamed(
         let src = crate::model::Source::File(input.to_path_buf());
         let (mut reader, _) = source::open_source(&src, input)?;
         let (mut cursor, mut written, mut n_edits, mut polygons, mut len) = (0, 0, 0, 0, 0);
-        let second = stream(input, read, chunk_bytes, &|n| passed(1, n), |c: Chunk| {
+        let second = passes.pass(input, 1, |c: Chunk| {
             polygons += c.model.polygon_count();
             let Some(f) = c.model.files.first() else {
                 return Ok::<(), WriteError>(());
@@ -234,7 +232,7 @@ pub fn write_document_streamed(
             written += apply_edits(&mut reader, w, &edits, &mut cursor, (len, input, out))?;
             Ok(())
         })?;
-        let Streamed::Done(sum) = second else {
+        let Some(sum) = second else {
             // nothing is kept of a declined stream's output
             return Err(WriteError::Invalid("declined".into()));
         };

@@ -11,7 +11,7 @@ use crate::export::citygml_from_cityjson::{
 };
 use crate::export::report::stats::Stats;
 use crate::export::{Content, Format};
-use crate::io::citygml::read::{read_file_observed, stream, ReadOptions, Streamed};
+use crate::io::citygml::read::{read_file_observed, stream, Passes, ReadOptions, Streamed};
 use crate::io::citygml::write::{write_document, write_document_streamed, WriteOptions};
 use crate::io::citygml::{ReadError, WriteError};
 use crate::model::crs::Crs;
@@ -258,8 +258,9 @@ fn convert_streamed(
         create_parent(out)?;
     }
     let ropts = ReadOptions::default();
+    let passes = Passes::new(&ropts, chunk, &pass);
     if o.format == Format::CityGml {
-        let Some(d) = write_document_streamed(input, &ropts, chunk, &pass, out, o.write)? else {
+        let Some(d) = write_document_streamed(input, &passes, out, o.write)? else {
             return Ok(Err(DECLINED));
         };
         let (bytes, edits, w) = (d.summary.bytes, d.summary.edits, d.stream.warnings);
@@ -273,7 +274,7 @@ fn convert_streamed(
             ..Converted::default()
         }));
     }
-    let r = crate::export::write_streamed(o.format, input, &ropts, chunk, &pass, out, o.write);
+    let r = crate::export::write_streamed(o.format, input, None, &passes, out, o.write);
     let Some((s, sum)) = r.map_err(|error| ConvertError::Streamed {
         out: out.to_path_buf(),
         error,

@@ -313,7 +313,7 @@ fn partial_merge(target: &Path, parts: usize, inputs: usize) -> Option<Said> {
 
 /// [`merge_parts`] into a target in another format than CityGML (`target`: the file and its
 /// format): the parts merged into a staged CityGML document ([`Staging::merged`]), then that
-/// converted to `target` from a streamed read ([`crate::export::write_streamed_as`]; read
+/// converted to `target` from a streamed read ([`crate::export::write_streamed`]; read
 /// whole where the stream declines). The output is the CityGML merge converted, named in the
 /// OBJ's comment line by the inputs it holds ([`crate::export::merged`]).
 pub fn merge_converted(
@@ -377,19 +377,11 @@ fn convert_staged(
     format: Format,
     opts: &WriteOptions,
 ) -> Result<crate::export::ExportSummary, crate::io::citygml::WriteError> {
-    let read = crate::io::citygml::read::ReadOptions::default();
-    let chunk = crate::io::citygml::read::CHUNK_BYTES;
-    let none = |_: usize, _: u64| {};
-    let streamed = crate::export::write_streamed_as(
-        format,
-        staged,
-        Some(label),
-        &read,
-        chunk,
-        &none,
-        target,
-        opts,
-    )?;
+    use crate::io::citygml::read::{Passes, ReadOptions, CHUNK_BYTES};
+    let read = ReadOptions::default();
+    let passes = Passes::new(&read, CHUNK_BYTES, &|_, _| {});
+    let streamed =
+        crate::export::write_streamed(format, staged, Some(label), &passes, target, opts)?;
     if let Some((e, _)) = streamed {
         return Ok(e);
     }

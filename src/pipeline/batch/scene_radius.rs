@@ -146,12 +146,19 @@ pub fn file_extent(path: &Path) -> Result<Option<(Extent, ExtentSource)>, Extent
     Ok(scan(path)?.map(|e| (e, ExtentSource::Scan)))
 }
 
-fn xml_err(path: &Path, at: u64, e: impl std::fmt::Display) -> ExtentError {
-    ExtentError::Xml {
+/// The next event of `r` into `buf`; malformed XML is [`ExtentError::Xml`] at the byte it
+/// starts at.
+fn next_event<'b>(
+    r: &mut quick_xml::Reader<Box<dyn BufRead>>,
+    buf: &'b mut Vec<u8>,
+    path: &Path,
+) -> Result<Event<'b>, ExtentError> {
+    let at = r.buffer_position();
+    r.read_event_into(buf).map_err(|e| ExtentError::Xml {
         file: path.to_path_buf(),
         at,
         message: e.to_string(),
-    }
+    })
 }
 
 /// The root's `boundedBy/Envelope`, read until the root's first other child.
@@ -162,10 +169,7 @@ fn envelope(path: &Path) -> Result<Option<Extent>, ExtentError> {
     let (mut lower, mut upper): (Option<Vec<f64>>, Option<Vec<f64>>) = (None, None);
     let mut corner: Option<bool> = None;
     loop {
-        let at = r.buffer_position();
-        let ev = r
-            .read_event_into(&mut buf)
-            .map_err(|e| xml_err(path, at, e))?;
+        let ev = next_event(&mut r, &mut buf, path)?;
         match ev {
             Event::Start(e) => {
                 let name = e.local_name().as_ref().to_vec();
@@ -232,11 +236,7 @@ fn scan(path: &Path) -> Result<Option<Extent>, ExtentError> {
     let mut ext = Extent::empty();
     let mut dim: Option<usize> = None;
     loop {
-        let at = r.buffer_position();
-        match r
-            .read_event_into(&mut buf)
-            .map_err(|e| xml_err(path, at, e))?
-        {
+        match next_event(&mut r, &mut buf, path)? {
             Event::Start(e) => {
                 dim = match e.local_name().as_ref() {
                     b"pos" | b"posList" => Some(

@@ -92,11 +92,8 @@ impl EditSummary {
     /// `a.gml -> b.gml: 12 of 40 city object(s) kept, ...`.
     pub fn describe(&self, input: &Path, out: &Path) -> String {
         let mut s = format!(
-            "{} -> {}: {} of {} city object(s) kept",
-            crate::model::shown(input),
-            crate::model::shown(out),
-            self.members_kept,
-            self.members
+            "{} of {} city object(s) kept",
+            self.members_kept, self.members
         );
         if self.lod_properties_removed > 0 || self.features_removed > 0 {
             s += &format!(
@@ -108,7 +105,7 @@ impl EditSummary {
             ", {} reference(s) pruned, {} -> {} bytes",
             self.references_pruned, self.bytes_in, self.bytes_out
         );
-        s
+        crate::model::made_line(input, out, &s)
     }
 }
 

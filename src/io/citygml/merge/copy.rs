@@ -2,7 +2,7 @@
 //! tags rewritten ([`super::ids`]).
 
 use super::ids::{rewrite_start, Rewrite};
-use super::scan::{ns_of, open, xml_err};
+use super::scan::{next_event, ns_of, open, xml_err};
 use crate::io::citygml::error::ReadError;
 use crate::io::citygml::ns::{classify, Ns};
 use quick_xml::events::{BytesText, Event};
@@ -39,10 +39,7 @@ pub(super) fn copy_children(
     let mut in_target = false;
     let mut n = 0;
     loop {
-        let pos = reader.buffer_position();
-        let ev = reader
-            .read_event_into(&mut buf)
-            .map_err(|e| CopyError::Read(xml_err(path, pos, e)))?;
+        let (pos, ev) = next_event(&mut reader, &mut buf, path).map_err(CopyError::Read)?;
         match &ev {
             Event::Eof => break,
             Event::Start(e) | Event::Empty(e) => {

@@ -81,7 +81,7 @@ use super::write::{check_target, WriteOptions};
 use crate::io::files::CountingWriter;
 use copy::{copy_children, xmlns_key, CopyError};
 use ids::Rewrite;
-use scan::{is_header, ns_of, open, scan, xml_err, Key};
+use scan::{is_header, next_event, ns_of, open, scan, xml_err, Key};
 
 /// Why documents cannot be merged.
 #[derive(Debug, thiserror::Error)]
@@ -192,15 +192,12 @@ fn head(path: &Path) -> Result<(Vec<u8>, Option<String>), ReadError> {
     let mut buf = Vec::new();
     let mut root_ns = None;
     loop {
-        let pos = reader.buffer_position();
-        if pos > HEAD_BYTES && root_ns.is_some() {
+        if reader.buffer_position() > HEAD_BYTES && root_ns.is_some() {
             return Ok((root_ns.unwrap_or_default(), None));
         }
         buf.clear();
-        match reader
-            .read_event_into(&mut buf)
-            .map_err(|e| xml_err(path, pos, e))?
-        {
+        let (pos, ev) = next_event(&mut reader, &mut buf, path)?;
+        match ev {
             Event::Eof => return Ok((root_ns.unwrap_or_default(), None)),
             Event::Start(ref e) | Event::Empty(ref e) => {
                 if root_ns.is_none() {

@@ -42,7 +42,22 @@ pub(super) fn xml_err(path: &Path, pos: u64, e: impl std::fmt::Display) -> ReadE
     ReadError::xml_at_byte(path, pos, e)
 }
 
-pub(super) fn open(path: &Path) -> Result<NsReader<Box<dyn std::io::BufRead + Send>>, ReadError> {
+/// A merge's reader of one document ([`open`]).
+pub(super) type Reader = NsReader<Box<dyn std::io::BufRead + Send>>;
+
+/// The next event of `reader` into `buf`, with the byte it starts at; malformed XML is
+/// [`ReadError::xml_at_byte`] of `path` there.
+pub(super) fn next_event<'b>(
+    reader: &mut Reader,
+    buf: &'b mut Vec<u8>,
+    path: &Path,
+) -> Result<(u64, Event<'b>), ReadError> {
+    let pos = reader.buffer_position();
+    let ev = reader.read_event_into(buf);
+    Ok((pos, ev.map_err(|e| xml_err(path, pos, e))?))
+}
+
+pub(super) fn open(path: &Path) -> Result<Reader, ReadError> {
     let (mut r, _) = source::open(path)?;
     source::skip_bom(&mut r, path)?;
     let mut reader = NsReader::from_reader(r);
@@ -107,10 +122,7 @@ pub(super) fn scan(path: &Path) -> Result<Scan, ReadError> {
     let mut seen_ids = HashSet::new();
     let mut seen_kinds = HashSet::new();
     loop {
-        let pos = reader.buffer_position();
-        let ev = reader
-            .read_event_into(&mut buf)
-            .map_err(|e| xml_err(path, pos, e))?;
+        let (pos, ev) = next_event(&mut reader, &mut buf, path)?;
         match ev {
             Event::Eof => break,
             Event::Decl(_) | Event::Comment(_) | Event::PI(_) | Event::DocType(_)

@@ -127,6 +127,59 @@ pub enum Streamed {
     Declined(String),
 }
 
+/// The settings of a writer that reads one document in several streamed passes: the options
+/// of every read, the chunk size, and the progress of each pass (`passed(k, n)`: `n` more
+/// bytes read in pass `k`, the writer telling what its passes are).
+#[derive(Clone, Copy)]
+pub struct Passes<'a> {
+    /// Options of every read.
+    pub read: &'a ReadOptions,
+    /// Bytes of whole top-level members a chunk holds, about ([`stream`]).
+    pub chunk_bytes: u64,
+    /// Progress: `passed(k, n)`, `n` more bytes read in pass `k`.
+    pub passed: &'a dyn Fn(usize, u64),
+}
+
+impl<'a> Passes<'a> {
+    /// Passes reading with `read` in chunks of `chunk_bytes`, telling `passed`.
+    pub fn new(read: &'a ReadOptions, chunk_bytes: u64, passed: &'a dyn Fn(usize, u64)) -> Self {
+        Passes {
+            read,
+            chunk_bytes,
+            passed,
+        }
+    }
+
+    /// Pass `k` over `path`: [`stream`] handing each chunk to `each`, its bytes told as pass
+    /// `k`'s. The document's summary, or `None` where the stream declines
+    /// ([`Streamed::Declined`]: what the pass did is to be dropped).
+    ///
+    /// # Errors
+    /// Errors of `each`, as [`stream`].
+    pub fn pass<E>(
+        &self,
+        path: &Path,
+        k: usize,
+        each: impl FnMut(Chunk) -> Result<(), E>,
+    ) -> Result<Option<StreamSummary>, E> {
+        let passed = self.passed;
+        let r = stream(path, self.read, self.chunk_bytes, &|n| passed(k, n), each)?;
+        Ok(match r {
+            Streamed::Done(s) => Some(s),
+            Streamed::Declined(_) => None,
+        })
+    }
+}
+
+impl std::fmt::Debug for Passes<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Passes")
+            .field("read", self.read)
+            .field("chunk_bytes", &self.chunk_bytes)
+            .finish_non_exhaustive()
+    }
+}
+
 /// Read `path` one chunk of about `chunk_bytes` bytes of whole top-level members at a time
 /// (see the module docs), handing each to `each` in document order and dropping it after;
 /// `passed(n)` is called as bytes of the document have been read (they add up to the

@@ -113,9 +113,7 @@ impl UpgradeSummary {
     /// `a.gml -> b.gml: CityGML 2.0 -> 3.0, 12 city object(s) in 3 member(s), ...`.
     pub fn describe(&self, input: &Path, out: &Path) -> String {
         let mut s = format!(
-            "{} -> {}: CityGML {} -> 3.0, {} city object(s) in {} member(s), {} generic attribute(s), {} appearance target(s)",
-            crate::model::shown(input),
-            crate::model::shown(out),
+            "CityGML {} -> 3.0, {} city object(s) in {} member(s), {} generic attribute(s), {} appearance target(s)",
             self.from,
             self.city_objects,
             self.members,
@@ -148,7 +146,7 @@ impl UpgradeSummary {
             );
         }
         s += &format!(", {} -> {} bytes", self.bytes_in, self.bytes_out);
-        s
+        crate::model::made_line(input, out, &s)
     }
 }
 
