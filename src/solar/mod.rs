@@ -1,11 +1,13 @@
 //! Solar analysis beside the LoD pipeline (paper 3, 5): the sky partition into ray bundles
-//! ([`sky`], shared with the selection), sun positions ([`sun`]), sky view factor and sky
+//! ([`sky`], shared with the selection), sun positions ([`sun`], with the site-independent
+//! half computed ahead: [`ephemeris`]), sky view factor and sky
 //! exposure ([`mod@svf`]), sun hours ([`mod@sun_hours`]), horizon profiles ([`horizon`]) and
 //! irradiation from hourly weather ([`weather`], [`mod@irradiance`]).
 //!
 //! All three take the scene only through an occlusion predicate (`true` = blocked), so
 //! they work with any ray caster; parallelism over points of interest is the caller's.
 
+pub mod ephemeris;
 pub mod fisheye;
 pub mod horizon;
 pub mod irradiance;

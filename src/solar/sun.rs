@@ -18,12 +18,13 @@
 //! # Ok::<(), skylod::solar::SolarError>(())
 //! ```
 
+use super::ephemeris::SunEphemeris;
 use super::SolarError;
 use crate::model::runtime::progress::{check, stage, Progress, Silent, Stage};
 use chrono::{DateTime, Datelike, Duration, FixedOffset, NaiveDate, Offset, TimeZone, Utc};
 use glam::DVec3;
 use rayon::prelude::*;
-use solar_positioning::{Location, RefractionCorrection, SolarPositions};
+use solar_positioning::{Location, PreparedPositions, RefractionCorrection, SolarPositions};
 
 /// Time zone used to attribute steps to local months: an IANA zone (with daylight saving)
 /// or a fixed offset from UTC.
@@ -261,6 +262,34 @@ fn quick_direction(utc: DateTime<Utc>, site: &Site) -> DVec3 {
     DVec3::new(-cd * sh, sd * cp - cd * ch * sp, sd * sp + cd * ch * cp).normalize_or_zero()
 }
 
+/// Start and number of steps of the UTC calendar year `year` at `step_minutes` (the
+/// remainder shorter than a step at the end of the year left out).
+pub(super) fn year_span(
+    year: i32,
+    step_minutes: u32,
+) -> Result<(DateTime<Utc>, usize), SolarError> {
+    let start = Utc
+        .with_ymd_and_hms(year, 1, 1, 0, 0, 0)
+        .single()
+        .ok_or(SolarError::Year(year))?;
+    let end =
+        NaiveDate::from_ymd_opt(year.saturating_add(1), 1, 1).ok_or(SolarError::Year(year))?;
+    let minutes = (end - start.date_naive()).num_minutes();
+    if step_minutes == 0 || step_minutes > 1440 {
+        return Err(SolarError::Step(step_minutes));
+    }
+    let steps = usize::try_from(minutes / i64::from(step_minutes)).unwrap_or(0);
+    Ok((start, steps))
+}
+
+/// The middle of step `k` of `step_s` seconds from `start`, where the sun is evaluated
+/// (`None` past the representable range).
+pub(super) fn step_mid(start: DateTime<Utc>, step_s: i64, k: usize) -> Option<DateTime<Utc>> {
+    let offset = Duration::try_seconds(i64::try_from(k).ok()?.checked_mul(step_s)?)?;
+    let half = Duration::milliseconds(step_s * 500);
+    start.checked_add_signed(offset)?.checked_add_signed(half)
+}
+
 /// Geometric sun elevation in degrees of [`quick_direction`].
 #[cfg(test)]
 fn quick_elevation(utc: DateTime<Utc>, site: &Site) -> f64 {
@@ -295,18 +324,24 @@ impl SunTable {
         site: &Site,
         progress: &dyn Progress,
     ) -> Result<SunTable, SolarError> {
-        let start = Utc
-            .with_ymd_and_hms(year, 1, 1, 0, 0, 0)
-            .single()
-            .ok_or(SolarError::Year(year))?;
-        let end =
-            NaiveDate::from_ymd_opt(year.saturating_add(1), 1, 1).ok_or(SolarError::Year(year))?;
-        let minutes = (end - start.date_naive()).num_minutes();
-        if step_minutes == 0 || step_minutes > 1440 {
-            return Err(SolarError::Step(step_minutes));
-        }
-        let steps = usize::try_from(minutes / i64::from(step_minutes)).unwrap_or(0);
-        SunTable::range_with(start, steps, step_minutes, site, progress)
+        SunTable::year_ahead(year, step_minutes, site, None, progress)
+    }
+
+    /// [`SunTable::year_with`], taking SPA's site-independent half of the steps from `ahead`
+    /// where it has them ready (and asking its thread to stop): the same table to the bit
+    /// ([`super::ephemeris`]). An ephemeris of another year, step or delta T is not used.
+    ///
+    /// # Errors
+    /// As [`SunTable::year_with`].
+    pub fn year_ahead(
+        year: i32,
+        step_minutes: u32,
+        site: &Site,
+        ahead: Option<&SunEphemeris>,
+        progress: &dyn Progress,
+    ) -> Result<SunTable, SolarError> {
+        let (start, steps) = year_span(year, step_minutes)?;
+        SunTable::build((start, steps, step_minutes), site, ahead, progress)
     }
 
     /// `steps` consecutive steps of `step_minutes` from `start` (computed in parallel;
@@ -334,39 +369,37 @@ impl SunTable {
         site: &Site,
         progress: &dyn Progress,
     ) -> Result<SunTable, SolarError> {
+        SunTable::build((start, steps, step_minutes), site, None, progress)
+    }
+
+    /// The table of `steps` steps of `step_minutes` from `start`, with SPA's
+    /// site-independent half from `ahead` where ready.
+    fn build(
+        (start, steps, step_minutes): (DateTime<Utc>, usize, u32),
+        site: &Site,
+        ahead: Option<&SunEphemeris>,
+        progress: &dyn Progress,
+    ) -> Result<SunTable, SolarError> {
         if step_minutes == 0 || step_minutes > 1440 {
             return Err(SolarError::Step(step_minutes));
+        }
+        if let Some(a) = ahead {
+            a.stop();
         }
         let refraction = RefractionCorrection::new(site.pressure_mbar, site.temperature_c)?;
         let spa = SolarPositions::new();
         let location = site.location();
         let step_s = i64::from(step_minutes) * 60;
-        let half = Duration::milliseconds(step_s * 500);
-        let in_years = |k: usize| {
-            let mid = i64::try_from(k)
-                .ok()
-                .and_then(|k| k.checked_mul(step_s))
-                .and_then(Duration::try_seconds)
-                .and_then(|o| start.checked_add_signed(o))
-                .and_then(|t| t.checked_add_signed(half));
-            mid.is_some_and(|t| QUICK_YEARS.contains(&t.year()))
-        };
+        let in_years =
+            |k: usize| step_mid(start, step_s, k).is_some_and(|t| QUICK_YEARS.contains(&t.year()));
         let quick = steps > 2
             && in_years(0)
             && in_years(steps - 1)
             && site.delta_t_s.abs() <= 86_400.0
             && (-90.0..=90.0).contains(&site.latitude)
             && (-180.0..=180.0).contains(&site.longitude);
-        let one = |k: usize| {
-            let offset = i64::try_from(k)
-                .ok()
-                .and_then(|k| k.checked_mul(step_s))
-                .and_then(Duration::try_seconds)
-                .ok_or(SolarError::Step(step_minutes))?;
-            let mid = start
-                .checked_add_signed(offset)
-                .and_then(|t| t.checked_add_signed(half))
-                .ok_or(SolarError::Step(step_minutes))?;
+        let one = |k: usize, prepared: Option<&PreparedPositions>| {
+            let mid = step_mid(start, step_s, k).ok_or(SolarError::Step(step_minutes))?;
             let month = u8::try_from(site.time_zone.local_month(mid).saturating_sub(1))
                 .unwrap_or(0)
                 .min(11);
@@ -380,13 +413,17 @@ impl SunTable {
                     });
                 }
             }
-            let p = spa.at(
-                &mid,
-                location,
-                site.elevation_m,
-                site.delta_t_s,
-                Some(refraction),
-            )?;
+            // `spa.at` is `for_time` then `at`: the same operations with the half ahead
+            let p = match prepared {
+                Some(p) => p.at(location, site.elevation_m, Some(refraction))?,
+                None => spa.at(
+                    &mid,
+                    location,
+                    site.elevation_m,
+                    site.delta_t_s,
+                    Some(refraction),
+                )?,
+            };
             Ok(SunStep {
                 direction: direction_from_angles(p.zenith_angle(), p.azimuth()),
                 above_horizon: p.zenith_angle() < 90.0,
@@ -394,7 +431,8 @@ impl SunTable {
             })
         };
         // A day of steps per task: the check between days, the order of the steps kept.
-        let per_day = (1440 / step_minutes as usize).max(1);
+        let per_day = SunEphemeris::per_day(step_minutes);
+        let table = (start, steps, step_minutes, site.delta_t_s);
         let steps = stage(progress, Stage::Sun, steps as u64, 0, || {
             let days: Vec<Vec<SunStep>> = (0..steps.div_ceil(per_day))
                 .into_par_iter()
@@ -402,7 +440,10 @@ impl SunTable {
                     check(progress, Stage::Sun)?;
                     let ks = d * per_day..((d + 1) * per_day).min(steps);
                     let n = ks.len() as u64;
-                    let day = ks.map(one).collect::<Result<Vec<_>, SolarError>>()?;
+                    let ready = ahead.and_then(|a| a.day(table, d));
+                    let day = (ks.enumerate())
+                        .map(|(i, k)| one(k, ready.and_then(|r| r.get(i)?.as_ref())))
+                        .collect::<Result<Vec<_>, SolarError>>()?;
                     progress.advance(Stage::Sun, n, 0, None);
                     Ok(day)
                 })

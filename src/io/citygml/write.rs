@@ -132,11 +132,11 @@ fn write_edits(
     }
     let edits = normalise(edits);
     let n_edits = edits.len();
-    let (mut reader, _) = source::open_source(&src.source, &src.path)?;
+    let mut reader = edit_source(&src.source, &src.path)?;
     let mut cursor = 0u64;
     let names = (src.len, src.path.as_path(), out);
-    let mut written = apply_edits(&mut reader, w, &edits, &mut cursor, names)?;
-    written += copy_rest(&mut reader, w, cursor, names)?;
+    let mut written = apply_edits(&mut *reader, w, &edits, &mut cursor, names)?;
+    written += copy_rest(&mut *reader, w, cursor, names)?;
     Ok(WriteSummary {
         bytes: written,
         edits: n_edits,
@@ -271,11 +271,71 @@ fn root_site_of(model: &CityModel) -> Option<u64> {
     owners.is_none_or(|o| first < o).then_some(first)
 }
 
+/// A source the edits are applied from, read in order: what no edit touches is read and
+/// copied, the spans the edits replace are passed over.
+pub(crate) trait EditSource: Read {
+    /// Pass over the next `n` bytes; the bytes passed (fewer where the source ends before).
+    fn pass(&mut self, n: u64) -> std::io::Result<u64> {
+        std::io::copy(&mut self.take(n), &mut std::io::sink())
+    }
+}
+
+impl EditSource for Box<dyn std::io::BufRead + Send> {}
+
+/// An uncompressed source file, read unbuffered where it is copied (the output is buffered)
+/// and passed over by seeking: a model that keeps a small part of its source reads only that
+/// part again (the paper district: 0.8 of 125 MB), not the whole file.
+struct PlainSource {
+    file: std::fs::File,
+    /// The file's length when opened.
+    len: u64,
+    pos: u64,
+}
+
+impl Read for PlainSource {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.file.read(buf)?;
+        self.pos += n as u64;
+        Ok(n)
+    }
+}
+
+impl EditSource for PlainSource {
+    fn pass(&mut self, n: u64) -> std::io::Result<u64> {
+        use std::io::{Seek, SeekFrom};
+        let to = self.pos.saturating_add(n).min(self.len.max(self.pos));
+        self.file.seek(SeekFrom::Start(to))?;
+        let passed = to - self.pos;
+        self.pos = to;
+        Ok(passed)
+    }
+}
+
+/// The source of `src` opened for [`apply_edits`]: an uncompressed file as a
+/// [`PlainSource`], anything else (gzip, memory, standard input) streamed
+/// ([`source::open_source`]).
+fn edit_source(src: &crate::model::Source, name: &Path) -> Result<Box<dyn EditSource>, WriteError> {
+    let io = |source| WriteError::Io {
+        file: name.to_path_buf(),
+        source,
+    };
+    if let source::Stream::Plain(reader) = source::open_stream(src, name)? {
+        let file = reader.into_inner();
+        let len = file.metadata().map_err(io)?.len();
+        let mut plain = PlainSource { file, len, pos: 0 };
+        // the buffered reader that told it from gzip has read ahead
+        std::io::Seek::rewind(&mut plain.file).map_err(io)?;
+        return Ok(Box::new(plain));
+    }
+    let (reader, _) = source::open_source(src, name)?;
+    Ok(Box::new(reader))
+}
+
 /// The source from `cursor` to the last of `edits` (sorted, not nested) copied to `w` with
 /// them applied; `cursor` moves past it. `(len, src, out)`: the source's length and the
 /// names of the source and the output. The bytes written.
 pub(crate) fn apply_edits(
-    reader: &mut dyn Read,
+    reader: &mut dyn EditSource,
     w: &mut dyn Write,
     edits: &[Edit],
     cursor: &mut u64,
@@ -294,13 +354,10 @@ pub(crate) fn apply_edits(
             })?;
         written += e.replacement.len() as u64;
         let skip = e.span.end - e.span.start;
-        let skipped =
-            std::io::copy(&mut reader.take(skip), &mut std::io::sink()).map_err(|source| {
-                WriteError::Io {
-                    file: src.to_path_buf(),
-                    source,
-                }
-            })?;
+        let skipped = reader.pass(skip).map_err(|source| WriteError::Io {
+            file: src.to_path_buf(),
+            source,
+        })?;
         if skipped != skip {
             return Err(WriteError::SourceChanged(src.to_path_buf()));
         }
@@ -313,7 +370,7 @@ pub(crate) fn apply_edits(
 /// (it changed since it was read). `(len, src, out)` as for [`apply_edits`]. The bytes
 /// copied.
 pub(crate) fn copy_rest(
-    reader: &mut dyn Read,
+    reader: &mut dyn EditSource,
     w: &mut dyn Write,
     cursor: u64,
     (len, src, out): (u64, &Path, &Path),
@@ -330,8 +387,8 @@ pub(crate) fn copy_rest(
     Ok(written)
 }
 
-pub(crate) fn copy(
-    reader: &mut dyn Read,
+pub(crate) fn copy<R: Read + ?Sized>(
+    reader: &mut R,
     w: &mut dyn Write,
     len: u64,
     src: &Path,
@@ -531,6 +588,50 @@ mod tests {
             span: a..b,
             replacement: vec![],
         }
+    }
+
+    /// A plain file and the same bytes streamed give the same output; the plain file is
+    /// passed over where the edits replace it, and a file shorter than its length in the
+    /// model is a changed source, as when it is streamed.
+    #[test]
+    fn plain_source_passes_over_replaced_spans() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("src.gml");
+        let text: Vec<u8> = (0..200_000u32).map(|i| b'a' + (i % 26) as u8).collect();
+        std::fs::write(&path, &text).unwrap();
+        let len = text.len() as u64;
+        let edits = normalise(vec![
+            e(10, 150_000),
+            Edit {
+                span: 150_100..150_200,
+                replacement: b"<x/>".to_vec(),
+            },
+            e(160_000, 199_990),
+        ]);
+        let run = |src: &crate::model::Source, len: u64| {
+            let mut reader = edit_source(src, &path)?;
+            let (mut cursor, mut out) = (0u64, Vec::new());
+            let names = (len, path.as_path(), Path::new("out.gml"));
+            let mut n = apply_edits(&mut *reader, &mut out, &edits, &mut cursor, names)?;
+            n += copy_rest(&mut *reader, &mut out, cursor, names)?;
+            assert_eq!(n, out.len() as u64);
+            Ok::<_, WriteError>(out)
+        };
+        let file = crate::model::Source::File(path.clone());
+        let memory = crate::model::Source::Memory(text.clone().into());
+        let got = run(&file, len).unwrap();
+        assert_eq!(got, run(&memory, len).unwrap());
+        let mut want = text[..10].to_vec();
+        want.extend_from_slice(&text[150_000..150_100]);
+        want.extend_from_slice(b"<x/>");
+        want.extend_from_slice(&text[150_200..160_000]);
+        want.extend_from_slice(&text[199_990..]);
+        assert_eq!(got, want);
+        // the source shorter (inside a replaced span) or longer than the model says
+        std::fs::write(&path, &text[..170_000]).unwrap();
+        assert!(matches!(run(&file, len), Err(WriteError::SourceChanged(_))));
+        std::fs::write(&path, [&text[..], b"z"].concat()).unwrap();
+        assert!(matches!(run(&file, len), Err(WriteError::SourceChanged(_))));
     }
 
     #[test]

@@ -11,6 +11,7 @@ use crate::export::report::report::Guarantee;
 use crate::lod::bound::BoundOptions;
 use crate::model::runtime::progress::Progress;
 use crate::pipeline::BoundSpec;
+use crate::solar::ephemeris::SunEphemeris;
 use crate::solar::{Site, SolarError, SunTable, DEFAULT_STEP_MIN, DEFAULT_YEAR};
 
 /// The relative error bounded by default (SVF, sun hours where the site is known, the
@@ -61,6 +62,17 @@ impl BoundRequest {
             no_bound_option: "--no-bound".into(),
             site_option: "--lat/--lon".into(),
         }
+    }
+
+    /// SPA's site-independent half of the sun-hours bound's table, started on a background
+    /// thread before the model (which gives the site) is read, for
+    /// [`BoundPlan::sun_table_ahead`]; `None` without a bound (or for a year or step the table
+    /// refuses: the table says so).
+    pub fn ephemeris(&self) -> Option<SunEphemeris> {
+        let delta_t_s = Site::new(0.0, 0.0).delta_t_s;
+        (self.bound)
+            .then(|| SunEphemeris::year(self.year, self.step_min, delta_t_s).ok())
+            .flatten()
     }
 
     /// What is bounded, with `site` the sun's site (given, or the model's:
@@ -145,11 +157,26 @@ impl BoundPlan {
     /// # Errors
     /// [`SolarError`] for an invalid year or step.
     pub fn sun_table(&self, progress: &dyn Progress) -> Result<Option<SunTable>, SolarError> {
+        self.sun_table_ahead(None, progress)
+    }
+
+    /// [`BoundPlan::sun_table`] with SPA's site-independent half taken from `ahead` where it
+    /// is ready ([`BoundRequest::ephemeris`], started before the model was read): the same
+    /// table.
+    ///
+    /// # Errors
+    /// As [`BoundPlan::sun_table`].
+    pub fn sun_table_ahead(
+        &self,
+        ahead: Option<&SunEphemeris>,
+        progress: &dyn Progress,
+    ) -> Result<Option<SunTable>, SolarError> {
         let Some((lat, lon)) = self.site.as_ref().map(SunSite::lat_lon) else {
+            ahead.inspect(|a| a.stop());
             return Ok(None);
         };
         let site = Site::new(lat, lon);
-        SunTable::year_with(self.year, self.step_min, &site, progress).map(Some)
+        SunTable::year_ahead(self.year, self.step_min, &site, ahead, progress).map(Some)
     }
 
     /// The bound to run ([`BoundSpec`], `None` when nothing is bounded) with `sun` (from

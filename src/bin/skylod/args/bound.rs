@@ -14,6 +14,7 @@ use skylod::pipeline::session::bound_plan::BoundRequest;
 use skylod::pipeline::session::flags::site_text;
 use skylod::pipeline::session::site::site_of;
 use skylod::pipeline::BoundSpec;
+use skylod::solar::ephemeris::SunEphemeris;
 
 #[derive(clap::Args, Debug)]
 pub struct BoundArgs {
@@ -67,18 +68,32 @@ impl BoundArgs {
         Ok(())
     }
 
-    /// The bound to run after the selection ([`skylod::pipeline::session::bound_plan`]) and what it
-    /// guarantees; `source` (the model as read) gives the sun's site.
-    pub fn spec(
-        &self,
-        source: &CityModel,
-        seed: u64,
-    ) -> anyhow::Result<(Option<BoundSpec>, Guarantee)> {
+    /// The request these options make (the bound's seed comes with the selection's options).
+    fn request(&self, seed: u64) -> BoundRequest {
         let mut r = BoundRequest::new(self.bound_rays, seed);
         r.bound = !self.no_bound;
         (r.max_svf_error, r.max_sun_hours_error) = (self.max_svf_error, self.max_sun_hours_error);
         r.max_irradiance_error = self.max_irradiance_error;
         (r.year, r.step_min) = (self.sun.year, self.sun.step);
+        r
+    }
+
+    /// SPA's site-independent half of the sun-hours bound's table, computed while the model
+    /// is read ([`BoundRequest::ephemeris`]); `None` with `--no-bound`.
+    pub fn ephemeris(&self) -> Option<SunEphemeris> {
+        self.request(0).ephemeris()
+    }
+
+    /// The bound to run after the selection ([`skylod::pipeline::session::bound_plan`]) and what it
+    /// guarantees; `source` (the model as read) gives the sun's site, `ahead` (from
+    /// [`BoundArgs::ephemeris`]) the site-independent half of the sun's table.
+    pub fn spec(
+        &self,
+        source: &CityModel,
+        seed: u64,
+        ahead: Option<&SunEphemeris>,
+    ) -> anyhow::Result<(Option<BoundSpec>, Guarantee)> {
+        let r = self.request(seed);
         let site = site_of(self.site.lat, self.site.lon, source);
         let plan = r
             .plan(site)
@@ -89,7 +104,7 @@ impl BoundArgs {
             }
             crate::log::summary!("lod: {n}");
         }
-        let sun = plan.sun_table(&crate::log::reporter())?;
+        let sun = plan.sun_table_ahead(ahead, &crate::log::reporter())?;
         let year = self.weather.year(&self.site, source, "lod")?;
         Ok(plan.finish(sun, year))
     }

@@ -78,6 +78,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let region = args.region.active();
     args.scene
         .filter(&mut args.pois, &pois, None, region, "lod")?;
+    // The sun's table, but for the site the model gives, computed while the model is read
+    // (in rayon's pool: sized first).
+    args.pois.jobs.global()?;
+    let ahead = args.bound.ephemeris();
     let Some(scene) = args.pois.scene()? else {
         return Ok(Outcome::SomeFailed);
     };
@@ -87,7 +91,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     let session = args.pois.study(scene, pois, None, spool, "lod")?;
     let study = &session.study;
-    let (bound, guarantee) = args.bound.spec(study.source(), lod.select.seed)?;
+    let (bound, guarantee) = args
+        .bound
+        .spec(study.source(), lod.select.seed, ahead.as_ref())?;
     let opts = LevelsOptions { lod, bound };
     let progress = crate::log::reporter();
     let lv = match combined {
