@@ -140,17 +140,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             Ok(s) => {
                 parts.push(out.clone());
                 names.push(input.clone());
-                crate::log::summary!(
-                    "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
-                    skylod::model::shown(input),
-                    shown.display(),
-                    s.source,
-                    s.target,
-                    s.rewrite.points,
-                    s.rewrite.elements,
-                    s.rewrite.envelopes,
-                    s.rewrite.srs_names
-                );
+                crate::log::summary!("{}", s.line(input, shown));
                 for w in &s.rewrite.warnings {
                     crate::log::warning!("warning: {}: {w}", skylod::model::shown(input));
                 }

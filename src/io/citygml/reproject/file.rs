@@ -77,6 +77,26 @@ mod with_crs {
         pub rewrite: RewriteSummary,
     }
 
+    impl ReprojectSummary {
+        /// The line `reproject` says for `input` written to `shown_output` (the output's name
+        /// as the user gave it):
+        /// `IN -> OUT: SOURCE -> TARGET, N points in E elements, V envelopes, S srsName`.
+        pub fn line(&self, input: &Path, shown_output: &Path) -> String {
+            let w = &self.rewrite;
+            format!(
+                "{} -> {}: {} -> {}, {} points in {} elements, {} envelopes, {} srsName",
+                crate::model::shown(input),
+                shown_output.display(),
+                self.source,
+                self.target,
+                w.points,
+                w.elements,
+                w.envelopes,
+                w.srs_names
+            )
+        }
+    }
+
     /// Reproject the document `src` into `out` through the transform `make` gives for the
     /// source CRS: `source`, or the document's `srsName` (module docs). Without `source`,
     /// every `srsName` of the document must name the same horizontal CRS. Large documents are

@@ -1,6 +1,7 @@
 //! Tests of the span-edit rewrite of coordinates, `srsName`s and envelopes.
 
 use super::*;
+use crate::model::crs::CrsName;
 
 #[test]
 fn attribute_spans_of_a_tag() {
@@ -233,4 +234,28 @@ fn passes_write_inside_one_wrapper_as_the_whole_rewrite() {
     // g0 bounds its own point (0, 0.5, 3), its coord (0, 7, 1), its implicit reference point
     // (10, 0, 30) and p1 (1, 1.5, 3), all swapped and shifted by 100.
     assert!(out.contains(r#"gml:id="g0"><gml:boundedBy><gml:Envelope srsName="EPSG:2" srsDimension="3"><gml:lowerCorner>100 100 1</gml:lowerCorner><gml:upperCorner>107 110 30</gml:upperCorner>"#), "{}", &out[..2000]);
+}
+
+#[test]
+fn the_summary_line_names_both_crss_and_the_counts() {
+    let rewrite = RewriteSummary {
+        points: 12,
+        elements: 3,
+        envelopes: 2,
+        srs_names: 4,
+        ..RewriteSummary::default()
+    };
+    let s = ReprojectSummary {
+        source: CrsName::parse("EPSG:25832").unwrap(),
+        target: CrsName::parse("EPSG:4326").unwrap(),
+        rewrite,
+    };
+    let line = s.line(Path::new("-"), Path::new("out.gml"));
+    assert_eq!(
+        line,
+        format!(
+            "<stdin> -> out.gml: {} -> {}, 12 points in 3 elements, 2 envelopes, 4 srsName",
+            s.source, s.target
+        )
+    );
 }
