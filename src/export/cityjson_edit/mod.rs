@@ -57,7 +57,7 @@ mod document;
 mod merge;
 mod reproject;
 mod rules;
-mod stream;
+pub(crate) mod stream;
 mod upgrade;
 
 pub use merge::merge_cityjson;

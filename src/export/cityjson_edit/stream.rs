@@ -352,6 +352,37 @@ impl Structure {
     pub fn trees(&self) -> Vec<Vec<u32>> {
         super::forest(&self.index, &self.ids, &self.parents, &self.children)
     }
+
+    /// Whether an object `id` was added.
+    pub fn contains(&self, id: &str) -> bool {
+        self.index.contains_key(&id_hash(id))
+    }
+
+    /// For each object, the last (in document order) of the objects linked to it through
+    /// `parents` or `children`, either way and transitively: the objects from a place in the
+    /// document on, up to the greatest such last object, hold every object they are linked
+    /// with.
+    pub fn reach(&self) -> Vec<u32> {
+        // union-find over the links, each set's root its greatest index
+        let mut up: Vec<u32> = (0..self.ids.len() as u32).collect();
+        fn root(up: &mut [u32], mut i: u32) -> u32 {
+            while up[i as usize] != i {
+                let next = up[up[i as usize] as usize];
+                up[i as usize] = next;
+                i = next;
+            }
+            i
+        }
+        for (i, links) in self.parents.iter().zip(&self.children).enumerate() {
+            for h in links.0.iter().chain(links.1.iter()) {
+                if let Some(&j) = self.index.get(h) {
+                    let (a, b) = (root(&mut up, i as u32), root(&mut up, j));
+                    up[a.min(b) as usize] = a.max(b);
+                }
+            }
+        }
+        (0..up.len() as u32).map(|i| root(&mut up, i)).collect()
+    }
 }
 
 /// A pass handing each city object to its function.

@@ -177,7 +177,7 @@ pub fn write_document_streamed(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<Option<StreamedDocument>, WriteError> {
-    use crate::io::citygml::read::{stream, Chunk, Streamed};
+    use crate::io::citygml::read::{stream_citygml as stream, Chunk, Streamed};
     use crate::model::Bbox;
     check_target(out, opts, std::iter::once(input))?;
     // Pass 0: the root envelope's box, and where that envelope is (the first chunk's

@@ -28,6 +28,7 @@
 //! assert_eq!(model.assets[0].detail_polygons()[0].exterior()[1].x, 1001.0);
 //! ```
 
+pub(crate) mod chunks;
 pub(crate) mod doc;
 pub mod map;
 mod seq;

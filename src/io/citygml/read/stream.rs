@@ -63,8 +63,12 @@ pub struct Chunk {
     pub bodies_before: usize,
     /// Warnings in earlier chunks.
     pub warnings_before: usize,
-    /// First and last byte (exclusive) of the chunk in the document.
+    /// First and last byte (exclusive) of the chunk in the document (a CityJSON document's:
+    /// in proportion to its city objects).
     pub bytes: (u64, u64),
+    /// A CityJSON document's: the attributes of the chunk's city objects and the members of
+    /// their semantic surface objects, which its CityJSON output copies.
+    pub(crate) source: Option<crate::export::cityjson_source::FromSource>,
 }
 
 impl Chunk {
@@ -141,6 +145,24 @@ pub enum Streamed {
 /// Errors of `each` (the stream stops at the first). A document that cannot be read is
 /// [`Streamed::Declined`]: the whole read reports its error as always.
 pub fn stream<E>(
+    path: &Path,
+    opts: &ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(u64),
+    each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<Streamed, E> {
+    if crate::export::citygml_from_cityjson::is_json_file(path) {
+        return crate::io::cityjson::chunks::stream(path, chunk_bytes, passed, each);
+    }
+    stream_citygml(path, opts, chunk_bytes, passed, each)
+}
+
+/// [`stream`] of a CityGML document only (a CityJSON one declines): for the writers that
+/// copy the document's XML.
+///
+/// # Errors
+/// As [`stream`].
+pub fn stream_citygml<E>(
     path: &Path,
     opts: &ReadOptions,
     chunk_bytes: u64,
@@ -262,6 +284,7 @@ pub fn stream<E>(
             warnings_before: sum.warnings,
             bytes: (if first { 0 } else { (from + bom) as u64 }, end),
             model,
+            source: None,
         };
         sum.buildings += chunk.model.buildings.len();
         sum.assets += chunk.model.assets.len() - bodies;

@@ -1,0 +1,356 @@
+//! A CityJSON document (`.city.json`, not CityJSONSeq) read in chunks of whole city-object
+//! trees ([`stream`]): the same [`Chunk`]s, in the same order, as the chunked CityGML read
+//! gives, so that `stats` and `convert` consume both alike; memory follows the chunk, not
+//! the document.
+//!
+//! Two passes over the document, through the streaming reader of the CityJSON edits
+//! (`crate::export::cityjson_edit::stream`: its members in any order, `CityObjects` one
+//! object at a time, `vertices` one vertex at a time):
+//!
+//! 1. the small members (`type`, `version`, `transform`, `metadata`, `geometry-templates`),
+//!    the vertices, and the ids of the city objects with their `parents` and `children` as
+//!    hashes (about 50 bytes an object, dropped after the pass). The links tell where the
+//!    object list can be cut: after an object when every object before it is linked only
+//!    with objects before it. The cuts kept are about one per `chunk_bytes` of document.
+//! 2. the city objects, each mapped as it is read ([`super::map`], as the whole read maps
+//!    them, in document order) into the chunk's model; at a cut the chunk's parents are
+//!    resolved, its bodies made, and it is handed over and dropped.
+//!
+//! What grows with the document: the vertices in real coordinates, 24 bytes a vertex (the
+//! whole document's list, since any object may use any vertex), and the list of cuts.
+//!
+//! The stream declines ([`Streamed::Declined`]: the caller reads the document whole, as
+//! before) where a chunk could differ from the whole read: CityJSONSeq, a first value that
+//! is no `CityJSON` object, a city object id given twice, and any document that does not
+//! read (the reason names the file and the line:column where the JSON parser was).
+
+use super::doc::{CityObject, Metadata, Templates, Transform};
+use super::map::{real_vertices, Mapper, Vertices};
+use super::seq::{check_version, reference_system_text, source_file, template_vertices};
+use super::Error;
+use crate::export::cityjson_edit::stream::{read, Pass, Structure, Vertex};
+use crate::export::cityjson_source::{add_object, FromSource};
+use crate::io::citygml::read::{Chunk, StreamSummary, Streamed};
+use crate::io::citygml::{ReadError, WriteError};
+use crate::model::{AssetKind, CityModel};
+use serde::Deserialize;
+use serde_json::Value;
+use std::path::Path;
+
+/// Why [`stream_chunks`] stopped.
+#[derive(Debug)]
+pub(crate) enum Stop<E> {
+    /// The caller's function failed.
+    Each(E),
+    /// The document could differ from the whole read (see the module docs).
+    Declined(String),
+    /// The document does not read: the file, line:column and city object where known.
+    Read(Error),
+}
+
+/// [`crate::io::citygml::read::stream`] of a CityJSON document (see the module docs): each
+/// chunk handed to `each` in document order; `passed(n)`: `n` more bytes of the document
+/// read (they add up to its size when it is done).
+///
+/// # Errors
+/// Errors of `each`; a document that cannot be read, or could differ from the whole read, is
+/// [`Streamed::Declined`] with the reason.
+pub(crate) fn stream<E>(
+    path: &Path,
+    chunk_bytes: u64,
+    passed: &dyn Fn(u64),
+    each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<Streamed, E> {
+    match stream_chunks(path, chunk_bytes, passed, each) {
+        Ok(sum) => Ok(Streamed::Done(sum)),
+        Err(Stop::Each(e)) => Err(e),
+        Err(Stop::Declined(why)) => Ok(Streamed::Declined(why)),
+        Err(Stop::Read(e)) => Ok(Streamed::Declined(e.to_string())),
+    }
+}
+
+/// Pass 1: the head, the vertices as stored, the links of the city objects.
+#[derive(Default)]
+struct Head {
+    ty: Option<Value>,
+    version: Option<Value>,
+    transform: Option<Value>,
+    metadata: Option<Value>,
+    templates: Option<Value>,
+    vertices: Vec<[f64; 3]>,
+    structure: Structure,
+    /// An id given twice.
+    repeated: Option<String>,
+}
+
+impl Pass for Head {
+    fn wants_members(&self) -> bool {
+        true
+    }
+    fn member(&mut self, key: String, v: Value) -> Result<(), String> {
+        let slot = match key.as_str() {
+            "type" => &mut self.ty,
+            "version" => &mut self.version,
+            "transform" => &mut self.transform,
+            "metadata" => &mut self.metadata,
+            "geometry-templates" => &mut self.templates,
+            _ => return Ok(()),
+        };
+        *slot = Some(v);
+        Ok(())
+    }
+    fn wants_objects(&self) -> bool {
+        true
+    }
+    fn object(&mut self, id: String, o: Value) -> Result<(), String> {
+        if self.structure.contains(&id) {
+            self.repeated.get_or_insert(id);
+            return Ok(());
+        }
+        self.structure.add(&id, &o)
+    }
+    fn wants_vertices(&self) -> bool {
+        true
+    }
+    fn vertex(&mut self, v: Vertex) -> Result<(), String> {
+        let k = self.vertices.len();
+        let c = v
+            .coords()
+            .ok_or_else(|| format!("vertex {k} is not three numbers"))?;
+        self.vertices.push(c);
+        Ok(())
+    }
+}
+
+/// A member of the head as `T` (absent: `None`).
+fn typed<T: serde::de::DeserializeOwned>(
+    v: &Option<Value>,
+    key: &str,
+    name: &Path,
+) -> Result<Option<T>, Error> {
+    // from the text: `geometry-templates` keeps boundaries as text (RawValue)
+    v.as_ref()
+        .map(|v| serde_json::from_str(&v.to_string()))
+        .transpose()
+        .map_err(|e| Error::at(name, 0, None, format!("{key}: {e}")))
+}
+
+/// The last object of each chunk (document order), about `per` objects a chunk, cut only
+/// where every object before the cut is linked with objects before it only.
+fn chunk_ends(reach: &[u32], per: usize) -> Vec<u32> {
+    let mut ends = Vec::new();
+    let (mut furthest, mut start) = (0u32, 0usize);
+    for (i, &r) in reach.iter().enumerate() {
+        furthest = furthest.max(r);
+        if furthest as usize == i && i + 1 - start >= per {
+            ends.push(i as u32);
+            start = i + 1;
+        }
+    }
+    if start < reach.len() {
+        ends.push(reach.len() as u32 - 1);
+    }
+    ends
+}
+
+/// [`stream`], with why it stopped.
+pub(crate) fn stream_chunks<E>(
+    path: &Path,
+    chunk_bytes: u64,
+    passed: &dyn Fn(u64),
+    mut each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<StreamSummary, Stop<E>> {
+    let read_error = |e: WriteError| match e {
+        WriteError::Read(ReadError::CityJson(e)) => Stop::Read(e),
+        e => Stop::Declined(e.to_string()),
+    };
+    // 1. the head, the vertices, the links
+    let mut head = Head::default();
+    let seen = read(path, path, &mut head).map_err(read_error)?;
+    if seen.more {
+        return Err(Stop::Declined("CityJSONSeq is read line by line".into()));
+    }
+    if head.ty.as_ref().and_then(Value::as_str) != Some("CityJSON") {
+        return Err(Stop::Declined("not a CityJSON object".into()));
+    }
+    if let Some(id) = head.repeated {
+        return Err(Stop::Declined(format!("city object id {id:?} given twice")));
+    }
+    let stop = Stop::Read;
+    let version = match head.version {
+        Some(Value::String(v)) => v,
+        None => String::new(),
+        Some(_) => {
+            return Err(stop(Error::at(
+                path,
+                0,
+                None,
+                "version: not a string".into(),
+            )))
+        }
+    };
+    let transform: Option<Transform> = typed(&head.transform, "transform", path).map_err(stop)?;
+    let metadata: Option<Metadata> = typed(&head.metadata, "metadata", path).map_err(stop)?;
+    let templates: Option<Templates> =
+        typed(&head.templates, "geometry-templates", path).map_err(stop)?;
+    let srs_name = metadata
+        .as_ref()
+        .and_then(|m| m.reference_system.as_ref())
+        .and_then(reference_system_text);
+    let template_list = template_vertices(templates.as_ref(), path).map_err(stop)?;
+    let list = real_vertices(&head.vertices, transform.as_ref(), path, 0).map_err(stop)?;
+    drop(std::mem::take(&mut head.vertices));
+    let n = head.structure.len();
+    let per = match seen.bytes {
+        0 => n.max(1),
+        b => usize::try_from(u128::from(chunk_bytes) * n as u128 / u128::from(b))
+            .unwrap_or(usize::MAX)
+            .max(1),
+    };
+    let ends = chunk_ends(&head.structure.reach(), per);
+    drop(head.structure);
+    let gzip = {
+        let mut magic = [0u8; 2];
+        std::fs::File::open(path)
+            .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
+            .is_ok()
+            && crate::io::is_gzip(&magic)
+    };
+    let verts = Vertices {
+        list: &list,
+        templates: templates.as_ref(),
+        template_list: &template_list,
+    };
+
+    // 2. the objects, chunk by chunk
+    let new_mapper = |first: bool| {
+        let mut m = Mapper::new(path);
+        if first {
+            check_version(&mut m, &version);
+        }
+        m
+    };
+    let mut sum = StreamSummary {
+        version: Some(super::seq::model_version(&version)),
+        srs_name: srs_name.clone(),
+        ..StreamSummary::default()
+    };
+    let mut mapper = new_mapper(true);
+    let mut source = FromSource::default();
+    let mut k = 0usize;
+    let mut failed: Option<Stop<E>> = None;
+    let mut failed_id: Option<String> = None;
+    let mut reported = 0u64;
+    let mut hand_over = |mapper: Mapper,
+                         source: FromSource,
+                         done: usize,
+                         sum: &mut StreamSummary|
+     -> Result<(), E> {
+        let (buildings, assets, _, warnings, counts) = mapper.finish();
+        let file = source_file(path, &version, srs_name.clone(), gzip, seen.bytes, counts);
+        let bodies = assets.iter().filter(|a| a.kind == AssetKind::Body).count();
+        let at = match n {
+            0 => seen.bytes,
+            n => u64::try_from(u128::from(seen.bytes) * done as u128 / n as u128)
+                .unwrap_or(seen.bytes),
+        };
+        let chunk = Chunk {
+            model: CityModel {
+                files: vec![file],
+                buildings,
+                assets,
+                warnings,
+            },
+            index: sum.chunks,
+            buildings_before: sum.buildings,
+            assets_before: sum.assets,
+            bodies_before: sum.bodies,
+            warnings_before: sum.warnings,
+            bytes: (reported, at),
+            source: Some(source),
+        };
+        sum.chunks += 1;
+        sum.buildings += chunk.model.buildings.len();
+        sum.assets += chunk.model.assets.len() - bodies;
+        sum.bodies += bodies;
+        sum.warnings += chunk.model.warnings.len();
+        if at > reported {
+            passed(at - reported);
+            reported = at;
+        }
+        each(chunk)
+    };
+    let mut end = ends.iter().copied();
+    let mut next_end = end.next();
+    let mut objects = crate::export::cityjson_edit::stream::EachObject(|id: String, o: Value| {
+        let before = mapper.origins.len();
+        let typed = match CityObject::deserialize(&o) {
+            Ok(t) => t,
+            Err(e) => {
+                failed_id = Some(id);
+                return Err(e.to_string());
+            }
+        };
+        let one = [(id, typed)];
+        if let Err(e) = mapper.add(&one, &verts, 0) {
+            failed_id = e.id.clone();
+            return Err(e.message);
+        }
+        let [(id, _)] = one;
+        let wanted: Vec<(usize, usize, usize)> = mapper.origins[before..]
+            .iter()
+            .enumerate()
+            .filter_map(|(i, o)| o.surface.map(|(g, s)| (before + i, g, s)))
+            .collect();
+        if let Value::Object(mut o) = o {
+            add_object(&mut source, id, &mut o, &wanted);
+        }
+        if next_end == Some(k as u32) {
+            next_end = end.next();
+            let m = std::mem::replace(&mut mapper, new_mapper(false));
+            let s = std::mem::take(&mut source);
+            if let Err(e) = hand_over(m, s, k + 1, &mut sum) {
+                failed = Some(Stop::Each(e));
+                return Err("stopped".into());
+            }
+        }
+        k += 1;
+        Ok(())
+    });
+    let r = read(path, path, &mut objects);
+    drop(objects);
+    if let Some(f) = failed {
+        return Err(f);
+    }
+    if let Err(e) = r {
+        return Err(match read_error(e) {
+            Stop::Read(mut e) => {
+                e.id = failed_id.or(e.id);
+                Stop::Read(e)
+            }
+            other => other,
+        });
+    }
+    if k != n {
+        return Err(Stop::Declined("the document changed while read".into()));
+    }
+    if n == 0 {
+        hand_over(mapper, source, 0, &mut sum).map_err(Stop::Each)?;
+    }
+    Ok(sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cuts_only_between_linked_groups() {
+        // 0 alone; 1..=3 linked (3 with 1); 4 alone
+        let reach = [0, 3, 2, 3, 4];
+        assert_eq!(chunk_ends(&reach, 1), [0, 3, 4]);
+        assert_eq!(chunk_ends(&reach, 2), [3, 4]);
+        assert_eq!(chunk_ends(&reach, 9), [4]);
+        assert!(chunk_ends(&[], 1).is_empty());
+    }
+}
