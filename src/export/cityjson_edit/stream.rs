@@ -13,6 +13,7 @@ use crate::io::citygml::error::WriteError;
 use crate::io::citygml::write::atomic_write;
 use crate::io::files::CountingWriter;
 use serde::de::{DeserializeSeed, Error as _, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use serde_json::value::RawValue;
 use serde_json::{Map, Value};
 use std::cell::Cell;
 use std::collections::HashMap;
@@ -40,6 +41,15 @@ pub(crate) trait Pass {
     }
     /// One city object, in document order.
     fn object(&mut self, _id: String, _o: Value) -> Result<(), String> {
+        Ok(())
+    }
+    /// Whether each city object is handed over as its JSON text ([`Pass::object_text`]) rather
+    /// than as a value (for a pass that parses only what it needs of each).
+    fn wants_text(&self) -> bool {
+        false
+    }
+    /// One city object as its JSON text, in document order.
+    fn object_text(&mut self, _id: String, _o: Box<RawValue>) -> Result<(), String> {
         Ok(())
     }
     /// Whether `vertices` is read.
@@ -279,9 +289,13 @@ impl<'de> Visitor<'de> for Objects<'_> {
         f.write_str("\"CityObjects\" as an object")
     }
     fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<(), A::Error> {
+        let text = self.0.wants_text();
         while let Some(id) = m.next_key::<String>()? {
-            let o: Value = m.next_value()?;
-            self.0.object(id, o).map_err(A::Error::custom)?;
+            let r = match text {
+                true => self.0.object_text(id, m.next_value()?),
+                false => self.0.object(id, m.next_value()?),
+            };
+            r.map_err(A::Error::custom)?;
         }
         Ok(())
     }
@@ -326,20 +340,30 @@ pub(crate) struct Structure {
 impl Structure {
     /// Add the next object; a repeated id is refused.
     pub fn add(&mut self, id: &str, o: &Value) -> Result<(), String> {
+        self.add_links(id, o.get("parents"), o.get("children"))
+    }
+
+    /// [`Structure::add`] of an object by its `parents` and `children` (the strings of
+    /// arrays; anything else is no link).
+    pub fn add_links(
+        &mut self,
+        id: &str,
+        parents: Option<&Value>,
+        children: Option<&Value>,
+    ) -> Result<(), String> {
         let h = id_hash(id);
         let k = u32::try_from(self.ids.len()).map_err(|_| "too many city objects".to_string())?;
         if self.index.insert(h, k).is_some() {
             return Err(format!("city object id {id:?} given twice"));
         }
-        let hashes = |key: &str| -> Box<[u64]> {
-            o.get(key)
-                .and_then(Value::as_array)
+        let hashes = |v: Option<&Value>| -> Box<[u64]> {
+            v.and_then(Value::as_array)
                 .map(|a| a.iter().filter_map(Value::as_str).map(id_hash).collect())
                 .unwrap_or_default()
         };
         self.ids.push(h);
-        self.parents.push(hashes("parents"));
-        self.children.push(hashes("children"));
+        self.parents.push(hashes(parents));
+        self.children.push(hashes(children));
         Ok(())
     }
 
@@ -393,6 +417,21 @@ impl<F: FnMut(String, Value) -> Result<(), String>> Pass for EachObject<F> {
         true
     }
     fn object(&mut self, id: String, o: Value) -> Result<(), String> {
+        (self.0)(id, o)
+    }
+}
+
+/// A pass handing each city object's JSON text to its function.
+pub(crate) struct EachText<F>(pub F);
+
+impl<F: FnMut(String, Box<RawValue>) -> Result<(), String>> Pass for EachText<F> {
+    fn wants_objects(&self) -> bool {
+        true
+    }
+    fn wants_text(&self) -> bool {
+        true
+    }
+    fn object_text(&mut self, id: String, o: Box<RawValue>) -> Result<(), String> {
         (self.0)(id, o)
     }
 }

@@ -9,12 +9,14 @@
 //!
 //! 1. the small members (`type`, `version`, `transform`, `metadata`, `geometry-templates`),
 //!    the vertices, and the ids of the city objects with their `parents` and `children` as
-//!    hashes (about 50 bytes an object, dropped after the pass). The links tell where the
-//!    object list can be cut: after an object when every object before it is linked only
-//!    with objects before it. The cuts kept are about one per `chunk_bytes` of document.
-//! 2. the city objects, each mapped as it is read ([`super::map`], as the whole read maps
-//!    them, in document order) into the chunk's model; at a cut the chunk's parents are
-//!    resolved, its bodies made, and it is handed over and dropped.
+//!    hashes (about 50 bytes an object, dropped after the pass; only the links are parsed of
+//!    each object's text, the rest skipped). The links tell where the object list can be
+//!    cut: after an object when every object before it is linked only with objects before
+//!    it. The cuts kept are about one per `chunk_bytes` of document.
+//! 2. the city objects, each parsed from its text and mapped as it is read ([`super::map`],
+//!    as the whole read maps them, in document order) into the chunk's model, its
+//!    attributes and semantic surface objects kept for a CityJSON output; at a cut the
+//!    chunk's parents are resolved, its bodies made, and it is handed over and dropped.
 //!
 //! What grows with the document: the vertices in real coordinates, 24 bytes a vertex (the
 //! whole document's list, since any object may use any vertex), and the list of cuts.
@@ -28,13 +30,14 @@ use super::doc::{CityObject, Metadata, Templates, Transform};
 use super::map::{real_vertices, Mapper, Vertices};
 use super::seq::{check_version, reference_system_text, source_file, template_vertices};
 use super::Error;
-use crate::export::cityjson_edit::stream::{read, Pass, Structure, Vertex};
+use crate::export::cityjson_edit::stream::{read, EachText, Pass, Structure, Vertex};
 use crate::export::cityjson_source::{add_object, FromSource};
 use crate::io::citygml::read::{Chunk, StreamSummary, Streamed};
 use crate::io::citygml::{ReadError, WriteError};
 use crate::model::{AssetKind, CityModel};
 use serde::Deserialize;
-use serde_json::Value;
+use serde_json::value::RawValue;
+use serde_json::{Map, Value};
 use std::path::Path;
 
 /// Why [`stream_chunks`] stopped.
@@ -102,12 +105,17 @@ impl Pass for Head {
     fn wants_objects(&self) -> bool {
         true
     }
-    fn object(&mut self, id: String, o: Value) -> Result<(), String> {
+    fn wants_text(&self) -> bool {
+        true
+    }
+    fn object_text(&mut self, id: String, o: Box<RawValue>) -> Result<(), String> {
         if self.structure.contains(&id) {
             self.repeated.get_or_insert(id);
             return Ok(());
         }
-        self.structure.add(&id, &o)
+        let l: Links = serde_json::from_str(o.get()).map_err(|e| format!("{id}: {e}"))?;
+        self.structure
+            .add_links(&id, l.parents.as_ref(), l.children.as_ref())
     }
     fn wants_vertices(&self) -> bool {
         true
@@ -119,6 +127,59 @@ impl Pass for Head {
             .ok_or_else(|| format!("vertex {k} is not three numbers"))?;
         self.vertices.push(c);
         Ok(())
+    }
+}
+
+/// What pass 1 reads of a city object: its links (the rest skipped unparsed).
+#[derive(Deserialize)]
+struct Links {
+    #[serde(default)]
+    parents: Option<Value>,
+    #[serde(default)]
+    children: Option<Value>,
+}
+
+/// What a CityJSON output copies of a city object ([`add_object`]): its attributes and its
+/// semantic surface objects (the rest skipped unparsed).
+#[derive(Deserialize)]
+struct Copied {
+    #[serde(default)]
+    attributes: Option<Value>,
+    #[serde(default)]
+    geometry: Vec<CopiedGeometry>,
+}
+
+#[derive(Deserialize)]
+struct CopiedGeometry {
+    #[serde(default)]
+    semantics: Option<CopiedSemantics>,
+}
+
+#[derive(Deserialize)]
+struct CopiedSemantics {
+    #[serde(default)]
+    surfaces: Option<Value>,
+}
+
+impl Copied {
+    /// The object as [`add_object`] reads it.
+    fn into_object(self) -> Map<String, Value> {
+        let geometry = self
+            .geometry
+            .into_iter()
+            .map(|g| match g.semantics {
+                Some(CopiedSemantics { surfaces: Some(s) }) => {
+                    serde_json::json!({"semantics": {"surfaces": s}})
+                }
+                _ => Value::Object(Map::new()),
+            })
+            .collect();
+        let mut o = Map::new();
+        o.insert("geometry".into(), Value::Array(geometry));
+        if let Some(a) = self.attributes {
+            o.insert("attributes".into(), a);
+        }
+        o
     }
 }
 
@@ -282,15 +343,18 @@ pub(crate) fn stream_chunks<E>(
     };
     let mut end = ends.iter().copied();
     let mut next_end = end.next();
-    let mut objects = crate::export::cityjson_edit::stream::EachObject(|id: String, o: Value| {
+    let mut objects = EachText(|id: String, o: Box<RawValue>| {
         let before = mapper.origins.len();
-        let typed = match CityObject::deserialize(&o) {
+        let parsed = serde_json::from_str::<CityObject>(o.get())
+            .and_then(|t| Ok((t, serde_json::from_str::<Copied>(o.get())?)));
+        let (typed, copied) = match parsed {
             Ok(t) => t,
             Err(e) => {
                 failed_id = Some(id);
                 return Err(e.to_string());
             }
         };
+        drop(o);
         let one = [(id, typed)];
         if let Err(e) = mapper.add(&one, &verts, 0) {
             failed_id = e.id.clone();
@@ -302,9 +366,7 @@ pub(crate) fn stream_chunks<E>(
             .enumerate()
             .filter_map(|(i, o)| o.surface.map(|(g, s)| (before + i, g, s)))
             .collect();
-        if let Value::Object(mut o) = o {
-            add_object(&mut source, id, &mut o, &wanted);
-        }
+        add_object(&mut source, id, &mut copied.into_object(), &wanted);
         if next_end == Some(k as u32) {
             next_end = end.next();
             let m = std::mem::replace(&mut mapper, new_mapper(false));
@@ -343,6 +405,79 @@ pub(crate) fn stream_chunks<E>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every chunk's buildings, or why the stream stopped.
+    fn chunks_of(doc: &str, chunk: u64) -> Result<Vec<Vec<String>>, Stop<()>> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.city.json");
+        std::fs::write(&path, doc).unwrap();
+        let mut out = Vec::new();
+        stream_chunks(&path, chunk, &|_| {}, |c: Chunk| {
+            let ids = c
+                .model
+                .buildings
+                .iter()
+                .map(|b| b.id.clone().unwrap_or_default());
+            out.push(ids.collect());
+            Ok::<(), ()>(())
+        })?;
+        Ok(out)
+    }
+
+    const DOC: &str = r#"{"vertices":[[0,0,0],[1000,0,0],[0,1000,0]],"type":"CityJSON","version":"2.0",
+      "CityObjects":{
+        "p":{"type":"BuildingPart","parents":["b"],"geometry":[{"type":"MultiSurface","lod":"1","boundaries":[[[0,1,2]]]}]},
+        "c":{"type":"Building","geometry":[{"type":"MultiSurface","lod":"1","boundaries":[[[0,1,2]]]}]},
+        "b":{"type":"Building","children":["p"]},
+        "d":{"type":"Building","geometry":[{"type":"MultiSurface","lod":"1","boundaries":[[[0,1,2]]]}]}},
+      "transform":{"scale":[0.001,0.001,0.001],"translate":[0,0,0]}}"#;
+
+    #[test]
+    fn chunks_hold_whole_trees_in_document_order() {
+        // one object a chunk where it can be cut: never between the part and its building
+        let c = chunks_of(DOC, 1).unwrap_or_else(|_| panic!("stopped"));
+        assert_eq!(c, [vec!["p", "c", "b"], vec!["d"]]);
+        let whole = crate::io::cityjson::read_slice(DOC.as_bytes(), "d".as_ref()).unwrap();
+        let ids: Vec<_> = whole
+            .buildings
+            .iter()
+            .map(|b| b.id.clone().unwrap())
+            .collect();
+        assert_eq!(ids, ["p", "c", "b", "d"]);
+        assert_eq!(chunks_of(DOC, 1 << 20).unwrap_or_default().len(), 1);
+    }
+
+    #[test]
+    fn errors_have_the_file_line_column_and_object() {
+        let bad = DOC.replace(r#""c":{"type":"Building","geometry":[{"type":"MultiSurface","lod":"1","boundaries":[[[0,1,2]]]}]}"#,
+            "\"c\":{\"type\":\"Building\",\"geometry\":[{\"type\":\"MultiSurface\",\"lod\":\"1\",\"boundaries\":[[[0,1,7]]]}]}");
+        assert_ne!(bad, DOC);
+        let Err(Stop::Read(e)) = chunks_of(&bad, 1) else {
+            panic!("a bad vertex index is an error");
+        };
+        assert_eq!((e.line, e.id.as_deref()), (4, Some("c")), "{e}");
+        assert!(e.column > 0 && e.message.contains("vertex index 7"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with(&format!("{}:4:", e.file.display())),
+            "{e}"
+        );
+        let Err(Stop::Read(e)) = chunks_of(&DOC[..DOC.len() - 30], 1) else {
+            panic!("a truncated document is an error");
+        };
+        assert!(
+            e.line == 7 && e.column > 0 && e.message.contains("EOF"),
+            "{e}"
+        );
+        // what could differ from the whole read declines
+        let twice = DOC.replace(r#""d":"#, r#""c":"#);
+        assert!(matches!(chunks_of(&twice, 1), Err(Stop::Declined(_))));
+        let seq = format!(
+            "{}\n{{\"type\":\"CityJSONFeature\"}}",
+            DOC.replace('\n', " ")
+        );
+        assert!(matches!(chunks_of(&seq, 1), Err(Stop::Declined(_))));
+    }
 
     #[test]
     fn cuts_only_between_linked_groups() {
