@@ -183,7 +183,7 @@ fn shared_data_converted_to_cityjson_streams_the_same() {
 /// `file:line:column` somewhere in `text`.
 fn has_position(text: &str, file: &str) -> bool {
     text.match_indices(&format!("{file}:")).any(|(at, m)| {
-        let rest = text[at + m.len()..].as_bytes();
+        let rest = &text.as_bytes()[at + m.len()..];
         let line = rest.iter().take_while(|b| b.is_ascii_digit()).count();
         let column = rest
             .get(line + 1..)

@@ -49,7 +49,7 @@ pub(crate) trait Pass {
         false
     }
     /// One city object as its JSON text, in document order.
-    fn object_text(&mut self, _id: String, _o: Box<RawValue>) -> Result<(), String> {
+    fn object_text(&mut self, _id: String, _o: &RawValue) -> Result<(), String> {
         Ok(())
     }
     /// Whether `vertices` is read.
@@ -292,7 +292,7 @@ impl<'de> Visitor<'de> for Objects<'_> {
         let text = self.0.wants_text();
         while let Some(id) = m.next_key::<String>()? {
             let r = match text {
-                true => self.0.object_text(id, m.next_value()?),
+                true => self.0.object_text(id, &m.next_value::<Box<RawValue>>()?),
                 false => self.0.object(id, m.next_value()?),
             };
             r.map_err(A::Error::custom)?;
@@ -424,14 +424,14 @@ impl<F: FnMut(String, Value) -> Result<(), String>> Pass for EachObject<F> {
 /// A pass handing each city object's JSON text to its function.
 pub(crate) struct EachText<F>(pub F);
 
-impl<F: FnMut(String, Box<RawValue>) -> Result<(), String>> Pass for EachText<F> {
+impl<F: FnMut(String, &RawValue) -> Result<(), String>> Pass for EachText<F> {
     fn wants_objects(&self) -> bool {
         true
     }
     fn wants_text(&self) -> bool {
         true
     }
-    fn object_text(&mut self, id: String, o: Box<RawValue>) -> Result<(), String> {
+    fn object_text(&mut self, id: String, o: &RawValue) -> Result<(), String> {
         (self.0)(id, o)
     }
 }

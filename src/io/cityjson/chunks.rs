@@ -108,7 +108,7 @@ impl Pass for Head {
     fn wants_text(&self) -> bool {
         true
     }
-    fn object_text(&mut self, id: String, o: Box<RawValue>) -> Result<(), String> {
+    fn object_text(&mut self, id: String, o: &RawValue) -> Result<(), String> {
         if self.structure.contains(&id) {
             self.repeated.get_or_insert(id);
             return Ok(());
@@ -343,44 +343,44 @@ pub(crate) fn stream_chunks<E>(
     };
     let mut end = ends.iter().copied();
     let mut next_end = end.next();
-    let mut objects = EachText(|id: String, o: Box<RawValue>| {
-        let before = mapper.origins.len();
-        let parsed = serde_json::from_str::<CityObject>(o.get())
-            .and_then(|t| Ok((t, serde_json::from_str::<Copied>(o.get())?)));
-        let (typed, copied) = match parsed {
-            Ok(t) => t,
-            Err(e) => {
-                failed_id = Some(id);
-                return Err(e.to_string());
+    let r = {
+        let mut objects = EachText(|id: String, o: &RawValue| {
+            let before = mapper.origins.len();
+            let parsed = serde_json::from_str::<CityObject>(o.get())
+                .and_then(|t| Ok((t, serde_json::from_str::<Copied>(o.get())?)));
+            let (typed, copied) = match parsed {
+                Ok(t) => t,
+                Err(e) => {
+                    failed_id = Some(id);
+                    return Err(e.to_string());
+                }
+            };
+            let one = [(id, typed)];
+            if let Err(e) = mapper.add(&one, &verts, 0) {
+                failed_id = e.id.clone();
+                return Err(e.message);
             }
-        };
-        drop(o);
-        let one = [(id, typed)];
-        if let Err(e) = mapper.add(&one, &verts, 0) {
-            failed_id = e.id.clone();
-            return Err(e.message);
-        }
-        let [(id, _)] = one;
-        let wanted: Vec<(usize, usize, usize)> = mapper.origins[before..]
-            .iter()
-            .enumerate()
-            .filter_map(|(i, o)| o.surface.map(|(g, s)| (before + i, g, s)))
-            .collect();
-        add_object(&mut source, id, &mut copied.into_object(), &wanted);
-        if next_end == Some(k as u32) {
-            next_end = end.next();
-            let m = std::mem::replace(&mut mapper, new_mapper(false));
-            let s = std::mem::take(&mut source);
-            if let Err(e) = hand_over(m, s, k + 1, &mut sum) {
-                failed = Some(Stop::Each(e));
-                return Err("stopped".into());
+            let [(id, _)] = one;
+            let wanted: Vec<(usize, usize, usize)> = mapper.origins[before..]
+                .iter()
+                .enumerate()
+                .filter_map(|(i, o)| o.surface.map(|(g, s)| (before + i, g, s)))
+                .collect();
+            add_object(&mut source, id, &mut copied.into_object(), &wanted);
+            if next_end == Some(k as u32) {
+                next_end = end.next();
+                let m = std::mem::replace(&mut mapper, new_mapper(false));
+                let s = std::mem::take(&mut source);
+                if let Err(e) = hand_over(m, s, k + 1, &mut sum) {
+                    failed = Some(Stop::Each(e));
+                    return Err("stopped".into());
+                }
             }
-        }
-        k += 1;
-        Ok(())
-    });
-    let r = read(path, path, &mut objects);
-    drop(objects);
+            k += 1;
+            Ok(())
+        });
+        read(path, path, &mut objects)
+    };
     if let Some(f) = failed {
         return Err(f);
     }
