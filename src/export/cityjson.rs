@@ -420,7 +420,7 @@ pub(super) struct Plan<'a> {
     /// Extra attributes of the semantic surface objects of some assets.
     surface_attributes: Option<&'a BTreeMap<usize, Map<String, Value>>>,
     /// A CityJSON source's attributes and semantic surface members, copied to the output.
-    source: Option<FromSource>,
+    pub(super) source: Option<FromSource>,
 }
 
 impl<'a> Plan<'a> {

@@ -230,6 +230,7 @@ impl Frame {
     fn plan<'a>(&self, c: &'a Chunk, ids: &mut Ids) -> Plan<'a> {
         let m = &c.model;
         let mut plan = Plan::bare(m, 0, Content::Full);
+        plan.source = c.source.clone();
         plan.bbox = self.bbox;
         plan.translate = self.translate;
         plan.scale = self.scale;

@@ -31,6 +31,8 @@ mod cityjson_edit;
 mod cityjson_export;
 // CityJSON and CityJSONSeq as inputs of every command (issue 24).
 mod cityjson_input;
+// A CityJSON document read in chunks of city-object trees by `stats` and `convert`.
+mod cityjson_chunks;
 mod cityjson_merge;
 // CityJSON / CityJSONSeq → CityGML 2.0 and 3.0: valid, counted, round trip; upgrade --jobs.
 mod cityjson_to_citygml;

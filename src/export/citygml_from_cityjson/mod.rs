@@ -230,37 +230,8 @@ pub fn citygml_from_cityjson(
     Ok(summary)
 }
 
-/// Whether the file at `path` holds JSON (CityJSON, CityJSONSeq; gzip-compressed or not), by
-/// its first bytes ([`crate::io::cityjson::sniff`]); false when it cannot be read.
-pub fn is_json_file(path: &Path) -> bool {
-    open(path).is_ok_and(|mut r| {
-        r.fill_buf()
-            .is_ok_and(|h| crate::io::cityjson::sniff(h) == crate::io::cityjson::Sniffed::Json)
-    })
-}
-
-/// Open a (possibly gzip-compressed) file, or standard input for `-` (its bytes as kept by
-/// [`crate::io::files::stdin_bytes`]).
-pub(crate) fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
-    let io = |source| ReadError::Io {
-        file: input.to_path_buf(),
-        source,
-    };
-    let mut r: Box<dyn BufRead + Send> = match crate::io::citygml::source::resolve(input)? {
-        crate::model::Source::Memory(bytes) => Box::new(std::io::Cursor::new(bytes)),
-        crate::model::Source::File(p) => Box::new(std::io::BufReader::with_capacity(
-            1 << 16,
-            std::fs::File::open(p).map_err(io)?,
-        )),
-    };
-    let head = r.fill_buf().map_err(io)?;
-    Ok(if crate::io::files::is_gzip(head) {
-        let dec = flate2::bufread::MultiGzDecoder::new(r);
-        Box::new(std::io::BufReader::with_capacity(1 << 16, dec))
-    } else {
-        r
-    })
-}
+pub use crate::io::cityjson::is_json_file;
+pub(crate) use crate::io::cityjson::open;
 
 /// Write the CityJSON / CityJSONSeq read from `r` (named `name` in errors) as CityGML 2.0
 /// to `w`, value by value.

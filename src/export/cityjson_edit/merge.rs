@@ -32,8 +32,12 @@
 //! features are streamed through one at a time (memory: one feature, the ids of every input,
 //! the templates); a document input's top-level objects become features (with their
 //! descendants; a document's appearance goes whole into each of its features, its indices
-//! unchanged; such a document input is still parsed whole). Every input is read twice: first
-//! for its header, ids and box, then to write.
+//! unchanged). A document input is read in passes too: the links of its city objects (as
+//! hashes) and its vertices (as [`Vertex`]es: 16 bytes each for integer triples, the part
+//! that grows with it), then its objects one at a time, each tree written once all its
+//! objects are read (a document with at most one top-level object is one feature: held
+//! whole; one with an id given twice is parsed whole). Every input is read at least twice:
+//! first for its header, ids and box, then to write.
 
 use super::stream::{self, EachObject, EachVertex, Pass, Vertex};
 use super::{check_type, cj, srs_of, transform_of, trees, write_line, Transform, Values};
@@ -194,8 +198,6 @@ pub fn merge_cityjson(
     let bytes = atomic_write(out, |w| {
         let mut n = write_line(w, &head).map_err(io)?;
         for (k, p) in inputs.iter().enumerate() {
-            let mut values = Values::open(p)?;
-            values.input = name(k);
             let mut part = Part {
                 from: heads[k].transform,
                 to,
@@ -203,6 +205,14 @@ pub fn merge_cityjson(
                 tpl: tpl_off[k],
                 summary: &mut summary,
             };
+            if heads[k].doc.is_some() {
+                let app = heads[k].members.get("appearance");
+                if part.absorb_document(p, &name(k), (&mut *w, &mut n), app, io)? {
+                    continue;
+                }
+            }
+            let mut values = Values::open(p)?;
+            values.input = name(k);
             let mut h = values.header()?;
             let app = h.get_mut("appearance").map(Value::take);
             if let Some(Value::Object(objects)) = h.get_mut("CityObjects").map(Value::take) {
@@ -531,6 +541,7 @@ impl Part<'_> {
         app: Option<&Value>,
         io: impl Fn(std::io::Error) -> WriteError,
     ) -> Result<(), String> {
+        let vertices: Vec<Vertex> = vertices.into_iter().map(Vertex::from_value).collect();
         let objects = self.rename(objects);
         let app = app.filter(|a| a.as_object().is_some_and(|m| !m.is_empty()));
         let single = objects.values().filter(|o| is_top(o)).count() <= 1;
@@ -546,11 +557,99 @@ impl Part<'_> {
         Ok(())
     }
 
+    /// [`Part::absorb`] of the document at `p` (named `name`) read in passes
+    /// ([`super::stream`]): its vertices kept as [`Vertex`]es and its objects' links as
+    /// hashes, then its objects one at a time, each tree written as soon as all its objects
+    /// are read, in [`trees`]' order (the objects of trees still open are held: one tree for a
+    /// document in tree order). `false`, nothing written, for a document with an id given
+    /// twice (absorbed whole then).
+    fn absorb_document(
+        &mut self,
+        p: &Path,
+        name: &Path,
+        (w, bytes): (&mut dyn std::io::Write, &mut u64),
+        app: Option<&Value>,
+        io: impl Fn(std::io::Error) -> WriteError,
+    ) -> Result<bool, WriteError> {
+        let mut structure = stream::Structure::default();
+        let (mut twice, mut tops) = (false, 0usize);
+        stream::read(
+            p,
+            name,
+            &mut EachObject(|id: String, o: Value| {
+                if is_top(&o) {
+                    tops += 1;
+                }
+                if structure.contains(&id) {
+                    twice = true;
+                    return Ok(());
+                }
+                structure.add(&id, &o)
+            }),
+        )?;
+        if twice {
+            return Ok(false);
+        }
+        let mut vertices = Vec::new();
+        stream::read(
+            p,
+            name,
+            &mut EachVertex(|v| {
+                vertices.push(v);
+                Ok(())
+            }),
+        )?;
+        let app = app.filter(|a| a.as_object().is_some_and(|m| !m.is_empty()));
+        let n = structure.len();
+        // one feature of every object in document order (at most one top-level object), or
+        // one a tree
+        let trees: Vec<Vec<u32>> = match tops <= 1 {
+            true if n > 0 => vec![(0..n as u32).collect()],
+            true => Vec::new(),
+            false => structure.trees(),
+        };
+        drop(structure);
+        let mut tree_of = vec![0u32; n];
+        let mut left: Vec<usize> = Vec::with_capacity(trees.len());
+        for (t, objs) in trees.iter().enumerate() {
+            for &i in objs {
+                tree_of[i as usize] = t as u32;
+            }
+            left.push(objs.len());
+        }
+        let mut held: HashMap<u32, (String, Value)> = HashMap::new();
+        let (mut next, mut k) = (0usize, 0u32);
+        stream::read(
+            p,
+            name,
+            &mut EachObject(|id: String, o: Value| {
+                let t = *tree_of
+                    .get(k as usize)
+                    .ok_or_else(|| "the document changed while read".to_string())?;
+                held.insert(k, (id, o));
+                k += 1;
+                left[t as usize] -= 1;
+                while next < trees.len() && left[next] == 0 {
+                    let group: Map<String, Value> = trees[next]
+                        .iter()
+                        .filter_map(|i| held.remove(i))
+                        .map(|(id, o)| self.rename_one(id, o))
+                        .collect();
+                    next += 1;
+                    let f = self.feature(group, &vertices, app)?;
+                    *bytes += write_line(&mut *w, &f).map_err(|e| io(e).to_string())?;
+                }
+                Ok(())
+            }),
+        )?;
+        Ok(true)
+    }
+
     /// One feature line of `objects` (the first the top-level one) with their own vertices.
     fn feature(
         &mut self,
         objects: Map<String, Value>,
-        vertices: &[Value],
+        vertices: &[Vertex],
         app: Option<&Value>,
     ) -> Result<Value, String> {
         let mut map: HashMap<u64, u64> = HashMap::new();
@@ -569,7 +668,7 @@ impl Part<'_> {
                     return Some(j);
                 }
                 let v = usize::try_from(i).ok().and_then(|i| vertices.get(i))?;
-                match self_vertex(v, self.from, self.to) {
+                match self_vertex(&v.clone().into_value(), self.from, self.to) {
                     Ok(q) => local.push(q),
                     Err(e) => {
                         bad = Some(e);

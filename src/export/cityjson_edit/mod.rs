@@ -57,7 +57,8 @@ mod document;
 mod merge;
 mod reproject;
 mod rules;
-mod stream;
+pub(crate) use crate::io::cityjson::stream;
+use crate::io::cityjson::stream::{cj, cj_error, forest, id_hash};
 mod upgrade;
 
 pub use merge::merge_cityjson;
@@ -66,13 +67,12 @@ pub use rules::{filter_lods, subset};
 pub use upgrade::{upgrade_cityjson, CityJsonUpgrade};
 
 use crate::io::citygml::edit::EditSummary;
-use crate::io::citygml::error::{ReadError, WriteError};
+use crate::io::citygml::error::WriteError;
 use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
 use crate::model::Bbox;
 use glam::DVec3;
 use serde_json::{Map, Value};
 use std::collections::{HashMap, HashSet};
-use std::hash::{BuildHasher, Hash};
 use std::io::{BufRead, Write};
 use std::path::Path;
 
@@ -209,49 +209,6 @@ pub(crate) fn trees(objects: &Map<String, Value>) -> Vec<Vec<String>> {
                 .collect()
         })
         .collect()
-}
-
-/// [`trees`] over objects `ids` (by index; `index` finds an id's) with their `parents` and
-/// `children`.
-pub(crate) fn forest<K: Eq + Hash + Copy, L: AsRef<[K]>>(
-    index: &HashMap<K, u32>,
-    ids: &[K],
-    parents: &[L],
-    children: &[L],
-) -> Vec<Vec<u32>> {
-    let is_top = |i: usize| parents[i].as_ref().iter().all(|p| !index.contains_key(p));
-    let mut seen = vec![false; ids.len()];
-    let mut out = Vec::new();
-    let grow = |top: usize, seen: &mut Vec<bool>| {
-        // `top` and its descendants not yet seen, depth first in `children` order
-        let mut tree = Vec::new();
-        let mut stack = vec![top as u32];
-        while let Some(i) = stack.pop() {
-            if std::mem::replace(&mut seen[i as usize], true) {
-                continue;
-            }
-            let kids = children[i as usize].as_ref();
-            stack.extend(kids.iter().rev().filter_map(|k| index.get(k)));
-            tree.push(i);
-        }
-        tree
-    };
-    for i in 0..ids.len() {
-        if is_top(i) && !seen[i] {
-            out.push(grow(i, &mut seen));
-        }
-    }
-    for i in 0..ids.len() {
-        if !seen[i] {
-            out.push(grow(i, &mut seen));
-        }
-    }
-    out
-}
-
-/// An 8-byte hash of an id (the ids that go, kept between the passes over CityJSONSeq).
-fn id_hash(id: &str) -> u64 {
-    foldhash::fast::FixedState::with_seed(0x5b5e_7c17).hash_one(id.as_bytes())
 }
 
 /// What an edit did to one group of objects (a document, a feature).
@@ -511,14 +468,6 @@ impl Values {
     fn bytes(&self) -> u64 {
         self.inner.byte_offset() as u64
     }
-}
-
-fn cj_error(e: crate::io::cityjson::Error) -> WriteError {
-    WriteError::Read(ReadError::CityJson(e))
-}
-
-fn cj(file: &Path, line: u64, id: Option<&str>, m: String) -> WriteError {
-    cj_error(crate::io::cityjson::Error::at(file, line, id, m))
 }
 
 /// Run `make`'s rule over the CityJSON / CityJSONSeq document at `input` into `out` (see the

@@ -7,7 +7,10 @@
 //! for a projected target and 1e-9 degrees (about 0.1 mm) for a geographic one in x and y,
 //! heights (never changed) with the old `scale`. `metadata.referenceSystem` becomes
 //! `https://www.opengis.net/def/crs/EPSG/0/<code>` and `metadata.geographicalExtent` the box of
-//! the converted vertices. CityJSONSeq is streamed in two passes (the extent, then the lines).
+//! the converted vertices. CityJSONSeq is streamed in two passes (the extent, then the lines);
+//! a document in two as well ([`super::stream`]): its small members and its vertices (kept
+//! as stored and converted, 40 bytes a vertex for integer triples: what grows with it), then
+//! its city objects one at a time as they are written.
 //!
 //! # Geometry templates
 //! A template's vertices are shared by its instances and live in a local frame: an instance
@@ -20,6 +23,7 @@
 //! from its reference point then lands within the conversion's curvature over `d` of its
 //! converted position (about a millimetre at 80 m from UTM to WGS 84).
 
+use super::stream::{self, Pass, Vertex};
 use super::{check_json_target, cj, transform_of, Transform, Values};
 use crate::io::citygml::error::WriteError;
 use crate::io::citygml::write::{check_target, WriteOptions};
@@ -43,6 +47,21 @@ pub struct CityJsonReproject {
     pub bytes_out: u64,
 }
 
+impl CityJsonReproject {
+    /// The line `reproject` says for `input` written to `shown_output` (the output's name as
+    /// the user gave it): `IN -> OUT: FROM -> TO, N vertices`.
+    pub fn line(&self, input: &Path, shown_output: &Path) -> String {
+        format!(
+            "{} -> {}: {} -> {}, {} vertices",
+            crate::model::shown(input),
+            shown_output.display(),
+            self.from,
+            self.to,
+            self.vertices
+        )
+    }
+}
+
 /// Convert the document at `input` from `source` (default: its `metadata.referenceSystem`)
 /// into `target` with `t`, into `out` (atomically; see the module docs).
 ///
@@ -63,8 +82,19 @@ pub fn reproject_cityjson(
         let m = format!("the target CRS {} has no EPSG code", target.name);
         return Err(WriteError::Invalid(m));
     };
+    // a document is read in passes (its small members and vertices, then its objects one
+    // at a time as they are written); CityJSONSeq is its header line, then its features
+    let mut scan = Scan::default();
+    let seq = stream::read(input, input, &mut scan)?.more;
     let mut values = Values::open(input)?;
-    let mut head = values.header()?;
+    let mut head = match seq {
+        true => values.header()?,
+        false => {
+            let h = Value::Object(std::mem::take(&mut scan.members));
+            super::check_type(input, h.as_object().unwrap_or(&Default::default()))?;
+            h
+        }
+    };
     let from = match source {
         Some(s) => s.clone(),
         None => match super::srs_of(&head) {
@@ -98,6 +128,20 @@ pub fn reproject_cityjson(
         let q = t.position(&from, target, p).map_err(|e| e.to_string())?;
         Ok(DVec3::new(q.x, q.y, p.z))
     };
+    // a stored vertex (three numbers) as stored in the new frame, and where that is
+    let quantise = |c: [f64; 3]| -> Result<([i64; 3], DVec3), String> {
+        let p = DVec3::new(
+            c[0] * old.0[0] + old.1[0],
+            c[1] * old.0[1] + old.1[1],
+            c[2] * old.0[2] + old.1[2],
+        );
+        let q = t.position(&from, target, p).map_err(|e| e.to_string())?;
+        let q = DVec3::new(q.x, q.y, p.z);
+        let i = |k: usize, c: f64| ((c - new.1[k]) / new.0[k]).round() as i64;
+        let v = [i(0, q.x), i(1, q.y), i(2, q.z)];
+        let at = |k: usize| v[k] as f64 * new.0[k] + new.1[k];
+        Ok((v, DVec3::new(at(0), at(1), at(2))))
+    };
     let convert = |f: &mut Value, line: u64, b: &mut Bbox, n: &mut usize| {
         reframe_instances(f, old, step, &map).map_err(|e| err(line, e))?;
         let Some(Value::Array(vs)) = f.get_mut("vertices") else {
@@ -111,31 +155,36 @@ pub fn reproject_cityjson(
                     format!("a vertex that is not three numbers: {v}"),
                 ));
             };
-            let p = DVec3::new(
-                x * old.0[0] + old.1[0],
-                y * old.0[1] + old.1[1],
-                z * old.0[2] + old.1[2],
-            );
-            let q = t
-                .position(&from, target, p)
-                .map_err(|e| err(line, e.to_string()))?;
-            let q = DVec3::new(q.x, q.y, p.z);
-            let i = |k: usize, c: f64| ((c - new.1[k]) / new.0[k]).round() as i64;
-            *v = serde_json::json!([i(0, q.x), i(1, q.y), i(2, q.z)]);
-            b.add(DVec3::new(
-                i(0, q.x) as f64 * new.0[0] + new.1[0],
-                i(1, q.y) as f64 * new.0[1] + new.1[1],
-                i(2, q.z) as f64 * new.0[2] + new.1[2],
-            ));
+            let (q, at) = quantise([x, y, z]).map_err(|e| err(line, e))?;
+            *v = serde_json::json!(q);
+            b.add(at);
             *n += 1;
         }
         Ok(())
     };
     let mut kept = Bbox::EMPTY;
+    // a document's vertices in the new frame (24 bytes each: what grows with it)
+    let mut moved: Vec<[i64; 3]> = Vec::new();
+    for v in scan.vertices.iter().filter(|_| !seq) {
+        let Some(c) = v.coords() else {
+            let m = format!(
+                "a vertex that is not three numbers: {}",
+                v.clone().into_value()
+            );
+            return Err(err(1, m));
+        };
+        let (q, at) = quantise(c).map_err(|e| err(1, e))?;
+        moved.push(q);
+        kept.add(at);
+    }
+    s.vertices = moved.len();
     convert(&mut head, 1, &mut kept, &mut s.vertices)?;
     // CityJSONSeq: pass 1 for the extent
     let mut line = 1;
-    while let Some(mut f) = values.next()? {
+    while let Some(mut f) = match seq {
+        true => values.next()?,
+        false => None,
+    } {
         line += 1;
         convert(&mut f, line, &mut kept, &mut 0)?;
     }
@@ -153,6 +202,27 @@ pub fn reproject_cityjson(
         }
     }
     super::set_extent(&mut head, &kept);
+    if !seq {
+        let Value::Object(head) = head else {
+            return Err(err(1, "not a JSON object".into()));
+        };
+        let point = |i: u64| scan.vertices.get(usize::try_from(i).ok()?)?.coords();
+        s.bytes_out = stream::write_document(out, &head, &mut |key, entries| {
+            if key == "vertices" {
+                for &[x, y, z] in &moved {
+                    let v = Vertex::from_value(serde_json::json!([x, y, z]));
+                    entries.vertex(&v).map_err(|e| err(0, e))?;
+                }
+                return Ok(());
+            }
+            let mut objects = stream::EachObject(|id: String, mut o: Value| {
+                reframe_object(&id, &mut o, &point, old, step, &map)?;
+                entries.object(&id, &o)
+            });
+            stream::read(input, input, &mut objects).map(|_| ())
+        })?;
+        return Ok(s);
+    }
     let mut values = Values::open(input)?;
     values.header()?;
     s.bytes_out = values.write_seq(out, &head, |line, f| {
@@ -161,6 +231,30 @@ pub fn reproject_cityjson(
         Ok(true)
     })?;
     Ok(s)
+}
+
+/// The first pass over a document: its small members (`CityObjects` and `vertices` as
+/// placeholders where they are) and its vertices as stored.
+#[derive(Default)]
+struct Scan {
+    members: serde_json::Map<String, Value>,
+    vertices: Vec<Vertex>,
+}
+
+impl Pass for Scan {
+    fn members(&mut self) -> Option<&mut serde_json::Map<String, Value>> {
+        Some(&mut self.members)
+    }
+    fn place(&mut self, key: &str) {
+        self.members.insert(key.to_string(), Value::Null);
+    }
+    fn wants_vertices(&self) -> bool {
+        true
+    }
+    fn vertex(&mut self, v: Vertex) -> Result<(), String> {
+        self.vertices.push(v);
+        Ok(())
+    }
 }
 
 /// The Jacobian of `f` at `p`, by central differences of `step` per axis: `j[r][c]` =
@@ -199,54 +293,18 @@ fn reframe_instances(
         .get_mut("vertices")
         .map(Value::take)
         .unwrap_or(Value::Null);
-    let point = |i: u64| -> Option<DVec3> {
+    let point = |i: u64| -> Option<[f64; 3]> {
         let v = verts.get(usize::try_from(i).ok()?)?;
-        let c = |k: usize| Some(v.get(k)?.as_f64()? * old.0[k] + old.1[k]);
-        Some(DVec3::new(c(0)?, c(1)?, c(2)?))
+        let c = |k: usize| v.get(k)?.as_f64();
+        Some([c(0)?, c(1)?, c(2)?])
     };
     let mut n = 0;
     let mut r = Ok(());
     let objects = o.get_mut("CityObjects").and_then(Value::as_object_mut);
     for (id, obj) in objects.into_iter().flatten() {
-        let Some(Value::Array(gs)) = obj.get_mut("geometry") else {
-            continue;
-        };
-        for g in gs {
-            if g.get("type").and_then(Value::as_str) != Some("GeometryInstance") {
-                continue;
-            }
-            let at = g.pointer("/boundaries/0").and_then(Value::as_u64);
-            let Some(p) = at.and_then(point) else {
-                r = Err(format!(
-                    "city object {id}: an instance without a reference point"
-                ));
-                continue;
-            };
-            let m: Option<Vec<f64>> = g
-                .get("transformationMatrix")
-                .and_then(Value::as_array)
-                .map(|a| a.iter().filter_map(Value::as_f64).collect());
-            let Some(m) = m.filter(|m| m.len() == 16) else {
-                r = Err(format!(
-                    "city object {id}: an instance needs a transformationMatrix of 16 numbers"
-                ));
-                continue;
-            };
-            let j = match jacobian(f, p, step) {
-                Ok(j) => j,
-                Err(e) => {
-                    r = Err(e);
-                    continue;
-                }
-            };
-            let mut new = m.clone();
-            for row in 0..3 {
-                for col in 0..4 {
-                    new[row * 4 + col] = (0..3).map(|k| j[row][k] * m[k * 4 + col]).sum();
-                }
-            }
-            g["transformationMatrix"] = serde_json::json!(new);
-            n += 1;
+        match reframe_object(id, obj, &point, old, step, f) {
+            Ok(k) => n += k,
+            Err(e) => r = Err(e),
         }
     }
     if let Some(v) = o.get_mut("vertices") {
@@ -255,8 +313,82 @@ fn reframe_instances(
     r.map(|()| n)
 }
 
+/// [`reframe_instances`] of one city object `id` (`obj`), its vertices' stored coordinates
+/// given by `point`.
+fn reframe_object(
+    id: &str,
+    obj: &mut Value,
+    point: &dyn Fn(u64) -> Option<[f64; 3]>,
+    old: Transform,
+    step: [f64; 3],
+    f: &dyn Fn(DVec3) -> Result<DVec3, String>,
+) -> Result<usize, String> {
+    let real = |i: u64| -> Option<DVec3> {
+        let v = point(i)?;
+        let c = |k: usize| v[k] * old.0[k] + old.1[k];
+        Some(DVec3::new(c(0), c(1), c(2)))
+    };
+    let mut n = 0;
+    let mut r = Ok(());
+    let Some(Value::Array(gs)) = obj.get_mut("geometry") else {
+        return Ok(0);
+    };
+    for g in gs {
+        if g.get("type").and_then(Value::as_str) != Some("GeometryInstance") {
+            continue;
+        }
+        let at = g.pointer("/boundaries/0").and_then(Value::as_u64);
+        let Some(p) = at.and_then(real) else {
+            r = Err(format!(
+                "city object {id}: an instance without a reference point"
+            ));
+            continue;
+        };
+        let m: Option<Vec<f64>> = g
+            .get("transformationMatrix")
+            .and_then(Value::as_array)
+            .map(|a| a.iter().filter_map(Value::as_f64).collect());
+        let Some(m) = m.filter(|m| m.len() == 16) else {
+            r = Err(format!(
+                "city object {id}: an instance needs a transformationMatrix of 16 numbers"
+            ));
+            continue;
+        };
+        let j = match jacobian(f, p, step) {
+            Ok(j) => j,
+            Err(e) => {
+                r = Err(e);
+                continue;
+            }
+        };
+        let mut new = m.clone();
+        for row in 0..3 {
+            for col in 0..4 {
+                new[row * 4 + col] = (0..3).map(|k| j[row][k] * m[k * 4 + col]).sum();
+            }
+        }
+        g["transformationMatrix"] = serde_json::json!(new);
+        n += 1;
+    }
+    r.map(|()| n)
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_summary_line_names_both_crss_and_the_vertices() {
+        let s = CityJsonReproject {
+            vertices: 7,
+            from: "EPSG:7415".into(),
+            to: "EPSG:4979".into(),
+            bytes_out: 1,
+        };
+        assert_eq!(
+            s.line(Path::new("-"), Path::new("-")),
+            "<stdin> -> -: EPSG:7415 -> EPSG:4979, 7 vertices"
+        );
+    }
+
     use super::*;
 
     #[test]

@@ -183,7 +183,7 @@ pub fn write_document_streamed(
     let mut root = Bbox::EMPTY;
     let mut root_site: Option<u64> = None;
     let mut unsure = false;
-    let first = passes.pass(input, 0, |c: Chunk| {
+    let first = passes.pass_citygml(input, 0, |c: Chunk| {
         let b = crate::model::content_bbox(&c.model.assets, &c.model.buildings);
         if c.index == 0 {
             root_site = root_site_of(&c.model);
@@ -202,7 +202,7 @@ pub fn write_document_streamed(
         let src = crate::model::Source::File(input.to_path_buf());
         let (mut reader, _) = source::open_source(&src, input)?;
         let (mut cursor, mut written, mut n_edits, mut polygons, mut len) = (0, 0, 0, 0, 0);
-        let second = passes.pass(input, 1, |c: Chunk| {
+        let second = passes.pass_citygml(input, 1, |c: Chunk| {
             polygons += c.model.polygon_count();
             let Some(f) = c.model.files.first() else {
                 return Ok::<(), WriteError>(());

@@ -1,8 +1,8 @@
 //! A document value by value: the `CityJSON` object, then (CityJSONSeq) one
 //! `CityJSONFeature` per line, each mapped and dropped before the next is parsed.
 
-use super::doc::Doc;
-use super::map::{real_vertices, Mapper, Origin, Vertices};
+use super::doc::{Doc, Templates};
+use super::map::{real_vertices, Counts, Mapper, Origin, Vertices};
 use super::Error;
 use crate::model::{CityGmlVersion, CityJsonFormat, CityModel, Source, SourceFile};
 use glam::DVec3;
@@ -97,21 +97,14 @@ fn read_values(
     }
     let version = head.version.clone().unwrap_or_default();
     let mut mapper = Mapper::new(name);
-    if !["1.0", "1.1", "2.0"].contains(&version.as_str()) {
-        mapper.warn(1, "", format!("CityJSON version {version:?}: read as 2.0"));
-    }
+    check_version(&mut mapper, &version);
     let srs_name = head
         .metadata
         .as_ref()
         .and_then(|m| m.reference_system.as_ref())
         .and_then(reference_system_text);
     let transform = head.transform;
-    let template_list: Vec<DVec3> = head
-        .templates
-        .as_ref()
-        .map(|t| real_vertices(&t.vertices, None, name, 1))
-        .transpose()?
-        .unwrap_or_default();
+    let template_list = template_vertices(head.templates.as_ref(), name)?;
     let templates = head.templates.as_ref();
     let list = real_vertices(&head.vertices, transform.as_ref(), name, 0)?;
     let verts = Vertices {
@@ -143,27 +136,10 @@ fn read_values(
         mapper.add(&f.objects.0, &verts, line)?;
     }
     let (buildings, assets, origins, warnings, counts) = mapper.finish();
-    let file = SourceFile {
-        path: name.to_path_buf(),
-        source: Source::File(name.to_path_buf()),
-        // CityJSON 2.0 encodes CityGML 3.0's data model, 1.x CityGML 2.0's
-        version: if version.starts_with('1') {
-            CityGmlVersion::V2_0
-        } else {
-            CityGmlVersion::V3_0
-        },
-        srs_name,
-        gzip,
-        len: 0,
-        gml_prefix: String::new(),
-        envelopes: Vec::new(),
-        implicit_geometries: counts.implicit_geometries,
-        library_objects: Vec::new(),
-        objects_without_geometry: counts.objects_without_geometry,
-        polygon_elements: counts.polygon_elements,
-        features: counts.features,
-        cityjson: Some(CityJsonFormat { version, seq }),
-    };
+    let mut file = source_file(name, &version, srs_name, gzip, 0, counts);
+    if let Some(c) = &mut file.cityjson {
+        c.seq = seq;
+    }
     Ok((
         CityModel {
             files: vec![file],
@@ -173,6 +149,64 @@ fn read_values(
         },
         origins,
     ))
+}
+
+/// Warn about a version other than 1.0, 1.1, 2.0 (read as 2.0).
+pub(super) fn check_version(mapper: &mut Mapper, version: &str) {
+    if !["1.0", "1.1", "2.0"].contains(&version) {
+        mapper.warn(1, "", format!("CityJSON version {version:?}: read as 2.0"));
+    }
+}
+
+/// The CityGML version a CityJSON version encodes: 2.0's data model is CityGML 3.0's, 1.x's
+/// CityGML 2.0's.
+pub(super) fn model_version(version: &str) -> CityGmlVersion {
+    if version.starts_with('1') {
+        CityGmlVersion::V2_0
+    } else {
+        CityGmlVersion::V3_0
+    }
+}
+
+/// The template vertices in real coordinates (never transformed).
+pub(super) fn template_vertices(
+    templates: Option<&Templates>,
+    name: &Path,
+) -> Result<Vec<DVec3>, Error> {
+    Ok(templates
+        .map(|t| real_vertices(&t.vertices, None, name, 1))
+        .transpose()?
+        .unwrap_or_default())
+}
+
+/// The model's file of a CityJSON document (not CityJSONSeq) of `len` bytes.
+pub(super) fn source_file(
+    name: &Path,
+    version: &str,
+    srs_name: Option<String>,
+    gzip: bool,
+    len: u64,
+    counts: Counts,
+) -> SourceFile {
+    SourceFile {
+        path: name.to_path_buf(),
+        source: Source::File(name.to_path_buf()),
+        version: model_version(version),
+        srs_name,
+        gzip,
+        len,
+        gml_prefix: String::new(),
+        envelopes: Vec::new(),
+        implicit_geometries: counts.implicit_geometries,
+        library_objects: Vec::new(),
+        objects_without_geometry: counts.objects_without_geometry,
+        polygon_elements: counts.polygon_elements,
+        features: counts.features,
+        cityjson: Some(CityJsonFormat {
+            version: version.to_string(),
+            seq: false,
+        }),
+    }
 }
 
 /// `metadata.referenceSystem` as the text of a CRS name: the string as given (2.0's URL, a

@@ -20,9 +20,11 @@ use crate::model::{shown, Warning};
 use std::path::Path;
 
 /// The chunk size to stream `path` with (`chunk` bytes), or `None` to read it whole: small
-/// files (under four chunks), standard input, CityJSON, and every file when `chunk` is 0. A
-/// gzip-compressed file counts as ten times its size (CityGML compresses 10 to 20 times): it
-/// is streamed from a temporary file.
+/// files (under four chunks), standard input, CityJSONSeq (`.jsonl` names: read line by
+/// line), and every file when `chunk` is 0. A gzip-compressed file counts as ten times its
+/// size (CityGML compresses 10 to 20 times): it is streamed from a temporary file. A
+/// CityJSON document is streamed in chunks of city objects
+/// ([`crate::io::citygml::read::stream`]).
 pub fn chunk_for(path: &Path, chunk: u64) -> Option<u64> {
     let len = std::fs::metadata(path).ok()?.len();
     let mut head = [0u8; 2];
@@ -31,12 +33,9 @@ pub fn chunk_for(path: &Path, chunk: u64) -> Option<u64> {
         .is_ok()
         && crate::io::is_gzip(&head);
     let len = if gzip { len.saturating_mul(10) } else { len };
-    // CityJSON is read whole (its reader is not the chunked CityGML one).
-    let mut opened = crate::io::citygml::source::open(path).ok()?.0;
-    let json = std::io::BufRead::fill_buf(&mut opened)
-        .map(|head| crate::io::cityjson::sniff(head) == crate::io::cityjson::Sniffed::Json)
-        .unwrap_or(false);
-    (!json && chunk > 0 && len >= chunk.saturating_mul(4)).then_some(chunk)
+    let name = path.to_string_lossy().to_ascii_lowercase();
+    let seq = name.ends_with(".jsonl") || name.ends_with(".jsonl.gz");
+    (!seq && chunk > 0 && len >= chunk.saturating_mul(4)).then_some(chunk)
 }
 
 /// The line that says a file meant to be streamed was read whole, and why.
@@ -205,7 +204,11 @@ pub fn convert_file(
     note: &(dyn Fn(String) + Sync),
 ) -> Result<Converted, ConvertError> {
     let passed = |n| progress.advance(Stage::Read, 0, n, None);
-    if let Some(chunk) = o.chunk {
+    // CityJSON → CityGML goes feature by feature from the document itself (convert_whole)
+    let chunk = o
+        .chunk
+        .filter(|_| o.format != Format::CityGml || !is_json_file(input));
+    if let Some(chunk) = chunk {
         match convert_streamed(input, out, o, chunk, &passed)? {
             Ok(c) => return Ok(c),
             Err(why) => note(read_whole(input, why)),
@@ -370,7 +373,18 @@ mod tests {
             format!("{{\"type\": \"CityJSON\"{}}}", " ".repeat(4000)),
         )
         .unwrap();
-        assert_eq!(chunk_for(&json, 10), None, "CityJSON is read whole");
+        assert_eq!(
+            chunk_for(&json, 10),
+            Some(10),
+            "a CityJSON document streams"
+        );
+        let seq = dir.path().join("a.city.jsonl");
+        std::fs::copy(&json, &seq).unwrap();
+        assert_eq!(
+            chunk_for(&seq, 10),
+            None,
+            "CityJSONSeq is read line by line"
+        );
     }
 
     #[test]

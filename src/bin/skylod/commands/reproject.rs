@@ -121,14 +121,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                 names.push(input.clone());
             }
             match r {
-                Ok(s) => crate::log::summary!(
-                    "{} -> {}: {} -> {}, {} vertices",
-                    skylod::model::shown(input),
-                    shown.display(),
-                    s.from,
-                    s.to,
-                    s.vertices
-                ),
+                Ok(s) => crate::log::summary!("{}", s.line(input, shown)),
                 Err(e) => {
                     crate::log::error!("{}: {e}", skylod::model::shown(input));
                     failed += 1;

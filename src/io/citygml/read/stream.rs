@@ -63,8 +63,12 @@ pub struct Chunk {
     pub bodies_before: usize,
     /// Warnings in earlier chunks.
     pub warnings_before: usize,
-    /// First and last byte (exclusive) of the chunk in the document.
+    /// First and last byte (exclusive) of the chunk in the document (a CityJSON document's:
+    /// in proportion to its city objects).
     pub bytes: (u64, u64),
+    /// A CityJSON document's: the attributes of the chunk's city objects and the members of
+    /// their semantic surface objects, which its CityJSON output copies.
+    pub(crate) source: Option<crate::io::cityjson::source::FromSource>,
 }
 
 impl Chunk {
@@ -127,6 +131,16 @@ pub enum Streamed {
     Declined(String),
 }
 
+impl Streamed {
+    /// The document's summary; `None` where the stream declined.
+    pub fn done(self) -> Option<StreamSummary> {
+        match self {
+            Streamed::Done(s) => Some(s),
+            Streamed::Declined(_) => None,
+        }
+    }
+}
+
 /// The settings of a writer that reads one document in several streamed passes: the options
 /// of every read, the chunk size, and the progress of each pass (`passed(k, n)`: `n` more
 /// bytes read in pass `k`, the writer telling what its passes are).
@@ -164,10 +178,23 @@ impl<'a> Passes<'a> {
     ) -> Result<Option<StreamSummary>, E> {
         let passed = self.passed;
         let r = stream(path, self.read, self.chunk_bytes, &|n| passed(k, n), each)?;
-        Ok(match r {
-            Streamed::Done(s) => Some(s),
-            Streamed::Declined(_) => None,
-        })
+        Ok(r.done())
+    }
+
+    /// [`Passes::pass`] over a CityGML document only ([`stream_citygml`]: a CityJSON one
+    /// declines), for the writers that copy the document's XML.
+    ///
+    /// # Errors
+    /// As [`Passes::pass`].
+    pub fn pass_citygml<E>(
+        &self,
+        path: &Path,
+        k: usize,
+        each: impl FnMut(Chunk) -> Result<(), E>,
+    ) -> Result<Option<StreamSummary>, E> {
+        let passed = self.passed;
+        let r = stream_citygml(path, self.read, self.chunk_bytes, &|n| passed(k, n), each)?;
+        Ok(r.done())
     }
 }
 
@@ -194,6 +221,24 @@ impl std::fmt::Debug for Passes<'_> {
 /// Errors of `each` (the stream stops at the first). A document that cannot be read is
 /// [`Streamed::Declined`]: the whole read reports its error as always.
 pub fn stream<E>(
+    path: &Path,
+    opts: &ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(u64),
+    each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<Streamed, E> {
+    if crate::io::cityjson::is_json_file(path) {
+        return crate::io::cityjson::chunks::stream(path, chunk_bytes, passed, each);
+    }
+    stream_citygml(path, opts, chunk_bytes, passed, each)
+}
+
+/// [`stream`] of a CityGML document only (a CityJSON one declines): for the writers that
+/// copy the document's XML.
+///
+/// # Errors
+/// As [`stream`].
+pub fn stream_citygml<E>(
     path: &Path,
     opts: &ReadOptions,
     chunk_bytes: u64,
@@ -315,6 +360,7 @@ pub fn stream<E>(
             warnings_before: sum.warnings,
             bytes: (if first { 0 } else { (from + bom) as u64 }, end),
             model,
+            source: None,
         };
         sum.buildings += chunk.model.buildings.len();
         sum.assets += chunk.model.assets.len() - bodies;

@@ -22,7 +22,9 @@
 
 use super::{rewrite_edits, scan, Mode, PointTransform, RewriteSummary, Scanner};
 use crate::io::citygml::error::{ReadError, WriteError};
-use crate::io::citygml::read::{read_file, stream, ReadOptions, Streamed, CHUNK_BYTES};
+use crate::io::citygml::read::{
+    read_file, stream_citygml as stream, ReadOptions, Streamed, CHUNK_BYTES,
+};
 use crate::io::citygml::source;
 use crate::io::citygml::write::{
     apply_edits, atomic_write, check_target, copy_rest, normalise, write_document, Edit,

@@ -8,18 +8,71 @@
 //! integer triples), the tree structure of the city objects as id hashes
 //! ([`Structure`], about 50 bytes an object).
 
-use super::{cj, cj_error, id_hash};
+use crate::io::citygml::error::ReadError;
 use crate::io::citygml::error::WriteError;
 use crate::io::citygml::write::atomic_write;
 use crate::io::files::CountingWriter;
 use serde::de::{DeserializeSeed, Error as _, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use serde_json::value::RawValue;
 use serde_json::{Map, Value};
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::fmt;
+use std::hash::{BuildHasher, Hash};
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
 use std::rc::Rc;
+
+/// An 8-byte hash of an id (the ids that go, kept between the passes over CityJSONSeq).
+pub(crate) fn id_hash(id: &str) -> u64 {
+    foldhash::fast::FixedState::with_seed(0x5b5e_7c17).hash_one(id.as_bytes())
+}
+
+pub(crate) fn cj_error(e: crate::io::cityjson::Error) -> WriteError {
+    WriteError::Read(ReadError::CityJson(e))
+}
+
+pub(crate) fn cj(file: &Path, line: u64, id: Option<&str>, m: String) -> WriteError {
+    cj_error(crate::io::cityjson::Error::at(file, line, id, m))
+}
+
+/// The trees (each top-level object, then its descendants) over objects `ids` (by index; `index` finds an id's) with their `parents` and
+/// `children`.
+pub(crate) fn forest<K: Eq + Hash + Copy, L: AsRef<[K]>>(
+    index: &HashMap<K, u32>,
+    ids: &[K],
+    parents: &[L],
+    children: &[L],
+) -> Vec<Vec<u32>> {
+    let is_top = |i: usize| parents[i].as_ref().iter().all(|p| !index.contains_key(p));
+    let mut seen = vec![false; ids.len()];
+    let mut out = Vec::new();
+    let grow = |top: usize, seen: &mut Vec<bool>| {
+        // `top` and its descendants not yet seen, depth first in `children` order
+        let mut tree = Vec::new();
+        let mut stack = vec![top as u32];
+        while let Some(i) = stack.pop() {
+            if std::mem::replace(&mut seen[i as usize], true) {
+                continue;
+            }
+            let kids = children[i as usize].as_ref();
+            stack.extend(kids.iter().rev().filter_map(|k| index.get(k)));
+            tree.push(i);
+        }
+        tree
+    };
+    for i in 0..ids.len() {
+        if is_top(i) && !seen[i] {
+            out.push(grow(i, &mut seen));
+        }
+    }
+    for i in 0..ids.len() {
+        if !seen[i] {
+            out.push(grow(i, &mut seen));
+        }
+    }
+    out
+}
 
 /// What one pass over a document wants; every callback's error names what is wrong (the
 /// reader adds the file, line and column).
@@ -36,6 +89,15 @@ pub(crate) trait Pass {
     }
     /// One city object, in document order.
     fn object(&mut self, _id: String, _o: Value) -> Result<(), String> {
+        Ok(())
+    }
+    /// Whether each city object is handed over as its JSON text ([`Pass::object_text`]) rather
+    /// than as a value (for a pass that parses only what it needs of each).
+    fn wants_text(&self) -> bool {
+        false
+    }
+    /// One city object as its JSON text, in document order.
+    fn object_text(&mut self, _id: String, _o: &RawValue) -> Result<(), String> {
         Ok(())
     }
     /// Whether `vertices` is read.
@@ -133,7 +195,7 @@ impl<R: Read> Read for Counted<R> {
 
 /// The (decompressed) JSON text of `input`, a byte-order mark skipped.
 pub(crate) fn open_json(input: &Path) -> Result<Box<dyn BufRead + Send>, WriteError> {
-    let mut r = crate::export::citygml_from_cityjson::open(input)?;
+    let mut r = super::open(input)?;
     if r.fill_buf().is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF")) {
         r.consume(3);
     }
@@ -277,9 +339,13 @@ impl<'de> Visitor<'de> for Objects<'_> {
         f.write_str("\"CityObjects\" as an object")
     }
     fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<(), A::Error> {
+        let text = self.0.wants_text();
         while let Some(id) = m.next_key::<String>()? {
-            let o: Value = m.next_value()?;
-            self.0.object(id, o).map_err(A::Error::custom)?;
+            let r = match text {
+                true => self.0.object_text(id, &m.next_value::<Box<RawValue>>()?),
+                false => self.0.object(id, m.next_value()?),
+            };
+            r.map_err(A::Error::custom)?;
         }
         Ok(())
     }
@@ -312,7 +378,7 @@ impl<'de> Visitor<'de> for Vertices<'_> {
 
 /// The tree structure of a document's city objects (by index in document order): which
 /// tree each is in, and each tree's objects (its top-level object first, then its
-/// descendants, as [`super::trees`] orders them).
+/// descendants, as the edits' trees order them).
 #[derive(Default)]
 pub(crate) struct Structure {
     ids: Vec<u64>,
@@ -324,20 +390,30 @@ pub(crate) struct Structure {
 impl Structure {
     /// Add the next object; a repeated id is refused.
     pub fn add(&mut self, id: &str, o: &Value) -> Result<(), String> {
+        self.add_links(id, o.get("parents"), o.get("children"))
+    }
+
+    /// [`Structure::add`] of an object by its `parents` and `children` (the strings of
+    /// arrays; anything else is no link).
+    pub fn add_links(
+        &mut self,
+        id: &str,
+        parents: Option<&Value>,
+        children: Option<&Value>,
+    ) -> Result<(), String> {
         let h = id_hash(id);
         let k = u32::try_from(self.ids.len()).map_err(|_| "too many city objects".to_string())?;
         if self.index.insert(h, k).is_some() {
             return Err(format!("city object id {id:?} given twice"));
         }
-        let hashes = |key: &str| -> Box<[u64]> {
-            o.get(key)
-                .and_then(Value::as_array)
+        let hashes = |v: Option<&Value>| -> Box<[u64]> {
+            v.and_then(Value::as_array)
                 .map(|a| a.iter().filter_map(Value::as_str).map(id_hash).collect())
                 .unwrap_or_default()
         };
         self.ids.push(h);
-        self.parents.push(hashes("parents"));
-        self.children.push(hashes("children"));
+        self.parents.push(hashes(parents));
+        self.children.push(hashes(children));
         Ok(())
     }
 
@@ -346,9 +422,40 @@ impl Structure {
         self.ids.len()
     }
 
-    /// The trees, in [`super::trees`]' order.
+    /// The trees, in the edits' trees' order (`forest`).
     pub fn trees(&self) -> Vec<Vec<u32>> {
-        super::forest(&self.index, &self.ids, &self.parents, &self.children)
+        forest(&self.index, &self.ids, &self.parents, &self.children)
+    }
+
+    /// Whether an object `id` was added.
+    pub fn contains(&self, id: &str) -> bool {
+        self.index.contains_key(&id_hash(id))
+    }
+
+    /// For each object, the last (in document order) of the objects linked to it through
+    /// `parents` or `children`, either way and transitively: the objects from a place in the
+    /// document on, up to the greatest such last object, hold every object they are linked
+    /// with.
+    pub fn reach(&self) -> Vec<u32> {
+        // union-find over the links, each set's root its greatest index
+        let mut up: Vec<u32> = (0..self.ids.len() as u32).collect();
+        fn root(up: &mut [u32], mut i: u32) -> u32 {
+            while up[i as usize] != i {
+                let next = up[up[i as usize] as usize];
+                up[i as usize] = next;
+                i = next;
+            }
+            i
+        }
+        for (i, links) in self.parents.iter().zip(&self.children).enumerate() {
+            for h in links.0.iter().chain(links.1.iter()) {
+                if let Some(&j) = self.index.get(h) {
+                    let (a, b) = (root(&mut up, i as u32), root(&mut up, j));
+                    up[a.min(b) as usize] = a.max(b);
+                }
+            }
+        }
+        (0..up.len() as u32).map(|i| root(&mut up, i)).collect()
     }
 }
 
@@ -360,6 +467,21 @@ impl<F: FnMut(String, Value) -> Result<(), String>> Pass for EachObject<F> {
         true
     }
     fn object(&mut self, id: String, o: Value) -> Result<(), String> {
+        (self.0)(id, o)
+    }
+}
+
+/// A pass handing each city object's JSON text to its function.
+pub(crate) struct EachText<F>(pub F);
+
+impl<F: FnMut(String, &RawValue) -> Result<(), String>> Pass for EachText<F> {
+    fn wants_objects(&self) -> bool {
+        true
+    }
+    fn wants_text(&self) -> bool {
+        true
+    }
+    fn object_text(&mut self, id: String, o: &RawValue) -> Result<(), String> {
         (self.0)(id, o)
     }
 }

@@ -10,8 +10,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::io::{self, Read};
 
 /// Attributes copied from a CityJSON source.
-#[derive(Debug, Default)]
-pub(super) struct FromSource {
+#[derive(Debug, Default, Clone)]
+pub(crate) struct FromSource {
     /// `attributes` of each city object, by id.
     pub objects: HashMap<String, Map<String, Value>>,
     /// Members of the semantic surface object of each asset (model index).
@@ -22,7 +22,7 @@ pub(super) struct FromSource {
 ///
 /// # Errors
 /// The source cannot be read again, or is no longer the document the model was read from.
-pub(super) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<FromSource>> {
+pub(crate) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<FromSource>> {
     let Some(f) = model.files.get(file).filter(|f| f.cityjson.is_some()) else {
         return Ok(None);
     };
@@ -70,30 +70,40 @@ pub(super) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<F
             let Value::Object(mut o) = o else {
                 continue;
             };
-            if let Some(w) = wanted.get(id.as_str()) {
-                let geoms = o.get("geometry").and_then(Value::as_array);
-                for &(i, g, k) in w {
-                    let s = geoms
-                        .and_then(|gs| gs.get(g))
-                        .and_then(|g| g.pointer(&format!("/semantics/surfaces/{k}")))
-                        .and_then(Value::as_object);
-                    if let Some(s) = s {
-                        let mut m = s.clone();
-                        for key in ["type", "parent", "children"] {
-                            m.remove(key);
-                        }
-                        if !m.is_empty() {
-                            out.surfaces.insert(i, m);
-                        }
-                    }
-                }
-            }
-            if let Some(Value::Object(a)) = o.remove("attributes") {
-                if !a.is_empty() {
-                    out.objects.insert(id, a);
-                }
-            }
+            let w = wanted.get(id.as_str()).map_or(&[][..], Vec::as_slice);
+            add_object(&mut out, id, &mut o, w);
         }
     }
     Ok(Some(out))
+}
+
+/// What city object `id` (`o`) of the source gives: its attributes, and the members of the
+/// semantic surface objects `wanted` (asset, geometry, surface).
+pub(crate) fn add_object(
+    out: &mut FromSource,
+    id: String,
+    o: &mut Map<String, Value>,
+    wanted: &[(usize, usize, usize)],
+) {
+    let geoms = o.get("geometry").and_then(Value::as_array);
+    for &(i, g, k) in wanted {
+        let s = geoms
+            .and_then(|gs| gs.get(g))
+            .and_then(|g| g.pointer(&format!("/semantics/surfaces/{k}")))
+            .and_then(Value::as_object);
+        if let Some(s) = s {
+            let mut m = s.clone();
+            for key in ["type", "parent", "children"] {
+                m.remove(key);
+            }
+            if !m.is_empty() {
+                out.surfaces.insert(i, m);
+            }
+        }
+    }
+    if let Some(Value::Object(a)) = o.remove("attributes") {
+        if !a.is_empty() {
+            out.objects.insert(id, a);
+        }
+    }
 }
