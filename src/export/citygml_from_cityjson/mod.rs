@@ -230,8 +230,8 @@ pub fn citygml_from_cityjson(
     Ok(summary)
 }
 
-pub use crate::io::cityjson::is_json_file;
-pub(crate) use crate::io::cityjson::open;
+pub use crate::io::citygml::json::is_json_file;
+pub(crate) use crate::io::citygml::json::open;
 
 /// Write the CityJSON / CityJSONSeq read from `r` (named `name` in errors) as CityGML 2.0
 /// to `w`, value by value.

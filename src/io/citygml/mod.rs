@@ -2,6 +2,7 @@
 
 pub mod edit;
 pub mod error;
+pub mod json;
 pub mod merge;
 pub mod ns;
 pub mod read;

@@ -42,7 +42,7 @@ pub struct Origin {
 }
 
 /// The model being built, over one document or every line of CityJSONSeq.
-pub(super) struct Mapper {
+pub(crate) struct Mapper {
     pub file: Arc<Path>,
     pub buildings: Vec<Building>,
     pub assets: Vec<Asset>,
@@ -60,7 +60,7 @@ pub(super) struct Mapper {
 }
 
 /// The vertices one batch of city objects refers to, in real coordinates.
-pub(super) struct Vertices<'a> {
+pub(crate) struct Vertices<'a> {
     pub list: &'a [DVec3],
     pub templates: Option<&'a Templates>,
     /// Template vertices, in real coordinates (never transformed).
@@ -110,7 +110,7 @@ const INTERIOR: &[&str] = &[
 ];
 
 /// Real coordinates of the integer (or, without `transform`, real) vertices.
-pub(super) fn real_vertices(
+pub(crate) fn real_vertices(
     raw: &[[f64; 3]],
     transform: Option<&Transform>,
     file: &Path,
@@ -627,7 +627,7 @@ impl Mapper {
 }
 
 /// A semantic surface's `id` as a string.
-pub(super) fn surface_id(s: &super::doc::Surface) -> Option<String> {
+pub(crate) fn surface_id(s: &super::doc::Surface) -> Option<String> {
     match s.id.as_ref()? {
         Value::String(t) => Some(t.clone()),
         Value::Number(n) => Some(n.to_string()),
@@ -636,7 +636,7 @@ pub(super) fn surface_id(s: &super::doc::Surface) -> Option<String> {
 }
 
 /// Counts of the document for its [`crate::model::SourceFile`].
-pub(super) struct Counts {
+pub(crate) struct Counts {
     pub features: std::collections::BTreeMap<String, usize>,
     pub polygon_elements: usize,
     pub implicit_geometries: usize,

@@ -28,21 +28,16 @@
 //! assert_eq!(model.assets[0].detail_polygons()[0].exterior()[1].x, 1001.0);
 //! ```
 
-pub(crate) mod chunks;
 pub(crate) mod doc;
 pub mod map;
-mod seq;
-pub(crate) mod source;
-pub(crate) mod stream;
+pub(crate) mod seq;
 pub(crate) use seq::reference_system_text;
 
 pub use map::Origin;
 pub use seq::{read_reader, read_slice, read_slice_with_origins};
 
-use crate::io::citygml::error::ReadError;
 use crate::model::CityModel;
 use std::fmt;
-use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
 /// Why a CityJSON document could not be read.
@@ -129,38 +124,6 @@ pub fn sniff(head: &[u8]) -> Sniffed {
 /// True when `model`'s file `file` was read from CityJSON.
 pub fn is_cityjson(model: &CityModel, file: usize) -> bool {
     model.files.get(file).is_some_and(|f| f.cityjson.is_some())
-}
-
-/// Whether the file at `path` holds JSON (CityJSON, CityJSONSeq; gzip-compressed or not), by
-/// its first bytes ([`crate::io::cityjson::sniff`]); false when it cannot be read.
-pub fn is_json_file(path: &Path) -> bool {
-    open(path).is_ok_and(|mut r| {
-        r.fill_buf()
-            .is_ok_and(|h| crate::io::cityjson::sniff(h) == crate::io::cityjson::Sniffed::Json)
-    })
-}
-
-/// Open a (possibly gzip-compressed) file, or standard input for `-` (its bytes as kept by
-/// [`crate::io::files::stdin_bytes`]).
-pub(crate) fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
-    let io = |source| ReadError::Io {
-        file: input.to_path_buf(),
-        source,
-    };
-    let mut r: Box<dyn BufRead + Send> = match crate::io::citygml::source::resolve(input)? {
-        crate::model::Source::Memory(bytes) => Box::new(std::io::Cursor::new(bytes)),
-        crate::model::Source::File(p) => Box::new(std::io::BufReader::with_capacity(
-            1 << 16,
-            std::fs::File::open(p).map_err(io)?,
-        )),
-    };
-    let head = r.fill_buf().map_err(io)?;
-    Ok(if crate::io::files::is_gzip(head) {
-        let dec = flate2::bufread::MultiGzDecoder::new(r);
-        Box::new(std::io::BufReader::with_capacity(1 << 16, dec))
-    } else {
-        r
-    })
 }
 
 #[cfg(test)]

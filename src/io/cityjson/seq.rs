@@ -152,7 +152,7 @@ fn read_values(
 }
 
 /// Warn about a version other than 1.0, 1.1, 2.0 (read as 2.0).
-pub(super) fn check_version(mapper: &mut Mapper, version: &str) {
+pub(crate) fn check_version(mapper: &mut Mapper, version: &str) {
     if !["1.0", "1.1", "2.0"].contains(&version) {
         mapper.warn(1, "", format!("CityJSON version {version:?}: read as 2.0"));
     }
@@ -160,7 +160,7 @@ pub(super) fn check_version(mapper: &mut Mapper, version: &str) {
 
 /// The CityGML version a CityJSON version encodes: 2.0's data model is CityGML 3.0's, 1.x's
 /// CityGML 2.0's.
-pub(super) fn model_version(version: &str) -> CityGmlVersion {
+pub(crate) fn model_version(version: &str) -> CityGmlVersion {
     if version.starts_with('1') {
         CityGmlVersion::V2_0
     } else {
@@ -169,7 +169,7 @@ pub(super) fn model_version(version: &str) -> CityGmlVersion {
 }
 
 /// The template vertices in real coordinates (never transformed).
-pub(super) fn template_vertices(
+pub(crate) fn template_vertices(
     templates: Option<&Templates>,
     name: &Path,
 ) -> Result<Vec<DVec3>, Error> {
@@ -180,7 +180,7 @@ pub(super) fn template_vertices(
 }
 
 /// The model's file of a CityJSON document (not CityJSONSeq) of `len` bytes.
-pub(super) fn source_file(
+pub(crate) fn source_file(
     name: &Path,
     version: &str,
     srs_name: Option<String>,

@@ -68,7 +68,7 @@ pub struct Chunk {
     pub bytes: (u64, u64),
     /// A CityJSON document's: the attributes of the chunk's city objects and the members of
     /// their semantic surface objects, which its CityJSON output copies.
-    pub(crate) source: Option<crate::io::cityjson::source::FromSource>,
+    pub(crate) source: Option<crate::io::citygml::json::source::FromSource>,
 }
 
 impl Chunk {
@@ -227,8 +227,8 @@ pub fn stream<E>(
     passed: &dyn Fn(u64),
     each: impl FnMut(Chunk) -> Result<(), E>,
 ) -> Result<Streamed, E> {
-    if crate::io::cityjson::is_json_file(path) {
-        return crate::io::cityjson::chunks::stream(path, chunk_bytes, passed, each);
+    if crate::io::citygml::json::is_json_file(path) {
+        return crate::io::citygml::json::chunks::stream(path, chunk_bytes, passed, each);
     }
     stream_citygml(path, opts, chunk_bytes, passed, each)
 }

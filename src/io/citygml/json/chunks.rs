@@ -26,14 +26,16 @@
 //! is no `CityJSON` object, a city object id given twice, and any document that does not
 //! read (the reason names the file and the line:column where the JSON parser was).
 
-use super::doc::{CityObject, Metadata, Templates, Transform};
-use super::map::{real_vertices, Mapper, Vertices};
-use super::seq::{check_version, reference_system_text, source_file, template_vertices};
 use super::source::{add_object, FromSource};
 use super::stream::{read, EachText, Pass, Structure, Vertex};
-use super::Error;
 use crate::io::citygml::read::{Chunk, StreamSummary, Streamed};
 use crate::io::citygml::{ReadError, WriteError};
+use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
+use crate::io::cityjson::map::{real_vertices, Mapper, Vertices};
+use crate::io::cityjson::seq::{
+    check_version, reference_system_text, source_file, template_vertices,
+};
+use crate::io::cityjson::Error;
 use crate::model::{AssetKind, CityModel};
 use serde::Deserialize;
 use serde_json::value::RawValue;
@@ -284,7 +286,7 @@ pub(crate) fn stream_chunks<E>(
         m
     };
     let mut sum = StreamSummary {
-        version: Some(super::seq::model_version(&version)),
+        version: Some(crate::io::cityjson::seq::model_version(&version)),
         srs_name: srs_name.clone(),
         ..StreamSummary::default()
     };
