@@ -1,9 +1,9 @@
 //! The CityJSON side of the chunked read and of the streamed CityJSON edits, here because
 //! they hand out this folder's [`Chunk`](crate::io::citygml::read::Chunk)s and errors
 //! (`io::cityjson`, the format's mapping into the model, imports nothing of `io::citygml`):
-//! [`stream`] reads a JSON document in passes (its members in any order, `CityObjects` one
-//! object and `vertices` one vertex at a time), [`chunks`] a `.city.json` in chunks of whole
-//! city-object trees, [`source`] what the CityJSON writer copies from a CityJSON source.
+//! `stream` reads a JSON document in passes (its members in any order, `CityObjects` one
+//! object and `vertices` one vertex at a time), `chunks` a `.city.json` in chunks of whole
+//! city-object trees, `source` what the CityJSON writer copies from a CityJSON source.
 
 pub(crate) mod chunks;
 pub(crate) mod source;

@@ -176,9 +176,7 @@ impl<'a> Passes<'a> {
         k: usize,
         each: impl FnMut(Chunk) -> Result<(), E>,
     ) -> Result<Option<StreamSummary>, E> {
-        let passed = self.passed;
-        let r = stream(path, self.read, self.chunk_bytes, &|n| passed(k, n), each)?;
-        Ok(r.done())
+        self.run(path, k, false, each)
     }
 
     /// [`Passes::pass`] over a CityGML document only ([`stream_citygml`]: a CityJSON one
@@ -192,8 +190,24 @@ impl<'a> Passes<'a> {
         k: usize,
         each: impl FnMut(Chunk) -> Result<(), E>,
     ) -> Result<Option<StreamSummary>, E> {
+        self.run(path, k, true, each)
+    }
+
+    /// Pass `k` over `path`, of a CityGML document only where `citygml_only`.
+    fn run<E>(
+        &self,
+        path: &Path,
+        k: usize,
+        citygml_only: bool,
+        each: impl FnMut(Chunk) -> Result<(), E>,
+    ) -> Result<Option<StreamSummary>, E> {
         let passed = self.passed;
-        let r = stream_citygml(path, self.read, self.chunk_bytes, &|n| passed(k, n), each)?;
+        let passed = &|n| passed(k, n);
+        let r = if citygml_only {
+            stream_citygml(path, self.read, self.chunk_bytes, passed, each)?
+        } else {
+            stream(path, self.read, self.chunk_bytes, passed, each)?
+        };
         Ok(r.done())
     }
 }
