@@ -77,8 +77,8 @@ pub(crate) fn stream<E>(
 /// Pass 1: the head, the vertices as stored, the links of the city objects.
 #[derive(Default)]
 struct Head {
-    /// The small top-level members (`type`, `version`, `transform`, `metadata`,
-    /// `geometry-templates`, ...).
+    /// The small top-level members the chunks need (`type`, `version`, `transform`,
+    /// `metadata`, `geometry-templates`: [`Pass::keeps`]).
     members: Map<String, Value>,
     vertices: Vec<[f64; 3]>,
     structure: Structure,
@@ -89,6 +89,13 @@ struct Head {
 impl Pass for Head {
     fn members(&mut self) -> Option<&mut Map<String, Value>> {
         Some(&mut self.members)
+    }
+    fn keeps(&self, key: &str) -> bool {
+        // what the chunks need: not `appearance` and the like, which may be large
+        matches!(
+            key,
+            "type" | "version" | "transform" | "metadata" | "geometry-templates"
+        )
     }
     fn wants_objects(&self) -> bool {
         true

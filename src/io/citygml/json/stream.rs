@@ -81,6 +81,10 @@ pub(crate) trait Pass {
     fn members(&mut self) -> Option<&mut Map<String, Value>> {
         None
     }
+    /// Whether the small member `key` goes into [`Pass::members`] (else it is skipped unread).
+    fn keeps(&self, _key: &str) -> bool {
+        true
+    }
     /// `CityObjects` or `vertices` is at this place among the members (read or not).
     fn place(&mut self, _key: &str) {}
     /// Whether `CityObjects` is read.
@@ -276,6 +280,9 @@ impl<'de> Visitor<'de> for Top<'_, '_> {
                         // checked for its kind (an object, an array), else skipped
                         m.next_value_seed(Skip(objects))?;
                     }
+                }
+                _ if !self.pass.keeps(&key) => {
+                    m.next_value::<IgnoredAny>()?;
                 }
                 _ => match self.pass.members() {
                     Some(members) => {
