@@ -6,20 +6,28 @@
 //! sun's geocentric right ascension and declination) depends only on the instant and delta T;
 //! the site (latitude, longitude, elevation, atmosphere) enters only in the cheap rest: hour
 //! angle, topocentric parallax, refraction, azimuth and zenith angle. A [`SunEphemeris`]
-//! computes the first half for every step of a year on a background thread, started before
+//! computes the first half for every step of a year in the background, started before
 //! the model (which gives the site) is read; [`SunTable::year_ahead`] then takes what is ready
 //! and computes the rest as [`SunTable::year_with`] does. The table is the same to the bit
 //! either way: `solar_positioning`'s `SolarPositions::at` is exactly `for_time` followed by
 //! `PreparedPositions::at`, and both halves are those same calls.
 //!
-//! The work goes to rayon's pool a day of steps at a time, one day in flight, from a thread
-//! that only waits: a worker takes such a day only when it finds no other work to steal, so
-//! the days fill the pool's idle stretches (in `lod`, the one-core merge and assembly at the
-//! end of the read) rather than slow what they run beside. A thread of its own would not do:
-//! at the normal priority it shares the cores with the reading threads, and at Linux's
-//! `SCHED_IDLE` it gets no core at all while other processes keep them busy (both measured,
-//! BENCHMARKS.md). It stops at the next step once the table is built from it
-//! ([`SunEphemeris::stop`]) or the ephemeris is dropped; nothing waits for it.
+//! The work is one job of rayon's pool that goes through the days in order and, before each
+//! day, runs whatever other work the pool has ([`rayon::yield_now`]): it fills the pool's idle
+//! stretches (in `lod`, the one-core merge and assembly at the end of the read) rather than
+//! slow what it runs beside, and it is not handed a day at a time (a hand-over per day left
+//! the idle core half unused: BENCHMARKS.md). A thread of its own would not do: at the normal
+//! priority it shares the cores with the reading threads, and at Linux's `SCHED_IDLE` it gets
+//! no core at all while other processes keep them busy (both measured, BENCHMARKS.md). It
+//! stops at the next step once the table is built from it ([`SunEphemeris::stop`]) or the
+//! ephemeris is dropped; nothing waits for it.
+//!
+//! Given a site near the one the table will have ([`SunEphemeris::year_near`], e.g. from the
+//! first city objects of the model, found by the job before its first day), the steps at which
+//! the sun is then far below the horizon ([`NIGHT_MARGIN_DEG`] below where the table skips
+//! SPA) are left out: the table needs no SPA there, and for any such step it does need (a
+//! site far from the one given) it computes SPA itself, as for a day not done. The table is
+//! the same whatever the ephemeris holds.
 //!
 //! ```rust
 //! use skylod::solar::{ephemeris::SunEphemeris, Site, SunTable};
@@ -36,14 +44,14 @@
 //! [`SunTable::year_ahead`]: super::SunTable::year_ahead
 //! [`SunTable::year_with`]: super::SunTable::year_with
 
-use super::sun::{step_mid, year_span};
-use super::SolarError;
+use super::sun::{night_by_far, step_mid, year_span};
+use super::{Site, SolarError};
 use chrono::{DateTime, Utc};
 use solar_positioning::{PreparedPositions, SolarPositions};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
-/// SPA's site-independent half of every step of a year, computed on a background thread
+/// SPA's site-independent half of every step of a year, computed in the background
 /// (module docs).
 #[derive(Debug)]
 pub struct SunEphemeris {
@@ -65,15 +73,30 @@ struct Shared {
 
 impl SunEphemeris {
     /// Starts computing the steps of the UTC calendar year `year` at `step_minutes` for
-    /// `delta_t_s` (the site's delta T) on a background thread, as [`super::SunTable::year`]
-    /// lays them out. If no thread can be started, nothing is computed ahead (the table is
-    /// then built as without it). The days go to rayon's global pool, which this builds if it
-    /// is not yet built: size it first (`ThreadPoolBuilder::build_global`) if it should not
-    /// have one thread per core.
+    /// `delta_t_s` (the site's delta T) in rayon's pool (module docs), as
+    /// [`super::SunTable::year`] lays them out. The job goes to rayon's global pool, which
+    /// this builds if it is not yet built: size it first (`ThreadPoolBuilder::build_global`)
+    /// if it should not have one thread per core.
     ///
     /// # Errors
     /// As [`super::SunTable::year`] for the year and the step.
     pub fn year(year: i32, step_minutes: u32, delta_t_s: f64) -> Result<Self, SolarError> {
+        SunEphemeris::year_near(year, step_minutes, delta_t_s, || None)
+    }
+
+    /// [`SunEphemeris::year`] for a table whose site is probably near the one `near` gives
+    /// (called by the job before its first day; `None`: no idea): the steps at which the sun
+    /// is then far below the horizon are not computed (module docs). The table built from it
+    /// is the same as without it, for any site.
+    ///
+    /// # Errors
+    /// As [`SunEphemeris::year`].
+    pub fn year_near(
+        year: i32,
+        step_minutes: u32,
+        delta_t_s: f64,
+        near: impl FnOnce() -> Option<Site> + Send + 'static,
+    ) -> Result<Self, SolarError> {
         let (start, steps) = year_span(year, step_minutes)?;
         let per_day = day_steps(step_minutes);
         let shared = Arc::new(Shared {
@@ -87,17 +110,12 @@ impl SunEphemeris {
                 .collect(),
             stop: AtomicBool::new(false),
         });
-        // rayon's pool made by this thread, not the feeder (whose name its workers would take)
-        rayon::current_num_threads();
-        let feeder = Arc::clone(&shared);
-        // Not started: the table computes every step itself.
-        let _ = std::thread::Builder::new()
-            .name("sun-ephemeris".into())
-            .spawn(move || feeder.feed());
+        let job = Arc::clone(&shared);
+        rayon::spawn(move || job.run(near));
         Ok(SunEphemeris { shared })
     }
 
-    /// Asks the thread to stop at its next step; the days done so far stay.
+    /// Asks the job to stop at its next step; the days done so far stay.
     pub fn stop(&self) {
         self.shared.stop.store(true, Ordering::Relaxed);
     }
@@ -146,29 +164,24 @@ impl Shared {
         ((d + 1) * self.per_day).min(self.steps) - (d * self.per_day).min(self.steps)
     }
 
-    /// Every day in order until asked to stop, one day at a time as a job of rayon's pool
-    /// injected from this (non-worker) thread, which waits for it: a worker takes such a job
-    /// only when it finds no other work (it steals first), and never two at once.
-    fn feed(self: Arc<Self>) {
+    /// Every day in order until asked to stop, each after whatever other work the pool has
+    /// (this job only fills idle time), leaving out the steps far into the night at the site
+    /// `near` gives.
+    fn run(&self, near: impl FnOnce() -> Option<Site>) {
+        let near = near();
+        let spa = SolarPositions::new();
         for d in 0..self.days.len() {
+            while rayon::yield_now() == Some(rayon::Yield::Executed) {}
             if self.stop.load(Ordering::Relaxed) {
                 return;
             }
-            let (done, wait) = std::sync::mpsc::sync_channel(1);
-            let me = Arc::clone(&self);
-            rayon::spawn(move || {
-                me.compute_day(d);
-                let _ = done.send(());
-            });
-            if wait.recv().is_err() {
-                return;
-            }
+            self.compute_day(d, &spa, near.as_ref());
         }
     }
 
-    /// Day `d`, stored when whole (stops at the step it is asked to).
-    fn compute_day(&self, d: usize) {
-        let spa = SolarPositions::new();
+    /// Day `d`, stored when whole (stops at the step it is asked to); a step far into the
+    /// night at `near` is left as `None`.
+    fn compute_day(&self, d: usize, spa: &SolarPositions, near: Option<&Site>) {
         let step_s = i64::from(self.step_minutes) * 60;
         let ks = d * self.per_day..((d + 1) * self.per_day).min(self.steps);
         let mut day = Vec::with_capacity(ks.len());
@@ -177,13 +190,24 @@ impl Shared {
                 return;
             }
             let mid = step_mid(self.start, step_s, k);
-            day.push(mid.and_then(|t| spa.for_time(&t, self.delta_t_s).ok()));
+            let wanted =
+                |t: &DateTime<Utc>| near.is_none_or(|s| !night_by_far(*t, s, NIGHT_MARGIN_DEG));
+            day.push(
+                mid.filter(wanted)
+                    .and_then(|t| spa.for_time(&t, self.delta_t_s).ok()),
+            );
         }
         if let Some(slot) = self.days.get(d) {
             let _ = slot.set(day.into_boxed_slice());
         }
     }
 }
+
+/// Degrees below the table's night threshold from which a step at the site an ephemeris is
+/// given ([`SunEphemeris::year_near`]) is left out. The sun's zenith angle differs between two
+/// sites by at most their angular distance: 5 degrees are 556 km, far more than between a
+/// city's first objects and its centre.
+pub const NIGHT_MARGIN_DEG: f64 = 5.0;
 
 /// A day of steps of `step_minutes` (at least one).
 fn day_steps(step_minutes: u32) -> usize {
@@ -192,7 +216,7 @@ fn day_steps(step_minutes: u32) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Site, SunTable};
+    use super::super::SunTable;
     use super::*;
     use crate::model::runtime::progress::Silent;
 
@@ -208,15 +232,17 @@ mod tests {
         false
     }
 
+    /// The bits of every direction of `t`.
+    fn bits(t: &SunTable) -> Vec<[u64; 3]> {
+        (t.steps().iter())
+            .map(|s| s.direction.to_array().map(f64::to_bits))
+            .collect()
+    }
+
     /// Whole, partial or foreign ephemeris: the table is the one built without it, to the bit
     /// (SunTable's PartialEq compares f64 by value; the directions' bits are compared too).
     #[test]
     fn the_table_from_an_ephemeris_is_the_table_without() {
-        let bits = |t: &SunTable| -> Vec<[u64; 3]> {
-            (t.steps().iter())
-                .map(|s| s.direction.to_array().map(f64::to_bits))
-                .collect()
-        };
         let madrid = Site::new(41.39, 2.17)
             .with_time_zone("Europe/Madrid")
             .unwrap();
@@ -245,6 +271,39 @@ mod tests {
                 let t = SunTable::year_ahead(year, step, &site, Some(&e), &Silent).unwrap();
                 assert_eq!((&t, bits(&t)), (&plain, bits(&plain)));
             }
+        }
+    }
+
+    /// An ephemeris given a site leaves out the steps deep in that site's night, and only
+    /// those; the table from it is the table without, at that site and at sites far away.
+    #[test]
+    fn an_ephemeris_near_a_site_leaves_out_its_nights_only() {
+        let year = 2025;
+        let site = Site::new(48.14, 11.58);
+        let e = SunEphemeris::year_near(year, 30, site.delta_t_s, move || Some(site)).unwrap();
+        assert!(finished(&e));
+        let (start, steps) = year_span(year, 30).unwrap();
+        let (mut left_out, mut night) = (0, 0);
+        for k in 0..steps {
+            let t = step_mid(start, 30 * 60, k).unwrap();
+            let deep = night_by_far(t, &site, NIGHT_MARGIN_DEG);
+            let day = e.day((start, steps, 30, site.delta_t_s), k / 48).unwrap();
+            assert_eq!(day[k % 48].is_none(), deep, "step {k}");
+            left_out += usize::from(day[k % 48].is_none());
+            night += usize::from(night_by_far(t, &site, 0.0));
+        }
+        // about a third of the year's steps, fewer than the table skips itself
+        assert!(
+            left_out > steps / 4 && left_out < night,
+            "{left_out} {night} {steps}"
+        );
+        let plain = SunTable::year(year, 30, &site).unwrap();
+        let t = SunTable::year_ahead(year, 30, &site, Some(&e), &Silent).unwrap();
+        assert_eq!((&t, bits(&t)), (&plain, bits(&plain)));
+        for far in [Site::new(-33.9, 151.2), Site::new(48.14, -100.0)] {
+            let plain = SunTable::year(year, 30, &far).unwrap();
+            let t = SunTable::year_ahead(year, 30, &far, Some(&e), &Silent).unwrap();
+            assert_eq!((&t, bits(&t)), (&plain, bits(&plain)));
         }
     }
 

@@ -262,6 +262,14 @@ fn quick_direction(utc: DateTime<Utc>, site: &Site) -> DVec3 {
     DVec3::new(-cd * sh, sd * cp - cd * ch * sp, sd * sp + cd * ch * cp).normalize_or_zero()
 }
 
+/// Whether the sun at `utc` is more than `margin_deg` below the elevation under which the
+/// table skips SPA ([`NIGHT_DEG`]) for a site near `site`, by the quick position, in the
+/// years it is trusted for ([`QUICK_YEARS`]). For work ahead of the table
+/// ([`super::ephemeris`]) that need not be done for such steps; the table decides itself.
+pub(super) fn night_by_far(utc: DateTime<Utc>, site: &Site, margin_deg: f64) -> bool {
+    QUICK_YEARS.contains(&utc.year()) && quick_elevation(utc, site) < NIGHT_DEG - margin_deg
+}
+
 /// Start and number of steps of the UTC calendar year `year` at `step_minutes` (the
 /// remainder shorter than a step at the end of the year left out).
 pub(super) fn year_span(
@@ -291,7 +299,6 @@ pub(super) fn step_mid(start: DateTime<Utc>, step_s: i64, k: usize) -> Option<Da
 }
 
 /// Geometric sun elevation in degrees of [`quick_direction`].
-#[cfg(test)]
 fn quick_elevation(utc: DateTime<Utc>, site: &Site) -> f64 {
     quick_direction(utc, site)
         .z

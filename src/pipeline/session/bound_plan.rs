@@ -64,14 +64,20 @@ impl BoundRequest {
         }
     }
 
-    /// SPA's site-independent half of the sun-hours bound's table, started on a background
-    /// thread before the model (which gives the site) is read, for
+    /// SPA's site-independent half of the sun-hours bound's table, started in the
+    /// background before the model (which gives the site) is read, for
     /// [`BoundPlan::sun_table_ahead`]; `None` without a bound (or for a year or step the table
-    /// refuses: the table says so).
-    pub fn ephemeris(&self) -> Option<SunEphemeris> {
+    /// refuses: the table says so). `near` (called in the background) is a latitude and
+    /// longitude near the site if one is known ([`super::site::site_hint`]): the steps deep
+    /// in its night are then not computed ([`SunEphemeris::year_near`]).
+    pub fn ephemeris(
+        &self,
+        near: impl FnOnce() -> Option<(f64, f64)> + Send + 'static,
+    ) -> Option<SunEphemeris> {
         let delta_t_s = Site::new(0.0, 0.0).delta_t_s;
+        let near = move || near().map(|(lat, lon)| Site::new(lat, lon));
         (self.bound)
-            .then(|| SunEphemeris::year(self.year, self.step_min, delta_t_s).ok())
+            .then(|| SunEphemeris::year_near(self.year, self.step_min, delta_t_s, near).ok())
             .flatten()
     }
 

@@ -3,8 +3,11 @@
 //! note a program tells its user when the site comes from the model ([`SunSite::note`]).
 
 use super::weather::SunSite;
+use crate::io::citygml::read::{stream_citygml, ReadOptions};
+use crate::io::citygml::source::{self, Document};
 use crate::model::crs::{model_crs, model_site, NoSite};
 use crate::model::CityModel;
+use std::path::Path;
 
 /// Why a site cannot be used. The caller names its own options in what it says.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -65,6 +68,39 @@ pub fn site_of(
     }
     let s = model_site(model, &model_crs(model, None))?;
     Ok(SunSite::Model(s.lat, s.lon, s.crs.name))
+}
+
+/// Bytes of a document whose city objects give [`site_hint`] its site (the first chunk of
+/// whole members from about this far on).
+const HINT_BYTES: u64 = 64 << 10;
+
+/// A site near the sun's ([`site_of`]), known before the model is read, for work done ahead
+/// of the sun's table ([`crate::solar::ephemeris::SunEphemeris::year_near`]): the latitude
+/// and longitude given, else the centre of the first city objects of `first` (about 64 KiB
+/// of an uncompressed CityGML file, read as a chunk of [`stream_citygml`]) in the file's CRS.
+/// `None` for a gzip-compressed or CityJSON file, standard input, or where those objects give
+/// no site.
+pub fn site_hint(lat: Option<f64>, lon: Option<f64>, first: Option<&Path>) -> Option<(f64, f64)> {
+    if let Ok(Some(given)) = given_site(lat, lon, true) {
+        return Some(given);
+    }
+    let path = first?;
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return None;
+    }
+    match source::load(path) {
+        Ok(Document::Plain(doc)) if !source::is_json(&doc) => {}
+        _ => return None,
+    }
+    let mut head = None;
+    let opts = ReadOptions::default();
+    let _ = stream_citygml(path, &opts, HINT_BYTES, &|_| {}, |c| {
+        head = Some(c.model);
+        Err(())
+    });
+    let head = head?;
+    let site = model_site(&head, &model_crs(&head, None)).ok()?;
+    Some((site.lat, site.lon))
 }
 
 impl SunSite {
@@ -151,6 +187,36 @@ mod tests {
         assert_eq!(
             station,
             format!("site of the weather station \"BCN\" (lat 41.5, lon 2.5): {why}")
+        );
+    }
+    /// The hint before the read: the site given, else near the model's centre (the first
+    /// objects of a 314 KB district are within a few hundred metres of it); nothing from a
+    /// file that is missing, compressed or not CityGML.
+    #[test]
+    fn a_site_hint_is_the_site_given_or_near_the_model_s() {
+        let path = crate::pipeline::test_support::fixture();
+        assert_eq!(
+            site_hint(Some(1.0), Some(2.0), Some(&path)),
+            Some((1.0, 2.0))
+        );
+        let (lat, lon) = site_of(None, None, &fixture_inputs().model)
+            .unwrap()
+            .lat_lon();
+        let (a, o) = site_hint(None, None, Some(&path)).unwrap();
+        assert!((a - lat).abs() < 0.01 && (o - lon).abs() < 0.01, "{a} {o}");
+        assert!((a, o) != (lat, lon), "the first objects only");
+        assert_eq!(site_hint(None, None, None), None);
+        let dir = tempfile::tempdir().unwrap();
+        let gz = dir.path().join("x.gml.gz");
+        let bytes = std::fs::read(&path).unwrap();
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        std::io::Write::write_all(&mut enc, &bytes).unwrap();
+        std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+        assert_eq!(site_hint(None, None, Some(&gz)), None);
+        assert_eq!(site_hint(None, None, Some(dir.path())), None);
+        assert_eq!(
+            site_hint(None, None, Some(&dir.path().join("none.gml"))),
+            None
         );
     }
 }

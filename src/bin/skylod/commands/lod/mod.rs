@@ -79,9 +79,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.scene
         .filter(&mut args.pois, &pois, None, region, "lod")?;
     // The sun's table, but for the site the model gives, computed while the model is read
-    // (in rayon's pool: sized first).
+    // (in rayon's pool: sized first), near the site of the first input's first objects.
     args.pois.jobs.global()?;
-    let ahead = args.bound.ephemeris();
+    let ahead = args
+        .bound
+        .ephemeris(args.pois.inputs.first().map(PathBuf::as_path));
     let Some(scene) = args.pois.scene()? else {
         return Ok(Outcome::SomeFailed);
     };
