@@ -17,7 +17,7 @@ use crate::model::Span;
 use std::borrow::Cow;
 use std::fs::File;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 /// What the prescan found in one skipped span.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,6 +69,8 @@ pub(super) struct Prescan<'s> {
     chunks: Vec<OnceLock<Chunk>>,
     next: AtomicUsize,
     stop: AtomicBool,
+    /// The pass's buffer for the chunks it scans itself.
+    pass_buf: Mutex<Vec<u8>>,
 }
 
 /// Per skip span the pass jumped over: its node and the prefixes bound to GML there.
@@ -121,6 +123,7 @@ impl<'s> Prescan<'s> {
             chunks,
             next: AtomicUsize::new(0),
             stop: AtomicBool::new(false),
+            pass_buf: Mutex::new(Vec::new()),
         }
     }
 
@@ -148,10 +151,20 @@ impl<'s> Prescan<'s> {
         })
     }
 
-    /// The chunk `c`, scanned here unless a worker did or does.
+    /// The chunk `c`, scanned here unless a worker did or does. While a worker scans it, the
+    /// pass scans the next chunk no one has taken rather than wait (both cores stay busy when
+    /// the pass catches up with the workers).
     fn chunk(&self, c: usize) -> Option<&Chunk> {
         let cell = self.chunks.get(c)?;
-        Some(cell.get_or_init(|| self.scan_chunk(c, &mut Vec::new())))
+        let mut buf = self.pass_buf.lock().unwrap_or_else(|e| e.into_inner());
+        while cell.get().is_none() {
+            let k = self.next.fetch_add(1, Ordering::Relaxed);
+            let Some(ahead) = self.chunks.get(k) else {
+                break;
+            };
+            ahead.get_or_init(|| self.scan_chunk(k, &mut buf));
+        }
+        Some(cell.get_or_init(|| self.scan_chunk(c, &mut buf)))
     }
 
     /// What was found in skip span `span`, if anything.
