@@ -20,6 +20,7 @@ use crate::lod::rough::{RoughGeometry, RoughOptions};
 use crate::lod::select::{PoiSelection, Selection};
 use crate::model::Poi;
 use crate::model::{Asset, CityModel};
+use rayon::prelude::*;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -345,19 +346,16 @@ impl Report {
             buildings_in: model.buildings.len(),
             ..Default::default()
         };
-        let assets = model
+        // an entry per asset on rayon's pool (a city's assets; the last step of `lod`), the
+        // totals summed from them in order
+        let assets: Vec<AssetEntry> = model
             .assets
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, a)| {
                 let level = sel.levels.get(i).copied().unwrap_or(0);
                 let polygons_in = a.polygon_count();
                 let out = polygons_out(a, rough.get(i), level);
-                totals.polygons_in += polygons_in;
-                totals.polygons_out += out;
-                if let Some(c) = totals.levels.get_mut(usize::from(level)) {
-                    *c += 1;
-                }
                 AssetEntry {
                     id: a.id.as_deref().map(str::to_owned),
                     kind: a.kind.as_str(),
@@ -374,6 +372,13 @@ impl Report {
                 }
             })
             .collect();
+        for a in &assets {
+            totals.polygons_in += a.polygons_in;
+            totals.polygons_out += a.polygons_out;
+            if let Some(c) = totals.levels.get_mut(usize::from(a.level)) {
+                *c += 1;
+            }
+        }
         totals.polygon_fraction = if totals.polygons_in == 0 {
             0.0
         } else {
