@@ -6,24 +6,25 @@
 //! sun's geocentric right ascension and declination) depends only on the instant and delta T;
 //! the site (latitude, longitude, elevation, atmosphere) enters only in the cheap rest: hour
 //! angle, topocentric parallax, refraction, azimuth and zenith angle. A [`SunEphemeris`]
-//! computes the first half for every step of a year in the background, started before
+//! computes the first half for every step of a year on a background thread, started before
 //! the model (which gives the site) is read; [`SunTable::year_ahead`] then takes what is ready
 //! and computes the rest as [`SunTable::year_with`] does. The table is the same to the bit
 //! either way: `solar_positioning`'s `SolarPositions::at` is exactly `for_time` followed by
 //! `PreparedPositions::at`, and both halves are those same calls.
 //!
-//! The work is one job of rayon's pool that goes through the days in order and, before each
-//! day, runs whatever other work the pool has ([`rayon::yield_now`]): it fills the pool's idle
-//! stretches (in `lod`, the one-core merge and assembly at the end of the read) rather than
-//! slow what it runs beside, and it is not handed a day at a time (a hand-over per day left
-//! the idle core half unused: BENCHMARKS.md). A thread of its own would not do: at the normal
-//! priority it shares the cores with the reading threads, and at Linux's `SCHED_IDLE` it gets
-//! no core at all while other processes keep them busy (both measured, BENCHMARKS.md). It
-//! stops at the next step once the table is built from it ([`SunEphemeris::stop`]) or the
-//! ephemeris is dropped; nothing waits for it.
+//! The work goes to rayon's pool a day of steps at a time, one day in flight, from a thread
+//! that only waits: a worker takes such a day only when it finds no other work to steal, so
+//! the days fill the pool's idle stretches (in `lod`, the one-core merge and assembly at the
+//! end of the read) rather than slow what they run beside. A thread of its own would not do:
+//! at the normal priority it shares the cores with the reading threads, and at Linux's
+//! `SCHED_IDLE` it gets no core at all while other processes keep them busy (both measured,
+//! BENCHMARKS.md); nor would one job going through the days and running the pool's other
+//! work between them (`rayon::yield_now`: measured slower, BENCHMARKS.md). It stops at the
+//! next step once the table is built from it ([`SunEphemeris::stop`]) or the ephemeris is
+//! dropped; nothing waits for it.
 //!
 //! Given a site near the one the table will have ([`SunEphemeris::year_near`], e.g. from the
-//! first city objects of the model, found by the job before its first day), the steps at which
+//! first city objects of the model, found by the feeding thread before its first day), the steps at which
 //! the sun is then far below the horizon ([`NIGHT_MARGIN_DEG`] below where the table skips
 //! SPA) are left out: the table needs no SPA there, and for any such step it does need (a
 //! site far from the one given) it computes SPA itself, as for a day not done. The table is
@@ -51,7 +52,7 @@ use solar_positioning::{PreparedPositions, SolarPositions};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
-/// SPA's site-independent half of every step of a year, computed in the background
+/// SPA's site-independent half of every step of a year, computed on a background thread
 /// (module docs).
 #[derive(Debug)]
 pub struct SunEphemeris {
@@ -73,10 +74,11 @@ struct Shared {
 
 impl SunEphemeris {
     /// Starts computing the steps of the UTC calendar year `year` at `step_minutes` for
-    /// `delta_t_s` (the site's delta T) in rayon's pool (module docs), as
-    /// [`super::SunTable::year`] lays them out. The job goes to rayon's global pool, which
-    /// this builds if it is not yet built: size it first (`ThreadPoolBuilder::build_global`)
-    /// if it should not have one thread per core.
+    /// `delta_t_s` (the site's delta T) on a background thread, as [`super::SunTable::year`]
+    /// lays them out. If no thread can be started, nothing is computed ahead (the table is
+    /// then built as without it). The days go to rayon's global pool, which this builds if it
+    /// is not yet built: size it first (`ThreadPoolBuilder::build_global`) if it should not
+    /// have one thread per core.
     ///
     /// # Errors
     /// As [`super::SunTable::year`] for the year and the step.
@@ -85,7 +87,7 @@ impl SunEphemeris {
     }
 
     /// [`SunEphemeris::year`] for a table whose site is probably near the one `near` gives
-    /// (called by the job before its first day; `None`: no idea): the steps at which the sun
+    /// (called on the background thread before its first day; `None`: no idea): the steps at which the sun
     /// is then far below the horizon are not computed (module docs). The table built from it
     /// is the same as without it, for any site.
     ///
@@ -110,12 +112,17 @@ impl SunEphemeris {
                 .collect(),
             stop: AtomicBool::new(false),
         });
-        let job = Arc::clone(&shared);
-        rayon::spawn(move || job.run(near));
+        // rayon's pool made by this thread, not the feeder (whose name its workers would take)
+        rayon::current_num_threads();
+        let feeder = Arc::clone(&shared);
+        // Not started: the table computes every step itself.
+        let _ = std::thread::Builder::new()
+            .name("sun-ephemeris".into())
+            .spawn(move || feeder.feed(near));
         Ok(SunEphemeris { shared })
     }
 
-    /// Asks the job to stop at its next step; the days done so far stay.
+    /// Asks the thread to stop at its next step; the days done so far stay.
     pub fn stop(&self) {
         self.shared.stop.store(true, Ordering::Relaxed);
     }
@@ -164,18 +171,25 @@ impl Shared {
         ((d + 1) * self.per_day).min(self.steps) - (d * self.per_day).min(self.steps)
     }
 
-    /// Every day in order until asked to stop, each after whatever other work the pool has
-    /// (this job only fills idle time), leaving out the steps far into the night at the site
-    /// `near` gives.
-    fn run(&self, near: impl FnOnce() -> Option<Site>) {
+    /// Every day in order until asked to stop, one day at a time as a job of rayon's pool
+    /// injected from this (non-worker) thread, which waits for it: a worker takes such a job
+    /// only when it finds no other work (it steals first), and never two at once. The steps
+    /// far into the night at the site `near` gives (asked first, on this thread) are left out.
+    fn feed(self: Arc<Self>, near: impl FnOnce() -> Option<Site>) {
         let near = near();
-        let spa = SolarPositions::new();
         for d in 0..self.days.len() {
-            while rayon::yield_now() == Some(rayon::Yield::Executed) {}
             if self.stop.load(Ordering::Relaxed) {
                 return;
             }
-            self.compute_day(d, &spa, near.as_ref());
+            let (done, wait) = std::sync::mpsc::sync_channel(1);
+            let me = Arc::clone(&self);
+            rayon::spawn(move || {
+                me.compute_day(d, &SolarPositions::new(), near.as_ref());
+                let _ = done.send(());
+            });
+            if wait.recv().is_err() {
+                return;
+            }
         }
     }
 
