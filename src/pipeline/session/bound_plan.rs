@@ -5,7 +5,7 @@
 //! sun and [`BoundPlan::finish`] gives the [`BoundSpec`] and its [`Guarantee`]. The command
 //! line and the Python package both decide through it.
 
-use super::site::SiteError;
+use super::site::{site_hint, SiteError};
 use super::weather::{SunSite, WeatherYear};
 use crate::export::report::report::Guarantee;
 use crate::lod::bound::BoundOptions;
@@ -13,6 +13,7 @@ use crate::model::runtime::progress::Progress;
 use crate::pipeline::BoundSpec;
 use crate::solar::ephemeris::SunEphemeris;
 use crate::solar::{Site, SolarError, SunTable, DEFAULT_STEP_MIN, DEFAULT_YEAR};
+use std::path::Path;
 
 /// The relative error bounded by default (SVF, sun hours where the site is known, the
 /// irradiation with a weather year): 1 %.
@@ -67,15 +68,19 @@ impl BoundRequest {
     /// SPA's site-independent half of the sun-hours bound's table, started in the
     /// background before the model (which gives the site) is read, for
     /// [`BoundPlan::sun_table_ahead`]; `None` without a bound (or for a year or step the table
-    /// refuses: the table says so). `near` (called in the background) is a latitude and
-    /// longitude near the site if one is known ([`super::site::site_hint`]): the steps deep
-    /// in its night are then not computed ([`SunEphemeris::year_near`]).
+    /// refuses: the table says so). The steps deep in the night of a site near the sun's are
+    /// not computed ([`SunEphemeris::year_near`]): the `lat`, `lon` given, else the centre of
+    /// the first city objects of `first` (the first input), found in the background
+    /// ([`super::site::site_hint`]).
     pub fn ephemeris(
         &self,
-        near: impl FnOnce() -> Option<(f64, f64)> + Send + 'static,
+        lat: Option<f64>,
+        lon: Option<f64>,
+        first: Option<&Path>,
     ) -> Option<SunEphemeris> {
         let delta_t_s = Site::new(0.0, 0.0).delta_t_s;
-        let near = move || near().map(|(lat, lon)| Site::new(lat, lon));
+        let first = first.map(Path::to_path_buf);
+        let near = move || site_hint(lat, lon, first.as_deref()).map(|(a, o)| Site::new(a, o));
         (self.bound)
             .then(|| SunEphemeris::year_near(self.year, self.step_min, delta_t_s, near).ok())
             .flatten()

@@ -12,10 +12,9 @@ use skylod::export::report::report::Guarantee;
 use skylod::model::CityModel;
 use skylod::pipeline::session::bound_plan::BoundRequest;
 use skylod::pipeline::session::flags::site_text;
-use skylod::pipeline::session::site::{site_hint, site_of};
+use skylod::pipeline::session::site::site_of;
 use skylod::pipeline::BoundSpec;
 use skylod::solar::ephemeris::SunEphemeris;
-use std::path::Path;
 
 #[derive(clap::Args, Debug)]
 pub struct BoundArgs {
@@ -80,13 +79,10 @@ impl BoundArgs {
     }
 
     /// SPA's site-independent half of the sun-hours bound's table, computed while the model
-    /// is read ([`BoundRequest::ephemeris`]), near the site given or that of the first city
-    /// objects of `first` (the first input: [`site_hint`]); `None` with `--no-bound`.
-    pub fn ephemeris(&self, first: Option<&Path>) -> Option<SunEphemeris> {
-        let (lat, lon) = (self.site.lat, self.site.lon);
-        let first = first.map(Path::to_path_buf);
+    /// is read near the site of `first` ([`BoundRequest::ephemeris`]); `None` with `--no-bound`.
+    pub fn ephemeris(&self, first: Option<&std::path::Path>) -> Option<SunEphemeris> {
         self.request(0)
-            .ephemeris(move || site_hint(lat, lon, first.as_deref()))
+            .ephemeris(self.site.lat, self.site.lon, first)
     }
 
     /// The bound to run after the selection ([`skylod::pipeline::session::bound_plan`]) and what it
