@@ -20,6 +20,8 @@
 
 pub mod bound;
 mod bound_report;
+// The hollow read: rough forms, boxes and counts made chunk by chunk, polygons dropped.
+pub mod hollow;
 // Full vs LoD vs all-boxes model per POI (paper 5, Tables 1 and 2).
 pub mod evaluation;
 pub mod level;
