@@ -20,9 +20,13 @@
 //! * its box ([`crate::model::Asset::bbox`]: min/max is exact in any order, so the model's box,
 //!   the root envelope's and any union of them are the whole read's);
 //! * the polygon count of each of its geometry properties (the report's polygon counts);
+//! * its full-detail box ([`detail_boxes`], what the bound's lazy reference indexes), and the
+//!   chunk's box of full-detail triangles, whose union over the chunks is the frame of the
+//!   whole model's full-detail scene (each chunk's is exact, so their union is);
 //!
 //! then drops the polygons, unless `keep` asks for the asset whole (e.g. the assets around a
-//! POI, whose full geometry the inside-a-building check looks at). What is left of the chunk
+//! POI, whose full geometry the inside-a-building check looks at: `keep` sees the chunk with
+//! its polygons, so it can judge a building by all its assets). What is left of the chunk
 //! (asset and building metadata, byte spans, the file's envelope sites and counts, warnings)
 //! is appended to the whole document's model with the indices of the whole read: a chunk's
 //! non-body assets follow the earlier chunks', its bodies go after every non-body asset of the
@@ -41,6 +45,7 @@
 
 use crate::io::citygml::read::{Chunk, Passes, StreamSummary};
 use crate::lod::rough::{rough_asset, RoughGeometry, RoughOptions};
+use crate::lod::scene::detail_boxes;
 use crate::model::{content_bbox, Asset, Bbox, Building, CityModel, LodGeometry, SourceFile};
 use rayon::prelude::*;
 use std::path::Path;
@@ -60,6 +65,10 @@ pub struct Hollow {
     pub rough: Vec<RoughGeometry>,
     /// Each asset's box, from its full geometry.
     pub boxes: Vec<Bbox>,
+    /// Each asset's full-detail box ([`detail_boxes`]).
+    pub detail: Vec<Bbox>,
+    /// The box of the full-detail scene's triangles (the second half of [`detail_boxes`]).
+    pub frame: Bbox,
     /// The box of every polygon of the document, assets' and buildings' own geometry
     /// ([`content_bbox`] of the whole model: its root envelope's box).
     pub content: Bbox,
@@ -116,6 +125,7 @@ struct Part {
     kept: Vec<bool>,
     rough: Vec<RoughGeometry>,
     boxes: Vec<Bbox>,
+    detail: Vec<Bbox>,
     counts: Vec<Vec<u32>>,
 }
 
@@ -125,7 +135,7 @@ impl Part {
         &mut self,
         mut asset: Asset,
         parent: Option<At>,
-        (rough, bbox): (RoughGeometry, Bbox),
+        (rough, bbox, detail): (RoughGeometry, Bbox, Bbox),
         keep: bool,
     ) {
         let counts = (asset.geometries.iter())
@@ -139,26 +149,28 @@ impl Part {
         self.kept.push(keep);
         self.rough.push(rough);
         self.boxes.push(bbox);
+        self.detail.push(detail);
         self.counts.push(counts);
     }
 }
 
 /// Read the CityGML document at `path` hollow (see the module docs): in chunks of `passes`
 /// (pass 0 of its progress), each asset's rough form made with `rough`, its polygons kept
-/// only where `keep` holds for its box. `None` where the document is to be read whole
+/// only where `keep` says so (`keep(chunk, boxes)`: for each asset of a chunk's model, with
+/// its polygons, and the assets' boxes, whether it keeps them). `None` where the document is to be read whole
 /// instead (the stream declines, or the first chunk holds no geometry while the document has
 /// a root envelope).
 pub fn read_hollow(
     path: &Path,
     passes: &Passes<'_>,
     rough: &RoughOptions,
-    keep: &(dyn Fn(&Bbox) -> bool + Sync),
+    keep: &dyn Fn(&CityModel, &[Bbox]) -> Vec<bool>,
 ) -> Option<Hollow> {
     let (mut plain, mut bodies) = (Part::default(), Part::default());
     let mut buildings: Vec<Building> = Vec::new();
     let mut warnings = Vec::new();
     let mut file: Option<SourceFile> = None;
-    let mut content = Bbox::EMPTY;
+    let (mut content, mut frame) = (Bbox::EMPTY, Bbox::EMPTY);
     let (mut root_site, mut unsure) = (None, false);
     let summary = passes.pass_citygml(path, 0, |c: Chunk| {
         let b = content_bbox(&c.model.assets, &c.model.buildings);
@@ -176,15 +188,19 @@ pub fn read_hollow(
             }
         };
         let mut model = c.model;
-        let made: Vec<(RoughGeometry, Bbox)> = (model.assets.par_iter())
+        let (rough, boxes): (Vec<RoughGeometry>, Vec<Bbox>) = (model.assets.par_iter())
             .map(|a| (rough_asset(a, rough), a.bbox()))
-            .collect();
-        for (i, (mut a, made)) in model.assets.drain(..).zip(made).enumerate() {
+            .unzip();
+        let (detail, tris) = detail_boxes(&model);
+        frame.union(&tris);
+        let kept = keep(&model, &boxes);
+        let made = rough.into_iter().zip(boxes).zip(detail);
+        let each = model.assets.drain(..).zip(made).zip(kept);
+        for (i, ((mut a, ((r, b), d)), k)) in each.enumerate() {
             a.building = a.building.map(|b| b + c.buildings_before);
             let parent = a.parent.map(at);
             let part = if i < nb { &mut plain } else { &mut bodies };
-            let kept = keep(&made.1);
-            part.push(a, parent, made, kept);
+            part.push(a, parent, (r, b, d), k);
         }
         for mut b in model.buildings.drain(..) {
             b.parent = b.parent.map(|p| p + c.buildings_before);
@@ -236,6 +252,7 @@ pub fn read_hollow(
     summary.patch_warnings(&mut warnings);
     let mut h = Hollow {
         content,
+        frame,
         summary,
         ..Hollow::default()
     };
@@ -247,6 +264,7 @@ pub fn read_hollow(
         h.kept.extend(part.kept);
         h.rough.extend(part.rough);
         h.boxes.extend(part.boxes);
+        h.detail.extend(part.detail);
         for c in part.counts {
             h.count_starts.push(h.counts.len());
             h.counts.extend(c);
@@ -304,7 +322,7 @@ mod tests {
         let read = ReadOptions::default();
         let passes = Passes::new(&read, 1, &|_, _| {});
         let high = whole.bbox().center().z;
-        let keep = |b: &Bbox| b.max.z > high;
+        let keep = |_: &CityModel, b: &[Bbox]| b.iter().map(|b| b.max.z > high).collect();
         let h = read_hollow(&path, &passes, &RoughOptions::default(), &keep).unwrap();
         assert!(h.summary.chunks > 2, "{} chunks", h.summary.chunks);
         assert!(h.kept.iter().any(|&k| k) && h.kept.iter().any(|&k| !k));
@@ -312,6 +330,7 @@ mod tests {
         assert_eq!(h.rough, rough_model(&whole, &RoughOptions::default()));
         let boxes: Vec<Bbox> = whole.assets.iter().map(Asset::bbox).collect();
         assert_eq!(h.boxes, boxes);
+        assert_eq!((h.detail.clone(), h.frame), detail_boxes(&whole));
         assert_eq!(h.content, content_bbox(&whole.assets, &whole.buildings));
         for (i, a) in whole.assets.iter().enumerate() {
             assert_eq!(h.polygon_count(i), a.polygon_count());

@@ -7,7 +7,8 @@ use skylod::io::citygml::read::{read_file, Passes};
 use skylod::io::citygml::ReadOptions;
 use skylod::lod::hollow::{hollowed, read_hollow};
 use skylod::lod::rough::{rough_model, RoughOptions};
-use skylod::model::{content_bbox, Asset, Bbox};
+use skylod::lod::scene::detail_boxes;
+use skylod::model::{content_bbox, Asset, Bbox, CityModel};
 
 #[test]
 fn shared_data_read_hollow_is_the_whole_read_without_its_polygons() {
@@ -25,7 +26,7 @@ fn shared_data_read_hollow_is_the_whole_read_without_its_polygons() {
         };
         // the assets above the model's middle keep their polygons
         let high = whole.bbox().center().z;
-        let keep = |b: &Bbox| b.max.z > high;
+        let keep = |_: &CityModel, b: &[Bbox]| b.iter().map(|b| b.max.z > high).collect();
         let Some(h) = read_hollow(&path, &passes, &opts, &keep) else {
             declined.push(short(&path));
             continue;
@@ -51,6 +52,7 @@ fn shared_data_read_hollow_is_the_whole_read_without_its_polygons() {
         assert_eq!(h.rough, rough_model(&whole, &opts), "{name}");
         let boxes: Vec<Bbox> = whole.assets.iter().map(Asset::bbox).collect();
         assert_eq!(h.boxes, boxes, "{name}");
+        assert_eq!((h.detail.clone(), h.frame), detail_boxes(&whole), "{name}");
         let content = content_bbox(&whole.assets, &whole.buildings);
         assert_eq!(h.content, content, "{name}");
         let mut counts = whole.assets.iter().enumerate();
