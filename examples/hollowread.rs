@@ -30,7 +30,7 @@ fn main() {
     }
     let read = ReadOptions::default();
     let passes = Passes::new(&read, CHUNK_BYTES, &|_, _| {});
-    let Some(h) = read_hollow(path, &passes, &opts, &|m, _| vec![false; m.assets.len()]) else {
+    let Some(h) = read_hollow(path, &passes, &opts, &|m, _, _| vec![false; m.assets.len()]) else {
         eprintln!("{}: the stream declines: read whole", path.display());
         std::process::exit(1);
     };

@@ -44,9 +44,12 @@
 //! few assets it needs read back by span, before `lod` can run on a [`Hollow`].
 
 use crate::io::citygml::read::{Chunk, Passes, StreamSummary};
+use crate::lod::poi::checks::enclosure::ON_SURFACE;
+use crate::lod::poi::checks::Surroundings;
 use crate::lod::rough::{rough_asset, RoughGeometry, RoughOptions};
 use crate::lod::scene::detail_boxes;
 use crate::model::{content_bbox, Asset, Bbox, Building, CityModel, LodGeometry, SourceFile};
+use glam::DVec3;
 use rayon::prelude::*;
 use std::path::Path;
 
@@ -154,17 +157,21 @@ impl Part {
     }
 }
 
+/// Which assets of a chunk keep their polygons in [`read_hollow`]: `keep(chunk, rough, boxes)`
+/// gets the chunk's model with its polygons, and each asset's rough form and box.
+pub type Keep<'a> = dyn Fn(&CityModel, &[RoughGeometry], &[Bbox]) -> Vec<bool> + 'a;
+
 /// Read the CityGML document at `path` hollow (see the module docs): in chunks of `passes`
 /// (pass 0 of its progress), each asset's rough form made with `rough`, its polygons kept
-/// only where `keep` says so (`keep(chunk, boxes)`: for each asset of a chunk's model, with
-/// its polygons, and the assets' boxes, whether it keeps them). `None` where the document is to be read whole
+/// only where `keep` says so (`keep(chunk, rough, boxes)`: for each asset of a chunk's model,
+/// with its polygons, rough forms and boxes, whether it keeps them; e.g. [`near_pois`]). `None` where the document is to be read whole
 /// instead (the stream declines, or the first chunk holds no geometry while the document has
 /// a root envelope).
 pub fn read_hollow(
     path: &Path,
     passes: &Passes<'_>,
     rough: &RoughOptions,
-    keep: &dyn Fn(&CityModel, &[Bbox]) -> Vec<bool>,
+    keep: &Keep<'_>,
 ) -> Option<Hollow> {
     let (mut plain, mut bodies) = (Part::default(), Part::default());
     let mut buildings: Vec<Building> = Vec::new();
@@ -193,7 +200,7 @@ pub fn read_hollow(
             .unzip();
         let (detail, tris) = detail_boxes(&model);
         frame.union(&tris);
-        let kept = keep(&model, &boxes);
+        let kept = keep(&model, &rough, &boxes);
         let made = rough.into_iter().zip(boxes).zip(detail);
         let each = model.assets.drain(..).zip(made).zip(kept);
         for (i, ((mut a, ((r, b), d)), k)) in each.enumerate() {
@@ -276,6 +283,32 @@ pub fn read_hollow(
     Some(h)
 }
 
+/// The assets whose full geometry the POI checks of `lod` look at, for POIs at `points` (in
+/// the document's coordinates), as a `keep` of [`read_hollow`]: every asset of a building
+/// whose box, grown by [`ON_SURFACE`], holds a POI ([`Surroundings::assets_holding`]: the
+/// inside-a-building and normal checks) and every asset whose rough box holds one
+/// ([`crate::lod::select::rough_holds_poi_full_not`]). A building and its parts are one
+/// top-level member, so a chunk sees each whole.
+pub fn near_pois(
+    points: &[DVec3],
+) -> impl Fn(&CityModel, &[RoughGeometry], &[Bbox]) -> Vec<bool> + '_ {
+    move |chunk, rough, boxes| {
+        let around = Surroundings::with_boxes(chunk, boxes);
+        let mut keep = vec![false; chunk.assets.len()];
+        for &p in points {
+            for i in around.assets_holding(p, ON_SURFACE) {
+                if let Some(k) = keep.get_mut(i as usize) {
+                    *k = true;
+                }
+            }
+            for (k, r) in keep.iter_mut().zip(rough) {
+                *k |= r.obb.as_ref().is_some_and(|b| b.contains(p, 0.0));
+            }
+        }
+        keep
+    }
+}
+
 /// `geometries` without their polygons (LoD, property and spans kept): what [`read_hollow`]
 /// leaves of the geometry of an asset not kept and of a building.
 pub fn drop_polygons(geometries: &mut [LodGeometry]) {
@@ -322,7 +355,9 @@ mod tests {
         let read = ReadOptions::default();
         let passes = Passes::new(&read, 1, &|_, _| {});
         let high = whole.bbox().center().z;
-        let keep = |_: &CityModel, b: &[Bbox]| b.iter().map(|b| b.max.z > high).collect();
+        let keep = |_: &CityModel, _: &[RoughGeometry], b: &[Bbox]| {
+            b.iter().map(|b| b.max.z > high).collect()
+        };
         let h = read_hollow(&path, &passes, &RoughOptions::default(), &keep).unwrap();
         assert!(h.summary.chunks > 2, "{} chunks", h.summary.chunks);
         assert!(h.kept.iter().any(|&k| k) && h.kept.iter().any(|&k| !k));
@@ -338,5 +373,50 @@ mod tests {
             assert_eq!(h.polygon_count_at(i, lod), a.polygons_at(lod).count());
         }
         assert_eq!(h.polygon_count(whole.assets.len()), 0);
+    }
+
+    /// The POI checks of `lod` on a model read hollow with [`near_pois`] kept: the same
+    /// flags as on the whole model, and the same answers of the rough-box test of the
+    /// selection.
+    #[test]
+    fn poi_checks_on_a_hollow_model_are_the_whole_models() {
+        use crate::lod::poi::checks::poi_flags_around;
+        use crate::lod::select::rough_holds_poi_full_not;
+        let path = fixture();
+        let whole = read_file(&path).unwrap();
+        // inside the first asset's box (its building's assets kept), and out of every box
+        let (a, b) = (whole.assets[0].bbox(), whole.bbox());
+        let pois = [
+            crate::model::Poi::at("in", a.center().to_array()),
+            crate::model::Poi::at("out", (b.max + 10.0).to_array()),
+        ];
+        let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+        let read = ReadOptions::default();
+        let passes = Passes::new(&read, 1, &|_, _| {});
+        let opts = RoughOptions::default();
+        let h = read_hollow(&path, &passes, &opts, &near_pois(&points)).unwrap();
+        assert!(h.kept.iter().any(|&k| !k));
+        let flags = |m: &CityModel, around: &Surroundings| -> Vec<_> {
+            let scene = around.scene_holding(m, &points, ON_SURFACE);
+            let each = pois.iter();
+            each.map(|p| poi_flags_around(&scene, m, around, p, None))
+                .collect()
+        };
+        let want = flags(&whole, &Surroundings::new(&whole));
+        assert!(want.iter().any(|f| !f.is_empty()), "{want:?}");
+        assert_eq!(
+            flags(&h.model, &Surroundings::with_boxes(&h.model, &h.boxes)),
+            want
+        );
+        let rough = rough_model(&whole, &opts);
+        let mut held = 0;
+        for (i, r) in rough.iter().enumerate() {
+            for &p in &points {
+                let full = rough_holds_poi_full_not(&whole.assets[i], r, p);
+                assert_eq!(rough_holds_poi_full_not(&h.model.assets[i], r, p), full);
+                held += usize::from(r.obb.as_ref().is_some_and(|b| b.contains(p, 0.0)));
+            }
+        }
+        assert!(held > 0);
     }
 }

@@ -6,7 +6,7 @@ use crate::util::*;
 use skylod::io::citygml::read::{read_file, Passes};
 use skylod::io::citygml::ReadOptions;
 use skylod::lod::hollow::{hollowed, read_hollow};
-use skylod::lod::rough::{rough_model, RoughOptions};
+use skylod::lod::rough::{rough_model, RoughGeometry, RoughOptions};
 use skylod::lod::scene::detail_boxes;
 use skylod::model::{content_bbox, Asset, Bbox, CityModel};
 
@@ -26,7 +26,9 @@ fn shared_data_read_hollow_is_the_whole_read_without_its_polygons() {
         };
         // the assets above the model's middle keep their polygons
         let high = whole.bbox().center().z;
-        let keep = |_: &CityModel, b: &[Bbox]| b.iter().map(|b| b.max.z > high).collect();
+        let keep = |_: &CityModel, _: &[RoughGeometry], b: &[Bbox]| {
+            b.iter().map(|b| b.max.z > high).collect()
+        };
         let Some(h) = read_hollow(&path, &passes, &opts, &keep) else {
             declined.push(short(&path));
             continue;
