@@ -38,16 +38,25 @@
 //! read) or the first chunk holds no geometry to tell the root envelope by, [`read_hollow`]
 //! gives `None`: the caller reads the document whole, which also reports any error.
 //!
-//! What is not done yet (issue 22): `lod` itself still reads whole. The stages after the read
-//! (frame and trust checks, selection, the bound's lazy reference, the writers) take the
-//! model's polygons; each must take the facts computed here instead, or the polygons of the
-//! few assets it needs read back by span, before `lod` can run on a [`Hollow`].
+//! The selection runs on a [`Hollow`] ([`crate::lod::lod_hollow`]): the rough forms are the
+//! read's, the selection scene needs only metadata, the facts of the full polygons it takes
+//! (each asset's lowest point, its polygons at a level: [`crate::lod::select::FullFacts`])
+//! come from the read, and the full geometry it looks at (the assets whose rough box holds a
+//! POI, the buildings whose box holds one: [`near_pois`]) is kept.
+//!
+//! What is not done yet (issue 22): `lod` itself still reads whole. The stages after the
+//! selection (the bound's lazy reference, the writers, the report) and the frame's checks
+//! take the model's polygons; each must take the facts computed here instead, or the
+//! polygons of the few assets it needs read back by span, before the command can run on a
+//! [`Hollow`].
 
 use crate::io::citygml::read::{Chunk, Passes, StreamSummary};
+use crate::lod::level::{polygon_count_of, rough_is_own};
 use crate::lod::poi::checks::enclosure::ON_SURFACE;
 use crate::lod::poi::checks::Surroundings;
 use crate::lod::rough::{rough_asset, RoughGeometry, RoughOptions};
 use crate::lod::scene::detail_boxes;
+use crate::lod::select::FullFacts;
 use crate::model::{content_bbox, Asset, Bbox, Building, CityModel, LodGeometry, SourceFile};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -70,6 +79,8 @@ pub struct Hollow {
     pub boxes: Vec<Bbox>,
     /// Each asset's full-detail box ([`detail_boxes`]).
     pub detail: Vec<Bbox>,
+    /// Whether each asset's rough form is its own geometry ([`rough_is_own`]).
+    pub own: Vec<bool>,
     /// The box of the full-detail scene's triangles (the second half of [`detail_boxes`]).
     pub frame: Bbox,
     /// The box of every polygon of the document, assets' and buildings' own geometry
@@ -112,6 +123,19 @@ impl Hollow {
     }
 }
 
+impl FullFacts for Hollow {
+    fn min_z(&self, i: usize) -> f64 {
+        self.boxes.get(i).map_or(f64::INFINITY, |b| b.min.z)
+    }
+
+    fn polygon_count(&self, i: usize, rough: Option<&RoughGeometry>, level: u8) -> usize {
+        let (Some(a), Some(&own)) = (self.model.assets.get(i), self.own.get(i)) else {
+            return 0;
+        };
+        polygon_count_of(a, self.polygon_counts(i), rough, level, own)
+    }
+}
+
 /// An asset index of the whole model while the document's count of non-body assets is not
 /// known yet: a non-body asset's index, or a body's among the bodies.
 #[derive(Clone, Copy)]
@@ -129,6 +153,7 @@ struct Part {
     rough: Vec<RoughGeometry>,
     boxes: Vec<Bbox>,
     detail: Vec<Bbox>,
+    own: Vec<bool>,
     counts: Vec<Vec<u32>>,
 }
 
@@ -141,6 +166,7 @@ impl Part {
         (rough, bbox, detail): (RoughGeometry, Bbox, Bbox),
         keep: bool,
     ) {
+        self.own.push(rough_is_own(&asset, &rough));
         let counts = (asset.geometries.iter())
             .map(|g| u32::try_from(g.polygons.len()).unwrap_or(u32::MAX))
             .collect();
@@ -272,6 +298,7 @@ pub fn read_hollow(
         h.rough.extend(part.rough);
         h.boxes.extend(part.boxes);
         h.detail.extend(part.detail);
+        h.own.extend(part.own);
         for c in part.counts {
             h.count_starts.push(h.counts.len());
             h.counts.extend(c);
@@ -418,5 +445,46 @@ mod tests {
             }
         }
         assert!(held > 0);
+    }
+
+    /// The selection of `lod` on a hollow read ([`crate::lod::lod_hollow`]) is the whole
+    /// read's: levels, hits, each POI's figures and flags, the selection scene.
+    #[test]
+    fn the_selection_on_a_hollow_read_is_the_whole_reads() {
+        use crate::lod::{lod_hollow, lod_with, LodOptions};
+        use crate::model::runtime::progress::Silent;
+        // six blocks of the small preset, the first block's POIs
+        let small = crate::model::synth::SynthOptions {
+            blocks_x: 3,
+            blocks_y: 2,
+            ..crate::model::synth::Preset::Small.defaults()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("six.gml");
+        let mut xml = Vec::new();
+        crate::model::synth::generate(&small, &mut xml).unwrap();
+        std::fs::write(&path, xml).unwrap();
+        let whole = read_file(&path).unwrap();
+        let pois: Vec<crate::model::Poi> = (crate::model::synth::pois(&small).into_iter())
+            .take(2)
+            .map(Into::into)
+            .collect();
+        let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+        let opts = LodOptions::default();
+        let read = ReadOptions::default();
+        let passes = Passes::new(&read, 1, &|_, _| {});
+        let h = read_hollow(&path, &passes, &opts.rough, &near_pois(&points)).unwrap();
+        assert!(h.kept.iter().any(|&k| !k));
+        let want = lod_with(&whole, &pois, &opts, &Silent).unwrap();
+        let mut got = lod_hollow(&h, &pois, &opts, &Silent).unwrap();
+        // each POI's time aside
+        for (g, w) in got.selection.pois.iter_mut().zip(&want.selection.pois) {
+            g.seconds = w.seconds;
+        }
+        let [_, l1, l2] = want.selection.level_counts();
+        assert!(l1 > 0 && l2 > 0, "{l1} {l2}");
+        assert_eq!(got.selection, want.selection);
+        assert_eq!(got.flags, want.flags);
+        assert_eq!((got.rough, got.triangles), (want.rough, want.triangles));
     }
 }
