@@ -38,6 +38,15 @@ pub fn is_gzip(head: &[u8]) -> bool {
     head.starts_with(&GZIP_MAGIC)
 }
 
+/// Whether the file at `path` starts with gzip's bytes (false when it cannot be read).
+pub fn is_gzip_file(path: &Path) -> bool {
+    let mut head = [0u8; 2];
+    std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
+        .is_ok()
+        && is_gzip(&head)
+}
+
 /// `-` as an output path: standard output (never a file named `-`).
 ///
 /// ```

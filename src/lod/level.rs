@@ -72,6 +72,59 @@ fn rough_is_own_geometry(asset: &Asset, r: &RoughGeometry, polygons: &[Polygon])
     same.len() == polygons.len() && same.iter().zip(polygons).all(|(x, y)| *x == y)
 }
 
+/// Whether property `g`, of `count` polygons, is written as the rough geometry `r` (of
+/// `rough_count` polygons) at level 1; `unchanged`: the rough geometry is the asset's own
+/// ([`rough_is_own`]).
+fn replaced(
+    g: &LodGeometry,
+    count: usize,
+    r: &RoughGeometry,
+    rough_count: usize,
+    unchanged: bool,
+) -> bool {
+    !(g.lod < r.lod
+        || (g.lod == r.lod && unchanged)
+        || !holds_polygons(&g.property)
+        || rough_count > count)
+}
+
+/// Whether the rough geometry `r` of `asset` is its own geometry at the rough LoD (those
+/// properties stay verbatim at level 1): what [`polygon_count_of`] needs of the full polygons.
+pub fn rough_is_own(asset: &Asset, r: &RoughGeometry) -> bool {
+    rough_is_own_geometry(asset, r, &r.polygons())
+}
+
+/// [`polygon_count`] from what a hollow read ([`crate::lod::hollow`]) keeps of an asset whose
+/// polygons are gone: `counts[k]`, the polygons of `asset.geometries[k]` in the full model, and
+/// `unchanged`, [`rough_is_own`] of the full asset.
+pub fn polygon_count_of(
+    asset: &Asset,
+    counts: &[u32],
+    rough: Option<&RoughGeometry>,
+    level: u8,
+    unchanged: bool,
+) -> usize {
+    let each = asset
+        .geometries
+        .iter()
+        .zip(counts.iter().map(|&n| n as usize));
+    match (level, rough) {
+        (0, _) => 0,
+        (1, Some(r)) if !r.is_empty() => {
+            let n = r.polygon_count();
+            each.map(|(g, c)| {
+                if replaced(g, c, r, n, unchanged) {
+                    n
+                } else {
+                    c
+                }
+            })
+            .sum()
+        }
+        _ => each.map(|(_, c)| c).sum(),
+    }
+}
+
 /// The asset's LoD properties as written at `level` (none at level 0), in document order.
 pub fn properties<'a>(
     asset: &'a Asset,
@@ -92,11 +145,7 @@ pub fn properties<'a>(
                 .geometries
                 .iter()
                 .map(|g| {
-                    let replaced = !(g.lod < r.lod
-                        || (g.lod == r.lod && unchanged)
-                        || !holds_polygons(&g.property)
-                        || polygons.len() > g.polygons.len());
-                    if replaced {
+                    if replaced(g, g.polygons.len(), r, polygons.len(), unchanged) {
                         PropertyOut {
                             geometry: g,
                             rough: true,

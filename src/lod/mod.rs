@@ -20,6 +20,8 @@
 
 pub mod bound;
 mod bound_report;
+// The hollow read: rough forms, boxes and counts made chunk by chunk, polygons dropped.
+pub mod hollow;
 // Full vs LoD vs all-boxes model per POI (paper 5, Tables 1 and 2).
 pub mod evaluation;
 pub mod level;
@@ -38,7 +40,7 @@ use crate::lod::poi::checks::enclosure::ON_SURFACE;
 use crate::lod::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::lod::rough::{rough_model, RoughGeometry, RoughOptions};
 use crate::lod::scene::selection_scene_for_rays;
-use crate::lod::select::{select_with, SelectError, SelectOptions, Selection};
+use crate::lod::select::{select_facts, FullFacts, SelectError, SelectOptions, Selection};
 use crate::model::runtime::progress::{check, stage, Progress, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
@@ -104,6 +106,49 @@ pub fn lod_with(
     });
     crate::model::runtime::mem::give_back_for(model.assets.len());
     let rough_s = t.elapsed().as_secs_f64();
+    let around = Surroundings::new(model);
+    select_and_flag(
+        (model, model, &around),
+        rough,
+        rough_s,
+        pois,
+        opts,
+        progress,
+    )
+}
+
+/// [`lod_with`] on a document read hollow ([`hollow::read_hollow`], its POI checks' geometry
+/// kept with [`hollow::near_pois`] of `pois`): the rough forms made by the read (with
+/// `opts.rough`), the facts of the full polygons from it; the same result as [`lod_with`] on
+/// the whole read (the rough stage's time: none).
+///
+/// # Errors
+/// As [`lod_with`].
+pub fn lod_hollow(
+    h: &hollow::Hollow,
+    pois: &[Poi],
+    opts: &LodOptions,
+    progress: &dyn Progress,
+) -> Result<LodResult, SelectError> {
+    let n = h.model.assets.len() as u64;
+    check(progress, Stage::Rough)?;
+    stage(progress, Stage::Rough, n, 0, || {
+        progress.advance(Stage::Rough, n, 0, None)
+    });
+    let around = Surroundings::with_boxes(&h.model, &h.boxes);
+    let rough = h.rough.clone();
+    select_and_flag((&h.model, h, &around), rough, 0.0, pois, opts, progress)
+}
+
+/// The rest of [`lod_with`] after the rough stage: selection scene, selection, POI flags.
+fn select_and_flag(
+    (model, facts, around): (&CityModel, &dyn FullFacts, &Surroundings),
+    rough: Vec<RoughGeometry>,
+    rough_s: f64,
+    pois: &[Poi],
+    opts: &LodOptions,
+    progress: &dyn Progress,
+) -> Result<LodResult, SelectError> {
     check(progress, Stage::Bvh)?;
     let t = Instant::now();
     let scene = stage(progress, Stage::Bvh, 1, 0, || {
@@ -112,18 +157,17 @@ pub fn lod_with(
     let bvh_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let selection = stage(progress, Stage::Select, pois.len() as u64, 0, || {
-        select_with(model, &rough, &scene, pois, &opts.select, progress)
+        select_facts(model, facts, &rough, &scene, pois, &opts.select, progress)
     })?;
     let select_s = t.elapsed().as_secs_f64();
     // Inside a building is judged on the full geometry (the rough model may close what the
     // full one leaves open): the buildings whose box holds a POI.
-    let around = Surroundings::new(model);
     let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
     let full_near = around.scene_holding(model, &points, ON_SURFACE);
     let flags = pois
         .par_iter()
         .zip(&selection.pois)
-        .map(|(p, s)| poi_flags_around(&full_near, model, &around, p, Some(s.sky_rays)))
+        .map(|(p, s)| poi_flags_around(&full_near, model, around, p, Some(s.sky_rays)))
         .collect();
     Ok(LodResult {
         flags,

@@ -204,6 +204,47 @@ pub fn select_with(
     opts: &SelectOptions,
     progress: &dyn crate::model::runtime::progress::Progress,
 ) -> Result<Selection, SelectError> {
+    select_facts(model, model, rough, scene, pois, opts, progress)
+}
+
+/// What the selection takes from the full polygons beyond the rough model and the assets a
+/// POI's rough box holds: the lowest point of each asset (which installations are roof
+/// assets) and its polygons at a level (each POI's own model). A [`CityModel`] answers from
+/// its polygons, a [`crate::lod::hollow::Hollow`] from what its read made of them.
+pub trait FullFacts: Sync {
+    /// The lowest z of asset `i`'s polygons, all LoDs ([`crate::model::Asset::bbox`]).
+    fn min_z(&self, i: usize) -> f64;
+    /// [`crate::lod::level::polygon_count`] of asset `i` with `rough` at `level`.
+    fn polygon_count(&self, i: usize, rough: Option<&RoughGeometry>, level: u8) -> usize;
+}
+
+impl FullFacts for CityModel {
+    fn min_z(&self, i: usize) -> f64 {
+        self.assets.get(i).map_or(f64::INFINITY, |a| a.bbox().min.z)
+    }
+
+    fn polygon_count(&self, i: usize, rough: Option<&RoughGeometry>, level: u8) -> usize {
+        let a = self.assets.get(i);
+        a.map_or(0, |a| crate::lod::level::polygon_count(a, rough, level))
+    }
+}
+
+/// [`select_with`] taking the full geometry's facts from `facts` (a hollow read's,
+/// [`crate::lod::hollow::Hollow`]); `model` needs the polygons only of the assets whose rough
+/// box holds a POI ([`rough_holds_poi_full_not`]).
+///
+/// # Errors
+/// As [`select_with`].
+#[allow(clippy::too_many_arguments)]
+pub fn select_facts(
+    model: &CityModel,
+    facts: &dyn FullFacts,
+    rough: &[RoughGeometry],
+    scene: &Scene,
+    pois: &[Poi],
+    opts: &SelectOptions,
+    progress: &dyn crate::model::runtime::progress::Progress,
+) -> Result<Selection, SelectError> {
     use crate::model::runtime::progress::{check, Stage};
     let n_assets = model.assets.len();
     if rough.len() != n_assets {
@@ -223,7 +264,7 @@ pub fn select_with(
             return Err(SelectError::Poi(p.id.clone()));
         }
     }
-    let roof_asset = roof_assets(model, rough, opts.roof_tolerance_m);
+    let roof_asset = roof_assets_with(model, facts, rough, opts.roof_tolerance_m);
 
     let per_poi: Vec<OnePoi> = pois
         .par_iter()
@@ -252,7 +293,7 @@ pub fn select_with(
         }
         silhouette.sort_unstable();
         silhouette.dedup();
-        info.polygons = own_polygons(model, rough, &poi_hits, &silhouette);
+        info.polygons = own_polygons(model, facts, rough, &poi_hits, &silhouette);
         for (a, h) in poi_hits {
             let a = a as usize;
             if let (Some(x), Some(l)) = (hits.get_mut(a), levels.get_mut(a)) {
@@ -294,6 +335,7 @@ pub fn select_with(
 /// openings of silhouette surfaces) at level 2, as [`select`] combines them.
 fn own_polygons(
     model: &CityModel,
+    facts: &dyn FullFacts,
     rough: &[RoughGeometry],
     hits: &[(u32, u32)],
     silhouette: &[u32],
@@ -311,10 +353,8 @@ fn own_polygons(
     }
     levels
         .iter()
-        .filter_map(|(&i, &l)| {
-            let a = model.assets.get(i)?;
-            Some(crate::lod::level::polygon_count(a, rough.get(i), l))
-        })
+        .filter(|&(&i, _)| i < model.assets.len())
+        .map(|(&i, &l)| facts.polygon_count(i, rough.get(i), l))
         .sum()
 }
 
@@ -434,15 +474,25 @@ fn ray_crosses(o: DVec3, d: DVec3, t: &[DVec3; 3]) -> bool {
 
 /// Which assets are roof assets (see the module docs).
 pub fn roof_assets(model: &CityModel, rough: &[RoughGeometry], tolerance: f64) -> Vec<bool> {
+    roof_assets_with(model, model, rough, tolerance)
+}
+
+/// [`roof_assets`] with the full geometry's facts from `facts`.
+fn roof_assets_with(
+    model: &CityModel,
+    facts: &dyn FullFacts,
+    rough: &[RoughGeometry],
+    tolerance: f64,
+) -> Vec<bool> {
     // Lowest roof edge per root building (over the building and its parts).
     let mut roof_min = vec![f64::INFINITY; model.buildings.len()];
-    for a in &model.assets {
+    for (i, a) in model.assets.iter().enumerate() {
         if a.kind != AssetKind::Roof {
             continue;
         }
         let Some(b) = a.building else { continue };
         let root = model.root_building(b);
-        let z = a.bbox().min.z;
+        let z = facts.min_z(i);
         if let Some(m) = roof_min.get_mut(root) {
             if z < *m {
                 *m = z;

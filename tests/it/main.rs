@@ -55,6 +55,8 @@ mod irradiance_lod;
 mod levels;
 // The house rules: no import cycle between folders of src/, what each stage may import.
 mod layout;
+// The hollow read of `lod`: the whole read without its polygons, chunk by chunk.
+mod hollow;
 // `lod` end to end: valid outputs, resolved references, the report schema, determinism.
 mod lod;
 // Selection on the hand-made scenes: the known level of each named asset.

@@ -259,7 +259,7 @@ pub fn write_document_streamed(
 
 /// Where the root's envelope starts in the first chunk's model: its first envelope, when
 /// that comes before every building and asset (an owner's envelope is inside its owner).
-fn root_site_of(model: &CityModel) -> Option<u64> {
+pub(crate) fn root_site_of(model: &CityModel) -> Option<u64> {
     let f = model.files.first()?;
     let first = f.envelopes.iter().map(|e| e.span.start).min()?;
     let owners = model

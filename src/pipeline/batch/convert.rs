@@ -27,11 +27,7 @@ use std::path::Path;
 /// ([`crate::io::citygml::read::stream`]).
 pub fn chunk_for(path: &Path, chunk: u64) -> Option<u64> {
     let len = std::fs::metadata(path).ok()?.len();
-    let mut head = [0u8; 2];
-    let gzip = std::fs::File::open(path)
-        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
-        .is_ok()
-        && crate::io::is_gzip(&head);
+    let gzip = crate::io::files::is_gzip_file(path);
     let len = if gzip { len.saturating_mul(10) } else { len };
     let name = path.to_string_lossy().to_ascii_lowercase();
     let seq = name.ends_with(".jsonl") || name.ends_with(".jsonl.gz");

@@ -54,10 +54,16 @@ fn cell_of(x: f64) -> i64 {
 impl Surroundings {
     /// Group the assets of `model` by top-level building and index their boxes.
     pub fn new(model: &CityModel) -> Self {
+        let boxes: Vec<Bbox> = model.assets.iter().map(|a| a.bbox()).collect();
+        Self::with_boxes(model, &boxes)
+    }
+
+    /// [`Surroundings::new`] with each asset's box given (`boxes[i]`: asset `i`'s
+    /// [`crate::model::Asset::bbox`], e.g. from a hollow read, [`crate::lod::hollow`]).
+    pub fn with_boxes(model: &CityModel, boxes: &[Bbox]) -> Self {
         let mut groups: Vec<Group> = Vec::new();
         let mut of_root: HashMap<usize, usize> = HashMap::new();
-        for (i, a) in model.assets.iter().enumerate() {
-            let b = a.bbox();
+        for ((i, a), &b) in model.assets.iter().enumerate().zip(boxes) {
             if b.is_empty() {
                 continue;
             }
@@ -143,6 +149,13 @@ impl Surroundings {
             .min_by(f64::total_cmp)
     }
 
+    /// The assets of the buildings whose box, grown by `margin`, holds `p`: those whose full
+    /// geometry [`Surroundings::polygons_at`] and [`Surroundings::scene_holding`] look at.
+    pub fn assets_holding(&self, p: DVec3, margin: f64) -> impl Iterator<Item = u32> + '_ {
+        (self.holding(p, margin).into_iter())
+            .flat_map(|k| self.groups[k as usize].assets.iter().copied())
+    }
+
     /// Indices of the groups whose box, grown by `margin`, holds `p`.
     fn holding(&self, p: DVec3, margin: f64) -> Vec<u32> {
         let m = DVec3::splat(margin);
@@ -163,10 +176,8 @@ impl Surroundings {
         p: DVec3,
         margin: f64,
     ) -> Vec<(u32, &'m Polygon)> {
-        self.holding(p, margin)
-            .into_iter()
-            .flat_map(|k| self.groups[k as usize].assets.iter())
-            .filter_map(|&i| model.assets.get(i as usize).map(|a| (i, a)))
+        self.assets_holding(p, margin)
+            .filter_map(|i| model.assets.get(i as usize).map(|a| (i, a)))
             .flat_map(|(i, a)| a.detail_polygons().iter().map(move |q| (i, q)))
             .collect()
     }

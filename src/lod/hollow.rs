@@ -1,0 +1,490 @@
+//! The hollow read of one CityGML document for `lod` (issue 22, "lod keeps only what the
+//! selection needs"): the whole read's model without the full polygons, and per asset what the
+//! selection needs of them, made while they are in memory.
+//!
+//! `lod` on a 4 GB document held the whole model as read (~0.53× the file: polygons with their
+//! points and ids) until its outputs were written, and the CityGML writer's index of the source
+//! (~0.31× the file) came on top of it (BENCHMARKS.md, "Where the memory of `lod` goes"). The
+//! selection traces only rough forms; the full geometry it still needs is that of a few assets
+//! (level 2, the bound's reference near its rays, the POIs' surroundings), which can be read
+//! again by byte span.
+//!
+//! [`read_hollow`] reads the document in chunks of whole top-level members
+//! ([`crate::io::citygml::read::Passes`], the chunked read of `stats` and `convert`). While a
+//! chunk's polygons are in memory it computes, per asset:
+//!
+//! * its rough form ([`rough_asset`], what [`crate::lod::rough::rough_model`] gives the
+//!   whole model: the rough stage looks at one asset at a time). The forms are in the
+//!   document's coordinates: the hollow read serves a frame that is the identity (a projected
+//!   metric CRS); a frame that depends on the whole model needs the whole read;
+//! * its box ([`crate::model::Asset::bbox`]: min/max is exact in any order, so the model's box,
+//!   the root envelope's and any union of them are the whole read's);
+//! * the polygon count of each of its geometry properties (the report's polygon counts);
+//! * its full-detail box ([`detail_boxes`], what the bound's lazy reference indexes), and the
+//!   chunk's box of full-detail triangles, whose union over the chunks is the frame of the
+//!   whole model's full-detail scene (each chunk's is exact, so their union is);
+//!
+//! then drops the polygons, unless `keep` asks for the asset whole (e.g. the assets around a
+//! POI, whose full geometry the inside-a-building check looks at: `keep` sees the chunk with
+//! its polygons, so it can judge a building by all its assets). What is left of the chunk
+//! (asset and building metadata, byte spans, the file's envelope sites and counts, warnings)
+//! is appended to the whole document's model with the indices of the whole read: a chunk's
+//! non-body assets follow the earlier chunks', its bodies go after every non-body asset of the
+//! document ([`crate::io::citygml::read::Chunk`]), building and parent indices shift with
+//! them. The root envelope's box is the union of every chunk's content box, as the streamed
+//! CityGML writer computes it.
+//!
+//! Where the stream declines (a reference across chunks, a DOCTYPE, a document that fails to
+//! read) or the first chunk holds no geometry to tell the root envelope by, [`read_hollow`]
+//! gives `None`: the caller reads the document whole, which also reports any error.
+//!
+//! The selection runs on a [`Hollow`] ([`crate::lod::lod_hollow`]): the rough forms are the
+//! read's, the selection scene needs only metadata, the facts of the full polygons it takes
+//! (each asset's lowest point, its polygons at a level: [`crate::lod::select::FullFacts`])
+//! come from the read, and the full geometry it looks at (the assets whose rough box holds a
+//! POI, the buildings whose box holds one: [`near_pois`]) is kept.
+//!
+//! What is not done yet (issue 22): `lod` itself still reads whole. The stages after the
+//! selection (the bound's lazy reference, the writers, the report) and the frame's checks
+//! take the model's polygons; each must take the facts computed here instead, or the
+//! polygons of the few assets it needs read back by span, before the command can run on a
+//! [`Hollow`].
+
+use crate::io::citygml::read::{Chunk, Passes, StreamSummary};
+use crate::lod::level::{polygon_count_of, rough_is_own};
+use crate::lod::poi::checks::enclosure::ON_SURFACE;
+use crate::lod::poi::checks::Surroundings;
+use crate::lod::rough::{rough_asset, RoughGeometry, RoughOptions};
+use crate::lod::scene::detail_boxes;
+use crate::lod::select::FullFacts;
+use crate::model::{content_bbox, Asset, Bbox, Building, CityModel, LodGeometry, SourceFile};
+use glam::DVec3;
+use rayon::prelude::*;
+use std::path::Path;
+
+/// A document read hollow ([`read_hollow`]): the whole read's model, every asset's polygons
+/// dropped but those `keep` asked for, and what the full polygons gave, per asset in the
+/// whole model's order.
+#[derive(Debug, Clone, Default)]
+pub struct Hollow {
+    /// The whole read's model, but for the polygons: an asset's geometry properties are all
+    /// there (LoD, property, spans) with no polygons unless it was kept; a building's own
+    /// geometry properties have none.
+    pub model: CityModel,
+    /// Whether each asset kept its polygons.
+    pub kept: Vec<bool>,
+    /// Each asset's rough form, from its full geometry.
+    pub rough: Vec<RoughGeometry>,
+    /// Each asset's box, from its full geometry.
+    pub boxes: Vec<Bbox>,
+    /// Each asset's full-detail box ([`detail_boxes`]).
+    pub detail: Vec<Bbox>,
+    /// Whether each asset's rough form is its own geometry ([`rough_is_own`]).
+    pub own: Vec<bool>,
+    /// The box of the full-detail scene's triangles (the second half of [`detail_boxes`]).
+    pub frame: Bbox,
+    /// The box of every polygon of the document, assets' and buildings' own geometry
+    /// ([`content_bbox`] of the whole model: its root envelope's box).
+    pub content: Bbox,
+    /// Polygons per geometry property, every asset's in turn ([`Hollow::polygon_counts`]).
+    counts: Vec<u32>,
+    /// Where each asset's entries of `counts` start.
+    count_starts: Vec<usize>,
+    /// What the stream found of the whole document.
+    pub summary: StreamSummary,
+}
+
+impl Hollow {
+    /// The polygons of each geometry property of asset `a` in the full model
+    /// (`asset.geometries[k].polygons.len()`), empty for an asset out of range.
+    pub fn polygon_counts(&self, a: usize) -> &[u32] {
+        let Some(&start) = self.count_starts.get(a) else {
+            return &[];
+        };
+        let end = (self.count_starts.get(a + 1).copied()).unwrap_or(self.counts.len());
+        self.counts.get(start..end).unwrap_or(&[])
+    }
+
+    /// Polygons of asset `a` over all its properties ([`Asset::polygon_count`] of the full
+    /// asset).
+    pub fn polygon_count(&self, a: usize) -> usize {
+        self.polygon_counts(a).iter().map(|&n| n as usize).sum()
+    }
+
+    /// Polygons of asset `a` at `lod` (the count of [`Asset::polygons_at`] of the full asset).
+    pub fn polygon_count_at(&self, a: usize, lod: u8) -> usize {
+        let Some(asset) = self.model.assets.get(a) else {
+            return 0;
+        };
+        (asset.geometries.iter().zip(self.polygon_counts(a)))
+            .filter(|(g, _)| g.lod == lod)
+            .map(|(_, &n)| n as usize)
+            .sum()
+    }
+}
+
+impl FullFacts for Hollow {
+    fn min_z(&self, i: usize) -> f64 {
+        self.boxes.get(i).map_or(f64::INFINITY, |b| b.min.z)
+    }
+
+    fn polygon_count(&self, i: usize, rough: Option<&RoughGeometry>, level: u8) -> usize {
+        let (Some(a), Some(&own)) = (self.model.assets.get(i), self.own.get(i)) else {
+            return 0;
+        };
+        polygon_count_of(a, self.polygon_counts(i), rough, level, own)
+    }
+}
+
+/// An asset index of the whole model while the document's count of non-body assets is not
+/// known yet: a non-body asset's index, or a body's among the bodies.
+#[derive(Clone, Copy)]
+enum At {
+    Plain(usize),
+    Body(usize),
+}
+
+/// A chunk's assets (non-bodies or bodies) with what their full geometry gave.
+#[derive(Default)]
+struct Part {
+    assets: Vec<Asset>,
+    parents: Vec<Option<At>>,
+    kept: Vec<bool>,
+    rough: Vec<RoughGeometry>,
+    boxes: Vec<Bbox>,
+    detail: Vec<Bbox>,
+    own: Vec<bool>,
+    counts: Vec<Vec<u32>>,
+}
+
+impl Part {
+    /// `asset` (with its parent as `parent`) hollowed unless `keep` holds for its box.
+    fn push(
+        &mut self,
+        mut asset: Asset,
+        parent: Option<At>,
+        (rough, bbox, detail): (RoughGeometry, Bbox, Bbox),
+        keep: bool,
+    ) {
+        self.own.push(rough_is_own(&asset, &rough));
+        let counts = (asset.geometries.iter())
+            .map(|g| u32::try_from(g.polygons.len()).unwrap_or(u32::MAX))
+            .collect();
+        if !keep {
+            drop_polygons(&mut asset.geometries);
+        }
+        self.assets.push(asset);
+        self.parents.push(parent);
+        self.kept.push(keep);
+        self.rough.push(rough);
+        self.boxes.push(bbox);
+        self.detail.push(detail);
+        self.counts.push(counts);
+    }
+}
+
+/// Which assets of a chunk keep their polygons in [`read_hollow`]: `keep(chunk, rough, boxes)`
+/// gets the chunk's model with its polygons, and each asset's rough form and box.
+pub type Keep<'a> = dyn Fn(&CityModel, &[RoughGeometry], &[Bbox]) -> Vec<bool> + 'a;
+
+/// Read the CityGML document at `path` hollow (see the module docs): in chunks of `passes`
+/// (pass 0 of its progress), each asset's rough form made with `rough`, its polygons kept
+/// only where `keep` says so (`keep(chunk, rough, boxes)`: for each asset of a chunk's model,
+/// with its polygons, rough forms and boxes, whether it keeps them; e.g. [`near_pois`]). `None` where the document is to be read whole
+/// instead (the stream declines, or the first chunk holds no geometry while the document has
+/// a root envelope).
+pub fn read_hollow(
+    path: &Path,
+    passes: &Passes<'_>,
+    rough: &RoughOptions,
+    keep: &Keep<'_>,
+) -> Option<Hollow> {
+    let (mut plain, mut bodies) = (Part::default(), Part::default());
+    let mut buildings: Vec<Building> = Vec::new();
+    let mut warnings = Vec::new();
+    let mut file: Option<SourceFile> = None;
+    let (mut content, mut frame) = (Bbox::EMPTY, Bbox::EMPTY);
+    let (mut root_site, mut unsure) = (None, false);
+    let summary = passes.pass_citygml(path, 0, |c: Chunk| {
+        let b = content_bbox(&c.model.assets, &c.model.buildings);
+        if c.index == 0 {
+            root_site = crate::io::citygml::write::root_site_of(&c.model);
+            unsure = root_site.is_some() && b.is_empty();
+        }
+        content.union(&b);
+        let nb = c.non_body_assets();
+        let at = |i: usize| {
+            if i < nb {
+                At::Plain(c.assets_before + i)
+            } else {
+                At::Body(c.bodies_before + (i - nb))
+            }
+        };
+        let mut model = c.model;
+        let (rough, boxes): (Vec<RoughGeometry>, Vec<Bbox>) = (model.assets.par_iter())
+            .map(|a| (rough_asset(a, rough), a.bbox()))
+            .unzip();
+        let (detail, tris) = detail_boxes(&model);
+        frame.union(&tris);
+        let kept = keep(&model, &rough, &boxes);
+        let made = rough.into_iter().zip(boxes).zip(detail);
+        let each = model.assets.drain(..).zip(made).zip(kept);
+        for (i, ((mut a, ((r, b), d)), k)) in each.enumerate() {
+            a.building = a.building.map(|b| b + c.buildings_before);
+            let parent = a.parent.map(at);
+            let part = if i < nb { &mut plain } else { &mut bodies };
+            part.push(a, parent, (r, b, d), k);
+        }
+        for mut b in model.buildings.drain(..) {
+            b.parent = b.parent.map(|p| p + c.buildings_before);
+            // placed once the document's non-body assets are counted
+            b.assets = (b.assets.iter())
+                .map(|&i| match at(i) {
+                    At::Plain(k) => k,
+                    At::Body(k) => usize::MAX - k,
+                })
+                .collect();
+            drop_polygons(&mut b.geometries);
+            buildings.push(b);
+        }
+        warnings.append(&mut model.warnings);
+        let f = model.files.into_iter().next();
+        match (&mut file, f) {
+            (None, f) => file = f,
+            (Some(whole), Some(f)) => add_file(whole, f),
+            (Some(_), None) => {}
+        }
+        Ok::<(), std::convert::Infallible>(())
+    });
+    let summary = match summary {
+        Ok(Some(s)) if !unsure => s,
+        _ => return None,
+    };
+    let n_plain = plain.assets.len();
+    let place = |a: At| match a {
+        At::Plain(k) => k,
+        At::Body(k) => n_plain + k,
+    };
+    for b in &mut buildings {
+        for i in &mut b.assets {
+            if *i > usize::MAX / 2 {
+                *i = n_plain + (usize::MAX - *i);
+            }
+        }
+    }
+    let mut file = file?;
+    file.version = summary.version.unwrap_or(file.version);
+    file.srs_name = summary.srs_name.clone();
+    // a compressed document is streamed from its decompressed copy
+    file.gzip = crate::io::files::is_gzip_file(path);
+    for e in &mut file.envelopes {
+        if root_site == Some(e.span.start) && !e.bbox.is_empty() {
+            e.bbox = content;
+        }
+    }
+    summary.patch_warnings(&mut warnings);
+    let mut h = Hollow {
+        content,
+        frame,
+        summary,
+        ..Hollow::default()
+    };
+    for part in [plain, bodies] {
+        for (mut a, p) in part.assets.into_iter().zip(part.parents) {
+            a.parent = p.map(place);
+            h.model.assets.push(a);
+        }
+        h.kept.extend(part.kept);
+        h.rough.extend(part.rough);
+        h.boxes.extend(part.boxes);
+        h.detail.extend(part.detail);
+        h.own.extend(part.own);
+        for c in part.counts {
+            h.count_starts.push(h.counts.len());
+            h.counts.extend(c);
+        }
+    }
+    h.model.buildings = buildings;
+    h.model.warnings = warnings;
+    h.model.files = vec![file];
+    Some(h)
+}
+
+/// The assets whose full geometry the POI checks of `lod` look at, for POIs at `points` (in
+/// the document's coordinates), as a `keep` of [`read_hollow`]: every asset of a building
+/// whose box, grown by [`ON_SURFACE`], holds a POI ([`Surroundings::assets_holding`]: the
+/// inside-a-building and normal checks) and every asset whose rough box holds one
+/// ([`crate::lod::select::rough_holds_poi_full_not`]). A building and its parts are one
+/// top-level member, so a chunk sees each whole.
+pub fn near_pois(
+    points: &[DVec3],
+) -> impl Fn(&CityModel, &[RoughGeometry], &[Bbox]) -> Vec<bool> + '_ {
+    move |chunk, rough, boxes| {
+        let around = Surroundings::with_boxes(chunk, boxes);
+        let mut keep = vec![false; chunk.assets.len()];
+        for &p in points {
+            for i in around.assets_holding(p, ON_SURFACE) {
+                if let Some(k) = keep.get_mut(i as usize) {
+                    *k = true;
+                }
+            }
+            for (k, r) in keep.iter_mut().zip(rough) {
+                *k |= r.obb.as_ref().is_some_and(|b| b.contains(p, 0.0));
+            }
+        }
+        keep
+    }
+}
+
+/// `geometries` without their polygons (LoD, property and spans kept): what [`read_hollow`]
+/// leaves of the geometry of an asset not kept and of a building.
+pub fn drop_polygons(geometries: &mut [LodGeometry]) {
+    geometries.iter_mut().for_each(|g| g.polygons = Vec::new());
+}
+
+/// `model`, the whole read of a document, as [`read_hollow`] leaves it where it keeps the
+/// assets of `kept`: what a hollow read must equal.
+pub fn hollowed(mut model: CityModel, kept: &[bool]) -> CityModel {
+    for (a, &k) in model.assets.iter_mut().zip(kept) {
+        if !k {
+            drop_polygons(&mut a.geometries);
+        }
+    }
+    (model.buildings.iter_mut()).for_each(|b| drop_polygons(&mut b.geometries));
+    model
+}
+
+/// `part`'s facts of the document added to `whole`'s: its envelope sites, counts, library
+/// objects and features.
+fn add_file(whole: &mut SourceFile, part: SourceFile) {
+    whole.envelopes.extend(part.envelopes);
+    whole.implicit_geometries += part.implicit_geometries;
+    whole.library_objects.extend(part.library_objects);
+    whole.objects_without_geometry += part.objects_without_geometry;
+    whole.polygon_elements += part.polygon_elements;
+    for (name, n) in part.features {
+        *whole.features.entry(name).or_default() += n;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::citygml::read::read_file;
+    use crate::io::citygml::ReadOptions;
+    use crate::lod::rough::rough_model;
+    use crate::pipeline::test_support::fixture;
+
+    #[test]
+    fn a_hollow_read_in_small_chunks_is_the_whole_read_without_its_polygons() {
+        let path = fixture();
+        let whole = read_file(&path).unwrap();
+        let read = ReadOptions::default();
+        let passes = Passes::new(&read, 1, &|_, _| {});
+        let high = whole.bbox().center().z;
+        let keep = |_: &CityModel, _: &[RoughGeometry], b: &[Bbox]| {
+            b.iter().map(|b| b.max.z > high).collect()
+        };
+        let h = read_hollow(&path, &passes, &RoughOptions::default(), &keep).unwrap();
+        assert!(h.summary.chunks > 2, "{} chunks", h.summary.chunks);
+        assert!(h.kept.iter().any(|&k| k) && h.kept.iter().any(|&k| !k));
+        assert_eq!(h.model, hollowed(whole.clone(), &h.kept));
+        assert_eq!(h.rough, rough_model(&whole, &RoughOptions::default()));
+        let boxes: Vec<Bbox> = whole.assets.iter().map(Asset::bbox).collect();
+        assert_eq!(h.boxes, boxes);
+        assert_eq!((h.detail.clone(), h.frame), detail_boxes(&whole));
+        assert_eq!(h.content, content_bbox(&whole.assets, &whole.buildings));
+        for (i, a) in whole.assets.iter().enumerate() {
+            assert_eq!(h.polygon_count(i), a.polygon_count());
+            let lod = a.max_lod().unwrap_or(0);
+            assert_eq!(h.polygon_count_at(i, lod), a.polygons_at(lod).count());
+        }
+        assert_eq!(h.polygon_count(whole.assets.len()), 0);
+    }
+
+    /// The POI checks of `lod` on a model read hollow with [`near_pois`] kept: the same
+    /// flags as on the whole model, and the same answers of the rough-box test of the
+    /// selection.
+    #[test]
+    fn poi_checks_on_a_hollow_model_are_the_whole_models() {
+        use crate::lod::poi::checks::poi_flags_around;
+        use crate::lod::select::rough_holds_poi_full_not;
+        let path = fixture();
+        let whole = read_file(&path).unwrap();
+        // inside the first asset's box (its building's assets kept), and out of every box
+        let (a, b) = (whole.assets[0].bbox(), whole.bbox());
+        let pois = [
+            crate::model::Poi::at("in", a.center().to_array()),
+            crate::model::Poi::at("out", (b.max + 10.0).to_array()),
+        ];
+        let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+        let read = ReadOptions::default();
+        let passes = Passes::new(&read, 1, &|_, _| {});
+        let opts = RoughOptions::default();
+        let h = read_hollow(&path, &passes, &opts, &near_pois(&points)).unwrap();
+        assert!(h.kept.iter().any(|&k| !k));
+        let flags = |m: &CityModel, around: &Surroundings| -> Vec<_> {
+            let scene = around.scene_holding(m, &points, ON_SURFACE);
+            let each = pois.iter();
+            each.map(|p| poi_flags_around(&scene, m, around, p, None))
+                .collect()
+        };
+        let want = flags(&whole, &Surroundings::new(&whole));
+        assert!(want.iter().any(|f| !f.is_empty()), "{want:?}");
+        assert_eq!(
+            flags(&h.model, &Surroundings::with_boxes(&h.model, &h.boxes)),
+            want
+        );
+        let rough = rough_model(&whole, &opts);
+        let mut held = 0;
+        for (i, r) in rough.iter().enumerate() {
+            for &p in &points {
+                let full = rough_holds_poi_full_not(&whole.assets[i], r, p);
+                assert_eq!(rough_holds_poi_full_not(&h.model.assets[i], r, p), full);
+                held += usize::from(r.obb.as_ref().is_some_and(|b| b.contains(p, 0.0)));
+            }
+        }
+        assert!(held > 0);
+    }
+
+    /// The selection of `lod` on a hollow read ([`crate::lod::lod_hollow`]) is the whole
+    /// read's: levels, hits, each POI's figures and flags, the selection scene.
+    #[test]
+    fn the_selection_on_a_hollow_read_is_the_whole_reads() {
+        use crate::lod::{lod_hollow, lod_with, LodOptions};
+        use crate::model::runtime::progress::Silent;
+        // six blocks of the small preset, the first block's POIs
+        let small = crate::model::synth::SynthOptions {
+            blocks_x: 3,
+            blocks_y: 2,
+            ..crate::model::synth::Preset::Small.defaults()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("six.gml");
+        let mut xml = Vec::new();
+        crate::model::synth::generate(&small, &mut xml).unwrap();
+        std::fs::write(&path, xml).unwrap();
+        let whole = read_file(&path).unwrap();
+        let pois: Vec<crate::model::Poi> = (crate::model::synth::pois(&small).into_iter())
+            .take(2)
+            .map(Into::into)
+            .collect();
+        let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+        let opts = LodOptions::default();
+        let read = ReadOptions::default();
+        let passes = Passes::new(&read, 1, &|_, _| {});
+        let h = read_hollow(&path, &passes, &opts.rough, &near_pois(&points)).unwrap();
+        assert!(h.kept.iter().any(|&k| !k));
+        let want = lod_with(&whole, &pois, &opts, &Silent).unwrap();
+        let mut got = lod_hollow(&h, &pois, &opts, &Silent).unwrap();
+        // each POI's time aside
+        for (g, w) in got.selection.pois.iter_mut().zip(&want.selection.pois) {
+            g.seconds = w.seconds;
+        }
+        let [_, l1, l2] = want.selection.level_counts();
+        assert!(l1 > 0 && l2 > 0, "{l1} {l2}");
+        assert_eq!(got.selection, want.selection);
+        assert_eq!(got.flags, want.flags);
+        assert_eq!((got.rough, got.triangles), (want.rough, want.triangles));
+    }
+}
