@@ -6,6 +6,7 @@
 //! city-object trees, `source` what the CityJSON writer copies from a CityJSON source.
 
 pub(crate) mod chunks;
+mod seq;
 pub(crate) mod source;
 pub(crate) mod stream;
 

@@ -26,6 +26,35 @@ pub(crate) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<F
     let Some(f) = model.files.get(file).filter(|f| f.cityjson.is_some()) else {
         return Ok(None);
     };
+    let assets: Vec<usize> = (0..model.assets.len())
+        .filter(|&i| model.assets[i].file == file)
+        .collect();
+    let changed = |now: usize| {
+        io::Error::other(format!(
+            "{}: the CityJSON source changed since it was read ({} assets, now {now})",
+            crate::model::shown(&f.path),
+            assets.len(),
+        ))
+    };
+    // a file through the chunked read's passes: one object's text at a time, not a value of
+    // the whole document
+    if let crate::model::Source::File(p) = &f.source {
+        if let Some((m, found)) = super::chunks::whole_model(super::chunks::Input::File(p), &f.path)
+        {
+            if m.assets.len() != assets.len() {
+                return Err(changed(m.assets.len()));
+            }
+            let surfaces = found
+                .surfaces
+                .into_iter()
+                .map(|(j, s)| (assets[j], s))
+                .collect();
+            return Ok(Some(FromSource {
+                objects: found.objects,
+                surfaces,
+            }));
+        }
+    }
     let mut bytes = Vec::new();
     match crate::io::citygml::source::load_source(&f.source, &f.path).map_err(io::Error::other)? {
         crate::io::citygml::source::Document::Plain(b) => bytes.extend_from_slice(&b),
@@ -35,16 +64,8 @@ pub(crate) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<F
     }
     let (_, origins) =
         crate::io::cityjson::read_slice_with_origins(&bytes, &f.path).map_err(io::Error::other)?;
-    let assets: Vec<usize> = (0..model.assets.len())
-        .filter(|&i| model.assets[i].file == file)
-        .collect();
     if assets.len() != origins.len() {
-        return Err(io::Error::other(format!(
-            "{}: the CityJSON source changed since it was read ({} assets, now {})",
-            crate::model::shown(&f.path),
-            assets.len(),
-            origins.len()
-        )));
+        return Err(changed(origins.len()));
     }
     // (object, geometry, surface) wanted, then one pass over the document's values
     let mut wanted: HashMap<&str, Vec<(usize, usize, usize)>> = HashMap::new();
