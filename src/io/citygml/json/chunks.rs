@@ -430,18 +430,22 @@ pub(crate) fn each_object<E>(
 }
 
 /// City object `id` (its text `o`) mapped into `mapper`, what a CityJSON output copies of it
-/// kept in `source`. Errors: the object's id where known, what is wrong.
+/// kept in `source` (when given: else not parsed). Errors: the object's id where known, what is wrong.
 fn map_object(
     mapper: &mut Mapper,
-    source: &mut FromSource,
+    source: Option<&mut FromSource>,
     verts: &Vertices<'_>,
     id: String,
     o: &RawValue,
     line: u64,
 ) -> Result<(), (Option<String>, String)> {
     let before = mapper.origins.len();
-    let parsed = serde_json::from_str::<CityObject>(o.get())
-        .and_then(|t| Ok((t, serde_json::from_str::<Copied>(o.get())?)));
+    let parsed = serde_json::from_str::<CityObject>(o.get()).and_then(|t| {
+        let c = source
+            .is_some()
+            .then(|| serde_json::from_str::<Copied>(o.get()));
+        Ok((t, c.transpose()?))
+    });
     let (typed, copied) = match parsed {
         Ok(t) => t,
         Err(e) => return Err((Some(id), e.to_string())),
@@ -451,6 +455,9 @@ fn map_object(
         .add(&one, verts, line)
         .map_err(|e| (e.id.clone(), e.message))?;
     let [(id, _)] = one;
+    let (Some(source), Some(copied)) = (source, copied) else {
+        return Ok(());
+    };
     let wanted: Vec<(usize, usize, usize)> = mapper.origins[before..]
         .iter()
         .enumerate()
@@ -468,7 +475,7 @@ pub(crate) fn stream_chunks<E>(
     each: impl FnMut(Chunk) -> Result<(), E>,
 ) -> Result<StreamSummary, Stop<E>> {
     match prepare(Input::File(path), path, chunk_bytes)? {
-        Some(p) => stream_prepared(Input::File(path), path, &p, passed, each),
+        Some(p) => stream_prepared(Input::File(path), path, &p, true, passed, each),
         None => super::seq::stream_seq(Input::File(path), path, chunk_bytes, passed, each),
     }
 }
@@ -505,7 +512,9 @@ pub(super) fn next_chunk(
     chunk
 }
 
-/// The chunks of a document (pass 2, after [`prepare`]) handed to `each`.
+/// The chunks of a document (pass 2, after [`prepare`]) handed to `each`; with
+/// `keep_source`, each with what a CityJSON output copies of its objects
+/// ([`Chunk::source`], else empty).
 ///
 /// # Errors
 /// As [`each_object`].
@@ -513,6 +522,7 @@ pub(crate) fn stream_prepared<E>(
     input: Input<'_>,
     path: &Path,
     p: &Prepared,
+    keep_source: bool,
     passed: &dyn Fn(u64),
     mut each: impl FnMut(Chunk) -> Result<(), E>,
 ) -> Result<StreamSummary, Stop<E>> {
@@ -562,8 +572,8 @@ pub(crate) fn stream_prepared<E>(
     let mut mapper = new_mapper(true);
     let mut source = FromSource::default();
     each_object(input, path, p, |id, o, last| {
-        map_object(&mut mapper, &mut source, &verts, id, o, 0)
-            .map_err(|(id, m)| Fail::Object(id, m))?;
+        let copy = keep_source.then_some(&mut source);
+        map_object(&mut mapper, copy, &verts, id, o, 0).map_err(|(id, m)| Fail::Object(id, m))?;
         if let Some(done) = last {
             let m = std::mem::replace(&mut mapper, new_mapper(false));
             let s = std::mem::take(&mut source);
@@ -615,32 +625,26 @@ pub(crate) fn stream_kept<E>(
             Err(e) => return streamed(Err(e)),
         },
     };
-    streamed(stream_prepared(
-        Input::File(path),
-        path,
-        &prepared,
-        passed,
-        each,
-    ))
+    let input = Input::File(path);
+    streamed(stream_prepared(input, path, &prepared, true, passed, each))
 }
 
 /// The whole model of the CityJSON document or CityJSONSeq `input` (named `name`) read
 /// through the passes of the chunked read, as one chunk (no serde value of the document:
-/// memory follows the model), with what a CityJSON output copies of it: the model
-/// [`crate::io::cityjson::read_slice`] reads. `None` where the chunked read declines (an id
+/// memory follows the model): the model [`crate::io::cityjson::read_slice`] reads. `None` where the chunked read declines (an id
 /// given twice, a document that does not read): read it whole then.
-pub(crate) fn whole_model(input: Input<'_>, name: &Path) -> Option<(CityModel, FromSource)> {
+pub(crate) fn whole_model(input: Input<'_>, name: &Path) -> Option<CityModel> {
     let mut out = None;
     let each = |c: Chunk| {
         let mut model = c.model;
         if let Some(f) = model.files.first_mut() {
             f.len = c.bytes.1;
         }
-        out = Some((model, c.source.unwrap_or_default()));
+        out = Some(model);
         Ok::<(), ()>(())
     };
     match prepare::<()>(input, name, u64::MAX).ok()? {
-        Some(p) => stream_prepared(input, name, &p, &|_| {}, each).ok()?,
+        Some(p) => stream_prepared(input, name, &p, false, &|_| {}, each).ok()?,
         None => super::seq::stream_seq(input, name, u64::MAX, &|_| {}, each).ok()?,
     };
     out
@@ -720,7 +724,56 @@ mod tests {
             "{}\n{{\"type\":\"CityJSONFeature\"}}",
             DOC.replace('\n', " ")
         );
-        assert!(matches!(chunks_of(&seq, 1), Err(Stop::Declined(_))));
+        // CityJSONSeq is read in chunks of lines (`super::seq`)
+        assert_eq!(
+            chunks_of(&seq, 1).unwrap_or_default(),
+            [vec!["p", "c", "b", "d"]]
+        );
+    }
+
+    #[test]
+    fn the_whole_model_through_the_passes_is_the_whole_read_s() {
+        let whole = crate::io::cityjson::read_slice(DOC.as_bytes(), "d".as_ref()).unwrap();
+        let m = whole_model(Input::Bytes(DOC.as_bytes()), "d".as_ref()).unwrap();
+        assert_eq!(m.buildings, whole.buildings);
+        assert_eq!(m.assets, whole.assets);
+        assert_eq!(m.warnings, whole.warnings);
+        assert_eq!(m.files[0].len, whole.files[0].len);
+        // an id given twice: declined, read whole
+        let twice = DOC.replace(r#""d":"#, r#""c":"#);
+        assert!(whole_model(Input::Bytes(twice.as_bytes()), "d".as_ref()).is_none());
+    }
+
+    #[test]
+    fn passes_keep_the_first_pass() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.city.json");
+        std::fs::write(&path, DOC).unwrap();
+        let kept = Kept::default();
+        let mut runs = Vec::new();
+        for _ in 0..2 {
+            let mut ids = Vec::new();
+            let r = stream_kept(&path, 1, &kept, &|_| {}, |c: Chunk| {
+                ids.push(c.model.buildings.len());
+                Ok::<(), ()>(())
+            });
+            assert!(matches!(r, Ok(Streamed::Done(_))));
+            runs.push(ids);
+            let k = kept.0.lock().unwrap();
+            assert!(k
+                .as_ref()
+                .is_some_and(|(p, prep)| p == &path && prep.objects == 4));
+        }
+        assert_eq!(runs[0], [3, 1]);
+        assert_eq!(runs[0], runs[1]);
+        // a file that changed between the passes (an object fewer) is declined
+        let start = DOC.find(",\n        \"d\":").unwrap();
+        let end = DOC[start..].find("}]}}").unwrap() + start + 3;
+        let fewer = format!("{}{}", &DOC[..start], &DOC[end..]);
+        assert!(crate::io::cityjson::read_slice(fewer.as_bytes(), "d".as_ref()).is_ok());
+        std::fs::write(&path, fewer).unwrap();
+        let r = stream_kept(&path, 1, &kept, &|_| {}, |_| Ok::<(), ()>(()));
+        assert!(matches!(r, Ok(Streamed::Declined(_))));
     }
 
     #[test]

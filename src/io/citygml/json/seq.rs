@@ -245,7 +245,8 @@ pub(super) fn stream_seq<E>(
             }
             Some(Ok(f)) => Some(f),
         };
-        if next.is_none() || n.get() - from >= chunk_bytes {
+        // the header goes with the first feature
+        if next.is_none() || (line > 2 && n.get() - from >= chunk_bytes) {
             from = n.get();
             let m = std::mem::replace(&mut mapper, Mapper::new(path));
             hand_over(m, std::mem::take(&mut source), &mut sum)?;
@@ -253,4 +254,102 @@ pub(super) fn stream_seq<E>(
         }
     }
     Ok(sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SEQ: &str = r#"{"type":"CityJSON","version":"2.0","transform":{"scale":[0.01,0.01,0.01],"translate":[100,200,0]},"CityObjects":{},"vertices":[]}
+{"type":"CityJSONFeature","id":"b","CityObjects":{"p":{"type":"BuildingPart","parents":["b"],"geometry":[{"type":"MultiSurface","lod":"2","boundaries":[[[0,1,2]]],"semantics":{"surfaces":[{"type":"RoofSurface","slope":9}],"values":[0]}}]},"b":{"type":"Building","children":["p"],"attributes":{"h":1}}},"vertices":[[0,0,0],[100,0,0],[0,100,0]]}
+{"type":"CityJSONFeature","id":"c","CityObjects":{"c":{"type":"Building","geometry":[{"type":"MultiSurface","lod":"1","boundaries":[[[0,1,2]]]}]}},"vertices":[[0,0,0],[100,0,0],[0,100,0]]}
+{"type":"CityJSONFeature","id":"d","CityObjects":{"d":{"type":"Building","geometry":[{"type":"MultiSurface","lod":"1","boundaries":[[[0,1,2]]]}]}},"vertices":[[5,0,0],[100,0,0],[0,100,0]]}
+"#;
+
+    /// Each chunk's model and source, or why the stream stopped.
+    fn chunks(doc: &str, chunk: u64) -> Result<Vec<Chunk>, Stop<()>> {
+        let mut out = Vec::new();
+        stream_seq(
+            Input::Bytes(doc.as_bytes()),
+            "s.city.jsonl".as_ref(),
+            chunk,
+            &|_| {},
+            |c| {
+                out.push(c);
+                Ok(())
+            },
+        )?;
+        Ok(out)
+    }
+
+    #[test]
+    fn chunks_of_lines_are_the_whole_read_s() {
+        let whole = crate::io::cityjson::read_slice(SEQ.as_bytes(), "s.city.jsonl".as_ref());
+        let whole = whole.unwrap();
+        let Ok(c) = chunks(SEQ, 1) else {
+            panic!("stopped")
+        };
+        // a chunk a line (the header's, without objects, goes with the first feature)
+        assert_eq!(c.len(), 3);
+        let assets: Vec<_> = c.iter().flat_map(|c| c.model.assets.clone()).collect();
+        let ids: Vec<_> = c
+            .iter()
+            .flat_map(|c| c.model.buildings.iter().map(|b| b.id.clone()))
+            .collect();
+        let whole_ids: Vec<_> = whole.buildings.iter().map(|b| b.id.clone()).collect();
+        assert_eq!(ids, whole_ids);
+        let lines: Vec<u64> = assets.iter().map(|a| a.line).collect();
+        assert_eq!(
+            lines,
+            whole.assets.iter().map(|a| a.line).collect::<Vec<_>>()
+        );
+        assert_eq!(lines, [2, 3, 4]);
+        for (a, b) in assets.iter().zip(&whole.assets) {
+            assert_eq!(a.detail_polygons(), b.detail_polygons());
+        }
+        assert_eq!(c[0].model.buildings[0].parent, Some(1));
+        assert!(c[0].model.files[0].cityjson.as_ref().is_some_and(|j| j.seq));
+        let s = c[0].source.as_ref().unwrap();
+        assert_eq!(s.objects.get("b").map(|a| a["h"].clone()), Some(1.into()));
+        assert_eq!(
+            s.surfaces.get(&0).map(|m| m["slope"].clone()),
+            Some(9.into())
+        );
+        assert_eq!((c[1].buildings_before, c[2].assets_before), (2, 1));
+        let Ok(one) = chunks(SEQ, u64::MAX) else {
+            panic!("stopped")
+        };
+        assert_eq!(one.len(), 1);
+        assert_eq!(one[0].model.assets, whole.assets);
+        assert_eq!(one[0].model.buildings, whole.buildings);
+    }
+
+    #[test]
+    fn links_between_lines_and_bad_lines_decline() {
+        // `c` names `d`, on the next line, as its child: chunks could differ
+        let linked = SEQ.replace(
+            r#""c":{"type":"Building","#,
+            r#""c":{"type":"Building","children":["d"],"#,
+        );
+        assert!(matches!(chunks(&linked, 1), Err(Stop::Declined(_))));
+        assert!(chunks(&linked, u64::MAX).is_ok(), "one chunk holds both");
+        let twice = SEQ.replace(r#"{"d":{"#, r#"{"c":{"#);
+        assert!(matches!(chunks(&twice, 1), Err(Stop::Declined(_))));
+        // a vertex index out of range: the file, the line, the object
+        let bad = SEQ.replace(
+            "[[[0,1,2]]]}]}},\"vertices\":[[5",
+            "[[[0,1,7]]]}]}},\"vertices\":[[5",
+        );
+        assert_ne!(bad, SEQ);
+        let Err(Stop::Read(e)) = chunks(&bad, 1) else {
+            panic!("a bad vertex index is an error")
+        };
+        assert_eq!((e.line, e.id.as_deref()), (4, Some("d")), "{e}");
+        assert!(e.to_string().starts_with("s.city.jsonl:4:"), "{e}");
+        let truncated = &SEQ[..SEQ.len() - 20];
+        let Err(Stop::Read(e)) = chunks(truncated, 1) else {
+            panic!("a truncated line is an error")
+        };
+        assert_eq!(e.line, 4, "{e}");
+    }
 }

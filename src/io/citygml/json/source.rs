@@ -3,6 +3,7 @@
 //! which the writer makes itself), found again from the source document
 //! ([`crate::io::cityjson::read_slice_with_origins`]: where each asset came from).
 
+use crate::io::citygml::read::Chunk;
 use crate::io::cityjson::Origin;
 use crate::model::CityModel;
 use serde_json::{Map, Value};
@@ -36,23 +37,31 @@ pub(crate) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<F
             assets.len(),
         ))
     };
-    // a file through the chunked read's passes: one object's text at a time, not a value of
-    // the whole document
+    // a file in chunks (the chunked read: one chunk's model at a time, besides the model
+    // given), each chunk's surface objects by their asset in the whole file's model
     if let crate::model::Source::File(p) = &f.source {
-        if let Some((m, found)) = super::chunks::whole_model(super::chunks::Input::File(p), &f.path)
-        {
-            if m.assets.len() != assets.len() {
-                return Err(changed(m.assets.len()));
+        let mut found = FromSource::default();
+        let chunk = crate::io::citygml::read::CHUNK_BYTES;
+        let r = super::chunks::stream_chunks(p, chunk, &|_| {}, |c: Chunk| {
+            let Some(s) = c.source else {
+                return Ok(());
+            };
+            found.objects.extend(s.objects);
+            for (j, m) in s.surfaces {
+                // non-body assets: those of earlier chunks come first
+                let i = assets
+                    .get(c.assets_before + j)
+                    .ok_or_else(|| changed(c.assets_before + j))?;
+                found.surfaces.insert(*i, m);
             }
-            let surfaces = found
-                .surfaces
-                .into_iter()
-                .map(|(j, s)| (assets[j], s))
-                .collect();
-            return Ok(Some(FromSource {
-                objects: found.objects,
-                surfaces,
-            }));
+            Ok(())
+        });
+        match r {
+            Ok(sum) if sum.assets + sum.bodies == assets.len() => return Ok(Some(found)),
+            Ok(sum) => return Err(changed(sum.assets + sum.bodies)),
+            Err(super::chunks::Stop::Each(e)) => return Err(e),
+            // read whole below
+            Err(_) => {}
         }
     }
     let mut bytes = Vec::new();

@@ -182,7 +182,7 @@ fn json_or_xml(
     Ok(Ok(match doc {
         source::Document::Plain(doc) if source::is_json(&doc) => {
             match whole_model(Input::Bytes(&doc), name) {
-                Some((model, _)) => model,
+                Some(model) => model,
                 None => crate::io::cityjson::read_slice(&doc, name)?,
             }
         }
@@ -195,7 +195,7 @@ fn json_or_xml(
                 Source::Memory(_) => None,
             };
             match file {
-                Some((mut model, _)) => {
+                Some(mut model) => {
                     for f in &mut model.files {
                         f.gzip = true;
                     }
