@@ -58,7 +58,9 @@
 //!
 //! CityJSONSeq is written feature by feature: each line is read, written as members and
 //! dropped before the next, so memory follows the largest feature. A `.city.json` document
-//! is one JSON value: read whole, then written member by member.
+//! is one JSON value: read whole, then written member by member ([`citygml_from_cityjson`]),
+//! or in chunks of whole city-object trees ([`citygml_from_cityjson_chunked`]: the same
+//! bytes, memory that follows the chunk and the document's vertices).
 
 mod document;
 mod geometry;
@@ -193,7 +195,7 @@ pub fn citygml_from_cityjson(
 }
 
 /// [`citygml_from_cityjson`] of a `.city.json` document in chunks of whole city-object
-/// trees of about `chunk_bytes` of document ([`crate::io::citygml::json::chunks`]): the same
+/// trees of about `chunk_bytes` of document (`io::citygml::json::chunks`): the same
 /// bytes, memory that follows the chunk and the document's vertices (24 bytes each), not the
 /// document. The document is read twice (its vertices and links, then its objects).
 /// CityJSONSeq, and a document the chunked read declines (an id given twice, one that does

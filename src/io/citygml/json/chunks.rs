@@ -1,4 +1,4 @@
-//! A CityJSON document (`.city.json`, not CityJSONSeq) read in chunks of whole city-object
+//! A CityJSON document (`.city.json`) read in chunks of whole city-object
 //! trees ([`stream`]): the same [`Chunk`]s, in the same order, as the chunked CityGML read
 //! gives, so that `stats` and `convert` consume both alike; memory follows the chunk, not
 //! the document.
@@ -22,9 +22,15 @@
 //! whole document's list, since any object may use any vertex), and the list of cuts.
 //!
 //! The stream declines ([`Streamed::Declined`]: the caller reads the document whole, as
-//! before) where a chunk could differ from the whole read: CityJSONSeq, a first value that
-//! is no `CityJSON` object, a city object id given twice, and any document that does not
-//! read (the reason names the file and the line:column where the JSON parser was).
+//! before) where a chunk could differ from the whole read: a first value that is no
+//! `CityJSON` object, a city object id given twice, and any document that does not read (the
+//! reason names the file and the line:column where the JSON parser was). CityJSONSeq (a
+//! second JSON value after the first) is read in chunks of lines (`super::seq`).
+//!
+//! Pass 1's results ([`Prepared`]) serve every later pass over the objects: the CityGML
+//! writer's (`crate::export::citygml_from_cityjson`), a streamed writer's passes
+//! ([`crate::io::citygml::read::Passes`] keeps them), and the whole model of a CityJSON input
+//! ([`whole_model`]: one chunk of everything, no serde value of the document).
 
 use super::source::{add_object, FromSource};
 use super::stream::{open_json, read_from, EachText, Pass, Seen, Structure, Vertex};

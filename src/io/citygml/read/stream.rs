@@ -146,7 +146,7 @@ impl Streamed {
 /// bytes read in pass `k`, the writer telling what its passes are).
 ///
 /// A CityJSON document's first pass (its small members, vertices and links:
-/// [`crate::io::citygml::json::chunks`]) is made once and kept for the later passes over the
+/// `io::citygml::json::chunks`) is made once and kept for the later passes over the
 /// same file: the document is read once a pass of the writer, not twice, for as long as the
 /// passes live at the cost of its vertices (24 bytes each) held between the passes.
 #[derive(Clone)]
