@@ -33,7 +33,7 @@
 //! ([`whole_model`]: one chunk of everything, no serde value of the document).
 
 use super::source::{add_object, FromSource};
-use super::stream::{open_json, read_from, EachText, Pass, Seen, Structure, Vertex};
+use super::stream::{open_json, read_from, read_slice, EachText, Pass, Seen, Structure, Vertex};
 use crate::io::citygml::read::{Chunk, StreamSummary, Streamed};
 use crate::io::citygml::{ReadError, WriteError};
 use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
@@ -245,7 +245,10 @@ impl<'a> Input<'a> {
 
     /// A pass of `pass` over the document (named `name` in errors).
     fn read(self, name: &Path, pass: &mut dyn Pass) -> Result<Seen, WriteError> {
-        read_from(self.open()?, name, pass)
+        match self {
+            Input::File(_) => read_from(self.open()?, name, pass),
+            Input::Bytes(b) => read_slice(b.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(b), name, pass),
+        }
     }
 
     /// Whether the document is gzip-compressed.
