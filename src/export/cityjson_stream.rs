@@ -17,9 +17,9 @@
 //! a list as large as the document's distinct vertices. So CityJSON runs the objects passes
 //! twice. The first writes nothing: every use of a vertex (its integer coordinates and its
 //! number among all uses) goes to one of `B` temporary bucket files chosen by a hash of the
-//! coordinates. Each bucket is then read alone (its records and a map of its distinct
-//! vertices in memory: `B` grows with the file, about one per 32 MiB of document) to find
-//! every use's first use, written back over the record; a bit per use marks the first
+//! coordinates. Each bucket is then read alone, 1 MiB of records at a time (a map of its
+//! distinct vertices in memory: `B` grows with the file, about one per 32 MiB of document),
+//! to find every use's first use, written back over the record; a bit per use marks the first
 //! uses, and a vertex's index is the number of first uses before its own (the bits and a
 //! count per 64 of them: 0.19 bytes a use, the part of memory that grows with the
 //! document, 15 MB for 80 million uses). The second objects pass writes the document: a
@@ -52,6 +52,10 @@ const RECORD: usize = 32;
 
 /// Buffer of each bucket file.
 const BUCKET_BUF: usize = 32 << 10;
+
+/// Bytes of bucket records resolved at a time (a whole number of records; 1 MiB, three
+/// records in unit tests so that their buckets take several blocks).
+const RESOLVE_BLOCK: usize = if cfg!(test) { RECORD * 3 } else { RECORD << 15 };
 
 /// One bucket per this many bytes of document (at least one, at most [`MAX_BUCKETS`]).
 const BUCKET_BYTES: u64 = 32 << 20;
@@ -386,23 +390,33 @@ impl Recorder {
         let mut first = vec![0u64; words];
         let mut files = Vec::with_capacity(self.buckets.len());
         let mut map: HashMap<[i64; 3], u64> = HashMap::new();
+        let mut block = vec![0u8; RESOLVE_BLOCK];
         for b in self.buckets {
             let mut f = b.into_inner().map_err(|e| e.into_error())?;
-            f.rewind()?;
-            let mut recs = Vec::new();
-            f.read_to_end(&mut recs)?;
             map.clear();
-            for r in recs.chunks_exact_mut(RECORD) {
-                let key = key_of(r);
-                let at = u64::from_le_bytes(r[24..32].try_into().map_err(io::Error::other)?);
-                let f0 = *map.entry(key).or_insert(at);
-                if f0 == at {
-                    first[(at / 64) as usize] |= 1 << (at % 64);
+            // a block of records at a time, written back where it was read: memory follows
+            // the bucket's distinct vertices, not its uses
+            let mut pos = 0u64;
+            loop {
+                f.seek(io::SeekFrom::Start(pos))?;
+                let k = read_full(&mut f, &mut block)?;
+                let k = k - k % RECORD;
+                if k == 0 {
+                    break;
                 }
-                r[24..32].copy_from_slice(&f0.to_le_bytes());
+                for r in block[..k].chunks_exact_mut(RECORD) {
+                    let key = key_of(r);
+                    let at = u64::from_le_bytes(r[24..32].try_into().map_err(io::Error::other)?);
+                    let f0 = *map.entry(key).or_insert(at);
+                    if f0 == at {
+                        first[(at / 64) as usize] |= 1 << (at % 64);
+                    }
+                    r[24..32].copy_from_slice(&f0.to_le_bytes());
+                }
+                f.seek(io::SeekFrom::Start(pos))?;
+                f.write_all(&block[..k])?;
+                pos += k as u64;
             }
-            f.rewind()?;
-            f.write_all(&recs)?;
             f.rewind()?;
             files.push(BufReader::with_capacity(BUCKET_BUF, f));
         }
@@ -421,6 +435,20 @@ impl Recorder {
             err: None,
         })
     }
+}
+
+/// Read `buf` full from `f`, or up to its end: the bytes read.
+fn read_full(f: &mut File, buf: &mut [u8]) -> io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match f.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
 }
 
 fn key_of(r: &[u8]) -> [i64; 3] {

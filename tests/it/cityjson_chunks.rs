@@ -1,6 +1,7 @@
 //! A CityJSON document as an input of `stats` and `convert` read in chunks of whole
-//! city-object trees (issues 22 and 24): the same output as the whole read, members in any
-//! order, objects linked across the document, errors with the file and line:column.
+//! city-object trees, and CityJSONSeq in chunks of lines (issues 22 and 24): the same output
+//! as the whole read (CityGML 2.0 and 3.0 too), members in any order, objects linked across
+//! the document, errors with the file and line:column.
 //!
 //! Streamed runs use `--stream-chunk` small enough for several chunks; whole runs
 //! `--stream-chunk 0`. A streamed read that declines says "read whole" on standard error (at
@@ -9,8 +10,8 @@
 use crate::util::*;
 use std::path::Path;
 
-/// `stats --json` and `convert -o` OBJ, CityJSON and CityJSONSeq of `input`, streamed in
-/// chunks of `chunk` bytes and whole: the same bytes.
+/// `stats --json` and `convert -o` OBJ, CityJSON, CityJSONSeq and CityGML (2.0 and 3.0) of
+/// `input`, streamed in chunks of `chunk` bytes and whole: the same bytes.
 fn streamed_is_whole(input: &Path, chunk: &str, dir: &Path) {
     let name = input.file_name().unwrap().to_string_lossy().to_string();
     let stats = |c: &str| {
@@ -29,11 +30,17 @@ fn streamed_is_whole(input: &Path, chunk: &str, dir: &Path) {
     let (streamed, err) = stats(chunk);
     assert!(!err.contains("read whole"), "{name}: {err}");
     assert_eq!(streamed, stats("0").0, "{name}: stats");
-    for ext in ["obj", "city.json", "city.jsonl"] {
+    for (ext, version) in [
+        ("obj", None),
+        ("city.json", None),
+        ("city.jsonl", None),
+        ("gml", None),
+        ("gml", Some("3.0")),
+    ] {
         let mut outs = Vec::new();
         for c in [chunk, "0"] {
-            let out = dir.join(format!("{name}.{c}.{ext}"));
-            let o = run(&[
+            let out = dir.join(format!("{name}.{c}.{}.{ext}", version.unwrap_or("")));
+            let mut args = vec![
                 os("convert"),
                 os(input),
                 os("-o"),
@@ -41,7 +48,11 @@ fn streamed_is_whole(input: &Path, chunk: &str, dir: &Path) {
                 os("--stream-chunk"),
                 os(c),
                 os("--log-level=info"),
-            ]);
+            ];
+            if let Some(v) = version {
+                args.extend([os("--citygml-version"), os(v)]);
+            }
+            let o = run(&args);
             assert!(o.status.success(), "{name} -> {ext}: {}", stderr(&o));
             assert!(!stderr(&o).contains("read whole"), "{}", stderr(&o));
             outs.push(std::fs::read(&out).unwrap());
@@ -142,6 +153,11 @@ fn members_in_any_order() {
     std::fs::write(&input, any_order_document(30, true)).unwrap();
     // every part with its building, whatever the chunk: here about one object a chunk
     streamed_is_whole(&input, "200", dir.path());
+    // and as CityJSONSeq, about one line a chunk
+    let seq = dir.path().join("any.city.jsonl");
+    let o = run(&[os("convert"), os(&input), os("-o"), os(&seq)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    streamed_is_whole(&seq, "200", dir.path());
     // the counts are the document's
     let o = run(&[
         os("stats"),
@@ -177,6 +193,11 @@ fn shared_data_converted_to_cityjson_streams_the_same() {
         assert!(o.status.success(), "{f}: {}", stderr(&o));
         let chunk = (std::fs::metadata(&json).unwrap().len() / 16).max(1);
         streamed_is_whole(&json, &chunk.to_string(), dir.path());
+        let seq = json.with_extension("jsonl");
+        let o = run(&[os("convert"), os(&json), os("-o"), os(&seq)]);
+        assert!(o.status.success(), "{f}: {}", stderr(&o));
+        let chunk = (std::fs::metadata(&seq).unwrap().len() / 16).max(1);
+        streamed_is_whole(&seq, &chunk.to_string(), dir.path());
     }
 }
 
@@ -202,9 +223,22 @@ fn errors_name_the_file_and_line_column() {
     let bad = dir.path().join("badindex.city.json");
     std::fs::write(&bad, doc.replacen("[[[[32,", "[[[[99999,", 1)).unwrap();
     assert_ne!(doc, std::fs::read_to_string(&bad).unwrap());
+    // CityJSONSeq with a vertex index out of range on its third line (line 3 named)
+    let good = dir.path().join("good.city.json");
+    std::fs::write(&good, &doc).unwrap();
+    let seq = dir.path().join("bad.city.jsonl");
+    let o = run(&[os("convert"), os(&good), os("-o"), os(&seq)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&seq).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let at = lines[2].find("\"boundaries\":[").unwrap() + 14;
+    let digits = lines[2][at..].find(|c: char| c.is_ascii_digit()).unwrap() + at;
+    lines[2].insert_str(digits, "9999");
+    std::fs::write(&seq, lines.join("\n") + "\n").unwrap();
     for (path, what) in [
         (&truncated, "EOF"),
         (&bad, "vertex index 99999 out of range"),
+        (&seq, "vertex index 9999"),
     ] {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         // the streamed read's reason for reading whole is said at `--log-level info`
@@ -219,6 +253,9 @@ fn errors_name_the_file_and_line_column() {
         assert!(err.contains(what), "{name}: {err}");
         assert!(err.contains(": read whole ("), "{name}: {err}");
         assert!(has_position(&err, &name), "{name}: {err}");
+        if path == &seq {
+            assert!(err.contains(&format!("{name}:3:")), "{name}: {err}");
+        }
     }
 }
 

@@ -58,8 +58,11 @@
 //!
 //! CityJSONSeq is written feature by feature: each line is read, written as members and
 //! dropped before the next, so memory follows the largest feature. A `.city.json` document
-//! is one JSON value: read whole, then written member by member.
+//! is one JSON value: read whole, then written member by member ([`citygml_from_cityjson`]),
+//! or in chunks of whole city-object trees ([`citygml_from_cityjson_chunked`]: the same
+//! bytes, memory that follows the chunk and the document's vertices).
 
+mod document;
 mod geometry;
 mod object;
 mod types;
@@ -188,12 +191,50 @@ pub fn citygml_from_cityjson(
     version: TargetVersion,
     opts: &WriteOptions,
 ) -> Result<FromCityJsonSummary, FromCityJsonError> {
+    convert(input, out, version, opts, None)
+}
+
+/// [`citygml_from_cityjson`] of a `.city.json` document in chunks of whole city-object
+/// trees of about `chunk_bytes` of document (`io::citygml::json::chunks`): the same
+/// bytes, memory that follows the chunk and the document's vertices (24 bytes each), not the
+/// document. The document is read twice (its vertices and links, then its objects).
+/// CityJSONSeq, and a document the chunked read declines (an id given twice, one that does
+/// not read), is converted as [`citygml_from_cityjson`] does.
+///
+/// # Errors
+/// As [`citygml_from_cityjson`].
+pub fn citygml_from_cityjson_chunked(
+    input: &Path,
+    out: &Path,
+    version: TargetVersion,
+    opts: &WriteOptions,
+    chunk_bytes: u64,
+) -> Result<FromCityJsonSummary, FromCityJsonError> {
+    convert(input, out, version, opts, Some(chunk_bytes))
+}
+
+/// [`citygml_from_cityjson`], in chunks where `chunk` says so.
+fn convert(
+    input: &Path,
+    out: &Path,
+    version: TargetVersion,
+    opts: &WriteOptions,
+    chunk: Option<u64>,
+) -> Result<FromCityJsonSummary, FromCityJsonError> {
+    use crate::io::citygml::json::chunks::{prepare, Input};
     check_target(out, opts, std::iter::once(input))?;
-    let reader = open(input)?;
+    // pass 1 of the chunked read; what it declines is read whole (and its errors said so)
+    let mut prepared = chunk
+        .and_then(|c| prepare::<()>(Input::File(input), input, c).ok())
+        .flatten();
+    let mut write = |w: &mut dyn Write| match prepared.take() {
+        Some(p) => document::write_chunked(input, p, w),
+        None => write_citygml(open(input)?, input, w),
+    };
     if version == TargetVersion::V2_0 {
         let mut summary = FromCityJsonSummary::default();
         let bytes = crate::io::files::atomic_write(out, |w| {
-            summary = write_citygml(reader, input, w)?;
+            summary = write(w)?;
             Ok::<_, FromCityJsonError>(summary.bytes_out)
         })?;
         summary.bytes_out = bytes;
@@ -214,7 +255,7 @@ pub fn citygml_from_cityjson(
         .tempfile_in(&dir)
         .map_err(io)?;
     let mut w = std::io::BufWriter::new(tmp.as_file());
-    let mut summary = write_citygml(reader, input, &mut w)?;
+    let mut summary = write(&mut w)?;
     w.flush().map_err(io)?;
     drop(w);
     let options = UpgradeOptions::new(false, true, true);
@@ -262,76 +303,16 @@ pub fn write_citygml<R: BufRead>(
         );
         return Err(cj(1, None, m).into());
     }
-    let mut n = 0u64;
-    let mut put = |w: &mut dyn Write, s: &str| -> Result<(), FromCityJsonError> {
-        w.write_all(s.as_bytes()).map_err(|source| WriteError::Io {
-            file: PathBuf::from("<output>"),
-            source,
-        })?;
-        n += s.len() as u64;
-        Ok(())
-    };
-    let mut tally = Tally::default();
     let meta = head.metadata.as_ref();
-    let srs = meta
-        .and_then(|m| m.reference_system.as_ref())
-        .and_then(srs_name);
     let transform = head.transform;
-    let coords = Coords::new(transform.map(|t| t.scale));
     let list = real(&head.vertices, transform, name, 0)?;
-    let extent = bbox(&list).or_else(|| meta?.extent());
-    let mut root = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<core:CityModel");
-    root += types::ROOT_NAMESPACES;
-    root += ">\n";
-    if let Some(e) = extent {
-        root += &format!(
-            "<gml:boundedBy>{}</gml:boundedBy>\n",
-            envelope(&e, srs.as_deref(), coords)
-        );
-    }
-    put(w, &root)?;
+    let mut out = Out::new(w, name, meta, transform.as_ref());
+    out.root(bbox(&list).or_else(|| meta?.extent()))?;
     if head.appearance.is_some() {
-        tally.drop("appearance (materials, textures)".into());
+        out.tally.drop("appearance (materials, textures)".into());
     }
     let templates = head.templates.as_ref();
-    let mut members = 0;
-    let mut unit = |objects: &[(String, doc::CityObject)],
-                    list: &[[f64; 3]],
-                    line: u64,
-                    w: &mut dyn Write|
-     -> Result<(), FromCityJsonError> {
-        let u = Unit::new(objects, templates);
-        let mut verts = Verts {
-            list,
-            coords,
-            bbox: [0.0; 6],
-        };
-        for k in 0..objects.len() {
-            if u.nested[k] {
-                continue;
-            }
-            verts.reset_box();
-            let x = write_object(&u, k, &mut verts, &mut tally, 0)
-                .map_err(|(id, m)| cj(line, Some(&id), m))?;
-            let Some(mut x) = x else { continue };
-            if verts.bbox[0] <= verts.bbox[3] {
-                let env = format!(
-                    "<gml:boundedBy>{}</gml:boundedBy>",
-                    envelope(&verts.bbox, srs.as_deref(), coords)
-                );
-                if let Some(i) = x.find('>') {
-                    x.insert_str(i + 1, &env);
-                }
-            }
-            members += 1;
-            put(
-                w,
-                &format!("<core:cityObjectMember>{x}</core:cityObjectMember>\n"),
-            )?;
-        }
-        Ok(())
-    };
-    unit(&head.objects.0, &list, 0, w)?;
+    out.unit(&head.objects.0, templates, &list, 0)?;
     drop(list);
     let (mut seq, mut appearances) = (false, 0);
     for (k, v) in values.enumerate() {
@@ -344,23 +325,133 @@ pub fn write_citygml<R: BufRead>(
         seq = true;
         appearances += usize::from(f.appearance.is_some());
         let list = real(&f.vertices, transform, name, line)?;
-        unit(&f.objects.0, &list, line, w)?;
+        out.unit(&f.objects.0, templates, &list, line)?;
     }
-    put(w, "</core:CityModel>\n")?;
-    for _ in 0..appearances {
-        tally.drop("appearance (materials, textures)".into());
+    out.finish(head.version.unwrap_or_default(), seq, appearances)
+}
+
+/// The CityGML being written ([`write_citygml`], [`document::write_chunked`]): the output and
+/// what it holds so far.
+struct Out<'a> {
+    w: &'a mut dyn Write,
+    name: &'a Path,
+    /// Bytes written.
+    n: u64,
+    tally: Tally,
+    members: usize,
+    srs: Option<String>,
+    coords: Coords,
+}
+
+impl<'a> Out<'a> {
+    fn new(
+        w: &'a mut dyn Write,
+        name: &'a Path,
+        meta: Option<&doc::Metadata>,
+        transform: Option<&doc::Transform>,
+    ) -> Self {
+        Out {
+            w,
+            name,
+            n: 0,
+            tally: Tally::default(),
+            members: 0,
+            srs: meta
+                .and_then(|m| m.reference_system.as_ref())
+                .and_then(srs_name),
+            coords: Coords::new(transform.map(|t| t.scale)),
+        }
     }
-    Ok(FromCityJsonSummary {
-        cityjson_version: head.version.unwrap_or_default(),
-        seq,
-        citygml_version: "2.0".into(),
-        members,
-        objects: tally.objects,
-        polygons: tally.polygons,
-        ids_made: tally.ids_made,
-        dropped: tally.dropped,
-        bytes_out: n,
-    })
+
+    fn put(&mut self, s: &str) -> Result<(), FromCityJsonError> {
+        self.w
+            .write_all(s.as_bytes())
+            .map_err(|source| WriteError::Io {
+                file: PathBuf::from("<output>"),
+                source,
+            })?;
+        self.n += s.len() as u64;
+        Ok(())
+    }
+
+    /// The XML declaration, the root element and its envelope (`extent`).
+    fn root(&mut self, extent: Option<[f64; 6]>) -> Result<(), FromCityJsonError> {
+        let mut root = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<core:CityModel");
+        root += types::ROOT_NAMESPACES;
+        root += ">\n";
+        if let Some(e) = extent {
+            root += &format!(
+                "<gml:boundedBy>{}</gml:boundedBy>\n",
+                envelope(&e, self.srs.as_deref(), self.coords)
+            );
+        }
+        self.put(&root)
+    }
+
+    /// The members of `objects` (whole trees, with the real coordinates `list`; `line` of a
+    /// CityJSONSeq feature for errors, else 0), each with its envelope.
+    fn unit(
+        &mut self,
+        objects: &[(String, doc::CityObject)],
+        templates: Option<&doc::Templates>,
+        list: &[[f64; 3]],
+        line: u64,
+    ) -> Result<(), FromCityJsonError> {
+        let u = Unit::new(objects, templates);
+        let mut verts = Verts {
+            list,
+            coords: self.coords,
+            bbox: [0.0; 6],
+        };
+        for k in 0..objects.len() {
+            if u.nested[k] {
+                continue;
+            }
+            verts.reset_box();
+            let x = write_object(&u, k, &mut verts, &mut self.tally, 0)
+                .map_err(|(id, m)| crate::io::cityjson::Error::at(self.name, line, Some(&id), m))?;
+            let Some(mut x) = x else { continue };
+            if verts.bbox[0] <= verts.bbox[3] {
+                let env = format!(
+                    "<gml:boundedBy>{}</gml:boundedBy>",
+                    envelope(&verts.bbox, self.srs.as_deref(), self.coords)
+                );
+                if let Some(i) = x.find('>') {
+                    x.insert_str(i + 1, &env);
+                }
+            }
+            self.members += 1;
+            self.put(&format!(
+                "<core:cityObjectMember>{x}</core:cityObjectMember>\n"
+            ))?;
+        }
+        Ok(())
+    }
+
+    /// The end of the root element; the summary (`appearances` of CityJSONSeq features
+    /// counted as left out).
+    fn finish(
+        mut self,
+        version: String,
+        seq: bool,
+        appearances: usize,
+    ) -> Result<FromCityJsonSummary, FromCityJsonError> {
+        self.put("</core:CityModel>\n")?;
+        for _ in 0..appearances {
+            self.tally.drop("appearance (materials, textures)".into());
+        }
+        Ok(FromCityJsonSummary {
+            cityjson_version: version,
+            seq,
+            citygml_version: "2.0".into(),
+            members: self.members,
+            objects: self.tally.objects,
+            polygons: self.tally.polygons,
+            ids_made: self.tally.ids_made,
+            dropped: self.tally.dropped,
+            bytes_out: self.n,
+        })
+    }
 }
 
 /// `metadata.referenceSystem` as an OGC URN (as given when it names no EPSG code).

@@ -115,3 +115,51 @@ fn seq_is_written_feature_by_feature_and_errors_name_the_line() {
         );
     }
 }
+
+#[test]
+fn a_document_in_chunks_is_written_as_whole() {
+    use crate::io::citygml::json::chunks::{prepare, Input};
+    let dir = tempfile::tempdir().unwrap();
+    // an appearance, and a tree that is its own chunk after the building's
+    let doc = DOC.replace(
+        r#""type":"CityJSON","#,
+        r#""type":"CityJSON","appearance":{"materials":[]},"#,
+    );
+    let path = dir.path().join("t.city.json");
+    std::fs::write(&path, &doc).unwrap();
+    let (whole, ws) = convert(&doc);
+    assert!(ws.dropped.contains_key("appearance (materials, textures)"));
+    for chunk in [1, 1 << 20] {
+        let p = prepare::<()>(Input::File(&path), &path, chunk)
+            .ok()
+            .flatten()
+            .unwrap();
+        let mut out = Vec::new();
+        let s = document::write_chunked(&path, p, &mut out).unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), whole, "chunk {chunk}");
+        assert_eq!(s, ws, "chunk {chunk}");
+    }
+    // through the file API: 2.0 and 3.0 the same bytes as the whole conversion
+    let opts = WriteOptions::default();
+    for v in [TargetVersion::V2_0, TargetVersion::V3_0] {
+        let a = dir.path().join(format!("a{v:?}.gml"));
+        let b = dir.path().join(format!("b{v:?}.gml"));
+        let sa = citygml_from_cityjson(&path, &a, v, &opts).unwrap();
+        let sb = citygml_from_cityjson_chunked(&path, &b, v, &opts, 1).unwrap();
+        assert_eq!(sa, sb);
+        assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    }
+    // an object that is refused names the file and the object
+    let bad = doc.replace("[[[4,5,6]]]", "[[[4,5,66]]]");
+    assert_ne!(bad, doc);
+    std::fs::write(&path, &bad).unwrap();
+    let out = dir.path().join("bad.gml");
+    let e = citygml_from_cityjson_chunked(&path, &out, TargetVersion::V2_0, &opts, 1)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("t.city.json") && e.contains("[city object i]"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}

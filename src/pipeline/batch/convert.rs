@@ -7,7 +7,8 @@
 use super::outputs::{create_parent, PlanError};
 use super::run::{size_note, Done};
 use crate::export::citygml_from_cityjson::{
-    citygml_from_cityjson, is_json_file, FromCityJsonError, TargetVersion,
+    citygml_from_cityjson, citygml_from_cityjson_chunked, is_json_file, FromCityJsonError,
+    TargetVersion,
 };
 use crate::export::report::stats::Stats;
 use crate::export::{Content, Format};
@@ -20,18 +21,15 @@ use crate::model::{shown, Warning};
 use std::path::Path;
 
 /// The chunk size to stream `path` with (`chunk` bytes), or `None` to read it whole: small
-/// files (under four chunks), standard input, CityJSONSeq (`.jsonl` names: read line by
-/// line), and every file when `chunk` is 0. A gzip-compressed file counts as ten times its
-/// size (CityGML compresses 10 to 20 times): it is streamed from a temporary file. A
-/// CityJSON document is streamed in chunks of city objects
-/// ([`crate::io::citygml::read::stream`]).
+/// files (under four chunks), standard input, and every file when `chunk` is 0. A
+/// gzip-compressed file counts as ten times its size (CityGML compresses 10 to 20 times): it
+/// is streamed from a temporary file. A CityJSON document is streamed in chunks of city
+/// objects, CityJSONSeq in chunks of lines ([`crate::io::citygml::read::stream`]).
 pub fn chunk_for(path: &Path, chunk: u64) -> Option<u64> {
     let len = std::fs::metadata(path).ok()?.len();
     let gzip = crate::io::files::is_gzip_file(path);
     let len = if gzip { len.saturating_mul(10) } else { len };
-    let name = path.to_string_lossy().to_ascii_lowercase();
-    let seq = name.ends_with(".jsonl") || name.ends_with(".jsonl.gz");
-    (!seq && chunk > 0 && len >= chunk.saturating_mul(4)).then_some(chunk)
+    (chunk > 0 && len >= chunk.saturating_mul(4)).then_some(chunk)
 }
 
 /// The line that says a file meant to be streamed was read whole, and why.
@@ -200,7 +198,8 @@ pub fn convert_file(
     note: &(dyn Fn(String) + Sync),
 ) -> Result<Converted, ConvertError> {
     let passed = |n| progress.advance(Stage::Read, 0, n, None);
-    // CityJSON → CityGML goes feature by feature from the document itself (convert_whole)
+    // CityJSON → CityGML goes from the document itself (convert_whole: in chunks of city
+    // objects where `chunk` says so)
     let chunk = o
         .chunk
         .filter(|_| o.format != Format::CityGml || !is_json_file(input));
@@ -307,11 +306,15 @@ fn convert_whole(
         ..Converted::default()
     };
     if o.format == Format::CityGml && is_json_file(input) {
-        // CityJSON → CityGML from the document itself, feature by feature.
+        // CityJSON → CityGML from the document itself, feature by feature (a document in
+        // chunks of city-object trees where `chunk` says so).
         if o.mirror {
             create_parent(out)?;
         }
-        let s = citygml_from_cityjson(input, out, o.version, o.write)?;
+        let s = match o.chunk {
+            Some(c) => citygml_from_cityjson_chunked(input, out, o.version, o.write, c)?,
+            None => citygml_from_cityjson(input, out, o.version, o.write)?,
+        };
         let line = s.describe(input, out).replace(
             &format!(", {} bytes", s.bytes_out),
             &format!(", {}", size_note(out, s.bytes_out)),
@@ -378,8 +381,8 @@ mod tests {
         std::fs::copy(&json, &seq).unwrap();
         assert_eq!(
             chunk_for(&seq, 10),
-            None,
-            "CityJSONSeq is read line by line"
+            Some(10),
+            "CityJSONSeq streams in chunks of lines"
         );
     }
 
@@ -406,8 +409,13 @@ mod tests {
         let len = f.metadata().unwrap().len();
         let dir = tempfile::tempdir().unwrap();
         let wopts = WriteOptions::default();
-        for format in [Format::CityGml, Format::Obj] {
-            let ext = if format == Format::Obj { "obj" } else { "gml" };
+        // CityJSON: its vertex buckets resolved three records at a time in unit tests
+        for format in [Format::CityGml, Format::Obj, Format::CityJson] {
+            let ext = match format {
+                Format::Obj => "obj",
+                Format::CityJson => "city.json",
+                _ => "gml",
+            };
             let mut outs = Vec::new();
             for chunk in [None, Some(len / 8)] {
                 let out = dir.path().join(format!("sub/{}.{ext}", chunk.is_some()));

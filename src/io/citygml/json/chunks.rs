@@ -1,4 +1,4 @@
-//! A CityJSON document (`.city.json`, not CityJSONSeq) read in chunks of whole city-object
+//! A CityJSON document (`.city.json`) read in chunks of whole city-object
 //! trees ([`stream`]): the same [`Chunk`]s, in the same order, as the chunked CityGML read
 //! gives, so that `stats` and `convert` consume both alike; memory follows the chunk, not
 //! the document.
@@ -22,12 +22,18 @@
 //! whole document's list, since any object may use any vertex), and the list of cuts.
 //!
 //! The stream declines ([`Streamed::Declined`]: the caller reads the document whole, as
-//! before) where a chunk could differ from the whole read: CityJSONSeq, a first value that
-//! is no `CityJSON` object, a city object id given twice, and any document that does not
-//! read (the reason names the file and the line:column where the JSON parser was).
+//! before) where a chunk could differ from the whole read: a first value that is no
+//! `CityJSON` object, a city object id given twice, and any document that does not read (the
+//! reason names the file and the line:column where the JSON parser was). CityJSONSeq (a
+//! second JSON value after the first) is read in chunks of lines (`super::seq`).
+//!
+//! Pass 1's results ([`Prepared`]) serve every later pass over the objects: the CityGML
+//! writer's (`crate::export::citygml_from_cityjson`), a streamed writer's passes
+//! ([`crate::io::citygml::read::Passes`] keeps them), and the whole model of a CityJSON input
+//! ([`whole_model`]: one chunk of everything, no serde value of the document).
 
 use super::source::{add_object, FromSource};
-use super::stream::{read, EachText, Pass, Structure, Vertex};
+use super::stream::{open_json, read_from, read_slice, EachText, Pass, Seen, Structure, Vertex};
 use crate::io::citygml::read::{Chunk, StreamSummary, Streamed};
 use crate::io::citygml::{ReadError, WriteError};
 use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
@@ -36,7 +42,8 @@ use crate::io::cityjson::seq::{
     check_version, reference_system_text, source_file, template_vertices,
 };
 use crate::io::cityjson::Error;
-use crate::model::{AssetKind, CityModel};
+use crate::model::{Asset, AssetKind, Building, CityModel, Warning};
+use glam::DVec3;
 use serde::Deserialize;
 use serde_json::value::RawValue;
 use serde_json::{Map, Value};
@@ -66,7 +73,12 @@ pub(crate) fn stream<E>(
     passed: &dyn Fn(u64),
     each: impl FnMut(Chunk) -> Result<(), E>,
 ) -> Result<Streamed, E> {
-    match stream_chunks(path, chunk_bytes, passed, each) {
+    streamed(stream_chunks(path, chunk_bytes, passed, each))
+}
+
+/// How a stream ended, as [`stream`] tells it.
+fn streamed<E>(r: Result<StreamSummary, Stop<E>>) -> Result<Streamed, E> {
+    match r {
         Ok(sum) => Ok(Streamed::Done(sum)),
         Err(Stop::Each(e)) => Err(e),
         Err(Stop::Declined(why)) => Ok(Streamed::Declined(why)),
@@ -84,6 +96,8 @@ struct Head {
     structure: Structure,
     /// An id given twice.
     repeated: Option<String>,
+    /// Whether `appearance` is given (not `null`).
+    appearance: bool,
 }
 
 impl Pass for Head {
@@ -96,6 +110,9 @@ impl Pass for Head {
             key,
             "type" | "version" | "transform" | "metadata" | "geometry-templates"
         )
+    }
+    fn skipped(&mut self, key: &str, null: bool) {
+        self.appearance |= key == "appearance" && !null;
     }
     fn wants_objects(&self) -> bool {
         true
@@ -137,7 +154,7 @@ struct Links {
 /// What a CityJSON output copies of a city object ([`add_object`]): its attributes and its
 /// semantic surface objects (the rest skipped unparsed).
 #[derive(Deserialize)]
-struct Copied {
+pub(super) struct Copied {
     #[serde(default)]
     attributes: Option<Value>,
     #[serde(default)]
@@ -158,7 +175,7 @@ struct CopiedSemantics {
 
 impl Copied {
     /// The object as [`add_object`] reads it.
-    fn into_object(self) -> Map<String, Value> {
+    pub(super) fn into_object(self) -> Map<String, Value> {
         let geometry = self
             .geometry
             .into_iter()
@@ -209,22 +226,88 @@ fn chunk_ends(reach: &[u32], per: usize) -> Vec<u32> {
     ends
 }
 
-/// [`stream`], with why it stopped.
-pub(crate) fn stream_chunks<E>(
-    path: &Path,
+/// Where a document is read from: a file (gzip recognised, `-` standard input) or its bytes
+/// in memory.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Input<'a> {
+    File(&'a Path),
+    Bytes(&'a [u8]),
+}
+
+impl<'a> Input<'a> {
+    /// The JSON text (decompressed, a byte-order mark skipped).
+    pub(super) fn open(self) -> Result<Box<dyn std::io::BufRead + 'a>, WriteError> {
+        Ok(match self {
+            Input::File(p) => open_json(p)?,
+            Input::Bytes(b) => Box::new(b.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(b)),
+        })
+    }
+
+    /// A pass of `pass` over the document (named `name` in errors).
+    fn read(self, name: &Path, pass: &mut dyn Pass) -> Result<Seen, WriteError> {
+        match self {
+            Input::File(_) => read_from(self.open()?, name, pass),
+            Input::Bytes(b) => read_slice(b.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(b), name, pass),
+        }
+    }
+
+    /// Whether the document is gzip-compressed.
+    pub(super) fn gzip(self) -> bool {
+        match self {
+            Input::File(path) => {
+                let mut magic = [0u8; 2];
+                std::fs::File::open(path)
+                    .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
+                    .is_ok()
+                    && crate::io::is_gzip(&magic)
+            }
+            Input::Bytes(_) => false,
+        }
+    }
+}
+
+/// What pass 1 found of a document (module docs): what every pass over its objects needs.
+/// Kept by [`crate::io::citygml::read::Passes`] for the later passes of a writer over the
+/// same document; its size grows with the document's vertices (24 bytes each) and chunks.
+#[derive(Debug)]
+pub(crate) struct Prepared {
+    /// `version` (empty when absent).
+    pub version: String,
+    pub transform: Option<Transform>,
+    pub metadata: Option<Metadata>,
+    pub templates: Option<Templates>,
+    /// The vertices in real coordinates.
+    pub list: Vec<DVec3>,
+    /// The template vertices (never transformed).
+    pub template_list: Vec<DVec3>,
+    /// Whether the document has an `appearance` (not `null`).
+    pub appearance: bool,
+    /// The last object of each chunk, in document order.
+    ends: Vec<u32>,
+    /// How many city objects.
+    pub objects: usize,
+    /// The document's bytes (decompressed, a byte-order mark left out).
+    pub bytes: u64,
+    gzip: bool,
+    /// The chunk size the cuts were made for.
+    pub chunk_bytes: u64,
+}
+
+/// Pass 1 over the document at `input` (named `name`), cut into chunks of about
+/// `chunk_bytes`: `None` for CityJSONSeq (more than one JSON value).
+///
+/// # Errors
+/// The document does not read, or could differ from the whole read.
+pub(crate) fn prepare<E>(
+    input: Input<'_>,
+    name: &Path,
     chunk_bytes: u64,
-    passed: &dyn Fn(u64),
-    mut each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<StreamSummary, Stop<E>> {
-    let read_error = |e: WriteError| match e {
-        WriteError::Read(ReadError::CityJson(e)) => Stop::Read(e),
-        e => Stop::Declined(e.to_string()),
-    };
-    // 1. the head, the vertices, the links
+) -> Result<Option<Prepared>, Stop<E>> {
+    let path = name;
     let mut head = Head::default();
-    let seen = read(path, path, &mut head).map_err(read_error)?;
+    let seen = input.read(path, &mut head).map_err(read_error)?;
     if seen.more {
-        return Err(Stop::Declined("CityJSONSeq is read line by line".into()));
+        return Ok(None);
     }
     if head.members.get("type").and_then(Value::as_str) != Some("CityJSON") {
         return Err(Stop::Declined("not a CityJSON object".into()));
@@ -255,10 +338,6 @@ pub(crate) fn stream_chunks<E>(
         path,
     )
     .map_err(stop)?;
-    let srs_name = metadata
-        .as_ref()
-        .and_then(|m| m.reference_system.as_ref())
-        .and_then(reference_system_text);
     let template_list = template_vertices(templates.as_ref(), path).map_err(stop)?;
     let list = real_vertices(&head.vertices, transform.as_ref(), path, 0).map_err(stop)?;
     drop(std::mem::take(&mut head.vertices));
@@ -270,120 +349,79 @@ pub(crate) fn stream_chunks<E>(
             .max(1),
     };
     let ends = chunk_ends(&head.structure.reach(), per);
-    drop(head.structure);
-    let gzip = {
-        let mut magic = [0u8; 2];
-        std::fs::File::open(path)
-            .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
-            .is_ok()
-            && crate::io::is_gzip(&magic)
-    };
-    let verts = Vertices {
-        list: &list,
-        templates: templates.as_ref(),
-        template_list: &template_list,
-    };
+    Ok(Some(Prepared {
+        version,
+        transform,
+        metadata,
+        templates,
+        list,
+        template_list,
+        appearance: head.appearance,
+        ends,
+        objects: n,
+        bytes: seen.bytes,
+        gzip: input.gzip(),
+        chunk_bytes,
+    }))
+}
 
-    // 2. the objects, chunk by chunk
-    let new_mapper = |first: bool| {
-        let mut m = Mapper::new(path);
-        if first {
-            check_version(&mut m, &version);
-        }
-        m
-    };
-    let mut sum = StreamSummary {
-        version: Some(crate::io::cityjson::seq::model_version(&version)),
-        srs_name: srs_name.clone(),
-        ..StreamSummary::default()
-    };
-    let mut mapper = new_mapper(true);
-    let mut source = FromSource::default();
+/// A reader's error as a [`Stop`]: the document's own (file, line:column) or declined.
+fn read_error<E>(e: WriteError) -> Stop<E> {
+    match e {
+        WriteError::Read(ReadError::CityJson(e)) => Stop::Read(e),
+        e => Stop::Declined(e.to_string()),
+    }
+}
+
+/// Why the function of [`each_object`] stopped.
+pub(crate) enum Fail<E> {
+    /// The caller's error.
+    Each(E),
+    /// The object is refused: the object's id where known, what is wrong.
+    Object(Option<String>, String),
+}
+
+/// Pass 2 over the document `p` was prepared from: each city object's id and text handed to
+/// `each` in document order, with `Some(done)` (the objects so far, this one too) when it
+/// is the last of a chunk.
+///
+/// # Errors
+/// `each`'s ([`Stop::Each`]); an object refused is [`Stop::Read`] with the file, line:column
+/// of the parser and the object; a document that changed since pass 1 is declined.
+pub(crate) fn each_object<E>(
+    input: Input<'_>,
+    name: &Path,
+    p: &Prepared,
+    mut each: impl FnMut(String, &RawValue, Option<usize>) -> Result<(), Fail<E>>,
+) -> Result<(), Stop<E>> {
     let mut k = 0usize;
-    let mut failed: Option<Stop<E>> = None;
+    let mut failed: Option<E> = None;
     let mut failed_id: Option<String> = None;
-    let mut reported = 0u64;
-    let mut hand_over = |mapper: Mapper,
-                         source: FromSource,
-                         done: usize,
-                         sum: &mut StreamSummary|
-     -> Result<(), E> {
-        let (buildings, assets, _, warnings, counts) = mapper.finish();
-        let file = source_file(path, &version, srs_name.clone(), gzip, seen.bytes, counts);
-        let bodies = assets.iter().filter(|a| a.kind == AssetKind::Body).count();
-        let at = match n {
-            0 => seen.bytes,
-            n => u64::try_from(u128::from(seen.bytes) * done as u128 / n as u128)
-                .unwrap_or(seen.bytes),
-        };
-        let chunk = Chunk {
-            model: CityModel {
-                files: vec![file],
-                buildings,
-                assets,
-                warnings,
-            },
-            index: sum.chunks,
-            buildings_before: sum.buildings,
-            assets_before: sum.assets,
-            bodies_before: sum.bodies,
-            warnings_before: sum.warnings,
-            bytes: (reported, at),
-            source: Some(source),
-        };
-        sum.chunks += 1;
-        sum.buildings += chunk.model.buildings.len();
-        sum.assets += chunk.model.assets.len() - bodies;
-        sum.bodies += bodies;
-        sum.warnings += chunk.model.warnings.len();
-        if at > reported {
-            passed(at - reported);
-            reported = at;
-        }
-        each(chunk)
-    };
-    let mut end = ends.iter().copied();
+    let mut end = p.ends.iter().copied();
     let mut next_end = end.next();
-    let r = {
-        let mut objects = EachText(|id: String, o: &RawValue| {
-            let before = mapper.origins.len();
-            let parsed = serde_json::from_str::<CityObject>(o.get())
-                .and_then(|t| Ok((t, serde_json::from_str::<Copied>(o.get())?)));
-            let (typed, copied) = match parsed {
-                Ok(t) => t,
-                Err(e) => {
-                    failed_id = Some(id);
-                    return Err(e.to_string());
-                }
-            };
-            let one = [(id, typed)];
-            if let Err(e) = mapper.add(&one, &verts, 0) {
-                failed_id = e.id.clone();
-                return Err(e.message);
-            }
-            let [(id, _)] = one;
-            let wanted: Vec<(usize, usize, usize)> = mapper.origins[before..]
-                .iter()
-                .enumerate()
-                .filter_map(|(i, o)| o.surface.map(|(g, s)| (before + i, g, s)))
-                .collect();
-            add_object(&mut source, id, &mut copied.into_object(), &wanted);
-            if next_end == Some(k as u32) {
+    let r = input.read(
+        name,
+        &mut EachText(|id: String, o: &RawValue| {
+            let last = next_end == Some(k as u32);
+            if last {
                 next_end = end.next();
-                let m = std::mem::replace(&mut mapper, new_mapper(false));
-                let s = std::mem::take(&mut source);
-                if let Err(e) = hand_over(m, s, k + 1, &mut sum) {
-                    failed = Some(Stop::Each(e));
-                    return Err("stopped".into());
-                }
             }
             k += 1;
-            Ok(())
-        });
-        read(path, path, &mut objects)
-    };
+            match each(id, o, last.then_some(k)) {
+                Ok(()) => Ok(()),
+                Err(Fail::Each(e)) => {
+                    failed = Some(e);
+                    Err("stopped".into())
+                }
+                Err(Fail::Object(id, m)) => {
+                    failed_id = id;
+                    Err(m)
+                }
+            }
+        }),
+    );
     if let Some(f) = failed {
-        return Err(f);
+        return Err(Stop::Each(f));
     }
     if let Err(e) = r {
         return Err(match read_error(e) {
@@ -394,13 +432,231 @@ pub(crate) fn stream_chunks<E>(
             other => other,
         });
     }
-    if k != n {
+    if k != p.objects {
         return Err(Stop::Declined("the document changed while read".into()));
     }
+    Ok(())
+}
+
+/// City object `id` (its text `o`) mapped into `mapper`, what a CityJSON output copies of it
+/// kept in `source` (when given: else not parsed). Errors: the object's id where known, what is wrong.
+fn map_object(
+    mapper: &mut Mapper,
+    source: Option<&mut FromSource>,
+    verts: &Vertices<'_>,
+    id: String,
+    o: &RawValue,
+    line: u64,
+) -> Result<(), (Option<String>, String)> {
+    let before = mapper.origins.len();
+    let parsed = serde_json::from_str::<CityObject>(o.get()).and_then(|t| {
+        let c = source
+            .is_some()
+            .then(|| serde_json::from_str::<Copied>(o.get()));
+        Ok((t, c.transpose()?))
+    });
+    let (typed, copied) = match parsed {
+        Ok(t) => t,
+        Err(e) => return Err((Some(id), e.to_string())),
+    };
+    let one = [(id, typed)];
+    mapper
+        .add(&one, verts, line)
+        .map_err(|e| (e.id.clone(), e.message))?;
+    let [(id, _)] = one;
+    let (Some(source), Some(copied)) = (source, copied) else {
+        return Ok(());
+    };
+    let wanted: Vec<(usize, usize, usize)> = mapper.origins[before..]
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| o.surface.map(|(g, s)| (before + i, g, s)))
+        .collect();
+    add_object(source, id, &mut copied.into_object(), &wanted);
+    Ok(())
+}
+
+/// [`stream`], with why it stopped.
+pub(crate) fn stream_chunks<E>(
+    path: &Path,
+    chunk_bytes: u64,
+    passed: &dyn Fn(u64),
+    each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<StreamSummary, Stop<E>> {
+    match prepare(Input::File(path), path, chunk_bytes)? {
+        Some(p) => stream_prepared(Input::File(path), path, &p, true, passed, each),
+        None => super::seq::stream_seq(Input::File(path), path, chunk_bytes, passed, each),
+    }
+}
+
+/// The next chunk after those `sum` counts (which it then counts too): a model of one file.
+pub(super) fn next_chunk(
+    sum: &mut StreamSummary,
+    file: crate::model::SourceFile,
+    (buildings, assets, warnings): (Vec<Building>, Vec<Asset>, Vec<Warning>),
+    bytes: (u64, u64),
+    source: FromSource,
+) -> Chunk {
+    let bodies = assets.iter().filter(|a| a.kind == AssetKind::Body).count();
+    let chunk = Chunk {
+        index: sum.chunks,
+        buildings_before: sum.buildings,
+        assets_before: sum.assets,
+        bodies_before: sum.bodies,
+        warnings_before: sum.warnings,
+        bytes,
+        source: Some(source),
+        model: CityModel {
+            files: vec![file],
+            buildings,
+            assets,
+            warnings,
+        },
+    };
+    sum.chunks += 1;
+    sum.buildings += chunk.model.buildings.len();
+    sum.assets += chunk.model.assets.len() - bodies;
+    sum.bodies += bodies;
+    sum.warnings += chunk.model.warnings.len();
+    chunk
+}
+
+/// The chunks of a document (pass 2, after [`prepare`]) handed to `each`; with
+/// `keep_source`, each with what a CityJSON output copies of its objects
+/// ([`Chunk::source`], else empty).
+///
+/// # Errors
+/// As [`each_object`].
+pub(crate) fn stream_prepared<E>(
+    input: Input<'_>,
+    path: &Path,
+    p: &Prepared,
+    keep_source: bool,
+    passed: &dyn Fn(u64),
+    mut each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<StreamSummary, Stop<E>> {
+    let srs_name = p
+        .metadata
+        .as_ref()
+        .and_then(|m| m.reference_system.as_ref())
+        .and_then(reference_system_text);
+    let verts = Vertices {
+        list: &p.list,
+        templates: p.templates.as_ref(),
+        template_list: &p.template_list,
+    };
+    let new_mapper = |first: bool| {
+        let mut m = Mapper::new(path);
+        if first {
+            check_version(&mut m, &p.version);
+        }
+        m
+    };
+    let mut sum = StreamSummary {
+        version: Some(crate::io::cityjson::seq::model_version(&p.version)),
+        srs_name: srs_name.clone(),
+        ..StreamSummary::default()
+    };
+    let mut reported = 0u64;
+    let (n, bytes) = (p.objects, p.bytes);
+    let mut hand_over = |mapper: Mapper,
+                         source: FromSource,
+                         done: usize,
+                         sum: &mut StreamSummary|
+     -> Result<(), E> {
+        let (buildings, assets, _, warnings, counts) = mapper.finish();
+        let file = source_file(path, &p.version, srs_name.clone(), p.gzip, bytes, counts);
+        let at = match n {
+            0 => bytes,
+            n => u64::try_from(u128::from(bytes) * done as u128 / n as u128).unwrap_or(bytes),
+        };
+        let parts = (buildings, assets, warnings);
+        let chunk = next_chunk(sum, file, parts, (reported, at), source);
+        if at > reported {
+            passed(at - reported);
+            reported = at;
+        }
+        each(chunk)
+    };
+    let mut mapper = new_mapper(true);
+    let mut source = FromSource::default();
+    each_object(input, path, p, |id, o, last| {
+        let copy = keep_source.then_some(&mut source);
+        map_object(&mut mapper, copy, &verts, id, o, 0).map_err(|(id, m)| Fail::Object(id, m))?;
+        if let Some(done) = last {
+            let m = std::mem::replace(&mut mapper, new_mapper(false));
+            let s = std::mem::take(&mut source);
+            hand_over(m, s, done, &mut sum).map_err(Fail::Each)?;
+        }
+        Ok(())
+    })?;
     if n == 0 {
         hand_over(mapper, source, 0, &mut sum).map_err(Stop::Each)?;
     }
     Ok(sum)
+}
+
+/// A document's first pass kept for the later passes of a writer over it
+/// ([`crate::io::citygml::read::Passes`]): the file and chunk size it was made for.
+#[derive(Debug, Default)]
+pub(crate) struct Kept(std::sync::Mutex<Option<(std::path::PathBuf, std::sync::Arc<Prepared>)>>);
+
+/// [`stream`] with the first pass made once for the file and chunk size and kept in `kept`
+/// (CityJSONSeq has none: it is read in one pass).
+///
+/// # Errors
+/// As [`stream`].
+pub(crate) fn stream_kept<E>(
+    path: &Path,
+    chunk_bytes: u64,
+    kept: &Kept,
+    passed: &dyn Fn(u64),
+    each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<Streamed, E> {
+    let found = match kept.0.lock() {
+        Ok(k) => k
+            .as_ref()
+            .filter(|(p, prep)| p == path && prep.chunk_bytes == chunk_bytes)
+            .map(|(_, prep)| prep.clone()),
+        Err(_) => None,
+    };
+    let prepared = match found {
+        Some(p) => p,
+        None => match prepare::<E>(Input::File(path), path, chunk_bytes) {
+            Ok(Some(p)) => {
+                let p = std::sync::Arc::new(p);
+                if let Ok(mut k) = kept.0.lock() {
+                    *k = Some((path.to_path_buf(), p.clone()));
+                }
+                p
+            }
+            Ok(None) => return stream(path, chunk_bytes, passed, each),
+            Err(e) => return streamed(Err(e)),
+        },
+    };
+    let input = Input::File(path);
+    streamed(stream_prepared(input, path, &prepared, true, passed, each))
+}
+
+/// The whole model of the CityJSON document or CityJSONSeq `input` (named `name`) read
+/// through the passes of the chunked read, as one chunk (no serde value of the document:
+/// memory follows the model): the model [`crate::io::cityjson::read_slice`] reads. `None` where the chunked read declines (an id
+/// given twice, a document that does not read): read it whole then.
+pub(crate) fn whole_model(input: Input<'_>, name: &Path) -> Option<CityModel> {
+    let mut out = None;
+    let each = |c: Chunk| {
+        let mut model = c.model;
+        if let Some(f) = model.files.first_mut() {
+            f.len = c.bytes.1;
+        }
+        out = Some(model);
+        Ok::<(), ()>(())
+    };
+    match prepare::<()>(input, name, u64::MAX).ok()? {
+        Some(p) => stream_prepared(input, name, &p, false, &|_| {}, each).ok()?,
+        None => super::seq::stream_seq(input, name, u64::MAX, &|_| {}, each).ok()?,
+    };
+    out
 }
 
 #[cfg(test)]
@@ -477,7 +733,56 @@ mod tests {
             "{}\n{{\"type\":\"CityJSONFeature\"}}",
             DOC.replace('\n', " ")
         );
-        assert!(matches!(chunks_of(&seq, 1), Err(Stop::Declined(_))));
+        // CityJSONSeq is read in chunks of lines (`super::seq`)
+        assert_eq!(
+            chunks_of(&seq, 1).unwrap_or_default(),
+            [vec!["p", "c", "b", "d"]]
+        );
+    }
+
+    #[test]
+    fn the_whole_model_through_the_passes_is_the_whole_read_s() {
+        let whole = crate::io::cityjson::read_slice(DOC.as_bytes(), "d".as_ref()).unwrap();
+        let m = whole_model(Input::Bytes(DOC.as_bytes()), "d".as_ref()).unwrap();
+        assert_eq!(m.buildings, whole.buildings);
+        assert_eq!(m.assets, whole.assets);
+        assert_eq!(m.warnings, whole.warnings);
+        assert_eq!(m.files[0].len, whole.files[0].len);
+        // an id given twice: declined, read whole
+        let twice = DOC.replace(r#""d":"#, r#""c":"#);
+        assert!(whole_model(Input::Bytes(twice.as_bytes()), "d".as_ref()).is_none());
+    }
+
+    #[test]
+    fn passes_keep_the_first_pass() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("d.city.json");
+        std::fs::write(&path, DOC).unwrap();
+        let kept = Kept::default();
+        let mut runs = Vec::new();
+        for _ in 0..2 {
+            let mut ids = Vec::new();
+            let r = stream_kept(&path, 1, &kept, &|_| {}, |c: Chunk| {
+                ids.push(c.model.buildings.len());
+                Ok::<(), ()>(())
+            });
+            assert!(matches!(r, Ok(Streamed::Done(_))));
+            runs.push(ids);
+            let k = kept.0.lock().unwrap();
+            assert!(k
+                .as_ref()
+                .is_some_and(|(p, prep)| p == &path && prep.objects == 4));
+        }
+        assert_eq!(runs[0], [3, 1]);
+        assert_eq!(runs[0], runs[1]);
+        // a file that changed between the passes (an object fewer) is declined
+        let start = DOC.find(",\n        \"d\":").unwrap();
+        let end = DOC[start..].find("}]}}").unwrap() + start + 3;
+        let fewer = format!("{}{}", &DOC[..start], &DOC[end..]);
+        assert!(crate::io::cityjson::read_slice(fewer.as_bytes(), "d".as_ref()).is_ok());
+        std::fs::write(&path, fewer).unwrap();
+        let r = stream_kept(&path, 1, &kept, &|_| {}, |_| Ok::<(), ()>(()));
+        assert!(matches!(r, Ok(Streamed::Declined(_))));
     }
 
     #[test]

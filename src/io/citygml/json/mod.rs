@@ -3,9 +3,11 @@
 //! (`io::cityjson`, the format's mapping into the model, imports nothing of `io::citygml`):
 //! `stream` reads a JSON document in passes (its members in any order, `CityObjects` one
 //! object and `vertices` one vertex at a time), `chunks` a `.city.json` in chunks of whole
-//! city-object trees, `source` what the CityJSON writer copies from a CityJSON source.
+//! city-object trees, `seq` CityJSONSeq in chunks of lines, `source` what the CityJSON writer
+//! copies from a CityJSON source.
 
 pub(crate) mod chunks;
+mod seq;
 pub(crate) mod source;
 pub(crate) mod stream;
 

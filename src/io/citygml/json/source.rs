@@ -3,6 +3,7 @@
 //! which the writer makes itself), found again from the source document
 //! ([`crate::io::cityjson::read_slice_with_origins`]: where each asset came from).
 
+use crate::io::citygml::read::Chunk;
 use crate::io::cityjson::Origin;
 use crate::model::CityModel;
 use serde_json::{Map, Value};
@@ -26,6 +27,43 @@ pub(crate) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<F
     let Some(f) = model.files.get(file).filter(|f| f.cityjson.is_some()) else {
         return Ok(None);
     };
+    let assets: Vec<usize> = (0..model.assets.len())
+        .filter(|&i| model.assets[i].file == file)
+        .collect();
+    let changed = |now: usize| {
+        io::Error::other(format!(
+            "{}: the CityJSON source changed since it was read ({} assets, now {now})",
+            crate::model::shown(&f.path),
+            assets.len(),
+        ))
+    };
+    // a file in chunks (the chunked read: one chunk's model at a time, besides the model
+    // given), each chunk's surface objects by their asset in the whole file's model
+    if let crate::model::Source::File(p) = &f.source {
+        let mut found = FromSource::default();
+        let chunk = crate::io::citygml::read::CHUNK_BYTES;
+        let r = super::chunks::stream_chunks(p, chunk, &|_| {}, |c: Chunk| {
+            let Some(s) = c.source else {
+                return Ok(());
+            };
+            found.objects.extend(s.objects);
+            for (j, m) in s.surfaces {
+                // non-body assets: those of earlier chunks come first
+                let i = assets
+                    .get(c.assets_before + j)
+                    .ok_or_else(|| changed(c.assets_before + j))?;
+                found.surfaces.insert(*i, m);
+            }
+            Ok(())
+        });
+        match r {
+            Ok(sum) if sum.assets + sum.bodies == assets.len() => return Ok(Some(found)),
+            Ok(sum) => return Err(changed(sum.assets + sum.bodies)),
+            Err(super::chunks::Stop::Each(e)) => return Err(e),
+            // read whole below
+            Err(_) => {}
+        }
+    }
     let mut bytes = Vec::new();
     match crate::io::citygml::source::load_source(&f.source, &f.path).map_err(io::Error::other)? {
         crate::io::citygml::source::Document::Plain(b) => bytes.extend_from_slice(&b),
@@ -35,16 +73,8 @@ pub(crate) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<F
     }
     let (_, origins) =
         crate::io::cityjson::read_slice_with_origins(&bytes, &f.path).map_err(io::Error::other)?;
-    let assets: Vec<usize> = (0..model.assets.len())
-        .filter(|&i| model.assets[i].file == file)
-        .collect();
     if assets.len() != origins.len() {
-        return Err(io::Error::other(format!(
-            "{}: the CityJSON source changed since it was read ({} assets, now {})",
-            crate::model::shown(&f.path),
-            assets.len(),
-            origins.len()
-        )));
+        return Err(changed(origins.len()));
     }
     // (object, geometry, surface) wanted, then one pass over the document's values
     let mut wanted: HashMap<&str, Vec<(usize, usize, usize)>> = HashMap::new();

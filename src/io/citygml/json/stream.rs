@@ -85,6 +85,8 @@ pub(crate) trait Pass {
     fn keeps(&self, _key: &str) -> bool {
         true
     }
+    /// The small member `key` was skipped unread; `null`: its value was `null`.
+    fn skipped(&mut self, _key: &str, _null: bool) {}
     /// `CityObjects` or `vertices` is at this place among the members (read or not).
     fn place(&mut self, _key: &str) {}
     /// Whether `CityObjects` is read.
@@ -212,7 +214,45 @@ pub(crate) fn open_json(input: &Path) -> Result<Box<dyn BufRead + Send>, WriteEr
 /// The source cannot be read, is empty, is not JSON, is not an object, or the pass refuses
 /// something (its message with the file, line and column).
 pub(crate) fn read(input: &Path, name: &Path, pass: &mut dyn Pass) -> Result<Seen, WriteError> {
-    let mut r = open_json(input)?;
+    read_from(open_json(input)?, name, pass)
+}
+
+/// [`read`] from the JSON text `b` in memory (a byte-order mark already skipped), parsed as
+/// a slice (faster than through a reader).
+///
+/// # Errors
+/// As [`read`].
+pub(crate) fn read_slice(b: &[u8], name: &Path, pass: &mut dyn Pass) -> Result<Seen, WriteError> {
+    if b.is_empty() {
+        return Err(cj(name, 0, None, "empty document".into()));
+    }
+    let mut de = serde_json::Deserializer::from_slice(b);
+    let mut seen = Seen {
+        bytes: b.len() as u64,
+        more: false,
+        objects: false,
+        vertices: false,
+    };
+    let json = |e: serde_json::Error| cj_error(crate::io::cityjson::Error::json(name, &e));
+    Top {
+        pass,
+        seen: &mut seen,
+    }
+    .deserialize(&mut de)
+    .map_err(json)?;
+    seen.more = de.end().is_err();
+    Ok(seen)
+}
+
+/// [`read`] from the JSON text `r` (a byte-order mark already skipped).
+///
+/// # Errors
+/// As [`read`].
+pub(crate) fn read_from(
+    mut r: impl BufRead,
+    name: &Path,
+    pass: &mut dyn Pass,
+) -> Result<Seen, WriteError> {
     if r.fill_buf().is_ok_and(<[u8]>::is_empty) {
         return Err(cj(name, 0, None, "empty document".into()));
     }
@@ -282,7 +322,8 @@ impl<'de> Visitor<'de> for Top<'_, '_> {
                     }
                 }
                 _ if !self.pass.keeps(&key) => {
-                    m.next_value::<IgnoredAny>()?;
+                    let v = m.next_value::<Option<IgnoredAny>>()?;
+                    self.pass.skipped(&key, v.is_none());
                 }
                 _ => match self.pass.members() {
                     Some(members) => {
@@ -290,7 +331,8 @@ impl<'de> Visitor<'de> for Top<'_, '_> {
                         members.insert(key, v);
                     }
                     None => {
-                        m.next_value::<IgnoredAny>()?;
+                        let v = m.next_value::<Option<IgnoredAny>>()?;
+                        self.pass.skipped(&key, v.is_none());
                     }
                 },
             }

@@ -136,7 +136,7 @@ pub fn read_source_observed(
     passed: &(dyn Fn(u64) + Sync),
 ) -> Result<CityModel, ReadError> {
     // CityJSON and CityJSONSeq, recognised by content (issue 24)
-    let mut model = match json_or_xml(source::load_source(&src, name)?, name)? {
+    let mut model = match json_or_xml(source::load_source(&src, name)?, &src, name)? {
         Ok(model) => model,
         Err(source::Document::Plain(doc)) => {
             let seen = Seen::new(doc.len() as u64, passed);
@@ -173,17 +173,36 @@ pub fn read_source_observed(
 /// CityGML reader.
 fn json_or_xml(
     doc: source::Document,
+    src: &Source,
     name: &Path,
 ) -> Result<Result<CityModel, source::Document>, ReadError> {
+    use crate::io::citygml::json::chunks::{whole_model, Input};
+    // through the chunked read's passes (memory follows the model, not a value of the whole
+    // document); what they decline is read whole, as before
     Ok(Ok(match doc {
         source::Document::Plain(doc) if source::is_json(&doc) => {
-            crate::io::cityjson::read_slice(&doc, name)?
+            match whole_model(Input::Bytes(&doc), name) {
+                Some(model) => model,
+                None => crate::io::cityjson::read_slice(&doc, name)?,
+            }
         }
         source::Document::Gzip(mut reader, n) => {
             if !source::is_json(source::peek(&mut reader)) {
                 return Ok(Err(source::Document::Gzip(reader, n)));
             }
-            crate::io::cityjson::read_reader(reader, name, true)?
+            let file = match src {
+                Source::File(p) => whole_model(Input::File(p), name),
+                Source::Memory(_) => None,
+            };
+            match file {
+                Some(mut model) => {
+                    for f in &mut model.files {
+                        f.gzip = true;
+                    }
+                    model
+                }
+                None => crate::io::cityjson::read_reader(reader, name, true)?,
+            }
         }
         doc => return Ok(Err(doc)),
     }))

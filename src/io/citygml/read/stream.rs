@@ -144,7 +144,12 @@ impl Streamed {
 /// The settings of a writer that reads one document in several streamed passes: the options
 /// of every read, the chunk size, and the progress of each pass (`passed(k, n)`: `n` more
 /// bytes read in pass `k`, the writer telling what its passes are).
-#[derive(Clone, Copy)]
+///
+/// A CityJSON document's first pass (its small members, vertices and links:
+/// `io::citygml::json::chunks`) is made once and kept for the later passes over the
+/// same file: the document is read once a pass of the writer, not twice, for as long as the
+/// passes live at the cost of its vertices (24 bytes each) held between the passes.
+#[derive(Clone)]
 pub struct Passes<'a> {
     /// Options of every read.
     pub read: &'a ReadOptions,
@@ -152,6 +157,8 @@ pub struct Passes<'a> {
     pub chunk_bytes: u64,
     /// Progress: `passed(k, n)`, `n` more bytes read in pass `k`.
     pub passed: &'a dyn Fn(usize, u64),
+    /// A CityJSON document's first pass, kept.
+    kept: std::sync::Arc<crate::io::citygml::json::chunks::Kept>,
 }
 
 impl<'a> Passes<'a> {
@@ -161,6 +168,7 @@ impl<'a> Passes<'a> {
             read,
             chunk_bytes,
             passed,
+            kept: Default::default(),
         }
     }
 
@@ -205,6 +213,14 @@ impl<'a> Passes<'a> {
         let passed = &|n| passed(k, n);
         let r = if citygml_only {
             stream_citygml(path, self.read, self.chunk_bytes, passed, each)?
+        } else if crate::io::citygml::json::is_json_file(path) {
+            crate::io::citygml::json::chunks::stream_kept(
+                path,
+                self.chunk_bytes,
+                &self.kept,
+                passed,
+                each,
+            )?
         } else {
             stream(path, self.read, self.chunk_bytes, passed, each)?
         };
