@@ -56,6 +56,13 @@ pub(crate) struct Metadata {
 }
 
 impl Metadata {
+    /// `referenceSystem` as the text of a CRS name ([`super::reference_system_text`]).
+    pub fn srs_name(&self) -> Option<String> {
+        self.reference_system
+            .as_ref()
+            .and_then(super::reference_system_text)
+    }
+
     /// `geographicalExtent` (min x, y, z, max x, y, z), `None` unless it is six numbers.
     pub fn extent(&self) -> Option<[f64; 6]> {
         let e = self.extent.as_ref()?.as_array()?;

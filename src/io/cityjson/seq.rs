@@ -1,7 +1,7 @@
 //! A document value by value: the `CityJSON` object, then (CityJSONSeq) one
 //! `CityJSONFeature` per line, each mapped and dropped before the next is parsed.
 
-use super::doc::{Doc, Templates};
+use super::doc::{Doc, Metadata, Templates};
 use super::map::{real_vertices, Counts, Mapper, Origin, Vertices};
 use super::Error;
 use crate::model::{CityGmlVersion, CityJsonFormat, CityModel, Source, SourceFile};
@@ -98,11 +98,7 @@ fn read_values(
     let version = head.version.clone().unwrap_or_default();
     let mut mapper = Mapper::new(name);
     check_version(&mut mapper, &version);
-    let srs_name = head
-        .metadata
-        .as_ref()
-        .and_then(|m| m.reference_system.as_ref())
-        .and_then(reference_system_text);
+    let srs_name = head.metadata.as_ref().and_then(Metadata::srs_name);
     let transform = head.transform;
     let template_list = template_vertices(head.templates.as_ref(), name)?;
     let templates = head.templates.as_ref();

@@ -38,9 +38,7 @@ use crate::io::citygml::read::{Chunk, StreamSummary, Streamed};
 use crate::io::citygml::{ReadError, WriteError};
 use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
 use crate::io::cityjson::map::{real_vertices, Mapper, Vertices};
-use crate::io::cityjson::seq::{
-    check_version, reference_system_text, source_file, template_vertices,
-};
+use crate::io::cityjson::seq::{check_version, source_file, template_vertices};
 use crate::io::cityjson::Error;
 use crate::model::{Asset, AssetKind, Building, CityModel, Warning};
 use glam::DVec3;
@@ -535,11 +533,7 @@ pub(crate) fn stream_prepared<E>(
     passed: &dyn Fn(u64),
     mut each: impl FnMut(Chunk) -> Result<(), E>,
 ) -> Result<StreamSummary, Stop<E>> {
-    let srs_name = p
-        .metadata
-        .as_ref()
-        .and_then(|m| m.reference_system.as_ref())
-        .and_then(reference_system_text);
+    let srs_name = p.metadata.as_ref().and_then(Metadata::srs_name);
     let verts = Vertices {
         list: &p.list,
         templates: p.templates.as_ref(),

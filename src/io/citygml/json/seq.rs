@@ -13,13 +13,11 @@
 
 use super::chunks::{next_chunk, Copied, Input, Stop};
 use super::source::{add_object, FromSource};
-use super::stream::id_hash;
+use super::stream::{id_hash, Counted};
 use crate::io::citygml::read::{Chunk, StreamSummary};
 use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
 use crate::io::cityjson::map::{real_vertices, Mapper, Vertices};
-use crate::io::cityjson::seq::{
-    check_version, model_version, reference_system_text, source_file, template_vertices,
-};
+use crate::io::cityjson::seq::{check_version, model_version, source_file, template_vertices};
 use crate::io::cityjson::Error;
 use serde::de::{Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
@@ -27,7 +25,6 @@ use serde_json::value::RawValue;
 use std::cell::Cell;
 use std::collections::{HashMap, HashSet};
 use std::fmt;
-use std::io::Read;
 use std::path::Path;
 use std::rc::Rc;
 
@@ -71,20 +68,6 @@ impl<'de> Deserialize<'de> for Texts {
             }
         }
         d.deserialize_map(V)
-    }
-}
-
-/// A reader that counts the bytes it gives.
-struct Counted<R> {
-    inner: R,
-    n: Rc<Cell<u64>>,
-}
-
-impl<R: Read> Read for Counted<R> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let k = self.inner.read(buf)?;
-        self.n.set(self.n.get() + k as u64);
-        Ok(k)
     }
 }
 
@@ -164,11 +147,7 @@ pub(super) fn stream_seq<E>(
         _ => return Err(Stop::Declined("not CityJSON".into())),
     };
     let version = head.version.clone().unwrap_or_default();
-    let srs_name = head
-        .metadata
-        .as_ref()
-        .and_then(|m| m.reference_system.as_ref())
-        .and_then(reference_system_text);
+    let srs_name = head.metadata.as_ref().and_then(Metadata::srs_name);
     let transform = head.transform;
     let kept = head.templates.take();
     let templates = kept.as_ref();

@@ -185,10 +185,11 @@ impl Vertex {
     }
 }
 
-/// A reader that counts the bytes it gives.
-struct Counted<R> {
-    inner: R,
-    n: Rc<Cell<u64>>,
+/// A reader that counts the bytes it gives (the document's passes here, the lines of a
+/// CityJSONSeq in `seq`).
+pub(super) struct Counted<R> {
+    pub(super) inner: R,
+    pub(super) n: Rc<Cell<u64>>,
 }
 
 impl<R: Read> Read for Counted<R> {
