@@ -5,8 +5,8 @@ use super::PoiCrsError;
 use crate::lod::poi::checks::extent::distance_to_box;
 use crate::lod::poi::{check_poi, check_poi_list, checks};
 use crate::model::crs::{build_transform, model_crs, Crs, CrsKind, LocalFrame, PointTransform};
-use crate::model::CityModel;
 use crate::model::Poi;
+use crate::model::{Bbox, CityModel};
 use glam::DVec3;
 use std::borrow::Cow;
 
@@ -56,6 +56,8 @@ pub struct Framed<'a> {
     /// The frame's warning (no CRS, an unknown one, ...), structured; its text is the last
     /// of [`Framed::warnings`].
     pub frame_warning: Option<crate::model::crs::FrameWarning>,
+    /// The box of [`Framed::source`] ([`CityModel::bbox`]): every point as read.
+    pub source_bbox: Bbox,
 }
 
 /// Check `pois` ([`check_poi_list`]: finite, non-zero normals, unique ids), apply
@@ -67,6 +69,20 @@ pub struct Framed<'a> {
 /// [`Error::Trust`].
 pub fn frame<'a>(
     model: &'a mut CityModel,
+    pois: Vec<Poi>,
+    opts: &FrameOptions,
+) -> Result<Framed<'a>, Error> {
+    frame_in(model, None, pois, opts)
+}
+
+/// [`frame`] of a model whose box ([`CityModel::bbox`]) is `bbox` when given (the
+/// caller has it already: a city's points are not walked again).
+///
+/// # Errors
+/// As [`frame`].
+pub(crate) fn frame_in<'a>(
+    model: &'a mut CityModel,
+    bbox: Option<Bbox>,
     pois: Vec<Poi>,
     opts: &FrameOptions,
 ) -> Result<Framed<'a>, Error> {
@@ -94,8 +110,8 @@ pub fn frame<'a>(
         ));
     }
     // every point of a city: one pass for the frame and the POI check (and none more when
-    // the frame is the identity)
-    let source_bbox = source.bbox();
+    // the frame is the identity), or none when the caller has the box
+    let source_bbox = bbox.unwrap_or_else(|| source.bbox());
     let (frame, warning) = LocalFrame::new(&crs, &source_bbox);
     warnings.extend(warning.as_ref().map(|w| w.to_string()));
     let note = (!frame.is_identity()).then(|| format!("{crs}: tracing in {}", frame.describe()));
@@ -155,6 +171,7 @@ pub fn frame<'a>(
         warnings,
         note,
         frame_warning: warning,
+        source_bbox,
     })
 }
 

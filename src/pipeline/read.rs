@@ -5,7 +5,7 @@ use crate::io::citygml::source::resolve;
 use crate::io::citygml::{ReadError, ReadOptions};
 use crate::lod::poi::checks::{self, TrustError};
 use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
-use crate::model::{CityModel, Source};
+use crate::model::{Bbox, CityModel, Source};
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -47,10 +47,22 @@ impl Inputs {
 /// # Errors
 /// [`TrustError`].
 pub fn check_model(model: &CityModel, allow_mixed_crs: bool) -> Result<(), TrustError> {
+    check_model_in(model, &model.bbox(), allow_mixed_crs)
+}
+
+/// [`check_model`] of a model whose box ([`CityModel::bbox`]) is `bbox`.
+///
+/// # Errors
+/// [`TrustError`].
+pub(crate) fn check_model_in(
+    model: &CityModel,
+    bbox: &Bbox,
+    allow_mixed_crs: bool,
+) -> Result<(), TrustError> {
     if !allow_mixed_crs {
         checks::check_same_crs(model)?;
     }
-    checks::check_heights(model)
+    checks::check_heights_in(model, bbox)
 }
 
 /// Read `paths` in parallel ([`Stage::Read`]: files and bytes) and merge them in input

@@ -47,7 +47,7 @@ pub use name::CrsName;
 pub use parse::{same_crs, srs_key, Crs, CrsKind, Ellipsoid};
 #[cfg(feature = "proj")]
 pub use proj_transform::ProjTransform;
-pub use site::{lat_lon, model_site, utm_zone, ModelSite, NoSite};
+pub use site::{box_site, lat_lon, model_site, utm_zone, ModelSite, NoSite};
 
 /// The CRS of a model: `override_crs` (`--source-crs`) when given, otherwise the first
 /// `srsName` of its files (an empty name when none has one, i.e. unknown).

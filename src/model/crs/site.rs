@@ -74,7 +74,15 @@ pub struct NoSite {
 /// # Errors
 /// [`NoSite`] for an empty model or a CRS the build does not convert.
 pub fn model_site(model: &crate::model::CityModel, crs: &Crs) -> Result<ModelSite, NoSite> {
-    let bbox = model.bbox();
+    box_site(&model.bbox(), crs)
+}
+
+/// [`model_site`] of a model whose box (every point of every asset,
+/// [`crate::model::CityModel::bbox`]) is `bbox`, for a caller that has it already.
+///
+/// # Errors
+/// As [`model_site`].
+pub fn box_site(bbox: &crate::model::Bbox, crs: &Crs) -> Result<ModelSite, NoSite> {
     let no = || NoSite {
         crs: (!crs.name.is_empty()).then(|| crs.name.clone()),
     };

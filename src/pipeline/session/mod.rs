@@ -36,13 +36,13 @@ use crate::io::citygml::ReadError;
 use crate::lod::evaluation::Evaluation;
 use crate::lod::poi::checks::TrustError;
 use crate::lod::scene::full_scene;
-use crate::model::crs::{model_site, Crs, LocalFrame, ModelSite};
+use crate::model::crs::{box_site, Crs, LocalFrame, ModelSite};
 use crate::model::runtime::progress::{check, Progress, Stage};
-use crate::model::{CityModel, Poi, Source};
+use crate::model::{Bbox, CityModel, Poi, Source};
 use crate::pipeline::batch::inputs::{expand, Input};
 use crate::pipeline::batch::outputs::{create_parent, plan, Plan};
-use crate::pipeline::{check_model, PoiIrradiance, Traced, Written};
-use crate::pipeline::{evaluate, frame, horizon, levels, read_inputs, read_sources};
+use crate::pipeline::{check_model_in, PoiIrradiance, Traced, Written};
+use crate::pipeline::{evaluate, frame_in, horizon, levels, read_inputs, read_sources};
 use crate::pipeline::{trace_in, write_all};
 use crate::pipeline::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsOptions};
 use crate::solar::irradiance::{IrradianceOptions, IrradianceTable};
@@ -51,6 +51,7 @@ use crate::solar::{Site, SkyBundles, SkyView, SunHours, SunTable, DEFAULT_STEP_M
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
+use weather::SunSite;
 
 /// How a [`Scene`] is read and framed.
 #[derive(Debug, Clone)]
@@ -132,6 +133,9 @@ impl SceneOptions {
 pub struct Scene {
     inputs: Vec<Input>,
     model: CityModel,
+    /// The model's box ([`CityModel::bbox`]), taken once for the checks, the frame and the
+    /// sun's site.
+    bbox: Bbox,
     failures: Vec<ReadError>,
     options: SceneOptions,
     read_s: f64,
@@ -223,6 +227,7 @@ impl Scene {
             .collect();
         Scene {
             inputs,
+            bbox: read.model.bbox(),
             model: read.model,
             failures: read.failures,
             options: options.clone(),
@@ -243,7 +248,8 @@ impl Scene {
             }
             .into());
         }
-        Ok(check_model(&self.model, self.options.allow_mixed_crs)?)
+        let mixed = self.options.allow_mixed_crs;
+        Ok(check_model_in(&self.model, &self.bbox, mixed)?)
     }
 
     /// Seconds spent reading the inputs.
@@ -275,11 +281,12 @@ impl Scene {
         let Scene {
             inputs,
             mut model,
+            bbox,
             failures,
             options,
             read_s,
         } = self;
-        let f = frame(&mut model, pois, &options.frame)?;
+        let f = frame_in(&mut model, Some(bbox), pois, &options.frame)?;
         let local = match f.model {
             Cow::Owned(m) => Some(m),
             Cow::Borrowed(_) => None,
@@ -288,6 +295,7 @@ impl Scene {
         let (warnings, note, frame_warning) = (f.warnings, f.note, f.frame_warning);
         Ok(Study {
             inputs,
+            bbox: f.source_bbox,
             source: model,
             local,
             crs,
@@ -311,6 +319,8 @@ impl Scene {
 pub struct Study {
     inputs: Vec<Input>,
     source: CityModel,
+    /// The source's box ([`CityModel::bbox`]).
+    bbox: Bbox,
     local: Option<CityModel>,
     crs: Crs,
     frame: LocalFrame,
@@ -338,6 +348,7 @@ impl Study {
             warnings: self.warnings.clone(),
             note: self.note.clone(),
             frame_warning: self.frame_warning.clone(),
+            source_bbox: self.bbox,
         }
     }
 
@@ -396,7 +407,21 @@ impl Study {
     /// # Errors
     /// [`Error::Site`] for an empty model or a CRS the build does not convert.
     pub fn site(&self) -> Result<ModelSite> {
-        Ok(model_site(&self.source, &self.crs)?)
+        Ok(box_site(&self.bbox, &self.crs)?)
+    }
+
+    /// The sun's site as [`site::site_of`] gives it for [`Study::source`] (the `lat`, `lon`
+    /// given, else the centre of the model in its own CRS), from the box the scene took when
+    /// it was read.
+    ///
+    /// # Errors
+    /// As [`site::site_of`].
+    pub fn sun_site(
+        &self,
+        lat: Option<f64>,
+        lon: Option<f64>,
+    ) -> std::result::Result<SunSite, site::SiteError> {
+        site::site_in(lat, lon, &self.source, &self.bbox)
     }
 
     /// Levels of every asset ([`crate::pipeline::levels`]).

@@ -4,9 +4,10 @@
 
 use super::weather::SunSite;
 use crate::io::citygml::read::{stream_citygml, ReadOptions};
-use crate::io::citygml::source::{self, Document};
-use crate::model::crs::{model_crs, model_site, NoSite};
-use crate::model::CityModel;
+use crate::io::citygml::source;
+use crate::io::files::is_gzip;
+use crate::model::crs::{box_site, model_crs, model_site, NoSite};
+use crate::model::{Bbox, CityModel};
 use std::path::Path;
 
 /// Why a site cannot be used. The caller names its own options in what it says.
@@ -63,10 +64,34 @@ pub fn site_of(
     lon: Option<f64>,
     model: &CityModel,
 ) -> Result<SunSite, SiteError> {
+    site_from(lat, lon, model, || model.bbox())
+}
+
+/// [`site_of`] of a model whose box ([`CityModel::bbox`]) is `bbox`, for a caller that has
+/// it already ([`super::Study::sun_site`]).
+///
+/// # Errors
+/// As [`site_of`].
+pub fn site_in(
+    lat: Option<f64>,
+    lon: Option<f64>,
+    model: &CityModel,
+    bbox: &Bbox,
+) -> Result<SunSite, SiteError> {
+    site_from(lat, lon, model, || *bbox)
+}
+
+/// [`site_of`] with the model's box from `bbox`, taken only when no site is given.
+fn site_from(
+    lat: Option<f64>,
+    lon: Option<f64>,
+    model: &CityModel,
+    bbox: impl FnOnce() -> Bbox,
+) -> Result<SunSite, SiteError> {
     if let Some((a, o)) = given_site(lat, lon, true)? {
         return Ok(SunSite::Given(a, o));
     }
-    let s = model_site(model, &model_crs(model, None))?;
+    let s = box_site(&bbox(), &model_crs(model, None))?;
     Ok(SunSite::Model(s.lat, s.lon, s.crs.name))
 }
 
@@ -88,9 +113,13 @@ pub fn site_hint(lat: Option<f64>, lon: Option<f64>, first: Option<&Path>) -> Op
     if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
         return None;
     }
-    match source::load(path) {
-        Ok(Document::Plain(doc)) if !source::is_json(&doc) => {}
-        _ => return None,
+    // Plain CityGML only, told from the first bytes (the stream maps the file itself): a
+    // gzip file would be decompressed whole before its first chunk, and CityJSON is not
+    // streamed.
+    let mut file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
+    let head = std::io::BufRead::fill_buf(&mut file).ok()?;
+    if is_gzip(head) || source::is_json(head) {
+        return None;
     }
     let mut head = None;
     let opts = ReadOptions::default();
@@ -213,6 +242,9 @@ mod tests {
         std::io::Write::write_all(&mut enc, &bytes).unwrap();
         std::fs::write(&gz, enc.finish().unwrap()).unwrap();
         assert_eq!(site_hint(None, None, Some(&gz)), None);
+        let json = dir.path().join("x.city.json");
+        std::fs::write(&json, " {\"type\": \"CityJSON\", \"CityObjects\": {}}").unwrap();
+        assert_eq!(site_hint(None, None, Some(&json)), None);
         assert_eq!(site_hint(None, None, Some(dir.path())), None);
         assert_eq!(
             site_hint(None, None, Some(&dir.path().join("none.gml"))),

@@ -9,10 +9,9 @@ use crate::args::sun::SunArgs;
 use crate::args::weather::WeatherArgs;
 use anyhow::{anyhow, bail};
 use skylod::export::report::report::Guarantee;
-use skylod::model::CityModel;
 use skylod::pipeline::session::bound_plan::BoundRequest;
 use skylod::pipeline::session::flags::site_text;
-use skylod::pipeline::session::site::site_of;
+use skylod::pipeline::session::Study;
 use skylod::pipeline::BoundSpec;
 use skylod::solar::ephemeris::SunEphemeris;
 
@@ -86,16 +85,17 @@ impl BoundArgs {
     }
 
     /// The bound to run after the selection ([`skylod::pipeline::session::bound_plan`]) and what it
-    /// guarantees; `source` (the model as read) gives the sun's site, `ahead` (from
-    /// [`BoundArgs::ephemeris`]) the site-independent half of the sun's table.
+    /// guarantees; `study`'s model as read gives the sun's site ([`Study::sun_site`]), `ahead`
+    /// (from [`BoundArgs::ephemeris`]) the site-independent half of the sun's table.
     pub fn spec(
         &self,
-        source: &CityModel,
+        study: &Study,
         seed: u64,
         ahead: Option<&SunEphemeris>,
     ) -> anyhow::Result<(Option<BoundSpec>, Guarantee)> {
         let r = self.request(seed);
-        let site = site_of(self.site.lat, self.site.lon, source);
+        let source = study.source();
+        let site = study.sun_site(self.site.lat, self.site.lon);
         let plan = r
             .plan(site)
             .map_err(|e| anyhow!(site_text(&e, "lod --max-sun-hours-error")))?;

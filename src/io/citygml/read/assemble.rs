@@ -53,16 +53,19 @@ impl Parser<'_> {
                 .max_href_work
                 .saturating_add(self.parts.len().saturating_mul(4)),
         };
+        // one buffer to resolve into, each geometry's list then allocated at its length
+        let mut out = Vec::new();
         for pg in &pending {
-            let mut out = Vec::new();
+            out.clear();
             self.resolve(pg.range, false, 0, None, &mut out, &mut walk)?;
             for r in &out {
                 if let Some(u) = uses.get_mut(r.poly as usize) {
                     *u += 1;
                 }
             }
-            refs.push(out);
+            refs.push(out.as_slice().to_vec());
         }
+        drop(out);
         let mut polys = std::mem::take(&mut self.polys);
         // Last geometry first: the arena is consumed from its end, and what no reference
         // needs any more is given back as the model's geometry grows (a city's polygons are

@@ -105,10 +105,15 @@ pub(super) fn read_split(
     head.expect_bytes(part_bytes);
     // the parts' resident bytes together as the serial read's
     let step = (RELEASE_STEP / ranges.len() as u64).max(4 << 20);
+    // what a part's thread allocates, about (the paper district: 22 MB of its arena for a
+    // 62 MB part), made writable in a few steps ahead of the parse
+    let heap = usize::try_from(part_bytes / 2).unwrap_or(usize::MAX);
+    let reserve = move || crate::model::runtime::mem::reserve_heap(heap);
 
     let first = ranges[0];
     let (first, rest) = rayon::join(
         move || {
+            reserve();
             // the first part continues the parser that read the root's start tag
             *reader.get_mut() = body.get(first.0..first.1)?;
             let mut saw_root = true;
@@ -130,6 +135,7 @@ pub(super) fn read_split(
                 .par_iter()
                 .map(|&(from, to)| {
                     let from_doc = (from + bom) as u64;
+                    reserve();
                     let mut p = Parser::new(path, opts.clone(), doc);
                     p.expect_bytes(part_bytes);
                     let mut reader = start_root(&mut p, prolog, bom as u64, RELEASE_STEP)?;

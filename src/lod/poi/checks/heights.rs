@@ -18,11 +18,16 @@
 //! ```
 
 use super::TrustError;
-use crate::model::CityModel;
+use crate::model::{Bbox, CityModel};
 
 /// Refuse a model whose geometry spans no height at all (within a millimetre).
 pub fn check_heights(model: &CityModel) -> Result<(), TrustError> {
-    let bbox = model.bbox();
+    check_heights_in(model, &model.bbox())
+}
+
+/// [`check_heights`] of a model whose box ([`CityModel::bbox`]) is `bbox`, for a caller that
+/// has it already.
+pub fn check_heights_in(model: &CityModel, bbox: &Bbox) -> Result<(), TrustError> {
     if bbox.is_empty() || bbox.max.z - bbox.min.z > 1e-3 {
         return Ok(());
     }

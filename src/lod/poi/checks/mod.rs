@@ -24,7 +24,7 @@ pub use extent::{
     check_lat_lon_order, check_pois_near, check_pois_near_in_frame, FarPoi, OutsideHint,
     PoisOutside, DEFAULT_POI_MARGIN,
 };
-pub use heights::check_heights;
+pub use heights::{check_heights, check_heights_in};
 pub use same_crs::check_same_crs;
 pub use surroundings::Surroundings;
 

@@ -93,9 +93,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     };
     let session = args.pois.study(scene, pois, None, spool, "lod")?;
     let study = &session.study;
-    let (bound, guarantee) = args
-        .bound
-        .spec(study.source(), lod.select.seed, ahead.as_ref())?;
+    let (bound, guarantee) = args.bound.spec(study, lod.select.seed, ahead.as_ref())?;
     let opts = LevelsOptions { lod, bound };
     let progress = crate::log::reporter();
     let lv = match combined {
