@@ -508,6 +508,31 @@ mod tests {
         (path, small)
     }
 
+    /// [`six_blocks`] read whole, two of its POIs, and read hollow in chunks of
+    /// `chunk_bytes` with the POIs' surroundings kept ([`near_pois`]).
+    fn six_read(
+        dir: &Path,
+        chunk_bytes: u64,
+    ) -> (
+        std::path::PathBuf,
+        CityModel,
+        Vec<crate::model::Poi>,
+        Hollow,
+    ) {
+        let (path, small) = six_blocks(dir);
+        let whole = read_file(&path).unwrap();
+        let pois: Vec<crate::model::Poi> = (crate::model::synth::pois(&small).into_iter())
+            .take(2)
+            .map(Into::into)
+            .collect();
+        let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+        let read = ReadOptions::default();
+        let passes = Passes::new(&read, chunk_bytes, &|_, _| {});
+        let rough = RoughOptions::default();
+        let h = read_hollow(&path, &passes, &rough, &near_pois(&points)).unwrap();
+        (path, whole, pois, h)
+    }
+
     /// Every asset of a hollow read in small chunks read back ([`Hollow::read_back`]), some
     /// at a time and all at once, is the whole read's.
     #[test]
@@ -589,6 +614,48 @@ mod tests {
         assert!(held > 0);
     }
 
+    /// The error bound on a hollow read, its assets read back by span
+    /// ([`crate::lod::bound::HollowSource`]), is the whole read's: levels, promotions, each
+    /// POI's figures and the reference, with the lazy reference and with the whole one.
+    #[test]
+    fn the_bound_on_a_hollow_read_is_the_whole_reads() {
+        use crate::lod::bound::HollowSource;
+        use crate::lod::bound::{bound, bound_against_from, full_answers_from, BoundOptions};
+        use crate::lod::{lod_hollow, lod_with, LodOptions};
+        use crate::model::runtime::progress::Silent;
+        let dir = tempfile::tempdir().unwrap();
+        let (path, whole, pois, h) = six_read(dir.path(), 1 << 16);
+        let (opts, read) = (LodOptions::default(), ReadOptions::default());
+        let rr = Reread::open(&path, &read).unwrap();
+        let w = lod_with(&whole, &pois, &opts, &Silent).unwrap();
+        let l = lod_hollow(&h, &pois, &opts, &Silent).unwrap();
+        let site = crate::solar::Site::new(48.76, 11.42);
+        let sun = crate::solar::SunTable::year(2025, 120, &site).unwrap();
+        let mut whole_ref = Vec::new();
+        for rays in [1000, 200_000] {
+            let b = BoundOptions {
+                max_svf_error: Some(0.0005),
+                max_sun_error: Some(0.0005),
+                svf_rays: rays,
+                ..Default::default()
+            };
+            let levels = &w.selection.levels;
+            let want = bound(&whole, &w.rough, levels, &pois, &b, Some(&sun)).unwrap();
+            let src = HollowSource::new(&h, &rr);
+            let full = full_answers_from(&src, &pois, &b, Some(&sun), None).unwrap();
+            let got = bound_against_from(&src, &l.rough, &l.selection.levels, &full).unwrap();
+            assert!(!want.promotions.is_empty(), "{rays} rays: {want:?}");
+            assert_eq!(got, want, "{rays} rays");
+            let n = whole.assets.len();
+            assert!(src.read_back() > 0, "{rays} rays");
+            whole_ref.push(want.reference.whole);
+            if !want.reference.whole {
+                assert!(want.reference.assets < n, "{:?}", want.reference);
+            }
+        }
+        assert_eq!(whole_ref, [false, true]);
+    }
+
     /// The selection of `lod` on a hollow read ([`crate::lod::lod_hollow`]) is the whole
     /// read's: levels, hits, each POI's figures and flags, the selection scene.
     #[test]
@@ -597,17 +664,8 @@ mod tests {
         use crate::model::runtime::progress::Silent;
         // six blocks of the small preset, the first block's POIs
         let dir = tempfile::tempdir().unwrap();
-        let (path, small) = six_blocks(dir.path());
-        let whole = read_file(&path).unwrap();
-        let pois: Vec<crate::model::Poi> = (crate::model::synth::pois(&small).into_iter())
-            .take(2)
-            .map(Into::into)
-            .collect();
-        let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+        let (_, whole, pois, h) = six_read(dir.path(), 1);
         let opts = LodOptions::default();
-        let read = ReadOptions::default();
-        let passes = Passes::new(&read, 1, &|_, _| {});
-        let h = read_hollow(&path, &passes, &opts.rough, &near_pois(&points)).unwrap();
         assert!(h.kept.iter().any(|&k| !k));
         let want = lod_with(&whole, &pois, &opts, &Silent).unwrap();
         let mut got = lod_hollow(&h, &pois, &opts, &Silent).unwrap();

@@ -492,6 +492,11 @@ impl Reread {
         })
     }
 
+    /// The document's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
     /// The document's bytes after the byte-order mark.
     fn body(&self) -> &[u8] {
         self.doc.get(self.bom..).unwrap_or(&[])
