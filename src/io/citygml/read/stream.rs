@@ -332,12 +332,7 @@ pub fn stream_citygml<E>(
             next_cut(body, at).unwrap_or(body.len())
         };
         let last = to == body.len();
-        let start_at = ChunkStart {
-            from,
-            to,
-            first,
-            state: std::sync::Arc::new(state.clone()),
-        };
+        let before = (!first).then(|| std::sync::Arc::new(state.clone()));
         let Some(p) = parse_chunk(&doc, bom, prolog, from, to, first, &state, path, opts) else {
             return decline("a chunk that does not read alone");
         };
@@ -345,6 +340,13 @@ pub fn stream_citygml<E>(
             return decline("a chunk that does not end between members");
         }
         state.absorb(&p);
+        // the first chunk's members are read again after the root's start tag, as the
+        // others, with the state after it (what they read of it is the root's)
+        let start_at = ChunkStart {
+            from: start,
+            to,
+            state: before.unwrap_or_else(|| std::sync::Arc::new(state.clone())),
+        };
         if first && p.root_is_model && !p.env_owners.iter().any(|o| matches!(o, EnvOwner::Root)) {
             sum.trailing.push(Warning {
                 file: p.shared_path.clone(),
@@ -435,10 +437,9 @@ pub fn stream_citygml<E>(
 /// the serial read stands in there, to parse the chunk, or some of its members, again.
 #[derive(Clone)]
 pub struct ChunkStart {
-    /// Body offsets of the chunk (the first chunk's `from` is 0: it is read from the prolog).
+    /// Body offsets of the chunk (the first chunk's from the root's start tag on).
     from: usize,
     to: usize,
-    first: bool,
     state: std::sync::Arc<DocState>,
 }
 
@@ -508,11 +509,7 @@ impl Reread {
     pub fn members(&self, start: &ChunkStart, span: std::ops::Range<u64>) -> std::ops::Range<u64> {
         const NAME: &[u8] = b"cityObjectMember>";
         let body = self.body();
-        let lo = if start.first {
-            self.root_end
-        } else {
-            start.from
-        };
+        let lo = start.from;
         let hi = start.to.min(body.len());
         let at = |x: u64| {
             usize::try_from(x)
@@ -537,9 +534,9 @@ impl Reread {
     }
 
     /// Chunk `start` parsed again, or only its members in `range` (document offsets from
-    /// [`Reread::members`]; the first chunk's are read from the prolog on, with the members
-    /// before them): the model a stream makes of them. `None` where they do not read alone
-    /// (e.g. a reference to another member of the chunk).
+    /// [`Reread::members`]): the model a stream makes of them, but for warnings and lines.
+    /// `None` where they do not read alone (e.g. a reference to another member of the
+    /// chunk). The pages of the document read are given back after.
     pub fn parse(
         &self,
         start: &ChunkStart,
@@ -553,7 +550,6 @@ impl Reread {
         };
         let (from, to) = match range {
             None => (start.from, start.to),
-            Some(r) if start.first => (0, at(r.end)),
             Some(r) => (at(r.start), at(r.end)),
         };
         if from > to || to > body.len() {
@@ -561,11 +557,12 @@ impl Reread {
         }
         let prolog = body.get(..self.root_end)?;
         let (doc, bom) = (&self.doc[..], self.bom);
-        let first = start.first;
         let state = &start.state;
-        let mut p = parse_chunk(
-            doc, bom, prolog, from, to, first, state, &self.path, &self.opts,
-        )?;
+        let p = parse_chunk(
+            doc, bom, prolog, from, to, false, state, &self.path, &self.opts,
+        );
+        self.doc.release_range(from + bom, to + bom);
+        let mut p = p?;
         if p.stack.len() != usize::from(to != body.len()) {
             return None;
         }
