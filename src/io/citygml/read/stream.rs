@@ -557,11 +557,24 @@ impl Reread {
         }
         let prolog = body.get(..self.root_end)?;
         let (doc, bom) = (&self.doc[..], self.bom);
-        let state = &start.state;
-        let p = parse_chunk(
-            doc, bom, prolog, from, to, false, state, &self.path, &self.opts,
-        );
-        self.doc.release_range(from + bom, to + bom);
+        // lines counted from the members on, not from the chunk's start: a member's lines
+        // are not the serial read's, its geometry is
+        let at_from = (from + bom) as u64;
+        let state = DocState {
+            line: LineMark {
+                line: 1,
+                line_start: at_from,
+                counted_to: at_from,
+            },
+            ..(*start.state).clone()
+        };
+        let (path, opts) = (&self.path, &self.opts);
+        let p = parse_chunk(doc, bom, prolog, from, to, false, &state, path, opts);
+        // whole pages around the members (their neighbours' are read again if needed): the
+        // map keeps no page of what is read back
+        const PAGE: usize = 64 << 10;
+        let around = ((from + bom) / PAGE * PAGE, (to + bom).div_ceil(PAGE) * PAGE);
+        self.doc.release_range(around.0, around.1);
         let mut p = p?;
         if p.stack.len() != usize::from(to != body.len()) {
             return None;
