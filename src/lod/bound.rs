@@ -33,6 +33,8 @@
 //! POIs on a small model), the rounds would cost more than the BVH they avoid, and the whole
 //! model is built at once, as before ([`Reference::whole`]). Measured (BENCHMARKS.md, "The
 //! default error bound"): on the paper district, the 6 POIs' rays reach 2,500 of 57,530 assets.
+//! The full model is a [`FullSource`]: the whole model, or a document read hollow whose
+//! assets are read back by span as the rounds and the LoD scene need them ([`HollowSource`]).
 //!
 //! **Two halves.** The full model's answers depend on the POIs, the rays and the model, not
 //! on the levels: [`full_answers`] makes them ([`FullAnswers`]) and [`bound_against`] checks

@@ -44,11 +44,30 @@
 //! come from the read, and the full geometry it looks at (the assets whose rough box holds a
 //! POI, the buildings whose box holds one: [`near_pois`]) is kept.
 //!
-//! What is not done yet (issue 22): `lod` itself still reads whole. The stages after the
-//! selection (the bound's lazy reference, the writers, the report) and the frame's checks
-//! take the model's polygons; each must take the facts computed here instead, or the
-//! polygons of the few assets it needs read back by span, before the command can run on a
-//! [`Hollow`].
+//! **Reading back.** A chunk records where it starts ([`ChunkStart`]: its bytes and the state
+//! the serial read stands in there) and each asset the chunk it was read in; so the full
+//! geometry of any assets can be parsed again from the document ([`Hollow::read_back`] through
+//! [`Reread`]): the top-level members that hold them (found from their top-level building's
+//! byte span), a chunk's members next to each other in one parse, chunks in parallel, each
+//! member parsed with the reader of the stream seeded with its chunk's state (the first
+//! chunk's: the state after it), the pages read given back. Lines are counted from the
+//! members on (an asset read back keeps the hollow model's metadata, so its lines; only its
+//! geometry is taken from the parse, found by span). Members that do not read alone (a
+//! reference to another member of the chunk) are read with their whole chunk.
+//!
+//! The error bound runs on it ([`crate::lod::bound::HollowSource`]): its reference reads back
+//! the assets near the rays round by round, its LoD scene the assets above level 0; the
+//! frame of the reference is [`Hollow::frame`], the whole model's, so every answer is the
+//! whole model's to the bit. Measured (BENCHMARKS.md, "Reading back for the bound"): on the
+//! benchmark files (one street repeated at the same place) the reference reaches every
+//! copy's assets near the rays, and parsing their members again costs about what the bound's
+//! whole-model side costs in all (1 GB: +3.6 s of wall time against 1.5 s); see there for what
+//! that means for tracing the reference per chunk instead.
+//!
+//! What is not done yet (issue 22): `lod` itself still reads whole. The frame's checks, the
+//! report and the writers take the model's polygons; each must take the facts computed here,
+//! or the polygons of the assets it needs read back ([`Hollow::read_back`]), before the
+//! command can run on a [`Hollow`].
 
 use crate::io::citygml::read::{Chunk, ChunkStart, Passes, Reread, StreamSummary};
 use crate::lod::level::{polygon_count_of, rough_is_own};
