@@ -60,9 +60,9 @@
 //! frame of the reference is [`Hollow::frame`], the whole model's, so every answer is the
 //! whole model's to the bit. Measured (BENCHMARKS.md, "Reading back for the bound"): on the
 //! benchmark files (one street repeated at the same place) the reference reaches every
-//! copy's assets near the rays, and parsing their members again costs about what the bound's
-//! whole-model side costs in all (1 GB: +3.6 s of wall time against 1.5 s); see there for what
-//! that means for tracing the reference per chunk instead.
+//! copy's assets near the rays, and parsing their members again costs several times the
+//! whole model's reference (1 GB: 5.3 s of wall time against 1.1 s; 4 GB: 30 s against 6.4 s);
+//! see there for what that means for tracing the reference per chunk instead.
 //!
 //! What is not done yet (issue 22): `lod` itself still reads whole. The frame's checks, the
 //! report and the writers take the model's polygons; each must take the facts computed here,
