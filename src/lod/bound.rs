@@ -33,6 +33,8 @@
 //! POIs on a small model), the rounds would cost more than the BVH they avoid, and the whole
 //! model is built at once, as before ([`Reference::whole`]). Measured (BENCHMARKS.md, "The
 //! default error bound"): on the paper district, the 6 POIs' rays reach 2,500 of 57,530 assets.
+//! The full model is a [`FullSource`]: the whole model, or a document read hollow whose
+//! assets are read back by span as the rounds and the LoD scene need them ([`HollowSource`]).
 //!
 //! **Two halves.** The full model's answers depend on the POIs, the rays and the model, not
 //! on the levels: [`full_answers`] makes them ([`FullAnswers`]) and [`bound_against`] checks
@@ -86,7 +88,6 @@
 
 use crate::lod::poi::{Poi, POI_OFFSET};
 use crate::lod::rough::RoughGeometry;
-use crate::lod::scene::{detail_boxes, full_scene, full_scene_part, mixed_scene};
 use crate::model::{Bbox, CityModel};
 use crate::solar::irradiance::{IrradianceSetting, PlaneRays};
 use crate::solar::sky::{Frame, SkyError};
@@ -99,6 +100,9 @@ use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use super::bound_report::{BoundReport, PoiBound, Promotion};
+pub use source::{FullSource, HollowSource};
+
+mod source;
 
 /// Options of [`bound`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -157,6 +161,14 @@ pub enum BoundError {
         levels: usize,
         /// Rough geometries given.
         rough: usize,
+    },
+    /// The full geometry of assets of a document read hollow could not be read back from it.
+    #[error("{}: the full geometry of {assets} asset(s) could not be read back", path.display())]
+    ReadBack {
+        /// The document.
+        path: std::path::PathBuf,
+        /// Assets asked for.
+        assets: usize,
     },
 }
 
@@ -289,35 +301,31 @@ const UNCAPPED_ROUND: u32 = 4;
 /// First-hit tags of every ray of every probe in the full model, as [`tags`] on
 /// [`crate::lod::scene::full_scene`] gives them, from a scene built only of the assets the
 /// rays can reach (see [`full_tags`] in the module docs, "Reference").
+#[allow(clippy::type_complexity)]
 fn full_tags(
-    model: &CityModel,
+    src: &dyn FullSource,
     probes: &[Probe],
     boxes: &AssetBoxes,
-) -> (Vec<Vec<Option<u32>>>, Reference) {
+) -> Result<(Vec<Vec<Option<u32>>>, Reference), BoundError> {
     let rays: usize = probes.iter().map(Probe::len).sum();
-    let polygons: usize = model.assets.iter().map(|a| a.detail_polygons().len()).sum();
+    let (polygons, of) = src.detail_polygons();
     if rays > polygons {
         // many rays, a small model: the lazy rounds would cost more than the whole BVH
-        let whole = full_scene(model);
-        let of = model
-            .assets
-            .iter()
-            .filter(|a| !a.detail_polygons().is_empty())
-            .count();
+        let whole = source::full_part(src, None, None)?;
         let reference = Reference {
             assets: of,
             of,
             rounds: 1,
             whole: true,
         };
-        return (probes.iter().map(|p| tags(&whole, p)).collect(), reference);
+        return Ok((probes.iter().map(|p| tags(&whole, p)).collect(), reference));
     }
-    let (hits, reference) = lazy_hits_with(model, probes, boxes, SEED_BOXES);
+    let (hits, reference) = lazy_hits_with(src, probes, boxes, SEED_BOXES)?;
     let tags = hits
         .into_iter()
         .map(|v| v.into_iter().map(|h| h.map(|h| h.0)).collect())
         .collect();
-    (tags, reference)
+    Ok((tags, reference))
 }
 
 /// Boxes per ray looked up before the first round: the [`SEED_BOXES`] nearest ones
@@ -333,7 +341,7 @@ const SEED_BOXES: usize = 4;
 #[allow(clippy::type_complexity)]
 #[cfg(test)]
 fn lazy_hits(model: &CityModel, probes: &[Probe]) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
-    lazy_hits_with(model, probes, &AssetBoxes::new(model), SEED_BOXES)
+    lazy_hits_with(model, probes, &AssetBoxes::new(model), SEED_BOXES).unwrap_or_default()
 }
 
 /// The boxes of the lazy reference: per asset the box of its full-detail polygons
@@ -348,8 +356,8 @@ struct AssetBoxes {
 }
 
 impl AssetBoxes {
-    fn new(model: &CityModel) -> AssetBoxes {
-        let (boxes, frame) = detail_boxes(model);
+    fn new(src: &dyn FullSource) -> AssetBoxes {
+        let (boxes, frame) = src.detail_boxes();
         let of = boxes.iter().filter(|b| !b.is_empty()).count();
         // Far above the f32 rounding of the scene (its node growth): a triangle's hit
         // point lies inside its asset's grown box.
@@ -373,11 +381,11 @@ impl AssetBoxes {
 /// its triangles by asset and breaks ties of the f32 distance by that order.
 #[allow(clippy::type_complexity)]
 fn lazy_hits_with(
-    model: &CityModel,
+    src: &dyn FullSource,
     probes: &[Probe],
     boxes: &AssetBoxes,
     seed_boxes: usize,
-) -> (Vec<Vec<Option<(u32, f64)>>>, Reference) {
+) -> Result<(Vec<Vec<Option<(u32, f64)>>>, Reference), BoundError> {
     let seed_boxes = seed_boxes.max(1);
     let mut out: Vec<Vec<Option<(u32, f64)>>> =
         probes.iter().map(|p| vec![None; p.len()]).collect();
@@ -386,7 +394,7 @@ fn lazy_hits_with(
         ..Default::default()
     };
     let (Some(index), frame, margin) = (&boxes.index, boxes.frame, boxes.margin) else {
-        return (out, reference);
+        return Ok((out, reference));
     };
     let rays: Vec<(u32, u32)> = probes
         .iter()
@@ -394,7 +402,7 @@ fn lazy_hits_with(
         .flat_map(|(k, p)| (0..p.len()).map(move |j| (k as u32, j as u32)))
         .collect();
     // seed: the nearest boxes of every ray, all built in the first round
-    let seeded: Vec<AtomicBool> = (0..model.assets.len())
+    let seeded: Vec<AtomicBool> = (0..src.asset_count())
         .map(|_| AtomicBool::new(false))
         .collect();
     let known: Vec<f32> = rays
@@ -430,7 +438,7 @@ fn lazy_hits_with(
     loop {
         reference.rounds += 1;
         let new: Vec<bool> = include.iter().zip(&built).map(|(&i, &b)| i && !b).collect();
-        let scene = full_scene_part(model, &new, frame, pending.len());
+        let scene = source::full_part(src, Some(&new), Some((frame, pending.len())))?;
         built.clone_from(&include);
         let cap = if reference.rounds as u32 >= UNCAPPED_ROUND {
             usize::MAX
@@ -508,7 +516,7 @@ fn lazy_hits_with(
         }
         if next.is_empty() {
             reference.assets = include.iter().filter(|&&x| x).count();
-            return (out, reference);
+            return Ok((out, reference));
         }
         pending = next;
     }
@@ -612,14 +620,13 @@ pub fn bound_with(
     table: Option<&SunTable>,
     irradiance: Option<&IrradianceSetting>,
 ) -> Result<Bounded, BoundError> {
-    mismatch(model, rough, levels)?;
+    mismatch(model.assets.len(), rough, levels)?;
     let full = full_answers(model, pois, opts, table, irradiance)?;
     bound_against(model, rough, levels, &full)
 }
 
 /// The levels and rough geometries must be one per asset.
-fn mismatch(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Result<(), BoundError> {
-    let n = model.assets.len();
+fn mismatch(n: usize, rough: &[RoughGeometry], levels: &[u8]) -> Result<(), BoundError> {
     if levels.len() != n || rough.len() != n {
         return Err(BoundError::Mismatch {
             assets: n,
@@ -674,6 +681,21 @@ pub fn full_answers<'a>(
     table: Option<&'a SunTable>,
     irradiance: Option<&'a IrradianceSetting>,
 ) -> Result<FullAnswers<'a>, BoundError> {
+    full_answers_from(model, pois, opts, table, irradiance)
+}
+
+/// [`full_answers`] of the full model `src` (e.g. a document read hollow, its assets read
+/// back by span: [`HollowSource`]): the same answers as of the whole model.
+///
+/// # Errors
+/// As [`full_answers`], and [`BoundError::ReadBack`].
+pub fn full_answers_from<'a>(
+    src: &dyn FullSource,
+    pois: &'a [Poi],
+    opts: &BoundOptions,
+    table: Option<&'a SunTable>,
+    irradiance: Option<&'a IrradianceSetting>,
+) -> Result<FullAnswers<'a>, BoundError> {
     let max_irr = opts.max_irradiance_error;
     for b in [opts.max_svf_error, opts.max_sun_error, max_irr]
         .into_iter()
@@ -700,7 +722,7 @@ pub fn full_answers<'a>(
     };
     // the boxes' index is built on one core: the probes beside it
     let (boxes, probes) = rayon::join(
-        || AssetBoxes::new(model),
+        || AssetBoxes::new(src),
         || -> Vec<Probe> {
             (pois.par_iter())
                 .map(|p| probe(p, &bundles, table, irr))
@@ -710,7 +732,7 @@ pub fn full_answers<'a>(
     let weights: Vec<Option<Vec<f64>>> = (probes.iter())
         .map(|p| Some(irradiance_weights(p, irr?)))
         .collect();
-    let (tags, reference) = full_tags(model, &probes, &boxes);
+    let (tags, reference) = full_tags(src, &probes, &boxes)?;
     Ok(FullAnswers {
         pois,
         opts: *opts,
@@ -722,7 +744,7 @@ pub fn full_answers<'a>(
         weights,
         tags,
         reference,
-        assets: model.assets.len(),
+        assets: src.asset_count(),
     })
 }
 
@@ -738,15 +760,29 @@ pub fn bound_against(
     levels: &[u8],
     full: &FullAnswers<'_>,
 ) -> Result<Bounded, BoundError> {
-    mismatch(model, rough, levels)?;
-    if full.assets != model.assets.len() {
+    bound_against_from(model, rough, levels, full)
+}
+
+/// [`bound_against`] for the full model `src` ([`full_answers_from`]): the assets of the
+/// LoD scene read from it as they rise above level 0.
+///
+/// # Errors
+/// As [`bound_against`], and [`BoundError::ReadBack`].
+pub fn bound_against_from(
+    src: &dyn FullSource,
+    rough: &[RoughGeometry],
+    levels: &[u8],
+    full: &FullAnswers<'_>,
+) -> Result<Bounded, BoundError> {
+    mismatch(src.asset_count(), rough, levels)?;
+    if full.assets != src.asset_count() {
         return Err(BoundError::Mismatch {
             assets: full.assets,
             levels: levels.len(),
             rough: rough.len(),
         });
     }
-    let n = model.assets.len();
+    let n = src.asset_count();
     let FullAnswers {
         pois,
         opts,
@@ -766,9 +802,10 @@ pub fn bound_against(
     let mut levels: Vec<u8> = levels.iter().map(|&l| l.min(2)).collect();
     let mut promotions = Vec::new();
     let mut rounds = 0;
+    let mut lod_assets = source::LodAssets::default();
     loop {
         rounds += 1;
-        let scene = mixed_scene(model, rough, &levels);
+        let scene = lod_assets.scene(src, rough, &levels)?;
         let lod_tags: Vec<Vec<Option<u32>>> = probes.iter().map(|p| tags(&scene, p)).collect();
         let mut figures = Vec::with_capacity(pois.len());
         // (poi, metric range, excess (rays, or weight), lod sees less sky, ray weights)
@@ -901,7 +938,7 @@ pub fn bound_against(
                 promotions.push(Promotion {
                     round: rounds,
                     asset: i,
-                    id: model.assets[i].id.as_deref().map(str::to_owned),
+                    id: src.id(i).map(str::to_owned),
                     from,
                     to: from + 1,
                     poi: pois[k].id.clone(),

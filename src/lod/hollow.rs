@@ -44,13 +44,32 @@
 //! come from the read, and the full geometry it looks at (the assets whose rough box holds a
 //! POI, the buildings whose box holds one: [`near_pois`]) is kept.
 //!
-//! What is not done yet (issue 22): `lod` itself still reads whole. The stages after the
-//! selection (the bound's lazy reference, the writers, the report) and the frame's checks
-//! take the model's polygons; each must take the facts computed here instead, or the
-//! polygons of the few assets it needs read back by span, before the command can run on a
-//! [`Hollow`].
+//! **Reading back.** A chunk records where it starts ([`ChunkStart`]: its bytes and the state
+//! the serial read stands in there) and each asset the chunk it was read in; so the full
+//! geometry of any assets can be parsed again from the document ([`Hollow::read_back`] through
+//! [`Reread`]): the top-level members that hold them (found from their top-level building's
+//! byte span), a chunk's members next to each other in one parse, chunks in parallel, each
+//! member parsed with the reader of the stream seeded with its chunk's state (the first
+//! chunk's: the state after it), the pages read given back. Lines are counted from the
+//! members on (an asset read back keeps the hollow model's metadata, so its lines; only its
+//! geometry is taken from the parse, found by span). Members that do not read alone (a
+//! reference to another member of the chunk) are read with their whole chunk.
+//!
+//! The error bound runs on it ([`crate::lod::bound::HollowSource`]): its reference reads back
+//! the assets near the rays round by round, its LoD scene the assets above level 0; the
+//! frame of the reference is [`Hollow::frame`], the whole model's, so every answer is the
+//! whole model's to the bit. Measured (BENCHMARKS.md, "Reading back for the bound"): on the
+//! benchmark files (one street repeated at the same place) the reference reaches every
+//! copy's assets near the rays, and parsing their members again costs several times the
+//! whole model's reference (1 GB: 5.3 s of wall time against 1.1 s; 4 GB: 30 s against 6.4 s);
+//! see there for what that means for tracing the reference per chunk instead.
+//!
+//! What is not done yet (issue 22): `lod` itself still reads whole. The frame's checks, the
+//! report and the writers take the model's polygons; each must take the facts computed here,
+//! or the polygons of the assets it needs read back ([`Hollow::read_back`]), before the
+//! command can run on a [`Hollow`].
 
-use crate::io::citygml::read::{Chunk, Passes, StreamSummary};
+use crate::io::citygml::read::{Chunk, ChunkStart, Passes, Reread, StreamSummary};
 use crate::lod::level::{polygon_count_of, rough_is_own};
 use crate::lod::poi::checks::enclosure::ON_SURFACE;
 use crate::lod::poi::checks::Surroundings;
@@ -92,6 +111,10 @@ pub struct Hollow {
     count_starts: Vec<usize>,
     /// What the stream found of the whole document.
     pub summary: StreamSummary,
+    /// The chunk each asset was read in.
+    chunk_of: Vec<u32>,
+    /// Where each chunk starts ([`Hollow::read_back`]).
+    starts: Vec<ChunkStart>,
 }
 
 impl Hollow {
@@ -120,6 +143,82 @@ impl Hollow {
             .filter(|(g, _)| g.lod == lod)
             .map(|(_, &n)| n as usize)
             .sum()
+    }
+}
+
+impl Hollow {
+    /// The span of the top-level member's city object that holds asset `a` (its top-level
+    /// building's, or its own without a building).
+    fn anchor(&self, a: &Asset) -> crate::model::Span {
+        let b = &self.model.buildings;
+        let mut at = a.building;
+        for _ in 0..b.len() {
+            match at.and_then(|k| b.get(k)) {
+                Some(x) if x.parent.is_some() => at = x.parent,
+                Some(x) => return x.span.clone(),
+                None => break,
+            }
+        }
+        a.span.clone()
+    }
+
+    /// The assets `want` (indices of the model, each at most once) with their full geometry,
+    /// in `want`'s order, read back from the document of `rr` (the one read hollow): the
+    /// top-level members that hold them parsed again, a chunk's members next to each other
+    /// at once, in parallel ([`Reread::parse`]; a chunk's whole when its members do not read
+    /// alone). Each asset is the whole read's: the hollow one with the geometry read back
+    /// (found by its span). `None` when one is out of range or cannot be read back.
+    pub fn read_back(&self, rr: &Reread, want: &[usize]) -> Option<Vec<Asset>> {
+        let mut ranges: Vec<(u32, crate::model::Span)> = (want.iter())
+            .map(|&i| {
+                let c = *self.chunk_of.get(i)?;
+                let start = self.starts.get(c as usize)?;
+                let a = self.model.assets.get(i)?;
+                Some((c, rr.members(start, self.anchor(a))))
+            })
+            .collect::<Option<_>>()?;
+        ranges.sort_unstable_by_key(|(c, r)| (*c, r.start, r.end));
+        let mut merged: Vec<(u32, crate::model::Span)> = Vec::new();
+        for (c, r) in ranges {
+            match merged.last_mut() {
+                Some((lc, lr)) if *lc == c && r.start <= lr.end => lr.end = lr.end.max(r.end),
+                _ => merged.push((c, r)),
+            }
+        }
+        let key = |a: &Asset| {
+            (
+                a.span.start,
+                a.span.end,
+                a.kind == crate::model::AssetKind::Body,
+            )
+        };
+        let mut at: foldhash::HashMap<(u64, u64, bool), usize> = Default::default();
+        for (k, &i) in want.iter().enumerate() {
+            at.insert(key(self.model.assets.get(i)?), k);
+        }
+        let found: Vec<Vec<(usize, Vec<LodGeometry>)>> = (merged.par_iter())
+            .map(|(c, r)| {
+                let start = self.starts.get(*c as usize)?;
+                let m = (rr.parse(start, Some(r.clone()))).or_else(|| rr.parse(start, None))?;
+                let taken = (m.assets.into_iter())
+                    .filter_map(|a| Some((*at.get(&key(&a))?, a.geometries)))
+                    .collect();
+                Some(taken)
+            })
+            .collect::<Option<_>>()?;
+        let mut geometries: Vec<Option<Vec<LodGeometry>>> = vec![None; want.len()];
+        for (k, g) in found.into_iter().flatten() {
+            if let Some(slot) = geometries.get_mut(k) {
+                *slot = Some(g);
+            }
+        }
+        (want.iter().zip(geometries))
+            .map(|(&i, g)| {
+                let mut a = self.model.assets.get(i)?.clone();
+                a.geometries = g?;
+                Some(a)
+            })
+            .collect()
     }
 }
 
@@ -155,6 +254,7 @@ struct Part {
     detail: Vec<Bbox>,
     own: Vec<bool>,
     counts: Vec<Vec<u32>>,
+    chunks: Vec<u32>,
 }
 
 impl Part {
@@ -164,7 +264,7 @@ impl Part {
         mut asset: Asset,
         parent: Option<At>,
         (rough, bbox, detail): (RoughGeometry, Bbox, Bbox),
-        keep: bool,
+        (keep, chunk): (bool, u32),
     ) {
         self.own.push(rough_is_own(&asset, &rough));
         let counts = (asset.geometries.iter())
@@ -180,6 +280,7 @@ impl Part {
         self.boxes.push(bbox);
         self.detail.push(detail);
         self.counts.push(counts);
+        self.chunks.push(chunk);
     }
 }
 
@@ -205,7 +306,13 @@ pub fn read_hollow(
     let mut file: Option<SourceFile> = None;
     let (mut content, mut frame) = (Bbox::EMPTY, Bbox::EMPTY);
     let (mut root_site, mut unsure) = (None, false);
+    let mut starts = Vec::new();
     let summary = passes.pass_citygml(path, 0, |c: Chunk| {
+        let Some(start) = c.start.clone() else {
+            return Err(());
+        };
+        let chunk = u32::try_from(starts.len()).map_err(|_| ())?;
+        starts.push(start);
         let b = content_bbox(&c.model.assets, &c.model.buildings);
         if c.index == 0 {
             root_site = crate::io::citygml::write::root_site_of(&c.model);
@@ -233,7 +340,7 @@ pub fn read_hollow(
             a.building = a.building.map(|b| b + c.buildings_before);
             let parent = a.parent.map(at);
             let part = if i < nb { &mut plain } else { &mut bodies };
-            part.push(a, parent, (r, b, d), k);
+            part.push(a, parent, (r, b, d), (k, chunk));
         }
         for mut b in model.buildings.drain(..) {
             b.parent = b.parent.map(|p| p + c.buildings_before);
@@ -254,7 +361,7 @@ pub fn read_hollow(
             (Some(whole), Some(f)) => add_file(whole, f),
             (Some(_), None) => {}
         }
-        Ok::<(), std::convert::Infallible>(())
+        Ok::<(), ()>(())
     });
     let summary = match summary {
         Ok(Some(s)) if !unsure => s,
@@ -287,6 +394,7 @@ pub fn read_hollow(
         content,
         frame,
         summary,
+        starts,
         ..Hollow::default()
     };
     for part in [plain, bodies] {
@@ -299,6 +407,7 @@ pub fn read_hollow(
         h.boxes.extend(part.boxes);
         h.detail.extend(part.detail);
         h.own.extend(part.own);
+        h.chunk_of.extend(part.chunks);
         for c in part.counts {
             h.count_starts.push(h.counts.len());
             h.counts.extend(c);
@@ -402,6 +511,81 @@ mod tests {
         assert_eq!(h.polygon_count(whole.assets.len()), 0);
     }
 
+    /// Six blocks of the small preset written in `dir`, and their options.
+    fn six_blocks(dir: &Path) -> (std::path::PathBuf, crate::model::synth::SynthOptions) {
+        let small = crate::model::synth::SynthOptions {
+            blocks_x: 3,
+            blocks_y: 2,
+            ..crate::model::synth::Preset::Small.defaults()
+        };
+        let path = dir.join("six.gml");
+        let mut xml = Vec::new();
+        crate::model::synth::generate(&small, &mut xml).unwrap();
+        std::fs::write(&path, xml).unwrap();
+        (path, small)
+    }
+
+    /// [`six_blocks`] read whole, two of its POIs, and read hollow in chunks of
+    /// `chunk_bytes` with the POIs' surroundings kept ([`near_pois`]).
+    fn six_read(
+        dir: &Path,
+        chunk_bytes: u64,
+    ) -> (
+        std::path::PathBuf,
+        CityModel,
+        Vec<crate::model::Poi>,
+        Hollow,
+    ) {
+        let (path, small) = six_blocks(dir);
+        let whole = read_file(&path).unwrap();
+        let pois: Vec<crate::model::Poi> = (crate::model::synth::pois(&small).into_iter())
+            .take(2)
+            .map(Into::into)
+            .collect();
+        let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+        let read = ReadOptions::default();
+        let passes = Passes::new(&read, chunk_bytes, &|_, _| {});
+        let rough = RoughOptions::default();
+        let h = read_hollow(&path, &passes, &rough, &near_pois(&points)).unwrap();
+        (path, whole, pois, h)
+    }
+
+    /// Every asset of a hollow read in small chunks read back ([`Hollow::read_back`]), some
+    /// at a time and all at once, is the whole read's.
+    #[test]
+    fn assets_read_back_are_the_whole_reads() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, _) = six_blocks(dir.path());
+        let whole = read_file(&path).unwrap();
+        let read = ReadOptions::default();
+        let passes = Passes::new(&read, 1 << 16, &|_, _| {});
+        let none = |m: &CityModel, _: &[RoughGeometry], _: &[Bbox]| vec![false; m.assets.len()];
+        let h = read_hollow(&path, &passes, &RoughOptions::default(), &none).unwrap();
+        assert!(h.summary.chunks > 2, "{} chunks", h.summary.chunks);
+        let rr = Reread::open(&path, &read).unwrap();
+        let n = whole.assets.len();
+        let all: Vec<usize> = (0..n).collect();
+        assert_eq!(h.read_back(&rr, &all).unwrap(), whole.assets);
+        // every seventh asset, backwards, and the last chunk's first
+        let some: Vec<usize> = (0..n).rev().step_by(7).collect();
+        let got = h.read_back(&rr, &some).unwrap();
+        for (a, i) in got.iter().zip(&some) {
+            assert_eq!(a, &whole.assets[*i], "asset {i}");
+        }
+        assert!(h.read_back(&rr, &[n]).is_none());
+        // a member of a chunk of several reads alone: fewer assets than its chunk
+        let alone = (0..n).find_map(|i| {
+            let start = &h.starts[h.chunk_of[i] as usize];
+            let one = rr.parse(start, Some(rr.members(start, h.anchor(&h.model.assets[i]))));
+            let chunk = rr.parse(start, None).unwrap();
+            let one = one.unwrap();
+            assert!(!one.assets.is_empty());
+            (one.assets.len() < chunk.assets.len()).then_some((i, one))
+        });
+        let (i, one) = alone.unwrap();
+        assert_eq!(one.assets[0].geometries, whole.assets[i].geometries);
+    }
+
     /// The POI checks of `lod` on a model read hollow with [`near_pois`] kept: the same
     /// flags as on the whole model, and the same answers of the rough-box test of the
     /// selection.
@@ -447,6 +631,48 @@ mod tests {
         assert!(held > 0);
     }
 
+    /// The error bound on a hollow read, its assets read back by span
+    /// ([`crate::lod::bound::HollowSource`]), is the whole read's: levels, promotions, each
+    /// POI's figures and the reference, with the lazy reference and with the whole one.
+    #[test]
+    fn the_bound_on_a_hollow_read_is_the_whole_reads() {
+        use crate::lod::bound::HollowSource;
+        use crate::lod::bound::{bound, bound_against_from, full_answers_from, BoundOptions};
+        use crate::lod::{lod_hollow, lod_with, LodOptions};
+        use crate::model::runtime::progress::Silent;
+        let dir = tempfile::tempdir().unwrap();
+        let (path, whole, pois, h) = six_read(dir.path(), 1 << 16);
+        let (opts, read) = (LodOptions::default(), ReadOptions::default());
+        let rr = Reread::open(&path, &read).unwrap();
+        let w = lod_with(&whole, &pois, &opts, &Silent).unwrap();
+        let l = lod_hollow(&h, &pois, &opts, &Silent).unwrap();
+        let site = crate::solar::Site::new(48.76, 11.42);
+        let sun = crate::solar::SunTable::year(2025, 120, &site).unwrap();
+        let mut whole_ref = Vec::new();
+        for rays in [1000, 200_000] {
+            let b = BoundOptions {
+                max_svf_error: Some(0.0005),
+                max_sun_error: Some(0.0005),
+                svf_rays: rays,
+                ..Default::default()
+            };
+            let levels = &w.selection.levels;
+            let want = bound(&whole, &w.rough, levels, &pois, &b, Some(&sun)).unwrap();
+            let src = HollowSource::new(&h, &rr);
+            let full = full_answers_from(&src, &pois, &b, Some(&sun), None).unwrap();
+            let got = bound_against_from(&src, &l.rough, &l.selection.levels, &full).unwrap();
+            assert!(!want.promotions.is_empty(), "{rays} rays: {want:?}");
+            assert_eq!(got, want, "{rays} rays");
+            let n = whole.assets.len();
+            assert!(src.read_back() > 0, "{rays} rays");
+            whole_ref.push(want.reference.whole);
+            if !want.reference.whole {
+                assert!(want.reference.assets < n, "{:?}", want.reference);
+            }
+        }
+        assert_eq!(whole_ref, [false, true]);
+    }
+
     /// The selection of `lod` on a hollow read ([`crate::lod::lod_hollow`]) is the whole
     /// read's: levels, hits, each POI's figures and flags, the selection scene.
     #[test]
@@ -454,26 +680,9 @@ mod tests {
         use crate::lod::{lod_hollow, lod_with, LodOptions};
         use crate::model::runtime::progress::Silent;
         // six blocks of the small preset, the first block's POIs
-        let small = crate::model::synth::SynthOptions {
-            blocks_x: 3,
-            blocks_y: 2,
-            ..crate::model::synth::Preset::Small.defaults()
-        };
         let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("six.gml");
-        let mut xml = Vec::new();
-        crate::model::synth::generate(&small, &mut xml).unwrap();
-        std::fs::write(&path, xml).unwrap();
-        let whole = read_file(&path).unwrap();
-        let pois: Vec<crate::model::Poi> = (crate::model::synth::pois(&small).into_iter())
-            .take(2)
-            .map(Into::into)
-            .collect();
-        let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+        let (_, whole, pois, h) = six_read(dir.path(), 1);
         let opts = LodOptions::default();
-        let read = ReadOptions::default();
-        let passes = Passes::new(&read, 1, &|_, _| {});
-        let h = read_hollow(&path, &passes, &opts.rough, &near_pois(&points)).unwrap();
         assert!(h.kept.iter().any(|&k| !k));
         let want = lod_with(&whole, &pois, &opts, &Silent).unwrap();
         let mut got = lod_hollow(&h, &pois, &opts, &Silent).unwrap();

@@ -23,7 +23,7 @@
 
 use crate::lod::rough::RoughGeometry;
 use crate::model::triangulate;
-use crate::model::{Bbox, CityModel};
+use crate::model::{Asset, Bbox, CityModel};
 use crate::solar::trace::{Scene, SceneBuilder};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -43,6 +43,16 @@ fn add_assets(
     n: usize,
     triangles: impl Fn(usize, &mut Vec<[DVec3; 3]>) + Sync,
 ) {
+    add_tagged(b, n, |k| k, triangles);
+}
+
+/// [`add_assets`] of `n` assets, the `k`-th tagged `tag(k)` (increasing with `k`).
+fn add_tagged(
+    b: &mut SceneBuilder,
+    n: usize,
+    tag: impl Fn(usize) -> usize + Sync,
+    triangles: impl Fn(usize, &mut Vec<[DVec3; 3]>) + Sync,
+) {
     let mut start = 0;
     while start < n {
         let end = n.min(start + GROUP);
@@ -55,7 +65,8 @@ fn add_assets(
                 for i in c..end.min(c + CHUNK) {
                     scratch.clear();
                     triangles(i, &mut scratch);
-                    out.extend(scratch.iter().map(|t| (i as u32, *t)));
+                    let t = tag(i) as u32;
+                    out.extend(scratch.iter().map(|x| (t, *x)));
                 }
                 out
             })
@@ -67,15 +78,37 @@ fn add_assets(
     }
 }
 
+/// Some assets of a model, each with its index there (increasing): what the scenes of a
+/// model read hollow are built from ([`full_scene_of`], [`mixed_scene_of`]).
+pub type Tagged<'a> = [(usize, &'a Asset)];
+
+/// [`full_scene`] (`frame`: `None`) or [`full_scene_part`] (`Some((frame, rays))`) of the
+/// model whose assets `assets` hold every full-detail polygon: the same scene.
+pub fn full_scene_of(assets: &Tagged<'_>, frame: Option<(Bbox, usize)>) -> Scene {
+    let mut b = SceneBuilder::new();
+    if let Some((f, _)) = frame {
+        b = b.with_frame(f);
+    }
+    add_tagged(
+        &mut b,
+        assets.len(),
+        |k| assets[k].0,
+        |k, out| {
+            for p in assets[k].1.detail_polygons() {
+                triangulate(p, out);
+            }
+        },
+    );
+    match frame {
+        Some((_, rays)) => b.for_rays(rays).build(),
+        None => b.build(),
+    }
+}
+
 /// Every asset at full detail (its highest LoD).
 pub fn full_scene(model: &CityModel) -> Scene {
-    let mut b = SceneBuilder::new();
-    add_assets(&mut b, model.assets.len(), |i, out| {
-        for p in model.assets[i].detail_polygons() {
-            triangulate(p, out);
-        }
-    });
-    b.build()
+    let tagged: Vec<(usize, &Asset)> = model.assets.iter().enumerate().collect();
+    full_scene_of(&tagged, None)
 }
 
 /// Per asset, the bounding box of the finite points of its full-detail polygons (empty
@@ -169,15 +202,10 @@ const TOP: usize = 64;
 /// coordinates and order, so a ray's [`Scene::first_hit`] is the full scene's whenever
 /// no left-out asset holds a triangle the ray hits as close ([`SceneBuilder::with_frame`]).
 pub fn full_scene_part(model: &CityModel, include: &[bool], frame: Bbox, rays: usize) -> Scene {
-    let mut b = SceneBuilder::new().with_frame(frame);
-    add_assets(&mut b, model.assets.len(), |i, out| {
-        if include.get(i).copied().unwrap_or(false) {
-            for p in model.assets[i].detail_polygons() {
-                triangulate(p, out);
-            }
-        }
-    });
-    b.for_rays(rays).build()
+    let tagged: Vec<(usize, &Asset)> = (model.assets.iter().enumerate())
+        .filter(|(i, _)| include.get(*i).copied().unwrap_or(false))
+        .collect();
+    full_scene_of(&tagged, Some((frame, rays)))
 }
 
 /// Every asset as its rough geometry (`rough[i]` belongs to asset `i`).
@@ -221,10 +249,36 @@ fn selection_builder(model: &CityModel, rough: &[RoughGeometry]) -> SceneBuilder
 pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
     let mut b = SceneBuilder::new();
     add_assets(&mut b, model.assets.len(), |i, out| {
-        let level = levels.get(i).copied().unwrap_or(0);
-        for p in crate::lod::level::traced(&model.assets[i], rough.get(i), level).iter() {
-            triangulate(p, out);
-        }
+        mixed_triangles(&model.assets[i], i, rough, levels, out);
     });
     b.build()
+}
+
+/// [`mixed_scene`] of the model whose assets `assets` hold every asset above level 0: the
+/// same scene.
+pub fn mixed_scene_of(assets: &Tagged<'_>, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
+    let mut b = SceneBuilder::new();
+    add_tagged(
+        &mut b,
+        assets.len(),
+        |k| assets[k].0,
+        |k, out| {
+            mixed_triangles(assets[k].1, assets[k].0, rough, levels, out);
+        },
+    );
+    b.build()
+}
+
+/// The triangles of asset `i` in [`mixed_scene`].
+fn mixed_triangles(
+    a: &Asset,
+    i: usize,
+    rough: &[RoughGeometry],
+    levels: &[u8],
+    out: &mut Vec<[DVec3; 3]>,
+) {
+    let level = levels.get(i).copied().unwrap_or(0);
+    for p in crate::lod::level::traced(a, rough.get(i), level).iter() {
+        triangulate(p, out);
+    }
 }

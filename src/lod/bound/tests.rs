@@ -1,7 +1,7 @@
 //! Tests of [`super`].
 
 use super::*;
-use crate::lod::scene::full_scene;
+use crate::lod::scene::{full_scene, mixed_scene};
 use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
 use crate::solar::poi_sky_view;
 
@@ -219,7 +219,8 @@ fn restricted_full_scene_answers_as_the_whole_model() {
     // seeded with one box per ray (many rounds) and with the default
     let mut rounds = Vec::new();
     for seed in [1, 3, SEED_BOXES] {
-        let (hits, reference) = lazy_hits_with(&model, &probes, &AssetBoxes::new(&model), seed);
+        let (hits, reference) =
+            lazy_hits_with(&model, &probes, &AssetBoxes::new(&model), seed).unwrap();
         let (mut compared, mut hit) = (0, 0);
         for (p, got) in probes.iter().zip(&hits) {
             assert_eq!(got.len(), p.len());
@@ -250,7 +251,7 @@ fn restricted_full_scene_answers_as_the_whole_model() {
     assert!(rounds[0] >= 3, "{rounds:?}");
     let (hits, _) = lazy_hits(&model, &probes);
     // `bound` uses these tags, or (more rays than polygons here) the whole model's
-    let (tags, r) = full_tags(&model, &probes, &AssetBoxes::new(&model));
+    let (tags, r) = full_tags(&model, &probes, &AssetBoxes::new(&model)).unwrap();
     assert!(r.whole, "{r:?}");
     for (p, (t, h)) in probes.iter().zip(tags.iter().zip(&hits)) {
         assert_eq!(t, &tags_of(&whole, p));

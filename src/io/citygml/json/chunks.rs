@@ -504,6 +504,7 @@ pub(super) fn next_chunk(
         warnings_before: sum.warnings,
         bytes,
         source: Some(source),
+        start: None,
         model: CityModel {
             files: vec![file],
             buildings,

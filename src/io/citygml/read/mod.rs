@@ -46,7 +46,9 @@ mod stream;
 mod xlink;
 
 pub use events::read_from;
-pub use stream::{stream, stream_citygml, Chunk, Passes, StreamSummary, Streamed, CHUNK_BYTES};
+pub use stream::{
+    stream, stream_citygml, Chunk, ChunkStart, Passes, Reread, StreamSummary, Streamed, CHUNK_BYTES,
+};
 
 use crate::io::citygml::error::ReadError;
 use crate::io::citygml::source;

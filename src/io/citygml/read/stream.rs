@@ -69,6 +69,9 @@ pub struct Chunk {
     /// A CityJSON document's: the attributes of the chunk's city objects and the members of
     /// their semantic surface objects, which its CityJSON output copies.
     pub(crate) source: Option<crate::io::citygml::json::source::FromSource>,
+    /// A CityGML document's: where the chunk starts, to parse it or some of its members
+    /// again ([`Reread`]).
+    pub start: Option<ChunkStart>,
 }
 
 impl Chunk {
@@ -329,6 +332,7 @@ pub fn stream_citygml<E>(
             next_cut(body, at).unwrap_or(body.len())
         };
         let last = to == body.len();
+        let before = (!first).then(|| std::sync::Arc::new(state.clone()));
         let Some(p) = parse_chunk(&doc, bom, prolog, from, to, first, &state, path, opts) else {
             return decline("a chunk that does not read alone");
         };
@@ -336,6 +340,13 @@ pub fn stream_citygml<E>(
             return decline("a chunk that does not end between members");
         }
         state.absorb(&p);
+        // the first chunk's members are read again after the root's start tag, as the
+        // others, with the state after it (what they read of it is the root's)
+        let start_at = ChunkStart {
+            from: start,
+            to,
+            state: before.unwrap_or_else(|| std::sync::Arc::new(state.clone())),
+        };
         if first && p.root_is_model && !p.env_owners.iter().any(|o| matches!(o, EnvOwner::Root)) {
             sum.trailing.push(Warning {
                 file: p.shared_path.clone(),
@@ -391,6 +402,7 @@ pub fn stream_citygml<E>(
             bytes: (if first { 0 } else { (from + bom) as u64 }, end),
             model,
             source: None,
+            start: Some(start_at),
         };
         sum.buildings += chunk.model.buildings.len();
         sum.assets += chunk.model.assets.len() - bodies;
@@ -421,6 +433,158 @@ pub fn stream_citygml<E>(
     Ok(Streamed::Done(sum))
 }
 
+/// Where a chunk of [`stream_citygml`] starts ([`Chunk::start`]): its bytes and the state
+/// the serial read stands in there, to parse the chunk, or some of its members, again.
+#[derive(Clone)]
+pub struct ChunkStart {
+    /// Body offsets of the chunk (the first chunk's from the root's start tag on).
+    from: usize,
+    to: usize,
+    state: std::sync::Arc<DocState>,
+}
+
+impl std::fmt::Debug for ChunkStart {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ChunkStart")
+            .field("from", &self.from)
+            .field("to", &self.to)
+            .finish_non_exhaustive()
+    }
+}
+
+/// A plain CityGML document held (memory-mapped) to parse chunks of a stream of it, or some
+/// of their top-level members, again ([`Reread::parse`]): a member parsed alone gives the
+/// chunk's model of it (the same assets, polygons and spans), since a chunk's parser is
+/// seeded with the state the serial read stands in at the chunk's start and a member's
+/// geometry depends on nothing read between the chunk's start and the member.
+pub struct Reread {
+    doc: source::Bytes,
+    bom: usize,
+    root_end: usize,
+    path: std::path::PathBuf,
+    opts: ReadOptions,
+}
+
+impl std::fmt::Debug for Reread {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Reread")
+            .field("path", &self.path)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Reread {
+    /// The plain document at `path` read with `opts` (as its stream was); `None` for a
+    /// compressed document or one whose head does not read.
+    pub fn open(path: &Path, opts: &ReadOptions) -> Option<Reread> {
+        let source::Document::Plain(doc) = source::load(path).ok()? else {
+            return None;
+        };
+        let (bom, root_end) = {
+            let h = super::split::parse_head(&doc, path, opts).ok()?;
+            (h.bom, h.root_end)
+        };
+        Some(Reread {
+            doc,
+            bom,
+            root_end,
+            path: path.to_path_buf(),
+            opts: opts.clone(),
+        })
+    }
+
+    /// The document's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The document's bytes after the byte-order mark.
+    fn body(&self) -> &[u8] {
+        self.doc.get(self.bom..).unwrap_or(&[])
+    }
+
+    /// The bytes (document offsets) of the top-level members of chunk `start` that hold the
+    /// document bytes `span` (an element inside the chunk): from the end of the last member
+    /// before it (or the chunk's start) to the end of the member that ends it.
+    pub fn members(&self, start: &ChunkStart, span: std::ops::Range<u64>) -> std::ops::Range<u64> {
+        const NAME: &[u8] = b"cityObjectMember>";
+        let body = self.body();
+        let lo = start.from;
+        let hi = start.to.min(body.len());
+        let at = |x: u64| {
+            usize::try_from(x)
+                .unwrap_or(usize::MAX)
+                .saturating_sub(self.bom)
+        };
+        let (s, e) = (at(span.start).clamp(lo, hi), at(span.end).clamp(lo, hi));
+        let finder = memchr::memmem::FinderRev::new(NAME);
+        let mut from = lo;
+        let mut upto = s;
+        while let Some(m) = body.get(lo..upto).and_then(|b| finder.rfind(b)) {
+            let m = lo + m;
+            if super::split::is_end_tag(body, m) {
+                from = m + NAME.len();
+                break;
+            }
+            upto = m;
+        }
+        let to = next_cut(body, e).map_or(hi, |c| c.min(hi));
+        let doc = |x: usize| (x + self.bom) as u64;
+        doc(from)..doc(to.max(from))
+    }
+
+    /// Chunk `start` parsed again, or only its members in `range` (document offsets from
+    /// [`Reread::members`]): the model a stream makes of them, but for warnings and lines.
+    /// `None` where they do not read alone (e.g. a reference to another member of the
+    /// chunk). The pages of the document read are given back after.
+    pub fn parse(
+        &self,
+        start: &ChunkStart,
+        range: Option<std::ops::Range<u64>>,
+    ) -> Option<CityModel> {
+        let body = self.body();
+        let at = |x: u64| {
+            usize::try_from(x)
+                .unwrap_or(usize::MAX)
+                .saturating_sub(self.bom)
+        };
+        let (from, to) = match range {
+            None => (start.from, start.to),
+            Some(r) => (at(r.start), at(r.end)),
+        };
+        if from > to || to > body.len() {
+            return None;
+        }
+        let prolog = body.get(..self.root_end)?;
+        let (doc, bom) = (&self.doc[..], self.bom);
+        // lines counted from the members on, not from the chunk's start: a member's lines
+        // are not the serial read's, its geometry is
+        let at_from = (from + bom) as u64;
+        let state = DocState {
+            line: LineMark {
+                line: 1,
+                line_start: at_from,
+                counted_to: at_from,
+            },
+            ..(*start.state).clone()
+        };
+        let (path, opts) = (&self.path, &self.opts);
+        let p = parse_chunk(doc, bom, prolog, from, to, false, &state, path, opts);
+        // whole pages around the members (their neighbours' are read again if needed): the
+        // map keeps no page of what is read back
+        const PAGE: usize = 64 << 10;
+        let around = ((from + bom) / PAGE * PAGE, (to + bom).div_ceil(PAGE) * PAGE);
+        self.doc.release_range(around.0, around.1);
+        let mut p = p?;
+        if p.stack.len() != usize::from(to != body.len()) {
+            return None;
+        }
+        p.stack.clear();
+        p.event_pos = (to + bom) as u64;
+        finish(p, doc.len() as u64, true, false).ok()
+    }
+}
+
 /// The end (after `>`) of the first top-level member end tag at or after `at`; `None` at the
 /// document's end.
 fn next_cut(body: &[u8], at: usize) -> Option<usize> {
@@ -439,7 +603,7 @@ fn next_cut(body: &[u8], at: usize) -> Option<usize> {
 }
 
 /// The document-wide state the serial read has reached at a chunk's start.
-#[derive(Default)]
+#[derive(Default, Clone)]
 struct DocState {
     line: LineMark,
     version: Option<CityGmlVersion>,

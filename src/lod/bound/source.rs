@@ -1,0 +1,174 @@
+//! Where the error bound takes the full model's geometry from ([`FullSource`]): the whole
+//! model in memory ([`CityModel`]), or a document read hollow ([`crate::lod::hollow`]) whose
+//! assets the bound needs are read back from the document by byte span ([`HollowSource`]:
+//! the reference's assets near the rays, round by round, and the LoD scene's assets above
+//! level 0).
+//!
+//! The scenes are the same either way, so are the answers, to the bit: a scene is built from
+//! the same assets with the same triangles in the same order ([`full_scene_of`],
+//! [`mixed_scene_of`]), and the reference's frame is the whole model's full-detail frame,
+//! which the hollow read computes exactly chunk by chunk ([`Hollow::frame`]); an asset read
+//! back is the whole read's ([`Hollow::read_back`]).
+
+use super::BoundError;
+use crate::io::citygml::read::Reread;
+use crate::lod::hollow::Hollow;
+use crate::lod::rough::RoughGeometry;
+use crate::lod::scene::{detail_boxes, full_scene_of, mixed_scene_of};
+use crate::model::{Asset, Bbox, CityModel};
+use crate::solar::trace::Scene;
+use std::borrow::Cow;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The full model the bound compares with: its boxes, counts and ids, and the full geometry
+/// of the assets asked for.
+pub trait FullSource: Sync {
+    /// Assets of the model.
+    fn asset_count(&self) -> usize;
+    /// [`detail_boxes`] of the model.
+    fn detail_boxes(&self) -> (Vec<Bbox>, Bbox);
+    /// Full-detail polygons of the model ([`Asset::detail_polygons`]), and the assets that
+    /// have some.
+    fn detail_polygons(&self) -> (usize, usize);
+    /// The gml:id of asset `i`.
+    fn id(&self, i: usize) -> Option<&str>;
+    /// The assets `which` (increasing indices) with their full geometry.
+    ///
+    /// # Errors
+    /// [`BoundError::ReadBack`] when they cannot be read back.
+    fn assets(&self, which: &[usize]) -> Result<Vec<Cow<'_, Asset>>, BoundError>;
+}
+
+impl FullSource for CityModel {
+    fn asset_count(&self) -> usize {
+        self.assets.len()
+    }
+
+    fn detail_boxes(&self) -> (Vec<Bbox>, Bbox) {
+        detail_boxes(self)
+    }
+
+    fn detail_polygons(&self) -> (usize, usize) {
+        let each = self.assets.iter().map(|a| a.detail_polygons().len());
+        each.fold((0, 0), |(n, k), c| (n + c, k + usize::from(c > 0)))
+    }
+
+    fn id(&self, i: usize) -> Option<&str> {
+        self.assets.get(i)?.id.as_deref()
+    }
+
+    fn assets(&self, which: &[usize]) -> Result<Vec<Cow<'_, Asset>>, BoundError> {
+        let all = which.iter().filter_map(|&i| self.assets.get(i));
+        Ok(all.map(Cow::Borrowed).collect())
+    }
+}
+
+/// A document read hollow, its assets read back by span from `reread` (the same document).
+#[derive(Debug)]
+pub struct HollowSource<'a> {
+    hollow: &'a Hollow,
+    reread: &'a Reread,
+    read_back: AtomicUsize,
+}
+
+impl<'a> HollowSource<'a> {
+    /// The full model of `hollow`, read back from `reread`.
+    pub fn new(hollow: &'a Hollow, reread: &'a Reread) -> Self {
+        HollowSource {
+            hollow,
+            reread,
+            read_back: AtomicUsize::new(0),
+        }
+    }
+
+    /// Assets read back so far (an asset asked for twice counts twice).
+    pub fn read_back(&self) -> usize {
+        self.read_back.load(Ordering::Relaxed)
+    }
+}
+
+impl FullSource for HollowSource<'_> {
+    fn asset_count(&self) -> usize {
+        self.hollow.model.assets.len()
+    }
+
+    fn detail_boxes(&self) -> (Vec<Bbox>, Bbox) {
+        (self.hollow.detail.clone(), self.hollow.frame)
+    }
+
+    fn detail_polygons(&self) -> (usize, usize) {
+        let h = self.hollow;
+        // the first geometry property at the asset's highest LoD
+        let each = (h.model.assets.iter().enumerate()).map(|(i, a)| {
+            let top = a.max_lod();
+            let k = a.geometries.iter().position(|g| Some(g.lod) == top);
+            k.and_then(|k| h.polygon_counts(i).get(k))
+                .map_or(0, |&n| n as usize)
+        });
+        each.fold((0, 0), |(n, k), c| (n + c, k + usize::from(c > 0)))
+    }
+
+    fn id(&self, i: usize) -> Option<&str> {
+        self.hollow.model.assets.get(i)?.id.as_deref()
+    }
+
+    fn assets(&self, which: &[usize]) -> Result<Vec<Cow<'_, Asset>>, BoundError> {
+        self.read_back.fetch_add(which.len(), Ordering::Relaxed);
+        let back = self.hollow.read_back(self.reread, which);
+        let back = back.ok_or_else(|| BoundError::ReadBack {
+            path: self.reread.path().to_path_buf(),
+            assets: which.len(),
+        })?;
+        Ok(back.into_iter().map(Cow::Owned).collect())
+    }
+}
+
+/// The part of the full scene made of the assets `i` with `include[i]`, in `frame` for about
+/// `rays` rays ([`crate::lod::scene::full_scene_part`]); the whole full scene
+/// ([`crate::lod::scene::full_scene`]) with `frame` `None`.
+pub(super) fn full_part(
+    src: &dyn FullSource,
+    include: Option<&[bool]>,
+    frame: Option<(Bbox, usize)>,
+) -> Result<Scene, BoundError> {
+    let n = src.asset_count();
+    let which: Vec<usize> = match include {
+        Some(inc) => (0..n)
+            .filter(|&i| inc.get(i).copied().unwrap_or(false))
+            .collect(),
+        None => (0..n).collect(),
+    };
+    let assets = src.assets(&which)?;
+    let tagged: Vec<(usize, &Asset)> = which.into_iter().zip(assets.iter().map(|a| &**a)).collect();
+    Ok(full_scene_of(&tagged, frame))
+}
+
+/// The assets of the LoD scene ([`crate::lod::scene::mixed_scene`]) read so far, kept from
+/// round to round of the bound (levels only rise).
+#[derive(Default)]
+pub(super) struct LodAssets<'s> {
+    kept: foldhash::HashMap<usize, Cow<'s, Asset>>,
+}
+
+impl<'s> LodAssets<'s> {
+    /// The LoD scene of `levels`: its assets above level 0 not read yet read from `src`.
+    pub(super) fn scene(
+        &mut self,
+        src: &'s dyn FullSource,
+        rough: &[RoughGeometry],
+        levels: &[u8],
+    ) -> Result<Scene, BoundError> {
+        let above: Vec<usize> = (0..src.asset_count())
+            .filter(|&i| levels.get(i).is_some_and(|&l| l > 0))
+            .collect();
+        let new: Vec<usize> = (above.iter().copied())
+            .filter(|i| !self.kept.contains_key(i))
+            .collect();
+        let read = src.assets(&new)?;
+        self.kept.extend(new.into_iter().zip(read));
+        let tagged: Vec<(usize, &Asset)> = (above.iter())
+            .filter_map(|i| Some((*i, &**self.kept.get(i)?)))
+            .collect();
+        Ok(mixed_scene_of(&tagged, rough, levels))
+    }
+}
