@@ -46,6 +46,7 @@ mod stream;
 mod xlink;
 
 pub use events::read_from;
+pub(crate) use stream::{member_chunks, MemberChunks, SeenIds};
 pub use stream::{stream, stream_citygml, Chunk, Passes, StreamSummary, Streamed, CHUNK_BYTES};
 
 use crate::io::citygml::error::ReadError;

@@ -321,13 +321,7 @@ pub fn stream_citygml<E>(
     let mut index = 0;
     loop {
         let first = index == 0;
-        let start = if first { root_end } else { from };
-        let at = start.saturating_add(step);
-        let to = if at >= body.len() {
-            body.len()
-        } else {
-            next_cut(body, at).unwrap_or(body.len())
-        };
+        let to = chunk_end(body, if first { root_end } else { from }, step);
         let last = to == body.len();
         let Some(p) = parse_chunk(&doc, bom, prolog, from, to, first, &state, path, opts) else {
             return decline("a chunk that does not read alone");
@@ -419,6 +413,67 @@ pub fn stream_citygml<E>(
         ));
     }
     Ok(Streamed::Done(sum))
+}
+
+/// The end (body offset) of the chunk of [`stream_citygml`] whose members start at `start`:
+/// the first top-level member end after `step` bytes, or the body's end.
+fn chunk_end(body: &[u8], start: usize, step: usize) -> usize {
+    let at = start.saturating_add(step);
+    if at >= body.len() {
+        body.len()
+    } else {
+        next_cut(body, at).unwrap_or(body.len())
+    }
+}
+
+/// Where [`stream_citygml`] cuts a document into chunks of whole top-level members
+/// ([`member_chunks`]), in document offsets (byte-order mark included).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct MemberChunks {
+    /// End of the root's start tag: `doc[..head_end]` is the prolog.
+    pub(crate) head_end: usize,
+    /// The chunks: the first starts at `head_end`, each starts where the one before ends, the
+    /// last ends at the document's end.
+    pub(crate) ranges: Vec<(usize, usize)>,
+    /// The root's qualified name, as written in its start tag.
+    pub(crate) root_qname: Vec<u8>,
+}
+
+/// The chunks [`stream_citygml`] reads `doc` (a whole uncompressed document) in, about
+/// `chunk_bytes` each; `Err` with why the document is not read in chunks (see
+/// [`super::split::parse_head`]). For the writers that go through a document a chunk at a
+/// time without reading it into a model (`lod::mixed`).
+pub(crate) fn member_chunks(
+    doc: &[u8],
+    path: &Path,
+    opts: &ReadOptions,
+    chunk_bytes: u64,
+) -> Result<MemberChunks, &'static str> {
+    let h = super::split::parse_head(doc, path, opts)?;
+    let (bom, body, root_end) = (h.bom, h.body, h.root_end);
+    // the root's start tag ends the prolog; no `<` can stand in its attribute values
+    let tag = memchr::memrchr(b'<', &body[..root_end]).ok_or("no CityModel root")?;
+    let root_qname: Vec<u8> = body[tag + 1..root_end]
+        .iter()
+        .copied()
+        .take_while(|c| !c.is_ascii_whitespace() && *c != b'>' && *c != b'/')
+        .collect();
+    let step = usize::try_from(chunk_bytes.max(1)).unwrap_or(usize::MAX);
+    let mut ranges = Vec::new();
+    let mut from = root_end;
+    loop {
+        let to = chunk_end(body, from, step);
+        ranges.push((from + bom, to + bom));
+        if to >= body.len() {
+            break;
+        }
+        from = to;
+    }
+    Ok(MemberChunks {
+        head_end: root_end + bom,
+        ranges,
+        root_qname,
+    })
 }
 
 /// The end (after `>`) of the first top-level member end tag at or after `at`; `None` at the
@@ -554,14 +609,24 @@ fn parse_chunk<'d>(
 /// The gml:id hashes of the chunks read so far, sorted, 8 bytes an id: which ids of the next
 /// chunk repeat an earlier one.
 #[derive(Default)]
-struct SeenIds {
+pub(crate) struct SeenIds {
     sorted: Vec<u64>,
 }
 
 impl SeenIds {
     /// The ids of chunk `p` met in earlier chunks; `p`'s ids are then added.
     fn check_and_add(&mut self, p: &Parser<'_>) -> foldhash::HashSet<u64> {
-        let mut h: Vec<u64> = p.id_log.iter().map(|r| r.hash).collect();
+        self.check_and_add_hashes(p.id_log.iter().map(|r| r.hash).collect())
+    }
+
+    /// Was an id of hash `h` met in an earlier chunk?
+    pub(crate) fn contains(&self, h: u64) -> bool {
+        self.sorted.binary_search(&h).is_ok()
+    }
+
+    /// The hashes of `h` (a chunk's ids, any hash function used throughout) met in earlier
+    /// chunks; they are then added.
+    pub(crate) fn check_and_add_hashes(&mut self, mut h: Vec<u64>) -> foldhash::HashSet<u64> {
         h.sort_unstable();
         h.dedup();
         let before: foldhash::HashSet<u64> = h
