@@ -230,6 +230,7 @@ fn write_out(model: &skylod::model::CityModel, out: &std::path::Path) {
         overwrite: false,
         protect: Vec::new(),
         keep_envelopes: false,
+        plan_by_chunk: false,
     };
     write_document(model, 0, Vec::new(), out, &opts).unwrap();
 }

@@ -6,6 +6,7 @@
 //! a `gml:MultiSurface`; other `lodNSurface` properties a `gml:CompositeSurface`; everything
 //! else (implicit geometry, curves, terrain intersections, reliefs) is kept verbatim.
 
+use super::id_table::IdTable;
 use crate::io::citygml::ns;
 use crate::io::citygml::write::{escape_attr, GmlWriter};
 use crate::model::{CityGmlVersion, Polygon};
@@ -124,13 +125,38 @@ impl Encoder {
 #[derive(Debug, Default)]
 pub(super) struct IdPool {
     used: HashSet<String>,
+    /// With [`IdPool::logging`]: the hashes ([`IdTable::hash`]) of the ids handed out (with
+    /// their `_s` and `_<n>` forms) since [`IdPool::take_log`].
+    log: Option<Vec<u64>>,
 }
 
 impl IdPool {
     pub(super) fn new() -> Self {
         IdPool {
             used: HashSet::new(),
+            log: None,
         }
+    }
+
+    /// A pool that logs the hashes of what it hands out (the chunked plan checks them against
+    /// the ids of the chunks after).
+    pub(super) fn logging() -> Self {
+        IdPool {
+            log: Some(Vec::new()),
+            ..IdPool::new()
+        }
+    }
+
+    /// The hashes logged since the last call.
+    pub(super) fn take_log(&mut self) -> Vec<u64> {
+        self.log.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
+    fn take(&mut self, id: String) {
+        if let Some(log) = &mut self.log {
+            log.push(IdTable::hash(id.as_bytes()));
+        }
+        self.used.insert(id);
     }
 
     /// A base id for geometry with `polygons` polygons: `base` with characters an `xs:ID`
@@ -164,10 +190,10 @@ impl IdPool {
                 || taken(&format!("{cand}_s"))
                 || (0..polygons).any(|i| taken(&format!("{cand}_{i}")));
             if !clash {
-                self.used.insert(cand.clone());
-                self.used.insert(format!("{cand}_s"));
+                self.take(cand.clone());
+                self.take(format!("{cand}_s"));
                 for i in 0..polygons {
-                    self.used.insert(format!("{cand}_{i}"));
+                    self.take(format!("{cand}_{i}"));
                 }
                 return cand;
             }

@@ -117,6 +117,11 @@ impl IdTable {
         self.bytes.get(i..i.checked_add(len)?)
     }
 
+    /// The hash ([`IdTable::hash`]) of every id, in no order.
+    pub(super) fn hashes(&self) -> impl Iterator<Item = u64> + '_ {
+        self.entries.iter().map(|e| e.hash)
+    }
+
     /// Smallest node holding `id`.
     pub(super) fn get(&self, id: &str) -> Option<u32> {
         let h = Self::hash(id.as_bytes());

@@ -92,26 +92,117 @@ fn scan_with(
             let file = reader
                 .get_ref()
                 .try_clone()
-                .map_err(|source| WriteError::Io {
-                    file: path.to_path_buf(),
-                    source,
-                })?;
-            let max_content = (opts.max_event_bytes / 2) as u64;
-            let pre = Prescan::new(file, skip, max_content, chunk_bytes);
-            let workers = rayon::current_num_threads().saturating_sub(1);
-            let (mut doc, taken) = pre.alongside(workers, |pre| {
-                scan_stream(reader, size, path, skip, opts, Some(pre))
-            })?;
-            pre.into_table(&taken, &mut doc.ids);
-            doc
+                .map_err(|e| io_error(path, e))?;
+            let pass = (size, path, skip, opts);
+            prescanned(reader, file, pass, chunk_bytes, 0)?
         }
-        Stream::Plain(reader) => scan_stream(reader, size, path, skip, opts, None)?.0,
-        Stream::Memory(reader) => scan_stream(reader, size, path, skip, opts, None)?.0,
-        Stream::Gzip(reader) => scan_stream(reader, size, path, skip, opts, None)?.0,
+        Stream::Plain(reader) => scan_stream(reader, size, path, skip, opts, None, 0)?.0,
+        Stream::Memory(reader) => scan_stream(reader, size, path, skip, opts, None, 0)?.0,
+        Stream::Gzip(reader) => scan_stream(reader, size, path, skip, opts, None, 0)?.0,
     };
     doc.seal();
     Ok(doc)
 }
+
+/// The index of one chunk of whole top-level members of a plain document held in `bytes`
+/// (`chunks.ranges[k]`, see [`crate::io::citygml::read::member_chunks`]): the pass reads the
+/// prolog, then the chunk, then (but for the last chunk) the root's end tag, the positions
+/// those of the document. The index holds the root and the chunk's elements; the ids of
+/// skipped content are found ahead by the other cores as in [`scan`] (`file`: the document,
+/// opened). Its memory follows the chunk, not the document.
+pub(super) fn scan_chunk(
+    bytes: &[u8],
+    file: &std::fs::File,
+    path: &Path,
+    chunks: &crate::io::citygml::read::MemberChunks,
+    k: usize,
+    skip: &[Span],
+    opts: &ReadOptions,
+) -> Result<Doc, WriteError> {
+    let (from, to) = chunks.ranges[k];
+    let last = k + 1 == chunks.ranges.len();
+    let mut tail = Vec::new();
+    if !last {
+        tail.extend_from_slice(b"</");
+        tail.extend_from_slice(&chunks.root_qname);
+        tail.push(b'>');
+    }
+    let (Some(head), Some(body)) = (bytes.get(..chunks.head_end), bytes.get(from..to)) else {
+        return Err(WriteError::SourceChanged(path.to_path_buf()));
+    };
+    let reader = Pieces {
+        parts: [head, body, &tail],
+        at: 0,
+    };
+    let gap = (from - chunks.head_end) as u64;
+    let skipped: u64 = skip.iter().map(|s| s.end.saturating_sub(s.start)).sum();
+    let mut doc = if cfg!(unix) && skipped >= PRESCAN_MIN_BYTES {
+        let file = file.try_clone().map_err(|e| io_error(path, e))?;
+        let pass = ((to - from) as u64, path, skip, opts);
+        prescanned(reader, file, pass, CHUNK_BYTES, gap)?
+    } else {
+        scan_stream(reader, (to - from) as u64, path, skip, opts, None, gap)?.0
+    };
+    doc.seal();
+    Ok(doc)
+}
+
+/// [`scan_stream`] of `reader` with `pass` (its size, path, skip spans and options), the
+/// ids of skipped content found ahead by the other cores ([`Prescan`] of `file`, the
+/// document, `chunk_bytes` at a time).
+fn prescanned<R: BufRead + SkipAhead>(
+    reader: R,
+    file: std::fs::File,
+    (size, path, skip, opts): (u64, &Path, &[Span], &ReadOptions),
+    chunk_bytes: u64,
+    gap: u64,
+) -> Result<Doc, WriteError> {
+    let max_content = (opts.max_event_bytes / 2) as u64;
+    let pre = Prescan::new(file, skip, max_content, chunk_bytes);
+    let workers = rayon::current_num_threads().saturating_sub(1);
+    let (mut doc, taken) = pre.alongside(workers, |pre| {
+        scan_stream(reader, size, path, skip, opts, Some(pre), gap)
+    })?;
+    pre.into_table(&taken, &mut doc.ids);
+    Ok(doc)
+}
+
+/// An I/O error reading `path`.
+fn io_error(path: &Path, source: std::io::Error) -> WriteError {
+    WriteError::Io {
+        file: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Byte slices read one after the other ([`scan_chunk`]'s prolog, chunk and end tag).
+struct Pieces<'b> {
+    parts: [&'b [u8]; 3],
+    at: usize,
+}
+
+impl Read for Pieces<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        crate::io::files::read_through_buf(self, buf)
+    }
+}
+
+impl BufRead for Pieces<'_> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        while self.at < self.parts.len() && self.parts[self.at].is_empty() {
+            self.at += 1;
+        }
+        Ok(self.parts.get(self.at).copied().unwrap_or_default())
+    }
+
+    fn consume(&mut self, amt: usize) {
+        if let Some(p) = self.parts.get_mut(self.at) {
+            *p = p.get(amt..).unwrap_or_default();
+        }
+    }
+}
+
+impl SkipAhead for Pieces<'_> {}
 
 /// The index being built: one call per start tag, end tag and text of the pass.
 struct Indexer<'p> {
@@ -301,7 +392,8 @@ impl<'p> Indexer<'p> {
 
 /// The pass over `reader` (`size`: the file's size, a hint): skipped content found by
 /// `pre` is jumped over ([`jump`]), any other is read and scanned as it comes
-/// ([`skip_content`]).
+/// ([`skip_content`]). `gap`: bytes of the document left out of `reader` right after the
+/// root's start tag ([`scan_chunk`]; counted in the positions).
 fn scan_stream<R: BufRead + SkipAhead>(
     reader: R,
     size: u64,
@@ -309,6 +401,7 @@ fn scan_stream<R: BufRead + SkipAhead>(
     skip: &[Span],
     opts: &ReadOptions,
     pre: Option<&Prescan>,
+    gap: u64,
 ) -> Result<(Doc, Taken), WriteError> {
     let mut taken: Taken = if pre.is_some() {
         vec![None; skip.len()]
@@ -343,7 +436,12 @@ fn scan_stream<R: BufRead + SkipAhead>(
             Event::Start(ref e) | Event::Empty(ref e) => {
                 let empty = matches!(ev, Event::Empty(_));
                 let content_start = reader.buffer_position() + base + skipped;
-                if let Some((idx, si, s)) = ix.start(&reader, e, empty, pos, content_start)? {
+                let root = ix.stack.is_empty() && ix.doc.nodes.is_empty();
+                let hit = ix.start(&reader, e, empty, pos, content_start)?;
+                if root {
+                    skipped += gap;
+                }
+                if let Some((idx, si, s)) = hit {
                     let io = |source| WriteError::Io {
                         file: path.to_path_buf(),
                         source,

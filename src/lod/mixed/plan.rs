@@ -35,13 +35,103 @@ struct Replacement {
     polygons: Vec<Polygon>,
 }
 
-/// The edits that write one source document at its levels.
+/// What of a file's model the plans of its parts share: the containers ([`containers`]) and
+/// per building its parts and the assets of the file it owns.
+pub(super) struct Shared {
+    pub(super) containers: Vec<bool>,
+    parts: Vec<Vec<usize>>,
+    owned: Vec<Vec<usize>>,
+}
+
+impl Shared {
+    /// `containers` from [`containers`] for the same file and levels.
+    pub(super) fn new(model: &CityModel, file: usize, containers: Vec<bool>) -> Self {
+        let mut parts = vec![Vec::new(); model.buildings.len()];
+        for (i, b) in model.buildings.iter().enumerate() {
+            if let Some(p) = b.parent.filter(|&p| p < parts.len()) {
+                parts[p].push(i);
+            }
+        }
+        let mut owned = vec![Vec::new(); model.buildings.len()];
+        for (i, a) in model.assets.iter().enumerate() {
+            if let Some(b) = a.building.filter(|&b| b < owned.len() && a.file == file) {
+                owned[b].push(i);
+            }
+        }
+        Shared {
+            containers,
+            parts,
+            owned,
+        }
+    }
+}
+
+/// What one plan covers: the whole document, or one chunk of its top-level members
+/// (`super::plan_chunked`). The lists hold the indices, ascending, of the file's assets,
+/// buildings and envelopes (of [`crate::model::SourceFile::envelopes`]) whose elements
+/// start in it.
+pub(super) struct Scope<'a> {
+    pub(super) assets: &'a [u32],
+    pub(super) buildings: &'a [u32],
+    pub(super) envelopes: &'a [u32],
+    pub(super) shared: &'a Shared,
+    /// Leave the envelopes of the root to the caller ([`Plan::root_sites`], [`Plan::written_box`]):
+    /// they bound what every chunk writes.
+    pub(super) defer_root: bool,
+    /// Is a gml:id in the document outside the index (a fresh id must not meet it)?
+    pub(super) elsewhere: &'a dyn Fn(&str) -> bool,
+}
+
+/// The indices of the file's assets, buildings and envelopes ([`Scope`]) whose elements start
+/// in each of the ranges `bounds` (sorted, adjoining `[start, end)` byte ranges).
+pub(super) fn scope_lists(
+    model: &CityModel,
+    file: usize,
+    bounds: &[(u64, u64)],
+) -> [Vec<Vec<u32>>; 3] {
+    let part = |start: u64| {
+        let k = bounds.partition_point(|b| b.1 <= start);
+        (k < bounds.len() && start >= bounds[k].0).then_some(k)
+    };
+    let group = |starts: &mut dyn Iterator<Item = (usize, u64)>| {
+        let mut v = vec![Vec::new(); bounds.len()];
+        for (i, start) in starts {
+            if let Some(k) = part(start) {
+                v[k].push(i as u32);
+            }
+        }
+        v
+    };
+    let src = &model.files[file];
+    [
+        group(
+            &mut (model.assets.iter().enumerate())
+                .filter(|(_, a)| a.file == file)
+                .map(|(i, a)| (i, a.span.start)),
+        ),
+        group(
+            &mut (model.buildings.iter().enumerate())
+                .filter(|(_, b)| b.file == file)
+                .map(|(i, b)| (i, b.span.start)),
+        ),
+        group(
+            &mut src
+                .envelopes
+                .iter()
+                .enumerate()
+                .map(|(i, e)| (i, e.span.start)),
+        ),
+    ]
+}
+
+/// The edits that write one source document (or one chunk of it: [`Scope`]) at its levels.
 pub(super) struct Plan<'a> {
     model: &'a CityModel,
     file: usize,
     rough: &'a [RoughGeometry],
     levels: &'a [u8],
     doc: &'a Doc,
+    scope: Scope<'a>,
     version: CityGmlVersion,
     encoder: Encoder,
     removed: Vec<bool>,
@@ -49,24 +139,29 @@ pub(super) struct Plan<'a> {
     replacements: Vec<Replacement>,
     inserts: Vec<Edit>,
     envelope_edits: Vec<Edit>,
-    containers: Vec<bool>,
-    ids: IdPool,
+    containers: &'a [bool],
+    /// The fresh ids handed out (by this plan and those of the chunks before).
+    pub(super) ids: IdPool,
     ref_nodes: HashSet<u32>,
     /// Per building: its parts, and the assets of the file it owns.
-    parts: Vec<Vec<usize>>,
-    owned: Vec<Vec<usize>>,
+    parts: &'a [Vec<usize>],
+    owned: &'a [Vec<usize>],
+    /// With [`Scope::defer_root`]: the root's envelopes (index in the file's envelopes, and
+    /// the span of their `gml:boundedBy`).
+    pub(super) root_sites: Vec<(usize, Span)>,
+    /// With [`Scope::defer_root`]: the box of every geometry written.
+    pub(super) written_box: Bbox,
     pub(super) summary: MixedSummary,
 }
 
 impl<'a> Plan<'a> {
-    /// `containers` from [`containers`] for the same file and levels.
+    /// A plan of `scope` on its index `doc`, handing out fresh ids from `ids`.
     pub(super) fn new(
         model: &'a CityModel,
-        file: usize,
-        rough: &'a [RoughGeometry],
-        levels: &'a [u8],
-        containers: Vec<bool>,
+        (file, rough, levels): (usize, &'a [RoughGeometry], &'a [u8]),
+        scope: Scope<'a>,
         doc: &'a Doc,
+        ids: IdPool,
     ) -> Self {
         let src = &model.files[file];
         Plan {
@@ -82,27 +177,14 @@ impl<'a> Plan<'a> {
             replacements: Vec::new(),
             inserts: Vec::new(),
             envelope_edits: Vec::new(),
-            containers,
-            ids: IdPool::new(),
+            containers: &scope.shared.containers,
+            ids,
             ref_nodes: doc.refs.iter().map(|r| r.0).collect(),
-            parts: {
-                let mut v = vec![Vec::new(); model.buildings.len()];
-                for (i, b) in model.buildings.iter().enumerate() {
-                    if let Some(p) = b.parent.filter(|&p| p < v.len()) {
-                        v[p].push(i);
-                    }
-                }
-                v
-            },
-            owned: {
-                let mut v = vec![Vec::new(); model.buildings.len()];
-                for (i, a) in model.assets.iter().enumerate() {
-                    if let Some(b) = a.building.filter(|&b| b < v.len() && a.file == file) {
-                        v[b].push(i);
-                    }
-                }
-                v
-            },
+            parts: &scope.shared.parts,
+            owned: &scope.shared.owned,
+            root_sites: Vec::new(),
+            written_box: Bbox::EMPTY,
+            scope,
             summary: MixedSummary::default(),
         }
     }
@@ -112,7 +194,7 @@ impl<'a> Plan<'a> {
     }
 
     fn file_assets(&self) -> impl Iterator<Item = usize> + '_ {
-        (0..self.model.assets.len()).filter(|&a| self.model.assets[a].file == self.file)
+        self.scope.assets.iter().map(|&a| a as usize)
     }
 
     /// Element of an asset (the building for a Body).
@@ -268,11 +350,11 @@ impl<'a> Plan<'a> {
             let Some(n) = self.doc.node_at(g.span.start) else {
                 continue;
             };
-            let doc = self.doc;
+            let (doc, elsewhere) = (self.doc, self.scope.elsewhere);
             let id = self
                 .ids
                 .fresh(&format!("{base}_g{j}"), out.polygons.len(), |s| {
-                    doc.has_id(s)
+                    doc.has_id(s) || elsewhere(s)
                 });
             let geom = self.encoder.geometry(enc, &id, &out.polygons);
             let node = self.doc.nodes[n as usize];
@@ -354,7 +436,7 @@ impl<'a> Plan<'a> {
     fn drop_buildings(&mut self) -> bool {
         let m = self.model;
         let mut changed = false;
-        for b in (0..m.buildings.len()).rev() {
+        for b in self.scope.buildings.iter().rev().map(|&b| b as usize) {
             let bd = &m.buildings[b];
             if bd.file != self.file {
                 continue;
@@ -527,16 +609,11 @@ impl<'a> Plan<'a> {
                 asset,
             });
         };
-        let groups = m
-            .assets
-            .iter()
-            .filter(|a| a.file == self.file)
-            .map(|a| (&a.geometries, true))
+        let groups = (self.scope.assets.iter())
+            .map(|&a| (&m.assets[a as usize].geometries, true))
             .chain(
-                m.buildings
-                    .iter()
-                    .filter(|b| b.file == self.file)
-                    .map(|b| (&b.geometries, false)),
+                (self.scope.buildings.iter())
+                    .map(|&b| (&m.buildings[b as usize].geometries, false)),
             );
         for (geoms, asset) in groups {
             for g in geoms {
@@ -562,7 +639,13 @@ impl<'a> Plan<'a> {
 
     fn envelopes(&mut self, written: &[Written]) {
         let src = &self.model.files[self.file];
-        for env in &src.envelopes {
+        if self.scope.defer_root {
+            for w in written {
+                self.written_box.union(&w.bbox);
+            }
+        }
+        for &e in self.scope.envelopes {
+            let env = &src.envelopes[e as usize];
             if env.bbox.is_empty() {
                 continue; // owner unknown: kept verbatim
             }
@@ -575,6 +658,13 @@ impl<'a> Plan<'a> {
             let Some(owner) = self.doc.parent(n).and_then(|p| self.doc.parent(p)) else {
                 continue;
             };
+            if self.scope.defer_root && self.doc.parent(owner).is_none() {
+                if let Some(bb) = self.doc.parent(n) {
+                    let bb = self.doc.nodes[bb as usize];
+                    self.root_sites.push((e as usize, bb.start..bb.end));
+                }
+                continue;
+            }
             let last = self.doc.nodes[owner as usize].last_desc;
             let lo = written.partition_point(|w| w.node < owner);
             let mut bbox = Bbox::EMPTY;

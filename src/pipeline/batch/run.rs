@@ -122,6 +122,7 @@ impl Batch {
             overwrite,
             protect: paths.clone(),
             keep_envelopes,
+            plan_by_chunk: false,
         };
         let targets = match edits {
             true => plan.edit_targets(&paths, &wopts, shard, true)?,

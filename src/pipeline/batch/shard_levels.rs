@@ -320,6 +320,7 @@ pub fn check_levels_target(
         overwrite,
         protect: inputs.to_vec(),
         keep_envelopes: false,
+        plan_by_chunk: false,
     };
     check_target(out, &wopts, inputs.iter().map(PathBuf::as_path))?;
     Ok(())

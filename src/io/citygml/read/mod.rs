@@ -46,6 +46,7 @@ mod stream;
 mod xlink;
 
 pub use events::read_from;
+pub(crate) use stream::{member_chunks, MemberChunks, SeenIds};
 pub use stream::{
     stream, stream_citygml, Chunk, ChunkStart, Passes, Reread, StreamSummary, Streamed, CHUNK_BYTES,
 };

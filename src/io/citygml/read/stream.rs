@@ -324,13 +324,7 @@ pub fn stream_citygml<E>(
     let mut index = 0;
     loop {
         let first = index == 0;
-        let start = if first { root_end } else { from };
-        let at = start.saturating_add(step);
-        let to = if at >= body.len() {
-            body.len()
-        } else {
-            next_cut(body, at).unwrap_or(body.len())
-        };
+        let to = chunk_end(body, if first { root_end } else { from }, step);
         let last = to == body.len();
         let before = (!first).then(|| std::sync::Arc::new(state.clone()));
         let Some(p) = parse_chunk(&doc, bom, prolog, from, to, first, &state, path, opts) else {
@@ -585,6 +579,67 @@ impl Reread {
     }
 }
 
+/// The end (body offset) of the chunk of [`stream_citygml`] whose members start at `start`:
+/// the first top-level member end after `step` bytes, or the body's end.
+fn chunk_end(body: &[u8], start: usize, step: usize) -> usize {
+    let at = start.saturating_add(step);
+    if at >= body.len() {
+        body.len()
+    } else {
+        next_cut(body, at).unwrap_or(body.len())
+    }
+}
+
+/// Where [`stream_citygml`] cuts a document into chunks of whole top-level members
+/// ([`member_chunks`]), in document offsets (byte-order mark included).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct MemberChunks {
+    /// End of the root's start tag: `doc[..head_end]` is the prolog.
+    pub(crate) head_end: usize,
+    /// The chunks: the first starts at `head_end`, each starts where the one before ends, the
+    /// last ends at the document's end.
+    pub(crate) ranges: Vec<(usize, usize)>,
+    /// The root's qualified name, as written in its start tag.
+    pub(crate) root_qname: Vec<u8>,
+}
+
+/// The chunks [`stream_citygml`] reads `doc` (a whole uncompressed document) in, about
+/// `chunk_bytes` each; `Err` with why the document is not read in chunks (see
+/// [`super::split::parse_head`]). For the writers that go through a document a chunk at a
+/// time without reading it into a model (`lod::mixed`).
+pub(crate) fn member_chunks(
+    doc: &[u8],
+    path: &Path,
+    opts: &ReadOptions,
+    chunk_bytes: u64,
+) -> Result<MemberChunks, &'static str> {
+    let h = super::split::parse_head(doc, path, opts)?;
+    let (bom, body, root_end) = (h.bom, h.body, h.root_end);
+    // the root's start tag ends the prolog; no `<` can stand in its attribute values
+    let tag = memchr::memrchr(b'<', &body[..root_end]).ok_or("no CityModel root")?;
+    let root_qname: Vec<u8> = body[tag + 1..root_end]
+        .iter()
+        .copied()
+        .take_while(|c| !c.is_ascii_whitespace() && *c != b'>' && *c != b'/')
+        .collect();
+    let step = usize::try_from(chunk_bytes.max(1)).unwrap_or(usize::MAX);
+    let mut ranges = Vec::new();
+    let mut from = root_end;
+    loop {
+        let to = chunk_end(body, from, step);
+        ranges.push((from + bom, to + bom));
+        if to >= body.len() {
+            break;
+        }
+        from = to;
+    }
+    Ok(MemberChunks {
+        head_end: root_end + bom,
+        ranges,
+        root_qname,
+    })
+}
+
 /// The end (after `>`) of the first top-level member end tag at or after `at`; `None` at the
 /// document's end.
 fn next_cut(body: &[u8], at: usize) -> Option<usize> {
@@ -715,39 +770,125 @@ fn parse_chunk<'d>(
     Some(p)
 }
 
-/// The gml:id hashes of the chunks read so far, sorted, 8 bytes an id: which ids of the next
-/// chunk repeat an earlier one.
+/// The gml:id hashes of the chunks read so far, 8 bytes an id: which ids of the next chunk
+/// repeat an earlier one. They are kept in sorted runs, each at least twice as long as the
+/// next (a run merged into the one before it once it is half as long): a chunk's ids are
+/// looked up in a few runs, and an id is moved in about log2(chunks) merges, not once per
+/// chunk after it (a single sorted vector made a 4 GB document's writer quadratic).
 #[derive(Default)]
-struct SeenIds {
-    sorted: Vec<u64>,
+pub(crate) struct SeenIds {
+    runs: Vec<Vec<u64>>,
 }
 
 impl SeenIds {
     /// The ids of chunk `p` met in earlier chunks; `p`'s ids are then added.
     fn check_and_add(&mut self, p: &Parser<'_>) -> foldhash::HashSet<u64> {
-        let mut h: Vec<u64> = p.id_log.iter().map(|r| r.hash).collect();
+        self.check_and_add_hashes(p.id_log.iter().map(|r| r.hash).collect())
+    }
+
+    /// Was an id of hash `h` met in an earlier chunk?
+    pub(crate) fn contains(&self, h: u64) -> bool {
+        self.runs.iter().any(|r| r.binary_search(&h).is_ok())
+    }
+
+    /// The hashes of `h` (a chunk's ids, any hash function used throughout) met in earlier
+    /// chunks; they are then added.
+    pub(crate) fn check_and_add_hashes(&mut self, mut h: Vec<u64>) -> foldhash::HashSet<u64> {
         h.sort_unstable();
         h.dedup();
-        let before: foldhash::HashSet<u64> = h
-            .iter()
-            .copied()
-            .filter(|x| self.sorted.binary_search(x).is_ok())
-            .collect();
-        // merge in place from the end (a large vector grows by remapping, not copying)
-        let old = self.sorted.len();
-        self.sorted.reserve_exact(h.len());
-        self.sorted.resize(old + h.len(), 0);
-        let (mut i, mut j, mut k) = (old, h.len(), old + h.len());
-        while j > 0 {
-            if i > 0 && self.sorted[i - 1] > h[j - 1] {
-                self.sorted[k - 1] = self.sorted[i - 1];
-                i -= 1;
-            } else {
-                self.sorted[k - 1] = h[j - 1];
-                j -= 1;
+        let mut before = foldhash::HashSet::default();
+        for run in &self.runs {
+            met_in(&h, run, &mut before);
+        }
+        self.runs.push(h);
+        while let [.., a, b] = &self.runs[..] {
+            if b.len() * 2 < a.len() {
+                break;
             }
-            k -= 1;
+            if let Some(b) = self.runs.pop() {
+                if let Some(a) = self.runs.last_mut() {
+                    merge_into(a, &b);
+                }
+            }
         }
         before
+    }
+}
+
+/// The values of the sorted `h` that the sorted `run` holds, into `out`: one walk with a
+/// cursor that gallops forward (memory read in order, a few steps a value where `run` is
+/// much longer than `h`).
+fn met_in(h: &[u64], run: &[u64], out: &mut foldhash::HashSet<u64>) {
+    let mut at = 0;
+    for &x in h {
+        // the first place at or after `at` holding x or more
+        let mut step = 1;
+        let mut hi = at;
+        while hi < run.len() && run[hi] < x {
+            at = hi + 1;
+            hi = at + step;
+            step *= 2;
+        }
+        let hi = hi.min(run.len());
+        at += run[at.min(hi)..hi].partition_point(|&v| v < x);
+        if run.get(at) == Some(&x) {
+            out.insert(x);
+        }
+    }
+}
+
+/// Merge the sorted `b` into the sorted `a`, in place from the end (a large vector grows by
+/// remapping, not copying).
+fn merge_into(a: &mut Vec<u64>, b: &[u64]) {
+    let old = a.len();
+    a.reserve_exact(b.len());
+    a.resize(old + b.len(), 0);
+    let (mut i, mut j, mut k) = (old, b.len(), old + b.len());
+    while j > 0 {
+        if i > 0 && a[i - 1] > b[j - 1] {
+            a[k - 1] = a[i - 1];
+            i -= 1;
+        } else {
+            a[k - 1] = b[j - 1];
+            j -= 1;
+        }
+        k -= 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The runs answer as one set would: every id of a chunk met before is found, no other,
+    /// over chunks of many sizes (merges of every shape), and the runs stay few.
+    #[test]
+    fn seen_ids_answer_as_a_set() {
+        let mut seen = SeenIds::default();
+        let mut all = std::collections::HashSet::new();
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        for chunk in 0..300usize {
+            let n = [1, 7, 100, 1000, 3][chunk % 5] + chunk;
+            let h: Vec<u64> = (0..n)
+                .map(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    x % 200_000 // repeats within and across chunks
+                })
+                .collect();
+            let expect: foldhash::HashSet<u64> =
+                h.iter().copied().filter(|v| all.contains(v)).collect();
+            assert_eq!(
+                seen.check_and_add_hashes(h.clone()),
+                expect,
+                "chunk {chunk}"
+            );
+            all.extend(h);
+            assert!(seen.runs.len() <= 24, "{} runs", seen.runs.len());
+            assert!(seen.runs.iter().all(|r| r.is_sorted()));
+        }
+        assert!(all.iter().all(|&v| seen.contains(v)));
+        assert!(!seen.contains(200_001));
     }
 }

@@ -1,0 +1,353 @@
+//! The mixed writer's plan made one chunk of whole top-level members at a time
+//! ([`plan_chunked`]): each chunk is indexed ([`index::scan_chunk`]), planned and its index
+//! dropped, so that the writer's memory follows the chunk, not the document. The chunks are
+//! those of the streamed read ([`crate::io::citygml::read::member_chunks`]).
+//!
+//! A chunk's plan is the whole document's restricted to the chunk where nothing of the
+//! document outside the chunk decides anything in it. What could, and how it is handled:
+//!
+//! * a reference (`xlink:href`, appearance target `#id`) whose target is not in its chunk
+//!   (in another member, at the root, or nowhere): the plan declines;
+//! * a gml:id of a chunk also met in an earlier one (the whole index resolves an id to its
+//!   first element): the plan declines. The hashes of the ids of the chunks before are kept
+//!   ([`SeenIds`], 8 bytes an id: the one part that grows with the document);
+//! * a fresh `skylod_` id must not meet any id of the document: a candidate is checked against
+//!   its chunk's ids and the hashes of the chunks before, and a chunk holding an id handed out
+//!   before declines;
+//! * a namespace prefix redeclared below the root (where `skylod_level` takes its prefixes
+//!   from): a chunk redeclaring one the first chunk does not declines;
+//! * the root's envelopes bound what every chunk writes: they are planned last, from the
+//!   union of the chunks' written boxes;
+//! * the counts of the summary are summed.
+//!
+//! A declined plan (`None`) is made again on the whole index, as is a plan whose chunk does
+//! not index alone (a chunk that does not end between two members of the root, a read error:
+//! the whole index reports it).
+
+use super::encode::IdPool;
+use super::id_table::IdTable;
+use super::plan::{self, Plan, Scope, Shared};
+use super::{index, MixedSummary};
+use crate::io::citygml::read::{member_chunks, ReadOptions, SeenIds};
+use crate::io::citygml::source::{self, Bytes, Document};
+use crate::io::citygml::write::{envelope_xml, Edit};
+use crate::lod::rough::RoughGeometry;
+use crate::model::{Bbox, CityModel, Source};
+use foldhash::HashSet;
+
+/// The edits that write `file` at `levels` (as `super::plan_file`), planned chunk by chunk
+/// (chunks of about `chunk_bytes`); `None` where the document is not a plain file of two
+/// chunks or more, or where a chunk's plan could differ from the whole index's (module
+/// docs): plan it whole then.
+pub(super) fn plan_chunked(
+    model: &CityModel,
+    (file, rough, levels): (usize, &[RoughGeometry], &[u8]),
+    keep_envelopes: bool,
+    chunk_bytes: u64,
+) -> Option<(Vec<Edit>, MixedSummary)> {
+    let src = &model.files[file];
+    let Source::File(path) = &src.source else {
+        return None;
+    };
+    let Ok(Document::Plain(bytes @ Bytes::Mapped(_))) = source::load_source(&src.source, path)
+    else {
+        return None;
+    };
+    if bytes.len() as u64 != src.len {
+        return None;
+    }
+    let opts = ReadOptions::default();
+    let chunks = member_chunks(&bytes, &src.path, &opts, chunk_bytes).ok()?;
+    if chunks.ranges.len() < 2 {
+        return None;
+    }
+    let fh = std::fs::File::open(path).ok()?;
+    // the first chunk holds the prolog
+    let bounds: Vec<(u64, u64)> = (chunks.ranges.iter().enumerate())
+        .map(|(k, &(a, b))| (if k == 0 { 0 } else { a as u64 }, b as u64))
+        .collect();
+    let containers = plan::containers(model, file, levels);
+    let skip = plan::skip_spans(model, file, levels, &containers);
+    let shared = Shared::new(model, file, containers);
+    let [assets, buildings, envelopes] = plan::scope_lists(model, file, &bounds);
+    let mut seen = SeenIds::default();
+    let mut handed_out: HashSet<u64> = HashSet::default();
+    let mut ids = IdPool::logging();
+    let mut redeclared = None;
+    let (mut edits, mut summary) = (Vec::new(), MixedSummary::default());
+    let (mut root_sites, mut root_box) = (Vec::new(), Bbox::EMPTY);
+    for (k, &(from, to)) in bounds.iter().enumerate() {
+        let lo = skip.partition_point(|s| s.start < from);
+        let hi = skip.partition_point(|s| s.start < to);
+        let doc = index::scan_chunk(&bytes, &fh, &src.path, &chunks, k, &skip[lo..hi], &opts);
+        // the chunk is not read again (a private read-only map reads the file again if it is)
+        bytes.release_range(chunks.ranges[k].0, chunks.ranges[k].1);
+        let mut doc = doc.ok()?;
+        let hashes: Vec<u64> = doc.ids.hashes().collect();
+        if hashes.iter().any(|h| handed_out.contains(h)) {
+            return None;
+        }
+        let before = seen.check_and_add_hashes(hashes);
+        if !before.is_empty() && looks_up(model, &doc, (&assets[k], &buildings[k]), &before) {
+            return None;
+        }
+        let dangling = (doc.refs.iter()).any(|(_, _, target)| {
+            target
+                .strip_prefix('#')
+                .is_some_and(|id| doc.id_node(id).is_none())
+        });
+        if dangling {
+            return None;
+        }
+        match &redeclared {
+            None => redeclared = Some(doc.redeclared.clone()),
+            Some(first) if doc.redeclared.is_subset(first) => doc.redeclared = first.clone(),
+            Some(_) => return None,
+        }
+        let elsewhere = |id: &str| seen.contains(IdTable::hash(id.as_bytes()));
+        let scope = Scope {
+            assets: &assets[k],
+            buildings: &buildings[k],
+            envelopes: &envelopes[k],
+            shared: &shared,
+            defer_root: true,
+            elsewhere: &elsewhere,
+        };
+        let mut plan = Plan::new(model, (file, rough, levels), scope, &doc, ids);
+        plan.run(keep_envelopes);
+        edits.append(&mut plan.edits());
+        summary.add(&plan.summary);
+        root_sites.append(&mut plan.root_sites);
+        root_box.union(&plan.written_box);
+        ids = plan.ids;
+        handed_out.extend(ids.take_log());
+    }
+    for (e, bb) in root_sites {
+        let env = &src.envelopes[e];
+        if root_box.is_empty() {
+            edits.push(Edit {
+                span: bb,
+                replacement: Vec::new(),
+            });
+            continue;
+        }
+        let mut site = env.clone();
+        site.bbox = root_box;
+        if let Some(xml) = envelope_xml(&site) {
+            edits.push(Edit {
+                span: env.span.clone(),
+                replacement: xml.into_bytes(),
+            });
+        }
+    }
+    Some((edits, summary))
+}
+
+/// Could the plan of a chunk look up one of the ids `before` (hashes of ids of the chunk
+/// met in an earlier one, where the whole index finds their first element)? The plan looks up
+/// the targets of references and the ids of the polygons of its assets and buildings.
+fn looks_up(
+    model: &CityModel,
+    doc: &super::doc::Doc,
+    (assets, buildings): (&[u32], &[u32]),
+    before: &HashSet<u64>,
+) -> bool {
+    let met = |id: &str| before.contains(&IdTable::hash(id.as_bytes()));
+    let geometries = (assets.iter())
+        .flat_map(|&a| &model.assets[a as usize].geometries)
+        .chain(
+            buildings
+                .iter()
+                .flat_map(|&b| &model.buildings[b as usize].geometries),
+        );
+    (doc.refs.iter()).any(|(_, _, t)| t.strip_prefix('#').is_some_and(met))
+        || geometries
+            .flat_map(|g| &g.polygons)
+            .any(|p| p.id.as_deref().is_some_and(met))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::{citygml_files, house, patterns, read_in, real_files};
+    use super::super::{plan_file, write_mixed_to};
+    use super::*;
+    use crate::io::citygml::read::read_file;
+    use crate::io::citygml::write::{write_document_to, WriteOptions};
+    use crate::lod::rough::{rough_model, RoughOptions};
+    use std::path::{Path, PathBuf};
+
+    /// The document `model` writes with `edits`.
+    fn written(model: &CityModel, edits: Vec<Edit>) -> Vec<u8> {
+        let mut v = Vec::new();
+        let opts = WriteOptions {
+            keep_envelopes: true,
+            ..WriteOptions::default()
+        };
+        write_document_to(model, 0, edits, &mut v, &opts).unwrap();
+        v
+    }
+
+    /// `f` as a plain file (a gzip-compressed one decompressed into `dir`: chunks are planned
+    /// on plain files only).
+    fn plain(f: &Path, dir: &Path, n: usize) -> Option<PathBuf> {
+        if f.extension().is_none_or(|e| e != "gz") {
+            return Some(f.to_path_buf());
+        }
+        let (mut r, _) = source::open(f).ok()?;
+        let mut v = Vec::new();
+        std::io::Read::read_to_end(&mut r, &mut v).ok()?; // a broken fixture
+        let out = dir.join(format!("{n}.gml"));
+        std::fs::write(&out, v).unwrap();
+        Some(out)
+    }
+
+    /// Planned a member at a time (`chunk_bytes` 1) or on the whole index, every real file
+    /// and fixture writes the same bytes with the same summary, for several level patterns,
+    /// envelopes recomputed or kept; the chunks are planned where nothing crosses them (LoD2,
+    /// LoD3, CityGML 3.0, appearances) and declined for the cross-member XLink example.
+    #[test]
+    fn chunks_write_the_bytes_of_the_whole_index() {
+        let data = Path::new("../shared/data");
+        let mut files = real_files();
+        let dir = tempfile::tempdir().unwrap();
+        if let Some(street) = street(data, dir.path()) {
+            files.push(street);
+        }
+        let (mut chunked, mut declined) = (Vec::new(), Vec::new());
+        for (n, f) in files.iter().enumerate() {
+            let Some(Ok(model)) = plain(f, dir.path(), n).map(|p| read_file(&p)) else {
+                continue;
+            };
+            if model.files.is_empty() || model.assets.is_empty() {
+                continue;
+            }
+            let rough = rough_model(&model, &RoughOptions::default());
+            for (what, levels) in patterns(&model) {
+                for keep in [false, true] {
+                    let whole = plan_file(&model, 0, &rough, &levels, keep, true).unwrap();
+                    let Some(parts) = plan_chunked(&model, (0, &rough, &levels), keep, 1) else {
+                        declined.push(f.clone());
+                        continue;
+                    };
+                    let at = format!("{}: {what}, keep {keep}", f.display());
+                    assert_eq!(whole.1, parts.1, "{at}: summaries differ");
+                    let (a, b) = (written(&model, whole.0), written(&model, parts.0));
+                    assert!(a == b, "{at}: outputs differ");
+                    chunked.push(f.clone());
+                }
+            }
+        }
+        let named = |v: &[PathBuf], s: &str| v.iter().any(|p| p.to_string_lossy().contains(s));
+        if data.is_dir() {
+            for s in [
+                "street.gml",
+                "kit-fzk-haus/citygml3",
+                "ogc-citygml3-examples/",
+                "ogc-citygml2-examples/appearance",
+                "rotterdam",
+            ] {
+                assert!(named(&chunked, s), "no file of {s} planned in chunks");
+            }
+            assert!(named(&declined, "XLink_examples"), "cross-member XLinks");
+        }
+        assert!(chunked.len() >= 20, "{} plans in chunks", chunked.len());
+    }
+
+    /// The Ingolstadt street (every LoD3 building of `data/ingolstadt-lod3`, one a tile) as
+    /// one document in `dir`, twice with the ids of the second copy renamed (as
+    /// `../shared/tools/bench_inputs.py` makes the large files); `None` without the tiles.
+    fn street(data: &Path, dir: &Path) -> Option<PathBuf> {
+        const OPEN: &str = "<core:cityObjectMember>";
+        const CLOSE: &str = "</core:cityObjectMember>";
+        let mut tiles = Vec::new();
+        citygml_files(&data.join("ingolstadt-lod3"), &mut tiles);
+        let (mut head, mut body) = (None, String::new());
+        for t in &tiles {
+            let (mut r, _) = source::open(t).ok()?;
+            let mut s = String::new();
+            std::io::Read::read_to_string(&mut r, &mut s).ok()?;
+            let (Some(i), Some(j)) = (s.find(OPEN), s.rfind(CLOSE)) else {
+                continue;
+            };
+            head.get_or_insert_with(|| s[..i].to_string());
+            body.push_str(&s[i..j + CLOSE.len()]);
+            body.push('\n');
+        }
+        let copy = body
+            .replace("gml:id=\"", "gml:id=\"c1_")
+            .replace("xlink:href=\"#", "xlink:href=\"#c1_");
+        let out = dir.join("street.gml");
+        std::fs::write(&out, format!("{}{body}{copy}</core:CityModel>\n", head?)).ok()?;
+        Some(out)
+    }
+
+    /// The house without its root appearance (whose targets are in both members).
+    fn two_members() -> String {
+        let h = house();
+        let a = h.find("<app:appearanceMember>").unwrap();
+        let b = h.find("</CityModel>").unwrap();
+        format!("{}{}", &h[..a], &h[b..])
+    }
+
+    /// `xml` written at `levels` through `write_mixed_to`: the whole index's bytes, planned in
+    /// chunks (`chunked`) or declined. The text, and the summary of the chunks.
+    fn same(xml: &str, levels: &[u8], chunked: bool) -> (String, Option<MixedSummary>) {
+        let dir = tempfile::tempdir().unwrap();
+        let model = read_in(dir.path(), xml);
+        let rough = rough_model(&model, &RoughOptions::default());
+        let parts = plan_chunked(&model, (0, &rough, levels), false, 1);
+        let whole = written(
+            &model,
+            plan_file(&model, 0, &rough, levels, false, true).unwrap().0,
+        );
+        let mut out = Vec::new();
+        write_mixed_to(
+            &model,
+            0,
+            &rough,
+            levels,
+            &mut out,
+            &WriteOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(parts.is_some(), chunked, "planned in chunks");
+        assert!(out == whole, "the bytes of the whole index");
+        (String::from_utf8(out).unwrap(), parts.map(|p| p.1))
+    }
+
+    #[test]
+    fn a_reference_across_members_declines() {
+        // the root appearance targets both members
+        same(&house(), &[1, 2, 0], false);
+        let (text, summary) = same(&two_members(), &[1, 2, 0], true);
+        // the root envelope bounds both chunks' geometry: the first member's roof (rough)
+        // and wall, the second's roof dropped
+        assert!(
+            text.contains("<gml:upperCorner>4 4 5</gml:upperCorner>"),
+            "{text}"
+        );
+        assert_eq!(summary.map(|s| s.buildings_dropped), Some(1));
+    }
+
+    #[test]
+    fn fresh_ids_meet_the_ids_of_other_chunks() {
+        // an id of an earlier chunk: known by its hash
+        let xml = two_members().replace("gml:id=\"b1\"", "gml:id=\"skylod_r2_g0\"");
+        let (text, _) = same(&xml, &[2, 2, 1], true);
+        assert!(text.contains("gml:id=\"skylod_r2_g0_1\""), "{text}");
+        // an id of a later chunk: declined, the whole index tells
+        let xml = two_members().replace("gml:id=\"b2\"", "gml:id=\"skylod_r1_g0\"");
+        let (text, _) = same(&xml, &[1, 2, 2], false);
+        assert!(text.contains("gml:id=\"skylod_r1_g0_1\""), "{text}");
+    }
+
+    #[test]
+    fn an_id_of_two_chunks_declines_where_it_is_looked_up() {
+        // a building's id: never looked up
+        let xml = two_members().replace("gml:id=\"b2\"", "gml:id=\"b1\"");
+        same(&xml, &[1, 2, 0], true);
+        // a polygon's id: the whole index finds the first
+        let xml = two_members().replace("gml:id=\"p3\"", "gml:id=\"p1\"");
+        same(&xml, &[1, 2, 2], false);
+    }
+}
