@@ -324,7 +324,8 @@ pub fn stream_citygml<E>(
     let mut index = 0;
     loop {
         let first = index == 0;
-        let to = chunk_end(body, if first { root_end } else { from }, step);
+        let start = if first { root_end } else { from };
+        let to = chunk_end(body, start, step);
         let last = to == body.len();
         let before = (!first).then(|| std::sync::Arc::new(state.clone()));
         let Some(p) = parse_chunk(&doc, bom, prolog, from, to, first, &state, path, opts) else {
