@@ -485,17 +485,19 @@ impl Asset {
         self.geometries.iter().map(|g| g.lod).max()
     }
 
-    /// Polygons of the highest LoD present (the "full detail" geometry).
+    /// Index in [`Asset::geometries`] of the "full detail" geometry: the first geometry
+    /// property at the highest LoD present. The one rule behind [`Asset::detail_polygons`]
+    /// and the hollow read's counts (which keep a count per geometry, not its polygons).
+    pub fn detail_geometry(&self) -> Option<usize> {
+        let top = self.max_lod()?;
+        self.geometries.iter().position(|g| g.lod == top)
+    }
+
+    /// Polygons of the highest LoD present (the "full detail" geometry,
+    /// [`Asset::detail_geometry`]).
     pub fn detail_polygons(&self) -> &[Polygon] {
-        match self.max_lod() {
-            Some(l) => self
-                .geometries
-                .iter()
-                .find(|g| g.lod == l)
-                .map(|g| g.polygons.as_slice())
-                .unwrap_or(&[]),
-            None => &[],
-        }
+        let g = self.detail_geometry().and_then(|k| self.geometries.get(k));
+        g.map_or(&[], |g| g.polygons.as_slice())
     }
 
     /// Polygons of a given LoD (all properties of that LoD).

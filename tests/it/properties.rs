@@ -226,12 +226,7 @@ fn document(buildings: &[GenBuilding], off: [i64; 3], envelope: bool) -> String 
 }
 
 fn write_out(model: &skylod::model::CityModel, out: &std::path::Path) {
-    let opts = WriteOptions {
-        overwrite: false,
-        protect: Vec::new(),
-        keep_envelopes: false,
-        plan_by_chunk: false,
-    };
+    let opts = WriteOptions::default();
     write_document(model, 0, Vec::new(), out, &opts).unwrap();
 }
 

@@ -98,10 +98,8 @@ impl FullSource for HollowSource<'_> {
 
     fn detail_polygons(&self) -> (usize, usize) {
         let h = self.hollow;
-        // the first geometry property at the asset's highest LoD
         let each = (h.model.assets.iter().enumerate()).map(|(i, a)| {
-            let top = a.max_lod();
-            let k = a.geometries.iter().position(|g| Some(g.lod) == top);
+            let k = a.detail_geometry();
             k.and_then(|k| h.polygon_counts(i).get(k))
                 .map_or(0, |&n| n as usize)
         });

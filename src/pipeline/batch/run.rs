@@ -122,7 +122,7 @@ impl Batch {
             overwrite,
             protect: paths.clone(),
             keep_envelopes,
-            plan_by_chunk: false,
+            ..Default::default()
         };
         let targets = match edits {
             true => plan.edit_targets(&paths, &wopts, shard, true)?,

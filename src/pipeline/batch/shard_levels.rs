@@ -319,8 +319,7 @@ pub fn check_levels_target(
     let wopts = WriteOptions {
         overwrite,
         protect: inputs.to_vec(),
-        keep_envelopes: false,
-        plan_by_chunk: false,
+        ..Default::default()
     };
     check_target(out, &wopts, inputs.iter().map(PathBuf::as_path))?;
     Ok(())

@@ -69,7 +69,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         overwrite: args.overwrite,
         protect: args.inputs.clone(),
         keep_envelopes: true,
-        plan_by_chunk: false,
+        ..Default::default()
     };
     // Every target is checked before any work; a merge reprojects each input into a staging
     // directory, then merges them.
