@@ -1,6 +1,8 @@
 //! How a run behaves while it works, apart from what it computes: progress and
-//! cancellation ([`progress`]), progress as log lines ([`progress_text`]) and giving memory back between stages ([`mem`]).
+//! cancellation ([`progress`]), progress as log lines ([`progress_text`]), giving memory back
+//! between stages ([`mem`]) and the memory a run may still take ([`available`]).
 
+pub mod available;
 pub mod mem;
 pub mod progress;
 pub mod progress_text;
