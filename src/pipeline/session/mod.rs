@@ -21,6 +21,7 @@ pub mod bound_plan;
 mod error;
 pub mod flags;
 mod lod;
+pub mod lod_read;
 pub mod lod_write;
 pub mod pictures;
 pub mod report;

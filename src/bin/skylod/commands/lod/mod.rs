@@ -14,6 +14,7 @@ use crate::Outcome;
 use anyhow::Context;
 use skylod::batch::inputs::Input;
 use skylod::lod::LodOptions;
+use skylod::pipeline::session::lod_read::{lod_read, LodRead, WholeWhy};
 use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
 use skylod::pipeline::session::tracing::ms_since;
 use skylod::pipeline::LevelsOptions;
@@ -44,6 +45,8 @@ pub struct Args {
     pub(crate) shard: crate::args::shard::ShardArgs,
     #[command(flatten)]
     pub(crate) scene: crate::args::scene::SceneArgs,
+    #[command(flatten)]
+    pub(crate) stream: crate::args::stream::StreamArgs,
     /// Reduce step: write the model (and --report) from the levels files of all shards
     /// (levels combine by maximum) instead of tracing; POIs and options come from the files,
     /// the inputs must be the shards' inputs.
@@ -78,6 +81,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let region = args.region.active();
     args.scene
         .filter(&mut args.pois, &pois, None, region, "lod")?;
+    if reduce.is_none() {
+        let read = hollow_or_whole(&args, spool.is_used());
+        if let Some(note) = args.pois.inputs.first().and_then(|p| read.note(p)) {
+            crate::log::info!("{note}");
+        }
+    }
     // The sun's table, but for the site the model gives, computed while the model is read
     // (in rayon's pool: sized first), near the site of the first input's first objects.
     args.pois.jobs.global()?;
@@ -130,6 +139,27 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let crate::args::tracing::Session { study, _spool, .. } = session;
     std::mem::forget(study);
     Ok(Outcome::failed_if(failed))
+}
+
+/// The read of the inputs ([`lod_read`]; `stdin`: standard input is among them), the
+/// options the hollow read does not serve first. Its stages are not wired yet: a hollow read
+/// possible is said and read whole ([`WholeWhy::NotServed`]).
+fn hollow_or_whole(args: &Args, stdin: bool) -> LodRead {
+    let not_served = [
+        (args.pois.crs.poi_crs.is_some(), "--poi-crs"),
+        (args.region.active(), "--facade or --region"),
+    ];
+    if let Some((_, o)) = not_served.iter().find(|(given, _)| *given) {
+        return LodRead::Whole(WholeWhy::Option((*o).to_string()));
+    }
+    let (chunk, source_crs) = (
+        args.stream.stream_chunk,
+        args.pois.crs.source.source_crs.as_ref(),
+    );
+    match lod_read(&args.pois.inputs, stdin, chunk, source_crs) {
+        LodRead::Hollow { .. } => LodRead::Whole(WholeWhy::NotServed),
+        whole => whole,
+    }
 }
 
 /// Where the model goes, every target checked before any work (a refused target is fatal:

@@ -1,0 +1,194 @@
+//! Which read the `lod` command takes (issue 22, "lod keeps only what the selection needs"):
+//! the hollow read ([`crate::lod::hollow::read_hollow`]: per chunk of whole top-level
+//! members, each asset's rough form and facts, its polygons dropped) or the whole read
+//! ([`crate::pipeline::read_inputs`]), decided before any input is read ([`lod_read`]).
+//!
+//! The hollow read serves one input, a plain (uncompressed) CityGML file at or above the
+//! streaming threshold of `stats` and `convert` ([`chunk_for`]: four chunks), whose tracing
+//! frame is the identity (a projected CRS in metres: the hollow read makes its rough forms in
+//! the document's coordinates). The CRS is told from the first city objects of the file
+//! ([`head_model`]) with `--source-crs` over it, as the whole read's frame
+//! ([`crate::pipeline::frame`]) tells it. Anything else is read whole, and [`WholeWhy`] says
+//! why, for the info line of the command.
+
+use super::site::head_model;
+use crate::model::crs::{model_crs, Crs, LocalFrame};
+use crate::model::shown;
+use crate::pipeline::batch::convert::chunk_for;
+use std::path::{Path, PathBuf};
+
+/// Bytes of the first chunk whose city objects tell the file's CRS ([`head_model`]).
+const HEAD_BYTES: u64 = 64 << 10;
+
+/// The read [`lod_read`] chooses.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LodRead {
+    /// Hollow, in chunks of `chunk` bytes ([`crate::io::citygml::read::Passes`]).
+    Hollow {
+        /// Bytes of a chunk.
+        chunk: u64,
+    },
+    /// Whole, and why.
+    Whole(WholeWhy),
+}
+
+/// Why `lod` reads its inputs whole ([`LodRead::Whole`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum WholeWhy {
+    /// Not exactly one input.
+    Inputs(usize),
+    /// The streaming chunk is 0 (every file read whole).
+    Off,
+    /// Standard input (spooled to a temporary file whose name no message should show).
+    Stdin,
+    /// Under the streaming threshold ([`chunk_for`]): `bytes` against four chunks of `chunk`.
+    Small {
+        /// The file's size.
+        bytes: u64,
+        /// The chunk.
+        chunk: u64,
+    },
+    /// Compressed, CityJSON, or a document whose first chunk does not stream.
+    NotPlain,
+    /// The tracing frame is not the identity (its CRS named).
+    Frame(String),
+    /// An option the hollow read does not serve (named as the command line names it).
+    Option(String),
+    /// The command's stages do not run on the hollow read yet.
+    NotServed,
+}
+
+impl std::fmt::Display for WholeWhy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            WholeWhy::Inputs(n) => write!(f, "{n} inputs: only a single input is read hollow"),
+            WholeWhy::Off => write!(f, "the streaming chunk is 0"),
+            WholeWhy::Stdin => write!(f, "standard input"),
+            WholeWhy::Small { bytes, chunk } => write!(
+                f,
+                "{bytes} bytes, under the streaming threshold of four chunks of {chunk} bytes"
+            ),
+            WholeWhy::NotPlain => write!(
+                f,
+                "not a plain CityGML file (compressed, CityJSON, or its first objects do not stream)"
+            ),
+            WholeWhy::Frame(crs) => write!(f, "{crs} is not traced in its own coordinates"),
+            WholeWhy::Option(o) => write!(f, "{o} is given"),
+            WholeWhy::NotServed => write!(
+                f,
+                "the POI checks, the report and the writers of lod do not run on the hollow read yet"
+            ),
+        }
+    }
+}
+
+impl LodRead {
+    /// The info line of a command that reads `input` whole for this reason, `None` for the
+    /// hollow read.
+    pub fn note(&self, input: &Path) -> Option<String> {
+        match self {
+            LodRead::Hollow { .. } => None,
+            LodRead::Whole(why) => Some(format!("{}: lod reads whole ({why})", shown(input))),
+        }
+    }
+}
+
+/// The read of `inputs` for `lod` (module docs): hollow in chunks of `chunk` bytes when there
+/// is one input, not standard input (`stdin`: the input is its spool), a plain CityGML file
+/// of at least four chunks whose frame, with `source_crs` over its `srsName`, is the identity;
+/// else whole, with the first reason found (the cheap ones first: the file's first objects
+/// are read only for a file large enough).
+pub fn lod_read(inputs: &[PathBuf], stdin: bool, chunk: u64, source_crs: Option<&Crs>) -> LodRead {
+    let whole = LodRead::Whole;
+    let [path] = inputs else {
+        return whole(WholeWhy::Inputs(inputs.len()));
+    };
+    if chunk == 0 {
+        return whole(WholeWhy::Off);
+    }
+    if stdin {
+        return whole(WholeWhy::Stdin);
+    }
+    let Some(chunk) = chunk_for(path, chunk) else {
+        let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+        return whole(WholeWhy::Small { bytes, chunk });
+    };
+    // a compressed file counts ten times its size in `chunk_for`: told here
+    let Some(head) = head_model(path, HEAD_BYTES.min(chunk)) else {
+        return whole(WholeWhy::NotPlain);
+    };
+    let crs = model_crs(&head, source_crs);
+    let (frame, _) = LocalFrame::new(&crs, &head.bbox());
+    if !frame.is_identity() {
+        return whole(WholeWhy::Frame(crs.to_string()));
+    }
+    LodRead::Hollow { chunk }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::test_support::fixture;
+
+    /// Each reason in turn on the district fixture and copies of it; the hollow read where
+    /// none holds.
+    #[test]
+    fn lod_reads_hollow_only_one_large_plain_file_in_its_own_coordinates() {
+        let path = fixture();
+        let len = std::fs::metadata(&path).unwrap().len();
+        let one = std::slice::from_ref(&path);
+        let small = len / 4;
+        assert_eq!(
+            lod_read(one, false, small, None),
+            LodRead::Hollow { chunk: small }
+        );
+        let two = [path.clone(), path.clone()];
+        let why = |r: LodRead| match r {
+            LodRead::Whole(w) => w,
+            h => panic!("{h:?}"),
+        };
+        assert_eq!(why(lod_read(&two, false, small, None)), WholeWhy::Inputs(2));
+        assert_eq!(why(lod_read(one, false, 0, None)), WholeWhy::Off);
+        assert_eq!(why(lod_read(one, true, small, None)), WholeWhy::Stdin);
+        let w = why(lod_read(one, false, len / 4 + 1, None));
+        assert_eq!(
+            w,
+            WholeWhy::Small {
+                bytes: len,
+                chunk: len / 4 + 1
+            }
+        );
+        assert!(
+            w.to_string().contains("under the streaming threshold"),
+            "{w}"
+        );
+        // US feet over the file's metres: scaled to metres (a geographic CRS over these
+        // coordinates, out of its range, would be taken as it is)
+        let feet = Crs::parse_named("EPSG:2263").unwrap();
+        let w = why(lod_read(one, false, small, Some(&feet)));
+        assert!(
+            matches!(&w, WholeWhy::Frame(c) if c.contains("2263")),
+            "{w:?}"
+        );
+        assert!(
+            w.to_string()
+                .ends_with("is not traced in its own coordinates"),
+            "{w}"
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let gz = dir.path().join("x.gml.gz");
+        let bytes = std::fs::read(&path).unwrap();
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        std::io::Write::write_all(&mut enc, &bytes).unwrap();
+        std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+        assert_eq!(
+            why(lod_read(&[gz.clone()], false, small / 4, None)),
+            WholeWhy::NotPlain
+        );
+        let r = lod_read(&[gz.clone()], false, small / 4, None);
+        let note = r.note(&gz).unwrap();
+        assert!(note.ends_with("lod reads whole (not a plain CityGML file (compressed, CityJSON, or its first objects do not stream))"), "{note}");
+        assert_eq!(LodRead::Hollow { chunk: 1 }.note(&gz), None);
+    }
+}
