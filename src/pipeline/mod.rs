@@ -70,7 +70,7 @@ pub use fisheye::{sky_pictures, SkyPicture, SkyPictureOptions};
 pub(crate) use frame::frame_in;
 pub use frame::{frame, FrameOptions, Framed};
 pub use irradiance::{irradiance, PoiIrradiance};
-pub use levels::{levels, levels_of, BoundSpec, Levels, LevelsOptions};
+pub use levels::{levels, levels_hollow, levels_of, BoundSpec, Levels, LevelsOptions};
 pub(crate) use read::check_model_in;
 pub use read::{check_model, read_inputs, read_sources, Inputs};
 pub use write::{

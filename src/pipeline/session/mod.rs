@@ -20,6 +20,7 @@
 pub mod bound_plan;
 mod error;
 pub mod flags;
+pub mod hollow_study;
 mod lod;
 pub mod lod_read;
 pub mod lod_write;
