@@ -233,6 +233,10 @@ impl FullFacts for Hollow {
         };
         polygon_count_of(a, self.polygon_counts(i), rough, level, own)
     }
+
+    fn polygons(&self, i: usize) -> usize {
+        Hollow::polygon_count(self, i)
+    }
 }
 
 /// An asset index of the whole model while the document's count of non-body assets is not

@@ -4,14 +4,21 @@
 //! [`super::Scene::check`] checks the whole read (heights) and frames the POIs as
 //! [`super::Scene::frame`] does ([`frame_in`] on the hollow model with the box the read gave:
 //! no point is walked); [`HollowStudy::levels`] selects and bounds on it
-//! ([`levels_hollow`]). What [`lod_read`](super::lod_read::lod_read) chose the hollow read
-//! for: the levels, the bound and the frame's warnings are the whole read's.
+//! ([`levels_hollow`]), and [`HollowStudy::lod_report`] makes its report (the polygon counts
+//! from the hollow read's). What [`lod_read`](super::lod_read::lod_read) chose the hollow
+//! read for: the levels, the bound, the report and the frame's warnings are the whole read's.
 //!
-//! Not served yet (the `lod` command still reads whole, [`super::lod_read`]): the sun's
-//! site of the bound, the report's per-asset polygon counts and the writers, which take the
-//! model's polygons.
+//! [`HollowStudy::sun_site`] is the sun's site of the bound as the whole read's.
+//!
+//! Not served yet (the `lod` command still reads whole, [`super::lod_read`]): the writers, which
+//! take the model's polygons: the CityGML writer the counts and the polygons of the assets at
+//! levels 1 and 2 and the buildings' own geometry (envelopes), OBJ and CityJSON those of the
+//! level-2 assets.
 
+use super::lod::report_of;
+use super::report::{finished, timings_of, RunMs};
 use super::{Result, SceneOptions};
+use crate::export::report::report::{Guarantee, Report};
 use crate::io::citygml::read::{Passes, Reread};
 use crate::io::citygml::ReadOptions;
 use crate::lod::hollow::{near_pois, read_hollow, Hollow};
@@ -89,7 +96,7 @@ impl HollowStudy {
         Ok(Some(HollowStudy {
             hollow,
             reread,
-            rough: rough.clone(),
+            rough: *rough,
             bbox,
             crs,
             pois,
@@ -112,13 +119,46 @@ impl HollowStudy {
     ) -> Result<Levels> {
         let opts = LevelsOptions {
             lod: LodOptions {
-                rough: self.rough.clone(),
-                select: select.clone(),
+                rough: self.rough,
+                select: *select,
             },
             bound: bound.cloned(),
         };
         let (h, rr) = (&self.hollow, &self.reread);
         levels_hollow(h, rr, &self.pois, &opts, progress)
+    }
+
+    /// The `lod` report of `lv` (from [`HollowStudy::levels`] with `select`) as
+    /// [`super::Study::lod_report`] makes it of the whole read: its polygon counts from the
+    /// hollow read's.
+    pub fn lod_report(
+        &self,
+        lv: &Levels,
+        select: &SelectOptions,
+        ms: RunMs,
+        guarantee: Guarantee,
+        written: impl IntoIterator<Item = (usize, String, usize)>,
+    ) -> Report {
+        let opts = LodOptions {
+            rough: self.rough,
+            select: *select,
+        };
+        let (model, t) = (&self.hollow.model, timings_of(lv, ms));
+        let report = report_of(model, &self.hollow, &self.pois, lv, &opts, t);
+        finished(report, model, guarantee, written)
+    }
+
+    /// The sun's site ([`super::Study::sun_site`]): `lat` and `lon` given, else the centre of
+    /// the model from its CRS.
+    ///
+    /// # Errors
+    /// As [`super::site::site_of`].
+    pub fn sun_site(
+        &self,
+        lat: Option<f64>,
+        lon: Option<f64>,
+    ) -> std::result::Result<super::weather::SunSite, super::site::SiteError> {
+        super::site::site_in(lat, lon, &self.hollow.model, &self.bbox)
     }
 
     /// The document read hollow.
@@ -207,6 +247,8 @@ mod tests {
         );
         assert_eq!(h.bbox(), study.source().bbox());
         assert_eq!(h.pois(), study.pois());
+        assert_eq!(h.sun_site(None, None), study.sun_site(None, None));
+        assert!(h.sun_site(None, None).is_ok());
         let got = h.levels(&opts.lod.select, opts.bound.as_ref(), &Silent);
         let mut got = got.unwrap();
         for (g, w) in (got.lod.selection.pois.iter_mut()).zip(&want.lod.selection.pois) {
@@ -219,6 +261,27 @@ mod tests {
         assert_eq!(got.lod.flags, want.lod.flags);
         assert_eq!(got.lod.rough, want.lod.rough);
         assert_eq!(got.rough_source(), want.rough_source());
+        // the report, its polygon counts from the hollow read's (the stages' times aside)
+        let w = &want.lod;
+        (got.lod.rough_s, got.lod.bvh_s, got.lod.select_s) = (w.rough_s, w.bvh_s, w.select_s);
+        let ms = RunMs::default();
+        let written = || [(0, "out.gml".to_string(), 1)];
+        let g = Guarantee::default();
+        let report = h.lod_report(&got, &opts.lod.select, ms, g.clone(), written());
+        let whole = study.lod_report(&want, &opts.lod, ms, g, written());
+        assert!(
+            whole.totals.polygons_in > whole.totals.polygons_out,
+            "{:?}",
+            whole.totals
+        );
+        assert!(whole
+            .assets
+            .iter()
+            .any(|a| a.level == 2 && a.polygons_in > 0));
+        assert_eq!(
+            serde_json::to_value(&report).unwrap(),
+            serde_json::to_value(&whole).unwrap()
+        );
         // a POI far outside is refused as by the whole read
         let far = vec![Poi::at("far", (h.bbox().max + 5000.0).to_array())];
         let r = HollowStudy::read(&path, 1 << 16, far, rough, &so, &Silent);

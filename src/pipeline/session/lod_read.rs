@@ -55,7 +55,8 @@ pub enum WholeWhy {
     Frame(String),
     /// An option the hollow read does not serve (named as the command line names it).
     Option(String),
-    /// The command's stages do not run on the hollow read yet.
+    /// The command's writers do not run on the hollow read yet (its levels, bound and report
+    /// do: [`super::hollow_study`]).
     NotServed,
 }
 
@@ -77,7 +78,7 @@ impl std::fmt::Display for WholeWhy {
             WholeWhy::Option(o) => write!(f, "{o} is given"),
             WholeWhy::NotServed => write!(
                 f,
-                "the POI checks, the report and the writers of lod do not run on the hollow read yet"
+                "the writers of lod do not run on the hollow read yet"
             ),
         }
     }
@@ -183,10 +184,10 @@ mod tests {
         std::io::Write::write_all(&mut enc, &bytes).unwrap();
         std::fs::write(&gz, enc.finish().unwrap()).unwrap();
         assert_eq!(
-            why(lod_read(&[gz.clone()], false, small / 4, None)),
+            why(lod_read(std::slice::from_ref(&gz), false, small / 4, None)),
             WholeWhy::NotPlain
         );
-        let r = lod_read(&[gz.clone()], false, small / 4, None);
+        let r = lod_read(std::slice::from_ref(&gz), false, small / 4, None);
         let note = r.note(&gz).unwrap();
         assert!(note.ends_with("lod reads whole (not a plain CityGML file (compressed, CityJSON, or its first objects do not stream))"), "{note}");
         assert_eq!(LodRead::Hollow { chunk: 1 }.note(&gz), None);
