@@ -2,7 +2,7 @@
 //! what the selection needs"): [`HollowStudy::read`] reads one plain CityGML document hollow
 //! ([`read_hollow`], the POIs' surroundings kept: [`near_pois`]), checks it as
 //! [`super::Scene::check`] checks the whole read (heights) and frames the POIs as
-//! [`super::Scene::frame`] does ([`frame_in`] on the hollow model with the box the read gave:
+//! [`super::Scene::frame`] does ([`crate::pipeline::frame`] on the hollow model with the box the read gave:
 //! no point is walked); [`HollowStudy::levels`] selects and bounds on it
 //! ([`levels_hollow`]), and [`HollowStudy::lod_report`] makes its report (the polygon counts
 //! from the hollow read's). What [`lod_read`](super::lod_read::lod_read) chose the hollow
@@ -52,7 +52,7 @@ impl HollowStudy {
     /// Read the plain CityGML document at `path` hollow in chunks of `chunk` bytes
     /// ([`Stage::Read`]: its bytes), rough forms made with `rough`, the surroundings of
     /// `pois` (in the document's CRS) kept; check it (heights) and frame `pois` with
-    /// `options` ([`frame_in`]: POIs checked, refused far outside the scene). `None` where
+    /// `options` ([`crate::pipeline::frame`]: POIs checked, refused far outside the scene). `None` where
     /// the read declines ([`read_hollow`]) or the frame is not the identity: the caller reads
     /// whole.
     ///

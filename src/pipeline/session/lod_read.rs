@@ -15,7 +15,7 @@ use super::site::head_model;
 use crate::model::crs::{model_crs, Crs, LocalFrame};
 use crate::model::shown;
 use crate::pipeline::batch::convert::chunk_for;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Bytes of the first chunk whose city objects tell the file's CRS ([`head_model`]).
 const HEAD_BYTES: u64 = 64 << 10;
@@ -84,13 +84,28 @@ impl std::fmt::Display for WholeWhy {
     }
 }
 
+/// The options of `lod` the hollow read does not serve, as [`lod_read`] takes whether each
+/// is given: POIs in another CRS than the model's, POIs of a region, the reduce step.
+pub const NOT_SERVED: [&str; 3] = ["--poi-crs", "--facade or --region", "--reduce"];
+
 impl LodRead {
-    /// The info line of a command that reads `input` whole for this reason, `None` for the
-    /// hollow read.
-    pub fn note(&self, input: &Path) -> Option<String> {
+    /// This read as the `lod` command takes it today: a hollow read is read whole
+    /// ([`WholeWhy::NotServed`]) until its writers run on it.
+    pub fn served(self) -> LodRead {
         match self {
-            LodRead::Hollow { .. } => None,
-            LodRead::Whole(why) => Some(format!("{}: lod reads whole ({why})", shown(input))),
+            LodRead::Hollow { .. } => LodRead::Whole(WholeWhy::NotServed),
+            whole => whole,
+        }
+    }
+
+    /// The info line of a command that reads `inputs` (named by the first) whole for this
+    /// reason, `None` for the hollow read or no input.
+    pub fn note(&self, inputs: &[PathBuf]) -> Option<String> {
+        match (self, inputs.first()) {
+            (LodRead::Whole(why), Some(input)) => {
+                Some(format!("{}: lod reads whole ({why})", shown(input)))
+            }
+            _ => None,
         }
     }
 }
@@ -99,9 +114,19 @@ impl LodRead {
 /// is one input, not standard input (`stdin`: the input is its spool), a plain CityGML file
 /// of at least four chunks whose frame, with `source_crs` over its `srsName`, is the identity;
 /// else whole, with the first reason found (the cheap ones first: the file's first objects
-/// are read only for a file large enough).
-pub fn lod_read(inputs: &[PathBuf], stdin: bool, chunk: u64, source_crs: Option<&Crs>) -> LodRead {
+/// are read only for a file large enough); whole too when an option of [`NOT_SERVED`] is
+/// given (`given`: whether each is).
+pub fn lod_read(
+    inputs: &[PathBuf],
+    stdin: bool,
+    chunk: u64,
+    source_crs: Option<&Crs>,
+    given: [bool; NOT_SERVED.len()],
+) -> LodRead {
     let whole = LodRead::Whole;
+    if let Some((_, o)) = given.iter().zip(NOT_SERVED).find(|(g, _)| **g) {
+        return whole(WholeWhy::Option(o.to_string()));
+    }
     let [path] = inputs else {
         return whole(WholeWhy::Inputs(inputs.len()));
     };
@@ -132,6 +157,8 @@ mod tests {
     use super::*;
     use crate::pipeline::test_support::fixture;
 
+    const N: [bool; 3] = [false; 3];
+
     /// Each reason in turn on the district fixture and copies of it; the hollow read where
     /// none holds.
     #[test]
@@ -141,7 +168,7 @@ mod tests {
         let one = std::slice::from_ref(&path);
         let small = len / 4;
         assert_eq!(
-            lod_read(one, false, small, None),
+            lod_read(one, false, small, None, N),
             LodRead::Hollow { chunk: small }
         );
         let two = [path.clone(), path.clone()];
@@ -149,10 +176,13 @@ mod tests {
             LodRead::Whole(w) => w,
             h => panic!("{h:?}"),
         };
-        assert_eq!(why(lod_read(&two, false, small, None)), WholeWhy::Inputs(2));
-        assert_eq!(why(lod_read(one, false, 0, None)), WholeWhy::Off);
-        assert_eq!(why(lod_read(one, true, small, None)), WholeWhy::Stdin);
-        let w = why(lod_read(one, false, len / 4 + 1, None));
+        assert_eq!(
+            why(lod_read(&two, false, small, None, N)),
+            WholeWhy::Inputs(2)
+        );
+        assert_eq!(why(lod_read(one, false, 0, None, N)), WholeWhy::Off);
+        assert_eq!(why(lod_read(one, true, small, None, N)), WholeWhy::Stdin);
+        let w = why(lod_read(one, false, len / 4 + 1, None, N));
         assert_eq!(
             w,
             WholeWhy::Small {
@@ -167,7 +197,7 @@ mod tests {
         // US feet over the file's metres: scaled to metres (a geographic CRS over these
         // coordinates, out of its range, would be taken as it is)
         let feet = Crs::parse_named("EPSG:2263").unwrap();
-        let w = why(lod_read(one, false, small, Some(&feet)));
+        let w = why(lod_read(one, false, small, Some(&feet), N));
         assert!(
             matches!(&w, WholeWhy::Frame(c) if c.contains("2263")),
             "{w:?}"
@@ -184,12 +214,27 @@ mod tests {
         std::io::Write::write_all(&mut enc, &bytes).unwrap();
         std::fs::write(&gz, enc.finish().unwrap()).unwrap();
         assert_eq!(
-            why(lod_read(std::slice::from_ref(&gz), false, small / 4, None)),
+            why(lod_read(
+                std::slice::from_ref(&gz),
+                false,
+                small / 4,
+                None,
+                N
+            )),
             WholeWhy::NotPlain
         );
-        let r = lod_read(std::slice::from_ref(&gz), false, small / 4, None);
-        let note = r.note(&gz).unwrap();
+        let r = lod_read(std::slice::from_ref(&gz), false, small / 4, None, N);
+        let note = r.note(std::slice::from_ref(&gz)).unwrap();
         assert!(note.ends_with("lod reads whole (not a plain CityGML file (compressed, CityJSON, or its first objects do not stream))"), "{note}");
-        assert_eq!(LodRead::Hollow { chunk: 1 }.note(&gz), None);
+        assert_eq!(
+            LodRead::Hollow { chunk: 1 }.note(std::slice::from_ref(&gz)),
+            None
+        );
+        assert_eq!(r.note(&[]), None);
+        let served = LodRead::Hollow { chunk: 1 }.served();
+        assert_eq!(served, LodRead::Whole(WholeWhy::NotServed));
+        // an option not served, the first named
+        let w = why(lod_read(one, false, small, None, [false, true, true]));
+        assert_eq!(w.to_string(), "--facade or --region is given");
     }
 }

@@ -5,16 +5,12 @@
 
 pub mod shard;
 
-use crate::args::output::OutputArgs;
-use crate::args::poi::PoiArgs;
-use crate::args::rough::RoughArgs;
-use crate::args::select::SelectArgs;
-use crate::log::{error, summary};
+use crate::args::{output::OutputArgs, poi::PoiArgs, rough::RoughArgs, select::SelectArgs};
+use crate::log::{error, info, summary};
 use crate::Outcome;
 use anyhow::Context;
 use skylod::batch::inputs::Input;
 use skylod::lod::LodOptions;
-use skylod::pipeline::session::lod_read::{lod_read, LodRead, WholeWhy};
 use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
 use skylod::pipeline::session::tracing::ms_since;
 use skylod::pipeline::LevelsOptions;
@@ -81,12 +77,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let region = args.region.active();
     args.scene
         .filter(&mut args.pois, &pois, None, region, "lod")?;
-    if reduce.is_none() {
-        let read = hollow_or_whole(&args, spool.is_used());
-        if let Some(note) = args.pois.inputs.first().and_then(|p| read.note(p)) {
-            crate::log::info!("{note}");
-        }
-    }
+    let (ins, c) = (&args.pois.inputs, &args.pois.crs);
+    let given = [c.poi_crs.is_some(), region, reduce.is_some()];
+    let (chunk, crs) = (args.stream.stream_chunk, c.source.source_crs.as_ref());
+    let read = skylod::session::lod_read::lod_read(ins, spool.is_used(), chunk, crs, given);
+    let note = read.served().note(ins);
+    note.iter().for_each(|l| info!("{l}"));
     // The sun's table, but for the site the model gives, computed while the model is read
     // (in rayon's pool: sized first), near the site of the first input's first objects.
     args.pois.jobs.global()?;
@@ -125,41 +121,17 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (read, write, total) = (session.read_ms, ms_since(t_write), ms_since(t_all));
     let run = RunMs { read, write, total };
     let report = study.lod_report(&lv, &opts.lod, run, guarantee, written);
-    for l in lod_lines(&report, &lv, study.pois().len(), args.region.active()) {
-        summary!("{l}");
-    }
+    let lines = lod_lines(&report, &lv, study.pois().len(), args.region.active());
+    lines.iter().for_each(|l| summary!("{l}"));
     if let Some(path) = &args.report {
         write_report(path, &report).context("writing the report")?;
     }
     // The process ends here: handing a city's model back to the allocator piece by piece
     // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
-    std::mem::forget(report);
-    std::mem::forget(lv);
+    std::mem::forget((report, lv));
     let failed = session.failed || w.failed;
-    let crate::args::tracing::Session { study, _spool, .. } = session;
-    std::mem::forget(study);
+    std::mem::forget(session.study);
     Ok(Outcome::failed_if(failed))
-}
-
-/// The read of the inputs ([`lod_read`]; `stdin`: standard input is among them), the
-/// options the hollow read does not serve first. Its stages are not wired yet: a hollow read
-/// possible is said and read whole ([`WholeWhy::NotServed`]).
-fn hollow_or_whole(args: &Args, stdin: bool) -> LodRead {
-    let not_served = [
-        (args.pois.crs.poi_crs.is_some(), "--poi-crs"),
-        (args.region.active(), "--facade or --region"),
-    ];
-    if let Some((_, o)) = not_served.iter().find(|(given, _)| *given) {
-        return LodRead::Whole(WholeWhy::Option((*o).to_string()));
-    }
-    let (chunk, source_crs) = (
-        args.stream.stream_chunk,
-        args.pois.crs.source.source_crs.as_ref(),
-    );
-    match lod_read(&args.pois.inputs, stdin, chunk, source_crs) {
-        LodRead::Hollow { .. } => LodRead::Whole(WholeWhy::NotServed),
-        whole => whole,
-    }
 }
 
 /// Where the model goes, every target checked before any work (a refused target is fatal:
