@@ -159,6 +159,7 @@ mod chunked;
 mod content_ids;
 mod doc;
 mod encode;
+mod hollow;
 mod id_table;
 mod index;
 mod plan;
@@ -171,6 +172,7 @@ use crate::io::citygml::write::{
 };
 use crate::lod::rough::RoughGeometry;
 use crate::model::CityModel;
+pub use hollow::write_mixed_hollow;
 use plan::{Plan, Scope, Shared};
 use std::path::Path;
 
@@ -348,6 +350,18 @@ fn plan_file(
     keep_envelopes: bool,
     skip: bool,
 ) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
+    plan_file_with(model, model, (file, rough, levels), keep_envelopes, skip)
+}
+
+/// [`plan_file`] with the polygons of each asset in the full model from `facts` (`model`'s
+/// own, or those of the hollow read `model` is).
+fn plan_file_with(
+    model: &CityModel,
+    facts: &dyn crate::lod::select::FullFacts,
+    (file, rough, levels): (usize, &[RoughGeometry], &[u8]),
+    keep_envelopes: bool,
+    skip: bool,
+) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
     let src = &model.files[file];
     let containers = plan::containers(model, file, levels);
     let spans = if skip {
@@ -363,6 +377,7 @@ fn plan_file(
         buildings: &buildings[0],
         envelopes: &envelopes[0],
         shared: &shared,
+        facts,
         defer_root: false,
         elsewhere: &|_| false,
     };

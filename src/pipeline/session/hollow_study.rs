@@ -16,11 +16,14 @@
 //! level-2 assets.
 
 use super::lod::report_of;
+use super::lod_write::{LodLayout, LodWritten};
 use super::report::{finished, timings_of, RunMs};
 use super::{Result, SceneOptions};
 use crate::export::report::report::{Guarantee, Report};
 use crate::io::citygml::read::{Passes, Reread};
+use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::ReadOptions;
+use crate::io::citygml::WriteError;
 use crate::lod::hollow::{near_pois, read_hollow, Hollow};
 use crate::lod::poi::check_poi_list;
 use crate::lod::rough::RoughOptions;
@@ -29,9 +32,12 @@ use crate::lod::LodOptions;
 use crate::model::crs::{Crs, FrameWarning};
 use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::{Bbox, Poi};
-use crate::pipeline::{check_model_in, frame_in, levels_hollow, BoundSpec, Levels, LevelsOptions};
+use crate::pipeline::{
+    check_model_in, frame_in, levels_hollow, write_levels_hollow, BoundSpec, Levels, LevelsOptions,
+    Written,
+};
 use glam::DVec3;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// One document read hollow, checked, with its POIs framed (module docs).
@@ -46,6 +52,7 @@ pub struct HollowStudy {
     warnings: Vec<String>,
     frame_warning: Option<FrameWarning>,
     read_s: f64,
+    chunk: u64,
 }
 
 impl HollowStudy {
@@ -103,6 +110,7 @@ impl HollowStudy {
             warnings,
             frame_warning,
             read_s: t.elapsed().as_secs_f64(),
+            chunk,
         }))
     }
 
@@ -146,6 +154,39 @@ impl HollowStudy {
         let (model, t) = (&self.hollow.model, timings_of(lv, ms));
         let report = report_of(model, &self.hollow, &self.pois, lv, &opts, t);
         finished(report, model, guarantee, written)
+    }
+
+    /// Write the document at the levels `lv` (from [`HollowStudy::levels`]) in CityGML to
+    /// `out` ([`write_levels_hollow`]: the polygons the writer needs read back, planned a
+    /// chunk of the read at a time): the bytes the whole read's
+    /// [`crate::pipeline::write_levels`] writes.
+    ///
+    /// # Errors
+    /// As [`crate::pipeline::write_levels`].
+    pub fn write_levels(
+        &mut self,
+        lv: &Levels,
+        out: &Path,
+        wopts: &WriteOptions,
+    ) -> std::result::Result<Written, WriteError> {
+        let (h, rr) = (&mut self.hollow, &self.reread);
+        write_levels_hollow((h, rr), lv, out, wopts, self.chunk)
+    }
+
+    /// [`LodLayout::write`] of the document at the levels `lv` (in CityGML, as
+    /// [`HollowStudy::write_levels`]).
+    ///
+    /// # Errors
+    /// As [`LodLayout::write`].
+    pub fn write(
+        &mut self,
+        layout: &LodLayout,
+        all_inputs: &[PathBuf],
+        lv: &Levels,
+        progress: &dyn Progress,
+    ) -> Result<LodWritten> {
+        let parts = (&mut self.hollow, &self.reread, self.chunk);
+        layout.write_hollow(parts, all_inputs, lv, progress)
     }
 
     /// The sun's site ([`super::Study::sun_site`]): `lat` and `lon` given, else the centre of
