@@ -16,7 +16,8 @@
 //! level-2 assets.
 
 use super::lod::report_of;
-use super::lod_write::{LodLayout, LodWritten};
+#[cfg(doc)]
+use super::lod_write::LodLayout;
 use super::report::{finished, timings_of, RunMs};
 use super::{Result, SceneOptions};
 use crate::export::report::report::{Guarantee, Report};
@@ -37,7 +38,7 @@ use crate::pipeline::{
     Written,
 };
 use glam::DVec3;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// One document read hollow, checked, with its POIs framed (module docs).
@@ -173,20 +174,10 @@ impl HollowStudy {
         write_levels_hollow((h, rr), lv, out, wopts, self.chunk)
     }
 
-    /// [`LodLayout::write`] of the document at the levels `lv` (in CityGML, as
-    /// [`HollowStudy::write_levels`]).
-    ///
-    /// # Errors
-    /// As [`LodLayout::write`].
-    pub fn write(
-        &mut self,
-        layout: &LodLayout,
-        all_inputs: &[PathBuf],
-        lv: &Levels,
-        progress: &dyn Progress,
-    ) -> Result<LodWritten> {
-        let parts = (&mut self.hollow, &self.reread, self.chunk);
-        layout.write_hollow(parts, all_inputs, lv, progress)
+    /// What [`LodLayout::write_hollow`] writes with: the document read hollow, its reread and
+    /// the chunk of the read.
+    pub fn writer(&mut self) -> (&mut Hollow, &Reread, u64) {
+        (&mut self.hollow, &self.reread, self.chunk)
     }
 
     /// The sun's site ([`super::Study::sun_site`]): `lat` and `lon` given, else the centre of
@@ -226,6 +217,11 @@ impl HollowStudy {
     /// warning structured.
     pub fn warnings(&self) -> (&[String], Option<&FrameWarning>) {
         (&self.warnings, self.frame_warning.as_ref())
+    }
+
+    /// The frame's warnings as the command line says them ([`super::flags::frame_said`]).
+    pub fn frame_said(&self) -> Vec<String> {
+        super::flags::frame_said(&self.warnings, self.frame_warning.as_ref())
     }
 
     /// Seconds spent reading (the hollow read, the checks and the frame).

@@ -55,8 +55,9 @@ pub enum WholeWhy {
     Frame(String),
     /// An option the hollow read does not serve (named as the command line names it).
     Option(String),
-    /// The command's writers do not run on the hollow read yet (its levels, bound and report
-    /// do: [`super::hollow_study`]).
+    /// An output other than CityGML (OBJ and CityJSON are written from the whole read; the
+    /// levels, bound, report and CityGML writer run on the hollow read:
+    /// [`super::hollow_study`]).
     NotServed,
 }
 
@@ -78,7 +79,7 @@ impl std::fmt::Display for WholeWhy {
             WholeWhy::Option(o) => write!(f, "{o} is given"),
             WholeWhy::NotServed => write!(
                 f,
-                "the writers of lod do not run on the hollow read yet"
+                "OBJ and CityJSON outputs are written from the whole read"
             ),
         }
     }
@@ -89,23 +90,26 @@ impl std::fmt::Display for WholeWhy {
 pub const NOT_SERVED: [&str; 3] = ["--poi-crs", "--facade or --region", "--reduce"];
 
 impl LodRead {
-    /// This read as the `lod` command takes it today: a hollow read is read whole
-    /// ([`WholeWhy::NotServed`]) until its writers run on it.
-    pub fn served(self) -> LodRead {
+    /// This read as the `lod` command takes it for an output in CityGML (`citygml`) or not:
+    /// a hollow read is read whole for another format ([`WholeWhy::NotServed`]).
+    pub fn served(self, citygml: bool) -> LodRead {
         match self {
-            LodRead::Hollow { .. } => LodRead::Whole(WholeWhy::NotServed),
-            whole => whole,
+            LodRead::Hollow { .. } if !citygml => LodRead::Whole(WholeWhy::NotServed),
+            read => read,
         }
     }
 
-    /// The info line of a command that reads `inputs` (named by the first) whole for this
-    /// reason, `None` for the hollow read or no input.
+    /// The info line of a command that reads `inputs` (named by the first) this way: hollow
+    /// in chunks, or whole and why; `None` for no input or a file read whole for being under
+    /// the streaming threshold (the ordinary case, said by nothing).
     pub fn note(&self, inputs: &[PathBuf]) -> Option<String> {
-        match (self, inputs.first()) {
-            (LodRead::Whole(why), Some(input)) => {
-                Some(format!("{}: lod reads whole ({why})", shown(input)))
-            }
-            _ => None,
+        let input = shown(inputs.first()?);
+        match self {
+            LodRead::Whole(WholeWhy::Small { .. }) => None,
+            LodRead::Whole(why) => Some(format!("{input}: lod reads whole ({why})")),
+            LodRead::Hollow { chunk } => Some(format!(
+                "{input}: lod reads hollow, in chunks of {chunk} bytes (what the selection needs, the rest read again where it is written)"
+            )),
         }
     }
 }
@@ -226,13 +230,17 @@ mod tests {
         let r = lod_read(std::slice::from_ref(&gz), false, small / 4, None, N);
         let note = r.note(std::slice::from_ref(&gz)).unwrap();
         assert!(note.ends_with("lod reads whole (not a plain CityGML file (compressed, CityJSON, or its first objects do not stream))"), "{note}");
-        assert_eq!(
-            LodRead::Hollow { chunk: 1 }.note(std::slice::from_ref(&gz)),
-            None
-        );
+        let note = LodRead::Hollow { chunk: 1 }.note(std::slice::from_ref(&gz));
+        assert!(note
+            .unwrap()
+            .contains("lod reads hollow, in chunks of 1 bytes"));
         assert_eq!(r.note(&[]), None);
-        let served = LodRead::Hollow { chunk: 1 }.served();
+        let quiet = LodRead::Whole(WholeWhy::Small { bytes: 1, chunk: 1 });
+        assert_eq!(quiet.note(one), None);
+        let served = LodRead::Hollow { chunk: 1 }.served(false);
         assert_eq!(served, LodRead::Whole(WholeWhy::NotServed));
+        let served = LodRead::Hollow { chunk: 1 }.served(true);
+        assert_eq!(served, LodRead::Hollow { chunk: 1 });
         // an option not served, the first named
         let w = why(lod_read(one, false, small, None, [false, true, true]));
         assert_eq!(w.to_string(), "--facade or --region is given");

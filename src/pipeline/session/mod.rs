@@ -23,6 +23,7 @@ pub mod flags;
 pub mod hollow_study;
 mod lod;
 pub mod lod_read;
+pub mod lod_study;
 pub mod lod_write;
 pub mod pictures;
 pub mod report;
