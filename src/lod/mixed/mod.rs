@@ -103,8 +103,9 @@
 //! few hundred of 57,000 assets are kept costs little more than copying its bytes. Memory is
 //! about 40 bytes per indexed element plus the ids.
 //!
-//! **Memory follows the chunk** (with [`WriteOptions::plan_by_chunk`], off by default: `lod`
-//! does not set it while it holds the whole model). A plain (uncompressed) source file is
+//! **Memory follows the chunk** (with [`WriteOptions::plan_by_chunk`], off by default: with
+//! the whole model in memory it lowers no peak; [`write_mixed_hollow`] plans so on a hollow
+//! read). A plain (uncompressed) source file is
 //! indexed, planned and its index dropped one chunk of whole top-level members at a time: the chunks of the
 //! streamed read (about 16 MiB each, cut at the ends of top-level `cityObjectMember`s), each
 //! indexed as the prolog, the chunk and the root's end tag. The edits are the whole index's

@@ -10,10 +10,9 @@
 //!
 //! [`HollowStudy::sun_site`] is the sun's site of the bound as the whole read's.
 //!
-//! Not served yet (the `lod` command still reads whole, [`super::lod_read`]): the writers, which
-//! take the model's polygons: the CityGML writer the counts and the polygons of the assets at
-//! levels 1 and 2 and the buildings' own geometry (envelopes), OBJ and CityJSON those of the
-//! level-2 assets.
+//! [`HollowStudy::write_levels`] writes its CityGML ([`write_levels_hollow`]: the polygons the
+//! writer needs read back), the whole read's bytes; OBJ and CityJSON outputs, which take the
+//! polygons of every level-2 asset, are written from the whole read ([`super::lod_read`]).
 
 use super::lod::report_of;
 #[cfg(doc)]

@@ -8,8 +8,10 @@
 //! frame is the identity (a projected CRS in metres: the hollow read makes its rough forms in
 //! the document's coordinates). The CRS is told from the first city objects of the file
 //! ([`head_model`]) with `--source-crs` over it, as the whole read's frame
-//! ([`crate::pipeline::frame`]) tells it. Anything else is read whole, and [`WholeWhy`] says
-//! why, for the info line of the command.
+//! ([`crate::pipeline::frame`]) tells it, and a CityGML output ([`LodRead::served`]: OBJ and
+//! CityJSON are written from the whole read). Anything else is read whole, and [`WholeWhy`]
+//! says why, for the info line of the command ([`LodRead::note`]); where the hollow read
+//! itself declines ([`LodRead::read_hollow`] gives `None`) the command reads whole too.
 
 use super::site::head_model;
 use crate::model::crs::{model_crs, Crs, LocalFrame};
