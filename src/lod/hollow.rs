@@ -64,10 +64,10 @@
 //! whole model's reference (1 GB: 5.3 s of wall time against 1.1 s; 4 GB: 30 s against 6.4 s);
 //! see there for what that means for tracing the reference per chunk instead.
 //!
-//! What is not done yet (issue 22): `lod` itself still reads whole. The frame's checks, the
-//! report and the writers take the model's polygons; each must take the facts computed here,
-//! or the polygons of the assets it needs read back ([`Hollow::read_back`]), before the
-//! command can run on a [`Hollow`].
+//! The mixed CityGML writer runs on it too ([`crate::lod::mixed::write_mixed_hollow`]: each
+//! chunk's kept assets and buildings read back for its plan, [`Hollow::read_back_geometries`]),
+//! so `lod` with a CityGML output runs on a [`Hollow`] (`session::lod_study`); OBJ and
+//! CityJSON outputs still take the whole read.
 
 use crate::io::citygml::read::{Chunk, ChunkStart, Passes, Reread, StreamSummary};
 use crate::lod::level::{polygon_count_of, rough_is_own};
@@ -113,6 +113,8 @@ pub struct Hollow {
     pub summary: StreamSummary,
     /// The chunk each asset was read in.
     chunk_of: Vec<u32>,
+    /// The chunk each building was read in.
+    building_chunk: Vec<u32>,
     /// Where each chunk starts ([`Hollow::read_back`]).
     starts: Vec<ChunkStart>,
 }
@@ -146,12 +148,14 @@ impl Hollow {
     }
 }
 
+/// The geometry properties of one asset or building.
+pub type Geometries = Vec<LodGeometry>;
+
 impl Hollow {
-    /// The span of the top-level member's city object that holds asset `a` (its top-level
-    /// building's, or its own without a building).
-    fn anchor(&self, a: &Asset) -> crate::model::Span {
+    /// The span of the top-level member's city object that holds building `b` (its top-level
+    /// ancestor's) or, without a building, `own`.
+    fn anchor(&self, mut at: Option<usize>, own: &crate::model::Span) -> crate::model::Span {
         let b = &self.model.buildings;
-        let mut at = a.building;
         for _ in 0..b.len() {
             match at.and_then(|k| b.get(k)) {
                 Some(x) if x.parent.is_some() => at = x.parent,
@@ -159,7 +163,7 @@ impl Hollow {
                 None => break,
             }
         }
-        a.span.clone()
+        own.clone()
     }
 
     /// The assets `want` (indices of the model, each at most once) with their full geometry,
@@ -169,12 +173,40 @@ impl Hollow {
     /// alone). Each asset is the whole read's: the hollow one with the geometry read back
     /// (found by its span). `None` when one is out of range or cannot be read back.
     pub fn read_back(&self, rr: &Reread, want: &[usize]) -> Option<Vec<Asset>> {
-        let mut ranges: Vec<(u32, crate::model::Span)> = (want.iter())
-            .map(|&i| {
-                let c = *self.chunk_of.get(i)?;
-                let start = self.starts.get(c as usize)?;
-                let a = self.model.assets.get(i)?;
-                Some((c, rr.members(start, self.anchor(a))))
+        let (geometries, _) = self.read_back_geometries(rr, want, &[])?;
+        (want.iter().zip(geometries))
+            .map(|(&i, g)| {
+                let mut a = self.model.assets.get(i)?.clone();
+                a.geometries = g;
+                Some(a)
+            })
+            .collect()
+    }
+
+    /// The full geometry properties of the assets `assets` and of the buildings' own geometry
+    /// of `buildings` (indices of the model, each at most once), in their orders, read back
+    /// as [`Hollow::read_back`] reads assets back (a building found by its span). `None` when
+    /// one is out of range or cannot be read back.
+    pub fn read_back_geometries(
+        &self,
+        rr: &Reread,
+        assets: &[usize],
+        buildings: &[usize],
+    ) -> Option<(Vec<Geometries>, Vec<Geometries>)> {
+        let m = &self.model;
+        let asset_at = |i: usize| {
+            let a = m.assets.get(i)?;
+            Some((*self.chunk_of.get(i)?, self.anchor(a.building, &a.span)))
+        };
+        let building_at = |i: usize| {
+            let b = m.buildings.get(i)?;
+            Some((*self.building_chunk.get(i)?, self.anchor(Some(i), &b.span)))
+        };
+        let mut ranges: Vec<(u32, crate::model::Span)> = (assets.iter().map(|&i| asset_at(i)))
+            .chain(buildings.iter().map(|&i| building_at(i)))
+            .map(|at| {
+                let (c, anchor) = at?;
+                Some((c, rr.members(self.starts.get(c as usize)?, anchor)))
             })
             .collect::<Option<_>>()?;
         ranges.sort_unstable_by_key(|(c, r)| (*c, r.start, r.end));
@@ -185,40 +217,42 @@ impl Hollow {
                 _ => merged.push((c, r)),
             }
         }
-        let key = |a: &Asset| {
-            (
-                a.span.start,
-                a.span.end,
-                a.kind == crate::model::AssetKind::Body,
-            )
-        };
+        // assets by span and whether a body, buildings by span (after the assets)
+        let key = |s: &crate::model::Span, body: bool| (s.start, s.end, body);
         let mut at: foldhash::HashMap<(u64, u64, bool), usize> = Default::default();
-        for (k, &i) in want.iter().enumerate() {
-            at.insert(key(self.model.assets.get(i)?), k);
+        for (k, &i) in assets.iter().enumerate() {
+            let a = m.assets.get(i)?;
+            at.insert(key(&a.span, a.kind == crate::model::AssetKind::Body), k);
+        }
+        let mut at_b: foldhash::HashMap<(u64, u64), usize> = Default::default();
+        for (k, &i) in buildings.iter().enumerate() {
+            let b = m.buildings.get(i)?;
+            at_b.insert((b.span.start, b.span.end), assets.len() + k);
         }
         let found: Vec<Vec<(usize, Vec<LodGeometry>)>> = (merged.par_iter())
             .map(|(c, r)| {
                 let start = self.starts.get(*c as usize)?;
                 let m = (rr.parse(start, Some(r.clone()))).or_else(|| rr.parse(start, None))?;
+                let body = |a: &Asset| a.kind == crate::model::AssetKind::Body;
                 let taken = (m.assets.into_iter())
-                    .filter_map(|a| Some((*at.get(&key(&a))?, a.geometries)))
+                    .filter_map(|a| Some((*at.get(&key(&a.span, body(&a)))?, a.geometries)))
+                    .chain((m.buildings.into_iter()).filter_map(|b| {
+                        Some((*at_b.get(&(b.span.start, b.span.end))?, b.geometries))
+                    }))
                     .collect();
                 Some(taken)
             })
             .collect::<Option<_>>()?;
-        let mut geometries: Vec<Option<Vec<LodGeometry>>> = vec![None; want.len()];
+        let mut geometries: Vec<Option<Vec<LodGeometry>>> =
+            vec![None; assets.len() + buildings.len()];
         for (k, g) in found.into_iter().flatten() {
             if let Some(slot) = geometries.get_mut(k) {
                 *slot = Some(g);
             }
         }
-        (want.iter().zip(geometries))
-            .map(|(&i, g)| {
-                let mut a = self.model.assets.get(i)?.clone();
-                a.geometries = g?;
-                Some(a)
-            })
-            .collect()
+        let mut all: Vec<Vec<LodGeometry>> = geometries.into_iter().collect::<Option<_>>()?;
+        let of_buildings = all.split_off(assets.len());
+        Some((all, of_buildings))
     }
 }
 
@@ -232,6 +266,10 @@ impl FullFacts for Hollow {
             return 0;
         };
         polygon_count_of(a, self.polygon_counts(i), rough, level, own)
+    }
+
+    fn polygons(&self, i: usize) -> usize {
+        Hollow::polygon_count(self, i)
     }
 }
 
@@ -302,6 +340,7 @@ pub fn read_hollow(
 ) -> Option<Hollow> {
     let (mut plain, mut bodies) = (Part::default(), Part::default());
     let mut buildings: Vec<Building> = Vec::new();
+    let mut building_chunk = Vec::new();
     let mut warnings = Vec::new();
     let mut file: Option<SourceFile> = None;
     let (mut content, mut frame) = (Bbox::EMPTY, Bbox::EMPTY);
@@ -353,6 +392,7 @@ pub fn read_hollow(
                 .collect();
             drop_polygons(&mut b.geometries);
             buildings.push(b);
+            building_chunk.push(chunk);
         }
         warnings.append(&mut model.warnings);
         let f = model.files.into_iter().next();
@@ -395,6 +435,7 @@ pub fn read_hollow(
         frame,
         summary,
         starts,
+        building_chunk,
         ..Hollow::default()
     };
     for part in [plain, bodies] {
@@ -576,7 +617,13 @@ mod tests {
         // a member of a chunk of several reads alone: fewer assets than its chunk
         let alone = (0..n).find_map(|i| {
             let start = &h.starts[h.chunk_of[i] as usize];
-            let one = rr.parse(start, Some(rr.members(start, h.anchor(&h.model.assets[i]))));
+            let one = rr.parse(
+                start,
+                Some(rr.members(start, {
+                    let a = &h.model.assets[i];
+                    h.anchor(a.building, &a.span)
+                })),
+            );
             let chunk = rr.parse(start, None).unwrap();
             let one = one.unwrap();
             assert!(!one.assets.is_empty());

@@ -216,6 +216,9 @@ pub trait FullFacts: Sync {
     fn min_z(&self, i: usize) -> f64;
     /// [`crate::lod::level::polygon_count`] of asset `i` with `rough` at `level`.
     fn polygon_count(&self, i: usize, rough: Option<&RoughGeometry>, level: u8) -> usize;
+    /// The polygons of asset `i` over all its geometry properties
+    /// ([`crate::model::Asset::polygon_count`]).
+    fn polygons(&self, i: usize) -> usize;
 }
 
 impl FullFacts for CityModel {
@@ -226,6 +229,12 @@ impl FullFacts for CityModel {
     fn polygon_count(&self, i: usize, rough: Option<&RoughGeometry>, level: u8) -> usize {
         let a = self.assets.get(i);
         a.map_or(0, |a| crate::lod::level::polygon_count(a, rough, level))
+    }
+
+    fn polygons(&self, i: usize) -> usize {
+        self.assets
+            .get(i)
+            .map_or(0, crate::model::Asset::polygon_count)
     }
 }
 

@@ -2,9 +2,12 @@
 
 use super::session::Error;
 use super::Framed;
-use crate::lod::bound::{bound_against, full_answers, BoundOptions, BoundReport, FullAnswers};
+use crate::io::citygml::read::Reread;
+use crate::lod::bound::{bound_against_from, full_answers_from, FullSource, HollowSource};
+use crate::lod::bound::{BoundOptions, BoundReport, FullAnswers};
+use crate::lod::hollow::Hollow;
 use crate::lod::rough::RoughGeometry;
-use crate::lod::{lod_with, LodOptions, LodResult};
+use crate::lod::{lod_hollow, lod_with, LodOptions, LodResult};
 use crate::model::runtime::mem::GIVE_BACK_MIN_ASSETS;
 use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::CityModel;
@@ -71,7 +74,7 @@ impl Levels {
 /// Rough model ([`Stage::Rough`]) → selection scene ([`Stage::Bvh`]) → selection
 /// ([`Stage::Select`], per POI, cancellable) → error bound ([`Stage::Trace`]) when asked.
 ///
-/// The bound's full-model side ([`full_answers`]: the reference trace, which needs no
+/// The bound's full-model side ([`crate::lod::bound::full_answers`]: the reference trace, which needs no
 /// levels) runs beside the rough model and the selection, each filling the other's
 /// one-core stretches, for models under [`GIVE_BACK_MIN_ASSETS`] assets (a larger model's
 /// peak memory keeps them one after the other); the answers are the same either way.
@@ -100,14 +103,14 @@ pub fn levels(
     finish(framed, opts, lod, Some(full?), progress)
 }
 
-/// [`full_answers`] of `spec` at `pois`.
+/// [`crate::lod::bound::full_answers`] of `spec` at `pois`, of the full model `src`.
 fn full_of<'a>(
-    model: &CityModel,
+    src: &dyn FullSource,
     pois: &'a [crate::model::Poi],
     spec: &'a BoundSpec,
 ) -> Result<FullAnswers<'a>, crate::lod::bound::BoundError> {
     let (sun, irr) = (spec.sun.as_ref(), spec.irradiance.as_ref());
-    full_answers(model, pois, &spec.options, sun, irr)
+    full_answers_from(src, pois, &spec.options, sun, irr)
 }
 
 /// The rest of [`levels`] for a selection made elsewhere (e.g. the levels of every shard of
@@ -133,28 +136,8 @@ fn finish(
     progress: &dyn Progress,
 ) -> Result<Levels, Error> {
     let model: &CityModel = &framed.model;
-    let pois = &framed.local_pois;
-    let mut bound_report = None;
-    let t = Instant::now();
-    if let Some(spec) = &opts.bound {
-        check(progress, Stage::Trace)?;
-        let b = crate::model::runtime::progress::stage(
-            progress,
-            Stage::Trace,
-            pois.len() as u64,
-            0,
-            || {
-                let full = match full {
-                    Some(f) => f,
-                    None => full_of(model, pois, spec)?,
-                };
-                bound_against(model, &lod.rough, &lod.selection.levels, &full)
-            },
-        )?;
-        bound_report = Some(BoundReport::new(&b, &spec.options));
-        lod.selection.levels = b.levels;
-    }
-    let bound_s = t.elapsed().as_secs_f64();
+    let (bound_report, bound_s) =
+        bounded(model, &framed.local_pois, opts, &mut lod, full, progress)?;
     let rough_source = match crate::lod::rough::rough_to_source(
         &framed.frame,
         model,
@@ -169,6 +152,66 @@ fn finish(
         lod,
         rough_source,
         bound: bound_report,
+        bound_s,
+    })
+}
+
+/// The error bound of `opts` ([`Stage::Trace`]) against the full model `src` when asked
+/// (its full-model side `full` when made already), `lod`'s levels promoted; its report and
+/// seconds.
+fn bounded(
+    src: &dyn FullSource,
+    pois: &[crate::model::Poi],
+    opts: &LevelsOptions,
+    lod: &mut LodResult,
+    full: Option<FullAnswers<'_>>,
+    progress: &dyn Progress,
+) -> Result<(Option<BoundReport>, f64), Error> {
+    let mut bound_report = None;
+    let t = Instant::now();
+    if let Some(spec) = &opts.bound {
+        check(progress, Stage::Trace)?;
+        let b = crate::model::runtime::progress::stage(
+            progress,
+            Stage::Trace,
+            pois.len() as u64,
+            0,
+            || {
+                let full = match full {
+                    Some(f) => f,
+                    None => full_of(src, pois, spec)?,
+                };
+                bound_against_from(src, &lod.rough, &lod.selection.levels, &full)
+            },
+        )?;
+        bound_report = Some(BoundReport::new(&b, &spec.options));
+        lod.selection.levels = b.levels;
+    }
+    Ok((bound_report, t.elapsed().as_secs_f64()))
+}
+
+/// [`levels`] of a document read hollow ([`crate::lod::hollow::read_hollow`]) whose frame is
+/// the identity, at `pois` (in the document's coordinates): the selection on its rough forms
+/// ([`lod_hollow`]), the bound against its full model read back from `reread` (the same
+/// document) by span ([`HollowSource`]), after the selection. The same levels, bound and
+/// flags as [`levels`] of the whole read.
+///
+/// # Errors
+/// As [`levels`].
+pub fn levels_hollow(
+    hollow: &Hollow,
+    reread: &Reread,
+    pois: &[crate::model::Poi],
+    opts: &LevelsOptions,
+    progress: &dyn Progress,
+) -> Result<Levels, Error> {
+    let mut lod = lod_hollow(hollow, pois, &opts.lod, progress)?;
+    let src = HollowSource::new(hollow, reread);
+    let (bound, bound_s) = bounded(&src, pois, opts, &mut lod, None, progress)?;
+    Ok(Levels {
+        lod,
+        rough_source: None,
+        bound,
         bound_s,
     })
 }

@@ -70,10 +70,10 @@ pub use fisheye::{sky_pictures, SkyPicture, SkyPictureOptions};
 pub(crate) use frame::frame_in;
 pub use frame::{frame, FrameOptions, Framed};
 pub use irradiance::{irradiance, PoiIrradiance};
-pub use levels::{levels, levels_of, BoundSpec, Levels, LevelsOptions};
+pub use levels::{levels, levels_hollow, levels_of, BoundSpec, Levels, LevelsOptions};
 pub(crate) use read::check_model_in;
 pub use read::{check_model, read_inputs, read_sources, Inputs};
 pub use write::{
-    buildings_without_kept_assets, write_all, write_levels, write_levels_to, write_merged_levels,
-    Written,
+    buildings_without_kept_assets, write_all, write_levels, write_levels_hollow, write_levels_to,
+    write_merged_levels, Written,
 };

@@ -5,9 +5,11 @@ use crate::export::citygml_via_cityjson::{
     is_cityjson_source, write_citygml_levels, write_citygml_levels_to,
 };
 use crate::export::{Content, Format};
+use crate::io::citygml::read::Reread;
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::WriteError;
-use crate::lod::mixed::{write_mixed, write_mixed_to};
+use crate::lod::hollow::Hollow;
+use crate::lod::mixed::{write_mixed, write_mixed_hollow, write_mixed_to};
 use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
 use crate::model::CityModel;
 use rayon::prelude::*;
@@ -47,18 +49,7 @@ pub fn write_levels(
     format: Format,
     wopts: &WriteOptions,
 ) -> Result<Written, WriteError> {
-    // a missing folder is made, not reported as a failed temporary file inside it
-    if let Some(dir) = out
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty() && !d.exists())
-    {
-        if !crate::io::files::is_stdout(out) {
-            std::fs::create_dir_all(dir).map_err(|source| WriteError::Io {
-                file: dir.to_path_buf(),
-                source,
-            })?;
-        }
-    }
+    make_parent(out)?;
     if format == Format::CityGml && is_cityjson_source(model, file) {
         let s = write_citygml_levels(model, file, content(levels), out, wopts)?;
         return Ok(via_cityjson_written(model, file, levels, &s));
@@ -76,6 +67,42 @@ pub fn write_levels(
     }
     let s = crate::export::write(format, model, file, content(levels), out, wopts)?;
     Ok(export_written(model, file, levels, s))
+}
+
+/// Make `out`'s missing parent folders (a missing folder is made, not reported as a failed
+/// temporary file inside it).
+fn make_parent(out: &Path) -> Result<(), WriteError> {
+    if let Some(dir) = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty() && !d.exists())
+    {
+        if !crate::io::files::is_stdout(out) {
+            std::fs::create_dir_all(dir).map_err(|source| WriteError::Io {
+                file: dir.to_path_buf(),
+                source,
+            })?;
+        }
+    }
+    Ok(())
+}
+
+/// [`write_levels`] in CityGML of the document read hollow as `hollow` (its one file), the
+/// polygons the writer needs read back through `rr` ([`crate::lod::mixed::write_mixed_hollow`],
+/// planned in chunks of about `chunk_bytes`): what the whole read writes.
+///
+/// # Errors
+/// As [`write_levels`].
+pub fn write_levels_hollow(
+    (hollow, rr): (&mut Hollow, &Reread),
+    levels: &Levels,
+    out: &Path,
+    wopts: &WriteOptions,
+    chunk_bytes: u64,
+) -> Result<Written, WriteError> {
+    make_parent(out)?;
+    let lv = (levels.rough_source(), levels.levels());
+    let s = write_mixed_hollow(hollow, rr, lv, out, wopts, chunk_bytes)?;
+    Ok(mixed_written(s))
 }
 
 /// [`write_levels`] into any writer `w` (uncompressed, no target checks: of `wopts` only

@@ -59,6 +59,8 @@ mod layout;
 mod hollow;
 // `lod` end to end: valid outputs, resolved references, the report schema, determinism.
 mod lod;
+// `lod` on a hollow read: levels, bound and report the whole read's; which read it takes.
+mod lod_hollow;
 // Selection on the hand-made scenes: the known level of each named asset.
 mod lod_scenes;
 // Several inputs merged into one OBJ / CityJSON: the CityGML merge converted (issue 22).

@@ -17,7 +17,7 @@
 //! ```
 
 use crate::lod::rough::{RoughGeometry, RoughOptions};
-use crate::lod::select::{PoiSelection, Selection};
+use crate::lod::select::{FullFacts, PoiSelection, Selection};
 use crate::model::Poi;
 use crate::model::{Asset, CityModel};
 use rayon::prelude::*;
@@ -330,6 +330,20 @@ impl Report {
         parameters: Parameters,
         timings_ms: Timings,
     ) -> Report {
+        Report::new_from(model, model, rough, sel, pois, parameters, timings_ms)
+    }
+
+    /// [`Report::new`] of a model whose polygon counts `facts` gives (the model itself, or a
+    /// hollow read of it, [`crate::lod::hollow::Hollow`], whose `model` has no polygons).
+    pub fn new_from(
+        model: &CityModel,
+        facts: &dyn FullFacts,
+        rough: &[RoughGeometry],
+        sel: &Selection,
+        pois: &[Poi],
+        parameters: Parameters,
+        timings_ms: Timings,
+    ) -> Report {
         let inputs = model
             .files
             .iter()
@@ -354,8 +368,8 @@ impl Report {
             .enumerate()
             .map(|(i, a)| {
                 let level = sel.levels.get(i).copied().unwrap_or(0);
-                let polygons_in = a.polygon_count();
-                let out = polygons_out(a, rough.get(i), level);
+                let polygons_in = facts.polygons(i);
+                let out = facts.polygon_count(i, rough.get(i), level);
                 AssetEntry {
                     id: a.id.as_deref().map(str::to_owned),
                     kind: a.kind.as_str(),

@@ -25,6 +25,7 @@
 //! the whole index reports it).
 
 use super::encode::IdPool;
+use super::hollow::{PlanModel, Whole};
 use super::id_table::IdTable;
 use super::plan::{self, Plan, Scope, Shared};
 use super::{index, MixedSummary};
@@ -41,10 +42,22 @@ use foldhash::HashSet;
 /// docs): plan it whole then.
 pub(super) fn plan_chunked(
     model: &CityModel,
+    parts: (usize, &[RoughGeometry], &[u8]),
+    keep_envelopes: bool,
+    chunk_bytes: u64,
+) -> Option<(Vec<Edit>, MixedSummary)> {
+    plan_chunked_with(&mut Whole(model), parts, keep_envelopes, chunk_bytes)
+}
+
+/// [`plan_chunked`] on `m`: each chunk's assets and buildings given their polygons
+/// ([`PlanModel::fill`]) while the chunk is planned (`None` too where they cannot be).
+pub(super) fn plan_chunked_with(
+    m: &mut dyn PlanModel,
     (file, rough, levels): (usize, &[RoughGeometry], &[u8]),
     keep_envelopes: bool,
     chunk_bytes: u64,
 ) -> Option<(Vec<Edit>, MixedSummary)> {
+    let model = m.model();
     let src = &model.files[file];
     let Source::File(path) = &src.source else {
         return None;
@@ -56,8 +69,9 @@ pub(super) fn plan_chunked(
     if bytes.len() as u64 != src.len {
         return None;
     }
+    let src_path = src.path.clone();
     let opts = ReadOptions::default();
-    let chunks = member_chunks(&bytes, &src.path, &opts, chunk_bytes).ok()?;
+    let chunks = member_chunks(&bytes, &src_path, &opts, chunk_bytes).ok()?;
     if chunks.ranges.len() < 2 {
         return None;
     }
@@ -79,7 +93,7 @@ pub(super) fn plan_chunked(
     for (k, &(from, to)) in bounds.iter().enumerate() {
         let lo = skip.partition_point(|s| s.start < from);
         let hi = skip.partition_point(|s| s.start < to);
-        let doc = index::scan_chunk(&bytes, &fh, &src.path, &chunks, k, &skip[lo..hi], &opts);
+        let doc = index::scan_chunk(&bytes, &fh, &src_path, &chunks, k, &skip[lo..hi], &opts);
         // the chunk is not read again (a private read-only map reads the file again if it is)
         bytes.release_range(chunks.ranges[k].0, chunks.ranges[k].1);
         let mut doc = doc.ok()?;
@@ -88,6 +102,10 @@ pub(super) fn plan_chunked(
             return None;
         }
         let before = seen.check_and_add_hashes(hashes);
+        if !m.fill(&assets[k], &buildings[k], levels) {
+            return None;
+        }
+        let model = m.model();
         if !before.is_empty() && looks_up(model, &doc, (&assets[k], &buildings[k]), &before) {
             return None;
         }
@@ -110,6 +128,7 @@ pub(super) fn plan_chunked(
             buildings: &buildings[k],
             envelopes: &envelopes[k],
             shared: &shared,
+            facts: m.facts(),
             defer_root: true,
             elsewhere: &elsewhere,
         };
@@ -121,7 +140,9 @@ pub(super) fn plan_chunked(
         root_box.union(&plan.written_box);
         ids = plan.ids;
         handed_out.extend(ids.take_log());
+        m.empty();
     }
+    let src = &m.model().files[file];
     for (e, bb) in root_sites {
         let env = &src.envelopes[e];
         if root_box.is_empty() {

@@ -103,8 +103,9 @@
 //! few hundred of 57,000 assets are kept costs little more than copying its bytes. Memory is
 //! about 40 bytes per indexed element plus the ids.
 //!
-//! **Memory follows the chunk** (with [`WriteOptions::plan_by_chunk`], off by default: `lod`
-//! does not set it while it holds the whole model). A plain (uncompressed) source file is
+//! **Memory follows the chunk** (with [`WriteOptions::plan_by_chunk`], off by default: with
+//! the whole model in memory it lowers no peak; [`write_mixed_hollow`] plans so on a hollow
+//! read). A plain (uncompressed) source file is
 //! indexed, planned and its index dropped one chunk of whole top-level members at a time: the chunks of the
 //! streamed read (about 16 MiB each, cut at the ends of top-level `cityObjectMember`s), each
 //! indexed as the prolog, the chunk and the root's end tag. The edits are the whole index's
@@ -159,6 +160,7 @@ mod chunked;
 mod content_ids;
 mod doc;
 mod encode;
+mod hollow;
 mod id_table;
 mod index;
 mod plan;
@@ -171,6 +173,7 @@ use crate::io::citygml::write::{
 };
 use crate::lod::rough::RoughGeometry;
 use crate::model::CityModel;
+pub use hollow::write_mixed_hollow;
 use plan::{Plan, Scope, Shared};
 use std::path::Path;
 
@@ -348,6 +351,18 @@ fn plan_file(
     keep_envelopes: bool,
     skip: bool,
 ) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
+    plan_file_with(model, model, (file, rough, levels), keep_envelopes, skip)
+}
+
+/// [`plan_file`] with the polygons of each asset in the full model from `facts` (`model`'s
+/// own, or those of the hollow read `model` is).
+fn plan_file_with(
+    model: &CityModel,
+    facts: &dyn crate::lod::select::FullFacts,
+    (file, rough, levels): (usize, &[RoughGeometry], &[u8]),
+    keep_envelopes: bool,
+    skip: bool,
+) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
     let src = &model.files[file];
     let containers = plan::containers(model, file, levels);
     let spans = if skip {
@@ -363,6 +378,7 @@ fn plan_file(
         buildings: &buildings[0],
         envelopes: &envelopes[0],
         shared: &shared,
+        facts,
         defer_root: false,
         elsewhere: &|_| false,
     };

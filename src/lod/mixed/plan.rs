@@ -9,6 +9,7 @@ use super::MixedSummary;
 use crate::io::citygml::ns::CORE_LEADING;
 use crate::io::citygml::write::{envelope_xml, Edit};
 use crate::lod::rough::RoughGeometry;
+use crate::lod::select::FullFacts;
 use crate::model::{Asset, AssetKind, Bbox, CityGmlVersion, CityModel, Polygon, Span};
 use foldhash::{HashMap, HashMapExt, HashSet};
 use std::fmt::Write as _;
@@ -75,6 +76,9 @@ pub(super) struct Scope<'a> {
     pub(super) buildings: &'a [u32],
     pub(super) envelopes: &'a [u32],
     pub(super) shared: &'a Shared,
+    /// The polygons of each asset in the full model ([`FullFacts::polygons`]: the model's,
+    /// or a hollow read's).
+    pub(super) facts: &'a dyn FullFacts,
     /// Leave the envelopes of the root to the caller ([`Plan::root_sites`], [`Plan::written_box`]):
     /// they bound what every chunk writes.
     pub(super) defer_root: bool,
@@ -271,7 +275,7 @@ impl<'a> Plan<'a> {
         for &a in &assets {
             let l = self.level(a);
             self.summary.levels[l as usize] += 1;
-            self.summary.polygons_in += self.model.assets[a].polygon_count();
+            self.summary.polygons_in += self.scope.facts.polygons(a);
             if self.containers[a] {
                 self.summary.containers += 1;
             }

@@ -215,6 +215,18 @@ pub fn shard_text(e: &ShardError) -> String {
     }
 }
 
+/// The frame's warnings `said` as the command line says them: the one that is the
+/// structured warning `fw` in its words ([`frame_warning_text`]), the others as they are.
+pub fn frame_said(said: &[String], fw: Option<&FrameWarning>) -> Vec<String> {
+    let frame = fw.map(|w| (w.to_string(), frame_warning_text(w)));
+    (said.iter())
+        .map(|w| match &frame {
+            Some((lib, cli)) if lib == w => cli.clone(),
+            _ => w.clone(),
+        })
+        .collect()
+}
+
 /// The frame's warning with the flag that fixes it.
 pub fn frame_warning_text(w: &FrameWarning) -> String {
     let metres = "coordinates are taken as metres";

@@ -4,8 +4,10 @@
 
 use super::{Result, Study};
 use crate::export::report::report::{Parameters, Report, Timings};
+use crate::lod::select::FullFacts;
 use crate::lod::{lod_with, LodOptions, LodResult};
 use crate::model::runtime::progress::Progress;
+use crate::model::{CityModel, Poi};
 use crate::pipeline::batch::shard_levels::Combined;
 use crate::pipeline::{levels_of, Levels, LevelsOptions};
 
@@ -41,32 +43,44 @@ impl Study {
     /// with their flags, assets, totals in the input's CRS, the bound; the outputs are
     /// added with [`Report::record_output`] as they are written.
     pub fn report(&self, lv: &Levels, opts: &LodOptions, timings: Timings) -> Report {
-        let result = &lv.lod;
-        let params = Parameters::of(
-            &result.selection,
-            opts.select.seed,
-            opts.select.roof_tolerance_m,
-            &opts.rough,
-        );
-        let mut report = Report::new(
-            self.source(),
-            lv.rough_source(),
-            &result.selection,
-            self.pois(),
-            params,
-            timings,
-        );
-        report.set_flags(&result.flags);
-        report.bound = lv.bound.clone();
-        report
+        let source = self.source();
+        report_of(source, source, self.pois(), lv, opts, timings)
     }
 
     /// The buildings and building parts of input `file` (what [`Report::record_output`]
     /// counts against).
     pub fn buildings_in(&self, file: usize) -> usize {
-        let b = &self.source().buildings;
-        b.iter().filter(|b| b.file == file).count()
+        buildings_in(self.source(), file)
     }
+}
+
+/// The buildings and building parts of input `file` of `model`.
+pub(super) fn buildings_in(model: &CityModel, file: usize) -> usize {
+    model.buildings.iter().filter(|b| b.file == file).count()
+}
+
+/// The report of `lv` made with `opts` on `model` as read (its polygon counts from `facts`:
+/// the model, or its hollow read), at `pois` in its CRS ([`Study::report`]).
+pub(super) fn report_of(
+    model: &CityModel,
+    facts: &dyn FullFacts,
+    pois: &[Poi],
+    lv: &Levels,
+    opts: &LodOptions,
+    timings: Timings,
+) -> Report {
+    let result = &lv.lod;
+    let params = Parameters::of(
+        &result.selection,
+        opts.select.seed,
+        opts.select.roof_tolerance_m,
+        &opts.rough,
+    );
+    let (rough, sel) = (lv.rough_source(), &result.selection);
+    let mut report = Report::new_from(model, facts, rough, sel, pois, params, timings);
+    report.set_flags(&result.flags);
+    report.bound = lv.bound.clone();
+    report
 }
 
 #[cfg(test)]

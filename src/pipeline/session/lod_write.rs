@@ -6,13 +6,18 @@
 use super::Result;
 use crate::export::report::report::Report;
 use crate::export::Format;
+use crate::io::citygml::read::Reread;
 use crate::io::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
-use crate::model::runtime::progress::Progress;
+use crate::lod::hollow::Hollow;
+use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::CityModel;
 use crate::pipeline::batch::outputs::Plan;
 use crate::pipeline::batch::run::{merge_parts, Batch, Said};
-use crate::pipeline::{buildings_without_kept_assets, write_all, write_merged_levels, Levels};
+use crate::pipeline::{
+    buildings_without_kept_assets, write_all, write_levels_hollow, write_merged_levels, Levels,
+    Written,
+};
 use std::path::{Path, PathBuf};
 
 /// Why the outputs of a `lod` run cannot be laid out.
@@ -122,22 +127,72 @@ impl LodLayout {
         progress: &dyn Progress,
     ) -> Result<LodWritten> {
         let targets = self.targets(model, all_inputs);
+        self.make_folders(&targets)?;
         let batch = &self.batch;
-        if batch.targets.mirror {
-            for (_, out) in &targets {
-                crate::pipeline::batch::outputs::create_parent(out)?;
-            }
-        }
-        // In a merge, the messages and the report name the merged document.
-        let shown = |out: &Path| batch.shown(out).display().to_string();
-        let format = batch.format;
-        let wopts = &batch.targets.write_opts;
+        let (format, wopts) = (batch.format, &batch.targets.write_opts);
         if let (Some(_), Plan::Merge(t)) = (&batch.targets.staging, &batch.plan) {
             if format != Format::CityGml {
                 return Ok(merged_export(model, &targets, t, lv, batch));
             }
         }
         let results = write_all(model, &targets, lv, format, wopts, progress)?;
+        Ok(self.done(model, &targets, results))
+    }
+
+    /// [`LodLayout::write`] of the one document read hollow as `hollow` in CityGML, the
+    /// polygons the writer needs read back through `rr`, planned in chunks of about
+    /// `chunk_bytes` ([`crate::pipeline::write_levels_hollow`]): what the whole read writes.
+    /// Another format fails the file ([`WriteError::Invalid`]: it takes the whole read).
+    ///
+    /// # Errors
+    /// As [`LodLayout::write`].
+    pub fn write_hollow(
+        &self,
+        (hollow, rr, chunk_bytes): (&mut Hollow, &Reread, u64),
+        all_inputs: &[PathBuf],
+        lv: &Levels,
+        progress: &dyn Progress,
+    ) -> Result<LodWritten> {
+        let targets = self.targets(&hollow.model, all_inputs);
+        self.make_folders(&targets)?;
+        let (format, wopts) = (self.batch.format, &self.batch.targets.write_opts);
+        check(progress, Stage::Write)?;
+        progress.start(Stage::Write, targets.len() as u64, 0);
+        let mut results = Vec::new();
+        for (_, out) in &targets {
+            results.push(match format {
+                Format::CityGml => write_levels_hollow((hollow, rr), lv, out, wopts, chunk_bytes),
+                f => Err(WriteError::Invalid(format!(
+                    "{f:?} is written from the whole read, not a hollow one"
+                ))),
+            });
+            progress.advance(Stage::Write, 1, 0, Some(&out.display().to_string()));
+        }
+        progress.finish(Stage::Write);
+        Ok(self.done(&hollow.model, &targets, results))
+    }
+
+    /// Make the folders of `targets` where the layout mirrors the inputs.
+    fn make_folders(&self, targets: &[(usize, PathBuf)]) -> Result<()> {
+        if self.batch.targets.mirror {
+            for (_, out) in targets {
+                crate::pipeline::batch::outputs::create_parent(out)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// What writing `targets` of `model` gave (`results`, in their order), with the merge
+    /// when the layout says so.
+    fn done(
+        &self,
+        model: &CityModel,
+        targets: &[(usize, PathBuf)],
+        results: Vec<std::result::Result<Written, WriteError>>,
+    ) -> LodWritten {
+        let batch = &self.batch;
+        let shown = |out: &Path| batch.shown(out).display().to_string();
+        let format = batch.format;
         let mut done = LodWritten {
             written: vec![None; model.files.len()],
             ..LodWritten::default()
@@ -185,7 +240,7 @@ impl LodLayout {
                 done.written.iter_mut().for_each(|w| *w = None);
             }
         }
-        Ok(done)
+        done
     }
 }
 

@@ -20,7 +20,10 @@
 pub mod bound_plan;
 mod error;
 pub mod flags;
+pub mod hollow_study;
 mod lod;
+pub mod lod_read;
+pub mod lod_study;
 pub mod lod_write;
 pub mod pictures;
 pub mod report;

@@ -5,6 +5,7 @@
 use super::Study;
 use crate::export::report::report::{Guarantee, Report, Timings};
 use crate::lod::LodOptions;
+use crate::model::CityModel;
 use crate::pipeline::Levels;
 
 /// The times of a `lod` run measured outside [`Levels`] (ms).
@@ -30,22 +31,37 @@ impl Study {
         guarantee: Guarantee,
         written: impl IntoIterator<Item = (usize, String, usize)>,
     ) -> Report {
-        let r = &lv.lod;
-        let timings = Timings {
-            read: ms.read,
-            rough: r.rough_s * 1e3,
-            bvh: r.bvh_s * 1e3,
-            select: r.select_s * 1e3,
-            write: ms.write,
-            total: ms.total,
-        };
-        let mut report = self.report(lv, opts, timings);
-        report.guarantee = guarantee;
-        for (f, path, dropped) in written {
-            report.record_output(f, path, self.buildings_in(f), dropped);
-        }
-        report
+        let report = self.report(lv, opts, timings_of(lv, ms));
+        finished(report, self.source(), guarantee, written)
     }
+}
+
+/// The timings of a `lod` report: the stages of `lv`, and `ms`.
+pub(super) fn timings_of(lv: &Levels, ms: RunMs) -> Timings {
+    let r = &lv.lod;
+    Timings {
+        read: ms.read,
+        rough: r.rough_s * 1e3,
+        bvh: r.bvh_s * 1e3,
+        select: r.select_s * 1e3,
+        write: ms.write,
+        total: ms.total,
+    }
+}
+
+/// `report` of `model` with the `guarantee` of the error bound and each output `written`
+/// recorded ([`Study::lod_report`]).
+pub(super) fn finished(
+    mut report: Report,
+    model: &CityModel,
+    guarantee: Guarantee,
+    written: impl IntoIterator<Item = (usize, String, usize)>,
+) -> Report {
+    report.guarantee = guarantee;
+    for (f, path, dropped) in written {
+        report.record_output(f, path, super::lod::buildings_in(model, f), dropped);
+    }
+    report
 }
 
 /// The lines of the error bound of `lv` (the guarantee first), and, when it cannot be met

@@ -109,13 +109,21 @@ pub fn site_hint(lat: Option<f64>, lon: Option<f64>, first: Option<&Path>) -> Op
     if let Ok(Some(given)) = given_site(lat, lon, true) {
         return Some(given);
     }
-    let path = first?;
+    let head = head_model(first?, HINT_BYTES)?;
+    let site = model_site(&head, &model_crs(&head, None)).ok()?;
+    Some((site.lat, site.lon))
+}
+
+/// The city objects of the first chunk of whole top-level members from about `bytes` on
+/// ([`stream_citygml`]) of the uncompressed CityGML file at `path`, known before the model is
+/// read (its CRS, where its first objects stand). `None` for a gzip-compressed or CityJSON
+/// file (told from the first bytes: a gzip file would be decompressed whole before its first
+/// chunk, and CityJSON is not streamed), a path that is not a file, or a document that does
+/// not stream.
+pub fn head_model(path: &Path, bytes: u64) -> Option<CityModel> {
     if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
         return None;
     }
-    // Plain CityGML only, told from the first bytes (the stream maps the file itself): a
-    // gzip file would be decompressed whole before its first chunk, and CityJSON is not
-    // streamed.
     let mut file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
     let head = std::io::BufRead::fill_buf(&mut file).ok()?;
     if is_gzip(head) || source::is_json(head) {
@@ -123,13 +131,11 @@ pub fn site_hint(lat: Option<f64>, lon: Option<f64>, first: Option<&Path>) -> Op
     }
     let mut head = None;
     let opts = ReadOptions::default();
-    let _ = stream_citygml(path, &opts, HINT_BYTES, &|_| {}, |c| {
+    let _ = stream_citygml(path, &opts, bytes, &|_| {}, |c| {
         head = Some(c.model);
         Err(())
     });
-    let head = head?;
-    let site = model_site(&head, &model_crs(&head, None)).ok()?;
-    Some((site.lat, site.lon))
+    head
 }
 
 impl SunSite {

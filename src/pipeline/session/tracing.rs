@@ -43,7 +43,7 @@ pub fn ms_since(t: Instant) -> f64 {
 }
 
 /// `s` seconds in milliseconds rounded to 0.1.
-fn round_ms(s: f64) -> f64 {
+pub(super) fn round_ms(s: f64) -> f64 {
     (s * 1e4).round() / 10.0
 }
 

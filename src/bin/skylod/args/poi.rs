@@ -12,7 +12,7 @@ use skylod::lod::poi::checks::DEFAULT_POI_MARGIN;
 use skylod::lod::poi::{check_pois, parse_poi_at, read_pois_csv, Located, Poi};
 use skylod::pipeline::batch::inputs::Input;
 use skylod::pipeline::batch::shard::Shard;
-use skylod::pipeline::session::{Scene, SceneOptions};
+use skylod::pipeline::session::{flags::frame_said, Scene, SceneOptions};
 use std::path::PathBuf;
 
 /// Inputs and points of interest.
@@ -108,18 +108,10 @@ impl PoiArgs {
     ) -> anyhow::Result<Session> {
         let failed = !scene.failures().is_empty();
         let study = scene.frame(pois)?;
-        let frame = study.frame_warning();
-        let frame = frame.map(|w| (w.to_string(), skylod::session::flags::frame_warning_text(w)));
-        for w in study.warnings() {
-            let w = match &frame {
-                Some((lib, cli)) if lib == w => cli,
-                _ => w,
-            };
+        for w in frame_said(study.warnings(), study.frame_warning()) {
             warning!("{cmd}: warning: {w}");
         }
-        if let Some(n) = study.note() {
-            summary!("{cmd}: {n}");
-        }
+        study.note().iter().for_each(|n| summary!("{cmd}: {n}"));
         Ok(Session {
             read_ms: study.read_ms(),
             study,

@@ -1,4 +1,4 @@
-//! `--stream-chunk`: how `stats` and `convert` read a large file (hidden: for tests and
+//! `--stream-chunk`: how `stats`, `convert` and `lod` read a large file (hidden: for tests and
 //! measurements; the default suits every file): the chunk of
 //! [`skylod::pipeline::batch::convert::chunk_for`].
 

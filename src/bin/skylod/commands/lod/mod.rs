@@ -5,17 +5,15 @@
 
 pub mod shard;
 
-use crate::args::output::OutputArgs;
-use crate::args::poi::PoiArgs;
-use crate::args::rough::RoughArgs;
-use crate::args::select::SelectArgs;
-use crate::log::{error, summary};
+use crate::args::{output::OutputArgs, poi::PoiArgs, rough::RoughArgs, select::SelectArgs};
+use crate::log::{error, info, summary, warning};
 use crate::Outcome;
 use anyhow::Context;
 use skylod::batch::inputs::Input;
 use skylod::lod::LodOptions;
 use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
 use skylod::pipeline::session::tracing::ms_since;
+use skylod::pipeline::session::{lod_study::LodStudy, SceneOptions};
 use skylod::pipeline::LevelsOptions;
 use skylod::session::lod_write::{check_report, write_report, LodLayout, ReportTargetError};
 use std::path::PathBuf;
@@ -44,6 +42,8 @@ pub struct Args {
     pub(crate) shard: crate::args::shard::ShardArgs,
     #[command(flatten)]
     pub(crate) scene: crate::args::scene::SceneArgs,
+    #[command(flatten)]
+    pub(crate) stream: crate::args::stream::StreamArgs,
     /// Reduce step: write the model (and --report) from the levels files of all shards
     /// (levels combine by maximum) instead of tracing; POIs and options come from the files,
     /// the inputs must be the shards' inputs.
@@ -78,29 +78,43 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let region = args.region.active();
     args.scene
         .filter(&mut args.pois, &pois, None, region, "lod")?;
+    let (ins, c) = (&args.pois.inputs, &args.pois.crs);
+    let given = [c.poi_crs.is_some(), region, reduce.is_some()];
+    let (chunk, crs) = (args.stream.stream_chunk, c.source.source_crs.as_ref());
+    let read = skylod::session::lod_read::lod_read(ins, spool.is_used(), chunk, crs, given)
+        .served(layout.batch.format == skylod::export::Format::CityGml);
+    read.note(ins).iter().for_each(|l| info!("{l}"));
     // The sun's table, but for the site the model gives, computed while the model is read
     // (in rayon's pool: sized first), near the site of the first input's first objects.
     args.pois.jobs.global()?;
-    let ahead = args
-        .bound
-        .ephemeris(args.pois.inputs.first().map(PathBuf::as_path));
-    let Some(scene) = args.pois.scene()? else {
-        return Ok(Outcome::SomeFailed);
-    };
-    let (combined, pois) = match reduce {
-        Some(r) => (Some(r.combine(scene.model())?), pois),
-        None => (None, args.region.extend(pois, scene.model())?),
-    };
-    let session = args.pois.study(scene, pois, None, spool, "lod")?;
-    let study = &session.study;
-    let (bound, guarantee) = args.bound.spec(study, lod.select.seed, ahead.as_ref())?;
+    let ahead = args.bound.ephemeris(ins.first().map(PathBuf::as_path));
+    let (p, progress) = (&args.pois, crate::log::reporter());
+    let so = SceneOptions::new(c.frame_options(p.poi_margin), p.allow_mixed_crs);
+    let (mut study, combined, unread, _spool) =
+        match read.read_hollow(ins, &pois, &lod.rough, &so, &progress)? {
+            Some(h) => {
+                h.frame_said()
+                    .iter()
+                    .for_each(|w| warning!("lod: warning: {w}"));
+                (LodStudy::Hollow(h), None, false, spool)
+            }
+            _ => {
+                let Some(scene) = args.pois.scene()? else {
+                    return Ok(Outcome::SomeFailed);
+                };
+                let (combined, pois) = match reduce {
+                    Some(r) => (Some(r.combine(scene.model())?), pois),
+                    None => (None, args.region.extend(pois, scene.model())?),
+                };
+                let s = args.pois.study(scene, pois, None, spool, "lod")?;
+                let whole = LodStudy::Whole(Box::new(s.study));
+                (whole, combined, s.failed, s._spool)
+            }
+        };
+    let (bound, guarantee) = args.bound.spec(&study, lod.select.seed, ahead.as_ref())?;
     let opts = LevelsOptions { lod, bound };
-    let progress = crate::log::reporter();
-    let lv = match combined {
-        Some(c) => study.levels_combined(c, &opts, &progress)?,
-        None => study.levels(&opts, &progress)?,
-    };
-    session.warn_flags(&lv.lod.flags);
+    let lv = study.levels(combined, &opts, &progress)?;
+    crate::commands::warn_flags(study.pois(), &lv.lod.flags);
     let (said, failed) = bound_lines(&lv, &guarantee);
     said.iter().for_each(|l| summary!("{l}"));
     if let Some(e) = failed {
@@ -109,27 +123,22 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     // Written geometry and the report are in the input's CRS.
     let t_write = Instant::now();
-    let mut w = layout.write(study.source(), &all_inputs, &lv, &progress)?;
+    let mut w = study.write(&layout, &all_inputs, &lv, &progress)?;
     crate::outputs::say(w.said());
     let written = (w.written.into_iter().enumerate())
         .filter_map(|(f, w)| w.map(|(path, dropped)| (f, path, dropped)));
-    let (read, write, total) = (session.read_ms, ms_since(t_write), ms_since(t_all));
+    let (read, write, total) = (study.read_ms(), ms_since(t_write), ms_since(t_all));
     let run = RunMs { read, write, total };
-    let report = study.lod_report(&lv, &opts.lod, run, guarantee, written);
-    for l in lod_lines(&report, &lv, study.pois().len(), args.region.active()) {
-        summary!("{l}");
-    }
+    let report = study.lod_report((&lv, &opts.lod), (run, guarantee), written);
+    let lines = lod_lines(&report, &lv, study.pois().len(), args.region.active());
+    lines.iter().for_each(|l| summary!("{l}"));
     if let Some(path) = &args.report {
         write_report(path, &report).context("writing the report")?;
     }
     // The process ends here: handing a city's model back to the allocator piece by piece
     // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
-    std::mem::forget(report);
-    std::mem::forget(lv);
-    let failed = session.failed || w.failed;
-    let crate::args::tracing::Session { study, _spool, .. } = session;
-    std::mem::forget(study);
-    Ok(Outcome::failed_if(failed))
+    std::mem::forget((report, lv, study));
+    Ok(Outcome::failed_if(unread || w.failed))
 }
 
 /// Where the model goes, every target checked before any work (a refused target is fatal:
