@@ -2,8 +2,8 @@
 //! shared data (Ingolstadt LoD3 street tiles, LoD2 buildings, CityGML 3.0), read one
 //! top-level member a chunk, the levels, the error bound (one that promotes), the report and
 //! the sun's site are the whole read's; and the `lod` command says which read it takes
-//! (`--stream-chunk` forces the hollow one's conditions on a small file) without changing a
-//! byte of its outputs.
+//! (`--stream-chunk` and `--max-memory 0` force the hollow one's conditions on a small file)
+//! without changing a byte of its outputs.
 
 use crate::util::*;
 use skylod::export::Format;
@@ -139,7 +139,8 @@ fn lod_on_a_hollow_read_of_shared_files_is_the_whole_reads() {
     assert!(promoted > 0, "no file where the bound promotes");
 }
 
-/// The `lod` command on a hollow read (`--stream-chunk` small: a member a chunk) writes the
+/// The `lod` command on a hollow read (`--stream-chunk` small: a member a chunk; `--max-memory
+/// 0`: the whole read would not fit) writes the
 /// whole read's CityGML byte for byte with the whole read's report (but for timings), on the
 /// Ingolstadt LoD3 tiles, LoD2 and CityGML 3.0 files, the default bound and a tighter one
 /// (which promotes somewhere); it says at info level which read it takes: hollow, or whole
@@ -184,7 +185,7 @@ fn lod_on_a_hollow_read_writes_the_whole_reads_bytes() {
         ] {
             let (whole, whole_report, said) = run_lod(&input, "whole", "gml", bound);
             assert!(!said.contains("lod reads"), "{name}: {said}");
-            let mut hollow = vec!["--stream-chunk", "1"];
+            let mut hollow = vec!["--stream-chunk", "1", "--max-memory", "0"];
             hollow.extend(bound);
             let (got, report, said) = run_lod(&input, "hollow", "gml", &hollow);
             assert!(
@@ -201,7 +202,12 @@ fn lod_on_a_hollow_read_writes_the_whole_reads_bytes() {
     assert!(compared >= 6, "{compared} runs compared");
     assert!(promoted > 0, "no run where the bound promotes");
     let input = data.join("rotterdam/Source.gml");
-    let (_, _, said) = run_lod(&input, "obj", "obj", &["--stream-chunk", "1"]);
+    let (_, _, said) = run_lod(
+        &input,
+        "obj",
+        "obj",
+        &["--stream-chunk", "1", "--max-memory", "0"],
+    );
     let why = "lod reads whole (OBJ and CityJSON outputs are written from the whole read)";
     assert!(said.contains(why), "{said}");
     let (_, _, said) = run_lod(&input, "off", "gml", &["--stream-chunk", "0"]);
@@ -209,7 +215,42 @@ fn lod_on_a_hollow_read_writes_the_whole_reads_bytes() {
         said.contains("lod reads whole (the streaming chunk is 0)"),
         "{said}"
     );
-    let crs = ["--stream-chunk", "1", "--source-crs", "EPSG:2263"];
+    // where the whole read fits in the memory lod may take, it is read whole: by default
+    // half of what is available (this file is far under it), or as --max-memory says
+    let (_, _, said) = run_lod(&input, "fits", "gml", &["--stream-chunk", "1"]);
+    let fits = "MiB lod may take (half of the memory available; --max-memory sets it))";
+    assert!(
+        said.contains("lod reads whole (") && said.contains(fits),
+        "{said}"
+    );
+    let (_, _, said) = run_lod(
+        &input,
+        "fits",
+        "gml",
+        &["--stream-chunk", "1", "--max-memory", "1G"],
+    );
+    assert!(
+        said.contains("MiB fit in the 1024.0 MiB of --max-memory"),
+        "{said}"
+    );
+    let o = run(&[
+        os("lod"),
+        input.as_os_str(),
+        os("--poi"),
+        os("0,0,0"),
+        os("--max-memory"),
+        os("lots"),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--max-memory"), "{}", stderr(&o));
+    let crs = [
+        "--stream-chunk",
+        "1",
+        "--max-memory",
+        "0",
+        "--source-crs",
+        "EPSG:2263",
+    ];
     let (_, _, said) = run_lod(&input, "crs", "gml", &crs);
     assert!(said.contains("EPSG:2263"), "{said}");
     assert!(

@@ -19,11 +19,12 @@ use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
 
 /// How much is said on standard error.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Level {
     /// Errors only.
     Error,
     /// Warnings and the summary lines (the default).
+    #[default]
     Warn,
     /// Also one line per stage and per file (progress as text).
     Info,
@@ -50,6 +51,7 @@ pub struct LogArgs {
     pub log_level: Level,
 }
 
+#[derive(Default)]
 struct Logger {
     level: Level,
     bars: Option<MultiProgress>,
@@ -116,10 +118,7 @@ pub fn init(args: &LogArgs) {
 }
 
 fn logger() -> &'static Logger {
-    LOGGER.get_or_init(|| Logger {
-        level: Level::Warn,
-        bars: None,
-    })
+    LOGGER.get_or_init(Logger::default)
 }
 
 /// Write `text` on standard error when `level` is enabled, above the bars when there are.

@@ -128,10 +128,8 @@ fn main() -> ExitCode {
         // is wrong with the work, so end quietly and successfully, as ripgrep does.
         Err(e) if is_broken_pipe(e.as_ref()) => ExitCode::SUCCESS,
         Err(e) => {
-            log::line(
-                log::Level::Error,
-                &format!("skylod: error: {}", message(&e)),
-            );
+            let text = format!("skylod: error: {}", message(&e));
+            log::line(log::Level::Error, &text);
             ExitCode::from(2)
         }
     }

@@ -12,9 +12,18 @@
 //! CityJSON are written from the whole read). Anything else is read whole, and [`WholeWhy`]
 //! says why, for the info line of the command ([`LodRead::note`]); where the hollow read
 //! itself declines ([`LodRead::read_hollow`] gives `None`) the command reads whole too.
+//!
+//! **Whole where it fits.** The hollow read takes about a quarter of the whole read's memory
+//! but twice its CPU (BENCHMARKS.md, "`lod` on the hollow read": 4 GB, 1.05 against 2.78 GiB,
+//! 58 against 27 s). So a file that qualifies is read hollow only when the whole read would
+//! not fit in the memory `lod` may take ([`memory_budget`]): `--max-memory`, else half of what
+//! the system and the job's control group have left ([`available_bytes`]: a Slurm job's
+//! `--mem`, a Kubernetes container's memory limit). The whole read is taken to need the file's
+//! size (measured: 0.73 to 1.0 times it, LoD3 files of 225 MB to 4 GB).
 
 use super::site::head_model;
 use crate::model::crs::{model_crs, Crs, LocalFrame};
+use crate::model::runtime::available::available_bytes;
 use crate::model::shown;
 use crate::pipeline::batch::convert::chunk_for;
 use std::path::PathBuf;
@@ -51,6 +60,14 @@ pub enum WholeWhy {
         /// The chunk.
         chunk: u64,
     },
+    /// The whole read fits: the file's `bytes` within the memory `lod` may take
+    /// ([`memory_budget`]).
+    Fits {
+        /// The file's size.
+        bytes: u64,
+        /// The memory `lod` may take, and whether the user set it (`--max-memory`).
+        budget: Budget,
+    },
     /// Compressed, CityJSON, or a document whose first chunk does not stream.
     NotPlain,
     /// The tracing frame is not the identity (its CRS named).
@@ -73,6 +90,9 @@ impl std::fmt::Display for WholeWhy {
                 f,
                 "{bytes} bytes, under the streaming threshold of four chunks of {chunk} bytes"
             ),
+            WholeWhy::Fits { bytes, budget } => {
+                write!(f, "{} fit in {budget}", mib(*bytes))
+            }
             WholeWhy::NotPlain => write!(
                 f,
                 "not a plain CityGML file (compressed, CityJSON, or its first objects do not stream)"
@@ -85,6 +105,71 @@ impl std::fmt::Display for WholeWhy {
             ),
         }
     }
+}
+
+/// The memory `lod` may take ([`memory_budget`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Budget {
+    /// Set by the user (`--max-memory`), in bytes.
+    Given(u64),
+    /// Half of what was available ([`available_bytes`]), in bytes.
+    Available(u64),
+}
+
+impl Budget {
+    /// The bytes.
+    pub fn bytes(self) -> u64 {
+        match self {
+            Budget::Given(b) | Budget::Available(b) => b,
+        }
+    }
+}
+
+impl std::fmt::Display for Budget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Budget::Given(b) => write!(f, "the {} of --max-memory", mib(*b)),
+            Budget::Available(b) => write!(
+                f,
+                "the {} lod may take (half of the memory available; --max-memory sets it)",
+                mib(*b)
+            ),
+        }
+    }
+}
+
+/// `b` bytes in MiB, for a message.
+fn mib(b: u64) -> String {
+    format!("{:.1} MiB", b as f64 / f64::from(1u32 << 20))
+}
+
+/// The memory `lod` may take: `given` (`--max-memory`), else half of what the system and the
+/// job's control group have left ([`available_bytes`]); `None` where neither is known (the
+/// file is then read hollow when it qualifies).
+pub fn memory_budget(given: Option<u64>) -> Option<Budget> {
+    match given {
+        Some(b) => Some(Budget::Given(b)),
+        None => available_bytes().map(|b| Budget::Available(b / 2)),
+    }
+}
+
+/// A size of memory as `--max-memory` takes it: bytes, or with a unit of 1024s (`2G`, `2GB`
+/// and `2GiB` are all 2^31 bytes; decimals allowed: `1.5G`).
+///
+/// # Errors
+/// The text, and why it is not a size.
+///
+/// ```
+/// use skylod::session::lod_read::memory_size;
+/// assert_eq!(memory_size("1.5GiB"), Ok(3 << 29));
+/// assert_eq!(memory_size("512M"), memory_size("536870912"));
+/// assert!(memory_size("lots").is_err());
+/// ```
+pub fn memory_size(text: &str) -> Result<u64, String> {
+    let config = parse_size::Config::new().with_binary();
+    config
+        .parse_size(text)
+        .map_err(|e| format!("{e}: {text:?}"))
 }
 
 /// The options of `lod` the hollow read does not serve, as [`lod_read`] takes whether each
@@ -121,13 +206,16 @@ impl LodRead {
 /// of at least four chunks whose frame, with `source_crs` over its `srsName`, is the identity;
 /// else whole, with the first reason found (the cheap ones first: the file's first objects
 /// are read only for a file large enough); whole too when an option of [`NOT_SERVED`] is
-/// given (`given`: whether each is).
+/// given (`given`: whether each is); whole too when the file's size is within the memory
+/// `lod` may take (`max_memory`, `--max-memory`, or half of what is available:
+/// [`memory_budget`]; module docs).
 pub fn lod_read(
     inputs: &[PathBuf],
     stdin: bool,
     chunk: u64,
     source_crs: Option<&Crs>,
     given: [bool; NOT_SERVED.len()],
+    max_memory: Option<u64>,
 ) -> LodRead {
     let whole = LodRead::Whole;
     if let Some((_, o)) = given.iter().zip(NOT_SERVED).find(|(g, _)| **g) {
@@ -146,6 +234,10 @@ pub fn lod_read(
         let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
         return whole(WholeWhy::Small { bytes, chunk });
     };
+    let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+    if let Some(budget) = memory_budget(max_memory).filter(|b| bytes <= b.bytes()) {
+        return whole(WholeWhy::Fits { bytes, budget });
+    }
     // a compressed file counts ten times its size in `chunk_for`: told here
     let Some(head) = head_model(path, HEAD_BYTES.min(chunk)) else {
         return whole(WholeWhy::NotPlain);
@@ -174,7 +266,7 @@ mod tests {
         let one = std::slice::from_ref(&path);
         let small = len / 4;
         assert_eq!(
-            lod_read(one, false, small, None, N),
+            lod_read(one, false, small, None, N, Some(0)),
             LodRead::Hollow { chunk: small }
         );
         let two = [path.clone(), path.clone()];
@@ -183,12 +275,18 @@ mod tests {
             h => panic!("{h:?}"),
         };
         assert_eq!(
-            why(lod_read(&two, false, small, None, N)),
+            why(lod_read(&two, false, small, None, N, Some(0))),
             WholeWhy::Inputs(2)
         );
-        assert_eq!(why(lod_read(one, false, 0, None, N)), WholeWhy::Off);
-        assert_eq!(why(lod_read(one, true, small, None, N)), WholeWhy::Stdin);
-        let w = why(lod_read(one, false, len / 4 + 1, None, N));
+        assert_eq!(
+            why(lod_read(one, false, 0, None, N, Some(0))),
+            WholeWhy::Off
+        );
+        assert_eq!(
+            why(lod_read(one, true, small, None, N, Some(0))),
+            WholeWhy::Stdin
+        );
+        let w = why(lod_read(one, false, len / 4 + 1, None, N, Some(0)));
         assert_eq!(
             w,
             WholeWhy::Small {
@@ -203,7 +301,7 @@ mod tests {
         // US feet over the file's metres: scaled to metres (a geographic CRS over these
         // coordinates, out of its range, would be taken as it is)
         let feet = Crs::parse_named("EPSG:2263").unwrap();
-        let w = why(lod_read(one, false, small, Some(&feet), N));
+        let w = why(lod_read(one, false, small, Some(&feet), N, Some(0)));
         assert!(
             matches!(&w, WholeWhy::Frame(c) if c.contains("2263")),
             "{w:?}"
@@ -225,11 +323,19 @@ mod tests {
                 false,
                 small / 4,
                 None,
-                N
+                N,
+                Some(0)
             )),
             WholeWhy::NotPlain
         );
-        let r = lod_read(std::slice::from_ref(&gz), false, small / 4, None, N);
+        let r = lod_read(
+            std::slice::from_ref(&gz),
+            false,
+            small / 4,
+            None,
+            N,
+            Some(0),
+        );
         let note = r.note(std::slice::from_ref(&gz)).unwrap();
         assert!(note.ends_with("lod reads whole (not a plain CityGML file (compressed, CityJSON, or its first objects do not stream))"), "{note}");
         let note = LodRead::Hollow { chunk: 1 }.note(std::slice::from_ref(&gz));
@@ -243,8 +349,31 @@ mod tests {
         assert_eq!(served, LodRead::Whole(WholeWhy::NotServed));
         let served = LodRead::Hollow { chunk: 1 }.served(true);
         assert_eq!(served, LodRead::Hollow { chunk: 1 });
+        // the whole read fits in the budget: whole; one byte short: hollow
+        let fits = Budget::Given(len);
+        let w = why(lod_read(one, false, small, None, N, Some(len)));
+        assert_eq!(
+            w,
+            WholeWhy::Fits {
+                bytes: len,
+                budget: fits
+            }
+        );
+        assert!(w.to_string().ends_with("MiB of --max-memory"), "{w}");
+        let r = lod_read(one, false, small, None, N, Some(len - 1));
+        assert_eq!(r, LodRead::Hollow { chunk: small });
+        let half = Budget::Available(len).to_string();
+        assert!(half.contains("half of the memory available"), "{half}");
+        assert_eq!(memory_budget(Some(7)), Some(Budget::Given(7)));
         // an option not served, the first named
-        let w = why(lod_read(one, false, small, None, [false, true, true]));
+        let w = why(lod_read(
+            one,
+            false,
+            small,
+            None,
+            [false, true, true],
+            Some(0),
+        ));
         assert_eq!(w.to_string(), "--facade or --region is given");
     }
 }

@@ -1,6 +1,5 @@
-//! `--stream-chunk`: how `stats`, `convert` and `lod` read a large file (hidden: for tests and
-//! measurements; the default suits every file): the chunk of
-//! [`skylod::pipeline::batch::convert::chunk_for`].
+//! `--stream-chunk` (hidden: for tests and measurements; the default suits every file): the
+//! chunk in which `stats`, `convert` and `lod` read a large file ([`skylod::pipeline::batch::convert::chunk_for`]).
 
 use skylod::citygml::read::CHUNK_BYTES;
 

@@ -13,7 +13,7 @@ use skylod::batch::inputs::Input;
 use skylod::lod::LodOptions;
 use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
 use skylod::pipeline::session::tracing::ms_since;
-use skylod::pipeline::session::{lod_study::LodStudy, SceneOptions};
+use skylod::pipeline::session::{lod_read::lod_read, lod_study::LodStudy, SceneOptions};
 use skylod::pipeline::LevelsOptions;
 use skylod::session::lod_write::{check_report, write_report, LodLayout, ReportTargetError};
 use std::path::PathBuf;
@@ -44,6 +44,10 @@ pub struct Args {
     pub(crate) scene: crate::args::scene::SceneArgs,
     #[command(flatten)]
     pub(crate) stream: crate::args::stream::StreamArgs,
+    /// The memory lod may take, e.g. 2GiB (default: half of what the system and the job's
+    /// memory limit leave): a larger file is read hollow, in less memory and more time.
+    #[arg(long, value_name = "SIZE", value_parser = skylod::session::lod_read::memory_size)]
+    pub(crate) max_memory: Option<u64>,
     /// Reduce step: write the model (and --report) from the levels files of all shards
     /// (levels combine by maximum) instead of tracing; POIs and options come from the files,
     /// the inputs must be the shards' inputs.
@@ -81,7 +85,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (ins, c) = (&args.pois.inputs, &args.pois.crs);
     let given = [c.poi_crs.is_some(), region, reduce.is_some()];
     let (chunk, crs) = (args.stream.stream_chunk, c.source.source_crs.as_ref());
-    let read = skylod::session::lod_read::lod_read(ins, spool.is_used(), chunk, crs, given)
+    let read = lod_read(ins, spool.is_used(), chunk, crs, given, args.max_memory)
         .served(layout.batch.format == skylod::export::Format::CityGml);
     read.note(ins).iter().for_each(|l| info!("{l}"));
     // The sun's table, but for the site the model gives, computed while the model is read
