@@ -23,8 +23,9 @@
 //! from there (see [`stream`]).
 //!
 //! A gml:id repeated in a later chunk is warned about there, as the serial read does: the
-//! hashes of the ids read so far are kept, sorted (8 bytes an id: the one part of memory that
-//! grows with the document: 31 MB for the 3.9 million ids of 1 GB of LoD3).
+//! hashes of the ids read so far are kept, sorted, with a filter and a directory of their top
+//! bits (`SeenIds`: 9.25 to 10.5 bytes an id, the one part of memory that grows with the
+//! document: 36 to 41 MB for the 3.9 million ids of 1 GB of LoD3).
 //!
 //! A chunk's model is the serial read's restricted to its members, with two differences its
 //! user must know: a building's body asset (a building without thematic surfaces, made after
@@ -771,14 +772,35 @@ fn parse_chunk<'d>(
     Some(p)
 }
 
-/// The gml:id hashes of the chunks read so far, 8 bytes an id: which ids of the next chunk
-/// repeat an earlier one. They are kept in sorted runs, each at least twice as long as the
-/// next (a run merged into the one before it once it is half as long): a chunk's ids are
-/// looked up in a few runs, and an id is moved in about log2(chunks) merges, not once per
-/// chunk after it (a single sorted vector made a 4 GB document's writer quadratic).
+/// The gml:id hashes of the chunks read so far (8 bytes an id, and 1.25 to 2.5 more for the
+/// filter and the runs' directories): which ids of the next chunk repeat an earlier one.
+/// They are kept in sorted runs, each at least twice as long as the next (a run merged into
+/// the one before it once it is half as long): a chunk's ids are looked up in a few runs,
+/// and an id is moved in about log2(chunks) merges, not once per chunk after it (a single
+/// sorted vector made a 4 GB document's writer quadratic). Before the runs, a bit per slot
+/// of the hashes' top bits (its `filter`) turns most ids away: an id whose bit is clear was
+/// never met; the others are looked up in each run's range of their top bits ([`Run`]).
+/// (The 1 GB bench file's stream spent 5.6 % of its CPU here with a galloping walk of every
+/// id through every run, 2.6 % so: BENCHMARKS.md, "The streamed read beside the whole one".)
 #[derive(Default)]
 pub(crate) struct SeenIds {
-    runs: Vec<Vec<u64>>,
+    runs: Vec<Run>,
+    /// The filter: bit `filter_slot(hash, filter_bits)` of every hash in the runs is set; 8
+    /// to 16 bits per id held (made larger, and filled again from the runs, where it would
+    /// hold more than one id per 8 bits), so that about 6 to 12 % of the bits are set.
+    /// Empty while no id is held.
+    filter: Vec<u64>,
+    /// log2 of the filter's bits.
+    filter_bits: u32,
+    /// Ids held in the runs.
+    len: usize,
+}
+
+/// The filter's slot of hash `h` among `1 << bits` (`bits` >= 6): its top bits (the hashes
+/// are uniform; in the order of the sorted hashes, so that a sorted chunk's lookups and the
+/// runs' rebuilds go through the filter in order, not at random).
+fn filter_slot(h: u64, bits: u32) -> usize {
+    usize::try_from(h >> (64 - bits)).unwrap_or(0)
 }
 
 impl SeenIds {
@@ -787,9 +809,43 @@ impl SeenIds {
         self.check_and_add_hashes(p.id_log.iter().map(|r| r.hash).collect())
     }
 
+    /// Could an id of hash `h` have been met? `false`: certainly not.
+    fn may_hold(&self, h: u64) -> bool {
+        if self.filter.is_empty() {
+            return false;
+        }
+        let s = filter_slot(h, self.filter_bits);
+        self.filter
+            .get(s / 64)
+            .is_some_and(|w| w >> (s % 64) & 1 == 1)
+    }
+
+    /// Set the filter's bits of `h`, made larger first (and filled again from the runs)
+    /// where the ids held would pass one per 8 bits.
+    fn filter_add(&mut self, h: &[u64]) {
+        let held = self.len + h.len();
+        if self.filter.is_empty() || held.saturating_mul(8) > 1usize << self.filter_bits {
+            // 8 to 16 bits per id held, at least one word
+            let bits = held.saturating_mul(8).max(64).next_power_of_two();
+            self.filter_bits = bits.trailing_zeros();
+            self.filter = vec![0u64; bits / 64];
+            let (filter, n) = (&mut self.filter, self.filter_bits);
+            for &x in self.runs.iter().flat_map(|r| &r.ids) {
+                let s = filter_slot(x, n);
+                filter[s / 64] |= 1 << (s % 64);
+            }
+        }
+        let n = self.filter_bits;
+        for &x in h {
+            let s = filter_slot(x, n);
+            self.filter[s / 64] |= 1 << (s % 64);
+        }
+        self.len = held;
+    }
+
     /// Was an id of hash `h` met in an earlier chunk?
     pub(crate) fn contains(&self, h: u64) -> bool {
-        self.runs.iter().any(|r| r.binary_search(&h).is_ok())
+        self.may_hold(h) && self.runs.iter().any(|r| r.holds(h))
     }
 
     /// The hashes of `h` (a chunk's ids, any hash function used throughout) met in earlier
@@ -798,17 +854,22 @@ impl SeenIds {
         h.sort_unstable();
         h.dedup();
         let mut before = foldhash::HashSet::default();
-        for run in &self.runs {
-            met_in(&h, run, &mut before);
+        // the ids the filter does not turn away, still sorted
+        let maybe: Vec<u64> = h.iter().copied().filter(|&x| self.may_hold(x)).collect();
+        for x in maybe {
+            if self.runs.iter().any(|r| r.holds(x)) {
+                before.insert(x);
+            }
         }
-        self.runs.push(h);
+        self.filter_add(&h);
+        self.runs.push(Run::new(h));
         while let [.., a, b] = &self.runs[..] {
-            if b.len() * 2 < a.len() {
+            if b.ids.len() * 2 < a.ids.len() {
                 break;
             }
             if let Some(b) = self.runs.pop() {
                 if let Some(a) = self.runs.last_mut() {
-                    merge_into(a, &b);
+                    a.merge(&b);
                 }
             }
         }
@@ -816,25 +877,58 @@ impl SeenIds {
     }
 }
 
-/// The values of the sorted `h` that the sorted `run` holds, into `out`: one walk with a
-/// cursor that gallops forward (memory read in order, a few steps a value where `run` is
-/// much longer than `h`).
-fn met_in(h: &[u64], run: &[u64], out: &mut foldhash::HashSet<u64>) {
-    let mut at = 0;
-    for &x in h {
-        // the first place at or after `at` holding x or more
-        let mut step = 1;
-        let mut hi = at;
-        while hi < run.len() && run[hi] < x {
-            at = hi + 1;
-            hi = at + step;
-            step *= 2;
+/// One sorted run of [`SeenIds`], with where each range of its top bits starts: an id is
+/// looked up in the few values of its range (two cache lines, about), not by a search over
+/// the run (the hashes are uniform).
+struct Run {
+    ids: Vec<u64>,
+    /// `dir[k]..dir[k + 1]`: the values whose top `bits` bits are `k`; 2 to 4 bits per id.
+    /// Empty for a run too long for `u32` indices (searched whole).
+    dir: Vec<u32>,
+    bits: u32,
+}
+
+/// The top `bits` bits of `x` (0 for none).
+fn top_bits(x: u64, bits: u32) -> usize {
+    usize::try_from(x.checked_shr(64 - bits).unwrap_or(0)).unwrap_or(0)
+}
+
+impl Run {
+    /// The run of the sorted `ids`, with its directory: one range per 8 to 16 values, about.
+    fn new(ids: Vec<u64>) -> Run {
+        let ranges = (ids.len() / 16).max(1).next_power_of_two();
+        let bits = ranges.trailing_zeros();
+        let mut dir = Vec::new();
+        if u32::try_from(ids.len()).is_ok() {
+            dir.reserve_exact(ranges + 1);
+            let mut at = 0;
+            for k in 0..ranges {
+                while ids.get(at).is_some_and(|&v| top_bits(v, bits) < k) {
+                    at += 1;
+                }
+                dir.push(u32::try_from(at).unwrap_or(u32::MAX));
+            }
+            dir.push(u32::try_from(ids.len()).unwrap_or(u32::MAX));
         }
-        let hi = hi.min(run.len());
-        at += run[at.min(hi)..hi].partition_point(|&v| v < x);
-        if run.get(at) == Some(&x) {
-            out.insert(x);
-        }
+        Run { ids, dir, bits }
+    }
+
+    /// Does the run hold `x`?
+    fn holds(&self, x: u64) -> bool {
+        let k = top_bits(x, self.bits);
+        let (lo, hi) = match (self.dir.get(k), self.dir.get(k + 1)) {
+            (Some(&lo), Some(&hi)) => (lo as usize, hi as usize),
+            _ => (0, self.ids.len()),
+        };
+        self.ids
+            .get(lo..hi)
+            .is_some_and(|r| r.binary_search(&x).is_ok())
+    }
+
+    /// Merge the run `b` into this one.
+    fn merge(&mut self, b: &Run) {
+        merge_into(&mut self.ids, &b.ids);
+        *self = Run::new(std::mem::take(&mut self.ids));
     }
 }
 
@@ -844,17 +938,17 @@ fn merge_into(a: &mut Vec<u64>, b: &[u64]) {
     let old = a.len();
     a.reserve_exact(b.len());
     a.resize(old + b.len(), 0);
-    let (mut i, mut j, mut k) = (old, b.len(), old + b.len());
-    while j > 0 {
-        if i > 0 && a[i - 1] > b[j - 1] {
-            a[k - 1] = a[i - 1];
-            i -= 1;
-        } else {
-            a[k - 1] = b[j - 1];
-            j -= 1;
-        }
-        k -= 1;
+    let (mut i, mut j) = (old, b.len());
+    // without a branch on which side is taken (the hashes interleave at random)
+    while i > 0 && j > 0 {
+        let (x, y) = (a[i - 1], b[j - 1]);
+        let from_a = x > y;
+        a[i + j - 1] = if from_a { x } else { y };
+        i -= usize::from(from_a);
+        j -= usize::from(!from_a);
     }
+    // what is left of `b` goes first (what is left of `a` is in place)
+    a[..j].copy_from_slice(&b[..j]);
 }
 
 #[cfg(test)]
@@ -862,9 +956,17 @@ mod tests {
     use super::*;
 
     /// The runs answer as one set would: every id of a chunk met before is found, no other,
-    /// over chunks of many sizes (merges of every shape), and the runs stay few.
+    /// over chunks of many sizes (merges of every shape), and the runs stay few; with
+    /// hashes spread over the 64 bits (the filter and the runs' ranges at work) and with
+    /// small ones (every id in the first range, the filter's first word).
     #[test]
     fn seen_ids_answer_as_a_set() {
+        for spread in [0x9E37_79B9_7F4A_7C15u64, 1] {
+            seen_ids_as_a_set(spread);
+        }
+    }
+
+    fn seen_ids_as_a_set(spread: u64) {
         let mut seen = SeenIds::default();
         let mut all = std::collections::HashSet::new();
         let mut x = 0x2545_f491_4f6c_dd1du64;
@@ -875,7 +977,8 @@ mod tests {
                     x ^= x << 13;
                     x ^= x >> 7;
                     x ^= x << 17;
-                    x % 200_000 // repeats within and across chunks
+                    // repeats within and across chunks (an odd factor keeps them)
+                    (x % 200_000).wrapping_mul(spread)
                 })
                 .collect();
             let expect: foldhash::HashSet<u64> =
@@ -887,9 +990,26 @@ mod tests {
             );
             all.extend(h);
             assert!(seen.runs.len() <= 24, "{} runs", seen.runs.len());
-            assert!(seen.runs.iter().all(|r| r.is_sorted()));
+            assert!(seen.runs.iter().all(|r| r.ids.is_sorted()));
+            // the filter: 8 to 16 bits per id held (at least one word); the ranges: one per
+            // 8 to 16 ids
+            let held: usize = seen.runs.iter().map(|r| r.ids.len()).sum();
+            for r in &seen.runs {
+                let ranges = r.dir.len() - 1;
+                let (lo, hi) = (8 * ranges, 16 * (ranges + 1));
+                assert!(
+                    ranges == 1 || (lo..hi).contains(&r.ids.len()),
+                    "{ranges} ranges"
+                );
+            }
+            assert_eq!(seen.len, held);
+            let bits = seen.filter.len() * 64;
+            assert!(
+                bits >= 8 * held && bits <= (16 * held).max(64),
+                "{bits} bits, {held} ids"
+            );
         }
         assert!(all.iter().all(|&v| seen.contains(v)));
-        assert!(!seen.contains(200_001));
+        assert!(!seen.contains(200_001u64.wrapping_mul(spread)));
     }
 }
