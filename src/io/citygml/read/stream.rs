@@ -23,9 +23,9 @@
 //! from there (see [`stream`]).
 //!
 //! A gml:id repeated in a later chunk is warned about there, as the serial read does: the
-//! hashes of the ids read so far are kept, sorted, with a filter and a directory of their top
-//! bits (`SeenIds`: 9.25 to 10.5 bytes an id, the one part of memory that grows with the
-//! document: 36 to 41 MB for the 3.9 million ids of 1 GB of LoD3).
+//! hashes of the ids read so far are kept, sorted, bucketed by their top bits, behind a
+//! filter (`SeenIds`: 7 to 7.75 bytes an id, the one part of memory that grows with the
+//! document: 27 to 30 MB for the 3.9 million ids of 1 GB of LoD3).
 //!
 //! A chunk's model is the serial read's restricted to its members, with two differences its
 //! user must know: a building's body asset (a building without thematic surfaces, made after
