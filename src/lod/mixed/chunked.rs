@@ -10,7 +10,7 @@
 //!   (in another member, at the root, or nowhere): the plan declines;
 //! * a gml:id of a chunk also met in an earlier one (the whole index resolves an id to its
 //!   first element): the plan declines. The hashes of the ids of the chunks before are kept
-//!   ([`SeenIds`], 8 bytes an id: the one part that grows with the document);
+//!   ([`SeenIds`], 7 to 7.75 bytes an id: the one part that grows with the document);
 //! * a fresh `skylod_` id must not meet any id of the document: a candidate is checked against
 //!   its chunk's ids and the hashes of the chunks before, and a chunk holding an id handed out
 //!   before declines;

@@ -40,13 +40,15 @@ mod events;
 mod geometry;
 mod ids;
 mod position;
+mod seen;
 mod split;
 mod state;
 mod stream;
 mod xlink;
 
 pub use events::read_from;
-pub(crate) use stream::{member_chunks, MemberChunks, SeenIds};
+pub(crate) use seen::SeenIds;
+pub(crate) use stream::{member_chunks, MemberChunks};
 pub use stream::{
     stream, stream_citygml, Chunk, ChunkStart, Passes, Reread, StreamSummary, Streamed, CHUNK_BYTES,
 };
