@@ -218,7 +218,7 @@ fn lod_on_a_hollow_read_writes_the_whole_reads_bytes() {
     // where the whole read fits in the memory lod may take, it is read whole: by default
     // half of what is available (this file is far under it), or as --max-memory says
     let (_, _, said) = run_lod(&input, "fits", "gml", &["--stream-chunk", "1"]);
-    let fits = "MiB lod may take (half of the memory available; --max-memory sets it))";
+    let fits = "MiB lod may take, half of the memory available; --max-memory sets it)";
     assert!(
         said.contains("lod reads whole (") && said.contains(fits),
         "{said}"

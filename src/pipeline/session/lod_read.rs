@@ -131,7 +131,7 @@ impl std::fmt::Display for Budget {
             Budget::Given(b) => write!(f, "the {} of --max-memory", mib(*b)),
             Budget::Available(b) => write!(
                 f,
-                "the {} lod may take (half of the memory available; --max-memory sets it)",
+                "the {} lod may take, half of the memory available; --max-memory sets it",
                 mib(*b)
             ),
         }
