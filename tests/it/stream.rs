@@ -674,3 +674,80 @@ fn streamed_gzip_inputs_are_the_whole_reads_bytes() {
         "{compared} gzip inputs compared, {streamed_gz} streamed"
     );
 }
+
+/// Chunks parsed ahead on other threads (`ReadOptions::stream_ahead`) are the serial
+/// stream's, chunk by chunk (models with their lines and warnings, counts, summary), also
+/// where the document-wide state changes from chunk to chunk (invalid gml:ids listed, a
+/// foreign namespace first met in a later chunk: those chunks are parsed again from the
+/// right state), and on every file of the shared data and the fixtures in chunks of 4 KiB.
+#[test]
+fn chunks_parsed_ahead_are_the_serial_streams() {
+    let member = |id: &str, extra: &str| {
+        format!(
+            r#"<cityObjectMember><bldg:Building gml:id="{id}">{extra}<bldg:boundedBy><bldg:WallSurface>
+<bldg:lod2MultiSurface><gml:MultiSurface><gml:surfaceMember><gml:Polygon gml:id="{id}_p"><gml:exterior>
+<gml:LinearRing><gml:posList>0 0 0 1 0 0 1 0 5 0 0 0</gml:posList></gml:LinearRing>
+</gml:exterior></gml:Polygon></gml:surfaceMember></gml:MultiSurface></bldg:lod2MultiSurface>
+</bldg:WallSurface></bldg:boundedBy></bldg:Building></cityObjectMember>
+"#
+        )
+    };
+    let ade = r#"<x:energy xmlns:x="urn:example:ade">12</x:energy>"#;
+    let mut members = Vec::new();
+    for k in 0..40 {
+        let id = match k % 7 {
+            0 => format!("{k}bad"), // not an xs:ID: listed, the state changes
+            _ => format!("b{k}"),
+        };
+        members.push(member(&id, if k == 23 { ade } else { "" }));
+    }
+    members.push(member("b3", "")); // repeated in a later chunk
+    let doc = format!(
+        r#"<?xml version="1.0"?>
+<CityModel gml:id="root" xmlns="http://www.opengis.net/citygml/2.0"
+ xmlns:bldg="http://www.opengis.net/citygml/building/2.0" xmlns:gml="http://www.opengis.net/gml">
+{}</CityModel>
+"#,
+        members.concat()
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let made = dir.path().join("ahead.gml");
+    std::fs::write(&made, doc).unwrap();
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let chunks = |path: &Path, ahead: usize, bytes: u64| {
+        let opts = ReadOptions {
+            stream_ahead: ahead,
+            ..ReadOptions::default()
+        };
+        let mut seen = Vec::new();
+        let end = two.install(|| {
+            stream(path, &opts, bytes, &|_| {}, |c| {
+                seen.push(format!("{c:?}"));
+                Ok::<(), ()>(())
+            })
+        });
+        (format!("{:?}", end.unwrap()), seen)
+    };
+    let serial = chunks(&made, 0, 1);
+    assert!(
+        serial.1.len() > 40,
+        "one member a chunk: {}",
+        serial.1.len()
+    );
+    assert!(serial.0.contains("Done"), "{}", serial.0);
+    for ahead in [1, 3] {
+        assert!(chunks(&made, ahead, 1) == serial, "{ahead} ahead");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for path in plain_inputs(dir.path()) {
+        let serial = chunks(&path, 0, 4096);
+        assert!(
+            chunks(&path, 2, 4096) == serial,
+            "{}: parsed ahead",
+            util::short(&path)
+        );
+    }
+}

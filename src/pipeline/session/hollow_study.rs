@@ -79,7 +79,11 @@ impl HollowStudy {
         let size = std::fs::metadata(path).map_or(0, |m| m.len());
         check(progress, Stage::Read)?;
         progress.start(Stage::Read, 1, size);
-        let read = ReadOptions::default();
+        // a chunk parsed ahead on every thread: the hollow model is far under lod's budget
+        let read = ReadOptions {
+            stream_ahead: usize::MAX,
+            ..ReadOptions::default()
+        };
         let passed = |_: usize, n: u64| progress.advance(Stage::Read, 0, n, None);
         let passes = Passes::new(&read, chunk, &passed);
         let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();

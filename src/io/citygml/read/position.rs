@@ -1,6 +1,6 @@
 //! Positions: byte offsets, line and column numbers, locations of errors and warnings.
 
-use super::state::{Parser, MARK_STEP};
+use super::state::{LineMark, Parser, MARK_STEP};
 use crate::io::citygml::error::{Location, ReadError};
 use crate::model::Warning;
 
@@ -21,15 +21,9 @@ impl Parser<'_> {
     /// here (one SIMD count over a long span instead of a count per event).
     pub(super) fn line_mark(&self) -> (u64, u64) {
         let mut m = self.lines.get();
-        let to = usize::try_from(self.event_pos).unwrap_or(usize::MAX);
-        let from = usize::try_from(m.counted_to).unwrap_or(usize::MAX);
-        if to > from {
-            if let Some(span) = self.doc.get(from..to) {
-                if let Some((n, last)) = newlines(span) {
-                    m.line += n;
-                    m.line_start = m.counted_to + last as u64 + 1;
-                }
-                m.counted_to = self.event_pos;
+        if self.event_pos > m.counted_to {
+            if let Some(moved) = m.advanced(self.doc, self.event_pos) {
+                m = moved;
                 self.lines.set(m);
                 let mut marks = self.marks.borrow_mut();
                 if marks
@@ -97,6 +91,21 @@ impl Parser<'_> {
             gml_id: self.nearest_id(),
             message: message.into(),
         });
+    }
+}
+
+impl LineMark {
+    /// The mark moved on to offset `to` of `doc` (at or after `counted_to`): the newlines
+    /// between counted. `None` where `doc` does not hold those bytes.
+    pub(super) fn advanced(mut self, doc: &[u8], to: u64) -> Option<LineMark> {
+        let from = usize::try_from(self.counted_to).ok()?;
+        let span = doc.get(from..usize::try_from(to).ok()?)?;
+        if let Some((n, last)) = newlines(span) {
+            self.line += n;
+            self.line_start = self.counted_to + last as u64 + 1;
+        }
+        self.counted_to = to;
+        Some(self)
     }
 }
 

@@ -271,7 +271,7 @@ pub(super) struct Attrs<'e> {
 
 /// Where the line counter stands: `line` is the line of offset `counted_to`, which lies after
 /// the newline at `line_start - 1`.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(super) struct LineMark {
     pub(super) line: u64,
     pub(super) line_start: u64,

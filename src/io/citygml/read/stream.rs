@@ -22,6 +22,10 @@
 //! A gzip-compressed file is decompressed once into an unnamed temporary file and streamed
 //! from there (see [`stream`]).
 //!
+//! The chunks after the one handed over are parsed ahead on other threads
+//! ([`super::ahead`], [`ReadOptions::stream_ahead`]), each from the state the serial read
+//! stands in at its start, or parsed again where that state was not known yet.
+//!
 //! A gml:id repeated in a later chunk is warned about there, as the serial read does: the
 //! hashes of the ids read so far are kept, sorted, bucketed by their top bits, behind a
 //! filter (`SeenIds`: 7 to 7.75 bytes an id, the one part of memory that grows with the
@@ -34,6 +38,7 @@
 //! envelope is computed over the chunk. The summary of invalid gml:ids ("N more ...") is the
 //! stream's: [`StreamSummary::patch_warnings`].
 
+use super::ahead::{Ahead, ChunkSource};
 use super::events::{configured, finish, parse_events, start_root};
 use super::ids::INVALID_IDS_LISTED;
 use super::seen::SeenIds;
@@ -323,111 +328,133 @@ pub fn stream_citygml<E>(
     let mut sum = StreamSummary::default();
     let mut from = 0usize; // body offset of the chunk (0: from the prolog on)
     let step = usize::try_from(chunk_bytes.max(1)).unwrap_or(usize::MAX);
-    let mut index = 0;
-    loop {
-        let first = index == 0;
-        let start = if first { root_end } else { from };
-        let to = chunk_end(body, start, step);
-        let last = to == body.len();
-        let before = (!first).then(|| std::sync::Arc::new(state.clone()));
-        let Some(p) = parse_chunk(&doc, bom, prolog, from, to, first, &state, path, opts) else {
-            return decline("a chunk that does not read alone");
-        };
-        if p.stack.len() != usize::from(!last) {
-            return decline("a chunk that does not end between members");
-        }
-        state.absorb(&p);
-        // the first chunk's members are read again after the root's start tag, as the
-        // others, with the state after it (what they read of it is the root's)
-        let start_at = ChunkStart {
-            from: start,
-            to,
-            state: before.unwrap_or_else(|| std::sync::Arc::new(state.clone())),
-        };
-        if first && p.root_is_model && !p.env_owners.iter().any(|o| matches!(o, EnvOwner::Root)) {
-            sum.trailing.push(Warning {
-                file: p.shared_path.clone(),
-                line: 1,
-                column: 1,
-                gml_id: None,
-                message: "CityModel has no gml:boundedBy envelope".into(),
-            });
-        }
-        let mut p = p;
-        let before = ids.check_and_add(&p);
-        if !before.is_empty() {
-            // a reference to such an id means its first occurrence, in another chunk
-            if p.href_targets().iter().any(|t| before.contains(t)) {
-                return decline("a reference to a gml:id of two chunks");
+    let src = ChunkSource {
+        doc: &doc,
+        bom,
+        prolog,
+        path,
+        opts,
+    };
+    let threads = rayon::current_num_threads();
+    let depth = if threads > 1 {
+        opts.stream_ahead.min(threads)
+    } else {
+        0
+    };
+    std::thread::scope(|scope| {
+        let mut ahead = Ahead::new(depth, src);
+        let mut index = 0;
+        loop {
+            let first = index == 0;
+            let start = if first { root_end } else { from };
+            let to = chunk_end(body, start, step);
+            let last = to == body.len();
+            let before = (!first).then(|| std::sync::Arc::new(state.clone()));
+            let ready = (!first).then(|| ahead.take((from, to), &state)).flatten();
+            let p = ready
+                .or_else(|| parse_chunk(&doc, bom, prolog, from, to, first, &state, path, opts));
+            let Some(p) = p else {
+                return decline("a chunk that does not read alone");
+            };
+            if p.stack.len() != usize::from(!last) {
+                return decline("a chunk that does not end between members");
             }
-            p.dup_before = before;
-        }
-        let listed = p.invalid_listed.clone();
-        let invalid = p.invalid_ids;
-        let end = (to + bom) as u64;
-        p.stack.clear();
-        p.event_pos = end;
-        state.line = {
-            let (line, line_start) = p.line_mark();
-            LineMark {
-                line,
-                line_start,
-                counted_to: end,
+            state.absorb(&p);
+            // the first chunk's members are read again after the root's start tag, as the
+            // others, with the state after it (what they read of it is the root's)
+            let start_at = ChunkStart {
+                from: start,
+                to,
+                state: before.unwrap_or_else(|| std::sync::Arc::new(state.clone())),
+            };
+            if first && p.root_is_model && !p.env_owners.iter().any(|o| matches!(o, EnvOwner::Root))
+            {
+                sum.trailing.push(Warning {
+                    file: p.shared_path.clone(),
+                    line: 1,
+                    column: 1,
+                    gml_id: None,
+                    message: "CityModel has no gml:boundedBy envelope".into(),
+                });
             }
-        };
-        let model = match finish(p, doc.len() as u64, true, false) {
-            Ok(m) => m,
-            Err(e) => return decline(&e.to_string()),
-        };
-        doc.release_range(from + bom, to + bom);
-        // invalid gml:ids: listed up to INVALID_IDS_LISTED per document
-        for &w in listed.iter().filter(|&&w| w != usize::MAX) {
-            state.invalid_last = Some(sum.warnings + w);
+            let mut p = p;
+            let before = ids.check_and_add(&p);
+            if !before.is_empty() {
+                // a reference to such an id means its first occurrence, in another chunk
+                if p.href_targets().iter().any(|t| before.contains(t)) {
+                    return decline("a reference to a gml:id of two chunks");
+                }
+                p.dup_before = before;
+            }
+            let listed = p.invalid_listed.clone();
+            let invalid = p.invalid_ids;
+            let end = (to + bom) as u64;
+            p.stack.clear();
+            p.event_pos = end;
+            state.line = {
+                let (line, line_start) = p.line_mark();
+                LineMark {
+                    line,
+                    line_start,
+                    counted_to: end,
+                }
+            };
+            // the chunks after this one parse on other threads while this one is handled
+            ahead.fill(scope, (start, to), &state, |s| chunk_end(body, s, step));
+            let model = match finish(p, doc.len() as u64, true, false) {
+                Ok(m) => m,
+                Err(e) => return decline(&e.to_string()),
+            };
+            doc.release_range(from + bom, to + bom);
+            // invalid gml:ids: listed up to INVALID_IDS_LISTED per document
+            for &w in listed.iter().filter(|&&w| w != usize::MAX) {
+                state.invalid_last = Some(sum.warnings + w);
+            }
+            state.invalid_ids += invalid;
+            let bodies = model
+                .assets
+                .iter()
+                .filter(|a| a.kind == AssetKind::Body)
+                .count();
+            let chunk = Chunk {
+                index,
+                buildings_before: sum.buildings,
+                assets_before: sum.assets,
+                bodies_before: sum.bodies,
+                warnings_before: sum.warnings,
+                bytes: (if first { 0 } else { (from + bom) as u64 }, end),
+                model,
+                source: None,
+                start: Some(start_at),
+            };
+            sum.buildings += chunk.model.buildings.len();
+            sum.assets += chunk.model.assets.len() - bodies;
+            sum.bodies += bodies;
+            sum.warnings += chunk.model.warnings.len();
+            passed(chunk.bytes.1);
+            each(chunk)?;
+            index += 1;
+            from = to;
+            if last {
+                break;
+            }
         }
-        state.invalid_ids += invalid;
-        let bodies = model
-            .assets
-            .iter()
-            .filter(|a| a.kind == AssetKind::Body)
-            .count();
-        let chunk = Chunk {
-            index,
-            buildings_before: sum.buildings,
-            assets_before: sum.assets,
-            bodies_before: sum.bodies,
-            warnings_before: sum.warnings,
-            bytes: (if first { 0 } else { (from + bom) as u64 }, end),
-            model,
-            source: None,
-            start: Some(start_at),
-        };
-        sum.buildings += chunk.model.buildings.len();
-        sum.assets += chunk.model.assets.len() - bodies;
-        sum.bodies += bodies;
-        sum.warnings += chunk.model.warnings.len();
-        passed(chunk.bytes.1);
-        each(chunk)?;
-        index += 1;
-        from = to;
-        if last {
-            break;
+        sum.chunks = index;
+        sum.warnings += sum.trailing.len();
+        sum.version = state.version;
+        sum.srs_name = state.srs_name;
+        let listed = state.invalid_listed as u64;
+        let more = state.invalid_ids.saturating_sub(listed);
+        if let (true, Some(i)) = (more > 0, state.invalid_last) {
+            sum.invalid_note = Some((
+                i,
+                format!(
+                    "; {more} more gml:ids after it are not valid xs:IDs either (not listed one by one)"
+                ),
+            ));
         }
-    }
-    sum.chunks = index;
-    sum.warnings += sum.trailing.len();
-    sum.version = state.version;
-    sum.srs_name = state.srs_name;
-    let listed = state.invalid_listed as u64;
-    let more = state.invalid_ids.saturating_sub(listed);
-    if let (true, Some(i)) = (more > 0, state.invalid_last) {
-        sum.invalid_note = Some((
-            i,
-            format!(
-                "; {more} more gml:ids after it are not valid xs:IDs either (not listed one by one)"
-            ),
-        ));
-    }
-    Ok(Streamed::Done(sum))
+        Ok(Streamed::Done(sum))
+    })
 }
 
 /// Where a chunk of [`stream_citygml`] starts ([`Chunk::start`]): its bytes and the state
@@ -662,18 +689,18 @@ fn next_cut(body: &[u8], at: usize) -> Option<usize> {
 
 /// The document-wide state the serial read has reached at a chunk's start.
 #[derive(Default, Clone)]
-struct DocState {
-    line: LineMark,
-    version: Option<CityGmlVersion>,
-    srs_name: Option<String>,
-    root_srs_set: bool,
-    gml_prefix: Option<String>,
-    relief_lod: Option<u8>,
-    ade_namespaces: Vec<Vec<u8>>,
-    unknown_prefixes: Vec<Vec<u8>>,
-    invalid_listed: usize,
-    invalid_ids: u64,
-    invalid_last: Option<usize>,
+pub(super) struct DocState {
+    pub(super) line: LineMark,
+    pub(super) version: Option<CityGmlVersion>,
+    pub(super) srs_name: Option<String>,
+    pub(super) root_srs_set: bool,
+    pub(super) gml_prefix: Option<String>,
+    pub(super) relief_lod: Option<u8>,
+    pub(super) ade_namespaces: Vec<Vec<u8>>,
+    pub(super) unknown_prefixes: Vec<Vec<u8>>,
+    pub(super) invalid_listed: usize,
+    pub(super) invalid_ids: u64,
+    pub(super) invalid_last: Option<usize>,
 }
 
 impl DocState {
@@ -703,7 +730,7 @@ impl DocState {
 /// Parse `body[from..to]` (body offsets; the first chunk from the prolog on) with a parser
 /// seeded as the serial read stands there; `None` on any error.
 #[allow(clippy::too_many_arguments)]
-fn parse_chunk<'d>(
+pub(super) fn parse_chunk<'d>(
     doc: &'d [u8],
     bom: usize,
     prolog: &'d [u8],
