@@ -99,6 +99,17 @@ pub fn fixture(name: &str) -> PathBuf {
     manifest_dir().join("fixtures").join(name)
 }
 
+/// The file at `path` gzipped into `dir` as its name with `.gz` added: the new file's path.
+pub fn gzip_copy(path: &Path, dir: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap().to_os_string();
+    name.push(".gz");
+    let gz = dir.join(name);
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    std::io::Write::write_all(&mut enc, &std::fs::read(path).unwrap()).unwrap();
+    std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+    gz
+}
+
 /// Every shared file plus every fixture (fixtures only when the shared data is missing).
 pub fn all_inputs() -> Vec<PathBuf> {
     let mut v = fixture_files();

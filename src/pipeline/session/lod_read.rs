@@ -253,7 +253,7 @@ pub fn lod_read(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::test_support::fixture;
+    use crate::pipeline::test_support::{fixture, gzip_copy};
 
     const N: [bool; 3] = [false; 3];
 
@@ -312,11 +312,7 @@ mod tests {
             "{w}"
         );
         let dir = tempfile::tempdir().unwrap();
-        let gz = dir.path().join("x.gml.gz");
-        let bytes = std::fs::read(&path).unwrap();
-        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-        std::io::Write::write_all(&mut enc, &bytes).unwrap();
-        std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+        let gz = gzip_copy(&path, dir.path());
         assert_eq!(
             why(lod_read(
                 std::slice::from_ref(&gz),
