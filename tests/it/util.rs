@@ -450,6 +450,21 @@ pub fn os<S: AsRef<OsStr> + ?Sized>(s: &S) -> &OsStr {
     s.as_ref()
 }
 
+/// The arguments of `skylod COMMAND INPUT` with a `--poi P` for each of `pois`, then `rest`.
+pub fn poi_args<'a, S: AsRef<OsStr> + ?Sized + 'a>(
+    command: &'a str,
+    input: &'a Path,
+    pois: impl IntoIterator<Item = &'a S>,
+    rest: &[&'a OsStr],
+) -> Vec<&'a OsStr> {
+    let mut args = vec![os(command), input.as_os_str()];
+    for p in pois {
+        args.extend([os("--poi"), p.as_ref()]);
+    }
+    args.extend(rest);
+    args
+}
+
 /// The standard error of a finished command, as text.
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).to_string()
