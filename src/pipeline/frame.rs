@@ -56,8 +56,6 @@ pub struct Framed<'a> {
     /// The frame's warning (no CRS, an unknown one, ...), structured; its text is the last
     /// of [`Framed::warnings`].
     pub frame_warning: Option<crate::model::crs::FrameWarning>,
-    /// The box of [`Framed::source`] ([`CityModel::bbox`]): every point as read.
-    pub source_bbox: Bbox,
 }
 
 /// Check `pois` ([`check_poi_list`]: finite, non-zero normals, unique ids), apply
@@ -171,7 +169,6 @@ pub(crate) fn frame_in<'a>(
         warnings,
         note,
         frame_warning: warning,
-        source_bbox,
     })
 }
 

@@ -5,11 +5,22 @@ use super::{frame, FrameOptions, Framed, Inputs};
 use crate::model::runtime::progress::{Progress, Silent, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 pub(crate) fn fixture() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml")
+}
+
+/// The file at `path` gzipped into `dir` as its name with `.gz` added: the new file's path.
+pub(crate) fn gzip_copy(path: &Path, dir: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap().to_os_string();
+    name.push(".gz");
+    let gz = dir.join(name);
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    std::io::Write::write_all(&mut enc, &std::fs::read(path).unwrap()).unwrap();
+    std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+    gz
 }
 
 /// A study of the [`fixture`] with `n` POIs ([`grid_pois`]), built and returned: nothing

@@ -160,9 +160,9 @@ fn lod_on_a_hollow_read_writes_the_whole_reads_bytes() {
         let at: Vec<String> = (pois.iter().map(|p| p.position.to_array()))
             .map(|[x, y, z]| format!("{x},{y},{z}"))
             .collect();
-        let mut args = vec![os("--log-level"), os("info"), os("lod"), input.as_os_str()];
-        at.iter().for_each(|p| args.extend([os("--poi"), os(p)]));
-        args.extend([os("-o"), out.as_os_str(), os("--report"), rep.as_os_str()]);
+        let rest = [os("-o"), out.as_os_str(), os("--report"), rep.as_os_str()];
+        let mut args = vec![os("--log-level"), os("info")];
+        args.extend(poi_args("lod", input, &at, &rest));
         args.push(os("--overwrite"));
         args.extend(extra.iter().map(os));
         let o = run(&args);
@@ -233,14 +233,8 @@ fn lod_on_a_hollow_read_writes_the_whole_reads_bytes() {
         said.contains("MiB fit in the 1024.0 MiB of --max-memory"),
         "{said}"
     );
-    let o = run(&[
-        os("lod"),
-        input.as_os_str(),
-        os("--poi"),
-        os("0,0,0"),
-        os("--max-memory"),
-        os("lots"),
-    ]);
+    let lots = [os("--max-memory"), os("lots")];
+    let o = run(&poi_args("lod", &input, ["0,0,0"], &lots));
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("--max-memory"), "{}", stderr(&o));
     let crs = [

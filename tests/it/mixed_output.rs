@@ -137,15 +137,7 @@ fn rough_command_on_every_file() {
 fn rough_command_batch_and_errors() {
     let dir = tempfile::tempdir().unwrap();
     let outdir = dir.path().join("out");
-    let gz = dir.path().join("chimney.gml.gz");
-    std::fs::write(&gz, {
-        use std::io::Write;
-        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-        e.write_all(&std::fs::read(fixture("chimney-citygml2.gml")).unwrap())
-            .unwrap();
-        e.finish().unwrap()
-    })
-    .unwrap();
+    let gz = gzip_copy(&fixture("chimney-citygml2.gml"), dir.path());
     let missing = dir.path().join("missing.gml");
     let o = run(&[
         "rough".as_ref(),
@@ -164,7 +156,7 @@ fn rough_command_batch_and_errors() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("polygons"), "{err}");
     assert!(outdir.join("chimney-citygml3.gml").is_file());
-    let raw = std::fs::read(outdir.join("chimney.gml.gz")).unwrap();
+    let raw = std::fs::read(outdir.join("chimney-citygml2.gml.gz")).unwrap();
     assert_eq!(&raw[..2], &[0x1f, 0x8b]);
     // existing outputs are not replaced without --overwrite
     let o = run(&[

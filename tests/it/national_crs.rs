@@ -13,7 +13,7 @@
 //! Needs python3 with pyproj and `../shared/data`: missing, the test fails under `CI=true` and
 //! prints `SKIP: ...` otherwise.
 
-use crate::util::{json, missing, os, python_has, run, shared_data, stderr};
+use crate::util::{json, missing, os, poi_args, python_has, run, shared_data, stderr};
 use glam::DVec3;
 use skylod::crs::convert::proj4_definition;
 use skylod::crs::{Builtin, Crs, PointTransform};
@@ -157,15 +157,12 @@ fn shared(rel: &str) -> Option<std::path::PathBuf> {
 }
 
 fn sun_hours(model: &std::path::Path, poi: &str, extra: &[&str]) -> serde_json::Value {
-    let mut args = vec![
-        os("sun-hours"),
-        model.as_os_str(),
-        os("--poi"),
-        os(poi),
-        os("--step"),
-        os("60"),
-        os("--json"),
-    ];
+    let mut args = poi_args(
+        "sun-hours",
+        model,
+        [poi],
+        &[os("--step"), os("60"), os("--json")],
+    );
     args.extend(extra.iter().map(os));
     let o = run(&args);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));

@@ -611,10 +611,7 @@ fn doctype_and_one_thread_read_serially() {
         .unwrap()
         .is_none());
     // gzip: streamed by one core
-    let gz = dir.path().join("plain.gml.gz");
-    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-    std::io::Write::write_all(&mut enc, &std::fs::read(&plain).unwrap()).unwrap();
-    std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+    let gz = gzip_copy(&plain, dir.path());
     assert!(two
         .install(|| read_file_split(&gz, &forced(3)))
         .unwrap()

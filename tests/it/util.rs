@@ -99,6 +99,17 @@ pub fn fixture(name: &str) -> PathBuf {
     manifest_dir().join("fixtures").join(name)
 }
 
+/// The file at `path` gzipped into `dir` as its name with `.gz` added: the new file's path.
+pub fn gzip_copy(path: &Path, dir: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap().to_os_string();
+    name.push(".gz");
+    let gz = dir.join(name);
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    std::io::Write::write_all(&mut enc, &std::fs::read(path).unwrap()).unwrap();
+    std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+    gz
+}
+
 /// Every shared file plus every fixture (fixtures only when the shared data is missing).
 pub fn all_inputs() -> Vec<PathBuf> {
     let mut v = fixture_files();
@@ -437,6 +448,21 @@ pub fn check_stdout_schema(schema: &str, o: &Output) {
 /// An argument as `&OsStr` (mixing `&str` and paths in one argument list).
 pub fn os<S: AsRef<OsStr> + ?Sized>(s: &S) -> &OsStr {
     s.as_ref()
+}
+
+/// The arguments of `skylod COMMAND INPUT` with a `--poi P` for each of `pois`, then `rest`.
+pub fn poi_args<'a, S: AsRef<OsStr> + ?Sized + 'a>(
+    command: &'a str,
+    input: &'a Path,
+    pois: impl IntoIterator<Item = &'a S>,
+    rest: &[&'a OsStr],
+) -> Vec<&'a OsStr> {
+    let mut args = vec![os(command), input.as_os_str()];
+    for p in pois {
+        args.extend([os("--poi"), p.as_ref()]);
+    }
+    args.extend(rest);
+    args
 }
 
 /// The standard error of a finished command, as text.

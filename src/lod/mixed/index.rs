@@ -647,6 +647,7 @@ fn scan_attrs<R>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pipeline::test_support::gzip_copy;
 
     const DOC: &str = r##"<?xml version="1.0"?>
 <CityModel xmlns="http://www.opengis.net/citygml/2.0" xmlns:gml="http://www.opengis.net/gml" xmlns:xlink="http://www.w3.org/1999/xlink">
@@ -729,10 +730,7 @@ mod tests {
         ] {
             let path = dir.path().join(format!("{name}.gml"));
             std::fs::write(&path, &text).unwrap();
-            let gz = dir.path().join(format!("{name}.gml.gz"));
-            let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-            std::io::Write::write_all(&mut enc, text.as_bytes()).unwrap();
-            std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+            let gz = gzip_copy(&path, dir.path());
             for skip in [vec![], vec![a.clone(), b.clone(), c.clone()]] {
                 let skip: Vec<Span> = skip
                     .iter()
@@ -893,10 +891,7 @@ mod tests {
             assert_eq!(f.is_some(), s.is_some(), "{id}");
         }
         // gzip streams: no prescan, the same index
-        let gz = dir.path().join("d.gml.gz");
-        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-        std::io::Write::write_all(&mut enc, text.as_bytes()).unwrap();
-        std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+        let gz = gzip_copy(&path, dir.path());
         let z = scan_with(&DocSource::File(gz.clone()), &gz, &skip, &opts, 0, 1).unwrap();
         assert_same_index(&serial, &z, &ids, "gzip");
     }
@@ -934,13 +929,7 @@ mod tests {
             max_event_bytes: 512 << 10,
             ..ReadOptions::default()
         };
-        let gz = |p: &Path| {
-            let z = p.with_extension("gml.gz");
-            let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-            std::io::Write::write_all(&mut enc, &std::fs::read(p).unwrap()).unwrap();
-            std::fs::write(&z, enc.finish().unwrap()).unwrap();
-            z
-        };
+        let gz = |p: &Path| gzip_copy(p, dir.path());
         let shallow = ReadOptions {
             max_depth: 2,
             ..ReadOptions::default()

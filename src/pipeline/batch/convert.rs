@@ -26,10 +26,22 @@ use std::path::Path;
 /// is streamed from a temporary file. A CityJSON document is streamed in chunks of city
 /// objects, CityJSONSeq in chunks of lines ([`crate::io::citygml::read::stream`]).
 pub fn chunk_for(path: &Path, chunk: u64) -> Option<u64> {
-    let len = std::fs::metadata(path).ok()?.len();
+    len_and_chunk(path, chunk).1
+}
+
+/// The file's size in bytes (0 where its metadata cannot be read) and [`chunk_for`] of it:
+/// the metadata read once for a caller that needs both.
+pub(crate) fn len_and_chunk(path: &Path, chunk: u64) -> (u64, Option<u64>) {
+    let Ok(meta) = std::fs::metadata(path) else {
+        return (0, None);
+    };
+    let len = meta.len();
     let gzip = crate::io::files::is_gzip_file(path);
-    let len = if gzip { len.saturating_mul(10) } else { len };
-    (chunk > 0 && len >= chunk.saturating_mul(4)).then_some(chunk)
+    let counted = if gzip { len.saturating_mul(10) } else { len };
+    (
+        len,
+        (chunk > 0 && counted >= chunk.saturating_mul(4)).then_some(chunk),
+    )
 }
 
 /// The line that says a file meant to be streamed was read whole, and why.
@@ -365,7 +377,17 @@ mod tests {
         assert_eq!(chunk_for(&f, len / 4 + 1), None, "under four chunks");
         assert_eq!(chunk_for(&f, 0), None, "0: always whole");
         assert_eq!(chunk_for(Path::new("/nonexistent.gml"), 1), None);
+        // the size as it is on disk, streamed or not; a gzip file counts ten times it
+        assert_eq!(len_and_chunk(&f, len / 4 + 1), (len, None));
+        assert_eq!(len_and_chunk(Path::new("/nonexistent.gml"), 1), (0, None));
         let dir = tempfile::tempdir().unwrap();
+        let gz = crate::pipeline::test_support::gzip_copy(&f, dir.path());
+        let gz_len = gz.metadata().unwrap().len();
+        assert_eq!(
+            len_and_chunk(&gz, gz_len * 10 / 4),
+            (gz_len, Some(gz_len * 10 / 4))
+        );
+        assert_eq!(len_and_chunk(&gz, gz_len * 10 / 4 + 1), (gz_len, None));
         let json = dir.path().join("a.city.json");
         std::fs::write(
             &json,

@@ -25,7 +25,9 @@ use super::site::head_model;
 use crate::model::crs::{model_crs, Crs, LocalFrame};
 use crate::model::runtime::available::available_bytes;
 use crate::model::shown;
+#[cfg(doc)]
 use crate::pipeline::batch::convert::chunk_for;
+use crate::pipeline::batch::convert::len_and_chunk;
 use std::path::PathBuf;
 
 /// Bytes of the first chunk whose city objects tell the file's CRS ([`head_model`]).
@@ -230,11 +232,11 @@ pub fn lod_read(
     if stdin {
         return whole(WholeWhy::Stdin);
     }
-    let Some(chunk) = chunk_for(path, chunk) else {
-        let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+    // the file's metadata read once: for the threshold, the reason and the memory budget
+    let (bytes, streamed) = len_and_chunk(path, chunk);
+    let Some(chunk) = streamed else {
         return whole(WholeWhy::Small { bytes, chunk });
     };
-    let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
     if let Some(budget) = memory_budget(max_memory).filter(|b| bytes <= b.bytes()) {
         return whole(WholeWhy::Fits { bytes, budget });
     }
@@ -253,7 +255,7 @@ pub fn lod_read(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::test_support::fixture;
+    use crate::pipeline::test_support::{fixture, gzip_copy};
 
     const N: [bool; 3] = [false; 3];
 
@@ -312,11 +314,7 @@ mod tests {
             "{w}"
         );
         let dir = tempfile::tempdir().unwrap();
-        let gz = dir.path().join("x.gml.gz");
-        let bytes = std::fs::read(&path).unwrap();
-        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-        std::io::Write::write_all(&mut enc, &bytes).unwrap();
-        std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+        let gz = gzip_copy(&path, dir.path());
         assert_eq!(
             why(lod_read(
                 std::slice::from_ref(&gz),

@@ -137,7 +137,7 @@ pub struct Scene {
     inputs: Vec<Input>,
     model: CityModel,
     /// The model's box ([`CityModel::bbox`]), taken once for the checks, the frame and the
-    /// sun's site.
+    /// sun's site: [`Scene::frame`] gives it to the [`Study`], which keeps it alone.
     bbox: Bbox,
     failures: Vec<ReadError>,
     options: SceneOptions,
@@ -298,7 +298,7 @@ impl Scene {
         let (warnings, note, frame_warning) = (f.warnings, f.note, f.frame_warning);
         Ok(Study {
             inputs,
-            bbox: f.source_bbox,
+            bbox,
             source: model,
             local,
             crs,
@@ -322,7 +322,8 @@ impl Scene {
 pub struct Study {
     inputs: Vec<Input>,
     source: CityModel,
-    /// The source's box ([`CityModel::bbox`]).
+    /// The source's box ([`CityModel::bbox`]): the one the [`Scene`] took, kept here alone
+    /// ([`Framed`] does not carry it).
     bbox: Bbox,
     local: Option<CityModel>,
     crs: Crs,
@@ -351,7 +352,6 @@ impl Study {
             warnings: self.warnings.clone(),
             note: self.note.clone(),
             frame_warning: self.frame_warning.clone(),
-            source_bbox: self.bbox,
         }
     }
 

@@ -242,11 +242,7 @@ mod tests {
         assert!((a, o) != (lat, lon), "the first objects only");
         assert_eq!(site_hint(None, None, None), None);
         let dir = tempfile::tempdir().unwrap();
-        let gz = dir.path().join("x.gml.gz");
-        let bytes = std::fs::read(&path).unwrap();
-        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-        std::io::Write::write_all(&mut enc, &bytes).unwrap();
-        std::fs::write(&gz, enc.finish().unwrap()).unwrap();
+        let gz = crate::pipeline::test_support::gzip_copy(&path, dir.path());
         assert_eq!(site_hint(None, None, Some(&gz)), None);
         let json = dir.path().join("x.city.json");
         std::fs::write(&json, " {\"type\": \"CityJSON\", \"CityObjects\": {}}").unwrap();
