@@ -79,14 +79,18 @@ impl<'s, 'd: 's> Ahead<'s, 'd> {
             let src = self.src;
             let seed = state.clone();
             let mut job = state.clone();
-            let parse = scope.spawn(move || {
+            let thread = std::thread::Builder::new().name("skylod-chunk".into());
+            // no thread to be had: the chunk is parsed in its turn
+            let Ok(parse) = thread.spawn_scoped(scope, move || {
                 let at = (range.0 + src.bom) as u64;
                 job.line = job.line.advanced(src.doc, at).unwrap_or(job.line);
                 let (doc, bom, prolog) = (src.doc, src.bom, src.prolog);
                 let (from, to) = range;
                 let p = parse_chunk(doc, bom, prolog, from, to, false, &job, src.path, src.opts);
                 (p, job.line)
-            });
+            }) else {
+                break;
+            };
             self.pending.push_back(Pending { range, seed, parse });
             start = range.1;
         }
