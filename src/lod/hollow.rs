@@ -62,7 +62,10 @@
 //! benchmark files (one street repeated at the same place) the reference reaches every
 //! copy's assets near the rays, and parsing their members again costs several times the
 //! whole model's reference (1 GB: 5.3 s of wall time against 1.1 s; 4 GB: 30 s against 6.4 s);
-//! see there for what that means for tracing the reference per chunk instead.
+//! see there for what that means for tracing the reference per chunk instead. A member holds
+//! many assets and the rounds ask for them a few at a time, so the source keeps, of each
+//! member it parses, the assets a later round may ask for ([`Hollow::read_back_keeping`]):
+//! no member is parsed twice for them (BENCHMARKS.md, "Keeping what is read back").
 //!
 //! The mixed CityGML writer runs on it too ([`crate::lod::mixed::write_mixed_hollow`]: each
 //! chunk's kept assets and buildings read back for its plan, [`Hollow::read_back_geometries`]),
