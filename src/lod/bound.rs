@@ -320,7 +320,9 @@ fn full_tags(
         };
         return Ok((probes.iter().map(|p| tags(&whole, p)).collect(), reference));
     }
-    let (hits, reference) = lazy_hits_with(src, probes, boxes, SEED_BOXES)?;
+    let lazy = lazy_hits_with(src, probes, boxes, SEED_BOXES);
+    src.expect(None);
+    let (hits, reference) = lazy?;
     let tags = hits
         .into_iter()
         .map(|v| v.into_iter().map(|h| h.map(|h| h.0)).collect())
@@ -438,6 +440,7 @@ fn lazy_hits_with(
     loop {
         reference.rounds += 1;
         let new: Vec<bool> = include.iter().zip(&built).map(|(&i, &b)| i && !b).collect();
+        src.expect(Some(&later_of(&pending, &new, &include)));
         let scene = source::full_part(src, Some(&new), Some((frame, pending.len())))?;
         built.clone_from(&include);
         let cap = if reference.rounds as u32 >= UNCAPPED_ROUND {
@@ -520,6 +523,22 @@ fn lazy_hits_with(
         }
         pending = next;
     }
+}
+
+/// The assets a round of [`lazy_hits_with`] builds (`new`) and those a later round may add
+/// ([`FullSource::expect`]): the boxes not included yet that a pending ray which hit nothing
+/// so far crosses (a ray that hit something added every box before its hit at once, and its
+/// limit only shrinks).
+fn later_of(pending: &[Pending], new: &[bool], include: &[bool]) -> Vec<bool> {
+    let mut later = new.to_vec();
+    for p in pending.iter().filter(|p| p.best.is_none()) {
+        for &(_, a) in p.crossed.iter().flat_map(|c| c.iter()) {
+            if let (Some(l), Some(false)) = (later.get_mut(a as usize), include.get(a as usize)) {
+                *l = true;
+            }
+        }
+    }
+    later
 }
 
 /// A ray of the reference trace still open.

@@ -62,7 +62,10 @@
 //! benchmark files (one street repeated at the same place) the reference reaches every
 //! copy's assets near the rays, and parsing their members again costs several times the
 //! whole model's reference (1 GB: 5.3 s of wall time against 1.1 s; 4 GB: 30 s against 6.4 s);
-//! see there for what that means for tracing the reference per chunk instead.
+//! see there for what that means for tracing the reference per chunk instead. A member holds
+//! many assets and the rounds ask for them a few at a time, so the source keeps, of each
+//! member it parses, the assets a later round may ask for ([`Hollow::read_back_keeping`]):
+//! no member is parsed twice for them (BENCHMARKS.md, "Keeping what is read back").
 //!
 //! The mixed CityGML writer runs on it too ([`crate::lod::mixed::write_mixed_hollow`]: each
 //! chunk's kept assets and buildings read back for its plan, [`Hollow::read_back_geometries`]),
@@ -173,14 +176,32 @@ impl Hollow {
     /// alone). Each asset is the whole read's: the hollow one with the geometry read back
     /// (found by its span). `None` when one is out of range or cannot be read back.
     pub fn read_back(&self, rr: &Reread, want: &[usize]) -> Option<Vec<Asset>> {
-        let (geometries, _) = self.read_back_geometries(rr, want, &[])?;
-        (want.iter().zip(geometries))
-            .map(|(&i, g)| {
-                let mut a = self.model.assets.get(i)?.clone();
-                a.geometries = g;
-                Some(a)
-            })
-            .collect()
+        Some(self.read_back_keeping(rr, want, &[])?.0)
+    }
+
+    /// [`Hollow::read_back`] of `want`, and of the assets `also` (indices of the model, none
+    /// of `want`'s) those that the members parsed for `want` hold, with their indices: what a
+    /// caller that may ask for them later keeps, so as not to parse their members again.
+    #[allow(clippy::type_complexity)]
+    pub fn read_back_keeping(
+        &self,
+        rr: &Reread,
+        want: &[usize],
+        also: &[usize],
+    ) -> Option<(Vec<Asset>, Vec<(usize, Asset)>)> {
+        let (geometries, _, more) = self.read_back_with(rr, want, &[], also)?;
+        let whole = |i: usize, g: Geometries| {
+            let mut a = self.model.assets.get(i)?.clone();
+            a.geometries = g;
+            Some(a)
+        };
+        let wanted = (want.iter().zip(geometries))
+            .map(|(&i, g)| whole(i, g))
+            .collect::<Option<_>>()?;
+        let more = (more.into_iter())
+            .map(|(i, g)| Some((i, whole(i, g)?)))
+            .collect::<Option<_>>()?;
+        Some((wanted, more))
     }
 
     /// The full geometry properties of the assets `assets` and of the buildings' own geometry
@@ -193,6 +214,20 @@ impl Hollow {
         assets: &[usize],
         buildings: &[usize],
     ) -> Option<(Vec<Geometries>, Vec<Geometries>)> {
+        let (a, b, _) = self.read_back_with(rr, assets, buildings, &[])?;
+        Some((a, b))
+    }
+
+    /// [`Hollow::read_back_geometries`], and the geometry of the assets `also` (none of
+    /// `assets`) that the members parsed hold, with their indices.
+    #[allow(clippy::type_complexity)]
+    fn read_back_with(
+        &self,
+        rr: &Reread,
+        assets: &[usize],
+        buildings: &[usize],
+        also: &[usize],
+    ) -> Option<(Vec<Geometries>, Vec<Geometries>, Vec<(usize, Geometries)>)> {
         let m = &self.model;
         let asset_at = |i: usize| {
             let a = m.assets.get(i)?;
@@ -220,6 +255,15 @@ impl Hollow {
         // assets by span and whether a body, buildings by span (after the assets)
         let key = |s: &crate::model::Span, body: bool| (s.start, s.end, body);
         let mut at: foldhash::HashMap<(u64, u64, bool), usize> = Default::default();
+        // slots: `assets`, then `buildings`, then `also`
+        let also_from = assets.len() + buildings.len();
+        for (k, &i) in also.iter().enumerate() {
+            let a = m.assets.get(i)?;
+            at.insert(
+                key(&a.span, a.kind == crate::model::AssetKind::Body),
+                also_from + k,
+            );
+        }
         for (k, &i) in assets.iter().enumerate() {
             let a = m.assets.get(i)?;
             at.insert(key(&a.span, a.kind == crate::model::AssetKind::Body), k);
@@ -243,16 +287,19 @@ impl Hollow {
                 Some(taken)
             })
             .collect::<Option<_>>()?;
-        let mut geometries: Vec<Option<Vec<LodGeometry>>> =
-            vec![None; assets.len() + buildings.len()];
+        let mut geometries: Vec<Option<Vec<LodGeometry>>> = vec![None; also_from + also.len()];
         for (k, g) in found.into_iter().flatten() {
             if let Some(slot) = geometries.get_mut(k) {
                 *slot = Some(g);
             }
         }
+        // the `also` assets found, where their members were parsed
+        let more = (also.iter().zip(geometries.split_off(also_from)))
+            .filter_map(|(&i, g)| Some((i, g?)))
+            .collect();
         let mut all: Vec<Vec<LodGeometry>> = geometries.into_iter().collect::<Option<_>>()?;
         let of_buildings = all.split_off(assets.len());
-        Some((all, of_buildings))
+        Some((all, of_buildings, more))
     }
 }
 
@@ -631,6 +678,45 @@ mod tests {
         });
         let (i, one) = alone.unwrap();
         assert_eq!(one.assets[0].geometries, whole.assets[i].geometries);
+        // the other assets of the member read for `i` come with it, the whole read's
+        let others: Vec<usize> = (0..n).filter(|&k| k != i).collect();
+        let (got, more) = h.read_back_keeping(&rr, &[i], &others).unwrap();
+        assert_eq!(got, [whole.assets[i].clone()]);
+        assert!(
+            !more.is_empty() && more.len() < n - 1,
+            "{} of {n}",
+            more.len()
+        );
+        for (k, a) in &more {
+            assert_eq!(a, &whole.assets[*k], "asset {k}");
+        }
+    }
+
+    /// A [`HollowSource`](crate::lod::bound::HollowSource) keeps, of the members it parses,
+    /// the assets it is told may be asked for later, and gives them as the whole read has
+    /// them; told no more, it keeps nothing.
+    #[test]
+    fn a_hollow_source_keeps_what_it_parses_on_the_way() {
+        use crate::lod::bound::{FullSource, HollowSource};
+        let dir = tempfile::tempdir().unwrap();
+        let (path, whole, _, h) = six_read(dir.path(), 1 << 16);
+        let rr = Reread::open(&path, &ReadOptions::default()).unwrap();
+        let src = HollowSource::new(&h, &rr);
+        let n = whole.assets.len();
+        let (first, rest): (Vec<usize>, Vec<usize>) = (0..n).partition(|i| i % 5 == 0);
+        src.expect(Some(&vec![true; n]));
+        let got = src.assets(&first).unwrap();
+        assert!(got.iter().zip(&first).all(|(a, &i)| **a == whole.assets[i]));
+        assert_eq!(src.from_kept(), 0);
+        let got = src.assets(&rest).unwrap();
+        assert!(got.iter().zip(&rest).all(|(a, &i)| **a == whole.assets[i]));
+        let kept = src.from_kept();
+        assert!(kept > 0 && kept <= rest.len(), "{kept} of {}", rest.len());
+        src.expect(None);
+        let got = src.assets(&first).unwrap();
+        assert!(got.iter().zip(&first).all(|(a, &i)| **a == whole.assets[i]));
+        assert_eq!(src.from_kept(), kept);
+        assert_eq!(src.read_back(), 2 * first.len() + rest.len());
     }
 
     /// The POI checks of `lod` on a model read hollow with [`near_pois`] kept: the same

@@ -19,6 +19,7 @@ use crate::model::{Asset, Bbox, CityModel};
 use crate::solar::trace::Scene;
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, PoisonError};
 
 /// The full model the bound compares with: its boxes, counts and ids, and the full geometry
 /// of the assets asked for.
@@ -37,6 +38,14 @@ pub trait FullSource: Sync {
     /// # Errors
     /// [`BoundError::ReadBack`] when they cannot be read back.
     fn assets(&self, which: &[usize]) -> Result<Vec<Cow<'_, Asset>>, BoundError>;
+
+    /// The assets a later call of [`FullSource::assets`] may ask for (`later[i]`), so that a
+    /// source that reads assets back keeps those it reads on the way rather than read them
+    /// again; `None`: no more, what is kept is given back. What [`FullSource::assets`] gives
+    /// does not change.
+    fn expect(&self, later: Option<&[bool]>) {
+        let _ = later;
+    }
 }
 
 impl FullSource for CityModel {
@@ -64,11 +73,27 @@ impl FullSource for CityModel {
 }
 
 /// A document read hollow, its assets read back by span from `reread` (the same document).
+///
+/// A top-level member parsed for the assets asked for holds others (a building's other
+/// surfaces): those the caller may ask for later ([`FullSource::expect`]) are kept from
+/// the parse and given from memory when asked for, so that no member is parsed again for
+/// them (BENCHMARKS.md, "Keeping what is read back").
 #[derive(Debug)]
 pub struct HollowSource<'a> {
     hollow: &'a Hollow,
     reread: &'a Reread,
     read_back: AtomicUsize,
+    from_kept: AtomicUsize,
+    kept: Mutex<Kept>,
+}
+
+/// What a [`HollowSource`] keeps of its parses.
+#[derive(Debug, Default)]
+struct Kept {
+    /// The assets that may be asked for later ([`FullSource::expect`]).
+    later: Vec<bool>,
+    /// Assets read back on the way, not asked for yet.
+    assets: foldhash::HashMap<usize, Asset>,
 }
 
 impl<'a> HollowSource<'a> {
@@ -78,12 +103,20 @@ impl<'a> HollowSource<'a> {
             hollow,
             reread,
             read_back: AtomicUsize::new(0),
+            from_kept: AtomicUsize::new(0),
+            kept: Mutex::default(),
         }
     }
 
-    /// Assets read back so far (an asset asked for twice counts twice).
+    /// Assets read back so far (an asset asked for twice counts twice; one kept from an
+    /// earlier parse counts when asked for).
     pub fn read_back(&self) -> usize {
         self.read_back.load(Ordering::Relaxed)
+    }
+
+    /// Of [`HollowSource::read_back`], the assets given from what an earlier parse kept.
+    pub fn from_kept(&self) -> usize {
+        self.from_kept.load(Ordering::Relaxed)
     }
 }
 
@@ -112,12 +145,54 @@ impl FullSource for HollowSource<'_> {
 
     fn assets(&self, which: &[usize]) -> Result<Vec<Cow<'_, Asset>>, BoundError> {
         self.read_back.fetch_add(which.len(), Ordering::Relaxed);
-        let back = self.hollow.read_back(self.reread, which);
-        let back = back.ok_or_else(|| BoundError::ReadBack {
+        let mut kept = self.kept.lock().unwrap_or_else(PoisonError::into_inner);
+        let mut out: Vec<Option<Asset>> = which.iter().map(|i| kept.assets.remove(i)).collect();
+        let rest: Vec<usize> = (which.iter().zip(&out))
+            .filter(|(_, a)| a.is_none())
+            .map(|(&i, _)| i)
+            .collect();
+        (self.from_kept).fetch_add(which.len() - rest.len(), Ordering::Relaxed);
+        if rest.is_empty() {
+            return Ok(out.into_iter().flatten().map(Cow::Owned).collect());
+        }
+        let mut asked: Vec<usize> = which.to_vec();
+        asked.sort_unstable();
+        let also: Vec<usize> = (kept.later.iter().enumerate())
+            .filter(|&(i, &l)| {
+                l && !kept.assets.contains_key(&i) && asked.binary_search(&i).is_err()
+            })
+            .map(|(i, _)| i)
+            .collect();
+        let back = self.hollow.read_back_keeping(self.reread, &rest, &also);
+        let (back, more) = back.ok_or_else(|| BoundError::ReadBack {
+            path: self.reread.path().to_path_buf(),
+            assets: rest.len(),
+        })?;
+        kept.assets.extend(more);
+        let mut back = back.into_iter();
+        for slot in out.iter_mut().filter(|a| a.is_none()) {
+            *slot = back.next();
+        }
+        let all: Option<Vec<Asset>> = out.into_iter().collect();
+        let all = all.ok_or_else(|| BoundError::ReadBack {
             path: self.reread.path().to_path_buf(),
             assets: which.len(),
         })?;
-        Ok(back.into_iter().map(Cow::Owned).collect())
+        Ok(all.into_iter().map(Cow::Owned).collect())
+    }
+
+    fn expect(&self, later: Option<&[bool]>) {
+        let mut kept = self.kept.lock().unwrap_or_else(PoisonError::into_inner);
+        match later {
+            Some(later) => {
+                kept.later.clear();
+                kept.later.extend_from_slice(later);
+                // what is no longer expected is given back
+                let Kept { later, assets } = &mut *kept;
+                assets.retain(|&i, _| later.get(i).copied().unwrap_or(false));
+            }
+            None => *kept = Kept::default(),
+        }
     }
 }
 
