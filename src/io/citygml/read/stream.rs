@@ -688,7 +688,7 @@ fn next_cut(body: &[u8], at: usize) -> Option<usize> {
 }
 
 /// The document-wide state the serial read has reached at a chunk's start.
-#[derive(Default, Clone)]
+#[derive(Default, Clone, PartialEq)]
 pub(super) struct DocState {
     pub(super) line: LineMark,
     pub(super) version: Option<CityGmlVersion>,
