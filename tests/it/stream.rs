@@ -191,34 +191,39 @@ fn plain_inputs(dir: &Path) -> Vec<std::path::PathBuf> {
     out
 }
 
-/// A gml:id repeated in a later chunk is warned about in its place, as the whole read does
-/// (with the root's gml:id as the enclosing one); a reference to such an id declines.
-#[test]
-fn ids_repeated_across_chunks_warn_as_the_whole_read() {
-    let member = |id: &str, extra: &str| {
-        format!(
-            r#"<cityObjectMember><bldg:Building gml:id="{id}"><bldg:boundedBy><bldg:RoofSurface>
-<bldg:lod2MultiSurface><gml:MultiSurface>{extra}<gml:surfaceMember><gml:Polygon gml:id="{id}_p"><gml:exterior>
+/// A top-level member: building `id` with one roof polygon (`{id}_p`), `in_building` written
+/// before its surfaces and `in_surface` inside its `gml:MultiSurface`.
+fn member(id: &str, in_building: &str, in_surface: &str) -> String {
+    format!(
+        r#"<cityObjectMember><bldg:Building gml:id="{id}">{in_building}<bldg:boundedBy><bldg:RoofSurface>
+<bldg:lod2MultiSurface><gml:MultiSurface>{in_surface}<gml:surfaceMember><gml:Polygon gml:id="{id}_p"><gml:exterior>
 <gml:LinearRing><gml:posList>0 0 5 1 0 5 1 1 5 0 0 5</gml:posList></gml:LinearRing>
 </gml:exterior></gml:Polygon></gml:surfaceMember></gml:MultiSurface></bldg:lod2MultiSurface>
 </bldg:RoofSurface></bldg:boundedBy></bldg:Building></cityObjectMember>
 "#
-        )
-    };
-    let doc = |members: &[String]| {
-        format!(
-            r#"<CityModel gml:id="root" xmlns="http://www.opengis.net/citygml/2.0" xmlns:xlink="http://www.w3.org/1999/xlink"
+    )
+}
+
+/// A CityGML 2.0 document (root gml:id `root`) of `members`.
+fn doc(members: &[String]) -> String {
+    format!(
+        r#"<CityModel gml:id="root" xmlns="http://www.opengis.net/citygml/2.0" xmlns:xlink="http://www.w3.org/1999/xlink"
  xmlns:bldg="http://www.opengis.net/citygml/building/2.0" xmlns:gml="http://www.opengis.net/gml">
 {}</CityModel>
 "#,
-            members.concat()
-        )
-    };
+        members.concat()
+    )
+}
+
+/// A gml:id repeated in a later chunk is warned about in its place, as the whole read does
+/// (with the root's gml:id as the enclosing one); a reference to such an id declines.
+#[test]
+fn ids_repeated_across_chunks_warn_as_the_whole_read() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("dup.gml");
     let members: Vec<String> = ["a", "b", "a", "c", "b", "b"]
         .iter()
-        .map(|id| member(id, ""))
+        .map(|id| member(id, "", ""))
         .collect();
     std::fs::write(&path, doc(&members)).unwrap();
     let whole = read_file_with(&path, &ReadOptions::default()).unwrap();
@@ -234,13 +239,21 @@ fn ids_repeated_across_chunks_warn_as_the_whole_read() {
     assert_eq!(m.assets, whole.assets);
     // a reference to an id of another chunk: the chunk cannot resolve it, the stream declines
     let mut members = members;
-    members.push(member("d", r##"<gml:surfaceMember xlink:href="#c_p"/>"##));
+    members.push(member(
+        "d",
+        "",
+        r##"<gml:surfaceMember xlink:href="#c_p"/>"##,
+    ));
     std::fs::write(&path, doc(&members)).unwrap();
     let why = reassemble(&path, 1).unwrap_err();
     assert!(why.contains("dangling"), "{why}");
     // to a repeated id: the first occurrence is meant, in another chunk
     members.pop();
-    members.push(member("a", r##"<gml:surfaceMember xlink:href="#a_p"/>"##));
+    members.push(member(
+        "a",
+        "",
+        r##"<gml:surfaceMember xlink:href="#a_p"/>"##,
+    ));
     std::fs::write(&path, doc(&members)).unwrap();
     let why = reassemble(&path, 1).unwrap_err();
     assert!(why.contains("two chunks"), "{why}");
@@ -682,16 +695,6 @@ fn streamed_gzip_inputs_are_the_whole_reads_bytes() {
 /// right state), and on every file of the shared data and the fixtures in chunks of 4 KiB.
 #[test]
 fn chunks_parsed_ahead_are_the_serial_streams() {
-    let member = |id: &str, extra: &str| {
-        format!(
-            r#"<cityObjectMember><bldg:Building gml:id="{id}">{extra}<bldg:boundedBy><bldg:WallSurface>
-<bldg:lod2MultiSurface><gml:MultiSurface><gml:surfaceMember><gml:Polygon gml:id="{id}_p"><gml:exterior>
-<gml:LinearRing><gml:posList>0 0 0 1 0 0 1 0 5 0 0 0</gml:posList></gml:LinearRing>
-</gml:exterior></gml:Polygon></gml:surfaceMember></gml:MultiSurface></bldg:lod2MultiSurface>
-</bldg:WallSurface></bldg:boundedBy></bldg:Building></cityObjectMember>
-"#
-        )
-    };
     let ade = r#"<x:energy xmlns:x="urn:example:ade">12</x:energy>"#;
     let mut members = Vec::new();
     for k in 0..40 {
@@ -699,20 +702,12 @@ fn chunks_parsed_ahead_are_the_serial_streams() {
             0 => format!("{k}bad"), // not an xs:ID: listed, the state changes
             _ => format!("b{k}"),
         };
-        members.push(member(&id, if k == 23 { ade } else { "" }));
+        members.push(member(&id, if k == 23 { ade } else { "" }, ""));
     }
-    members.push(member("b3", "")); // repeated in a later chunk
-    let doc = format!(
-        r#"<?xml version="1.0"?>
-<CityModel gml:id="root" xmlns="http://www.opengis.net/citygml/2.0"
- xmlns:bldg="http://www.opengis.net/citygml/building/2.0" xmlns:gml="http://www.opengis.net/gml">
-{}</CityModel>
-"#,
-        members.concat()
-    );
+    members.push(member("b3", "", "")); // repeated in a later chunk
     let dir = tempfile::tempdir().unwrap();
     let made = dir.path().join("ahead.gml");
-    std::fs::write(&made, doc).unwrap();
+    std::fs::write(&made, doc(&members)).unwrap();
     let two = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
