@@ -35,6 +35,13 @@
 //! default error bound"): on the paper district, the 6 POIs' rays reach 2,500 of 57,530 assets.
 //! The full model is a [`FullSource`]: the whole model, or a document read hollow whose
 //! assets are read back by span as the rounds and the LoD scene need them ([`HollowSource`]).
+//! Where the source knows twins ([`FullSource::twins`]: assets whose full-detail polygons
+//! are bit for bit an earlier asset's, [`crate::lod::hollow::Hollow::twin`]), an asset a
+//! round adds is built as its twin: the same triangles, so the same distances, and the
+//! earlier index wins the tie as in the whole model; the assets added, the rounds and every
+//! answer are those without twins. A document that repeats its buildings in place (the
+//! bench files: one street stacked ~150 times in 4 GB) so reads back one copy, not every
+//! copy the rays reach (BENCHMARKS.md, "Twins traced once").
 //!
 //! **Two halves.** The full model's answers depend on the POIs, the rays and the model, not
 //! on the levels: [`full_answers`] makes them ([`FullAnswers`]) and [`bound_against`] checks
@@ -425,6 +432,19 @@ fn lazy_hits_with(
         })
         .collect();
     let mut include: Vec<bool> = seeded.into_iter().map(AtomicBool::into_inner).collect();
+    // an asset is built as its twin, whose triangles are its own and whose index comes
+    // first: the whole model's answer to a tie of the two
+    let twins = src.twins();
+    let twin = |a: usize| twins.and_then(|t| t.get(a)).map_or(a, |&c| c as usize);
+    let as_twins = |of: &[bool]| {
+        let mut out = vec![false; of.len()];
+        for a in (0..of.len()).filter(|&a| of[a]) {
+            if let Some(x) = out.get_mut(twin(a)) {
+                *x = true;
+            }
+        }
+        out
+    };
     let mut built = vec![false; include.len()];
     let mut pending: Vec<Pending> = rays
         .into_iter()
@@ -439,10 +459,12 @@ fn lazy_hits_with(
         .collect();
     loop {
         reference.rounds += 1;
-        let new: Vec<bool> = include.iter().zip(&built).map(|(&i, &b)| i && !b).collect();
-        src.expect(Some(&later_of(&pending, &new, &include)));
+        let new: Vec<bool> = (as_twins(&include).into_iter().zip(&built))
+            .map(|(i, &b)| i && !b)
+            .collect();
+        src.expect(Some(&as_twins(&later_of(&pending, &new, &include))));
         let scene = source::full_part(src, Some(&new), Some((frame, pending.len())))?;
-        built.clone_from(&include);
+        built.iter_mut().zip(&new).for_each(|(b, &n)| *b |= n);
         let cap = if reference.rounds as u32 >= UNCAPPED_ROUND {
             usize::MAX
         } else {

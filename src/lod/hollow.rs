@@ -23,6 +23,9 @@
 //! * its full-detail box ([`detail_boxes`], what the bound's lazy reference indexes), and the
 //!   chunk's box of full-detail triangles, whose union over the chunks is the frame of the
 //!   whole model's full-detail scene (each chunk's is exact, so their union is);
+//! * the key of its full-detail polygons ([`detail_key`]), which finds each asset's twin
+//!   ([`Hollow::twin`]: the first asset with the same polygons bit for bit, traced in its
+//!   stead by the bound's reference);
 //!
 //! then drops the polygons, unless `keep` asks for the asset whole (e.g. the assets around a
 //! POI, whose full geometry the inside-a-building check looks at: `keep` sees the chunk with
@@ -77,7 +80,7 @@ use crate::lod::level::{polygon_count_of, rough_is_own};
 use crate::lod::poi::checks::enclosure::ON_SURFACE;
 use crate::lod::poi::checks::Surroundings;
 use crate::lod::rough::{rough_asset, RoughGeometry, RoughOptions};
-use crate::lod::scene::detail_boxes;
+use crate::lod::scene::{detail_boxes, detail_key};
 use crate::lod::select::FullFacts;
 use crate::model::{content_bbox, Asset, Bbox, Building, CityModel, LodGeometry, SourceFile};
 use glam::DVec3;
@@ -105,6 +108,12 @@ pub struct Hollow {
     pub own: Vec<bool>,
     /// The box of the full-detail scene's triangles (the second half of [`detail_boxes`]).
     pub frame: Bbox,
+    /// Each asset's twin: the first asset of the model whose full-detail polygons are its
+    /// own bit for bit ([`detail_key`]), so whose triangles in the full-detail scene are its
+    /// own; the asset itself for most (and for an asset without full-detail polygons). The
+    /// error bound's reference traces one asset of each such set
+    /// ([`crate::lod::bound::FullSource::twins`]).
+    pub twin: Vec<u32>,
     /// The box of every polygon of the document, assets' and buildings' own geometry
     /// ([`content_bbox`] of the whole model: its root envelope's box).
     pub content: Bbox,
@@ -340,6 +349,8 @@ struct Part {
     own: Vec<bool>,
     counts: Vec<Vec<u32>>,
     chunks: Vec<u32>,
+    /// [`detail_key`] of each (0: none).
+    keys: Vec<u128>,
 }
 
 impl Part {
@@ -348,7 +359,7 @@ impl Part {
         &mut self,
         mut asset: Asset,
         parent: Option<At>,
-        (rough, bbox, detail): (RoughGeometry, Bbox, Bbox),
+        (rough, bbox, detail, key): (RoughGeometry, Bbox, Bbox, u128),
         (keep, chunk): (bool, u32),
     ) {
         self.own.push(rough_is_own(&asset, &rough));
@@ -366,6 +377,7 @@ impl Part {
         self.detail.push(detail);
         self.counts.push(counts);
         self.chunks.push(chunk);
+        self.keys.push(key);
     }
 }
 
@@ -414,19 +426,26 @@ pub fn read_hollow(
             }
         };
         let mut model = c.model;
-        let (rough, boxes): (Vec<RoughGeometry>, Vec<Bbox>) = (model.assets.par_iter())
-            .map(|a| (rough_asset(a, rough), a.bbox()))
-            .unzip();
+        let made: Vec<(RoughGeometry, (Bbox, u128))> = (model.assets.par_iter())
+            .map(|a| {
+                (
+                    rough_asset(a, rough),
+                    (a.bbox(), detail_key(a).unwrap_or(0)),
+                )
+            })
+            .collect();
+        let (rough, (boxes, keys)): (Vec<RoughGeometry>, (Vec<Bbox>, Vec<u128>)) =
+            made.into_iter().unzip();
         let (detail, tris) = detail_boxes(&model);
         frame.union(&tris);
         let kept = keep(&model, &rough, &boxes);
-        let made = rough.into_iter().zip(boxes).zip(detail);
+        let made = rough.into_iter().zip(boxes).zip(detail).zip(keys);
         let each = model.assets.drain(..).zip(made).zip(kept);
-        for (i, ((mut a, ((r, b), d)), k)) in each.enumerate() {
+        for (i, ((mut a, (((r, b), d), key)), k)) in each.enumerate() {
             a.building = a.building.map(|b| b + c.buildings_before);
             let parent = a.parent.map(at);
             let part = if i < nb { &mut plain } else { &mut bodies };
-            part.push(a, parent, (r, b, d), (k, chunk));
+            part.push(a, parent, (r, b, d, key), (k, chunk));
         }
         for mut b in model.buildings.drain(..) {
             b.parent = b.parent.map(|p| p + c.buildings_before);
@@ -485,6 +504,7 @@ pub fn read_hollow(
         building_chunk,
         ..Hollow::default()
     };
+    h.twin = twins(plain.keys.iter().chain(&bodies.keys));
     for part in [plain, bodies] {
         for (mut a, p) in part.assets.into_iter().zip(part.parents) {
             a.parent = p.map(place);
@@ -531,6 +551,22 @@ pub fn near_pois(
         }
         keep
     }
+}
+
+/// Each asset's twin ([`Hollow::twin`]) from their [`detail_key`]s in the model's order
+/// (0: none).
+fn twins<'k>(keys: impl Iterator<Item = &'k u128>) -> Vec<u32> {
+    let mut first: foldhash::HashMap<u128, u32> = Default::default();
+    keys.enumerate()
+        .map(|(i, &k)| {
+            let i = u32::try_from(i).unwrap_or(u32::MAX);
+            if k == 0 {
+                i
+            } else {
+                *first.entry(k).or_insert(i)
+            }
+        })
+        .collect()
 }
 
 /// `geometries` without their polygons (LoD, property and spans kept): what [`read_hollow`]
@@ -599,8 +635,13 @@ mod tests {
         assert_eq!(h.polygon_count(whole.assets.len()), 0);
     }
 
-    /// Six blocks of the small preset written in `dir`, and their options.
-    fn six_blocks(dir: &Path) -> (std::path::PathBuf, crate::model::synth::SynthOptions) {
+    /// Six blocks of the small preset written in `dir`, and their options; `stacked`: the
+    /// members twice, at the same place, the copy's ids renamed (as the bench files repeat
+    /// a street).
+    fn six_blocks(
+        dir: &Path,
+        stacked: bool,
+    ) -> (std::path::PathBuf, crate::model::synth::SynthOptions) {
         let small = crate::model::synth::SynthOptions {
             blocks_x: 3,
             blocks_y: 2,
@@ -609,6 +650,17 @@ mod tests {
         let path = dir.join("six.gml");
         let mut xml = Vec::new();
         crate::model::synth::generate(&small, &mut xml).unwrap();
+        let mut xml = String::from_utf8(xml).unwrap();
+        if stacked {
+            // the members again, their ids and references renamed
+            let (from, to) = (
+                xml.find("<core:cityObjectMember>").unwrap(),
+                xml.rfind("</core:cityObjectMember>").unwrap() + "</core:cityObjectMember>".len(),
+            );
+            let copy = (xml[from..to].replace("gml:id=\"", "gml:id=\"copy_"))
+                .replace("xlink:href=\"#", "xlink:href=\"#copy_");
+            xml.insert_str(to, &copy);
+        }
         std::fs::write(&path, xml).unwrap();
         (path, small)
     }
@@ -618,13 +670,14 @@ mod tests {
     fn six_read(
         dir: &Path,
         chunk_bytes: u64,
+        stacked: bool,
     ) -> (
         std::path::PathBuf,
         CityModel,
         Vec<crate::model::Poi>,
         Hollow,
     ) {
-        let (path, small) = six_blocks(dir);
+        let (path, small) = six_blocks(dir, stacked);
         let whole = read_file(&path).unwrap();
         let pois: Vec<crate::model::Poi> = (crate::model::synth::pois(&small).into_iter())
             .take(2)
@@ -643,7 +696,7 @@ mod tests {
     #[test]
     fn assets_read_back_are_the_whole_reads() {
         let dir = tempfile::tempdir().unwrap();
-        let (path, _) = six_blocks(dir.path());
+        let (path, _) = six_blocks(dir.path(), false);
         let whole = read_file(&path).unwrap();
         let read = ReadOptions::default();
         let passes = Passes::new(&read, 1 << 16, &|_, _| {});
@@ -699,7 +752,7 @@ mod tests {
     fn a_hollow_source_keeps_what_it_parses_on_the_way() {
         use crate::lod::bound::{FullSource, HollowSource};
         let dir = tempfile::tempdir().unwrap();
-        let (path, whole, _, h) = six_read(dir.path(), 1 << 16);
+        let (path, whole, _, h) = six_read(dir.path(), 1 << 16, false);
         let rr = Reread::open(&path, &ReadOptions::default()).unwrap();
         let src = HollowSource::new(&h, &rr);
         let n = whole.assets.len();
@@ -774,7 +827,7 @@ mod tests {
         use crate::lod::{lod_hollow, lod_with, LodOptions};
         use crate::model::runtime::progress::Silent;
         let dir = tempfile::tempdir().unwrap();
-        let (path, whole, pois, h) = six_read(dir.path(), 1 << 16);
+        let (path, whole, pois, h) = six_read(dir.path(), 1 << 16, false);
         let (opts, read) = (LodOptions::default(), ReadOptions::default());
         let rr = Reread::open(&path, &read).unwrap();
         let w = lod_with(&whole, &pois, &opts, &Silent).unwrap();
@@ -806,6 +859,76 @@ mod tests {
         assert_eq!(whole_ref, [false, true]);
     }
 
+    /// On a document of two copies of the same blocks at the same place (as the bench
+    /// files repeat a street), every asset of the second copy with full-detail polygons
+    /// is the twin of the first copy's ([`Hollow::twin`]); the bound on the hollow read,
+    /// which traces one of each twins, is the whole read's, and reads fewer assets back.
+    #[test]
+    fn the_bound_traces_twins_once_and_is_the_whole_reads() {
+        use crate::lod::bound::{bound, bound_against_from, full_answers_from, BoundOptions};
+        use crate::lod::bound::{FullSource, HollowSource};
+        use crate::lod::{lod_hollow, lod_with, LodOptions};
+        use crate::model::runtime::progress::Silent;
+        let dir = tempfile::tempdir().unwrap();
+        let (path, whole, pois, h) = six_read(dir.path(), 1 << 16, true);
+        let opts = LodOptions::default();
+        assert!(h.summary.chunks > 2, "{} chunks", h.summary.chunks);
+        // each asset's twin: the first of the whole read's with its full-detail polygons
+        let n = whole.assets.len();
+        let rings = |a: &Asset| -> Vec<Vec<DVec3>> {
+            (a.detail_polygons().iter())
+                .flat_map(|p| {
+                    std::iter::once(p.exterior())
+                        .chain(p.interiors())
+                        .chain([&[][..]])
+                })
+                .map(<[DVec3]>::to_vec)
+                .collect()
+        };
+        let mut twins = 0;
+        for (i, a) in whole.assets.iter().enumerate() {
+            let first = (0..n)
+                .find(|&k| !a.detail_polygons().is_empty() && rings(&whole.assets[k]) == rings(a));
+            assert_eq!(h.twin[i] as usize, first.unwrap_or(i), "asset {i}");
+            twins += usize::from(h.twin[i] as usize != i);
+        }
+        assert!(twins * 2 >= n - 10, "{twins} twins of {n} assets");
+        let rr = Reread::open(&path, &ReadOptions::default()).unwrap();
+        let w = lod_with(&whole, &pois, &opts, &Silent).unwrap();
+        let l = lod_hollow(&h, &pois, &opts, &Silent).unwrap();
+        let b = BoundOptions {
+            max_svf_error: Some(0.0005),
+            max_sun_error: Some(0.0005),
+            svf_rays: 1000,
+            ..Default::default()
+        };
+        let site = crate::solar::Site::new(48.76, 11.42);
+        let sun = crate::solar::SunTable::year(2025, 120, &site).unwrap();
+        let levels = &w.selection.levels;
+        let want = bound(&whole, &w.rough, levels, &pois, &b, Some(&sun)).unwrap();
+        assert!(
+            !want.reference.whole && !want.promotions.is_empty(),
+            "{want:?}"
+        );
+        let mut read_back = Vec::new();
+        for h in [
+            h.clone(),
+            Hollow {
+                twin: Vec::new(),
+                ..h
+            },
+        ] {
+            let src = HollowSource::new(&h, &rr);
+            assert_eq!(src.twins().is_some(), !h.twin.is_empty());
+            let full = full_answers_from(&src, &pois, &b, Some(&sun), None).unwrap();
+            let got = bound_against_from(&src, &l.rough, &l.selection.levels, &full).unwrap();
+            assert_eq!(got, want, "twins: {}", !h.twin.is_empty());
+            read_back.push(src.read_back());
+        }
+        // with twins, the second copy is not read back for the reference
+        assert!(read_back[0] < read_back[1], "{read_back:?}");
+    }
+
     /// The selection of `lod` on a hollow read ([`crate::lod::lod_hollow`]) is the whole
     /// read's: levels, hits, each POI's figures and flags, the selection scene.
     #[test]
@@ -814,7 +937,7 @@ mod tests {
         use crate::model::runtime::progress::Silent;
         // six blocks of the small preset, the first block's POIs
         let dir = tempfile::tempdir().unwrap();
-        let (_, whole, pois, h) = six_read(dir.path(), 1);
+        let (_, whole, pois, h) = six_read(dir.path(), 1, false);
         let opts = LodOptions::default();
         assert!(h.kept.iter().any(|&k| !k));
         let want = lod_with(&whole, &pois, &opts, &Silent).unwrap();

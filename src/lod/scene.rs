@@ -132,6 +132,45 @@ pub fn detail_boxes(model: &CityModel) -> (Vec<Bbox>, Bbox) {
     (boxes, frame)
 }
 
+/// A 128-bit key of what [`full_scene`] makes of `asset`: its full-detail polygons' rings,
+/// their lengths and their points bit for bit (xxh3-128). Two assets with the same key
+/// give the same triangles ([`crate::lod::hollow::Hollow::twin`]: the error bound's
+/// reference traces such twins once); `None` for an asset without full-detail polygons.
+///
+/// ```
+/// use glam::DVec3;
+/// use skylod::model::{Asset, AssetKind, LodGeometry, Polygon};
+/// let triangle = |z: f64| Polygon::new(vec![
+///     DVec3::new(0.0, 0.0, z), DVec3::new(1.0, 0.0, z), DVec3::new(1.0, 1.0, z),
+/// ]);
+/// let roof = |polygons: Vec<Polygon>, id: &str| Asset {
+///     kind: AssetKind::Roof, id: Some(id.into()), element: "RoofSurface".into(),
+///     building: None, parent: None, span: 0..0, line: 1, function: None, file: 0,
+///     geometries: vec![LodGeometry { lod: 3, polygons, ..Default::default() }],
+/// };
+/// let key = skylod::lod::scene::detail_key;
+/// assert_eq!(key(&roof(vec![triangle(5.0)], "a")), key(&roof(vec![triangle(5.0)], "b")));
+/// assert_ne!(key(&roof(vec![triangle(5.0)], "a")), key(&roof(vec![triangle(6.0)], "a")));
+/// assert_eq!(key(&roof(vec![], "a")), None);
+/// ```
+pub fn detail_key(asset: &Asset) -> Option<u128> {
+    let polygons = asset.detail_polygons();
+    if polygons.is_empty() {
+        return None;
+    }
+    let mut h = xxhash_rust::xxh3::Xxh3Default::new();
+    let ring = |h: &mut xxhash_rust::xxh3::Xxh3Default, r: &[DVec3]| {
+        h.update(&(r.len() as u64).to_le_bytes());
+        h.update(bytemuck::cast_slice(r));
+    };
+    for p in polygons {
+        h.update(&(p.interior_count() as u64).to_le_bytes());
+        ring(&mut h, p.exterior());
+        p.interiors().for_each(|r| ring(&mut h, r));
+    }
+    Some(h.digest128())
+}
+
 /// The box of [`full_scene`]'s triangles, `boxes` from [`detail_boxes`]: on each side, the
 /// assets in the order of their box's reach, triangulated until the next cannot reach
 /// farther than the triangles found so far.

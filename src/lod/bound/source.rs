@@ -46,6 +46,13 @@ pub trait FullSource: Sync {
     fn expect(&self, later: Option<&[bool]>) {
         let _ = later;
     }
+
+    /// Each asset's twin, where known: an asset (of an index at most its own) whose
+    /// full-detail triangles are its own ([`Hollow::twin`]), which the reference traces in
+    /// its stead. `None`: every asset is its own.
+    fn twins(&self) -> Option<&[u32]> {
+        None
+    }
 }
 
 impl FullSource for CityModel {
@@ -179,6 +186,11 @@ impl FullSource for HollowSource<'_> {
             assets: which.len(),
         })?;
         Ok(all.into_iter().map(Cow::Owned).collect())
+    }
+
+    fn twins(&self) -> Option<&[u32]> {
+        let t = &self.hollow.twin;
+        (t.len() == self.hollow.model.assets.len()).then_some(t.as_slice())
     }
 
     fn expect(&self, later: Option<&[bool]>) {
