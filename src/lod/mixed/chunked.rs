@@ -1,7 +1,10 @@
 //! The mixed writer's plan made one chunk of whole top-level members at a time
 //! ([`plan_chunked`]): each chunk is indexed ([`index::scan_chunk`]), planned and its index
 //! dropped, so that the writer's memory follows the chunk, not the document. The chunks are
-//! those of the streamed read ([`crate::io::citygml::read::member_chunks`]).
+//! those of the streamed read ([`crate::io::citygml::read::member_chunks`]). While a chunk is
+//! filled and planned, the next one is indexed on a thread of its own (`skylod-plan`): one
+//! chunk's index more in memory (about a chunk's share of the writer's 32 bytes an element and
+//! 16 an id), every check against the chunks before still made in document order.
 //!
 //! A chunk's plan is the whole document's restricted to the chunk where nothing of the
 //! document outside the chunk decides anything in it. What could, and how it is handled:
@@ -50,12 +53,31 @@ pub(super) fn plan_chunked(
 }
 
 /// [`plan_chunked`] on `m`: each chunk's assets and buildings given their polygons
-/// ([`PlanModel::fill`]) while the chunk is planned (`None` too where they cannot be).
+/// ([`PlanModel::fill`]) while the chunk is planned (`None` too where they cannot be). The
+/// next chunk is indexed on a thread of its own while a chunk is filled and planned
+/// ([`plan_in_chunks`]).
 pub(super) fn plan_chunked_with(
+    m: &mut dyn PlanModel,
+    parts: (usize, &[RoughGeometry], &[u8]),
+    keep_envelopes: bool,
+    chunk_bytes: u64,
+) -> Option<(Vec<Edit>, MixedSummary)> {
+    plan_in_chunks(m, parts, keep_envelopes, chunk_bytes, true)
+}
+
+/// [`plan_chunked_with`], the index of chunk k + 1 made while chunk k is filled and planned
+/// where `ahead` (on a thread named `skylod-plan`; where none is to be had, in its turn). Only
+/// the index moves: it reads nothing the plan of an earlier chunk decides (the bytes, the
+/// skip spans, the options), so it is the same index; every check of a chunk against the
+/// chunks before it (ids met or handed out before, prefixes redeclared, references that
+/// dangle) is made in document order as without `ahead`. At most one index more than
+/// without `ahead` is held: the next chunk's, made while the current one is planned.
+fn plan_in_chunks(
     m: &mut dyn PlanModel,
     (file, rough, levels): (usize, &[RoughGeometry], &[u8]),
     keep_envelopes: bool,
     chunk_bytes: u64,
+    ahead: bool,
 ) -> Option<(Vec<Edit>, MixedSummary)> {
     let model = m.model();
     let src = &model.files[file];
@@ -82,6 +104,16 @@ pub(super) fn plan_chunked_with(
         .collect();
     let containers = plan::containers(model, file, levels);
     let skip = plan::skip_spans(model, file, levels, &containers);
+    // the index of chunk k, its bytes let go after it (they are not read again: a private
+    // read-only map reads the file again if they are)
+    let scan = |k: usize| {
+        let (from, to) = bounds[k];
+        let lo = skip.partition_point(|s| s.start < from);
+        let hi = skip.partition_point(|s| s.start < to);
+        let doc = index::scan_chunk(&bytes, &fh, &src_path, &chunks, k, &skip[lo..hi], &opts);
+        bytes.release_range(chunks.ranges[k].0, chunks.ranges[k].1);
+        doc
+    };
     let shared = Shared::new(model, file, containers);
     let [assets, buildings, envelopes] = plan::scope_lists(model, file, &bounds);
     let mut seen = SeenIds::default();
@@ -90,58 +122,68 @@ pub(super) fn plan_chunked_with(
     let mut redeclared = None;
     let (mut edits, mut summary) = (Vec::new(), MixedSummary::default());
     let (mut root_sites, mut root_box) = (Vec::new(), Bbox::EMPTY);
-    for (k, &(from, to)) in bounds.iter().enumerate() {
-        let lo = skip.partition_point(|s| s.start < from);
-        let hi = skip.partition_point(|s| s.start < to);
-        let doc = index::scan_chunk(&bytes, &fh, &src_path, &chunks, k, &skip[lo..hi], &opts);
-        // the chunk is not read again (a private read-only map reads the file again if it is)
-        bytes.release_range(chunks.ranges[k].0, chunks.ranges[k].1);
-        let mut doc = doc.ok()?;
-        let hashes: Vec<u64> = doc.ids.hashes().collect();
-        if hashes.iter().any(|h| handed_out.contains(h)) {
-            return None;
+    // a plan that declines leaves the scope once the index made ahead is done
+    std::thread::scope(|threads| {
+        let mut next = None;
+        for k in 0..bounds.len() {
+            let doc = match next.take() {
+                // a thread that panicked: planned whole
+                Some(made) => std::thread::ScopedJoinHandle::join(made).ok()?,
+                None => scan(k),
+            };
+            if ahead && k + 1 < bounds.len() {
+                let thread = std::thread::Builder::new().name("skylod-plan".into());
+                // no thread to be had: the next chunk is indexed in its turn
+                next = thread.spawn_scoped(threads, move || scan(k + 1)).ok();
+            }
+            let mut doc = doc.ok()?;
+            let hashes: Vec<u64> = doc.ids.hashes().collect();
+            if hashes.iter().any(|h| handed_out.contains(h)) {
+                return None;
+            }
+            let before = seen.check_and_add_hashes(hashes);
+            if !m.fill(&assets[k], &buildings[k], levels) {
+                return None;
+            }
+            let model = m.model();
+            if !before.is_empty() && looks_up(model, &doc, (&assets[k], &buildings[k]), &before) {
+                return None;
+            }
+            let dangling = (doc.refs.iter()).any(|(_, _, target)| {
+                target
+                    .strip_prefix('#')
+                    .is_some_and(|id| doc.id_node(id).is_none())
+            });
+            if dangling {
+                return None;
+            }
+            match &redeclared {
+                None => redeclared = Some(doc.redeclared.clone()),
+                Some(first) if doc.redeclared.is_subset(first) => doc.redeclared = first.clone(),
+                Some(_) => return None,
+            }
+            let elsewhere = |id: &str| seen.contains(IdTable::hash(id.as_bytes()));
+            let scope = Scope {
+                assets: &assets[k],
+                buildings: &buildings[k],
+                envelopes: &envelopes[k],
+                shared: &shared,
+                facts: m.facts(),
+                defer_root: true,
+                elsewhere: &elsewhere,
+            };
+            let mut plan = Plan::new(model, (file, rough, levels), scope, &doc, ids);
+            plan.run(keep_envelopes);
+            edits.append(&mut plan.edits());
+            summary.add(&plan.summary);
+            root_sites.append(&mut plan.root_sites);
+            root_box.union(&plan.written_box);
+            ids = plan.ids;
+            handed_out.extend(ids.take_log());
+            m.empty();
         }
-        let before = seen.check_and_add_hashes(hashes);
-        if !m.fill(&assets[k], &buildings[k], levels) {
-            return None;
-        }
-        let model = m.model();
-        if !before.is_empty() && looks_up(model, &doc, (&assets[k], &buildings[k]), &before) {
-            return None;
-        }
-        let dangling = (doc.refs.iter()).any(|(_, _, target)| {
-            target
-                .strip_prefix('#')
-                .is_some_and(|id| doc.id_node(id).is_none())
-        });
-        if dangling {
-            return None;
-        }
-        match &redeclared {
-            None => redeclared = Some(doc.redeclared.clone()),
-            Some(first) if doc.redeclared.is_subset(first) => doc.redeclared = first.clone(),
-            Some(_) => return None,
-        }
-        let elsewhere = |id: &str| seen.contains(IdTable::hash(id.as_bytes()));
-        let scope = Scope {
-            assets: &assets[k],
-            buildings: &buildings[k],
-            envelopes: &envelopes[k],
-            shared: &shared,
-            facts: m.facts(),
-            defer_root: true,
-            elsewhere: &elsewhere,
-        };
-        let mut plan = Plan::new(model, (file, rough, levels), scope, &doc, ids);
-        plan.run(keep_envelopes);
-        edits.append(&mut plan.edits());
-        summary.add(&plan.summary);
-        root_sites.append(&mut plan.root_sites);
-        root_box.union(&plan.written_box);
-        ids = plan.ids;
-        handed_out.extend(ids.take_log());
-        m.empty();
-    }
+        Some(())
+    })?;
     let src = &m.model().files[file];
     for (e, bb) in root_sites {
         let env = &src.envelopes[e];
@@ -222,6 +264,32 @@ mod tests {
         Some(out)
     }
 
+    /// Every real file and fixture, and the Ingolstadt street ([`street`]) made in `dir`.
+    fn real_and_street(dir: &Path) -> Vec<PathBuf> {
+        let mut files = real_files();
+        files.extend(street(Path::new("../shared/data"), dir));
+        files
+    }
+
+    /// `f` called with each of `files` that reads (as a plain file in `dir`) to a model with
+    /// assets, and its rough geometry.
+    fn each_model(
+        files: &[PathBuf],
+        dir: &Path,
+        mut f: impl FnMut(&Path, &CityModel, &[RoughGeometry]),
+    ) {
+        for (n, file) in files.iter().enumerate() {
+            let Some(Ok(model)) = plain(file, dir, n).map(|p| read_file(&p)) else {
+                continue;
+            };
+            if model.files.is_empty() || model.assets.is_empty() {
+                continue;
+            }
+            let rough = rough_model(&model, &RoughOptions::default());
+            f(file, &model, &rough);
+        }
+    }
+
     /// Planned a member at a time (`chunk_bytes` 1) or on the whole index, every real file
     /// and fixture writes the same bytes with the same summary, for several level patterns,
     /// envelopes recomputed or kept; the chunks are planned where nothing crosses them (LoD2,
@@ -229,35 +297,28 @@ mod tests {
     #[test]
     fn chunks_write_the_bytes_of_the_whole_index() {
         let data = Path::new("../shared/data");
-        let mut files = real_files();
         let dir = tempfile::tempdir().unwrap();
-        if let Some(street) = street(data, dir.path()) {
-            files.push(street);
-        }
         let (mut chunked, mut declined) = (Vec::new(), Vec::new());
-        for (n, f) in files.iter().enumerate() {
-            let Some(Ok(model)) = plain(f, dir.path(), n).map(|p| read_file(&p)) else {
-                continue;
-            };
-            if model.files.is_empty() || model.assets.is_empty() {
-                continue;
-            }
-            let rough = rough_model(&model, &RoughOptions::default());
-            for (what, levels) in patterns(&model) {
-                for keep in [false, true] {
-                    let whole = plan_file(&model, 0, &rough, &levels, keep, true).unwrap();
-                    let Some(parts) = plan_chunked(&model, (0, &rough, &levels), keep, 1) else {
-                        declined.push(f.clone());
-                        continue;
-                    };
-                    let at = format!("{}: {what}, keep {keep}", f.display());
-                    assert_eq!(whole.1, parts.1, "{at}: summaries differ");
-                    let (a, b) = (written(&model, whole.0), written(&model, parts.0));
-                    assert!(a == b, "{at}: outputs differ");
-                    chunked.push(f.clone());
+        each_model(
+            &real_and_street(dir.path()),
+            dir.path(),
+            |f, model, rough| {
+                for (what, levels) in patterns(model) {
+                    for keep in [false, true] {
+                        let whole = plan_file(model, 0, rough, &levels, keep, true).unwrap();
+                        let Some(parts) = plan_chunked(model, (0, rough, &levels), keep, 1) else {
+                            declined.push(f.to_path_buf());
+                            continue;
+                        };
+                        let at = format!("{}: {what}, keep {keep}", f.display());
+                        assert_eq!(whole.1, parts.1, "{at}: summaries differ");
+                        let (a, b) = (written(model, whole.0), written(model, parts.0));
+                        assert!(a == b, "{at}: outputs differ");
+                        chunked.push(f.to_path_buf());
+                    }
                 }
-            }
-        }
+            },
+        );
         let named = |v: &[PathBuf], s: &str| v.iter().any(|p| p.to_string_lossy().contains(s));
         if data.is_dir() {
             for s in [
@@ -370,5 +431,75 @@ mod tests {
         // a polygon's id: the whole index finds the first
         let xml = two_members().replace("gml:id=\"p3\"", "gml:id=\"p1\"");
         same(&xml, &[1, 2, 2], false);
+    }
+
+    /// With the next chunk indexed ahead, a member a chunk, the plan is the plan of the chunks
+    /// indexed in turn (the same edits and summary, or declined alike) on the fixtures
+    /// (planned; declined at the first chunk, and at a later one while the next chunk is being
+    /// indexed), every real file and the Ingolstadt street (hundreds of chunks).
+    #[test]
+    fn chunks_indexed_ahead_plan_as_in_turn() {
+        let at_later = two_members().replace("gml:id=\"b2\"", "gml:id=\"skylod_r1_g0\"");
+        let p1_twice = two_members().replace("gml:id=\"p3\"", "gml:id=\"p1\"");
+        let four = {
+            let h = two_members();
+            let m = h.find("<cityObjectMember>").unwrap();
+            let e = h.rfind("</CityModel>").unwrap();
+            let copy = h[m..e]
+                .replace("gml:id=\"", "gml:id=\"c1_")
+                .replace("#", "#c1_");
+            format!("{}{copy}{}", &h[..e], &h[e..])
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let mut files = Vec::new();
+        // each with the levels its test above writes it at
+        let fixtures = [
+            (two_members(), vec![1, 2, 0]),
+            (house(), vec![1, 2, 0]),
+            (at_later, vec![1, 2, 2]),
+            (p1_twice, vec![1, 2, 2]),
+            (four, vec![1, 2, 0, 2, 1, 1]),
+        ];
+        let mut given = Vec::new();
+        for (n, (xml, levels)) in fixtures.iter().enumerate() {
+            let f = dir.path().join(format!("fixture{n}.gml"));
+            std::fs::write(&f, xml).unwrap();
+            given.push((f.clone(), levels.clone()));
+            files.push(f);
+        }
+        files.extend(real_and_street(dir.path()));
+        let (mut planned, mut declined) = (Vec::new(), Vec::new());
+        each_model(&files, dir.path(), |f, model, rough| {
+            let mut levels = patterns(model);
+            let fixed = given.iter().filter(|(g, _)| g == f);
+            levels.extend(fixed.map(|(_, l)| ("given", l.clone())));
+            for (what, levels) in levels {
+                let plan =
+                    |ahead| plan_in_chunks(&mut Whole(model), (0, rough, &levels), false, 1, ahead);
+                let (on, off) = (plan(true), plan(false));
+                let at = format!("{}: {what}", f.display());
+                assert_eq!(on.is_some(), off.is_some(), "{at}: declined once");
+                assert!(on == off, "{at}: the plans differ");
+                match on {
+                    Some(p) if !p.0.is_empty() => planned.push(f.to_path_buf()),
+                    Some(_) => {}
+                    None => declined.push(f.to_path_buf()),
+                }
+            }
+        });
+        let fixture =
+            |v: &[PathBuf], n: usize| v.contains(&dir.path().join(format!("fixture{n}.gml")));
+        for n in [0, 4] {
+            assert!(fixture(&planned, n), "fixture {n} planned");
+        }
+        for n in [1, 2, 3] {
+            assert!(fixture(&declined, n), "fixture {n} declined");
+        }
+        if Path::new("../shared/data").is_dir() {
+            assert!(
+                planned.iter().any(|p| p.ends_with("street.gml")),
+                "the street"
+            );
+        }
     }
 }
