@@ -434,17 +434,7 @@ fn lazy_hits_with(
     let mut include: Vec<bool> = seeded.into_iter().map(AtomicBool::into_inner).collect();
     // an asset is built as its twin, whose triangles are its own and whose index comes
     // first: the whole model's answer to a tie of the two
-    let twins = src.twins();
-    let twin = |a: usize| twins.and_then(|t| t.get(a)).map_or(a, |&c| c as usize);
-    let as_twins = |of: &[bool]| {
-        let mut out = vec![false; of.len()];
-        for a in (0..of.len()).filter(|&a| of[a]) {
-            if let Some(x) = out.get_mut(twin(a)) {
-                *x = true;
-            }
-        }
-        out
-    };
+    let as_twins = |of: &[bool]| source::as_twins(src, of);
     let mut built = vec![false; include.len()];
     let mut pending: Vec<Pending> = rays
         .into_iter()

@@ -208,6 +208,20 @@ impl FullSource for HollowSource<'_> {
     }
 }
 
+/// The twins ([`FullSource::twins`]) of the assets `i` with `of[i]`, as flags of the same
+/// length: what a scene of those assets is built of.
+pub(super) fn as_twins(src: &dyn FullSource, of: &[bool]) -> Vec<bool> {
+    let twins = src.twins();
+    let twin = |a: usize| twins.and_then(|t| t.get(a)).map_or(a, |&c| c as usize);
+    let mut out = vec![false; of.len()];
+    for a in (0..of.len()).filter(|&a| of[a]) {
+        if let Some(x) = out.get_mut(twin(a)) {
+            *x = true;
+        }
+    }
+    out
+}
+
 /// The part of the full scene made of the assets `i` with `include[i]`, in `frame` for about
 /// `rays` rays ([`crate::lod::scene::full_scene_part`]); the whole full scene
 /// ([`crate::lod::scene::full_scene`]) with `frame` `None`.
