@@ -426,16 +426,13 @@ pub fn read_hollow(
             }
         };
         let mut model = c.model;
-        let made: Vec<(RoughGeometry, (Bbox, u128))> = (model.assets.par_iter())
-            .map(|a| {
-                (
-                    rough_asset(a, rough),
-                    (a.bbox(), detail_key(a).unwrap_or(0)),
-                )
-            })
-            .collect();
         let (rough, (boxes, keys)): (Vec<RoughGeometry>, (Vec<Bbox>, Vec<u128>)) =
-            made.into_iter().unzip();
+            (model.assets.par_iter())
+                .map(|a| {
+                    let key = detail_key(a).unwrap_or(0);
+                    (rough_asset(a, rough), (a.bbox(), key))
+                })
+                .unzip();
         let (detail, tris) = detail_boxes(&model);
         frame.union(&tris);
         let kept = keep(&model, &rough, &boxes);
