@@ -158,7 +158,22 @@ impl SceneBuilder {
 
     /// Build the BVH. An empty builder gives an empty scene in which every ray is free.
     pub fn build(mut self) -> Scene {
-        let bbox = Bbox::of_points(self.tris.iter().flatten());
+        // min and max are exact in any order: the box is the serial one
+        let bbox = (self.tris.par_iter())
+            .fold(
+                || Bbox::EMPTY,
+                |mut b, t| {
+                    t.iter().for_each(|p| b.add(*p));
+                    b
+                },
+            )
+            .reduce(
+                || Bbox::EMPTY,
+                |mut a, b| {
+                    a.union(&b);
+                    a
+                },
+            );
         let origin = match self.frame {
             Some(f) => f.center(),
             None if bbox.is_empty() => DVec3::ZERO,
@@ -200,14 +215,9 @@ impl SceneBuilder {
         }
         let (accel, indices) = build_accel(&local, self.layout, self.quality.params(), pad);
         // Lay the triangles out in BVH leaf order so traversal reads them directly.
-        let mut tris = Vec::with_capacity(indices.len());
-        let mut slot_triangle = Vec::with_capacity(indices.len());
-        for &i in &indices {
-            if let Some(t) = local.get(i as usize) {
-                tris.push(*t);
-                slot_triangle.push(i);
-            }
-        }
+        let (tris, slot_triangle): (Vec<Triangle>, Vec<u32>) = (indices.par_iter())
+            .filter_map(|&i| Some((*local.get(i as usize)?, i)))
+            .unzip();
         Scene {
             origin,
             bbox,
@@ -231,10 +241,14 @@ impl SceneBuilder {
 /// distance within a few scene extents), so whether a triangle is tested no longer
 /// depends on the tree. Costs a few more node visits.
 fn node_pad(local: &[Triangle]) -> f32 {
-    let m = local
-        .iter()
-        .flat_map(|t| [t.v0, t.v1, t.v2])
-        .fold(1.0f32, |m, v| m.max(v.abs().max_element()));
+    // max is exact in any order
+    let m = (local.par_iter())
+        .map(|t| {
+            [t.v0, t.v1, t.v2]
+                .iter()
+                .fold(1.0f32, |m, v| m.max(v.abs().max_element()))
+        })
+        .reduce(|| 1.0f32, f32::max);
     m * (1.0 / 32768.0)
 }
 
