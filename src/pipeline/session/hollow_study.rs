@@ -79,9 +79,11 @@ impl HollowStudy {
         let size = std::fs::metadata(path).map_or(0, |m| m.len());
         check(progress, Stage::Read)?;
         progress.start(Stage::Read, 1, size);
-        // a chunk parsed ahead on every thread: the hollow model is far under lod's budget
+        // a chunk parsed ahead on every thread: the hollow model is far under lod's budget;
+        // no polygon ids, but for the kept assets' (read back with them after the read)
         let read = ReadOptions {
             stream_ahead: usize::MAX,
+            polygon_ids: false,
             ..ReadOptions::default()
         };
         let passed = |_: usize, n: u64| progress.advance(Stage::Read, 0, n, None);
@@ -91,9 +93,16 @@ impl HollowStudy {
         let name = crate::model::shown(path).to_string();
         progress.advance(Stage::Read, 1, 0, Some(&name));
         progress.finish(Stage::Read);
-        let (Some(mut hollow), Some(reread)) = (hollow, Reread::open(path, &read)) else {
+        let with_ids = ReadOptions {
+            polygon_ids: true,
+            ..read
+        };
+        let (Some(mut hollow), Some(reread)) = (hollow, Reread::open(path, &with_ids)) else {
             return Ok(None);
         };
+        if hollow.kept_with_ids(&reread).is_none() {
+            return Ok(None);
+        }
         let bbox = (hollow.boxes.iter()).fold(Bbox::EMPTY, |mut b, a| {
             b.union(a);
             b

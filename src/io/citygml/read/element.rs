@@ -225,7 +225,8 @@ impl Parser<'_> {
             }
             Kind::Polygon => {
                 let id = frame.id.take();
-                let text = id.and_then(|(a, b, _)| self.open_ids.get(a..b));
+                let text = (id.filter(|_| self.opts.polygon_ids))
+                    .and_then(|(a, b, _)| self.open_ids.get(a..b));
                 let pushed = self.finish_polygon(text.map(compact_str::CompactString::from));
                 if let (Some(start), Some((a, b, hash))) = (frame.register, id) {
                     let end = if pushed {
