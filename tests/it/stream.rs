@@ -237,6 +237,10 @@ fn ids_repeated_across_chunks_warn_as_the_whole_read() {
     let m = reassemble(&path, 1).unwrap();
     assert_eq!(m.warnings, whole.warnings);
     assert_eq!(m.assets, whole.assets);
+    // about two members a chunk: ids repeated within a chunk ("b", "b") and across
+    let third = std::fs::metadata(&path).unwrap().len() / 3;
+    let m = reassemble(&path, third).unwrap();
+    assert_eq!(m.warnings, whole.warnings);
     // a reference to an id of another chunk: the chunk cannot resolve it, the stream declines
     let mut members = members;
     members.push(member(

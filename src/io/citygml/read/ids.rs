@@ -107,14 +107,16 @@ impl Parser<'_> {
         if log.len() < 2 && before.is_empty() {
             return;
         }
-        let mut hashes: Vec<u64> = log.iter().map(|r| r.hash).collect();
-        hashes.par_sort_unstable();
-        let mut repeated: HashSet<u64> = hashes
-            .windows(2)
-            .filter(|w| w[0] == w[1])
-            .map(|w| w[0])
-            .collect();
-        drop(hashes);
+        let mut repeated: HashSet<u64> = match self.dup_within.take() {
+            Some(r) => r,
+            None => {
+                let mut hashes: Vec<u64> = log.iter().map(|r| r.hash).collect();
+                hashes.par_sort_unstable();
+                (hashes.windows(2).filter(|w| w[0] == w[1]))
+                    .map(|w| w[0])
+                    .collect()
+            }
+        };
         repeated.extend(before.iter().copied());
         if repeated.is_empty() {
             return;

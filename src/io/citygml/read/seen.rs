@@ -51,9 +51,21 @@ const FILTER_BITS_PER_ID: (usize, usize) = (6, 9);
 const RECENT_SHARE: usize = 16;
 
 impl SeenIds {
-    /// The ids of chunk `p` met in earlier chunks; `p`'s ids are then added.
-    pub(super) fn check_and_add(&mut self, p: &Parser<'_>) -> foldhash::HashSet<u64> {
-        self.check_and_add_hashes(p.id_log.iter().map(|r| r.hash).collect())
+    /// The ids of chunk `p` met in earlier chunks, and those it holds more than once (found
+    /// on the way: the sort that finds them here is the one the chunk's own duplicate check
+    /// made again); `p`'s ids are then added.
+    #[allow(clippy::type_complexity)]
+    pub(super) fn check_and_add(
+        &mut self,
+        p: &Parser<'_>,
+    ) -> (foldhash::HashSet<u64>, foldhash::HashSet<u64>) {
+        let mut h: Vec<u64> = p.id_log.iter().map(|r| r.hash).collect();
+        h.sort_unstable();
+        let repeated = (h.windows(2).filter(|w| w[0] == w[1]))
+            .map(|w| w[0])
+            .collect();
+        h.dedup();
+        (self.check_and_add_sorted(h), repeated)
     }
 
     /// Ids held.
@@ -109,6 +121,11 @@ impl SeenIds {
     pub(crate) fn check_and_add_hashes(&mut self, mut h: Vec<u64>) -> foldhash::HashSet<u64> {
         h.sort_unstable();
         h.dedup();
+        self.check_and_add_sorted(h)
+    }
+
+    /// [`SeenIds::check_and_add_hashes`] of `h` sorted, without repeats.
+    fn check_and_add_sorted(&mut self, mut h: Vec<u64>) -> foldhash::HashSet<u64> {
         let mut before = foldhash::HashSet::default();
         // the ids the filter does not turn away, still sorted
         let maybe: Vec<u64> = h.iter().copied().filter(|&x| self.may_hold(x)).collect();

@@ -246,6 +246,10 @@ pub(super) struct Parser<'d> {
     /// A chunk of a streamed read: hashes of its gml:ids met in earlier chunks (each of
     /// their occurrences here is a duplicate).
     pub(super) dup_before: HashSet<u64>,
+    /// A chunk of a streamed read: hashes of the gml:ids it holds more than once, found
+    /// where its ids are checked against the earlier chunks' (`None`: found from the id log
+    /// when the model is assembled).
+    pub(super) dup_within: Option<HashSet<u64>>,
     /// A chunk after the first of a streamed read: the root's gml:id, the nearest enclosing
     /// id of a top-level member.
     pub(super) root_id: Option<String>,
@@ -342,6 +346,7 @@ impl<'d> Parser<'d> {
             streamed: false,
             stream_tail: false,
             dup_before: HashSet::new(),
+            dup_within: None,
             root_id: None,
             id_log: Vec::new(),
         }

@@ -378,7 +378,8 @@ pub fn stream_citygml<E>(
                 });
             }
             let mut p = p;
-            let before = ids.check_and_add(&p);
+            let (before, repeated) = ids.check_and_add(&p);
+            p.dup_within = Some(repeated);
             if !before.is_empty() {
                 // a reference to such an id means its first occurrence, in another chunk
                 if p.href_targets().iter().any(|t| before.contains(t)) {
