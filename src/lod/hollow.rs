@@ -82,7 +82,7 @@ use crate::lod::poi::checks::Surroundings;
 use crate::lod::rough::{rough_asset, RoughGeometry, RoughOptions};
 use crate::lod::scene::{detail_boxes, detail_key};
 use crate::lod::select::FullFacts;
-use crate::model::{content_bbox, Asset, Bbox, Building, CityModel, LodGeometry, SourceFile};
+use crate::model::{content_bbox_of, Asset, Bbox, Building, CityModel, LodGeometry, SourceFile};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::path::Path;
@@ -115,7 +115,7 @@ pub struct Hollow {
     /// ([`crate::lod::bound::FullSource::twins`]).
     pub twin: Vec<u32>,
     /// The box of every polygon of the document, assets' and buildings' own geometry
-    /// ([`content_bbox`] of the whole model: its root envelope's box).
+    /// ([`crate::model::content_bbox`] of the whole model: its root envelope's box).
     pub content: Bbox,
     /// Polygons per geometry property, every asset's in turn ([`Hollow::polygon_counts`]).
     counts: Vec<u32>,
@@ -429,12 +429,6 @@ pub fn read_hollow(
         };
         let chunk = u32::try_from(starts.len()).map_err(|_| ())?;
         starts.push(start);
-        let b = content_bbox(&c.model.assets, &c.model.buildings);
-        if c.index == 0 {
-            root_site = crate::io::citygml::write::root_site_of(&c.model);
-            unsure = root_site.is_some() && b.is_empty();
-        }
-        content.union(&b);
         let nb = c.non_body_assets();
         let at = |i: usize| {
             if i < nb {
@@ -451,6 +445,13 @@ pub fn read_hollow(
                     (rough_asset(a, rough), (a.bbox(), key))
                 })
                 .unzip();
+        // the chunk's content box from its assets' boxes (content_bbox)
+        let b = content_bbox_of(boxes.iter().copied(), &model.buildings);
+        if c.index == 0 {
+            root_site = crate::io::citygml::write::root_site_of(&model);
+            unsure = root_site.is_some() && b.is_empty();
+        }
+        content.union(&b);
         let (detail, tris) = detail_boxes(&model);
         frame.union(&tris);
         let kept = keep(&model, &rough, &boxes);

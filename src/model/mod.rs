@@ -536,9 +536,15 @@ fn add_geometries(b: &mut Bbox, geometries: &[LodGeometry]) {
 /// The box of a root envelope: every polygon of the `assets` and of the `buildings`' own
 /// geometry (the reader's recomputed envelopes, the writer's over a streamed chunk).
 pub fn content_bbox(assets: &[Asset], buildings: &[Building]) -> Bbox {
+    content_bbox_of(assets.iter().map(Asset::bbox), buildings)
+}
+
+/// [`content_bbox`] from the assets' boxes ([`Asset::bbox`], in the assets' order) where they
+/// are at hand: the same box, bit for bit.
+pub fn content_bbox_of(boxes: impl IntoIterator<Item = Bbox>, buildings: &[Building]) -> Bbox {
     let mut b = Bbox::EMPTY;
-    for a in assets {
-        b.union(&a.bbox());
+    for a in boxes {
+        b.union(&a);
     }
     for bd in buildings {
         add_geometries(&mut b, &bd.geometries);

@@ -4,6 +4,7 @@ use super::*;
 use crate::io::citygml::read::read_file;
 use crate::io::citygml::ReadOptions;
 use crate::lod::rough::rough_model;
+use crate::model::content_bbox;
 use crate::pipeline::test_support::fixture;
 
 #[test]
