@@ -5,7 +5,12 @@ use crate::io::citygml::read::read_file;
 use crate::io::citygml::ReadOptions;
 use crate::lod::rough::rough_model;
 use crate::model::content_bbox;
-use crate::pipeline::test_support::fixture;
+
+/// The small synthetic fixture (`pipeline::test_support::fixture`'s: the pipeline is a later
+/// group than `lod`).
+fn fixture() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml")
+}
 
 #[test]
 fn a_hollow_read_in_small_chunks_is_the_whole_read_without_its_polygons() {
