@@ -112,9 +112,7 @@ impl Parser<'_> {
             None => {
                 let mut hashes: Vec<u64> = log.iter().map(|r| r.hash).collect();
                 hashes.par_sort_unstable();
-                (hashes.windows(2).filter(|w| w[0] == w[1]))
-                    .map(|w| w[0])
-                    .collect()
+                repeats(&hashes)
             }
         };
         repeated.extend(before.iter().copied());
@@ -202,6 +200,13 @@ impl Parser<'_> {
             (h == hash).then(|| v.into_owned())
         })
     }
+}
+
+/// The hashes that occur more than once in the sorted `hashes`.
+pub(super) fn repeats(hashes: &[u64]) -> HashSet<u64> {
+    (hashes.windows(2).filter(|w| w[0] == w[1]))
+        .map(|w| w[0])
+        .collect()
 }
 
 #[cfg(test)]

@@ -61,9 +61,7 @@ impl SeenIds {
     ) -> (foldhash::HashSet<u64>, foldhash::HashSet<u64>) {
         let mut h: Vec<u64> = p.id_log.iter().map(|r| r.hash).collect();
         h.sort_unstable();
-        let repeated = (h.windows(2).filter(|w| w[0] == w[1]))
-            .map(|w| w[0])
-            .collect();
+        let repeated = super::ids::repeats(&h);
         h.dedup();
         (self.check_and_add_sorted(h), repeated)
     }
