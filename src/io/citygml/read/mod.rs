@@ -90,8 +90,8 @@ pub struct ReadOptions {
     /// them every polygon has none; the ids are still checked and resolved as before
     /// (duplicates, `xlink:href` targets), only not stored. `lod`'s hollow read, which drops
     /// most polygons once it has their rough forms, reads without them: 7.5 million
-    /// allocations fewer for the 4 GB bench file, ~10 % of its read (BENCHMARKS.md,
-    /// "Polygon ids left out of the hollow read").
+    /// allocations fewer for the 4 GB bench file, whose read took 9.2–9.3 s instead of
+    /// 10.5–11.9 s (BENCHMARKS.md, "Polygon ids left out of the hollow read").
     pub polygon_ids: bool,
 }
 
