@@ -47,6 +47,57 @@ pub fn is_gzip_file(path: &Path) -> bool {
         && is_gzip(&head)
 }
 
+/// Bytes a reader of [`decoded`] and [`open_decoded`] asks for at a time.
+const READ_BUF: usize = 256 * 1024;
+
+/// `r`, gzip-decompressed when its first bytes are gzip's ([`is_gzip`]; the magic bytes
+/// decide, not a name), as one buffered reader: the one place a gzip input is decoded. A
+/// concatenation of gzip members (`cat a.gz b.gz`) reads as one document, as `gzip -d` does.
+///
+/// # Errors
+/// Reading the first bytes failed.
+///
+/// ```
+/// use std::io::{Read, Write};
+/// let mut gz = flate2::write::GzEncoder::new(Vec::new(), Default::default());
+/// gz.write_all(b"<CityModel/>")?;
+/// let bytes = gz.finish()?;
+/// let (mut r, was_gzip) = skylod::io::files::decoded(std::io::Cursor::new(bytes))?;
+/// let mut text = String::new();
+/// r.read_to_string(&mut text)?;
+/// assert!(was_gzip);
+/// assert_eq!(text, "<CityModel/>");
+/// # Ok::<(), std::io::Error>(())
+/// ```
+pub fn decoded<R: BufRead + Send + 'static>(
+    mut r: R,
+) -> std::io::Result<(Box<dyn BufRead + Send>, bool)> {
+    Ok(if is_gzip(r.fill_buf()?) {
+        (gunzip(r), true)
+    } else {
+        (Box::new(r), false)
+    })
+}
+
+/// `r` gzip-decompressed, buffered: [`decoded`] for a reader already known to be gzip.
+pub fn gunzip<R: BufRead + Send + 'static>(r: R) -> Box<dyn BufRead + Send> {
+    let dec = flate2::bufread::MultiGzDecoder::new(r);
+    Box::new(std::io::BufReader::with_capacity(READ_BUF, dec))
+}
+
+/// The input named `path`, decompressed where it is gzip ([`decoded`]): standard input for
+/// `-` (its bytes as kept by [`stdin_bytes`]), else the file.
+///
+/// # Errors
+/// Opening or reading the file, or standard input, failed.
+pub fn open_decoded(path: &Path) -> std::io::Result<(Box<dyn BufRead + Send>, bool)> {
+    if path.as_os_str() == crate::model::STDIN_NAME {
+        return decoded(std::io::Cursor::new(stdin_bytes()?));
+    }
+    let file = std::fs::File::open(path)?;
+    decoded(std::io::BufReader::with_capacity(READ_BUF, file))
+}
+
 /// `-` as an output path: standard output (never a file named `-`).
 ///
 /// ```

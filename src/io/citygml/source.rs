@@ -69,8 +69,7 @@ pub(crate) fn open_stream(src: &Source, name: &Path) -> Result<Stream, ReadError
         Source::Memory(bytes) => {
             let cursor = Cursor::new(Arc::clone(bytes));
             return Ok(if crate::io::files::is_gzip(bytes) {
-                let dec = flate2::bufread::MultiGzDecoder::new(cursor);
-                let mut dec: Box<dyn BufRead + Send> = Box::new(BufReader::with_capacity(BUF, dec));
+                let mut dec = crate::io::files::gunzip(cursor);
                 refuse_json(peek(&mut dec), name)?;
                 Stream::Gzip(dec)
             } else {
@@ -83,8 +82,7 @@ pub(crate) fn open_stream(src: &Source, name: &Path) -> Result<Stream, ReadError
     let mut reader = BufReader::with_capacity(BUF, file);
     let head = reader.fill_buf().map_err(io)?;
     if crate::io::files::is_gzip(head) {
-        let dec = flate2::bufread::MultiGzDecoder::new(reader);
-        let mut dec: Box<dyn BufRead + Send> = Box::new(BufReader::with_capacity(BUF, dec));
+        let mut dec = crate::io::files::gunzip(reader);
         refuse_json(peek(&mut dec), name)?;
         Ok(Stream::Gzip(dec))
     } else {
@@ -197,8 +195,7 @@ pub fn load_source(src: &Source, name: &Path) -> Result<Document, ReadError> {
 fn document(bytes: Bytes) -> Document {
     if crate::io::files::is_gzip(&bytes) {
         let len = bytes.len() as u64;
-        let dec = flate2::bufread::MultiGzDecoder::new(Cursor::new(bytes));
-        Document::Gzip(Box::new(BufReader::with_capacity(BUF, dec)), len)
+        Document::Gzip(crate::io::files::gunzip(Cursor::new(bytes)), len)
     } else {
         Document::Plain(bytes)
     }

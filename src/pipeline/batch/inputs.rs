@@ -214,20 +214,12 @@ pub fn sniff_cityjson(path: &Path) -> bool {
 /// The first [`SNIFF_BYTES`] bytes of a file, gzip decompressed.
 fn head_of(path: &Path) -> Option<Vec<u8>> {
     use std::io::Read;
-    let file = std::fs::File::open(path).ok()?;
-    let mut head = Vec::with_capacity(SNIFF_BYTES);
-    let mut r = std::io::BufReader::new(file);
-    let gz = std::io::BufRead::fill_buf(&mut r)
-        .ok()
-        .is_some_and(crate::io::files::is_gzip);
-    if gz {
-        flate2::read::MultiGzDecoder::new(r)
-            .take(SNIFF_BYTES as u64)
-            .read_to_end(&mut head)
-            .ok()?;
-    } else {
-        r.take(SNIFF_BYTES as u64).read_to_end(&mut head).ok()?;
+    if path.as_os_str() == crate::model::STDIN_NAME {
+        return None; // not a file: standard input is told by its reader
     }
+    let (r, _) = crate::io::files::open_decoded(path).ok()?;
+    let mut head = Vec::with_capacity(SNIFF_BYTES);
+    r.take(SNIFF_BYTES as u64).read_to_end(&mut head).ok()?;
     Some(head)
 }
 

@@ -17,7 +17,7 @@
 
 use glam::{DVec2, DVec3};
 use quick_xml::events::Event;
-use std::io::{BufRead, BufReader};
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
 /// A horizontal rectangle.
@@ -93,30 +93,12 @@ impl Extent {
 }
 
 fn open(path: &Path) -> Result<Box<dyn BufRead>, ExtentError> {
-    let io = |source| ExtentError::Io {
+    // standard input is held in memory and read from there (it is read again later)
+    let (r, _) = crate::io::files::open_decoded(path).map_err(|source| ExtentError::Io {
         file: path.to_path_buf(),
         source,
-    };
-    if path.as_os_str() == crate::model::STDIN_NAME {
-        // standard input, held in memory: read from there (it is read again later)
-        let bytes = crate::io::files::stdin_bytes().map_err(io)?;
-        let r = std::io::Cursor::new(bytes);
-        return Ok(if crate::io::files::is_gzip(r.get_ref()) {
-            Box::new(BufReader::new(flate2::bufread::MultiGzDecoder::new(r)))
-        } else {
-            Box::new(r)
-        });
-    }
-    let mut f = BufReader::with_capacity(256 * 1024, std::fs::File::open(path).map_err(io)?);
-    let gz = crate::io::files::is_gzip(f.fill_buf().map_err(io)?);
-    Ok(if gz {
-        Box::new(BufReader::with_capacity(
-            256 * 1024,
-            flate2::bufread::MultiGzDecoder::new(f),
-        ))
-    } else {
-        Box::new(f)
-    })
+    })?;
+    Ok(r)
 }
 
 /// True for a CityJSON input (JSON by content, [`crate::io::cityjson::sniff`]).

@@ -27,22 +27,9 @@ pub fn is_json_file(path: &Path) -> bool {
 /// Open a (possibly gzip-compressed) file, or standard input for `-` (its bytes as kept by
 /// [`crate::io::files::stdin_bytes`]).
 pub(crate) fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
-    let io = |source| ReadError::Io {
+    let (r, _) = crate::io::files::open_decoded(input).map_err(|source| ReadError::Io {
         file: input.to_path_buf(),
         source,
-    };
-    let mut r: Box<dyn BufRead + Send> = match crate::io::citygml::source::resolve(input)? {
-        crate::model::Source::Memory(bytes) => Box::new(std::io::Cursor::new(bytes)),
-        crate::model::Source::File(p) => Box::new(std::io::BufReader::with_capacity(
-            1 << 16,
-            std::fs::File::open(p).map_err(io)?,
-        )),
-    };
-    let head = r.fill_buf().map_err(io)?;
-    Ok(if crate::io::files::is_gzip(head) {
-        let dec = flate2::bufread::MultiGzDecoder::new(r);
-        Box::new(std::io::BufReader::with_capacity(1 << 16, dec))
-    } else {
-        r
-    })
+    })?;
+    Ok(r)
 }
