@@ -13,13 +13,15 @@
 //! says why, for the info line of the command ([`LodRead::note`]); where the hollow read
 //! itself declines ([`LodRead::read_hollow`] gives `None`) the command reads whole too.
 //!
-//! **Whole where it fits.** The hollow read takes about a quarter of the whole read's memory
-//! but twice its CPU (BENCHMARKS.md, "`lod` on the hollow read": 4 GB, 1.05 against 2.78 GiB,
-//! 58 against 27 s). So a file that qualifies is read hollow only when the whole read would
-//! not fit in the memory `lod` may take ([`memory_budget`]): `--max-memory`, else half of what
-//! the system and the job's control group have left ([`available_bytes`]: a Slurm job's
-//! `--mem`, a Kubernetes container's memory limit). The whole read is taken to need the file's
-//! size (measured: 0.73 to 1.0 times it, LoD3 files of 225 MB to 4 GB).
+//! **Whole where it fits.** The hollow read holds a chunk and what the selection keeps, the
+//! whole read about the file's size (measured: 0.73 to 1.0 times it, LoD3 files of 225 MB to
+//! 4 GB) in about the same wall time but less CPU. So a file that qualifies is read hollow
+//! when the whole read would not fit in the memory `lod` may take ([`memory_budget`]): the
+//! user's budget where one is given, else [`DEFAULT_BUDGET`] or half of what the system and
+//! the job's control group have left ([`available_bytes`]: a Slurm job's `--mem`, a Kubernetes
+//! container's memory limit), whichever is less. A district or a city tile is read whole as
+//! before; a file of gigabytes is read hollow without being asked, its memory following the
+//! chunk and not the file.
 
 use super::site::head_model;
 use crate::model::crs::{model_crs, Crs, LocalFrame};
@@ -109,20 +111,26 @@ impl std::fmt::Display for WholeWhy {
     }
 }
 
+/// The memory `lod` may take for its read when the user sets none: the whole read of a file
+/// of up to about this size (a district, a city's tile, the 1 GB bench city) keeps its lower
+/// CPU; a larger file is read hollow.
+pub const DEFAULT_BUDGET: u64 = 1 << 30;
+
 /// The memory `lod` may take ([`memory_budget`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Budget {
     /// Set by the user (`--max-memory`), in bytes.
     Given(u64),
-    /// Half of what was available ([`available_bytes`]), in bytes.
-    Available(u64),
+    /// Not set: [`DEFAULT_BUDGET`], or half of what was available ([`available_bytes`]) where
+    /// that is less, in bytes.
+    Default(u64),
 }
 
 impl Budget {
     /// The bytes.
     pub fn bytes(self) -> u64 {
         match self {
-            Budget::Given(b) | Budget::Available(b) => b,
+            Budget::Given(b) | Budget::Default(b) => b,
         }
     }
 }
@@ -131,9 +139,9 @@ impl std::fmt::Display for Budget {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Budget::Given(b) => write!(f, "the {} of --max-memory", mib(*b)),
-            Budget::Available(b) => write!(
+            Budget::Default(b) => write!(
                 f,
-                "the {} lod may take, half of the memory available; --max-memory sets it",
+                "the {} lod may take by default (1 GiB, or half the memory available where that is less); --max-memory sets it",
                 mib(*b)
             ),
         }
@@ -145,13 +153,15 @@ fn mib(b: u64) -> String {
     format!("{:.1} MiB", b as f64 / f64::from(1u32 << 20))
 }
 
-/// The memory `lod` may take: `given` (`--max-memory`), else half of what the system and the
-/// job's control group have left ([`available_bytes`]); `None` where neither is known (the
-/// file is then read hollow when it qualifies).
-pub fn memory_budget(given: Option<u64>) -> Option<Budget> {
+/// The memory `lod` may take: `given` (`--max-memory`), else [`DEFAULT_BUDGET`] or half of
+/// what the system and the job's control group have left ([`available_bytes`]), whichever is
+/// less (where what is left is not known, [`DEFAULT_BUDGET`]).
+pub fn memory_budget(given: Option<u64>) -> Budget {
     match given {
-        Some(b) => Some(Budget::Given(b)),
-        None => available_bytes().map(|b| Budget::Available(b / 2)),
+        Some(b) => Budget::Given(b),
+        None => Budget::Default(
+            available_bytes().map_or(DEFAULT_BUDGET, |b| (b / 2).min(DEFAULT_BUDGET)),
+        ),
     }
 }
 
@@ -237,7 +247,8 @@ pub fn lod_read(
     let Some(chunk) = streamed else {
         return whole(WholeWhy::Small { bytes, chunk });
     };
-    if let Some(budget) = memory_budget(max_memory).filter(|b| bytes <= b.bytes()) {
+    let budget = memory_budget(max_memory);
+    if bytes <= budget.bytes() {
         return whole(WholeWhy::Fits { bytes, budget });
     }
     // a compressed file counts ten times its size in `chunk_for`: told here
@@ -360,9 +371,15 @@ mod tests {
         assert!(w.to_string().ends_with("MiB of --max-memory"), "{w}");
         let r = lod_read(one, false, small, None, N, Some(len - 1));
         assert_eq!(r, LodRead::Hollow { chunk: small });
-        let half = Budget::Available(len).to_string();
-        assert!(half.contains("half of the memory available"), "{half}");
-        assert_eq!(memory_budget(Some(7)), Some(Budget::Given(7)));
+        let half = Budget::Default(len).to_string();
+        assert!(half.contains("half the memory available"), "{half}");
+        assert_eq!(memory_budget(Some(7)), Budget::Given(7));
+        // by default never more than DEFAULT_BUDGET: a file of gigabytes is read hollow
+        let b = memory_budget(None);
+        assert!(
+            matches!(b, Budget::Default(n) if n <= DEFAULT_BUDGET),
+            "{b:?}"
+        );
         // an option not served, the first named
         let w = why(lod_read(
             one,

@@ -44,8 +44,9 @@ pub struct Args {
     pub(crate) scene: crate::args::scene::SceneArgs,
     #[command(flatten)]
     pub(crate) stream: crate::args::stream::StreamArgs,
-    /// The memory lod may take, e.g. 2GiB (default: half of what the system and the job's
-    /// memory limit leave): a larger file is read hollow, in less memory and more time.
+    /// The memory lod may take for reading a file whole, e.g. 2GiB (default: 1GiB, or half
+    /// of what the system and the job's memory limit leave where that is less): a larger
+    /// file is read hollow, a chunk at a time, in less memory and a little more CPU.
     #[arg(long, value_name = "SIZE", value_parser = skylod::session::lod_read::memory_size)]
     pub(crate) max_memory: Option<u64>,
     /// Reduce step: write the model (and --report) from the levels files of all shards
