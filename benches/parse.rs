@@ -112,11 +112,11 @@ fn bench(c: &mut Criterion) {
             &bytes,
             |b, x| b.iter(|| raw_scan_floats(x)),
         );
-        // one core, and split across rayon's threads (issue 11: one large file read by both
-        // cores); the same model either way
-        for (id, split_min_bytes) in [("skylod_read", u64::MAX), ("skylod_read_split", 0)] {
+        // one chunk on one core, and chunks parsed ahead on rayon's threads (the default);
+        // the same model either way
+        for (id, chunk_bytes) in [("skylod_read_one_chunk", u64::MAX), ("skylod_read", 0)] {
             let opts = ReadOptions {
-                split_min_bytes,
+                chunk_bytes,
                 ..ReadOptions::default()
             };
             g.bench_with_input(BenchmarkId::new(id, &name), &bytes, |b, x| {

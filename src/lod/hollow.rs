@@ -480,7 +480,7 @@ pub fn read_hollow(
         let f = model.files.into_iter().next();
         match (&mut file, f) {
             (None, f) => file = f,
-            (Some(whole), Some(f)) => add_file(whole, f),
+            (Some(whole), Some(f)) => crate::io::citygml::read::add_file(whole, f),
             (Some(_), None) => {}
         }
         Ok::<(), ()>(())
@@ -601,19 +601,6 @@ pub fn hollowed(mut model: CityModel, kept: &[bool]) -> CityModel {
     }
     (model.buildings.iter_mut()).for_each(|b| drop_polygons(&mut b.geometries));
     model
-}
-
-/// `part`'s facts of the document added to `whole`'s: its envelope sites, counts, library
-/// objects and features.
-fn add_file(whole: &mut SourceFile, part: SourceFile) {
-    whole.envelopes.extend(part.envelopes);
-    whole.implicit_geometries += part.implicit_geometries;
-    whole.library_objects.extend(part.library_objects);
-    whole.objects_without_geometry += part.objects_without_geometry;
-    whole.polygon_elements += part.polygon_elements;
-    for (name, n) in part.features {
-        *whole.features.entry(name).or_default() += n;
-    }
 }
 
 #[cfg(test)]

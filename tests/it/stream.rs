@@ -65,19 +65,14 @@ fn bytes_move_while_one_large_file_is_read() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", util::stderr(&out));
-    // one core: a report every 32 MiB
+    // one chunk, one core: a report every 32 MiB
     let serial = ReadOptions {
-        split_min_bytes: u64::MAX,
+        chunk_bytes: u64::MAX,
         ..ReadOptions::default()
     };
     observed_matches(&big, &serial, 1);
-    // two parts on two cores, each reporting its own way through
-    let split = ReadOptions {
-        split_min_bytes: 0,
-        split_parts: 2,
-        ..ReadOptions::default()
-    };
-    observed_matches(&big, &split, 2);
+    // chunks on two cores, each reported as it is read
+    observed_matches(&big, &ReadOptions::default(), 2);
 }
 
 /// The chunks of a streamed read put back together in the serial read's order (non-body

@@ -505,6 +505,7 @@ pub(super) fn next_chunk(
         bytes,
         source: Some(source),
         start: None,
+        root_envelopes: Vec::new(),
         model: CityModel {
             files: vec![file],
             buildings,

@@ -95,7 +95,7 @@ impl Parser<'_> {
                 self.assets.push(body);
             }
         }
-        // the model's lists at their size (a split read appended the parts' lists)
+        // the model's lists at their size
         self.assets.shrink_to_fit();
         self.buildings.shrink_to_fit();
         // Assets with no geometry left (e.g. a surface with only curves) are dropped from the

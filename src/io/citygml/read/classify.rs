@@ -41,10 +41,7 @@ impl Parser<'_> {
     pub(super) fn open_geom_prop(&mut self, local: &[u8], name: &mut Option<Box<str>>) -> Kind {
         let lod = match is_lod_property(local) {
             Some(lod) => lod,
-            None => {
-                self.relief_default_used |= !self.relief_lod_set;
-                self.relief_lod
-            }
+            None => self.relief_lod,
         };
         *name = Some(String::from_utf8_lossy(local).into());
         Kind::GeomProp {

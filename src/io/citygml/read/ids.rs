@@ -21,6 +21,14 @@ use rayon::slice::ParallelSliceMut;
 /// Invalid `xs:ID`s listed one by one per document (see the module docs).
 pub(super) const INVALID_IDS_LISTED: usize = 100;
 
+/// What the warning on an invalid `xs:ID` says after the id.
+const INVALID_ID: &str = " is not a valid xs:ID (must start with a letter or '_')";
+
+/// Whether `w` is the warning of [`Parser::invalid_id`] listing an invalid `xs:ID`.
+pub(super) fn is_listed_invalid_id(w: &crate::model::Warning) -> bool {
+    w.message.starts_with("gml:id \"") && w.message.ends_with(INVALID_ID)
+}
+
 impl Parser<'_> {
     /// Warn that gml:id `id` is not a valid `xs:ID`, unless [`INVALID_IDS_LISTED`] were
     /// listed already (then it is only counted).
@@ -30,9 +38,7 @@ impl Parser<'_> {
             return;
         }
         self.invalid_listed.push(self.warnings.len());
-        self.warn(format!(
-            "gml:id \"{id}\" is not a valid xs:ID (must start with a letter or '_')"
-        ));
+        self.warn(format!("gml:id \"{id}\"{INVALID_ID}"));
     }
 
     /// After the last event (of the whole document, parts merged): the last invalid id
@@ -265,12 +271,20 @@ mod tests {
             .unwrap();
             let logged = in_memory(&d);
             assert_eq!(logged.warnings, streamed.warnings, "{n} members");
-            // split in three parts: the parts' logs and marks merged
-            let split =
-                super::super::split::read_split_on_two_threads(d.as_bytes(), Path::new("d.gml"), 3);
+            // in chunks of about a third: the chunks' warnings collected
+            let third = (d.len() / 3).max(1) as u64;
+            let chunked = super::super::collect::read_in_chunks(d.as_bytes(), "d.gml", third);
             if n >= 5 {
-                let split = split.expect("split read");
-                assert_eq!(split.warnings, streamed.warnings, "{n} members, split");
+                let chunked = chunked.expect("chunked read");
+                let (a, b) = (&chunked.warnings, &streamed.warnings);
+                let first = a.iter().zip(b).position(|(x, y)| x != y);
+                assert!(
+                    first.is_none() && a.len() == b.len(),
+                    "{n} members, chunked: {} against {} warnings, first differing: {:?}",
+                    a.len(),
+                    b.len(),
+                    first.map(|i| (&a[i], &b[i]))
+                );
             }
             // one invalid id per member ("9bad"): the first hundred listed, then a count
             let invalid: Vec<&str> = logged

@@ -35,18 +35,20 @@ mod ahead;
 mod assemble;
 mod attrs;
 mod classify;
+mod collect;
 pub(crate) mod coords;
 mod element;
 mod events;
 mod geometry;
+mod head;
 mod ids;
 mod position;
 mod seen;
-mod split;
 mod state;
 mod stream;
 mod xlink;
 
+pub(crate) use collect::add_file;
 pub use events::read_from;
 pub(crate) use seen::SeenIds;
 pub(crate) use stream::{member_chunks, MemberChunks};
@@ -72,14 +74,13 @@ pub struct ReadOptions {
     /// `xlink:href` geometry references, on top of five per polygon element of the document;
     /// protects against exponential reference trees ("billion laughs" built from xlinks).
     pub max_href_work: usize,
-    /// An uncompressed document at least this long (default 1 MiB: a 3 MB tile of several
-    /// buildings is read 1.4× faster by two cores) is read by several cores at once (cut at
-    /// top-level `cityObjectMember`s, one part per thread of rayon's current pool), when the
-    /// pool has more than one thread. The model is the same as one core's; inputs the split
-    /// cannot read exactly as one core would are read by one core.
-    pub split_min_bytes: u64,
-    /// Parts of a split read; 0: one per thread of rayon's current pool.
-    pub split_parts: usize,
+    /// Bytes of whole top-level members (`cityObjectMember`s) the read of an uncompressed
+    /// document parses at a time: the chunks of [`stream`], parsed ahead on rayon's threads
+    /// ([`ReadOptions::stream_ahead`]) and collected into one model, the same whatever the
+    /// chunks. 0 (default): an eighth of the document, at least [`MIN_CHUNK_BYTES`] and at
+    /// most [`CHUNK_BYTES`], so that a city tile of a few MB is read by every core;
+    /// `u64::MAX`: the document as one chunk, by one core.
+    pub chunk_bytes: u64,
     /// Chunks of a streamed read ([`stream`]) parsed ahead on other threads while the one
     /// before them is handled, at most one per thread of rayon's current pool (none when it
     /// has one thread); 0: one thread parses every chunk. The chunks are the same either
@@ -102,8 +103,7 @@ impl Default for ReadOptions {
             max_event_bytes: 64 << 20,
             max_href_depth: 64,
             max_href_work: 2_000_000,
-            split_min_bytes: 1 << 20,
-            split_parts: 0,
+            chunk_bytes: 0,
             stream_ahead: 2,
             polygon_ids: true,
         }
@@ -137,16 +137,28 @@ pub fn read_source_with(
 
 /// [`read_file_with`] that reports its way through the file: `passed(n)` is called, from
 /// any of the reading threads, each time `n` more bytes of an uncompressed document have been
-/// parsed (every few MiB, see the reader's release step), so that progress moves while one
-/// large file is read. The calls add up to at most the file's size, also when a split read
-/// falls back to one core; a gzip-compressed file is not reported (`passed` is never
-/// called). The model is the same as [`read_file_with`]'s.
+/// parsed (every few MiB), so that progress moves while one large file is read. The calls add
+/// up to at most the file's size, also where the chunked read declines and the document is
+/// read as one chunk; a gzip-compressed file is not reported (`passed` is never called). The
+/// model is the same as [`read_file_with`]'s.
 pub fn read_file_observed(
     path: &Path,
     opts: &ReadOptions,
     passed: &(dyn Fn(u64) + Sync),
 ) -> Result<CityModel, ReadError> {
     read_source_observed(source::resolve(path)?, path, opts, passed)
+}
+
+/// The least bytes of a chunk of the whole read by default ([`ReadOptions::chunk_bytes`]).
+pub const MIN_CHUNK_BYTES: u64 = 1 << 20;
+
+/// The chunks the whole read of a document of `len` bytes parses, about
+/// ([`ReadOptions::chunk_bytes`]).
+fn chunk_bytes(opts: &ReadOptions, len: u64) -> u64 {
+    match opts.chunk_bytes {
+        0 => (len / 8).clamp(MIN_CHUNK_BYTES, CHUNK_BYTES),
+        n => n,
+    }
 }
 
 /// [`read_file_observed`] on a [`Source`] named `name`.
@@ -156,22 +168,26 @@ pub fn read_source_observed(
     opts: &ReadOptions,
     passed: &(dyn Fn(u64) + Sync),
 ) -> Result<CityModel, ReadError> {
-    // CityJSON and CityJSONSeq, recognised by content (issue 24)
+    // CityJSON and CityJSONSeq, recognised by content
     let mut model = match json_or_xml(source::load_source(&src, name)?, &src, name)? {
         Ok(model) => model,
         Err(source::Document::Plain(doc)) => {
-            let seen = Seen::new(doc.len() as u64, passed);
-            let release = |from, upto| {
-                seen.part_at(from, upto);
-                doc.release_range(from, upto);
-            };
-            match split::read_split(&doc, name, opts, &release) {
+            let len = doc.len() as u64;
+            let told = Told::new(len, passed);
+            let chunk = chunk_bytes(opts, len);
+            let collected = (chunk < len)
+                .then(|| collect::read_collected(&doc, name, opts, chunk, &|n| told.more(n)))
+                .flatten();
+            match collected {
                 Some(model) => model,
                 None => {
-                    seen.restart();
+                    // one chunk: the serial read, which also reports any error
+                    let at = std::sync::atomic::AtomicU64::new(0);
                     events::read_slice(&doc, name, false, opts, &|upto| {
-                        seen.part_at(0, upto);
-                        doc.release_before(upto);
+                        let upto = upto as u64;
+                        let from = at.fetch_max(upto, std::sync::atomic::Ordering::Relaxed);
+                        told.more(upto.saturating_sub(from));
+                        doc.release_before(upto as usize);
                     })?
                 }
             }
@@ -229,63 +245,48 @@ fn json_or_xml(
     }))
 }
 
-/// The bytes [`read_file_observed`] has reported: how far each part (keyed by its first byte)
-/// has been parsed, and the total reported, capped at the document's length.
-struct Seen<'a> {
-    parts: std::sync::Mutex<std::collections::HashMap<usize, usize>>,
+/// The bytes [`read_file_observed`] has told, capped at the document's length (a read that
+/// starts over after the chunked read declined tells no byte twice).
+struct Told<'a> {
     total: std::sync::atomic::AtomicU64,
     len: u64,
     passed: &'a (dyn Fn(u64) + Sync),
 }
 
-impl<'a> Seen<'a> {
+impl<'a> Told<'a> {
     fn new(len: u64, passed: &'a (dyn Fn(u64) + Sync)) -> Self {
-        Seen {
-            parts: std::sync::Mutex::new(std::collections::HashMap::new()),
+        Told {
             total: std::sync::atomic::AtomicU64::new(0),
             len,
             passed,
         }
     }
 
-    /// The part that starts at `from` has been parsed up to `upto`.
-    fn part_at(&self, from: usize, upto: usize) {
-        let Ok(mut parts) = self.parts.lock() else {
-            return;
-        };
-        let last = parts.entry(from).or_insert(from);
-        if upto <= *last {
-            return;
-        }
-        let mut n = (upto - *last) as u64;
-        *last = upto;
-        drop(parts);
+    /// `n` more bytes read.
+    fn more(&self, n: u64) {
         use std::sync::atomic::Ordering;
         let before = self.total.fetch_add(n, Ordering::Relaxed);
-        n = n.min(self.len.saturating_sub(before));
+        let n = n.min(self.len.saturating_sub(before));
         if n > 0 {
             (self.passed)(n);
         }
     }
-
-    /// A new read of the whole document begins: parts start over, the total stays (so the
-    /// bytes of a declined split read are not reported again).
-    fn restart(&self) {
-        if let Ok(mut parts) = self.parts.lock() {
-            parts.clear();
-        }
-    }
 }
 
-/// The split read of [`read_file_with`] alone (one document read by several cores, see
-/// [`ReadOptions::split_min_bytes`]): `Ok(None)` where `read_file_with` reads by one core
-/// instead (gzip, a small document, one thread, a document the split declines, and every
-/// input that fails to read). For tests and benchmarks.
-pub fn read_file_split(path: &Path, opts: &ReadOptions) -> Result<Option<CityModel>, ReadError> {
+/// The chunked read of [`read_file_with`] alone ([`ReadOptions::chunk_bytes`]): `Ok(None)`
+/// where `read_file_with` reads the document as one chunk instead (gzip, a document of one
+/// chunk, a document the stream declines, and every input that fails to read). For tests
+/// and benchmarks.
+///
+/// # Errors
+/// The file cannot be opened.
+pub fn read_file_chunked(path: &Path, opts: &ReadOptions) -> Result<Option<CityModel>, ReadError> {
     match source::load(path)? {
         source::Document::Plain(doc) => {
-            let release = |from, upto| doc.release_range(from, upto);
-            Ok(split::read_split(&doc, path, opts, &release))
+            let len = doc.len() as u64;
+            let chunk = chunk_bytes(opts, len);
+            let read = || collect::read_collected(&doc, path, opts, chunk, &|_| {});
+            Ok((chunk < len).then(read).flatten())
         }
         source::Document::Gzip(..) => Ok(None),
     }
@@ -299,7 +300,7 @@ pub fn read_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<CityModel, Rea
     read_bytes_with(bytes, name, &ReadOptions::default())
 }
 
-/// [`read_bytes`] with explicit limits (a large document is split across cores as
+/// [`read_bytes`] with explicit limits (a large document is read in chunks by every core as
 /// [`read_file_with`] does).
 pub fn read_bytes_with(
     bytes: &[u8],

@@ -127,8 +127,7 @@ pub(super) struct IdRec {
     pub(super) pos: u64,
     /// Number of warnings before the element's duplicate warning would be.
     pub(super) warnings: u32,
-    /// The entry of the nearest enclosing element with a gml:id ([`NO_REC`]: none; in a
-    /// later part of a split document before it is merged: the root's or none).
+    /// The entry of the nearest enclosing element with a gml:id ([`NO_REC`]: none).
     pub(super) parent: u32,
 }
 
@@ -233,9 +232,6 @@ pub(super) struct Parser<'d> {
     pub(super) relief_lod: u8,
     /// A relief `lod` was read ([`Parser::relief_lod`] set) in this parser.
     pub(super) relief_lod_set: bool,
-    /// [`Parser::relief_lod`] was used before any relief `lod` was read in this parser (a
-    /// split read then depends on the part before it).
-    pub(super) relief_default_used: bool,
     /// The root's envelope set [`Parser::srs_name`] (over any earlier `srsName`).
     pub(super) root_srs_set: bool,
     /// A chunk of a streamed read (see `stream`): the invalid-id summary and the warning
@@ -341,7 +337,6 @@ impl<'d> Parser<'d> {
             invalid_listed: Vec::new(),
             relief_lod: 2,
             relief_lod_set: false,
-            relief_default_used: false,
             root_srs_set: false,
             streamed: false,
             stream_tail: false,

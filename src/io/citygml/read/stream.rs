@@ -2,7 +2,7 @@
 //! the chunk, not the file.
 //!
 //! The bytes after the root's start tag are cut at the ends of top-level `cityObjectMember`
-//! elements (any prefix, CityGML 1.0 to 3.0: the cuts of the split read) about every
+//! elements (any prefix, CityGML 1.0 to 3.0) about every
 //! `chunk_bytes`; each chunk is parsed by its own [`Parser`] seeded with the root's start tag
 //! and with the document-wide state the serial read would have reached there (version, CRS,
 //! `gml:` prefix, relief LoD, the foreign namespaces and unknown prefixes already warned
@@ -40,7 +40,7 @@
 
 use super::ahead::{Ahead, ChunkSource};
 use super::events::{configured, finish, parse_events, start_root};
-use super::ids::INVALID_IDS_LISTED;
+use super::ids::{is_listed_invalid_id, INVALID_IDS_LISTED};
 use super::seen::SeenIds;
 use super::state::{EnvOwner, LineMark, Parser, NO_REC};
 use super::ReadOptions;
@@ -79,6 +79,9 @@ pub struct Chunk {
     /// A CityGML document's: where the chunk starts, to parse it or some of its members
     /// again ([`Reread`]).
     pub start: Option<ChunkStart>,
+    /// The root's envelopes among the model's file's envelopes (indices), each with the box
+    /// of the chunk's content, where the whole document's puts the box of all of it.
+    pub(crate) root_envelopes: Vec<usize>,
 }
 
 impl Chunk {
@@ -283,7 +286,7 @@ pub fn stream_citygml<E>(
     opts: &ReadOptions,
     chunk_bytes: u64,
     passed: &dyn Fn(u64),
-    mut each: impl FnMut(Chunk) -> Result<(), E>,
+    each: impl FnMut(Chunk) -> Result<(), E>,
 ) -> Result<Streamed, E> {
     let decline = |why: &str| Ok(Streamed::Declined(why.to_string()));
     let (doc, on_disk) = match source::load(path) {
@@ -295,6 +298,25 @@ pub fn stream_citygml<E>(
         },
         Err(e) => return decline(&e.to_string()),
     };
+    stream_document(&doc, on_disk, path, opts, chunk_bytes, passed, each)
+}
+
+/// [`stream_citygml`] of the uncompressed document `doc` at hand, named `path`; `on_disk`:
+/// the compressed size of the file it was decompressed from, whose bytes `passed` tells in
+/// proportion.
+///
+/// # Errors
+/// As [`stream`].
+pub(super) fn stream_document<E>(
+    doc: &source::Bytes,
+    on_disk: Option<u64>,
+    path: &Path,
+    opts: &ReadOptions,
+    chunk_bytes: u64,
+    passed: &dyn Fn(u64),
+    mut each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<Streamed, E> {
+    let decline = |why: &str| Ok(Streamed::Declined(why.to_string()));
     // the bytes reported: the document's, or for a compressed file its compressed bytes in
     // proportion (they add up to the size on disk)
     let doc_len = doc.len() as u64;
@@ -311,7 +333,7 @@ pub fn stream_citygml<E>(
             passed(n);
         }
     };
-    let (bom, body, root_end) = match super::split::parse_head(&doc, path, opts) {
+    let (bom, body, root_end) = match super::head::parse_head(doc, path, opts) {
         Ok(h) => (h.bom, h.body, h.root_end),
         Err(why) => return decline(why),
     };
@@ -402,14 +424,22 @@ pub fn stream_citygml<E>(
             };
             // the chunks after this one parse on other threads while this one is handled
             ahead.fill(scope, (start, to), &state, |s| chunk_end(body, s, step));
+            // an envelope without srsDimension is written empty, whoever owns it
+            let root_envelopes = (p.env_owners.iter().zip(&p.envelopes).enumerate())
+                .filter(|(_, (o, e))| matches!(o, EnvOwner::Root) && e.dimension != 0)
+                .map(|(i, _)| i)
+                .collect();
             let model = match finish(p, doc.len() as u64, true, false) {
                 Ok(m) => m,
                 Err(e) => return decline(&e.to_string()),
             };
             doc.release_range(from + bom, to + bom);
-            // invalid gml:ids: listed up to INVALID_IDS_LISTED per document
-            for &w in listed.iter().filter(|&&w| w != usize::MAX) {
-                state.invalid_last = Some(sum.warnings + w);
+            // invalid gml:ids: listed up to INVALID_IDS_LISTED per document; the last one this
+            // chunk lists is found among its warnings as written, the duplicate-id warnings
+            // (made after the last event) placed among them
+            if listed.iter().any(|&w| w != usize::MAX) {
+                let last = model.warnings.iter().rposition(is_listed_invalid_id);
+                state.invalid_last = last.map(|k| sum.warnings + k).or(state.invalid_last);
             }
             state.invalid_ids += invalid;
             let bodies = model
@@ -427,6 +457,7 @@ pub fn stream_citygml<E>(
                 model,
                 source: None,
                 start: Some(start_at),
+                root_envelopes,
             };
             sum.buildings += chunk.model.buildings.len();
             sum.assets += chunk.model.assets.len() - bodies;
@@ -506,7 +537,7 @@ impl Reread {
             return None;
         };
         let (bom, root_end) = {
-            let h = super::split::parse_head(&doc, path, opts).ok()?;
+            let h = super::head::parse_head(&doc, path, opts).ok()?;
             (h.bom, h.root_end)
         };
         Some(Reread {
@@ -547,7 +578,7 @@ impl Reread {
         let mut upto = s;
         while let Some(m) = body.get(lo..upto).and_then(|b| finder.rfind(b)) {
             let m = lo + m;
-            if super::split::is_end_tag(body, m) {
+            if super::head::is_end_tag(body, m) {
                 from = m + NAME.len();
                 break;
             }
@@ -636,7 +667,7 @@ pub(crate) struct MemberChunks {
 
 /// The chunks [`stream_citygml`] reads `doc` (a whole uncompressed document) in, about
 /// `chunk_bytes` each; `Err` with why the document is not read in chunks (see
-/// [`super::split::parse_head`]). For the writers that go through a document a chunk at a
+/// [`super::head::parse_head`]). For the writers that go through a document a chunk at a
 /// time without reading it into a model (`lod::mixed`).
 pub(crate) fn member_chunks(
     doc: &[u8],
@@ -644,7 +675,7 @@ pub(crate) fn member_chunks(
     opts: &ReadOptions,
     chunk_bytes: u64,
 ) -> Result<MemberChunks, &'static str> {
-    let h = super::split::parse_head(doc, path, opts)?;
+    let h = super::head::parse_head(doc, path, opts)?;
     let (bom, body, root_end) = (h.bom, h.body, h.root_end);
     // the root's start tag ends the prolog; no `<` can stand in its attribute values
     let tag = memchr::memrchr(b'<', &body[..root_end]).ok_or("no CityModel root")?;
@@ -680,7 +711,7 @@ fn next_cut(body: &[u8], at: usize) -> Option<usize> {
     while let Some(hit) = body.get(at..).and_then(|b| finder.find(b)) {
         let m = at + hit;
         at = m + 1;
-        if super::split::is_end_tag(body, m) {
+        if super::head::is_end_tag(body, m) {
             let cut = m + NAME.len();
             return (cut < body.len()).then_some(cut);
         }

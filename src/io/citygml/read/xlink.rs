@@ -66,41 +66,6 @@ impl Registry {
         self.entries.push(RegEntry { hash, at, range });
     }
 
-    /// Append the registrations of a later part of the document whose parts start at
-    /// `parts_offset` in the merged arena and whose id log entries at `log_offset` in the
-    /// merged log (a split read: offsets into the document stay, text ends move by the
-    /// text before them); `None` when the order of registrations would change.
-    pub(super) fn append(
-        &mut self,
-        other: Registry,
-        parts_offset: u32,
-        log_offset: u32,
-    ) -> Option<()> {
-        if !self.entries.is_empty() && !other.logged.is_empty() {
-            return None;
-        }
-        let base = self.text.len() as u64;
-        let text_ends = !other.text.is_empty();
-        let shift = |r: (u32, u32)| (r.0 + parts_offset, r.1 + parts_offset);
-        self.text.push_str(&other.text);
-        self.logged.reserve_exact(other.logged.len());
-        for e in other.logged {
-            let rec = e.rec.checked_add(log_offset)?;
-            self.logged.push(LogEntry {
-                rec,
-                range: shift(e.range),
-            });
-        }
-        self.entries.reserve_exact(other.entries.len());
-        self.entries
-            .extend(other.entries.into_iter().map(|e| RegEntry {
-                hash: e.hash,
-                at: if text_ends { e.at + base } else { e.at },
-                range: shift(e.range),
-            }));
-        Some(())
-    }
-
     /// The ids whose hash is in `wanted`, each with its first registered range (the text is
     /// compared, so two ids with the same hash stay apart); `read_back(offset, hash)` reads
     /// an id back from the document in memory (entries without text), `logged(rec)` is the
@@ -350,19 +315,18 @@ mod tests {
     }
 
     #[test]
-    fn registry_of_a_document_reads_ids_back_and_appends_parts() {
+    fn registry_of_a_document_reads_ids_back() {
         let doc = ["a", "b", "a", "c", "d"];
         let back = |at: u64, _: u64| doc.get(at as usize).map(|s| s.to_string());
-        // the id log of the merged document: (hash, offset) per entry
-        let log = [(7u64, 0u64), (7, 1), (8, 9), (7, 2), (9, 3)];
+        // the id log of the document: (hash, offset) per entry
+        let log = [(7u64, 0u64), (7, 1), (7, 2), (9, 3)];
         let logged = |rec: u32| log.get(rec as usize).copied();
-        let (mut r, mut later) = (Registry::default(), Registry::default());
+        let mut r = Registry::default();
         r.add(7, IdAt::Log { rec: 0, pos: 0 }, (0, 1));
         r.add(7, IdAt::Log { rec: 1, pos: 1 }, (1, 2));
-        // a duplicate in a later part (log entries from 3 on): the first wins
-        later.add(7, IdAt::Log { rec: 0, pos: 2 }, (0, 1));
-        later.add(9, IdAt::Log { rec: 1, pos: 3 }, (1, 2));
-        assert_eq!(r.append(later, 10, 3), Some(()));
+        // a duplicate later on: the first wins
+        r.add(7, IdAt::Log { rec: 2, pos: 2 }, (10, 11));
+        r.add(9, IdAt::Log { rec: 3, pos: 3 }, (11, 12));
         assert!(
             r.text.is_empty() && r.entries.is_empty(),
             "no id text, no hashes"
@@ -390,9 +354,5 @@ mod tests {
         assert_eq!(idx.get("d"), Some(&(0, 1)));
         assert_eq!(idx.get("a"), Some(&(1, 2)));
         assert_eq!(idx.get("c"), Some(&(2, 3)));
-        // a part registered by log entries cannot follow one registered by offsets
-        let mut later = Registry::default();
-        later.add(7, IdAt::Log { rec: 0, pos: 0 }, (0, 1));
-        assert_eq!(r.append(later, 10, 3), None);
     }
 }
