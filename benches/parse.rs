@@ -39,7 +39,7 @@ fn raw_scan(bytes: &[u8]) -> usize {
     n
 }
 
-/// The reference of the reader's goal (issue 11, `../shared/tools/qxscan FILE floats`): the
+/// The reference of the reader's goal (`../shared/tools/qxscan FILE floats`): the
 /// same scan, parsing every whitespace-separated number of every text node with `str::parse`.
 fn raw_scan_floats(bytes: &[u8]) -> f64 {
     let mut r = NsReader::from_reader(bytes);
@@ -112,8 +112,8 @@ fn bench(c: &mut Criterion) {
             &bytes,
             |b, x| b.iter(|| raw_scan_floats(x)),
         );
-        // one core, and split across rayon's threads (issue 11: one large file read by both
-        // cores); the same model either way
+        // one core, and split across rayon's threads (one large file read by both cores); the
+        // same model either way
         for (id, split_min_bytes) in [("skylod_read", u64::MAX), ("skylod_read_split", 0)] {
             let opts = ReadOptions {
                 split_min_bytes,

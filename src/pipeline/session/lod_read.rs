@@ -1,4 +1,4 @@
-//! Which read the `lod` command takes (issue 22, "lod keeps only what the selection needs"):
+//! Which read the `lod` command takes (`lod` keeps only what the selection needs):
 //! the hollow read ([`crate::lod::hollow::read_hollow`]: per chunk of whole top-level
 //! members, each asset's rough form and facts, its polygons dropped) or the whole read
 //! ([`crate::pipeline::read_inputs`]), decided before any input is read ([`lod_read`]).
@@ -13,13 +13,13 @@
 //! says why, for the info line of the command ([`LodRead::note`]); where the hollow read
 //! itself declines ([`LodRead::read_hollow`] gives `None`) the command reads whole too.
 //!
-//! **Whole where it fits.** The hollow read takes about a quarter of the whole read's memory
-//! but twice its CPU (BENCHMARKS.md, "`lod` on the hollow read": 4 GB, 1.05 against 2.78 GiB,
-//! 58 against 27 s). So a file that qualifies is read hollow only when the whole read would
-//! not fit in the memory `lod` may take ([`memory_budget`]): `--max-memory`, else half of what
-//! the system and the job's control group have left ([`available_bytes`]: a Slurm job's
-//! `--mem`, a Kubernetes container's memory limit). The whole read is taken to need the file's
-//! size (measured: 0.73 to 1.0 times it, LoD3 files of 225 MB to 4 GB).
+//! **Whole where it fits.** The hollow read takes a fraction of the whole read's memory but
+//! more CPU (it parses what the bound and the writer read back a second time). So a file
+//! that qualifies is read hollow only when the whole read would not fit in the memory `lod`
+//! may take ([`memory_budget`]): `--max-memory`, else half of what the system and the job's
+//! control group have left ([`available_bytes`]: a Slurm job's `--mem`, a Kubernetes
+//! container's memory limit). The whole read is taken to need the file's size (measured: 0.73
+//! to 1.0 times it, LoD3 files of 225 MB to 4 GB).
 
 use super::site::head_model;
 use crate::model::crs::{model_crs, Crs, LocalFrame};

@@ -72,10 +72,10 @@ pub struct ReadOptions {
     /// `xlink:href` geometry references, on top of five per polygon element of the document;
     /// protects against exponential reference trees ("billion laughs" built from xlinks).
     pub max_href_work: usize,
-    /// An uncompressed document at least this long (default 1 MiB: a 3 MB tile of several
-    /// buildings is read 1.4× faster by two cores) is read by several cores at once (cut at
-    /// top-level `cityObjectMember`s, one part per thread of rayon's current pool), when the
-    /// pool has more than one thread. The model is the same as one core's; inputs the split
+    /// An uncompressed document at least this long (default 1 MiB: even a tile of a few MB
+    /// with several buildings is read faster by two cores) is read by several cores at once
+    /// (cut at top-level `cityObjectMember`s, one part per thread of rayon's current pool),
+    /// when the pool has more than one thread. The model is the same as one core's; inputs the split
     /// cannot read exactly as one core would are read by one core.
     pub split_min_bytes: u64,
     /// Parts of a split read; 0: one per thread of rayon's current pool.
@@ -87,11 +87,10 @@ pub struct ReadOptions {
     /// ~40 MB more for 16 MiB chunks of LoD3, within the stream's memory goal).
     pub stream_ahead: usize,
     /// Keep each polygon's `gml:id` ([`crate::model::Polygon::id`]; default true). Without
-    /// them every polygon has none; the ids are still checked and resolved as before
-    /// (duplicates, `xlink:href` targets), only not stored. `lod`'s hollow read, which drops
-    /// most polygons once it has their rough forms, reads without them: 7.5 million
-    /// allocations fewer for the 4 GB bench file, whose read took 9.2–9.3 s instead of
-    /// 10.5–11.9 s (BENCHMARKS.md, "Polygon ids left out of the hollow read").
+    /// them every polygon has none; the ids are still checked and resolved (duplicates,
+    /// `xlink:href` targets), only not stored. `lod`'s hollow read, which drops most polygons
+    /// once it has their rough forms, reads without them: ids longer than fit inline take an
+    /// allocation each, made on a reading thread and freed on another, for ids nothing reads.
     pub polygon_ids: bool,
 }
 
@@ -156,7 +155,7 @@ pub fn read_source_observed(
     opts: &ReadOptions,
     passed: &(dyn Fn(u64) + Sync),
 ) -> Result<CityModel, ReadError> {
-    // CityJSON and CityJSONSeq, recognised by content (issue 24)
+    // CityJSON and CityJSONSeq, recognised by content
     let mut model = match json_or_xml(source::load_source(&src, name)?, &src, name)? {
         Ok(model) => model,
         Err(source::Document::Plain(doc)) => {
