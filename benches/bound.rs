@@ -1,4 +1,4 @@
-//! The cost of `lod`'s default error bound (issue 21: the default `lod` on the paper district
+//! The cost of `lod`'s default error bound (the goal: the default `lod` on the paper district
 //! at most 2.5× a raw scan of the file), in the same run, on the `paper` preset district
 //! (generated once into a temporary file, ~125 MB, with its 6 POIs):
 //!

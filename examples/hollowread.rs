@@ -5,11 +5,11 @@
 //! `cargo run --release --example hollowread -- FILE.gml [whole]`
 //!
 //! With `bound` (`FILE.gml bound [whole]`): `lod`'s selection and its default error bound
-//! (SVF and sun hours within 1 %, the sun of Ingolstadt) at the two street POIs of
-//! BENCHMARKS.md ("Where the memory of `lod` goes"), on the hollow read with the bound's
-//! assets read back by span ([`skylod::lod::bound::HollowSource`]) or on the whole read;
-//! prints the levels, promotions and reference (the same both ways) and, on stderr, each
-//! stage's seconds.
+//! (SVF and sun hours within 1 %, the sun of Ingolstadt) at the two street POIs of the
+//! bench files' `lod` runs (678095,5403890,418 and 678150,5403776,419), on the hollow read
+//! with the bound's assets read back by span ([`skylod::lod::bound::HollowSource`]) or on
+//! the whole read; prints the levels, promotions and reference (the same both ways) and, on
+//! stderr, each stage's seconds.
 use skylod::io::citygml::read::{read_file, Passes, Reread, CHUNK_BYTES};
 use skylod::io::citygml::ReadOptions;
 use skylod::lod::bound::{bound_against_from, full_answers_from, BoundOptions, FullSource};

@@ -113,7 +113,7 @@ pub use lod::{bound, level, rough, scene, select};
 pub use model::runtime::{mem, progress};
 #[doc(hidden)]
 pub use solar::sky;
-// The folders of release 0.2 before the six groups (issue 23), kept for one release.
+// The folders of release 0.2 before the six groups, kept for one release.
 #[doc(hidden)]
 pub use export::report as output;
 #[doc(hidden)]

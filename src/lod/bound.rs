@@ -31,8 +31,8 @@
 //! answer is never nearer than the whole model's, so the limits only shrink and each round
 //! ends rays or adds assets. When the rays outnumber the model's full-detail polygons (many
 //! POIs on a small model), the rounds would cost more than the BVH they avoid, and the whole
-//! model is built at once, as before ([`Reference::whole`]). Measured (BENCHMARKS.md, "The
-//! default error bound"): on the paper district, the 6 POIs' rays reach 2,500 of 57,530 assets.
+//! model is built at once ([`Reference::whole`]). On the paper district the 6 POIs' rays
+//! reach 2,500 of 57,530 assets.
 //! The full model is a [`FullSource`]: the whole model, or a document read hollow whose
 //! assets are read back by span as the rounds and the LoD scene need them ([`HollowSource`]).
 //! Where the source knows twins ([`FullSource::twins`]: assets whose full-detail polygons
@@ -41,7 +41,7 @@
 //! earlier index wins the tie as in the whole model; the assets added, the rounds and every
 //! answer are those without twins. A document that repeats its buildings in place (the
 //! bench files: one street stacked ~150 times in 4 GB) so reads back one copy, not every
-//! copy the rays reach (BENCHMARKS.md, "Twins traced once").
+//! copy the rays reach.
 //!
 //! **Two halves.** The full model's answers depend on the POIs, the rays and the model, not
 //! on the levels: [`full_answers`] makes them ([`FullAnswers`]) and [`bound_against`] checks
@@ -339,10 +339,10 @@ fn full_tags(
 
 /// Boxes per ray looked up before the first round: the [`SEED_BOXES`] nearest ones
 /// ([`BoxIndex::nearest_k`]). Their assets make the first part, and a ray whose answer
-/// there comes before the last of them is final without another box query. Measured on
-/// the paper district (6 POIs, 118,888 rays; BENCHMARKS.md): 1 box builds 2,816 assets in
-/// 3 rounds, 4 boxes 2,500 in 2 rounds (the quickest), 8 boxes 5,031 in one round (slower:
-/// boxes behind the answer are built too).
+/// there comes before the last of them is final without another box query. On the paper
+/// district (6 POIs, 118,888 rays) 1 box builds 2,816 assets in 3 rounds, 4 boxes 2,500 in
+/// 2 rounds (the least work), 8 boxes 5,031 in one round (boxes behind the answer are built
+/// too).
 const SEED_BOXES: usize = 4;
 
 /// [`full_tags`] through the lazy rounds (see the module docs, "Reference"), with the

@@ -1,10 +1,10 @@
-//! The hollow read of one CityGML document for `lod` (issue 22, "lod keeps only what the
-//! selection needs"): the whole read's model without the full polygons, and per asset what the
+//! The hollow read of one CityGML document for `lod` (`lod` keeps only what the selection
+//! needs): the whole read's model without the full polygons, and per asset what the
 //! selection needs of them, made while they are in memory.
 //!
-//! `lod` on a 4 GB document held the whole model as read (~0.53× the file: polygons with their
-//! points and ids) until its outputs were written, and the CityGML writer's index of the source
-//! (~0.31× the file) came on top of it (BENCHMARKS.md, "Where the memory of `lod` goes"). The
+//! The whole model as read holds every polygon with its points and ids, about half the
+//! file's size, until the outputs are written, and the CityGML writer's index of the source
+//! comes on top of it: too much for a large document in a job's memory. The
 //! selection traces only rough forms; the full geometry it still needs is that of a few assets
 //! (level 2, the bound's reference near its rays, the POIs' surroundings), which can be read
 //! again by byte span.
@@ -61,14 +61,14 @@
 //! The error bound runs on it ([`crate::lod::bound::HollowSource`]): its reference reads back
 //! the assets near the rays round by round, its LoD scene the assets above level 0; the
 //! frame of the reference is [`Hollow::frame`], the whole model's, so every answer is the
-//! whole model's to the bit. Measured (BENCHMARKS.md, "Reading back for the bound"): on the
-//! benchmark files (one street repeated at the same place) the reference reaches every
-//! copy's assets near the rays, and parsing their members again costs several times the
-//! whole model's reference (1 GB: 5.3 s of wall time against 1.1 s; 4 GB: 30 s against 6.4 s);
-//! see there for what that means for tracing the reference per chunk instead. A member holds
+//! whole model's to the bit. Parsing members again costs more than tracing the whole
+//! model's reference where the rays reach many members (a document that repeats one street
+//! in place: every copy near a ray), which is why a twin is traced in its copies' stead.
+//! Tracing the reference chunk by chunk during the read instead would need the whole
+//! model's full-detail frame before the first chunk, i.e. a second pass. A member holds
 //! many assets and the rounds ask for them a few at a time, so the source keeps, of each
 //! member it parses, the assets a later round may ask for ([`Hollow::read_back_keeping`]):
-//! no member is parsed twice for them (BENCHMARKS.md, "Keeping what is read back").
+//! no member is parsed twice for them.
 //!
 //! The mixed CityGML writer runs on it too ([`crate::lod::mixed::write_mixed_hollow`]: each
 //! chunk's kept assets and buildings read back for its plan, [`Hollow::read_back_geometries`]),

@@ -865,7 +865,7 @@ mod tests {
         assert!(!idx.near_segment(o, [DVec3::new(-1.0, 0.0, 1.0), DVec3::new(1.0, 0.0, 1.0)]));
     }
 
-    /// Issue 21's safety net: a POI between the two walls of a gate-like object lies inside
+    /// The rough model's safety net: a POI between the two walls of a gate-like object lies inside
     /// the object's box but outside its geometry: the object goes to level 2. A POI inside
     /// a closed box-shaped object (both its box and its geometry hold it) does not promote it.
     #[test]

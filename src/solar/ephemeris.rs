@@ -17,10 +17,10 @@
 //! the days fill the pool's idle stretches (in `lod`, the one-core merge and assembly at the
 //! end of the read) rather than slow what they run beside. A thread of its own would not do:
 //! at the normal priority it shares the cores with the reading threads, and at Linux's
-//! `SCHED_IDLE` it gets no core at all while other processes keep them busy (both measured,
-//! BENCHMARKS.md); nor would one job going through the days and running the pool's other
-//! work between them (`rayon::yield_now`: measured slower, BENCHMARKS.md). It stops at the
-//! next step once the table is built from it ([`SunEphemeris::stop`]) or the ephemeris is
+//! `SCHED_IDLE` it gets no core at all while other processes keep them busy; nor would one
+//! job going through the days and running the pool's other work between them
+//! (`rayon::yield_now`: it never sleeps, and the read's one-core tail slows beside it). It
+//! stops at the next step once the table is built from it ([`SunEphemeris::stop`]) or the ephemeris is
 //! dropped; nothing waits for it.
 //!
 //! Given a site near the one the table will have ([`SunEphemeris::year_near`], e.g. from the

@@ -56,8 +56,8 @@ pub struct WriteOptions {
     /// top-level members at a time where that gives the same bytes, so that its index of the
     /// source follows the chunk instead of the file. Off by default: with the whole model in
     /// memory it does not lower `lod`'s peak (the read sets it) and its writer stage costs
-    /// more CPU (BENCHMARKS.md, "The mixed writer a chunk at a time"); it is meant for a
-    /// model that does not hold every polygon (issue 22).
+    /// more CPU; it is meant for a model that does not hold every polygon (the hollow read
+    /// of `lod`).
     pub plan_by_chunk: bool,
 }
 

@@ -84,7 +84,7 @@ impl FullSource for CityModel {
 /// A top-level member parsed for the assets asked for holds others (a building's other
 /// surfaces): those the caller may ask for later ([`FullSource::expect`]) are kept from
 /// the parse and given from memory when asked for, so that no member is parsed again for
-/// them (BENCHMARKS.md, "Keeping what is read back").
+/// them.
 #[derive(Debug)]
 pub struct HollowSource<'a> {
     hollow: &'a Hollow,

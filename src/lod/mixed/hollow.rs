@@ -1,4 +1,4 @@
-//! The mixed writer on a document read hollow ([`write_mixed_hollow`], issue 22): the plan
+//! The mixed writer on a document read hollow ([`write_mixed_hollow`]): the plan
 //! of each chunk is made on the hollow model with the polygons its rules look at read back
 //! for the chunk ([`PlanModel::fill`]) and dropped again after it: the assets kept (level 1
 //! or 2: properties copied, rebuilt or compared with the rough form, the boxes of the

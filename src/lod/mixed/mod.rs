@@ -110,7 +110,7 @@
 //! streamed read (about 16 MiB each, cut at the ends of top-level `cityObjectMember`s), each
 //! indexed as the prolog, the chunk and the root's end tag. The edits are the whole index's
 //! wherever nothing outside a chunk decides anything in it; what could is checked, and the
-//! writer indexes the whole document instead (the memory of before, ~0.31x the file) where a
+//! writer indexes the whole document instead (its index of the whole source, ~0.31x the file) where a
 //! chunk holds a reference (`xlink:href`, appearance target) whose target is not in the chunk
 //! (a cross-member XLink, an appearance at the root targeting members), looks up (as a
 //! reference's target or a polygon's id) a gml:id that an earlier chunk holds too, holds a

@@ -11,7 +11,7 @@
 //! * with [`RoughOptions::prefer_lod2`], an asset that also carries LoD2 geometry besides
 //!   a higher LoD takes the LoD2 geometry as input (shell surfaces use it unchanged).
 //!
-//! # Whole-building assets (issue 21)
+//! # Whole-building assets
 //!
 //! A body's box covers ground that the building leaves open: the courtyard of a ring
 //! block, the inner corner of an L or U. A POI standing there is then inside the rough

@@ -8,9 +8,9 @@
 //! elsewhere it does nothing.
 
 /// Models of at least this many assets give their free pages back between stages
-/// ([`give_back_for`]); below it the pages freed are few and the trim costs more than it
-/// saves (the paper district, 57,530 assets: 40 ms of a 0.63 s `lod`; the 1 GB city, 463,370
-/// assets: 47 MiB off its peak).
+/// ([`give_back_for`]); below it (a district of tens of thousands of assets) the pages freed
+/// are few and the trim's time is not repaid, above it (a city of hundreds of thousands) it
+/// lowers the peak.
 pub const GIVE_BACK_MIN_ASSETS: usize = 200_000;
 
 static ENABLED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);

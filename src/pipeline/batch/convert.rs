@@ -63,8 +63,8 @@ pub struct StatsRead {
 /// counts as the whole read; `warnings`: keep the warnings, else count them only), else read
 /// whole (`note`: the line that says why a file meant to be streamed was, said before it
 /// is). The bytes read advance [`Stage::Read`] of `progress`. `leak`: the process ends soon, so the model read
-/// whole is not handed back to the allocator piece by piece (a fifth of the run on a 3 MB
-/// tile) but left to the end of the process.
+/// whole is not handed back to the allocator piece by piece (a large share of a small
+/// file's run) but left to the end of the process.
 ///
 /// # Errors
 /// The file could not be read ([`ReadError`]; a stream that fails is retried whole).

@@ -37,7 +37,7 @@ pub struct StatsRun {
 /// The statistics of `inputs` ([`file_stats`] each; [`Stage::Read`] of `progress` counts
 /// them and their bytes; `note` hears why a file meant to be streamed was read whole). One
 /// input: its model and warnings are left to the end of the process, not handed back to the
-/// allocator piece by piece (a fifth of the run on a 3 MB tile); a batch frees each model
+/// allocator piece by piece (a large share of a small file's run); a batch frees each model
 /// after its counts, so memory stays that of the files being read. `started`: the start of
 /// the run, for the closing line.
 pub fn stats_files(

@@ -1,5 +1,5 @@
-//! The `lod` side of a [`super::Study`] on a document read hollow (issue 22, "lod keeps only
-//! what the selection needs"): [`HollowStudy::read`] reads one plain CityGML document hollow
+//! The `lod` side of a [`super::Study`] on a document read hollow (`lod` keeps only what the
+//! selection needs): [`HollowStudy::read`] reads one plain CityGML document hollow
 //! ([`read_hollow`], the POIs' surroundings kept: [`near_pois`]), checks it as
 //! [`super::Scene::check`] checks the whole read (heights) and frames the POIs as
 //! [`super::Scene::frame`] does ([`crate::pipeline::frame`] on the hollow model with the box the read gave:

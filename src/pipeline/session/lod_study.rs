@@ -1,6 +1,6 @@
 //! The study the `lod` command runs on ([`LodStudy`]): the whole read's ([`Study`]) or,
 //! where [`super::lod_read`] chose it and the read does not decline, a hollow read's
-//! ([`HollowStudy`], issue 22): one command for both, each stage the same answer.
+//! ([`HollowStudy`]): one command for both, each stage the same answer.
 
 use super::hollow_study::HollowStudy;
 use super::lod_read::LodRead;

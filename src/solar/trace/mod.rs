@@ -8,20 +8,8 @@
 //! coordinates and shifted the same way, in f64, before rounding.
 //!
 //! Acceleration structure: obvhs' compressed wide BVH8 ([`BvhLayout::Cwbvh`], PLOC +
-//! reinsertion, [`BuildQuality::Fast`] = `BvhBuildParams::fast_build`) is the default.
-//! Measured with a CPU-time probe on the bench city (600K triangles, 10,000 hemisphere
-//! rays from a street, 2-core machine under heavy load from other jobs):
-//!
-//! | layout, quality   | build  | 10K `first_hit` | 10K `occluded` |
-//! |-------------------|--------|-----------------|----------------|
-//! | Cwbvh, VeryFast   | 355 ms | 6.8 ms          | 4.2 ms         |
-//! | Cwbvh, Fast       | 435 ms | 5.7 ms          | 3.6 ms         |
-//! | Cwbvh, Medium     | 556 ms | 5.0 ms          | 3.1 ms         |
-//! | Bvh2, Fastest     | 141 ms | 8.1 ms          | 4.9 ms         |
-//! | Bvh2, Fast        | 343 ms | 6.3 ms          | 3.6 ms         |
-//! | Bvh2, Medium      | 474 ms | 5.2 ms          | 3.2 ms         |
-//!
-//! At equal build effort the CWBVH traces 5-20 % faster, so it is the default; its
+//! reinsertion, [`BuildQuality::Fast`] = `BvhBuildParams::fast_build`) is the default: at
+//! equal build effort it traces faster (8-way nodes tested with SIMD). Its
 //! conversion from the binary tree makes it slower to build, and when building
 //! dominates (many small scenes, few rays) `Bvh2` + [`BuildQuality::Fastest`] is the
 //! better choice: [`SceneBuilder::for_rays`] is the one rule that picks it (`lod`'s

@@ -85,12 +85,11 @@ impl SceneBuilder {
     /// Choose layout and effort for a scene that will trace about `rays` rays (the one
     /// rule, used by `lod`'s selection scene): when they are fewer than half its
     /// triangles, building dominates and [`BvhLayout::Bvh2`] with [`BuildQuality::Fastest`]
-    /// costs least overall; otherwise the default CWBVH with [`BuildQuality::Fast`].
-    /// Measured (BENCHMARKS.md, "BVH: deterministic ties, quicker build"): the quick build
-    /// saves 0.8-0.95 µs per triangle and costs 0.6-1.2 µs more per ray (paper district,
-    /// 166K triangles, 60K rays: build + select ~295 → ~200 ms; 18x18 city, 1.33M
-    /// triangles, 1M rays: a wash, so it keeps the CWBVH). Call it after the last triangle
-    /// is added. Results do not depend on the choice ([`Scene::first_hit`] breaks ties by
+    /// costs least overall; otherwise the default CWBVH with [`BuildQuality::Fast`]. The
+    /// quick build saves about as much per triangle as it costs more per ray, hence the
+    /// threshold: the paper district's selection scene (166K triangles, 60K rays) gains, the
+    /// 1 GB city's (1.33M triangles, 1M rays) would not, so it keeps the CWBVH. Call it after
+    /// the last triangle is added. Results do not depend on the choice ([`Scene::first_hit`] breaks ties by
     /// triangle index), so a shard that traces fewer rays may build another tree and
     /// still agree.
     pub fn for_rays(self, rays: usize) -> Self {

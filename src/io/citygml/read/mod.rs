@@ -88,11 +88,10 @@ pub struct ReadOptions {
     /// ~40 MB more for 16 MiB chunks of LoD3, within the stream's memory goal).
     pub stream_ahead: usize,
     /// Keep each polygon's `gml:id` ([`crate::model::Polygon::id`]; default true). Without
-    /// them every polygon has none; the ids are still checked and resolved as before
-    /// (duplicates, `xlink:href` targets), only not stored. `lod`'s hollow read, which drops
-    /// most polygons once it has their rough forms, reads without them: 7.5 million
-    /// allocations fewer for the 4 GB bench file, whose read took 9.2–9.3 s instead of
-    /// 10.5–11.9 s (BENCHMARKS.md, "Polygon ids left out of the hollow read").
+    /// them every polygon has none; the ids are still checked and resolved (duplicates,
+    /// `xlink:href` targets), only not stored. `lod`'s hollow read, which drops most polygons
+    /// once it has their rough forms, reads without them: ids longer than fit inline take an
+    /// allocation each, made on a reading thread and freed on another, for ids nothing reads.
     pub polygon_ids: bool,
 }
 

@@ -7,9 +7,8 @@ use super::state::Parser;
 /// The gml:id hashes of the chunks read so far: which ids of the next chunk repeat an earlier
 /// one. About 7 to 7.75 bytes an id (6 for the [`Base`], 0.75 to 1.1 for the filter, at most
 /// 0.5 for the recent runs), and no part of it held twice while it grows: a plain sorted
-/// vector took 8, the sorted runs that replaced it 8 and, while the two longest merged, up to
-/// half as much again (`stats` of the 4 GB bench file: BENCHMARKS.md, "The streamed read
-/// beside the whole one").
+/// vector takes 8, sorted runs alone 8 and, while the two longest merge, up to half as much
+/// again.
 ///
 /// Most ids are in the [`Base`]: sorted, bucketed by their top 16 bits, 6 bytes an id. The
 /// ids of the recent chunks are in sorted `runs` (each with a directory of its top bits, each
@@ -17,12 +16,12 @@ use super::state::Parser;
 /// long), at most a sixteenth of the base's ids (or one chunk's); past that they are merged
 /// into one run and that into the base, in place. An id is so copied about 16 times on
 /// average by the base's merges (block copies: each added id's place found by a walk down its
-/// bucket) and a few times among the runs (a single sorted vector merged per chunk made a
-/// 4 GB document's writer quadratic).
+/// bucket) and a few times among the runs (a single sorted vector merged per chunk would be
+/// quadratic in the chunks).
 ///
 /// Before the base and the runs, a filter of a bit per slot of the hashes' scaled values
-/// turns most ids away: an id whose bit is clear was never met. (The 1 GB bench file's stream
-/// spent 5.6 % of its CPU here with a galloping walk of every id through every run.)
+/// turns most ids away: an id whose bit is clear was never met, so most ids never walk the
+/// runs (walking every id through every run steps through most of their cache lines).
 #[derive(Default)]
 pub(crate) struct SeenIds {
     base: Base,

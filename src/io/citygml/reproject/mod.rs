@@ -33,8 +33,7 @@
 //! Memory: [`rewrite_edits`] holds the replacement texts until the end (envelopes come before
 //! what they bound), about the size of the document's coordinate text; from [`STREAM_BYTES`]
 //! on, [`rewrite_file`] rewrites in passes instead and holds the envelopes and the boxes of
-//! the ids that references name ([`RewriteSource`]: a 400 MB LoD3 document in 41 MiB of heap,
-//! 888 MiB whole).
+//! the ids that references name ([`RewriteSource`]), not the coordinate text.
 //!
 //! # Example
 //! ```

@@ -141,7 +141,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         write_report(path, &report).context("writing the report")?;
     }
     // The process ends here: handing a city's model back to the allocator piece by piece
-    // would cost ~6 % of the run for nothing (the temporary input spool is still removed).
+    // would cost time for nothing (the temporary input spool is still removed).
     std::mem::forget((report, lv, study));
     Ok(Outcome::failed_if(unread || w.failed))
 }
