@@ -53,8 +53,9 @@ fn bench(c: &mut Criterion) {
     let model = read_file(&src).unwrap_or_else(|e| panic!("read: {e}"));
     let all: Vec<Poi> = pois(&opts).into_iter().map(Poi::from).collect();
     let lopts = LodOptions::default();
-    let one = lod(&model, &all[..1], &lopts).unwrap_or_else(|e| panic!("lod: {e}"));
-    let six = lod(&model, &all, &lopts).unwrap_or_else(|e| panic!("lod: {e}"));
+    let one =
+        lod(&model, &all[..1], &lopts, &skylod::Silent).unwrap_or_else(|e| panic!("lod: {e}"));
+    let six = lod(&model, &all, &lopts, &skylod::Silent).unwrap_or_else(|e| panic!("lod: {e}"));
     let rough = six.rough;
     let cases = [
         ("1 POI", one.selection.levels),
@@ -81,7 +82,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| black_box(raw_scan(&src)))
     });
     for (name, levels) in &cases {
-        match write_mixed(&model, 0, &rough, levels, &out, &wopts) {
+        match write_mixed((&model, 0), &rough, levels, &out, &wopts) {
             Ok(s) => eprintln!(
                 "mixed/{name}: assets at level 0/1/2 = {:?}, polygons {} -> {}, {} bytes written",
                 s.levels, s.polygons_in, s.polygons_out, s.bytes
@@ -89,7 +90,7 @@ fn bench(c: &mut Criterion) {
             Err(e) => panic!("write: {e}"),
         }
         g.bench_function(format!("mixed/{name}"), |b| {
-            b.iter(|| black_box(write_mixed(&model, 0, &rough, levels, &out, &wopts).is_ok()))
+            b.iter(|| black_box(write_mixed((&model, 0), &rough, levels, &out, &wopts).is_ok()))
         });
     }
     g.finish();

@@ -16,7 +16,7 @@ use skylod::lod::bound::{bound_against_from, full_answers_from, BoundOptions, Fu
 use skylod::lod::bound::{Bounded, HollowSource};
 use skylod::lod::hollow::{near_pois, read_hollow};
 use skylod::lod::rough::{rough_model, RoughOptions};
-use skylod::lod::{lod_hollow, lod_with, LodOptions, LodResult};
+use skylod::lod::{lod, LodOptions, LodResult};
 use skylod::model::runtime::progress::Silent;
 use skylod::model::Poi;
 use std::path::Path;
@@ -100,7 +100,7 @@ fn bound(path: &Path, whole: bool) {
     let (lod, bounded) = if whole {
         let m = read_file(path).unwrap_or_else(|e| panic!("{e}"));
         lap("read", &mut at);
-        let lod = lod_with(&m, &pois, &opts, &Silent).unwrap_or_else(|e| panic!("{e}"));
+        let lod = lod(&m, &pois, &opts, &Silent).unwrap_or_else(|e| panic!("{e}"));
         lap("selection", &mut at);
         let r = run(&m, &lod, &mut at);
         std::mem::forget(m);
@@ -114,7 +114,7 @@ fn bound(path: &Path, whole: bool) {
             std::process::exit(1);
         };
         lap("read", &mut at);
-        let lod = lod_hollow(&h, &pois, &opts, &Silent).unwrap_or_else(|e| panic!("{e}"));
+        let lod = lod(&h, &pois, &opts, &Silent).unwrap_or_else(|e| panic!("{e}"));
         lap("selection", &mut at);
         let Some(rr) = Reread::open(path, &read) else {
             eprintln!("{}: cannot be read back", path.display());

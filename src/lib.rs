@@ -39,7 +39,7 @@
 //! // Outputs: the input file with every asset at its level, written atomically.
 //! let tmp = tempfile::tempdir()?;
 //! let out = tmp.path().join("lod.gml");
-//! let w = write_levels(framed.source, 0, &lv, &out, Format::CityGml, &Default::default())?;
+//! let w = write_levels((framed.source, 0), &lv, &out, Format::CityGml, &Default::default())?;
 //! assert!(w.polygons_out < w.polygons_in);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```

@@ -41,7 +41,7 @@
 //! read) or the first chunk holds no geometry to tell the root envelope by, [`read_hollow`]
 //! gives `None`: the caller reads the document whole, which also reports any error.
 //!
-//! The selection runs on a [`Hollow`] ([`crate::lod::lod_hollow`]): the rough forms are the
+//! The selection runs on a [`Hollow`] ([`crate::lod::lod`]): the rough forms are the
 //! read's, the selection scene needs only metadata, the facts of the full polygons it takes
 //! (each asset's lowest point, its polygons at a level: [`crate::lod::select::FullFacts`])
 //! come from the read, and the full geometry it looks at (the assets whose rough box holds a

@@ -12,7 +12,8 @@
 //! generate(&opts, &mut xml).unwrap();
 //! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
 //! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
-//! let r = lod(&model, &pois, &LodOptions::default()).unwrap();
+//! let silent = &skylod::model::runtime::progress::Silent;
+//! let r = lod(&model, &pois, &LodOptions::default(), silent).unwrap();
 //! let [l0, l1, l2] = r.selection.level_counts();
 //! assert_eq!(l0 + l1 + l2, model.assets.len());
 //! assert!(l1 > 0 && l0 > 0);
@@ -77,70 +78,75 @@ pub struct LodResult {
     pub flags: Vec<Vec<PoiFlag>>,
 }
 
-/// Run rough, scene and selection for `pois` on `model`.
-///
-/// # Errors
-/// As [`crate::lod::select::select`].
-pub fn lod(model: &CityModel, pois: &[Poi], opts: &LodOptions) -> Result<LodResult, SelectError> {
-    lod_with(model, pois, opts, &crate::model::runtime::progress::Silent)
+/// What the LoD stage runs on: a model read whole, or one document read hollow
+/// ([`hollow::read_hollow`], its POI checks' geometry kept with [`hollow::near_pois`]),
+/// whose rough forms the read made and whose full polygons' facts it kept. The two give the
+/// same result; they differ only in where the rough forms and the facts come from
+/// ([`lod`]).
+#[derive(Debug, Clone, Copy)]
+pub enum LodInput<'a> {
+    /// The model with every polygon.
+    Whole(&'a CityModel),
+    /// A document read hollow.
+    Hollow(&'a hollow::Hollow),
 }
 
-/// [`lod`] reporting its stages to `progress` ([`Stage::Rough`], [`Stage::Bvh`],
-/// [`Stage::Select`] per POI) and stopping with [`SelectError::Cancelled`] when it asks to.
+impl<'a> From<&'a CityModel> for LodInput<'a> {
+    fn from(m: &'a CityModel) -> Self {
+        LodInput::Whole(m)
+    }
+}
+
+impl<'a> From<&'a hollow::Hollow> for LodInput<'a> {
+    fn from(h: &'a hollow::Hollow) -> Self {
+        LodInput::Hollow(h)
+    }
+}
+
+/// Rough model ([`Stage::Rough`]), selection scene ([`Stage::Bvh`]) and selection
+/// ([`Stage::Select`] per POI) for `pois` on `input`, reported to `progress` and stopped with
+/// [`SelectError::Cancelled`] when it asks to. A hollow read's rough forms are the read's
+/// (the rough stage takes no time), a whole model's are made here.
 ///
 /// # Errors
 /// As [`crate::lod::select::select`], and [`SelectError::Cancelled`].
-pub fn lod_with(
-    model: &CityModel,
+pub fn lod<'a>(
+    input: impl Into<LodInput<'a>>,
     pois: &[Poi],
     opts: &LodOptions,
     progress: &dyn Progress,
 ) -> Result<LodResult, SelectError> {
+    let input = input.into();
+    let model = match input {
+        LodInput::Whole(m) => m,
+        LodInput::Hollow(h) => &h.model,
+    };
     let n = model.assets.len() as u64;
     check(progress, Stage::Rough)?;
     let t = Instant::now();
     let rough = stage(progress, Stage::Rough, n, 0, || {
-        let r = rough_model(model, &opts.rough);
+        let r = match input {
+            LodInput::Whole(m) => rough_model(m, &opts.rough),
+            LodInput::Hollow(h) => h.rough.clone(),
+        };
         progress.advance(Stage::Rough, n, 0, None);
         r
     });
-    crate::model::runtime::mem::give_back_for(model.assets.len());
-    let rough_s = t.elapsed().as_secs_f64();
-    let around = Surroundings::new(model);
-    select_and_flag(
-        (model, model, &around),
-        rough,
-        rough_s,
-        pois,
-        opts,
-        progress,
-    )
+    match input {
+        LodInput::Whole(m) => {
+            crate::model::runtime::mem::give_back_for(m.assets.len());
+            let rough_s = t.elapsed().as_secs_f64();
+            let around = Surroundings::new(m);
+            select_and_flag((m, m, &around), rough, rough_s, pois, opts, progress)
+        }
+        LodInput::Hollow(h) => {
+            let around = Surroundings::with_boxes(&h.model, &h.boxes);
+            select_and_flag((&h.model, h, &around), rough, 0.0, pois, opts, progress)
+        }
+    }
 }
 
-/// [`lod_with`] on a document read hollow ([`hollow::read_hollow`], its POI checks' geometry
-/// kept with [`hollow::near_pois`] of `pois`): the rough forms made by the read (with
-/// `opts.rough`), the facts of the full polygons from it; the same result as [`lod_with`] on
-/// the whole read (the rough stage's time: none).
-///
-/// # Errors
-/// As [`lod_with`].
-pub fn lod_hollow(
-    h: &hollow::Hollow,
-    pois: &[Poi],
-    opts: &LodOptions,
-    progress: &dyn Progress,
-) -> Result<LodResult, SelectError> {
-    let n = h.model.assets.len() as u64;
-    check(progress, Stage::Rough)?;
-    stage(progress, Stage::Rough, n, 0, || {
-        progress.advance(Stage::Rough, n, 0, None)
-    });
-    let around = Surroundings::with_boxes(&h.model, &h.boxes);
-    let rough = h.rough.clone();
-    select_and_flag((&h.model, h, &around), rough, 0.0, pois, opts, progress)
-}
-
-/// The rest of [`lod_with`] after the rough stage: selection scene, selection, POI flags.
+/// The rest of [`lod`] after the rough stage: selection scene, selection, POI flags.
 fn select_and_flag(
     (model, facts, around): (&CityModel, &dyn FullFacts, &Surroundings),
     rough: Vec<RoughGeometry>,

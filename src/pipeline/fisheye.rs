@@ -168,7 +168,8 @@ mod tests {
             assert_eq!(pic.cells.len(), partition.len());
             assert_eq!(pic.view, poi_sky_view(&scene, poi, &bundles));
             // The levels `lod` selects for this POI alone, openings shown at their wall's.
-            let alone = crate::lod::lod(&framed.model, std::slice::from_ref(poi), &lod).unwrap();
+            let alone =
+                crate::lod::lod(&*framed.model, std::slice::from_ref(poi), &lod, &Silent).unwrap();
             let want = shown_levels(&framed.model, alone.selection.levels);
             assert_eq!(pic.levels.as_deref(), Some(&want[..]));
         }

@@ -7,7 +7,7 @@ use crate::lod::bound::{bound_against_from, full_answers_from, FullSource, Hollo
 use crate::lod::bound::{BoundOptions, BoundReport, FullAnswers};
 use crate::lod::hollow::Hollow;
 use crate::lod::rough::RoughGeometry;
-use crate::lod::{lod_hollow, lod_with, LodOptions, LodResult};
+use crate::lod::{lod, LodOptions, LodResult};
 use crate::model::runtime::mem::GIVE_BACK_MIN_ASSETS;
 use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::CityModel;
@@ -71,8 +71,36 @@ impl Levels {
     }
 }
 
+/// What [`levels`] runs on: the inputs read whole and framed, or one document read hollow
+/// ([`crate::lod::hollow::read_hollow`]) whose frame is the identity, with the same document
+/// to read its full polygons back from and the POIs in its coordinates.
+#[derive(Debug, Clone, Copy)]
+pub enum LevelsInput<'a> {
+    /// Read whole.
+    Framed(&'a Framed<'a>),
+    /// Read hollow.
+    Hollow {
+        /// The hollow read.
+        hollow: &'a Hollow,
+        /// The document, to read back what the bound needs.
+        reread: &'a Reread,
+        /// The POIs.
+        pois: &'a [crate::model::Poi],
+    },
+}
+
+impl<'a> From<&'a Framed<'a>> for LevelsInput<'a> {
+    fn from(f: &'a Framed<'a>) -> Self {
+        LevelsInput::Framed(f)
+    }
+}
+
 /// Rough model ([`Stage::Rough`]) → selection scene ([`Stage::Bvh`]) → selection
 /// ([`Stage::Select`], per POI, cancellable) → error bound ([`Stage::Trace`]) when asked.
+///
+/// On a hollow read the selection runs on its rough forms and the bound against its full
+/// model read back by span ([`HollowSource`]), after the selection: the same levels, bound
+/// and flags as on the whole read.
 ///
 /// The bound's full-model side ([`crate::lod::bound::full_answers`]: the reference trace, which needs no
 /// levels) runs beside the rough model and the selection, each filling the other's
@@ -81,22 +109,40 @@ impl Levels {
 ///
 /// # Errors
 /// [`Error::Select`], [`Error::Bound`], [`Error::Cancelled`].
-pub fn levels(
-    framed: &Framed<'_>,
+pub fn levels<'a>(
+    input: impl Into<LevelsInput<'a>>,
     opts: &LevelsOptions,
     progress: &dyn Progress,
 ) -> Result<Levels, Error> {
+    let framed = match input.into() {
+        LevelsInput::Framed(f) => f,
+        LevelsInput::Hollow {
+            hollow,
+            reread,
+            pois,
+        } => {
+            let mut lod = lod(hollow, pois, &opts.lod, progress)?;
+            let src = HollowSource::new(hollow, reread);
+            let (bound, bound_s) = bounded(&src, pois, opts, &mut lod, None, progress)?;
+            return Ok(Levels {
+                lod,
+                rough_source: None,
+                bound,
+                bound_s,
+            });
+        }
+    };
     let (model, pois) = (&*framed.model, &framed.local_pois[..]);
     let beside = opts
         .bound
         .as_ref()
         .filter(|_| model.assets.len() < GIVE_BACK_MIN_ASSETS);
     let Some(spec) = beside else {
-        let lod = lod_with(model, pois, &opts.lod, progress)?;
+        let lod = lod(model, pois, &opts.lod, progress)?;
         return levels_of(framed, opts, lod, progress);
     };
     let (lod, full) = rayon::join(
-        || lod_with(model, pois, &opts.lod, progress),
+        || lod(model, pois, &opts.lod, progress),
         || full_of(model, pois, spec),
     );
     let lod = lod?;
@@ -190,32 +236,6 @@ fn bounded(
     Ok((bound_report, t.elapsed().as_secs_f64()))
 }
 
-/// [`levels`] of a document read hollow ([`crate::lod::hollow::read_hollow`]) whose frame is
-/// the identity, at `pois` (in the document's coordinates): the selection on its rough forms
-/// ([`lod_hollow`]), the bound against its full model read back from `reread` (the same
-/// document) by span ([`HollowSource`]), after the selection. The same levels, bound and
-/// flags as [`levels`] of the whole read.
-///
-/// # Errors
-/// As [`levels`].
-pub fn levels_hollow(
-    hollow: &Hollow,
-    reread: &Reread,
-    pois: &[crate::model::Poi],
-    opts: &LevelsOptions,
-    progress: &dyn Progress,
-) -> Result<Levels, Error> {
-    let mut lod = lod_hollow(hollow, pois, &opts.lod, progress)?;
-    let src = HollowSource::new(hollow, reread);
-    let (bound, bound_s) = bounded(&src, pois, opts, &mut lod, None, progress)?;
-    Ok(Levels {
-        lod,
-        rough_source: None,
-        bound,
-        bound_s,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -247,7 +267,7 @@ mod tests {
         };
         let silent = &crate::model::runtime::progress::Silent;
         let beside = levels(&framed, &opts, silent).unwrap();
-        let lod = lod_with(&framed.model, &framed.local_pois, &opts.lod, silent).unwrap();
+        let lod = lod(&*framed.model, &framed.local_pois, &opts.lod, silent).unwrap();
         let after = levels_of(&framed, &opts, lod, silent).unwrap();
         assert_eq!(beside.levels(), after.levels());
         assert_eq!(beside.bound, after.bound);

@@ -39,7 +39,7 @@
 //! let lv = levels(&framed, &LevelsOptions::default(), &Silent).unwrap();
 //! let dir = tempfile::tempdir().unwrap();
 //! let out = dir.path().join("lod.gml");
-//! let written = write_levels(framed.source, 0, &lv, &out, Format::CityGml, &Default::default()).unwrap();
+//! let written = write_levels((framed.source, 0), &lv, &out, Format::CityGml, &Default::default()).unwrap();
 //! assert!(written.polygons_out <= written.polygons_in);
 //! assert!(out.exists());
 //! ```
@@ -70,10 +70,10 @@ pub use fisheye::{sky_pictures, SkyPicture, SkyPictureOptions};
 pub(crate) use frame::frame_in;
 pub use frame::{frame, FrameOptions, Framed};
 pub use irradiance::{irradiance, PoiIrradiance};
-pub use levels::{levels, levels_hollow, levels_of, BoundSpec, Levels, LevelsOptions};
+pub use levels::{levels, levels_of, BoundSpec, Levels, LevelsInput, LevelsOptions};
 pub(crate) use read::check_model_in;
 pub use read::{check_model, read_inputs, read_sources, Inputs};
 pub use write::{
-    buildings_without_kept_assets, write_all, write_levels, write_levels_hollow, write_levels_to,
-    write_merged_levels, Written,
+    buildings_without_kept_assets, write_all, write_levels, write_levels_to, write_merged_levels,
+    Written,
 };

@@ -5,11 +5,9 @@ use crate::export::citygml_via_cityjson::{
     is_cityjson_source, write_citygml_levels, write_citygml_levels_to,
 };
 use crate::export::{Content, Format};
-use crate::io::citygml::read::Reread;
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::WriteError;
-use crate::lod::hollow::Hollow;
-use crate::lod::mixed::{write_mixed, write_mixed_hollow, write_mixed_to};
+use crate::lod::mixed::{write_mixed, write_mixed_to, MixedSource};
 use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
 use crate::model::CityModel;
 use rayon::prelude::*;
@@ -36,28 +34,41 @@ pub struct Written {
     pub export: Option<crate::export::ExportSummary>,
 }
 
-/// Write file `file` of `model` (as read, [`Framed::source`](super::Framed::source)) to `out` in `format` with
-/// every asset at its level; `out`'s missing parent folders are created.
+/// Write `src` to `out` in `format` with every asset at its level; `out`'s missing parent
+/// folders are created. `src` is a file of the model as read, e.g.
+/// `(framed.source, 0)` ([`Framed::source`](super::Framed::source)), or a document read
+/// hollow ([`MixedSource::Hollow`]: CityGML only, the polygons the writer needs read back,
+/// the bytes of the whole read's).
 ///
 /// # Errors
 /// [`WriteError`] (the target is checked first; nothing partial is left behind).
-pub fn write_levels(
-    model: &CityModel,
-    file: usize,
+pub fn write_levels<'a>(
+    src: impl Into<MixedSource<'a>>,
     levels: &Levels,
     out: &Path,
     format: Format,
     wopts: &WriteOptions,
 ) -> Result<Written, WriteError> {
     make_parent(out)?;
+    let (model, file) = match src.into() {
+        MixedSource::Whole(model, file) => (model, file),
+        _ if format != Format::CityGml => {
+            return Err(WriteError::Invalid(format!(
+                "{format:?} is written from the whole read, not a hollow one"
+            )))
+        }
+        hollow => {
+            let s = write_mixed(hollow, levels.rough_source(), levels.levels(), out, wopts)?;
+            return Ok(mixed_written(s));
+        }
+    };
     if format == Format::CityGml && is_cityjson_source(model, file) {
         let s = write_citygml_levels(model, file, content(levels), out, wopts)?;
         return Ok(via_cityjson_written(model, file, levels, &s));
     }
     if format == Format::CityGml {
         let s = write_mixed(
-            model,
-            file,
+            (model, file),
             levels.rough_source(),
             levels.levels(),
             out,
@@ -84,25 +95,6 @@ fn make_parent(out: &Path) -> Result<(), WriteError> {
         }
     }
     Ok(())
-}
-
-/// [`write_levels`] in CityGML of the document read hollow as `hollow` (its one file), the
-/// polygons the writer needs read back through `rr` ([`crate::lod::mixed::write_mixed_hollow`],
-/// planned in chunks of about `chunk_bytes`): what the whole read writes.
-///
-/// # Errors
-/// As [`write_levels`].
-pub fn write_levels_hollow(
-    (hollow, rr): (&mut Hollow, &Reread),
-    levels: &Levels,
-    out: &Path,
-    wopts: &WriteOptions,
-    chunk_bytes: u64,
-) -> Result<Written, WriteError> {
-    make_parent(out)?;
-    let lv = (levels.rough_source(), levels.levels());
-    let s = write_mixed_hollow(hollow, rr, lv, out, wopts, chunk_bytes)?;
-    Ok(mixed_written(s))
 }
 
 /// [`write_levels`] into any writer `w` (uncompressed, no target checks: of `wopts` only
@@ -220,7 +212,7 @@ pub fn write_all(
         .par_iter()
         .map(|(f, path)| {
             check(progress, Stage::Write)?;
-            let r = write_levels(model, *f, levels, path, format, wopts);
+            let r = write_levels((model, *f), levels, path, format, wopts);
             progress.advance(Stage::Write, 1, 0, Some(&path.display().to_string()));
             Ok(r)
         })
@@ -343,8 +335,7 @@ mod tests {
         // A missing folder is created (it used to fail naming a temporary file in it).
         let deep = dir.path().join("x/y/c.gml");
         write_levels(
-            framed.source,
-            0,
+            (framed.source, 0),
             &lv,
             &deep,
             Format::CityGml,

@@ -13,6 +13,7 @@ use skylod::output::report::{Parameters, Report, Timings};
 use skylod::pipeline::evaluation::{evaluate, EvalOptions};
 use skylod::poi::Poi;
 use skylod::solar::{poi_sky_view, SkyBundles};
+use skylod::Silent;
 
 /// Files with installations (several below the roof edge, some with 3-polygon geometry that
 /// the writer keeps verbatim at level 1), xlinked installation geometry, and CityGML 3.0.
@@ -54,7 +55,7 @@ fn report_evaluate_writer_and_written_file_agree() {
             normal: None,
         };
         let lopts = LodOptions::default();
-        let r = lod(&model, std::slice::from_ref(&poi), &lopts).unwrap();
+        let r = lod(&model, std::slice::from_ref(&poi), &lopts, &Silent).unwrap();
         let levels = &r.selection.levels;
         let report = Report::new(
             &model,
@@ -65,8 +66,14 @@ fn report_evaluate_writer_and_written_file_agree() {
             Timings::default(),
         );
         let out = dir.path().join(format!("out{k}.gml"));
-        let summary =
-            write_mixed(&model, 0, &r.rough, levels, &out, &WriteOptions::default()).unwrap();
+        let summary = write_mixed(
+            (&model, 0),
+            &r.rough,
+            levels,
+            &out,
+            &WriteOptions::default(),
+        )
+        .unwrap();
         let back = read_file(&out).unwrap_or_else(|e| panic!("{rel} written: {e}"));
         let eopts = EvalOptions {
             lod: lopts,

@@ -116,7 +116,7 @@ fn lod_on_a_hollow_read_of_shared_files_is_the_whole_reads() {
             overwrite: true,
             ..Default::default()
         };
-        let w = write_levels(study.source(), 0, &want, &a, Format::CityGml, &wopts).unwrap();
+        let w = write_levels((study.source(), 0), &want, &a, Format::CityGml, &wopts).unwrap();
         let g = h.write_levels(&got, &b, &wopts).unwrap();
         assert!(
             std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(),
@@ -216,9 +216,9 @@ fn lod_on_a_hollow_read_writes_the_whole_reads_bytes() {
         "{said}"
     );
     // where the whole read fits in the memory lod may take, it is read whole: by default
-    // half of what is available (this file is far under it), or as --max-memory says
+    // 1 GiB or half of what is available (this file is far under it), or as --max-memory says
     let (_, _, said) = run_lod(&input, "fits", "gml", &["--stream-chunk", "1"]);
-    let fits = "MiB lod may take, half of the memory available; --max-memory sets it)";
+    let fits = "MiB lod may take by default (1 GiB, or half the memory available where that is less); --max-memory sets it)";
     assert!(
         said.contains("lod reads whole (") && said.contains(fits),
         "{said}"

@@ -30,7 +30,7 @@ fn levels(scene: &str, p: Poi, rays: usize) -> (CityModel, Vec<u8>) {
         },
         ..Default::default()
     };
-    let r = lod(&model, &[p], &opts).unwrap_or_else(|e| panic!("{e}"));
+    let r = lod(&model, &[p], &opts, &skylod::Silent).unwrap_or_else(|e| panic!("{e}"));
     (model, r.selection.levels)
 }
 
@@ -138,7 +138,7 @@ fn levels_are_invariant_under_a_large_translation() {
     }
     let mut p = poi(0.0, 0.0, 11.0);
     p.position -= shift;
-    let shifted = lod(&model, &[p], &LodOptions::default()).unwrap();
+    let shifted = lod(&model, &[p], &LodOptions::default(), &skylod::Silent).unwrap();
     let (_, original) = levels("roof-tanks.gml", poi(0.0, 0.0, 11.0), 10_000);
     assert_eq!(shifted.selection.levels, original);
 }

@@ -195,7 +195,7 @@ fn mixed(
     out: &Path,
 ) -> Result<MixedSummary, skylod::citygml::WriteError> {
     let rough = rough_model(model, &RoughOptions::default());
-    write_mixed(model, 0, &rough, levels, out, &WriteOptions::default())
+    write_mixed((model, 0), &rough, levels, out, &WriteOptions::default())
 }
 
 fn unique_ids(model: &CityModel) -> HashMap<&str, usize> {

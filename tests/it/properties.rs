@@ -360,7 +360,10 @@ fn levels_at(buildings: &[BoxBuilding], origin: [f64; 3], poi: [f64; 3]) -> Vec<
         },
         ..Default::default()
     };
-    lod(&model, &[p], &opts).unwrap().selection.levels
+    lod(&model, &[p], &opts, &skylod::Silent)
+        .unwrap()
+        .selection
+        .levels
 }
 
 proptest! {

@@ -125,7 +125,7 @@ fn soak_lod_on_a_generated_city() {
 
     let out = dir.path().join("city-lod.gml");
     let t = Instant::now();
-    let s = write_mixed(&model, 0, &rough, &levels, &out, &WriteOptions::default()).unwrap();
+    let s = write_mixed((&model, 0), &rough, &levels, &out, &WriteOptions::default()).unwrap();
     eprintln!(
         "write: {:.1} s, levels {:?}, polygons {} -> {}, RSS {:.0} MiB",
         t.elapsed().as_secs_f64(),

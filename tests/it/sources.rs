@@ -125,7 +125,7 @@ fn models_read_from_memory_are_written_as_from_their_file() {
             .collect();
         let out = dir.path().join("mixed.gml");
         let opts = WriteOptions::default();
-        write_mixed(&from_memory, 0, &rough, &levels, &out, &opts).unwrap();
+        write_mixed((&from_memory, 0), &rough, &levels, &out, &opts).unwrap();
         assert!(std::fs::read(&out).unwrap() == a[1].1, "{}", short(p));
         gz += usize::from(from_file.files[0].gzip);
         kinds.insert(from_file.files[0].version);

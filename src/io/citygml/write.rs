@@ -52,13 +52,6 @@ pub struct WriteOptions {
     pub protect: Vec<PathBuf>,
     /// Keep the source's envelopes instead of recomputing them.
     pub keep_envelopes: bool,
-    /// The mixed-LoD writer ([`crate::lod::mixed`]) plans a plain source one chunk of
-    /// top-level members at a time where that gives the same bytes, so that its index of the
-    /// source follows the chunk instead of the file. Off by default: with the whole model in
-    /// memory it does not lower `lod`'s peak (the read sets it) and its writer stage costs
-    /// more CPU; it is meant for a model that does not hold every polygon (the hollow read
-    /// of `lod`).
-    pub plan_by_chunk: bool,
 }
 
 /// What was written.

@@ -261,14 +261,14 @@ fn poi_checks_on_a_hollow_model_are_the_whole_models() {
 fn the_bound_on_a_hollow_read_is_the_whole_reads() {
     use crate::lod::bound::HollowSource;
     use crate::lod::bound::{bound, bound_against_from, full_answers_from, BoundOptions};
-    use crate::lod::{lod_hollow, lod_with, LodOptions};
+    use crate::lod::{lod, LodOptions};
     use crate::model::runtime::progress::Silent;
     let dir = tempfile::tempdir().unwrap();
     let (path, whole, pois, h) = six_read(dir.path(), 1 << 16, false);
     let (opts, read) = (LodOptions::default(), ReadOptions::default());
     let rr = Reread::open(&path, &read).unwrap();
-    let w = lod_with(&whole, &pois, &opts, &Silent).unwrap();
-    let l = lod_hollow(&h, &pois, &opts, &Silent).unwrap();
+    let w = lod(&whole, &pois, &opts, &Silent).unwrap();
+    let l = lod(&h, &pois, &opts, &Silent).unwrap();
     let site = crate::solar::Site::new(48.76, 11.42);
     let sun = crate::solar::SunTable::year(2025, 120, &site).unwrap();
     let mut whole_ref = Vec::new();
@@ -304,7 +304,7 @@ fn the_bound_on_a_hollow_read_is_the_whole_reads() {
 fn the_bound_traces_twins_once_and_is_the_whole_reads() {
     use crate::lod::bound::{bound, bound_against_from, full_answers_from, BoundOptions};
     use crate::lod::bound::{FullSource, HollowSource};
-    use crate::lod::{lod_hollow, lod_with, LodOptions};
+    use crate::lod::{lod, LodOptions};
     use crate::model::runtime::progress::Silent;
     let dir = tempfile::tempdir().unwrap();
     let (path, whole, pois, h) = six_read(dir.path(), 1 << 16, true);
@@ -331,8 +331,8 @@ fn the_bound_traces_twins_once_and_is_the_whole_reads() {
     }
     assert!(twins * 2 >= n - 10, "{twins} twins of {n} assets");
     let rr = Reread::open(&path, &ReadOptions::default()).unwrap();
-    let w = lod_with(&whole, &pois, &opts, &Silent).unwrap();
-    let l = lod_hollow(&h, &pois, &opts, &Silent).unwrap();
+    let w = lod(&whole, &pois, &opts, &Silent).unwrap();
+    let l = lod(&h, &pois, &opts, &Silent).unwrap();
     let b = BoundOptions {
         max_svf_error: Some(0.0005),
         max_sun_error: Some(0.0005),
@@ -366,19 +366,19 @@ fn the_bound_traces_twins_once_and_is_the_whole_reads() {
     assert!(read_back[0] < read_back[1], "{read_back:?}");
 }
 
-/// The selection of `lod` on a hollow read ([`crate::lod::lod_hollow`]) is the whole
+/// The selection of `lod` on a hollow read ([`crate::lod::lod`]) is the whole
 /// read's: levels, hits, each POI's figures and flags, the selection scene.
 #[test]
 fn the_selection_on_a_hollow_read_is_the_whole_reads() {
-    use crate::lod::{lod_hollow, lod_with, LodOptions};
+    use crate::lod::{lod, LodOptions};
     use crate::model::runtime::progress::Silent;
     // six blocks of the small preset, the first block's POIs
     let dir = tempfile::tempdir().unwrap();
     let (_, whole, pois, h) = six_read(dir.path(), 1, false);
     let opts = LodOptions::default();
     assert!(h.kept.iter().any(|&k| !k));
-    let want = lod_with(&whole, &pois, &opts, &Silent).unwrap();
-    let mut got = lod_hollow(&h, &pois, &opts, &Silent).unwrap();
+    let want = lod(&whole, &pois, &opts, &Silent).unwrap();
+    let mut got = lod(&h, &pois, &opts, &Silent).unwrap();
     // each POI's time aside
     for (g, w) in got.selection.pois.iter_mut().zip(&want.selection.pois) {
         g.seconds = w.seconds;

@@ -28,7 +28,7 @@
 //! the whole index reports it).
 
 use super::encode::IdPool;
-use super::hollow::{PlanModel, Whole};
+use super::hollow::PlanModel;
 use super::id_table::IdTable;
 use super::plan::{self, Plan, Scope, Shared};
 use super::{index, MixedSummary};
@@ -42,14 +42,21 @@ use foldhash::HashSet;
 /// The edits that write `file` at `levels` (as `super::plan_file`), planned chunk by chunk
 /// (chunks of about `chunk_bytes`); `None` where the document is not a plain file of two
 /// chunks or more, or where a chunk's plan could differ from the whole index's (module
-/// docs): plan it whole then.
+/// docs): plan it whole then. The plan of a model read whole (for tests: the writer plans a
+/// model read whole on the whole index, in one chunk).
+#[cfg(test)]
 pub(super) fn plan_chunked(
     model: &CityModel,
     parts: (usize, &[RoughGeometry], &[u8]),
     keep_envelopes: bool,
     chunk_bytes: u64,
 ) -> Option<(Vec<Edit>, MixedSummary)> {
-    plan_chunked_with(&mut Whole(model), parts, keep_envelopes, chunk_bytes)
+    plan_chunked_with(
+        &mut super::hollow::Whole(model),
+        parts,
+        keep_envelopes,
+        chunk_bytes,
+    )
 }
 
 /// [`plan_chunked`] on `m`: each chunk's assets and buildings given their polygons
@@ -475,7 +482,7 @@ mod tests {
             levels.extend(fixed.map(|(_, l)| ("given", l.clone())));
             for (what, levels) in levels {
                 let plan =
-                    |ahead| plan_in_chunks(&mut Whole(model), (0, rough, &levels), false, 1, ahead);
+                    |ahead| plan_in_chunks(&mut super::super::hollow::Whole(model), (0, rough, &levels), false, 1, ahead);
                 let (on, off) = (plan(true), plan(false));
                 let at = format!("{}: {what}", f.display());
                 assert_eq!(on.is_some(), off.is_some(), "{at}: declined once");

@@ -1,13 +1,11 @@
-//! The mixed writer on a document read hollow ([`write_mixed_hollow`]): the plan
+//! The mixed writer on a document read hollow ([`super::MixedSource::Hollow`]): the plan
 //! of each chunk is made on the hollow model with the polygons its rules look at read back
 //! for the chunk ([`PlanModel::fill`]) and dropped again after it: the assets kept (level 1
 //! or 2: properties copied, rebuilt or compared with the rough form, the boxes of the
 //! envelopes) and the buildings' own geometry (the envelopes, a building's kept geometry).
 //! A level-0 asset's geometry goes whole, so its polygons are not needed; the polygon counts
 //! of the summary are the hollow read's ([`FullFacts::polygons`]). The bytes written are
-//! those of [`super::write_mixed`] on the whole read with
-//! [`WriteOptions::plan_by_chunk`](crate::io::citygml::write::WriteOptions::plan_by_chunk).
-//! Where the chunked plan declines, every such polygon of the file is read back and the whole
+//! those of [`super::write_mixed`] on the whole read. Where the chunked plan declines, every such polygon of the file is read back and the whole
 //! index planned (the memory of the whole read).
 
 use super::chunked::plan_chunked_with;
@@ -35,9 +33,12 @@ pub(super) trait PlanModel {
     fn empty(&mut self);
 }
 
-/// The whole read: nothing to fill.
+/// The whole read: nothing to fill (for tests: the writer plans a model read whole in one
+/// chunk).
+#[cfg(test)]
 pub(super) struct Whole<'a>(pub(super) &'a CityModel);
 
+#[cfg(test)]
 impl PlanModel for Whole<'_> {
     fn model(&self) -> &CityModel {
         self.0
@@ -119,10 +120,7 @@ impl PlanModel for Filled<'_> {
 /// the polygons the plan needs read back through `rr` (the document's [`Reread`]), planned in
 /// chunks of about `chunk_bytes` (see the module docs): the bytes and the summary of the
 /// whole read's. `hollow` is left as it was given.
-///
-/// # Errors
-/// As [`super::write_mixed`]; [`WriteError::Invalid`] where the polygons cannot be read back.
-pub fn write_mixed_hollow(
+pub(super) fn write_hollow(
     hollow: &mut Hollow,
     rr: &Reread,
     (rough, levels): (&[RoughGeometry], &[u8]),

@@ -103,9 +103,9 @@
 //! few hundred of 57,000 assets are kept costs little more than copying its bytes. Memory is
 //! about 40 bytes per indexed element plus the ids.
 //!
-//! **Memory follows the chunk** (with [`WriteOptions::plan_by_chunk`], off by default: with
-//! the whole model in memory it lowers no peak; [`write_mixed_hollow`] plans so on a hollow
-//! read). A plain (uncompressed) source file is
+//! **Memory follows the chunk** on a hollow read ([`MixedSource::Hollow`]; a model read
+//! whole is planned as one chunk, on the index of the whole document: with every polygon in
+//! memory, a chunked plan would lower no peak). A plain (uncompressed) source file is
 //! indexed, planned and its index dropped one chunk of whole top-level members at a time: the chunks of the
 //! streamed read (about 16 MiB each, cut at the ends of top-level `cityObjectMember`s), each
 //! indexed as the prolog, the chunk and the root's end tag. The edits are the whole index's
@@ -145,7 +145,7 @@
 //! let rough = rough_model(&model, &RoughOptions::default());
 //! let out = dir.path().join("out.gml");
 //! // roof rough (level 1), wall dropped (level 0)
-//! let s = write_mixed(&model, 0, &rough, &[1, 0], &out, &WriteOptions::default()).unwrap();
+//! let s = write_mixed((&model, 0), &rough, &[1, 0], &out, &WriteOptions::default()).unwrap();
 //! assert_eq!(s.levels, [1, 1, 0]);
 //! assert_eq!((s.polygons_in, s.polygons_out), (3, 1)); // two roof halves merged, wall dropped
 //! let text = std::fs::read_to_string(&out).unwrap();
@@ -168,12 +168,13 @@ mod push_back;
 
 use crate::io::citygml::error::WriteError;
 use crate::io::citygml::read::ReadOptions;
+use crate::io::citygml::read::Reread;
 use crate::io::citygml::write::{
     check_target, write_document, write_document_to, Edit, WriteOptions,
 };
+use crate::lod::hollow::Hollow;
 use crate::lod::rough::RoughGeometry;
 use crate::model::CityModel;
-pub use hollow::write_mixed_hollow;
 use plan::{Plan, Scope, Shared};
 use std::path::Path;
 
@@ -240,18 +241,46 @@ impl MixedSummary {
     }
 }
 
-/// Write file `file` of `model` to `out` with every asset at its level (see the module docs).
+/// What [`write_mixed`] writes: a file of a model read whole, planned on the index of the
+/// whole document, or the one file of a document read hollow, planned a chunk of whole
+/// top-level members at a time with the polygons each chunk's plan needs read back (the
+/// memory follows the chunk). The bytes are the same either way.
+#[derive(Debug)]
+pub enum MixedSource<'a> {
+    /// File `.1` of the model `.0`.
+    Whole(&'a CityModel, usize),
+    /// A document read hollow ([`crate::lod::hollow::read_hollow`], left as it was given),
+    /// the document to read polygons back from ([`Reread`]), and the bytes of a chunk.
+    Hollow(&'a mut Hollow, &'a Reread, u64),
+}
+
+impl<'a> From<(&'a CityModel, usize)> for MixedSource<'a> {
+    fn from((model, file): (&'a CityModel, usize)) -> Self {
+        MixedSource::Whole(model, file)
+    }
+}
+
+/// Write `src` to `out` with every asset at its level (see the module docs).
 ///
-/// `rough[i]` and `levels[i]` belong to `model.assets[i]`; only the assets of `file` are
-/// looked at. Levels above 2 count as 2.
-pub fn write_mixed(
-    model: &CityModel,
-    file: usize,
+/// `rough[i]` and `levels[i]` belong to the model's `assets[i]`; only the assets of the file
+/// written are looked at. Levels above 2 count as 2.
+///
+/// # Errors
+/// The target's checks, I/O; [`WriteError::Invalid`] where the levels or rough forms do not
+/// match the assets, or a hollow read's polygons cannot be read back.
+pub fn write_mixed<'a>(
+    src: impl Into<MixedSource<'a>>,
     rough: &[RoughGeometry],
     levels: &[u8],
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<MixedSummary, WriteError> {
+    let (model, file) = match src.into() {
+        MixedSource::Whole(model, file) => (model, file),
+        MixedSource::Hollow(h, rr, chunk) => {
+            return hollow::write_hollow(h, rr, (rough, levels), out, opts, chunk)
+        }
+    };
     let (edits, mut summary) = mixed_edits(model, file, rough, levels, opts, |src| {
         check_target(out, opts, src.source.path())
     })?;
@@ -313,32 +342,7 @@ fn mixed_edits(
     check_per_asset(model, rough, levels)?;
     let src = crate::io::citygml::write::source_file(model, file)?;
     check(src)?;
-    if opts.plan_by_chunk {
-        plan_edits(model, file, rough, levels, opts.keep_envelopes, CHUNK_BYTES)
-    } else {
-        plan_file(model, file, rough, levels, opts.keep_envelopes, true)
-    }
-}
-
-/// Bytes of whole top-level members the writer indexes and plans at a time
-/// ([`chunked::plan_chunked`]): the streamed read's chunks.
-const CHUNK_BYTES: u64 = crate::io::citygml::read::CHUNK_BYTES;
-
-/// The edits that write `file` at `levels`: planned a chunk of about `chunk_bytes` at a time
-/// where that gives the same edits ([`chunked::plan_chunked`]), else on the index of the whole
-/// document ([`plan_file`]).
-fn plan_edits(
-    model: &CityModel,
-    file: usize,
-    rough: &[RoughGeometry],
-    levels: &[u8],
-    keep_envelopes: bool,
-    chunk_bytes: u64,
-) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
-    match chunked::plan_chunked(model, (file, rough, levels), keep_envelopes, chunk_bytes) {
-        Some(planned) => Ok(planned),
-        None => plan_file(model, file, rough, levels, keep_envelopes, true),
-    }
+    plan_file(model, file, rough, levels, opts.keep_envelopes, true)
 }
 
 /// The edits that write `file` at `levels`, and what they do. `skip`: do not parse the
@@ -461,7 +465,7 @@ mod tests {
         let model = read_in(dir.path(), xml);
         let rough = rough_model(&model, &RoughOptions::default());
         let out = dir.path().join("out.gml");
-        let s = write_mixed(&model, 0, &rough, levels, &out, &WriteOptions::default()).unwrap();
+        let s = write_mixed((&model, 0), &rough, levels, &out, &WriteOptions::default()).unwrap();
         let text = std::fs::read_to_string(&out).unwrap();
         read_file(&out).unwrap();
         (text, s)
@@ -638,8 +642,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let model = read_in(dir.path(), &house());
         let e = write_mixed(
-            &model,
-            0,
+            (&model, 0),
             &[],
             &[],
             &dir.path().join("o.gml"),

@@ -81,7 +81,7 @@ pub fn rough_file(
             polygons,
         });
     }
-    let s = write_mixed(&model, 0, &rough, &levels, out, o.write)?;
+    let s = write_mixed((&model, 0), &rough, &levels, out, o.write)?;
     let line = Some(s.rough_line(input, out));
     let polygons = (s.polygons_in, s.polygons_out);
     Ok(Done {

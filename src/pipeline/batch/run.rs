@@ -122,7 +122,6 @@ impl Batch {
             overwrite,
             protect: paths.clone(),
             keep_envelopes,
-            ..Default::default()
         };
         let targets = match edits {
             true => plan.edit_targets(&paths, &wopts, shard, true)?,

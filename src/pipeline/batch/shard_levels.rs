@@ -653,7 +653,7 @@ mod tests {
     }
 
     fn write(dir: &Path, shard: Shard, m: &CityModel, pois: &[Poi], o: &LodOptions) -> PathBuf {
-        let r = lod(m, pois, o).unwrap();
+        let r = lod(m, pois, o, &crate::Silent).unwrap();
         let path = dir.join(format!("levels-{}.jsonl", shard.index()));
         let w = write_shard(&path, shard, m, pois, o, &r).unwrap();
         let said = (w.pois, w.levels, w.select_ms);
@@ -713,7 +713,7 @@ mod tests {
             },
             ..Default::default()
         };
-        let serial = lod(&m, &pois, &o).unwrap();
+        let serial = lod(&m, &pois, &o, &crate::Silent).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let pts: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
         for n in 1..=3 {

@@ -20,11 +20,13 @@ use super::lod_write::LodLayout;
 use super::report::{finished, timings_of, RunMs};
 use super::{Result, SceneOptions};
 use crate::export::report::report::{Guarantee, Report};
+use crate::export::Format;
 use crate::io::citygml::read::{Passes, Reread};
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::ReadOptions;
 use crate::io::citygml::WriteError;
 use crate::lod::hollow::{near_pois, read_hollow, Hollow};
+use crate::lod::mixed::MixedSource;
 use crate::lod::poi::check_poi_list;
 use crate::lod::rough::RoughOptions;
 use crate::lod::select::SelectOptions;
@@ -33,7 +35,7 @@ use crate::model::crs::{Crs, FrameWarning};
 use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::{Bbox, Poi};
 use crate::pipeline::{
-    check_model_in, frame_in, levels_hollow, write_levels_hollow, BoundSpec, Levels, LevelsOptions,
+    check_model_in, frame_in, levels, write_levels, BoundSpec, Levels, LevelsInput, LevelsOptions,
     Written,
 };
 use glam::DVec3;
@@ -146,7 +148,12 @@ impl HollowStudy {
             bound: bound.cloned(),
         };
         let (h, rr) = (&self.hollow, &self.reread);
-        levels_hollow(h, rr, &self.pois, &opts, progress)
+        let input = LevelsInput::Hollow {
+            hollow: h,
+            reread: rr,
+            pois: &self.pois,
+        };
+        levels(input, &opts, progress)
     }
 
     /// The `lod` report of `lv` (from [`HollowStudy::levels`] with `select`) as
@@ -182,8 +189,8 @@ impl HollowStudy {
         out: &Path,
         wopts: &WriteOptions,
     ) -> std::result::Result<Written, WriteError> {
-        let (h, rr) = (&mut self.hollow, &self.reread);
-        write_levels_hollow((h, rr), lv, out, wopts, self.chunk)
+        let src = MixedSource::Hollow(&mut self.hollow, &self.reread, self.chunk);
+        write_levels(src, lv, out, Format::CityGml, wopts)
     }
 
     /// What [`LodLayout::write_hollow`] writes with: the document read hollow, its reread and

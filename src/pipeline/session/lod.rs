@@ -5,7 +5,7 @@
 use super::{Result, Study};
 use crate::export::report::report::{Parameters, Report, Timings};
 use crate::lod::select::FullFacts;
-use crate::lod::{lod_with, LodOptions, LodResult};
+use crate::lod::{lod, LodOptions, LodResult};
 use crate::model::runtime::progress::Progress;
 use crate::model::{CityModel, Poi};
 use crate::pipeline::batch::shard_levels::Combined;
@@ -13,13 +13,13 @@ use crate::pipeline::{levels_of, Levels, LevelsOptions};
 
 impl Study {
     /// The selection of every asset at the POIs, without an error bound and in the local
-    /// frame ([`crate::lod::lod_with`]): what a shard of an array job records.
+    /// frame ([`crate::lod::lod`]): what a shard of an array job records.
     ///
     /// # Errors
     /// [`super::Error::Select`], [`super::Error::Cancelled`].
     pub fn lod(&self, opts: &LodOptions, progress: &dyn Progress) -> Result<LodResult> {
         let framed = self.framed();
-        Ok(lod_with(&framed.model, &framed.local_pois, opts, progress)?)
+        Ok(lod(&*framed.model, &framed.local_pois, opts, progress)?)
     }
 
     /// [`Study::levels`] for the selections of every shard combined

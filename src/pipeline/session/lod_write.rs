@@ -10,13 +10,13 @@ use crate::io::citygml::read::Reread;
 use crate::io::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
 use crate::lod::hollow::Hollow;
+use crate::lod::mixed::MixedSource;
 use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::CityModel;
 use crate::pipeline::batch::outputs::Plan;
 use crate::pipeline::batch::run::{merge_parts, Batch, Said};
 use crate::pipeline::{
-    buildings_without_kept_assets, write_all, write_levels_hollow, write_merged_levels, Levels,
-    Written,
+    buildings_without_kept_assets, write_all, write_levels, write_merged_levels, Levels, Written,
 };
 use std::path::{Path, PathBuf};
 
@@ -160,12 +160,8 @@ impl LodLayout {
         progress.start(Stage::Write, targets.len() as u64, 0);
         let mut results = Vec::new();
         for (_, out) in &targets {
-            results.push(match format {
-                Format::CityGml => write_levels_hollow((hollow, rr), lv, out, wopts, chunk_bytes),
-                f => Err(WriteError::Invalid(format!(
-                    "{f:?} is written from the whole read, not a hollow one"
-                ))),
-            });
+            let src = MixedSource::Hollow(hollow, rr, chunk_bytes);
+            results.push(write_levels(src, lv, out, format, wopts));
             progress.advance(Stage::Write, 1, 0, Some(&out.display().to_string()));
         }
         progress.finish(Stage::Write);

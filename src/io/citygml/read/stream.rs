@@ -351,7 +351,7 @@ pub(super) fn stream_document<E>(
     let mut from = 0usize; // body offset of the chunk (0: from the prolog on)
     let step = usize::try_from(chunk_bytes.max(1)).unwrap_or(usize::MAX);
     let src = ChunkSource {
-        doc: &doc,
+        doc,
         bom,
         prolog,
         path,
@@ -374,7 +374,7 @@ pub(super) fn stream_document<E>(
             let before = (!first).then(|| std::sync::Arc::new(state.clone()));
             let ready = (!first).then(|| ahead.take((from, to), &state)).flatten();
             let p = ready
-                .or_else(|| parse_chunk(&doc, bom, prolog, from, to, first, &state, path, opts));
+                .or_else(|| parse_chunk(doc, bom, prolog, from, to, first, &state, path, opts));
             let Some(p) = p else {
                 return decline("a chunk that does not read alone");
             };
