@@ -1,5 +1,5 @@
 //! Selection benchmark on the `paper` preset district (~300K polygons, generated in
-//! memory by `skylod::synth`): the whole `lod` pipeline after loading, stage by stage.
+//! memory by `skylod::model::synth`): the whole `lod` pipeline after loading, stage by stage.
 //!
 //! * `rough_model`: the rough stage over every asset;
 //! * `bvh/rough` vs `bvh/full`: BVH build of the rough model against the full-detail
@@ -9,13 +9,13 @@
 //!   one window POI).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use skylod::citygml::read::read_bytes;
+use skylod::io::citygml::read::read_bytes;
+use skylod::lod::poi::POI_OFFSET;
 use skylod::lod::rough::{rough_model, RoughOptions};
 use skylod::lod::scene::{full_scene, rough_scene, selection_scene};
 use skylod::lod::select::{select, SelectOptions};
-use skylod::poi::POI_OFFSET;
+use skylod::model::synth::{generate, pois, Preset};
 use skylod::solar::sky::{SkyPartition, SkyVariant};
-use skylod::synth::{generate, pois, Preset};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -28,7 +28,7 @@ fn bench(c: &mut Criterion) {
     let model = read_bytes(&xml, "paper.gml").unwrap_or_else(|e| panic!("read: {e}"));
     let all_pois = pois(&opts);
     // A window POI near the middle of the list (a facade inside the district).
-    let poi: skylod::poi::Poi = all_pois[all_pois.len() / 2].clone().into();
+    let poi: skylod::lod::poi::Poi = all_pois[all_pois.len() / 2].clone().into();
     eprintln!(
         "paper preset: {} assets, {} polygons, {} POIs",
         model.assets.len(),

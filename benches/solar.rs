@@ -1,5 +1,5 @@
 //! Benchmarks of the solar analysis: year sun table, sun hours, SVF bundles, and both
-//! per POI against a ~300K-polygon district (`skylod::synth` paper preset, generated
+//! per POI against a ~300K-polygon district (`skylod::model::synth` paper preset, generated
 //! here) with the same rays against an empty scene as the baseline in the same run.
 //!
 //! Product targets: SVF with 100,000 rays <= 50 ms per POI; a year of sun hours at
@@ -7,13 +7,13 @@
 //! iteration; the `district/*` benchmarks cycle through the district's facade POIs).
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
-use skylod::citygml::read::read_bytes;
+use skylod::io::citygml::read::read_bytes;
+use skylod::lod::poi::Poi;
 use skylod::lod::scene::full_scene;
-use skylod::poi::Poi;
+use skylod::model::synth::{generate, Preset};
 use skylod::solar::sky::{SkyPartition, SkyVariant};
+use skylod::solar::trace::SceneBuilder;
 use skylod::solar::{poi_sky_view, poi_sun_hours, sky_view, sun_hours, Site, SkyBundles, SunTable};
-use skylod::synth::{generate, Preset};
-use skylod::trace::SceneBuilder;
 use std::cell::Cell;
 use std::hint::black_box;
 use std::time::Instant;
@@ -80,7 +80,7 @@ fn district(c: &mut Criterion) {
     let model = read_bytes(&gml, "paper.gml").expect("read");
     drop(gml);
     let scene = full_scene(&model);
-    let pois: Vec<Poi> = skylod::synth::pois(&opts)
+    let pois: Vec<Poi> = skylod::model::synth::pois(&opts)
         .into_iter()
         .map(|p| Poi {
             id: p.id,

@@ -5,7 +5,7 @@
 //! (group `synth-bytes`) and polygons/s (group `synth-polygons`).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use skylod::synth::{generate, Preset};
+use skylod::model::synth::{generate, Preset};
 use std::hint::black_box;
 use std::io::Write;
 use std::time::Duration;

@@ -20,8 +20,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use skylod::model::Polygon;
-use skylod::trace::ray::ray_triangle;
-use skylod::trace::{BuildQuality, BvhLayout, Scene, SceneBuilder};
+use skylod::solar::trace::ray::ray_triangle;
+use skylod::solar::trace::{BuildQuality, BvhLayout, Scene, SceneBuilder};
 use std::hint::black_box;
 use std::time::Duration;
 

@@ -3,9 +3,9 @@
 //! `cargo run --release --example lod_pipeline -- MODEL.gml POIS.csv OUT.gml [SECONDS]`
 //! (without arguments: the committed synth fixture, written to a temporary directory).
 use skylod::export::Format;
+use skylod::lod::poi::read_pois_csv;
+use skylod::model::runtime::progress::{Progress, Stage};
 use skylod::pipeline::{frame, levels, read_inputs, write_all, FrameOptions, LevelsOptions};
-use skylod::poi::read_pois_csv;
-use skylod::runtime::progress::{Progress, Stage};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};

@@ -4,7 +4,7 @@
 use std::hash::{Hash, Hasher};
 fn main() {
     for p in std::env::args().skip(1) {
-        let s = match skylod::citygml::read_file(std::path::Path::new(&p)) {
+        let s = match skylod::io::citygml::read_file(std::path::Path::new(&p)) {
             Ok(m) => format!("{m:?}"),
             Err(e) => format!("ERROR {e} / {e:?}"),
         };

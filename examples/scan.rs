@@ -3,9 +3,9 @@
 fn main() {
     for p in std::env::args().skip(1) {
         let t = std::time::Instant::now();
-        match skylod::citygml::read_file(std::path::Path::new(&p)) {
+        match skylod::io::citygml::read_file(std::path::Path::new(&p)) {
             Ok(m) => {
-                let s = skylod::output::stats::Stats::of(&m);
+                let s = skylod::export::report::stats::Stats::of(&m);
                 println!(
                     "{p}: {:?} {:.1}ms",
                     serde_json::to_string(&s).unwrap(),

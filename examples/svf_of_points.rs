@@ -2,9 +2,9 @@
 //! the inputs and scene steps of [`skylod::pipeline`], then [`skylod::pipeline::svf`] (the
 //! path `skylod svf` takes: full-detail scene, POIs traced in parallel). `cargo run --release --example svf_of_points -- MODEL.gml POIS.csv`
 //! (without arguments: the committed synth fixture and its POIs).
+use skylod::lod::poi::read_pois_csv;
+use skylod::model::runtime::progress::Silent;
 use skylod::pipeline::{frame, read_inputs, svf, FrameOptions};
-use skylod::poi::read_pois_csv;
-use skylod::runtime::progress::Silent;
 use skylod::solar::SkyBundles;
 use std::path::PathBuf;
 

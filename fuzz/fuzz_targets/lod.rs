@@ -8,12 +8,12 @@
 use glam::DVec3;
 use libfuzzer_sys::fuzz_target;
 use skylod::lod::mixed::write_mixed;
-use skylod::citygml::read_file;
-use skylod::citygml::write::WriteOptions;
+use skylod::io::citygml::read_file;
+use skylod::io::citygml::write::WriteOptions;
 use skylod::lod::{lod, LodOptions};
-use skylod::poi::Poi;
+use skylod::lod::poi::Poi;
 use skylod::lod::select::SelectOptions;
-use skylod::synth::boxes::{boxes_citygml, BoxBuilding};
+use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
 
 struct Bytes<'a>(&'a [u8], usize);
 

@@ -1,5 +1,5 @@
 //! `skylod._skylod`: the native part of the Python package `skylod` (PyO3, abi3). Each call
-//! reads, frames and traces through the library's owned API (`skylod::session`) on its own
+//! reads, frames and traces through the library's owned API (`skylod::pipeline::session`) on its own
 //! thread with the GIL released ([`relay::run`]) and returns the JSON document the matching
 //! command prints with `--json` (the same output types), which `skylod/__init__.py` turns into
 //! dicts and numpy arrays. Errors are `SkylodError` with the library's message.
@@ -11,9 +11,9 @@ mod write;
 use pyo3::prelude::*;
 use relay::{message, run, SkylodError};
 use setup::{load, ms, Setup};
-use skylod::output::sun_hours::SunSetting;
+use skylod::export::report::sun_hours::SunSetting;
 use skylod::pipeline::session::tracing::{EvaluateRequest, IrradianceRequest};
-use skylod::session::weather::weather_site;
+use skylod::pipeline::session::weather::weather_site;
 use skylod::solar::irradiance::SkyModel;
 use skylod::solar::weather::read_weather;
 use skylod::solar::{HorizonOptions, Site, SkyBundles, SunTable};
@@ -26,7 +26,7 @@ fn json<T: serde::Serialize>(doc: &T) -> Result<String, String> {
 }
 
 /// `(lat, lon)` given, or the centre of the study's model from its CRS.
-fn site(study: &skylod::session::Study, given: Option<(f64, f64)>) -> Result<(f64, f64), String> {
+fn site(study: &skylod::pipeline::session::Study, given: Option<(f64, f64)>) -> Result<(f64, f64), String> {
     if let Some(s) = given {
         return Ok(s);
     }
@@ -131,7 +131,7 @@ fn irradiance(
         let weather_ms = ms(t0);
         let bundles = SkyBundles::new(rays, seed).map_err(|e| message(&e))?;
         let l = load(&setup, p)?;
-        let model = skylod::crs::model_site(l.study.source(), l.study.crs());
+        let model = skylod::model::crs::model_site(l.study.source(), l.study.crs());
         let at = weather_site(site, model, &w).map_err(|e| {
             format!("irradiance: {e}; give site=(lat, lon) to use this weather anyway")
         })?;

@@ -4,11 +4,11 @@
 
 use crate::relay::message;
 use pyo3::prelude::*;
-use skylod::batch::inputs::expand;
-use skylod::crs::Crs;
-use skylod::poi::{check_pois, read_pois_csv, Located, Poi};
-use skylod::runtime::progress::Progress;
-use skylod::session::{Scene, SceneOptions, Study};
+use skylod::pipeline::batch::inputs::expand;
+use skylod::model::crs::Crs;
+use skylod::lod::poi::{check_pois, read_pois_csv, Located, Poi};
+use skylod::model::runtime::progress::Progress;
+use skylod::pipeline::session::{Scene, SceneOptions, Study};
 use std::path::PathBuf;
 use std::time::Instant;
 

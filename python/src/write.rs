@@ -4,10 +4,10 @@
 use crate::relay::{message, run};
 use crate::setup::{crs, failures, load, ms, Setup};
 use pyo3::prelude::*;
-use skylod::batch::inputs::{expand, Input};
-use skylod::batch::outputs::{create_parent, plan, Plan, Targets};
-use skylod::citygml::merge::merge_named;
-use skylod::citygml::write::WriteOptions;
+use skylod::pipeline::batch::inputs::{expand, Input};
+use skylod::pipeline::batch::outputs::{create_parent, plan, Plan, Targets};
+use skylod::io::citygml::merge::merge_named;
+use skylod::io::citygml::write::WriteOptions;
 use skylod::export::citygml_from_cityjson::TargetVersion;
 use skylod::export::Format;
 use skylod::lod::rough::RoughOptions;
@@ -15,15 +15,15 @@ use skylod::lod::select::SelectOptions;
 use skylod::lod::LodOptions;
 use skylod::model::crs::model_site;
 use skylod::model::runtime::progress::Silent;
-use skylod::output::report::Guarantee;
-use skylod::output::stats::{FileStats, Stats, StatsOutput};
+use skylod::export::report::report::Guarantee;
+use skylod::export::report::stats::{FileStats, Stats, StatsOutput};
 use skylod::pipeline::batch::convert::{convert_file, file_stats, ConvertOptions};
 use skylod::pipeline::session::bound_plan::BoundRequest;
 use skylod::pipeline::session::report::RunMs;
 use skylod::pipeline::session::site::SiteError;
 use skylod::pipeline::session::weather::SunSite;
 use skylod::pipeline::{write_all, BoundSpec, LevelsOptions};
-use skylod::runtime::progress::Stage;
+use skylod::model::runtime::progress::Stage;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -93,7 +93,7 @@ impl BoundArgs {
     /// ([`BoundRequest`]), the options named as Python names them.
     fn spec(
         &self,
-        study: &skylod::session::Study,
+        study: &skylod::pipeline::session::Study,
         seed: u64,
     ) -> Result<(Option<BoundSpec>, Guarantee), String> {
         let mut r = BoundRequest::new(self.bound_rays, seed);

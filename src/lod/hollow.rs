@@ -70,7 +70,7 @@
 //! member it parses, the assets a later round may ask for ([`Hollow::read_back_keeping`]):
 //! no member is parsed twice for them.
 //!
-//! The mixed CityGML writer runs on it too ([`crate::lod::mixed::write_mixed_hollow`]: each
+//! The mixed CityGML writer runs on it too ([`crate::lod::mixed::MixedSource::Hollow`]: each
 //! chunk's kept assets and buildings read back for its plan, [`Hollow::read_back_geometries`]),
 //! so `lod` with a CityGML output runs on a [`Hollow`] (`session::lod_study`); OBJ and
 //! CityJSON outputs still take the whole read.

@@ -33,10 +33,6 @@ pub mod rough;
 pub mod scene;
 pub mod select;
 
-/// Moved to [`crate::solar::sky`]: the sky partition serves SVF as much as the selection.
-#[doc(hidden)]
-pub use crate::solar::sky;
-
 use crate::lod::poi::checks::enclosure::ON_SURFACE;
 use crate::lod::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::lod::rough::{rough_model, RoughGeometry, RoughOptions};

@@ -49,9 +49,6 @@ pub mod attributes;
 // Batch work: input files, shards, levels files and their reduce, scene radius.
 pub mod batch;
 mod error;
-// Moved to `lod::evaluation` (the layering: `export::report` reads it); kept for one release.
-#[doc(hidden)]
-pub use crate::lod::evaluation;
 mod fisheye;
 mod frame;
 mod irradiance;

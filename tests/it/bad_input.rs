@@ -7,10 +7,10 @@
 //! big inputs are generated here; inputs over 100 MB only with `--ignored`.
 
 use crate::util::*;
-use skylod::citygml::read::{read_bytes, read_file, read_from, ReadOptions};
-use skylod::citygml::ReadError;
+use skylod::export::report::stats::Stats;
+use skylod::io::citygml::read::{read_bytes, read_file, read_from, ReadOptions};
+use skylod::io::citygml::ReadError;
 use skylod::model::CityModel;
-use skylod::output::stats::Stats;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};

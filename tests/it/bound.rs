@@ -9,10 +9,10 @@
 
 use glam::DVec3;
 use serde_json::Value;
-use skylod::citygml::read_file;
+use skylod::io::citygml::read_file;
+use skylod::lod::poi::Poi;
 use skylod::lod::scene::full_scene;
 use skylod::model::{AssetKind, CityModel};
-use skylod::poi::Poi;
 use skylod::solar::{poi_sky_view, SkyBundles};
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};

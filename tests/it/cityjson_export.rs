@@ -6,10 +6,10 @@
 
 use crate::util::*;
 use serde_json::Value;
-use skylod::citygml::read_file;
+use skylod::export::report::stats::Stats;
 use skylod::export::{write, Content, Format};
+use skylod::io::citygml::read_file;
 use skylod::model::{AssetKind, CityModel};
-use skylod::output::stats::Stats;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 

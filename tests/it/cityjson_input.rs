@@ -13,7 +13,7 @@
 
 use crate::util::*;
 use serde_json::Value;
-use skylod::citygml::read_file;
+use skylod::io::citygml::read_file;
 use skylod::model::CityModel;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -186,11 +186,11 @@ fn own_cityjson_and_seq_read_back_as_the_citygml() {
                 m.files[0]
                     .srs_name
                     .as_deref()
-                    .map(|s| skylod::crs::Crs::parse(s).epsg),
+                    .map(|s| skylod::model::crs::Crs::parse(s).epsg),
                 original.files[0]
                     .srs_name
                     .as_deref()
-                    .map(|s| skylod::crs::Crs::parse(s).epsg),
+                    .map(|s| skylod::model::crs::Crs::parse(s).epsg),
                 "{rel}: CRS"
             );
             // the same geometry within the transform's rounding (1 mm, 1e-8°)
@@ -355,7 +355,7 @@ fn bad_cityjson_fails_with_a_location() {
             e.contains("invalid CityJSON") && e.contains(want),
             "{name}: {e}"
         );
-        assert!(skylod::citygml::read_file(&p).is_err(), "{name}");
+        assert!(skylod::io::citygml::read_file(&p).is_err(), "{name}");
     }
 }
 

@@ -230,7 +230,7 @@ fn cityjson_to_citygml_valid_counted_and_round_tripped() {
         let src = data.join(rel);
         assert!(src.is_file(), "{rel}");
         let key = rel.strip_suffix(".gml").unwrap();
-        let pois = crate::cityjson_input::pois(&skylod::citygml::read_file(&src).unwrap());
+        let pois = crate::cityjson_input::pois(&skylod::io::citygml::read_file(&src).unwrap());
         let a = crate::cityjson_input::svf(&src, &pois);
         let b = crate::cityjson_input::svf(&d(&format!("g1-2.0/{key}.gml")), &pois);
         for (x, y) in a.iter().zip(&b) {
@@ -251,7 +251,7 @@ fn merges_stdin_stdout_and_upgrade_jobs() {
     // two CityJSON inputs merged into one CityGML document
     let e = ok(&[os("convert"), os(&a), os(&b), os("-o"), os(&d("m.gml"))]);
     assert!(e.contains("merged 2 file(s)"), "{e}");
-    let m = skylod::citygml::read_file(&d("m.gml")).unwrap();
+    let m = skylod::io::citygml::read_file(&d("m.gml")).unwrap();
     assert_eq!(m.buildings.len(), 17);
     // - in, - out
     let mut c = Command::new(env!("CARGO_BIN_EXE_skylod"))
@@ -284,7 +284,7 @@ fn merges_stdin_stdout_and_upgrade_jobs() {
     assert!(d("o/cjio-dummy.gml").is_file());
     ok(&[os("convert"), os(&a), os("-o"), os(&d("z.gml.gz"))]);
     assert_eq!(
-        skylod::citygml::read_file(&d("z.gml.gz"))
+        skylod::io::citygml::read_file(&d("z.gml.gz"))
             .unwrap()
             .buildings
             .len(),

@@ -2,8 +2,8 @@
 //! schema-valid input, idempotent (byte-identical round trip), gzip output.
 
 use crate::util::*;
-use skylod::citygml::read_file;
-use skylod::output::stats::Stats;
+use skylod::export::report::stats::Stats;
+use skylod::io::citygml::read_file;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 

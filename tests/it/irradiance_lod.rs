@@ -10,8 +10,8 @@ use crate::irradiance::tmy3;
 use crate::util::*;
 use glam::DVec3;
 use serde_json::Value;
-use skylod::citygml::read_file;
-use skylod::poi::Poi;
+use skylod::io::citygml::read_file;
+use skylod::lod::poi::Poi;
 use std::ffi::OsString;
 use std::path::PathBuf;
 

@@ -7,8 +7,9 @@
 //! - plain data (`model/`) imports no other group, tracing (`solar/trace/`) knows no levels,
 //!   the reader (`io/citygml/read/`) imports neither the writer nor `lod`;
 //! - the library never prints; no source file outside `src/model/synth/` passes 1,000 lines;
-//!   at most six folders or files at the top of `src/` besides `lib.rs` and `bin/`; the binary
-//!   (`src/bin/`) at most 3,000 lines, each command at most 200.
+//!   at most six folders or files at the top of `src/` besides `lib.rs` and `bin/`; each
+//!   command of the binary at most 200 lines (the binary owns the words of the command line,
+//!   however many: no cap on the binary as a whole).
 //!
 //! Imports are read from the text: every `crate::path` (and each part of `crate::{a, b}`)
 //! outside comments and outside the `#[cfg(test)] mod tests` block at the end of a file
@@ -556,7 +557,7 @@ fn each_rule_can_fail() {
     // ... but the evaluation's old path names `lod`: no violation.
     let old = fake(&[(
         "export/report/evaluate.rs",
-        "use crate::pipeline::evaluation::PoiEval;",
+        "use crate::lod::evaluation::PoiEval;",
     )]);
     assert!(layering(&old).is_empty(), "{:?}", layering(&old));
     // A cycle inside a group (no layering rule sees it).
@@ -639,19 +640,5 @@ fn each_command_of_the_binary_stays_short() {
     assert!(
         long.is_empty(),
         "a command maps flags to library calls: {long:?}"
-    );
-}
-
-#[test]
-fn the_binary_stays_thin() {
-    let files = rust_files(&src().join("bin"));
-    assert!(!files.is_empty(), "no binary found");
-    let lines: usize = (files.iter())
-        .map(|p| std::fs::read_to_string(p).unwrap().lines().count())
-        .sum();
-    assert!(
-        lines <= 3_000,
-        "the binary maps flags to library calls and prints: {lines} lines (at most 3,000; \
-         library work goes to the library)"
     );
 }

@@ -4,14 +4,14 @@
 //! the SVF of the written file read back and traced with the same rays.
 
 use glam::DVec3;
-use skylod::citygml::read_file;
-use skylod::citygml::write::WriteOptions;
+use skylod::export::report::report::{Parameters, Report, Timings};
+use skylod::io::citygml::read_file;
+use skylod::io::citygml::write::WriteOptions;
+use skylod::lod::evaluation::{evaluate, EvalOptions};
 use skylod::lod::mixed::write_mixed;
+use skylod::lod::poi::Poi;
 use skylod::lod::scene::{full_scene, mixed_scene};
 use skylod::lod::{lod, LodOptions};
-use skylod::output::report::{Parameters, Report, Timings};
-use skylod::pipeline::evaluation::{evaluate, EvalOptions};
-use skylod::poi::Poi;
 use skylod::solar::{poi_sky_view, SkyBundles};
 use skylod::Silent;
 

@@ -6,7 +6,7 @@
 
 use glam::DVec3;
 use serde_json::Value;
-use skylod::citygml::read_file;
+use skylod::io::citygml::read_file;
 use skylod::model::{AssetKind, CityModel};
 use std::collections::HashMap;
 use std::ffi::OsStr;
@@ -462,8 +462,8 @@ fn lod_on_every_file() {
         let mid = format!("{},{},{}", (x0 + x1) / 2.0, (y0 + y1) / 2.0, z0 + 1.5);
         // 5 m beyond the corner, in the model's units (about 5e-5 degrees in a geographic CRS).
         let srs = model.files[0].srs_name.as_deref().unwrap_or("");
-        let step = match skylod::crs::Crs::parse(srs).kind {
-            skylod::crs::CrsKind::Geographic { .. } => 5e-5,
+        let step = match skylod::model::crs::Crs::parse(srs).kind {
+            skylod::model::crs::CrsKind::Geographic { .. } => 5e-5,
             _ => 5.0,
         };
         let corner = format!("{},{},{}", x0 - step, y0 - step, z0 + 1.5);

@@ -1,4 +1,4 @@
-//! `lod` on a hollow read (`skylod::session::hollow_study`, issue 22): on real files of the
+//! `lod` on a hollow read (`skylod::pipeline::session::hollow_study`, issue 22): on real files of the
 //! shared data (Ingolstadt LoD3 street tiles, LoD2 buildings, CityGML 3.0), read one
 //! top-level member a chunk, the levels, the error bound (one that promotes), the report and
 //! the sun's site are the whole read's; and the `lod` command says which read it takes

@@ -2,11 +2,11 @@
 //! a known level for the named assets, seen from its POI.
 
 use glam::DVec3;
-use skylod::citygml::read_file;
+use skylod::io::citygml::read_file;
+use skylod::lod::poi::Poi;
 use skylod::lod::select::SelectOptions;
 use skylod::lod::{lod, LodOptions};
 use skylod::model::CityModel;
-use skylod::poi::Poi;
 
 const X0: f64 = 430_000.0;
 const Y0: f64 = 4_581_000.0;

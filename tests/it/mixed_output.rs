@@ -5,12 +5,12 @@
 
 use crate::util::*;
 use rand::{Rng, SeedableRng};
-use skylod::citygml::read_file;
-use skylod::citygml::write::WriteOptions;
+use skylod::export::report::stats::Stats;
+use skylod::io::citygml::read_file;
+use skylod::io::citygml::write::WriteOptions;
 use skylod::lod::mixed::{write_mixed, MixedSummary};
 use skylod::lod::rough::{rough_model, RoughOptions};
 use skylod::model::{AssetKind, CityModel};
-use skylod::output::stats::Stats;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -22,7 +22,7 @@ fn inputs() -> Vec<PathBuf> {
 }
 
 fn decompressed(p: &Path) -> Vec<u8> {
-    let (mut r, _) = skylod::citygml::source::open(p).unwrap();
+    let (mut r, _) = skylod::io::citygml::source::open(p).unwrap();
     let mut v = Vec::new();
     std::io::Read::read_to_end(&mut r, &mut v).unwrap();
     v
@@ -193,7 +193,7 @@ fn mixed(
     model: &CityModel,
     levels: &[u8],
     out: &Path,
-) -> Result<MixedSummary, skylod::citygml::WriteError> {
+) -> Result<MixedSummary, skylod::io::citygml::WriteError> {
     let rough = rough_model(model, &RoughOptions::default());
     write_mixed((model, 0), &rough, levels, out, &WriteOptions::default())
 }

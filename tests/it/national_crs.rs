@@ -15,8 +15,8 @@
 
 use crate::util::{json, missing, os, poi_args, python_has, run, shared_data, stderr};
 use glam::DVec3;
-use skylod::crs::convert::proj4_definition;
-use skylod::crs::{Builtin, Crs, PointTransform};
+use skylod::model::crs::convert::proj4_definition;
+use skylod::model::crs::{Builtin, Crs, PointTransform};
 use std::io::Write;
 use std::process::{Command, Stdio};
 
@@ -223,7 +223,7 @@ fn sun_hours_site_and_poi_crs() {
 #[test]
 fn bavarian_cityjson_has_reference_system() {
     let Some(model) = shared(GK4) else { return };
-    let m = skylod::citygml::read_file(&model).expect("read the Bavarian model");
+    let m = skylod::io::citygml::read_file(&model).expect("read the Bavarian model");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("by.city.json");
     skylod::export::write(

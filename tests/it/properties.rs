@@ -6,10 +6,10 @@
 
 use glam::DVec3;
 use proptest::prelude::*;
-use skylod::citygml::read::{read_bytes, read_file};
-use skylod::citygml::write::{write_document, WriteOptions};
-use skylod::output::stats::Stats;
-use skylod::trace::ray::{ray_aabb, ray_triangle};
+use skylod::export::report::stats::Stats;
+use skylod::io::citygml::read::{read_bytes, read_file};
+use skylod::io::citygml::write::{write_document, WriteOptions};
+use skylod::solar::trace::ray::{ray_aabb, ray_triangle};
 
 // ---------------------------------------------------------------------------------------------
 // ray-box against ray-triangle
@@ -295,10 +295,10 @@ proptest! {
 // ---------------------------------------------------------------------------------------------
 // lod levels under a UTM-sized translation of the scene and the POI
 
+use skylod::lod::poi::Poi;
 use skylod::lod::select::SelectOptions;
 use skylod::lod::{lod, LodOptions};
-use skylod::poi::Poi;
-use skylod::synth::boxes::{boxes_citygml, BoxBuilding};
+use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
 
 /// Half-metre grid values, so that every coordinate and its translate are exact in f64.
 fn half(lo: i32, hi: i32) -> impl Strategy<Value = f64> {

@@ -217,7 +217,7 @@ fn obj_conventions() {
     let pois = fixture("synth-small.pois.csv");
     let full = dir.path().join("full.obj");
     skylod(&os(&[&"convert", &gml, &"-o", &full]));
-    let model = skylod::citygml::read_file(&gml).unwrap();
+    let model = skylod::io::citygml::read_file(&gml).unwrap();
 
     let parse = |path: &Path| {
         let text = std::fs::read_to_string(path).unwrap();
@@ -284,7 +284,7 @@ fn obj_conventions() {
     let lod = dir.path().join("lod.obj");
     skylod(&os(&[&"lod", &gml, &"--pois", &pois, &"-o", &lod]));
     let (names, mtls, faces, _) = parse(&lod);
-    let p: Vec<_> = skylod::poi::read_pois_csv(&pois)
+    let p: Vec<_> = skylod::lod::poi::read_pois_csv(&pois)
         .unwrap()
         .into_iter()
         .map(|l| l.poi)

@@ -10,10 +10,10 @@
 
 use crate::util::*;
 use glam::DVec3;
-use skylod::citygml::read::{read_file_chunked, read_file_with, ReadOptions};
-use skylod::citygml::{read_file, ReadError};
+use skylod::export::report::stats::Stats;
+use skylod::io::citygml::read::{read_file_chunked, read_file_with, ReadOptions};
+use skylod::io::citygml::{read_file, ReadError};
 use skylod::model::{AssetKind, CityModel, Polygon};
-use skylod::output::stats::Stats;
 use std::path::{Path, PathBuf};
 
 /// The one shared file that is plain GML, not CityGML.
@@ -414,7 +414,7 @@ fn pool(threads: usize) -> rayon::ThreadPool {
         .unwrap()
 }
 
-fn show(r: &Result<CityModel, skylod::citygml::error::ReadError>) -> String {
+fn show(r: &Result<CityModel, skylod::io::citygml::error::ReadError>) -> String {
     match r {
         Ok(m) => format!(
             "ok: {} buildings, {} assets, {} warnings",

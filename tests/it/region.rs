@@ -2,8 +2,8 @@
 //! `--spacing`, on `svf` and `lod` (the same arguments serve `sun-hours` and `evaluate`).
 
 use serde_json::Value;
-use skylod::citygml::read_file;
-use skylod::poi::region::facade_pois;
+use skylod::io::citygml::read_file;
+use skylod::lod::poi::region::facade_pois;
 use std::ffi::OsStr;
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! Soak test (opt-in: `#[ignore]`, run with `--ignored`): the `lod` pipeline over a generated city of about
 //! 1 GB of CityGML with 1,000 POIs, memory sampled.
 //!
-//! The city (`skylod::synth`, `SKYLOD_SOAK_BLOCKS`, default `18x18` blocks, ~1 GB) is streamed
+//! The city (`skylod::model::synth`, `SKYLOD_SOAK_BLOCKS`, default `18x18` blocks, ~1 GB) is streamed
 //! to a temporary file, read, and the rough model and selection scene are built once. The
 //! 1,000 POIs (seeded random street-level points over the district) are then selected in 20
 //! batches of 50 while the resident set size is sampled after each batch: after the first
@@ -17,14 +17,14 @@
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use skylod::citygml::read_file;
-use skylod::citygml::write::WriteOptions;
+use skylod::io::citygml::read_file;
+use skylod::io::citygml::write::WriteOptions;
 use skylod::lod::mixed::write_mixed;
+use skylod::lod::poi::Poi;
 use skylod::lod::rough::{rough_model, RoughOptions};
 use skylod::lod::scene::selection_scene;
 use skylod::lod::select::{select, SelectOptions};
-use skylod::poi::Poi;
-use skylod::synth::{generate, Preset};
+use skylod::model::synth::{generate, Preset};
 use std::io::BufWriter;
 use std::time::Instant;
 

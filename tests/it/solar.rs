@@ -29,10 +29,10 @@ use crate::util::*;
 use chrono::{DateTime, Datelike, Timelike, Utc};
 use glam::DVec3;
 use serde_json::Value;
-use skylod::poi::Poi;
-use skylod::poi::POI_OFFSET;
+use skylod::lod::poi::Poi;
+use skylod::lod::poi::POI_OFFSET;
+use skylod::solar::trace::{Scene, SceneBuilder};
 use skylod::solar::{poi_sky_view, poi_sun_hours, visible_steps, Site, SkyBundles, SunTable};
-use skylod::trace::{Scene, SceneBuilder};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::ffi::OsStr;
 use std::path::PathBuf;
@@ -283,8 +283,8 @@ fn sun_hours_json_and_errors() {
     // A model without a CRS skylod converts: usage error naming --lat/--lon.
     let dir = tempfile::tempdir().unwrap();
     let nocrs = dir.path().join("nocrs.gml");
-    let boxes = skylod::synth::boxes::boxes_citygml(
-        &[skylod::synth::boxes::BoxBuilding {
+    let boxes = skylod::model::synth::boxes::boxes_citygml(
+        &[skylod::model::synth::boxes::BoxBuilding {
             id: "B".into(),
             min: [0.0, 0.0],
             max: [10.0, 10.0],

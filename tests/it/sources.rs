@@ -4,9 +4,9 @@
 //! temporary path (issues 22 and 27).
 
 use crate::util::{citygml_files, os, shared_data, short, stderr, BIN};
-use skylod::citygml::read::{read_bytes, read_file};
-use skylod::citygml::write::{write_document, write_document_to, WriteOptions};
 use skylod::export::{Content, Format};
+use skylod::io::citygml::read::{read_bytes, read_file};
+use skylod::io::citygml::write::{write_document, write_document_to, WriteOptions};
 use skylod::lod::mixed::{write_mixed, write_mixed_to};
 use skylod::lod::rough::{rough_model, RoughOptions};
 use skylod::model::{AssetKind, CityModel, Source};

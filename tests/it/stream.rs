@@ -1,12 +1,12 @@
 //! Issue 22: reading a large file reports its bytes as it goes
-//! ([`skylod::citygml::read_file_observed`]), with the same model as the plain read.
+//! ([`skylod::io::citygml::read_file_observed`]), with the same model as the plain read.
 //!
 //! The file (~70 MB) is made by the shared generator (`../shared/tools/bench_inputs.py`: the
 //! Ingolstadt street repeated) in a temporary directory.
 
 use crate::util;
-use skylod::citygml::read::{read_file_with, stream, Chunk, Passes, ReadOptions, Streamed};
-use skylod::citygml::read_file_observed;
+use skylod::io::citygml::read::{read_file_with, stream, Chunk, Passes, ReadOptions, Streamed};
+use skylod::io::citygml::read_file_observed;
 use skylod::model::CityModel;
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -441,7 +441,7 @@ fn lod_of_a_large_file_peaks_under_the_file_size_and_a_seventh() {
 fn streamed_exports_are_the_whole_models_bytes() {
     use skylod::export::{write, write_streamed, Content, Format};
     let dir = tempfile::tempdir().unwrap();
-    let opts = skylod::citygml::write::WriteOptions {
+    let opts = skylod::io::citygml::write::WriteOptions {
         overwrite: true,
         ..Default::default()
     };
@@ -493,7 +493,7 @@ fn streamed_exports_are_the_whole_models_bytes() {
 /// back, on every file of the shared data and the fixtures (issue 22).
 #[test]
 fn streamed_citygml_is_the_whole_reads_bytes() {
-    use skylod::citygml::write::{write_document, write_document_streamed, WriteOptions};
+    use skylod::io::citygml::write::{write_document, write_document_streamed, WriteOptions};
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (
         dir.path().join("whole.gml"),
@@ -592,7 +592,7 @@ fn streamed_cityjson_ids_are_the_whole_writers() {
     let path = dir.path().join("ids.gml");
     std::fs::write(&path, doc).unwrap();
     let model = read_file_with(&path, &ReadOptions::default()).unwrap();
-    let opts = skylod::citygml::write::WriteOptions {
+    let opts = skylod::io::citygml::write::WriteOptions {
         overwrite: true,
         ..Default::default()
     };

@@ -1,11 +1,13 @@
 //! Integration tests of the synthetic district generator: schema validity (xmllint with the
 //! shared offline catalog), determinism, counts and envelope against the written bytes.
 
-use skylod::synth::{generate, pois, write_pois_csv, InstallationKind, Preset, SynthOptions};
+use skylod::model::synth::{
+    generate, pois, write_pois_csv, InstallationKind, Preset, SynthOptions,
+};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn gen(opts: &SynthOptions) -> (Vec<u8>, skylod::synth::SynthSummary) {
+fn gen(opts: &SynthOptions) -> (Vec<u8>, skylod::model::synth::SynthSummary) {
     let mut out = Vec::new();
     let s = generate(opts, &mut out).expect("generate");
     (out, s)

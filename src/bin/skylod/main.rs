@@ -4,7 +4,7 @@
 
 use clap::{Parser, Subcommand};
 use skylod::io::message::{chain_message, is_broken_pipe};
-use skylod::session::flags::cli_text;
+use skylod::pipeline::session::flags::cli_text;
 use std::process::ExitCode;
 
 mod args;
@@ -136,7 +136,7 @@ fn main() -> ExitCode {
 }
 
 /// The error and its causes joined by ": ", each thing said once, in the CLI's words
-/// ([`skylod::io::message::chain_message`], [`skylod::session::flags::cli_text`]).
+/// ([`skylod::io::message::chain_message`], [`skylod::pipeline::session::flags::cli_text`]).
 fn message(e: &anyhow::Error) -> String {
     chain_message(e.as_ref(), cli_text)
 }

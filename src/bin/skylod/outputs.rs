@@ -1,26 +1,26 @@
 //! `-o` of the commands that write per input (`convert`, `rough`, `lod`, `reproject`,
 //! `subset`, `filter-lods`): the library lays the outputs out, merges and says what to tell
-//! the user ([`skylod::batch::outputs`], [`skylod::batch::run`]); this module prints it (in
-//! the flags' words: [`skylod::session::flags`]).
+//! the user ([`skylod::pipeline::batch::outputs`], [`skylod::pipeline::batch::run`]); this module prints it (in
+//! the flags' words: [`skylod::pipeline::session::flags`]).
 
 use crate::log::{error, summary, warning};
 use anyhow::anyhow;
-use skylod::batch::inputs::Input;
-use skylod::batch::outputs::Targets;
-use skylod::batch::run::{Batch, Said};
-use skylod::batch::shard::Shard;
-use skylod::citygml::write::WriteOptions;
 use skylod::export::Format;
+use skylod::io::citygml::write::WriteOptions;
+use skylod::pipeline::batch::inputs::Input;
+use skylod::pipeline::batch::outputs::Targets;
+use skylod::pipeline::batch::run::{Batch, Said};
+use skylod::pipeline::batch::shard::Shard;
 use std::path::{Path, PathBuf};
 
-use skylod::batch::run::Done;
+use skylod::pipeline::batch::run::Done;
 
-/// [`skylod::batch::outputs::Plan::targets`] for `cmd`: this shard's files said on stderr, each refused target
+/// [`skylod::pipeline::batch::outputs::Plan::targets`] for `cmd`: this shard's files said on stderr, each refused target
 /// reported with `refused` (its input fails without being read); the number refused
 /// (`reproject`).
 #[cfg(feature = "proj")]
 pub fn targets(
-    plan: &skylod::batch::outputs::Plan,
+    plan: &skylod::pipeline::batch::outputs::Plan,
     inputs: &[PathBuf],
     wopts: &WriteOptions,
     shard: Option<Shard>,
@@ -46,7 +46,10 @@ fn refused_said(
     }
     let n = t.refused.len();
     for e in std::mem::take(&mut t.refused) {
-        refused(&anyhow!("{}", skylod::session::flags::cli_text(&e)));
+        refused(&anyhow!(
+            "{}",
+            skylod::pipeline::session::flags::cli_text(&e)
+        ));
     }
     n
 }
@@ -113,7 +116,7 @@ pub fn per_input_jobs(
     b.counts_polygons = false;
     let each = |i: &Path, o: &Path, shown: &Path, w: &WriteOptions| {
         let done = edit.apply(i, o, shown, w).map(Done::with_line);
-        done.map_err(|e| anyhow!(skylod::session::flags::cli_text(&e)))
+        done.map_err(|e| anyhow!(skylod::pipeline::session::flags::cli_text(&e)))
     };
     let results = jobs.install(|| b.run_each(&inputs, true, &each))?;
     let failure = |e: &anyhow::Error| e.to_string();

@@ -481,8 +481,15 @@ mod tests {
             let fixed = given.iter().filter(|(g, _)| g == f);
             levels.extend(fixed.map(|(_, l)| ("given", l.clone())));
             for (what, levels) in levels {
-                let plan =
-                    |ahead| plan_in_chunks(&mut super::super::hollow::Whole(model), (0, rough, &levels), false, 1, ahead);
+                let plan = |ahead| {
+                    plan_in_chunks(
+                        &mut super::super::hollow::Whole(model),
+                        (0, rough, &levels),
+                        false,
+                        1,
+                        ahead,
+                    )
+                };
                 let (on, off) = (plan(true), plan(false));
                 let at = format!("{}: {what}", f.display());
                 assert_eq!(on.is_some(), off.is_some(), "{at}: declined once");

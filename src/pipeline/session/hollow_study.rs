@@ -4,13 +4,13 @@
 //! [`super::Scene::check`] checks the whole read (heights) and frames the POIs as
 //! [`super::Scene::frame`] does ([`crate::pipeline::frame`] on the hollow model with the box the read gave:
 //! no point is walked); [`HollowStudy::levels`] selects and bounds on it
-//! ([`levels_hollow`]), and [`HollowStudy::lod_report`] makes its report (the polygon counts
+//! ([`levels`]), and [`HollowStudy::lod_report`] makes its report (the polygon counts
 //! from the hollow read's). What [`lod_read`](super::lod_read::lod_read) chose the hollow
 //! read for: the levels, the bound, the report and the frame's warnings are the whole read's.
 //!
 //! [`HollowStudy::sun_site`] is the sun's site of the bound as the whole read's.
 //!
-//! [`HollowStudy::write_levels`] writes its CityGML ([`write_levels_hollow`]: the polygons the
+//! [`HollowStudy::write_levels`] writes its CityGML ([`write_levels`]: the polygons the
 //! writer needs read back), the whole read's bytes; OBJ and CityJSON outputs, which take the
 //! polygons of every level-2 asset, are written from the whole read ([`super::lod_read`]).
 
@@ -129,7 +129,7 @@ impl HollowStudy {
         }))
     }
 
-    /// The levels at the POIs ([`levels_hollow`]) selected with `select` (the rough forms are
+    /// The levels at the POIs ([`levels`]) selected with `select` (the rough forms are
     /// the read's), the error bound checked when `bound` asks.
     ///
     /// # Errors
@@ -177,7 +177,7 @@ impl HollowStudy {
     }
 
     /// Write the document at the levels `lv` (from [`HollowStudy::levels`]) in CityGML to
-    /// `out` ([`write_levels_hollow`]: the polygons the writer needs read back, planned a
+    /// `out` ([`write_levels`]: the polygons the writer needs read back, planned a
     /// chunk of the read at a time): the bytes the whole read's
     /// [`crate::pipeline::write_levels`] writes.
     ///

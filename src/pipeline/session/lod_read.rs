@@ -172,7 +172,7 @@ pub fn memory_budget(given: Option<u64>) -> Budget {
 /// The text, and why it is not a size.
 ///
 /// ```
-/// use skylod::session::lod_read::memory_size;
+/// use skylod::pipeline::session::lod_read::memory_size;
 /// assert_eq!(memory_size("1.5GiB"), Ok(3 << 29));
 /// assert_eq!(memory_size("512M"), memory_size("536870912"));
 /// assert!(memory_size("lots").is_err());

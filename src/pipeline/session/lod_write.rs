@@ -141,7 +141,7 @@ impl LodLayout {
 
     /// [`LodLayout::write`] of the one document read hollow as `hollow` in CityGML, the
     /// polygons the writer needs read back through `rr`, planned in chunks of about
-    /// `chunk_bytes` ([`crate::pipeline::write_levels_hollow`]): what the whole read writes.
+    /// `chunk_bytes` ([`crate::pipeline::write_levels`]): what the whole read writes.
     /// Another format fails the file ([`WriteError::Invalid`]: it takes the whole read).
     ///
     /// # Errors

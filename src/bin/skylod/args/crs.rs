@@ -1,8 +1,8 @@
 //! `--source-crs` and `--poi-crs`, and the local metric frame every tracing command works in
-//! ([`skylod::crs::LocalFrame`]): the model and the POIs are brought into it after reading,
+//! ([`skylod::model::crs::LocalFrame`]): the model and the POIs are brought into it after reading,
 //! reports and outputs stay in the input's CRS.
 
-use skylod::crs::Crs;
+use skylod::model::crs::Crs;
 use skylod::pipeline::FrameOptions;
 
 /// Parse a CRS flag: any `srsName` spelling that names a CRS ([`Crs::parse_named`]).

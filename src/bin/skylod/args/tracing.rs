@@ -1,6 +1,6 @@
 //! The arguments every tracing command (svf, sun-hours, horizon, evaluate, irradiance)
 //! shares — inputs and POIs, region, shard, scene radius — and the steps they take before
-//! tracing: the library's [`skylod::session`] (`Scene` → `Study`) with what stays CLI-only
+//! tracing: the library's [`skylod::pipeline::session`] (`Scene` → `Study`) with what stays CLI-only
 //! (failures and warnings on stderr, the shard said, the spooled standard input kept).
 
 use crate::args::poi::PoiArgs;

@@ -3,9 +3,9 @@
 
 use crate::log::warning;
 use anyhow::Context;
-use skylod::output::text::{Document, TextContext};
-use skylod::poi::checks::PoiFlag;
-use skylod::poi::Poi;
+use skylod::export::report::text::{Document, TextContext};
+use skylod::lod::poi::checks::PoiFlag;
+use skylod::lod::poi::Poi;
 use std::io::Write;
 
 pub mod completions;

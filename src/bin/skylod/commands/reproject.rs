@@ -43,12 +43,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use anyhow::Context;
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
-    use skylod::batch::outputs::{Plan, Targets};
-    use skylod::citygml::reproject::{reproject_file, ReprojectError};
-    use skylod::citygml::write::WriteOptions;
-    use skylod::crs::CrsName;
     use skylod::export::cityjson_edit::reproject_cityjson;
+    use skylod::io::citygml::reproject::{reproject_file, ReprojectError};
+    use skylod::io::citygml::write::WriteOptions;
     use skylod::model::crs::Crs;
+    use skylod::model::crs::CrsName;
+    use skylod::pipeline::batch::outputs::{Plan, Targets};
 
     let parse = |flag: &str, text: &str| {
         CrsName::parse(text)
@@ -58,13 +58,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let target = parse("-t", &args.target)?;
     let source = args.source.as_deref().map(|s| parse("-s", s)).transpose()?;
     // Both CRSs known to PROJ before any file is touched (usage error otherwise).
-    skylod::crs::proj::crs_info(target.horizontal).context("-t")?;
+    skylod::model::crs::proj::crs_info(target.horizontal).context("-t")?;
     if let Some(s) = source {
-        skylod::crs::proj::crs_info(s.horizontal).context("-s")?;
+        skylod::model::crs::proj::crs_info(s.horizontal).context("-s")?;
     }
     let shard = args.shard.resolve()?;
     let citygml = Some(skylod::export::Format::CityGml);
-    let (plan, _) = skylod::batch::outputs::plan(&inputs, &args.output, citygml)?;
+    let (plan, _) = skylod::pipeline::batch::outputs::plan(&inputs, &args.output, citygml)?;
     let wopts = WriteOptions {
         overwrite: args.overwrite,
         protect: args.inputs.clone(),
@@ -100,7 +100,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     for (k, out) in &todo {
         let input = &args.inputs[*k];
         if mirror {
-            skylod::batch::outputs::create_parent(out)?;
+            skylod::pipeline::batch::outputs::create_parent(out)?;
         }
         // A staged part's path means nothing to the user: the merge line follows.
         let shown = if staging.is_some() {
@@ -116,7 +116,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             );
             let t = skylod::model::crs::ProjTransform;
             let r = reproject_cityjson(input, out, from.as_ref(), &to, &t, &write_opts)
-                .map_err(|e| anyhow::anyhow!(skylod::session::flags::cli_text(&e)));
+                .map_err(|e| anyhow::anyhow!(skylod::pipeline::session::flags::cli_text(&e)));
             if r.is_ok() {
                 parts.push(out.clone());
                 names.push(input.clone());
@@ -146,7 +146,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         }
     }
     if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
-        let (merged, said) = skylod::batch::run::merge_parts(&parts, &names, t, &wopts, total);
+        let (merged, said) =
+            skylod::pipeline::batch::run::merge_parts(&parts, &names, t, &wopts, total);
         crate::outputs::say(said);
         if !merged {
             failed = total;

@@ -3,9 +3,9 @@
 use crate::log::{summary, warning};
 use crate::outputs;
 use crate::Outcome;
-use skylod::citygml::write::WriteOptions;
-use skylod::crs::FrameWarning;
 use skylod::export::Format;
+use skylod::io::citygml::write::WriteOptions;
+use skylod::model::crs::FrameWarning;
 use skylod::pipeline::batch::rough::{rough_file, RoughFile};
 use std::path::{Path, PathBuf};
 
@@ -46,7 +46,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // or CityJSON file's line is said as it is written).
     let each = |input: &Path, out: &Path, _: &Path, _: &WriteOptions| {
         let warned = |w: &FrameWarning| {
-            let w = skylod::session::flags::frame_warning_text(w);
+            let w = skylod::pipeline::session::flags::frame_warning_text(w);
             warning!("rough: warning: {}: {w}", skylod::model::shown(input));
         };
         let mut d = rough_file(input, out, &o, &warned)?;

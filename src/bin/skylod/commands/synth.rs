@@ -2,8 +2,8 @@
 
 use crate::Outcome;
 use anyhow::{bail, Context};
+use skylod::model::synth::{Preset, SynthOptions};
 use skylod::pipeline::batch::synth::write_synth;
-use skylod::synth::{Preset, SynthOptions};
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -1,7 +1,7 @@
 //! `skylod lod`: the skyline-controlled mixed-LoD model for a set of POIs, step by step:
 //! outputs laid out and checked ([`layout`]), inputs read, levels selected (or reduced from
 //! the shards' levels files, [`shard`]), the error bound, outputs written
-//! ([`skylod::session::lod_write`]) and the report ([`skylod::session::report`]).
+//! ([`skylod::pipeline::session::lod_write`]) and the report ([`skylod::pipeline::session::report`]).
 
 pub mod shard;
 
@@ -9,13 +9,15 @@ use crate::args::{output::OutputArgs, poi::PoiArgs, rough::RoughArgs, select::Se
 use crate::log::{error, info, summary, warning};
 use crate::Outcome;
 use anyhow::Context;
-use skylod::batch::inputs::Input;
 use skylod::lod::LodOptions;
+use skylod::pipeline::batch::inputs::Input;
+use skylod::pipeline::session::lod_write::{
+    check_report, write_report, LodLayout, ReportTargetError,
+};
 use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
 use skylod::pipeline::session::tracing::ms_since;
 use skylod::pipeline::session::{lod_read::lod_read, lod_study::LodStudy, SceneOptions};
 use skylod::pipeline::LevelsOptions;
-use skylod::session::lod_write::{check_report, write_report, LodLayout, ReportTargetError};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -47,7 +49,7 @@ pub struct Args {
     /// The memory lod may take for reading a file whole, e.g. 2GiB (default: 1GiB, or half
     /// of what the system and the job's memory limit leave where that is less): a larger
     /// file is read hollow, a chunk at a time, in less memory and a little more CPU.
-    #[arg(long, value_name = "SIZE", value_parser = skylod::session::lod_read::memory_size)]
+    #[arg(long, value_name = "SIZE", value_parser = skylod::pipeline::session::lod_read::memory_size)]
     pub(crate) max_memory: Option<u64>,
     /// Reduce step: write the model (and --report) from the levels files of all shards
     /// (levels combine by maximum) instead of tracing; POIs and options come from the files,

@@ -1,14 +1,14 @@
-//! `skylod lod` in an array job: a shard writes its levels ([`skylod::batch::shard_levels`]),
-//! `--reduce` writes the model from all shards' levels ([`skylod::batch::reduce`]).
+//! `skylod lod` in an array job: a shard writes its levels ([`skylod::pipeline::batch::shard_levels`]),
+//! `--reduce` writes the model from all shards' levels ([`skylod::pipeline::batch::reduce`]).
 
 use crate::commands::lod::Args;
 use crate::inputs::Spool;
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::batch::reduce::Reduce;
-use skylod::batch::shard::Shard;
-use skylod::batch::shard_levels::{check_levels_target, write_shard};
 use skylod::lod::LodOptions;
+use skylod::pipeline::batch::reduce::Reduce;
+use skylod::pipeline::batch::shard::Shard;
+use skylod::pipeline::batch::shard_levels::{check_levels_target, write_shard};
 use skylod::pipeline::session::tracing::ms_since;
 use std::time::Instant;
 
