@@ -21,7 +21,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use skylod::model::Polygon;
 use skylod::solar::trace::ray::ray_triangle;
-use skylod::solar::trace::{BuildQuality, BvhLayout, Scene, SceneBuilder};
+use skylod::solar::trace::{BuildQuality, BvhLayout, SceneBuilder, TraceScene};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -98,7 +98,7 @@ const CONFIGS: [(BvhLayout, BuildQuality); 2] = [
     (BvhLayout::Bvh2, BuildQuality::Fastest),
 ];
 
-fn build(tris: &[(u32, [DVec3; 3])], (layout, quality): (BvhLayout, BuildQuality)) -> Scene {
+fn build(tris: &[(u32, [DVec3; 3])], (layout, quality): (BvhLayout, BuildQuality)) -> TraceScene {
     let mut b = SceneBuilder::new()
         .with_layout(layout)
         .with_quality(quality);

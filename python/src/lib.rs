@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use relay::{message, run, SkylodError};
 use setup::{load, ms, Setup};
 use skylod::export::report::sun_hours::SunSetting;
-use skylod::pipeline::session::tracing::{EvaluateRequest, IrradianceRequest};
+use skylod::pipeline::session::documents::{EvaluateRequest, IrradianceRequest};
 use skylod::pipeline::session::weather::weather_site;
 use skylod::solar::irradiance::SkyModel;
 use skylod::solar::weather::read_weather;

@@ -98,7 +98,7 @@ use crate::lod::rough::RoughGeometry;
 use crate::model::{Bbox, CityModel};
 use crate::solar::irradiance::{IrradianceSetting, PlaneRays};
 use crate::solar::sky::{Frame, SkyError};
-use crate::solar::trace::{BoxIndex, Scene};
+use crate::solar::trace::{BoxIndex, TraceScene};
 use crate::solar::{SkyBundles, SunTable};
 use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
@@ -578,7 +578,7 @@ struct Best {
 }
 
 /// First-hit tags of every ray of a probe (SVF rays, sun rays, irradiance sun rays).
-fn tags(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
+fn tags(scene: &TraceScene, p: &Probe) -> Vec<Option<u32>> {
     p.svf_dirs
         .par_iter()
         .chain(p.sun_dirs.par_iter())

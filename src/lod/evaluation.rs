@@ -38,7 +38,7 @@ use crate::model::CityModel;
 use crate::model::Poi;
 use crate::solar::irradiance::IrradianceSetting;
 use crate::solar::sky::SkyError;
-use crate::solar::trace::Scene;
+use crate::solar::trace::TraceScene;
 use crate::solar::{poi_irradiance, poi_sky_view, poi_sun_hours, SkyBundles, SunTable};
 use serde::Serialize;
 use std::time::Instant;
@@ -181,7 +181,7 @@ fn ms(t: Instant) -> f64 {
 }
 
 fn figures(
-    scene: &Scene,
+    scene: &TraceScene,
     polygons: usize,
     poi: &Poi,
     bundles: &SkyBundles,

@@ -24,7 +24,7 @@
 use crate::lod::rough::RoughGeometry;
 use crate::model::triangulate;
 use crate::model::{Asset, Bbox, CityModel};
-use crate::solar::trace::{Scene, SceneBuilder};
+use crate::solar::trace::{SceneBuilder, TraceScene};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -84,7 +84,7 @@ pub type Tagged<'a> = [(usize, &'a Asset)];
 
 /// [`full_scene`] (`frame`: `None`) or [`full_scene_part`] (`Some((frame, rays))`) of the
 /// model whose assets `assets` hold every full-detail polygon: the same scene.
-pub fn full_scene_of(assets: &Tagged<'_>, frame: Option<(Bbox, usize)>) -> Scene {
+pub fn full_scene_of(assets: &Tagged<'_>, frame: Option<(Bbox, usize)>) -> TraceScene {
     let mut b = SceneBuilder::new();
     if let Some((f, _)) = frame {
         b = b.with_frame(f);
@@ -106,14 +106,14 @@ pub fn full_scene_of(assets: &Tagged<'_>, frame: Option<(Bbox, usize)>) -> Scene
 }
 
 /// Every asset at full detail (its highest LoD).
-pub fn full_scene(model: &CityModel) -> Scene {
+pub fn full_scene(model: &CityModel) -> TraceScene {
     let tagged: Vec<(usize, &Asset)> = model.assets.iter().enumerate().collect();
     full_scene_of(&tagged, None)
 }
 
 /// Per asset, the bounding box of the finite points of its full-detail polygons (empty
 /// when none), which holds every triangle [`full_scene`] makes of it; and the box of all
-/// of [`full_scene`]'s triangles ([`Scene::bbox`], its frame), found exactly while
+/// of [`full_scene`]'s triangles ([`TraceScene::bbox`], its frame), found exactly while
 /// triangulating only the assets that reach the edges.
 pub fn detail_boxes(model: &CityModel) -> (Vec<Bbox>, Bbox) {
     let boxes: Vec<Bbox> = model
@@ -238,9 +238,14 @@ const TOP: usize = 64;
 /// The part of [`full_scene`] made of the assets `i` with `include[i]`, built in the
 /// frame of the full scene's box `frame` (the union of [`detail_boxes`]) and for about
 /// `rays` rays ([`SceneBuilder::for_rays`]): its triangles have the full scene's f32
-/// coordinates and order, so a ray's [`Scene::first_hit`] is the full scene's whenever
+/// coordinates and order, so a ray's [`TraceScene::first_hit`] is the full scene's whenever
 /// no left-out asset holds a triangle the ray hits as close ([`SceneBuilder::with_frame`]).
-pub fn full_scene_part(model: &CityModel, include: &[bool], frame: Bbox, rays: usize) -> Scene {
+pub fn full_scene_part(
+    model: &CityModel,
+    include: &[bool],
+    frame: Bbox,
+    rays: usize,
+) -> TraceScene {
     let tagged: Vec<(usize, &Asset)> = (model.assets.iter().enumerate())
         .filter(|(i, _)| include.get(*i).copied().unwrap_or(false))
         .collect();
@@ -248,7 +253,7 @@ pub fn full_scene_part(model: &CityModel, include: &[bool], frame: Bbox, rays: u
 }
 
 /// Every asset as its rough geometry (`rough[i]` belongs to asset `i`).
-pub fn rough_scene(rough: &[RoughGeometry]) -> Scene {
+pub fn rough_scene(rough: &[RoughGeometry]) -> TraceScene {
     let mut b = SceneBuilder::new();
     add_assets(&mut b, rough.len(), |i, out| {
         for p in rough[i].polygons().iter() {
@@ -260,13 +265,17 @@ pub fn rough_scene(rough: &[RoughGeometry]) -> Scene {
 
 /// The scene the selection traces: the rough model without the openings that their
 /// surface's rough plane closes ([`crate::lod::level::selection_traced`]).
-pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> Scene {
+pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> TraceScene {
     selection_builder(model, rough).build()
 }
 
 /// [`selection_scene`] built for about `rays` rays ([`SceneBuilder::for_rays`]): the same
 /// answers, a quicker build when few rays are traced.
-pub fn selection_scene_for_rays(model: &CityModel, rough: &[RoughGeometry], rays: usize) -> Scene {
+pub fn selection_scene_for_rays(
+    model: &CityModel,
+    rough: &[RoughGeometry],
+    rays: usize,
+) -> TraceScene {
     selection_builder(model, rough).for_rays(rays).build()
 }
 
@@ -285,7 +294,7 @@ fn selection_builder(model: &CityModel, rough: &[RoughGeometry]) -> SceneBuilder
 
 /// The mixed-LoD model as `lod` writes it: each asset's [`crate::lod::level::traced`] polygons
 /// at its level (level 0 absent).
-pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
+pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) -> TraceScene {
     let mut b = SceneBuilder::new();
     add_assets(&mut b, model.assets.len(), |i, out| {
         mixed_triangles(&model.assets[i], i, rough, levels, out);
@@ -295,7 +304,7 @@ pub fn mixed_scene(model: &CityModel, rough: &[RoughGeometry], levels: &[u8]) ->
 
 /// [`mixed_scene`] of the model whose assets `assets` hold every asset above level 0: the
 /// same scene.
-pub fn mixed_scene_of(assets: &Tagged<'_>, rough: &[RoughGeometry], levels: &[u8]) -> Scene {
+pub fn mixed_scene_of(assets: &Tagged<'_>, rough: &[RoughGeometry], levels: &[u8]) -> TraceScene {
     let mut b = SceneBuilder::new();
     add_tagged(
         &mut b,

@@ -58,7 +58,7 @@ use crate::lod::poi::{Poi, POI_OFFSET};
 use crate::lod::rough::RoughGeometry;
 use crate::model::{AssetKind, CityModel};
 use crate::solar::sky::{SkyError, SkyPartition, SkyVariant};
-use crate::solar::trace::Scene;
+use crate::solar::trace::TraceScene;
 use foldhash::{HashMap, HashMapExt};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -175,7 +175,7 @@ impl Selection {
 pub fn select(
     model: &CityModel,
     rough: &[RoughGeometry],
-    scene: &Scene,
+    scene: &TraceScene,
     pois: &[Poi],
     opts: &SelectOptions,
 ) -> Result<Selection, SelectError> {
@@ -199,7 +199,7 @@ pub fn select(
 pub fn select_with(
     model: &CityModel,
     rough: &[RoughGeometry],
-    scene: &Scene,
+    scene: &TraceScene,
     pois: &[Poi],
     opts: &SelectOptions,
     progress: &dyn crate::model::runtime::progress::Progress,
@@ -249,7 +249,7 @@ pub fn select_facts(
     model: &CityModel,
     facts: &dyn FullFacts,
     rough: &[RoughGeometry],
-    scene: &Scene,
+    scene: &TraceScene,
     pois: &[Poi],
     opts: &SelectOptions,
     progress: &dyn crate::model::runtime::progress::Progress,
@@ -374,7 +374,7 @@ type OnePoi = (PoiSelection, Vec<(u32, u32)>, Vec<u32>);
 fn select_one(
     poi: &Poi,
     dirs: &[DVec3],
-    scene: &Scene,
+    scene: &TraceScene,
     rough: &[RoughGeometry],
     roof_asset: &[bool],
     threshold: f64,

@@ -9,7 +9,7 @@ use crate::lod::scene::full_scene;
 use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
-use crate::solar::trace::Scene;
+use crate::solar::trace::TraceScene;
 use crate::solar::{
     poi_horizon, poi_sky_view, poi_sun_hours, HorizonOptions, HorizonProfile, SkyBundles, SkyView,
     SunHours, SunTable,
@@ -53,7 +53,7 @@ impl<T> Traced<T> {
 /// [`Cancelled`] when `progress` asks to stop.
 pub fn trace<T: Send>(
     framed: &Framed<'_>,
-    f: impl Fn(&Scene, &Poi) -> T + Sync,
+    f: impl Fn(&TraceScene, &Poi) -> T + Sync,
     sky_rays: impl Fn(&T) -> Option<usize> + Sync,
     progress: &dyn Progress,
 ) -> Result<Traced<T>, Cancelled> {
@@ -76,8 +76,8 @@ pub fn trace<T: Send>(
 /// [`Cancelled`] when `progress` asks to stop.
 pub(crate) fn trace_in<T: Send>(
     framed: &Framed<'_>,
-    scene: &Scene,
-    f: impl Fn(&Scene, &Poi) -> T + Sync,
+    scene: &TraceScene,
+    f: impl Fn(&TraceScene, &Poi) -> T + Sync,
     sky_rays: impl Fn(&T) -> Option<usize> + Sync,
     progress: &dyn Progress,
 ) -> Result<Traced<T>, Cancelled> {

@@ -37,7 +37,7 @@ use super::sun::{sun_position, Site};
 use super::SolarError;
 use crate::model::AssetKind;
 use crate::solar::sky::{SkyPartition, SkyVariant};
-use crate::solar::trace::Scene;
+use crate::solar::trace::TraceScene;
 use chrono::{Duration, NaiveDate, TimeZone, Utc};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -262,7 +262,7 @@ pub fn cell_centre(partition: &SkyPartition, cell: usize) -> Option<DVec3> {
 /// cells; the result does not depend on the thread count.
 pub fn classify_cells(
     partition: &SkyPartition,
-    scene: &Scene,
+    scene: &TraceScene,
     origin: DVec3,
     normal: Option<DVec3>,
     tmin: f64,

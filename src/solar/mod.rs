@@ -31,12 +31,12 @@ pub const DEFAULT_STEP_MIN: u32 = 15;
 
 use crate::model::Poi;
 use crate::model::POI_OFFSET;
-use crate::solar::trace::Scene;
+use crate::solar::trace::TraceScene;
 
 /// [`sky_view()`] of a POI against a scene: rays start at [`Poi::ray_origin`] (moved
 /// [`POI_OFFSET`] along the normal) and ignore hits closer than [`POI_OFFSET`]; the bundles
 /// are jittered for this POI ([`SkyBundles::for_poi`]).
-pub fn poi_sky_view(scene: &Scene, poi: &Poi, bundles: &SkyBundles) -> SkyView {
+pub fn poi_sky_view(scene: &TraceScene, poi: &Poi, bundles: &SkyBundles) -> SkyView {
     sky_view(
         poi.ray_origin(),
         poi.normal,
@@ -47,7 +47,7 @@ pub fn poi_sky_view(scene: &Scene, poi: &Poi, bundles: &SkyBundles) -> SkyView {
 
 /// [`sun_hours()`] of a POI against a scene, with the same ray origin and `tmin` as
 /// [`poi_sky_view`].
-pub fn poi_sun_hours(scene: &Scene, poi: &Poi, table: &SunTable) -> SunHours {
+pub fn poi_sun_hours(scene: &TraceScene, poi: &Poi, table: &SunTable) -> SunHours {
     let origin = poi.ray_origin();
     sun_hours(table, poi.normal, |d| {
         scene.occluded(origin, d, POI_OFFSET, f64::INFINITY)
@@ -58,7 +58,7 @@ pub fn poi_sun_hours(scene: &Scene, poi: &Poi, table: &SunTable) -> SunHours {
 /// POI's own bundle ([`SkyBundles::for_poi`], as [`poi_sky_view`]) and one ray per sunlit
 /// hour, with the same ray origin and `tmin` as [`poi_sky_view`].
 pub fn poi_irradiance(
-    scene: &Scene,
+    scene: &TraceScene,
     poi: &Poi,
     bundles: &SkyBundles,
     table: &irradiance::IrradianceTable,
@@ -74,7 +74,7 @@ pub fn poi_irradiance(
 /// [`horizon_profile()`] of a POI against a scene, with the same ray origin and `tmin` as
 /// [`poi_sky_view`]; with a normal, the POI's own surface plane is part of the horizon.
 pub fn poi_horizon(
-    scene: &Scene,
+    scene: &TraceScene,
     poi: &Poi,
     opts: &HorizonOptions,
 ) -> Result<HorizonProfile, SolarError> {

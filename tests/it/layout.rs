@@ -493,7 +493,7 @@ fn source_files_stay_short_and_the_top_stays_small() {
 #[test]
 fn the_path_reader_sees_imports() {
     // The checks above are only as good as the reader of imports: it must see these.
-    let code = code("use crate::lod::rough; // crate::solar in a comment\nfn f() { crate::trace::Scene::new(); $crate::x::y(); }\nuse crate::{io::citygml::write, model};\n#[cfg(test)]\nmod tests { use crate::synth; }\n");
+    let code = code("use crate::lod::rough; // crate::solar in a comment\nfn f() { crate::trace::TraceScene::new(); $crate::x::y(); }\nuse crate::{io::citygml::write, model};\n#[cfg(test)]\nmod tests { use crate::synth; }\n");
     let found: Vec<String> = crate_paths(&code)
         .iter()
         .map(|p| canonical(p).join("::"))
@@ -502,7 +502,7 @@ fn the_path_reader_sees_imports() {
         found,
         [
             "lod::rough",
-            "solar::trace::Scene::new",
+            "solar::trace::TraceScene::new",
             "io::citygml::write",
             "model"
         ]
@@ -540,7 +540,7 @@ fn each_rule_can_fail() {
         ("solar/trace/mod.rs", "use crate::model::CityModel;"),
         (
             "lod/mod.rs",
-            "use crate::{solar::trace::Scene, io::citygml};",
+            "use crate::{solar::trace::TraceScene, io::citygml};",
         ),
         ("pipeline/mod.rs", "use crate::export::report::LodReport;"),
     ]);

@@ -31,7 +31,7 @@ use glam::DVec3;
 use serde_json::Value;
 use skylod::lod::poi::Poi;
 use skylod::lod::poi::POI_OFFSET;
-use skylod::solar::trace::{Scene, SceneBuilder};
+use skylod::solar::trace::{SceneBuilder, TraceScene};
 use skylod::solar::{poi_sky_view, poi_sun_hours, visible_steps, Site, SkyBundles, SunTable};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::ffi::OsStr;
@@ -475,7 +475,7 @@ fn wall(b: &mut SceneBuilder, x: f64, h: f64, side: f64, tag: u32) {
 }
 
 /// North-south canyon of width `w` and height `h` centred on UTM.
-fn canyon(w: f64, h: f64) -> Scene {
+fn canyon(w: f64, h: f64) -> TraceScene {
     let mut b = SceneBuilder::new();
     wall(&mut b, -w / 2.0, h, -1.0, 0);
     wall(&mut b, w / 2.0, h, 1.0, 1);

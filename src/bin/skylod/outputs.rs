@@ -105,7 +105,7 @@ pub fn per_input_jobs(
     a: &crate::args::citygml_io::CityGmlIoArgs,
     cmd: &str,
     jobs: &crate::args::jobs::JobsArgs,
-    edit: skylod::pipeline::batch::edit::Edit,
+    edit: skylod::pipeline::batch::edit::Transform,
 ) -> anyhow::Result<crate::Outcome> {
     let t0 = std::time::Instant::now();
     let shard = a.shard.resolve()?;

@@ -6,7 +6,7 @@
 use super::{bbox, FromCityJsonError, FromCityJsonSummary, Out};
 use crate::io::citygml::json::chunks::{each_object, Fail, Input, Prepared, Stop};
 use crate::io::cityjson::doc::CityObject;
-use crate::io::cityjson::Error;
+use crate::io::cityjson::CityJsonError as Error;
 use std::io::Write;
 use std::path::Path;
 

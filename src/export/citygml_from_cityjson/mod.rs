@@ -108,7 +108,7 @@ impl std::str::FromStr for TargetVersion {
 pub enum FromCityJsonError {
     /// The source is not valid CityJSON (file, line, city object).
     #[error(transparent)]
-    CityJson(#[from] crate::io::cityjson::Error),
+    CityJson(#[from] crate::io::cityjson::CityJsonError),
     /// The source cannot be read.
     #[error(transparent)]
     Read(#[from] ReadError),
@@ -285,15 +285,16 @@ pub fn write_citygml<R: BufRead>(
     name: &Path,
     w: &mut dyn Write,
 ) -> Result<FromCityJsonSummary, FromCityJsonError> {
-    let cj =
-        |line: u64, id: Option<&str>, m: String| crate::io::cityjson::Error::at(name, line, id, m);
+    let cj = |line: u64, id: Option<&str>, m: String| {
+        crate::io::cityjson::CityJsonError::at(name, line, id, m)
+    };
     if r.fill_buf().is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF")) {
         r.consume(3);
     }
     let mut values = serde_json::Deserializer::from_reader(r).into_iter::<Doc>();
     let head = match values.next() {
         None => return Err(cj(0, None, "empty document".into()).into()),
-        Some(Err(e)) => return Err(crate::io::cityjson::Error::json(name, &e).into()),
+        Some(Err(e)) => return Err(crate::io::cityjson::CityJsonError::json(name, &e).into()),
         Some(Ok(d)) => d,
     };
     if head.ty != "CityJSON" {
@@ -317,7 +318,7 @@ pub fn write_citygml<R: BufRead>(
     let (mut seq, mut appearances) = (false, 0);
     for (k, v) in values.enumerate() {
         let line = k as u64 + 2;
-        let f = v.map_err(|e| crate::io::cityjson::Error::json(name, &e))?;
+        let f = v.map_err(|e| crate::io::cityjson::CityJsonError::json(name, &e))?;
         if f.ty != "CityJSONFeature" {
             let m = format!("a value of type {:?} after the CityJSON header (CityJSONSeq holds CityJSONFeature lines)", f.ty);
             return Err(cj(line, None, m).into());
@@ -408,8 +409,9 @@ impl<'a> Out<'a> {
                 continue;
             }
             verts.reset_box();
-            let x = write_object(&u, k, &mut verts, &mut self.tally, 0)
-                .map_err(|(id, m)| crate::io::cityjson::Error::at(self.name, line, Some(&id), m))?;
+            let x = write_object(&u, k, &mut verts, &mut self.tally, 0).map_err(|(id, m)| {
+                crate::io::cityjson::CityJsonError::at(self.name, line, Some(&id), m)
+            })?;
             let Some(mut x) = x else { continue };
             if verts.bbox[0] <= verts.bbox[3] {
                 let env = format!(
@@ -469,7 +471,7 @@ fn real(
     t: Option<doc::Transform>,
     name: &Path,
     line: u64,
-) -> Result<Vec<[f64; 3]>, crate::io::cityjson::Error> {
+) -> Result<Vec<[f64; 3]>, crate::io::cityjson::CityJsonError> {
     let (s, o) = t.map_or(([1.0; 3], [0.0; 3]), |t| (t.scale, t.translate));
     raw.iter()
         .enumerate()
@@ -481,7 +483,7 @@ fn real(
                 let m = format!(
                     "vertex {k} {v:?} is not a finite coordinate of magnitude at most 1e12"
                 );
-                Err(crate::io::cityjson::Error::at(name, line, None, m))
+                Err(crate::io::cityjson::CityJsonError::at(name, line, None, m))
             }
         })
         .collect()

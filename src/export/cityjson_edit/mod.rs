@@ -425,7 +425,10 @@ impl Values {
                 self.line += 1;
                 Ok(Some(v))
             }
-            Some(Err(e)) => Err(cj_error(crate::io::cityjson::Error::json(&self.input, &e))),
+            Some(Err(e)) => Err(cj_error(crate::io::cityjson::CityJsonError::json(
+                &self.input,
+                &e,
+            ))),
         }
     }
 

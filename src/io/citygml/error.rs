@@ -105,7 +105,7 @@ pub enum ReadError {
     },
     /// A CityJSON document that cannot be read ([`crate::io::cityjson`]).
     #[error("{0}")]
-    CityJson(#[from] crate::io::cityjson::Error),
+    CityJson(#[from] crate::io::cityjson::CityJsonError),
     /// A resource limit protecting against hostile input was exceeded.
     #[error("{loc}: {message}")]
     Limit {

@@ -123,7 +123,7 @@ fn refuse_json(head: &[u8], name: &Path) -> Result<(), ReadError> {
 }
 
 /// A source document ready to parse: see [`load`].
-pub enum Document {
+pub enum Loaded {
     /// The whole uncompressed document.
     Plain(Bytes),
     /// A decompressing reader, and the compressed size in bytes.
@@ -153,7 +153,7 @@ impl std::ops::Deref for Bytes {
 }
 
 /// Open `path` whole ([`load_source`] of [`resolve`]: `-` is standard input).
-pub fn load(path: &Path) -> Result<Document, ReadError> {
+pub fn load(path: &Path) -> Result<Loaded, ReadError> {
     load_source(&resolve(path)?, path)
 }
 
@@ -162,7 +162,7 @@ pub fn load(path: &Path) -> Result<Document, ReadError> {
 /// uncompressed file is memory-mapped: its pages come from the page cache as they are (no
 /// copy, no zeroed buffer), the cheapest way to hold a large document; a document in memory
 /// is parsed where it is. `name` names the source in errors.
-pub fn load_source(src: &Source, name: &Path) -> Result<Document, ReadError> {
+pub fn load_source(src: &Source, name: &Path) -> Result<Loaded, ReadError> {
     let path = match src {
         Source::File(p) => p.as_path(),
         Source::Memory(b) => return Ok(document(Bytes::Shared(Arc::clone(b)))),
@@ -192,12 +192,12 @@ pub fn load_source(src: &Source, name: &Path) -> Result<Document, ReadError> {
 }
 
 /// A whole document: plain, or gzip to decompress as it is read.
-fn document(bytes: Bytes) -> Document {
+fn document(bytes: Bytes) -> Loaded {
     if crate::io::files::is_gzip(&bytes) {
         let len = bytes.len() as u64;
-        Document::Gzip(crate::io::files::gunzip(Cursor::new(bytes)), len)
+        Loaded::Gzip(crate::io::files::gunzip(Cursor::new(bytes)), len)
     } else {
-        Document::Plain(bytes)
+        Loaded::Plain(bytes)
     }
 }
 

@@ -18,7 +18,7 @@
 //!   reference point (CityGML's implicit geometry). Points and lines carry no polygons.
 
 use super::doc::{CityObject, Geometry, Semantics, Templates, Transform};
-use super::Error;
+use super::CityJsonError;
 use crate::model::{Asset, AssetKind, Building, LodGeometry, Polygon, Warning};
 use glam::{DMat4, DVec3, DVec4};
 use serde::Deserialize;
@@ -115,7 +115,7 @@ pub(crate) fn real_vertices(
     transform: Option<&Transform>,
     file: &Path,
     line: u64,
-) -> Result<Vec<DVec3>, Error> {
+) -> Result<Vec<DVec3>, CityJsonError> {
     let (s, t) = match transform {
         Some(t) => (DVec3::from(t.scale), DVec3::from(t.translate)),
         None => (DVec3::ONE, DVec3::ZERO),
@@ -127,7 +127,7 @@ pub(crate) fn real_vertices(
             if p.is_finite() && p.abs().max_element() <= MAX_COORDINATE {
                 Ok(p)
             } else {
-                Err(Error::at(
+                Err(CityJsonError::at(
                     file,
                     line,
                     None,
@@ -175,7 +175,7 @@ impl Mapper {
         objects: &[(String, CityObject)],
         verts: &Vertices<'_>,
         line: u64,
-    ) -> Result<(), Error> {
+    ) -> Result<(), CityJsonError> {
         // buildings first, so that installations and parts of this batch find them
         let first = self.buildings.len();
         for (id, o) in objects {
@@ -428,7 +428,7 @@ impl Mapper {
         o: &'a CityObject,
         verts: &Vertices<'a>,
         line: u64,
-    ) -> Result<Vec<GeomOut<'a>>, Error> {
+    ) -> Result<Vec<GeomOut<'a>>, CityJsonError> {
         let mut out = Vec::with_capacity(o.geometry.len());
         for g in &o.geometry {
             out.push(self.geometry(id, g, verts, line)?);
@@ -442,8 +442,8 @@ impl Mapper {
         g: &'a Geometry,
         verts: &Vertices<'a>,
         line: u64,
-    ) -> Result<GeomOut<'a>, Error> {
-        let err = |m: String| Error::at(&self.file, line, Some(id), m);
+    ) -> Result<GeomOut<'a>, CityJsonError> {
+        let err = |m: String| CityJsonError::at(&self.file, line, Some(id), m);
         if g.ty == "GeometryInstance" {
             self.implicit_geometries += 1;
             let t = verts
@@ -499,9 +499,9 @@ impl Mapper {
         list: &[DVec3],
         line: u64,
         count: bool,
-    ) -> Result<GeomOut<'a>, Error> {
+    ) -> Result<GeomOut<'a>, CityJsonError> {
         let file = Arc::clone(&self.file);
-        let err = |m: String| Error::at(&file, line, Some(id), m);
+        let err = |m: String| CityJsonError::at(&file, line, Some(id), m);
         let value = match g.lod.as_ref().map(|l| (l, l.value())) {
             Some((_, Some(v))) => v,
             Some((l, None)) => return Err(err(format!("{} geometry: bad lod {l:?}", g.ty))),

@@ -30,11 +30,11 @@
 
 pub(crate) mod doc;
 pub mod map;
-pub(crate) mod seq;
-pub(crate) use seq::reference_system_text;
+pub(crate) mod read;
+pub(crate) use read::reference_system_text;
 
 pub use map::Origin;
-pub use seq::{read_reader, read_slice, read_slice_with_origins};
+pub use read::{read_reader, read_slice, read_slice_with_origins};
 
 use crate::model::CityModel;
 use std::fmt;
@@ -42,7 +42,7 @@ use std::path::{Path, PathBuf};
 
 /// Why a CityJSON document could not be read.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub struct Error {
+pub struct CityJsonError {
     /// The file.
     pub file: PathBuf,
     /// 1-based line, 0 when unknown.
@@ -55,7 +55,7 @@ pub struct Error {
     pub message: String,
 }
 
-impl fmt::Display for Error {
+impl fmt::Display for CityJsonError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}", crate::model::shown(&self.file))?;
         if self.line > 0 {
@@ -68,9 +68,9 @@ impl fmt::Display for Error {
     }
 }
 
-impl Error {
-    pub(crate) fn at(file: &Path, line: u64, id: Option<&str>, message: String) -> Error {
-        Error {
+impl CityJsonError {
+    pub(crate) fn at(file: &Path, line: u64, id: Option<&str>, message: String) -> CityJsonError {
+        CityJsonError {
             file: file.to_path_buf(),
             line,
             column: 0,
@@ -80,13 +80,13 @@ impl Error {
     }
 
     /// A JSON parser's error, with its line and column.
-    pub(crate) fn json(file: &Path, e: &serde_json::Error) -> Error {
+    pub(crate) fn json(file: &Path, e: &serde_json::Error) -> CityJsonError {
         let text = e.to_string();
         let message = match text.rsplit_once(" at line ") {
             Some((m, _)) => m.to_string(),
             None => text,
         };
-        Error {
+        CityJsonError {
             file: file.to_path_buf(),
             line: e.line() as u64,
             column: e.column() as u64,

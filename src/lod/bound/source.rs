@@ -16,7 +16,7 @@ use crate::lod::hollow::Hollow;
 use crate::lod::rough::RoughGeometry;
 use crate::lod::scene::{detail_boxes, full_scene_of, mixed_scene_of};
 use crate::model::{Asset, Bbox, CityModel};
-use crate::solar::trace::Scene;
+use crate::solar::trace::TraceScene;
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, PoisonError};
@@ -229,7 +229,7 @@ pub(super) fn full_part(
     src: &dyn FullSource,
     include: Option<&[bool]>,
     frame: Option<(Bbox, usize)>,
-) -> Result<Scene, BoundError> {
+) -> Result<TraceScene, BoundError> {
     let n = src.asset_count();
     let which: Vec<usize> = match include {
         Some(inc) => (0..n)
@@ -256,7 +256,7 @@ impl<'s> LodAssets<'s> {
         src: &'s dyn FullSource,
         rough: &[RoughGeometry],
         levels: &[u8],
-    ) -> Result<Scene, BoundError> {
+    ) -> Result<TraceScene, BoundError> {
         let above: Vec<usize> = (0..src.asset_count())
             .filter(|&i| levels.get(i).is_some_and(|&l| l > 0))
             .collect();

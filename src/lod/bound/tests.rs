@@ -259,7 +259,7 @@ fn restricted_full_scene_answers_as_the_whole_model() {
     }
 }
 
-fn tags_of(scene: &Scene, p: &Probe) -> Vec<Option<u32>> {
+fn tags_of(scene: &TraceScene, p: &Probe) -> Vec<Option<u32>> {
     tags(scene, p)
 }
 

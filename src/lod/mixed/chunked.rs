@@ -33,7 +33,7 @@ use super::id_table::IdTable;
 use super::plan::{self, Plan, Scope, Shared};
 use super::{index, MixedSummary};
 use crate::io::citygml::read::{member_chunks, ReadOptions, SeenIds};
-use crate::io::citygml::source::{self, Bytes, Document};
+use crate::io::citygml::source::{self, Bytes, Loaded};
 use crate::io::citygml::write::{envelope_xml, Edit};
 use crate::lod::rough::RoughGeometry;
 use crate::model::{Bbox, CityModel, Source};
@@ -91,8 +91,7 @@ fn plan_in_chunks(
     let Source::File(path) = &src.source else {
         return None;
     };
-    let Ok(Document::Plain(bytes @ Bytes::Mapped(_))) = source::load_source(&src.source, path)
-    else {
+    let Ok(Loaded::Plain(bytes @ Bytes::Mapped(_))) = source::load_source(&src.source, path) else {
         return None;
     };
     if bytes.len() as u64 != src.len {

@@ -61,7 +61,7 @@ pub mod layout;
 pub mod mesh;
 pub mod poi;
 
-pub use poi::{pois, pois_path, write_pois_csv, Poi};
+pub use poi::{pois, pois_path, write_pois_csv, SynthPoi};
 
 use crate::model::Bbox;
 use std::collections::BTreeMap;

@@ -31,7 +31,7 @@ pub const POI_OFFSET: f64 = 0.05;
 
 /// A point of interest on a facade.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Poi {
+pub struct SynthPoi {
     /// The gml:id of the window it belongs to.
     pub id: String,
     /// Position (EPSG:25831 metres).
@@ -40,9 +40,9 @@ pub struct Poi {
     pub normal: DVec3,
 }
 
-impl From<Poi> for crate::model::Poi {
+impl From<SynthPoi> for crate::model::Poi {
     /// The generic POI of the analysis stages (with its normal).
-    fn from(p: Poi) -> Self {
+    fn from(p: SynthPoi) -> Self {
         crate::model::Poi {
             id: p.id,
             position: p.position,
@@ -54,7 +54,7 @@ impl From<Poi> for crate::model::Poi {
 /// POIs of the district: in the central block, the central first-floor street window of
 /// every chamfer (corner) building, plus one such window mid-street on the south and east
 /// sides (every listed side lot when the preset limits the buildings per block).
-pub fn pois(opts: &SynthOptions) -> Vec<Poi> {
+pub fn pois(opts: &SynthOptions) -> Vec<SynthPoi> {
     let mut out = Vec::new();
     if opts.lod < 3 || opts.blocks_x == 0 || opts.blocks_y == 0 {
         return out;
@@ -86,7 +86,7 @@ pub fn pois(opts: &SynthOptions) -> Vec<Poi> {
                 da.total_cmp(&db)
             });
         if let Some((k, o)) = best {
-            out.push(Poi {
+            out.push(SynthPoi {
                 id: opening_id(&bid, k),
                 position: o.centre + o.normal * (o.recess + POI_OFFSET),
                 normal: o.normal,
@@ -97,7 +97,7 @@ pub fn pois(opts: &SynthOptions) -> Vec<Poi> {
 }
 
 /// Write POIs as CSV with header `id,x,y,z,nx,ny,nz` (positions 3 decimals, normals 6).
-pub fn write_pois_csv<W: Write>(pois: &[Poi], mut out: W) -> Result<(), SynthError> {
+pub fn write_pois_csv<W: Write>(pois: &[SynthPoi], mut out: W) -> Result<(), SynthError> {
     let mut buf = Vec::with_capacity(64 * (pois.len() + 1));
     buf.extend_from_slice(b"id,x,y,z,nx,ny,nz\n");
     for p in pois {

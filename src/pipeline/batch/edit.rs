@@ -2,7 +2,7 @@
 //! input's format: CityGML through [`crate::io::citygml::edit`] and
 //! [`crate::io::citygml::upgrade`], CityJSON and CityJSONSeq (by content, [`is_json_file`])
 //! through [`crate::export::cityjson_edit`] and, for an upgrade to a CityGML name,
-//! [`crate::export::citygml_from_cityjson`]. [`Edit::apply`] is what
+//! [`crate::export::citygml_from_cityjson`]. [`Transform::apply`] is what
 //! [`Batch::run_each`](super::run::Batch::run_each) runs on each input.
 
 use super::inputs::is_citygml_name;
@@ -17,7 +17,7 @@ use std::path::Path;
 /// An edit of a document, its rule with it.
 #[derive(Debug, Clone)]
 #[non_exhaustive]
-pub enum Edit {
+pub enum Transform {
     /// Keep the top-level city objects that match a box, ids or types.
     Subset(Subset),
     /// Keep or remove LoD representations.
@@ -27,7 +27,7 @@ pub enum Edit {
     Upgrade(UpgradeOptions),
 }
 
-impl Edit {
+impl Transform {
     /// Apply the edit to `input`, written to `out` (atomically; `-` for standard output); its
     /// summary line, naming the output `shown` (the merge target of a staged part).
     ///
@@ -43,20 +43,22 @@ impl Edit {
     ) -> Result<String, WriteError> {
         let json = is_json_file(input);
         Ok(match self {
-            Edit::Subset(r) if json => {
+            Transform::Subset(r) if json => {
                 cityjson_edit::subset(input, out, r, opts)?.describe(input, shown)
             }
-            Edit::Subset(r) => edit::subset(input, out, r, opts)?.describe(input, shown),
-            Edit::FilterLods(r) if json => {
+            Transform::Subset(r) => edit::subset(input, out, r, opts)?.describe(input, shown),
+            Transform::FilterLods(r) if json => {
                 cityjson_edit::filter_lods(input, out, r, opts)?.describe(input, shown)
             }
-            Edit::FilterLods(r) => edit::filter_lods(input, out, r, opts)?.describe(input, shown),
-            Edit::Upgrade(o) if !json => upgrade(input, out, o, opts)?.describe(input, shown),
-            Edit::Upgrade(_) if is_citygml_name(&out.to_string_lossy()) => {
+            Transform::FilterLods(r) => {
+                edit::filter_lods(input, out, r, opts)?.describe(input, shown)
+            }
+            Transform::Upgrade(o) if !json => upgrade(input, out, o, opts)?.describe(input, shown),
+            Transform::Upgrade(_) if is_citygml_name(&out.to_string_lossy()) => {
                 let v = TargetVersion::V3_0;
                 citygml_from_cityjson(input, out, v, opts)?.describe(input, shown)
             }
-            Edit::Upgrade(_) => {
+            Transform::Upgrade(_) => {
                 cityjson_edit::upgrade_cityjson(input, out, opts)?.describe(input, shown)
             }
         })
@@ -78,7 +80,7 @@ mod tests {
     /// `edit` and `direct` on `input`, each written into a new directory as `name`: their
     /// lines (the directory left out) and their bytes.
     fn both(
-        edit: &Edit,
+        edit: &Transform,
         input: &Path,
         name: &str,
         direct: impl Fn(&Path, &Path) -> String,
@@ -107,7 +109,7 @@ mod tests {
             mode,
             ..Lods::default()
         };
-        let e = Edit::FilterLods(lods.clone());
+        let e = Transform::FilterLods(lods.clone());
         let gml = fixture("chimney-citygml2.gml");
         let [a, b] = both(&e, &gml, "o.gml", |o, shown| {
             let opts = WriteOptions::default();
@@ -131,7 +133,7 @@ mod tests {
 
     #[test]
     fn an_upgrade_of_cityjson_follows_the_output_name() {
-        let e = Edit::Upgrade(UpgradeOptions::default());
+        let e = Transform::Upgrade(UpgradeOptions::default());
         let json = fixture("cityjson/cjio-dummy.city.json");
         let [a, b] = both(&e, &json, "o.gml", |o, shown| {
             let (v, opts) = (TargetVersion::V3_0, WriteOptions::default());

@@ -120,7 +120,7 @@ pub struct AssetRecord {
 /// One line of a levels file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
-pub enum Line {
+pub enum LevelsLine {
     /// The header.
     Header(Header),
     /// A POI.
@@ -219,16 +219,16 @@ pub fn write_levels(
     flags: &[Vec<PoiFlag>],
 ) -> std::io::Result<u64> {
     let mut n = 0u64;
-    let mut line = |l: &Line, w: &mut dyn Write| -> std::io::Result<()> {
+    let mut line = |l: &LevelsLine, w: &mut dyn Write| -> std::io::Result<()> {
         let mut s = serde_json::to_vec(l).map_err(std::io::Error::other)?;
         s.push(b'\n');
         n += s.len() as u64;
         w.write_all(&s)
     };
-    line(&Line::Header(header.clone()), w)?;
+    line(&LevelsLine::Header(header.clone()), w)?;
     for (i, (p, s)) in pois.iter().zip(&selection.pois).enumerate() {
         line(
-            &Line::Poi(PoiRecord {
+            &LevelsLine::Poi(PoiRecord {
                 seen: PoiSeen::new(p, s),
                 polygons: s.polygons,
                 seconds: s.seconds,
@@ -249,7 +249,7 @@ pub fn write_levels(
             .map(|f| f.path.display().to_string())
             .unwrap_or_default();
         line(
-            &Line::Asset(AssetRecord {
+            &LevelsLine::Asset(AssetRecord {
                 file,
                 span: [a.span.start, a.span.end],
                 id: a.id.as_deref().map(str::to_owned),
@@ -404,9 +404,10 @@ pub fn read_levels(path: &Path) -> Result<LevelsFile, LevelsError> {
         if l.trim().is_empty() {
             continue;
         }
-        let parsed: Line = serde_json::from_str(&l).map_err(|e| syntax(i + 1, e.to_string()))?;
+        let parsed: LevelsLine =
+            serde_json::from_str(&l).map_err(|e| syntax(i + 1, e.to_string()))?;
         match parsed {
-            Line::Header(h) if i == 0 => {
+            LevelsLine::Header(h) if i == 0 => {
                 if h.format != FORMAT || h.version != VERSION {
                     return Err(syntax(
                         1,
@@ -424,12 +425,12 @@ pub fn read_levels(path: &Path) -> Result<LevelsFile, LevelsError> {
                 rough.check().map_err(|m| syntax(1, m))?;
                 header = Some(h);
             }
-            Line::Header(_) => return Err(syntax(i + 1, "a second header".into())),
+            LevelsLine::Header(_) => return Err(syntax(i + 1, "a second header".into())),
             _ if header.is_none() => {
                 return Err(syntax(1, format!("not a levels file: no {FORMAT} header")))
             }
-            Line::Poi(p) => pois.push(p),
-            Line::Asset(a) => assets.push(a),
+            LevelsLine::Poi(p) => pois.push(p),
+            LevelsLine::Asset(a) => assets.push(a),
         }
     }
     let Some(header) = header else {

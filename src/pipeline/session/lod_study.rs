@@ -69,7 +69,7 @@ impl LodStudy {
     pub fn read_ms(&self) -> f64 {
         match self {
             LodStudy::Whole(s) => s.read_ms(),
-            LodStudy::Hollow(h) => super::tracing::round_ms(h.read_s()),
+            LodStudy::Hollow(h) => super::documents::round_ms(h.read_s()),
         }
     }
 

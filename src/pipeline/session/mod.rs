@@ -18,6 +18,7 @@
 //! ```
 
 pub mod bound_plan;
+pub mod documents;
 mod error;
 pub mod flags;
 pub mod hollow_study;
@@ -28,7 +29,6 @@ pub mod lod_write;
 pub mod pictures;
 pub mod report;
 pub mod site;
-pub mod tracing;
 pub mod weather;
 
 pub use error::{Error, Result};
@@ -335,7 +335,7 @@ pub struct Study {
     frame_warning: Option<crate::model::crs::FrameWarning>,
     failures: Vec<ReadError>,
     read_s: f64,
-    full: OnceLock<crate::solar::trace::Scene>,
+    full: OnceLock<crate::solar::trace::TraceScene>,
     sun: Mutex<Option<(SunOptions, Arc<SunTable>)>>,
 }
 
@@ -436,7 +436,7 @@ impl Study {
     }
 
     /// The full-detail scene (built on first use) and the seconds this call spent building it.
-    fn full(&self, progress: &dyn Progress) -> Result<(&crate::solar::trace::Scene, f64)> {
+    fn full(&self, progress: &dyn Progress) -> Result<(&crate::solar::trace::TraceScene, f64)> {
         if let Some(s) = self.full.get() {
             return Ok((s, 0.0));
         }
@@ -455,7 +455,7 @@ impl Study {
     /// `f` for every POI against the full-detail scene, with the seconds of building it.
     fn trace<T: Send>(
         &self,
-        f: impl Fn(&crate::solar::trace::Scene, &Poi) -> T + Sync,
+        f: impl Fn(&crate::solar::trace::TraceScene, &Poi) -> T + Sync,
         sky_rays: impl Fn(&T) -> Option<usize> + Sync,
         progress: &dyn Progress,
     ) -> Result<Traced<T>> {

@@ -1,6 +1,6 @@
 //! Ray casting against a triangle scene through an `obvhs` BVH (pipeline stage "trace").
 //!
-//! A [`Scene`] owns the triangles of many polygons, each tagged with a `u32` chosen by
+//! A [`TraceScene`] owns the triangles of many polygons, each tagged with a `u32` chosen by
 //! the caller (typically the asset index). [`SceneBuilder::build`] shifts everything
 //! to a local origin (the centre of the scene's bounding box, kept as f64) and converts
 //! to f32 before the BVH is built, because raw UTM coordinates (~5e6 m) in f32 lose
@@ -21,14 +21,14 @@
 //! them. The distance of the closest hit is then refined in f64 against the plane of
 //! the hit triangle.
 //!
-//! Results do not depend on the tree: [`Scene::first_hit`] returns the smallest f32
+//! Results do not depend on the tree: [`TraceScene::first_hit`] returns the smallest f32
 //! distance and, among triangles at exactly that distance (duplicated or coincident
 //! faces, shared edges), the smallest triangle index; the node boxes are grown a little
 //! (`node_pad`) so that obvhs' non-robust slab test never drops a triangle the triangle
 //! test hits. So layout, build effort, thread count and how POIs are split into shards
 //! never change an answer (`ties_resolve_to_smallest_triangle_index_whatever_the_tree`).
 //!
-//! All queries take `&self`; a [`Scene`] is `Send + Sync`, so callers parallelise over
+//! All queries take `&self`; a [`TraceScene`] is `Send + Sync`, so callers parallelise over
 //! rays with rayon. Results do not depend on the thread count.
 
 mod boxes;
@@ -40,4 +40,4 @@ mod scene;
 pub use boxes::BoxIndex;
 pub use polygons::scene_of;
 pub use query::Hit;
-pub use scene::{BuildQuality, BvhLayout, Scene, SceneBuilder};
+pub use scene::{BuildQuality, BvhLayout, SceneBuilder, TraceScene};

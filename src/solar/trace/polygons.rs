@@ -2,7 +2,7 @@
 //! The scenes of a model at a level of detail are [`crate::lod::scene`]'s; this one knows no
 //! levels (regions use it for the surfaces that hold their POIs).
 
-use super::{Scene, SceneBuilder};
+use super::{SceneBuilder, TraceScene};
 use crate::model::Polygon;
 
 /// A scene of the given polygons, each tagged with its asset index.
@@ -18,7 +18,7 @@ use crate::model::Polygon;
 /// let hit = scene.first_hit(DVec3::ZERO, DVec3::Z, 0.0, f64::INFINITY).unwrap();
 /// assert_eq!((hit.tag, (hit.t - 5.0).abs() < 1e-6), (7, true));
 /// ```
-pub fn scene_of<'a>(polys: impl IntoIterator<Item = (u32, &'a Polygon)>) -> Scene {
+pub fn scene_of<'a>(polys: impl IntoIterator<Item = (u32, &'a Polygon)>) -> TraceScene {
     let mut b = SceneBuilder::new();
     for (tag, p) in polys {
         b.add_polygon(tag, p);

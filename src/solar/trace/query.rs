@@ -1,7 +1,7 @@
-//! The ray queries of a [`Scene`]: the watertight triangle test, [`Scene::first_hit`] and
-//! [`Scene::occluded`] (see the module docs of [`crate::solar::trace`]).
+//! The ray queries of a [`TraceScene`]: the watertight triangle test, [`TraceScene::first_hit`] and
+//! [`TraceScene::occluded`] (see the module docs of [`crate::solar::trace`]).
 
-use super::scene::{Accel, Scene};
+use super::scene::{Accel, TraceScene};
 use glam::{DVec3, Vec3A};
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
@@ -93,7 +93,7 @@ impl Watertight {
     }
 }
 
-impl Scene {
+impl TraceScene {
     /// The f32 ray in local coordinates and its watertight constants, or `None` for a
     /// non-finite or zero direction, a non-finite origin or an empty interval.
     fn local_ray(
@@ -156,7 +156,7 @@ impl Scene {
         self.first_hit_f32(origin, dir, tmin, tmax).map(|(h, _)| h)
     }
 
-    /// [`Scene::first_hit`] and the f32 distance by which it won (hits are ordered by it,
+    /// [`TraceScene::first_hit`] and the f32 distance by which it won (hits are ordered by it,
     /// then by triangle index): for callers that merge the answers of several scenes built
     /// in one frame ([`SceneBuilder::with_frame`](super::SceneBuilder::with_frame)) from
     /// disjoint parts of one triangle list, where the smallest (f32 distance, position in
@@ -645,7 +645,7 @@ pub(super) mod tests {
     /// test: the smallest (t, triangle index). Returns (t, triangle, number of
     /// triangles at exactly that t).
     fn brute_closest(
-        s: &Scene,
+        s: &TraceScene,
         o: DVec3,
         d: DVec3,
         tmin: f64,

@@ -16,7 +16,7 @@ use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-/// Which obvhs acceleration structure a [`Scene`] uses.
+/// Which obvhs acceleration structure a [`TraceScene`] uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BvhLayout {
     /// Compressed wide BVH8 (8-way, SIMD node tests). The faster one; the default.
@@ -51,7 +51,7 @@ impl BuildQuality {
     }
 }
 
-/// Collects tagged triangles in model coordinates; [`SceneBuilder::build`] makes a [`Scene`].
+/// Collects tagged triangles in model coordinates; [`SceneBuilder::build`] makes a [`TraceScene`].
 ///
 /// Non-finite triangles and zero-area triangles are skipped.
 #[derive(Debug, Clone, Default)]
@@ -89,7 +89,7 @@ impl SceneBuilder {
     /// quick build saves about as much per triangle as it costs more per ray, hence the
     /// threshold: the paper district's selection scene (166K triangles, 60K rays) gains, the
     /// 1 GB city's (1.33M triangles, 1M rays) would not, so it keeps the CWBVH. Call it after
-    /// the last triangle is added. Results do not depend on the choice ([`Scene::first_hit`] breaks ties by
+    /// the last triangle is added. Results do not depend on the choice ([`TraceScene::first_hit`] breaks ties by
     /// triangle index), so a shard that traces fewer rays may build another tree and
     /// still agree.
     pub fn for_rays(self, rays: usize) -> Self {
@@ -106,7 +106,7 @@ impl SceneBuilder {
     /// the local origin is its centre and the node boxes are grown as for it, so every
     /// triangle gets the same f32 coordinates, and every ray the same f32 distances, as in
     /// that scene. A scene made of part of another's triangles, added in the same order,
-    /// then answers [`Scene::first_hit`] exactly as the whole would for every ray whose
+    /// then answers [`TraceScene::first_hit`] exactly as the whole would for every ray whose
     /// answer there is one of its triangles and that no left-out triangle hits as close.
     /// Ignored when `bbox` is empty.
     pub fn with_frame(mut self, bbox: Bbox) -> Self {
@@ -156,7 +156,7 @@ impl SceneBuilder {
     }
 
     /// Build the BVH. An empty builder gives an empty scene in which every ray is free.
-    pub fn build(mut self) -> Scene {
+    pub fn build(mut self) -> TraceScene {
         // min and max are exact in any order: the box is the serial one
         let bbox = (self.tris.par_iter())
             .fold(
@@ -192,7 +192,7 @@ impl SceneBuilder {
             .collect();
         drop(world);
         if local.is_empty() {
-            return Scene {
+            return TraceScene {
                 origin,
                 bbox,
                 tris: Vec::new(),
@@ -217,7 +217,7 @@ impl SceneBuilder {
         let (tris, slot_triangle): (Vec<Triangle>, Vec<u32>) = (indices.par_iter())
             .filter_map(|&i| Some((*local.get(i as usize)?, i)))
             .unzip();
-        Scene {
+        TraceScene {
             origin,
             bbox,
             tris,
@@ -343,7 +343,7 @@ impl std::fmt::Debug for Accel {
 /// assert!(!scene.occluded(o, DVec3::Z, 0.0, f64::INFINITY));
 /// ```
 #[derive(Debug, Clone)]
-pub struct Scene {
+pub struct TraceScene {
     pub(super) origin: DVec3,
     pub(super) bbox: Bbox,
     /// Local f32 triangles in BVH slot order.
@@ -357,7 +357,7 @@ pub struct Scene {
     pub(super) accel: Accel,
 }
 
-impl Scene {
+impl TraceScene {
     /// Number of triangles in the scene.
     pub fn len(&self) -> usize {
         self.tris.len()
@@ -413,6 +413,6 @@ mod tests {
     #[test]
     fn scene_is_send_and_sync() {
         fn assert_send_sync<T: Send + Sync>() {}
-        assert_send_sync::<Scene>();
+        assert_send_sync::<TraceScene>();
     }
 }

@@ -8,7 +8,7 @@ use crate::Outcome;
 use skylod::export::report::evaluate::write_table;
 use skylod::export::report::sun_hours::SunSetting;
 use skylod::lod::LodOptions;
-use skylod::pipeline::session::tracing::EvaluateRequest;
+use skylod::pipeline::session::documents::EvaluateRequest;
 use skylod::solar::{Site, SunTable};
 use std::io::Write;
 use std::time::Instant;

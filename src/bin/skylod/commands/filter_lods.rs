@@ -5,7 +5,7 @@
 use crate::args::citygml_io::EditArgs;
 use crate::Outcome;
 use skylod::io::citygml::edit::{LodMode, Lods};
-use skylod::pipeline::batch::edit::Edit;
+use skylod::pipeline::batch::edit::Transform;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -34,6 +34,6 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         &args.edit.io,
         "filter-lods",
         &args.edit.jobs,
-        Edit::FilterLods(rule),
+        Transform::FilterLods(rule),
     )
 }

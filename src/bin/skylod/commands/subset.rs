@@ -7,7 +7,7 @@ use crate::Outcome;
 use anyhow::Context;
 use skylod::io::citygml::edit::{BboxMode, Subset};
 use skylod::model::crs::Crs;
-use skylod::pipeline::batch::edit::Edit;
+use skylod::pipeline::batch::edit::Transform;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -64,5 +64,10 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         invert: args.invert,
         limit: args.limit,
     };
-    crate::outputs::per_input_jobs(&args.edit.io, "subset", &args.edit.jobs, Edit::Subset(rule))
+    crate::outputs::per_input_jobs(
+        &args.edit.io,
+        "subset",
+        &args.edit.jobs,
+        Transform::Subset(rule),
+    )
 }

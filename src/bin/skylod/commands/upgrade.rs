@@ -6,7 +6,7 @@
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
 use skylod::io::citygml::upgrade::UpgradeOptions;
-use skylod::pipeline::batch::edit::Edit;
+use skylod::pipeline::batch::edit::Transform;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -33,5 +33,5 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         args.map_lod0_roof_edge,
         args.map_lod1_multi_surfaces,
     );
-    crate::outputs::per_input_jobs(&args.io, "upgrade", &args.jobs, Edit::Upgrade(options))
+    crate::outputs::per_input_jobs(&args.io, "upgrade", &args.jobs, Transform::Upgrade(options))
 }

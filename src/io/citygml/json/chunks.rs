@@ -38,8 +38,8 @@ use crate::io::citygml::read::{Chunk, StreamSummary, Streamed};
 use crate::io::citygml::{ReadError, WriteError};
 use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
 use crate::io::cityjson::map::{real_vertices, Mapper, Vertices};
-use crate::io::cityjson::seq::{check_version, source_file, template_vertices};
-use crate::io::cityjson::Error;
+use crate::io::cityjson::read::{check_version, source_file, template_vertices};
+use crate::io::cityjson::CityJsonError as Error;
 use crate::model::{Asset, AssetKind, Building, CityModel, Warning};
 use glam::DVec3;
 use serde::Deserialize;
@@ -549,7 +549,7 @@ pub(crate) fn stream_prepared<E>(
         m
     };
     let mut sum = StreamSummary {
-        version: Some(crate::io::cityjson::seq::model_version(&p.version)),
+        version: Some(crate::io::cityjson::read::model_version(&p.version)),
         srs_name: srs_name.clone(),
         ..StreamSummary::default()
     };

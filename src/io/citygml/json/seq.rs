@@ -17,8 +17,8 @@ use super::stream::{id_hash, Counted};
 use crate::io::citygml::read::{Chunk, StreamSummary};
 use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
 use crate::io::cityjson::map::{real_vertices, Mapper, Vertices};
-use crate::io::cityjson::seq::{check_version, model_version, source_file, template_vertices};
-use crate::io::cityjson::Error;
+use crate::io::cityjson::read::{check_version, model_version, source_file, template_vertices};
+use crate::io::cityjson::CityJsonError;
 use serde::de::{Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
 use serde_json::value::RawValue;
@@ -126,7 +126,7 @@ pub(super) fn stream_seq<E>(
     passed: &dyn Fn(u64),
     mut each: impl FnMut(Chunk) -> Result<(), E>,
 ) -> Result<StreamSummary, Stop<E>> {
-    let read = |e: &serde_json::Error| Stop::Read(Error::json(path, e));
+    let read = |e: &serde_json::Error| Stop::Read(CityJsonError::json(path, e));
     let r = input.open().map_err(|e| Stop::Declined(e.to_string()))?;
     let gzip = input.gzip();
     // the file's size (a chunk's model is of the whole file)
@@ -191,7 +191,7 @@ pub(super) fn stream_seq<E>(
         let mut typed = Vec::with_capacity(l.objects.0.len());
         let mut copied = Vec::with_capacity(l.objects.0.len());
         for (id, o) in l.objects.0 {
-            let at = |m: String| Stop::Read(Error::at(path, line.max(1), Some(&id), m));
+            let at = |m: String| Stop::Read(CityJsonError::at(path, line.max(1), Some(&id), m));
             let t = serde_json::from_str::<CityObject>(o.get()).map_err(|e| at(e.to_string()))?;
             let c = serde_json::from_str::<Copied>(o.get()).map_err(|e| at(e.to_string()))?;
             links.add(&id, &t).map_err(Stop::Declined)?;

@@ -66,8 +66,8 @@ pub(crate) fn from_source(model: &CityModel, file: usize) -> io::Result<Option<F
     }
     let mut bytes = Vec::new();
     match crate::io::citygml::source::load_source(&f.source, &f.path).map_err(io::Error::other)? {
-        crate::io::citygml::source::Document::Plain(b) => bytes.extend_from_slice(&b),
-        crate::io::citygml::source::Document::Gzip(mut r, _) => {
+        crate::io::citygml::source::Loaded::Plain(b) => bytes.extend_from_slice(&b),
+        crate::io::citygml::source::Loaded::Gzip(mut r, _) => {
             r.read_to_end(&mut bytes)?;
         }
     }

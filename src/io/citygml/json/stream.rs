@@ -28,12 +28,12 @@ pub(crate) fn id_hash(id: &str) -> u64 {
     foldhash::fast::FixedState::with_seed(0x5b5e_7c17).hash_one(id.as_bytes())
 }
 
-pub(crate) fn cj_error(e: crate::io::cityjson::Error) -> WriteError {
+pub(crate) fn cj_error(e: crate::io::cityjson::CityJsonError) -> WriteError {
     WriteError::Read(ReadError::CityJson(e))
 }
 
 pub(crate) fn cj(file: &Path, line: u64, id: Option<&str>, m: String) -> WriteError {
-    cj_error(crate::io::cityjson::Error::at(file, line, id, m))
+    cj_error(crate::io::cityjson::CityJsonError::at(file, line, id, m))
 }
 
 /// The trees (each top-level object, then its descendants) over objects `ids` (by index; `index` finds an id's) with their `parents` and
@@ -234,7 +234,7 @@ pub(crate) fn read_slice(b: &[u8], name: &Path, pass: &mut dyn Pass) -> Result<S
         objects: false,
         vertices: false,
     };
-    let json = |e: serde_json::Error| cj_error(crate::io::cityjson::Error::json(name, &e));
+    let json = |e: serde_json::Error| cj_error(crate::io::cityjson::CityJsonError::json(name, &e));
     Top {
         pass,
         seen: &mut seen,
@@ -269,7 +269,7 @@ pub(crate) fn read_from(
         objects: false,
         vertices: false,
     };
-    let json = |e: serde_json::Error| cj_error(crate::io::cityjson::Error::json(name, &e));
+    let json = |e: serde_json::Error| cj_error(crate::io::cityjson::CityJsonError::json(name, &e));
     Top {
         pass,
         seen: &mut seen,

@@ -170,7 +170,7 @@ pub fn read_source_observed(
     // CityJSON and CityJSONSeq, recognised by content
     let mut model = match json_or_xml(source::load_source(&src, name)?, &src, name)? {
         Ok(model) => model,
-        Err(source::Document::Plain(doc)) => {
+        Err(source::Loaded::Plain(doc)) => {
             let len = doc.len() as u64;
             let told = Told::new(len, passed);
             let chunk = chunk_bytes(opts, len);
@@ -191,7 +191,7 @@ pub fn read_source_observed(
                 }
             }
         }
-        Err(source::Document::Gzip(reader, compressed)) => {
+        Err(source::Loaded::Gzip(reader, compressed)) => {
             // gzip-compressed CityGML is typically 8-12 times smaller than the document
             let hint = compressed.saturating_mul(8);
             events::read_sized(reader, name, true, opts, hint)?
@@ -208,23 +208,23 @@ pub fn read_source_observed(
 /// A CityJSON document read ([`crate::io::cityjson`]), or the document handed back for the
 /// CityGML reader.
 fn json_or_xml(
-    doc: source::Document,
+    doc: source::Loaded,
     src: &Source,
     name: &Path,
-) -> Result<Result<CityModel, source::Document>, ReadError> {
+) -> Result<Result<CityModel, source::Loaded>, ReadError> {
     use crate::io::citygml::json::chunks::{whole_model, Input};
     // through the chunked read's passes (memory follows the model, not a value of the whole
     // document); what they decline is read whole, as before
     Ok(Ok(match doc {
-        source::Document::Plain(doc) if source::is_json(&doc) => {
+        source::Loaded::Plain(doc) if source::is_json(&doc) => {
             match whole_model(Input::Bytes(&doc), name) {
                 Some(model) => model,
                 None => crate::io::cityjson::read_slice(&doc, name)?,
             }
         }
-        source::Document::Gzip(mut reader, n) => {
+        source::Loaded::Gzip(mut reader, n) => {
             if !source::is_json(source::peek(&mut reader)) {
-                return Ok(Err(source::Document::Gzip(reader, n)));
+                return Ok(Err(source::Loaded::Gzip(reader, n)));
             }
             let file = match src {
                 Source::File(p) => whole_model(Input::File(p), name),
@@ -281,13 +281,13 @@ impl<'a> Told<'a> {
 /// The file cannot be opened.
 pub fn read_file_chunked(path: &Path, opts: &ReadOptions) -> Result<Option<CityModel>, ReadError> {
     match source::load(path)? {
-        source::Document::Plain(doc) => {
+        source::Loaded::Plain(doc) => {
             let len = doc.len() as u64;
             let chunk = chunk_bytes(opts, len);
             let read = || collect::read_collected(&doc, path, opts, chunk, &|_| {});
             Ok((chunk < len).then(read).flatten())
         }
-        source::Document::Gzip(..) => Ok(None),
+        source::Loaded::Gzip(..) => Ok(None),
     }
 }
 

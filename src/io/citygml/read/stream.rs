@@ -290,9 +290,9 @@ pub fn stream_citygml<E>(
 ) -> Result<Streamed, E> {
     let decline = |why: &str| Ok(Streamed::Declined(why.to_string()));
     let (doc, on_disk) = match source::load(path) {
-        Ok(source::Document::Plain(doc)) => (doc, None),
+        Ok(source::Loaded::Plain(doc)) => (doc, None),
         // decompressed once into an unnamed temporary file, then streamed from its map
-        Ok(source::Document::Gzip(mut reader, len)) => match source::spill(&mut reader) {
+        Ok(source::Loaded::Gzip(mut reader, len)) => match source::spill(&mut reader) {
             Ok(doc) => (doc, Some(len)),
             Err(e) => return decline(&format!("decompressing: {e}")),
         },
@@ -533,7 +533,7 @@ impl Reread {
     /// The plain document at `path` read with `opts` (as its stream was); `None` for a
     /// compressed document or one whose head does not read.
     pub fn open(path: &Path, opts: &ReadOptions) -> Option<Reread> {
-        let source::Document::Plain(doc) = source::load(path).ok()? else {
+        let source::Loaded::Plain(doc) = source::load(path).ok()? else {
             return None;
         };
         let (bom, root_end) = {

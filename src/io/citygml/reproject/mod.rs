@@ -87,7 +87,7 @@ use std::io::BufRead;
 use std::path::Path;
 
 /// A transform of points in the document's axis order, in place; `Err` names the problem.
-pub type PointTransform<'a> = dyn Fn(&mut [DVec3]) -> Result<(), String> + 'a;
+pub type PointsFn<'a> = dyn Fn(&mut [DVec3]) -> Result<(), String> + 'a;
 
 /// What [`rewrite_file`] did.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -118,7 +118,7 @@ pub struct RewriteSummary {
 pub fn rewrite_file(
     src: &Path,
     out: &Path,
-    transform: &PointTransform<'_>,
+    transform: &PointsFn<'_>,
     target_srs: &str,
     opts: &WriteOptions,
 ) -> Result<RewriteSummary, WriteError> {
@@ -260,7 +260,7 @@ struct Scanner<'t, 'a> {
     /// The ids worth a box (hashed by [`streamed::id_hash`]): those some `xlink:href` names;
     /// `None`: every id.
     wanted: Option<HashSet<u64>>,
-    transform: &'t PointTransform<'t>,
+    transform: &'t PointsFn<'t>,
     target_srs: &'a str,
     edits: Vec<Edit>,
     summary: RewriteSummary,
@@ -279,12 +279,7 @@ struct Scanner<'t, 'a> {
 }
 
 impl<'t, 'a> Scanner<'t, 'a> {
-    fn new(
-        path: &'a Path,
-        transform: &'t PointTransform<'t>,
-        target_srs: &'a str,
-        mode: Mode,
-    ) -> Self {
+    fn new(path: &'a Path, transform: &'t PointsFn<'t>, target_srs: &'a str, mode: Mode) -> Self {
         Scanner {
             path,
             mode,
@@ -927,7 +922,7 @@ impl<'t, 'a> Scanner<'t, 'a> {
 /// them). [`rewrite_file`] is this plus the write.
 pub fn rewrite_edits(
     path: &Path,
-    transform: &PointTransform<'_>,
+    transform: &PointsFn<'_>,
     target_srs: &str,
 ) -> Result<(Vec<Edit>, RewriteSummary), WriteError> {
     let mut sc = Scanner::new(path, transform, target_srs, Mode::Whole);

@@ -20,7 +20,7 @@
 //! document the chunked reader declines (see [`stream`]) is read whole and rewritten as a
 //! small one.
 
-use super::{rewrite_edits, scan, Mode, PointTransform, RewriteSummary, Scanner};
+use super::{rewrite_edits, scan, Mode, PointsFn, RewriteSummary, Scanner};
 use crate::io::citygml::error::{ReadError, WriteError};
 use crate::io::citygml::read::{
     read_file, stream_citygml as stream, ReadOptions, Streamed, CHUNK_BYTES,
@@ -174,7 +174,7 @@ impl RewriteSource {
     pub fn rewrite<E: From<WriteError>>(
         self,
         out: &Path,
-        transform: &PointTransform<'_>,
+        transform: &PointsFn<'_>,
         target_srs: &str,
         opts: &WriteOptions,
         check: impl FnOnce(&mut RewriteSummary) -> Result<(), E>,
@@ -209,7 +209,7 @@ impl RewriteSource {
 /// with its points transformed and `envelopes` (pass 3's, in document order) in place.
 fn write_pass(
     path: &Path,
-    transform: &PointTransform<'_>,
+    transform: &PointsFn<'_>,
     target_srs: &str,
     envelopes: Vec<Edit>,
     len: u64,

@@ -28,13 +28,13 @@ fn doc(body: &str) -> String {
     )
 }
 
-fn rewrite(body: &str, t: &PointTransform<'_>) -> (String, RewriteSummary) {
+fn rewrite(body: &str, t: &PointsFn<'_>) -> (String, RewriteSummary) {
     rewrite_doc(&doc(body), t)
 }
 
 /// `text` rewritten whole and in passes ([`RewriteSource::read_with`]): the same bytes and
 /// the same summary, or the same error (nothing written).
-fn rewrite_doc(text: &str, t: &PointTransform<'_>) -> (String, RewriteSummary) {
+fn rewrite_doc(text: &str, t: &PointsFn<'_>) -> (String, RewriteSummary) {
     let (whole, passes) = (both(text, t, u64::MAX), both(text, t, 0));
     match (whole, passes) {
         (Ok(w), Ok(p)) => {
@@ -47,7 +47,7 @@ fn rewrite_doc(text: &str, t: &PointTransform<'_>) -> (String, RewriteSummary) {
 
 fn both(
     text: &str,
-    t: &PointTransform<'_>,
+    t: &PointsFn<'_>,
     stream_from: u64,
 ) -> Result<(String, RewriteSummary), String> {
     let dir = tempfile::tempdir().unwrap();

@@ -33,7 +33,7 @@ use super::surroundings::Surroundings;
 use crate::model::CityModel;
 use crate::model::Poi;
 use crate::model::POI_OFFSET;
-use crate::solar::trace::Scene;
+use crate::solar::trace::TraceScene;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -177,7 +177,7 @@ impl Owner {
 
 /// Who most probe rays from `origin` hit when every direction is blocked (`None` when one
 /// reaches the sky or the scene is empty).
-fn enclosed(scene: &Scene, model: &CityModel, origin: DVec3) -> Option<Option<String>> {
+fn enclosed(scene: &TraceScene, model: &CityModel, origin: DVec3) -> Option<Option<String>> {
     if scene.is_empty() {
         return None;
     }
@@ -207,7 +207,7 @@ fn enclosed(scene: &Scene, model: &CityModel, origin: DVec3) -> Option<Option<St
 /// known. The commands call [`poi_flags_around`], which adds the flags that need the
 /// surroundings.
 pub fn poi_flags(
-    scene: &Scene,
+    scene: &TraceScene,
     model: &CityModel,
     poi: &Poi,
     sky_rays: Option<usize>,
@@ -218,7 +218,7 @@ pub fn poi_flags(
 /// The flags of `poi` in their order: inside a building (then no other), what `between`
 /// adds, no sky.
 fn flags_with(
-    scene: &Scene,
+    scene: &TraceScene,
     model: &CityModel,
     poi: &Poi,
     sky_rays: Option<usize>,
@@ -239,7 +239,7 @@ fn flags_with(
 /// geometry around the POI: the full scene, or [`Surroundings::scene_holding`]), far below
 /// the buildings around it, its normal into the surface it lies on, no sky.
 pub fn poi_flags_around(
-    scene: &Scene,
+    scene: &TraceScene,
     model: &CityModel,
     around: &Surroundings,
     poi: &Poi,
@@ -270,7 +270,7 @@ fn in_triangle(q: DVec3, t: &[DVec3; 3], n: DVec3) -> bool {
 /// [`PoiFlag::NormalIntoSurface`] for `poi` when it has a normal and lies within
 /// [`ON_SURFACE`] of a full-detail polygon (the nearest counts).
 fn normal_into_surface(
-    scene: &Scene,
+    scene: &TraceScene,
     model: &CityModel,
     around: &Surroundings,
     poi: &Poi,

@@ -20,7 +20,7 @@
 //! ```
 
 use crate::model::{Bbox, CityModel, Polygon};
-use crate::solar::trace::{scene_of, Scene};
+use crate::solar::trace::{scene_of, TraceScene};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -185,7 +185,7 @@ impl Surroundings {
     /// A full-detail scene (tags: asset indices) of every building whose box, grown by
     /// `margin`, holds one of `points`: what the inside-building probe needs to judge the
     /// full geometry when the traced scene is another (the rough model of `lod`).
-    pub fn scene_holding(&self, model: &CityModel, points: &[DVec3], margin: f64) -> Scene {
+    pub fn scene_holding(&self, model: &CityModel, points: &[DVec3], margin: f64) -> TraceScene {
         let mut keep = vec![false; self.groups.len()];
         for p in points {
             for k in self.holding(*p, margin) {

@@ -11,11 +11,11 @@ use crate::Outcome;
 use anyhow::Context;
 use skylod::lod::LodOptions;
 use skylod::pipeline::batch::inputs::Input;
+use skylod::pipeline::session::documents::ms_since;
 use skylod::pipeline::session::lod_write::{
     check_report, write_report, LodLayout, ReportTargetError,
 };
 use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
-use skylod::pipeline::session::tracing::ms_since;
 use skylod::pipeline::session::{lod_read::lod_read, lod_study::LodStudy, SceneOptions};
 use skylod::pipeline::LevelsOptions;
 use std::path::PathBuf;

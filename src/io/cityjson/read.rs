@@ -3,7 +3,7 @@
 
 use super::doc::{Doc, Metadata, Templates};
 use super::map::{real_vertices, Counts, Mapper, Origin, Vertices};
-use super::Error;
+use super::CityJsonError;
 use crate::model::{CityGmlVersion, CityJsonFormat, CityModel, Source, SourceFile};
 use glam::DVec3;
 use std::cell::Cell;
@@ -14,8 +14,8 @@ use std::path::Path;
 /// errors and warnings).
 ///
 /// # Errors
-/// [`Error`]: not JSON, not CityJSON, a vertex index out of range, a non-finite coordinate...
-pub fn read_slice(bytes: &[u8], name: &Path) -> Result<CityModel, Error> {
+/// [`CityJsonError`]: not JSON, not CityJSON, a vertex index out of range, a non-finite coordinate...
+pub fn read_slice(bytes: &[u8], name: &Path) -> Result<CityModel, CityJsonError> {
     read_slice_with_origins(bytes, name).map(|(m, _)| m)
 }
 
@@ -27,7 +27,7 @@ pub fn read_slice(bytes: &[u8], name: &Path) -> Result<CityModel, Error> {
 pub fn read_slice_with_origins(
     bytes: &[u8],
     name: &Path,
-) -> Result<(CityModel, Vec<Origin>), Error> {
+) -> Result<(CityModel, Vec<Origin>), CityJsonError> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let de = serde_json::Deserializer::from_slice(bytes);
     let (mut model, origins) = read_values(de.into_iter::<Doc>(), name, false)?;
@@ -41,11 +41,15 @@ pub fn read_slice_with_origins(
 /// nothing but the current value is held); `gzip` is recorded in the model.
 ///
 /// # Errors
-/// As [`read_slice`]; I/O errors of `r` as [`Error`]s.
-pub fn read_reader<R: BufRead>(mut r: R, name: &Path, gzip: bool) -> Result<CityModel, Error> {
+/// As [`read_slice`]; I/O errors of `r` as [`CityJsonError`]s.
+pub fn read_reader<R: BufRead>(
+    mut r: R,
+    name: &Path,
+    gzip: bool,
+) -> Result<CityModel, CityJsonError> {
     let head = r
         .fill_buf()
-        .map_err(|e| Error::at(name, 0, None, format!("cannot read: {e}")))?;
+        .map_err(|e| CityJsonError::at(name, 0, None, format!("cannot read: {e}")))?;
     if head.starts_with(b"\xEF\xBB\xBF") {
         r.consume(3);
     }
@@ -78,14 +82,14 @@ fn read_values(
     mut values: impl Iterator<Item = Result<Doc, serde_json::Error>>,
     name: &Path,
     gzip: bool,
-) -> Result<(CityModel, Vec<Origin>), Error> {
+) -> Result<(CityModel, Vec<Origin>), CityJsonError> {
     let head = match values.next() {
-        None => return Err(Error::at(name, 0, None, "empty document".into())),
-        Some(Err(e)) => return Err(Error::json(name, &e)),
+        None => return Err(CityJsonError::at(name, 0, None, "empty document".into())),
+        Some(Err(e)) => return Err(CityJsonError::json(name, &e)),
         Some(Ok(d)) => d,
     };
     if head.ty != "CityJSON" {
-        return Err(Error::at(
+        return Err(CityJsonError::at(
             name,
             1,
             None,
@@ -113,9 +117,9 @@ fn read_values(
     let mut seq = false;
     for (k, v) in values.enumerate() {
         let line = k as u64 + 2;
-        let f = v.map_err(|e| Error::json(name, &e))?;
+        let f = v.map_err(|e| CityJsonError::json(name, &e))?;
         if f.ty != "CityJSONFeature" {
-            return Err(Error::at(
+            return Err(CityJsonError::at(
                 name,
                 line,
                 f.id.as_deref(),
@@ -168,7 +172,7 @@ pub(crate) fn model_version(version: &str) -> CityGmlVersion {
 pub(crate) fn template_vertices(
     templates: Option<&Templates>,
     name: &Path,
-) -> Result<Vec<DVec3>, Error> {
+) -> Result<Vec<DVec3>, CityJsonError> {
     Ok(templates
         .map(|t| real_vertices(&t.vertices, None, name, 1))
         .transpose()?
