@@ -82,7 +82,7 @@
 //! generate(&opts, &mut xml).unwrap();
 //! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
 //! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
-//! let r = lod(&model, &pois, &LodOptions::default()).unwrap();
+//! let r = lod(&model, &pois, &LodOptions::default(), &skylod::Silent).unwrap();
 //! let b = BoundOptions { max_svf_error: Some(0.001), ..Default::default() };
 //! let out = bound(&model, &r.rough, &r.selection.levels, &pois, &b, None).unwrap();
 //! assert!(out.met);
