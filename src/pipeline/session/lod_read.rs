@@ -10,7 +10,7 @@
 //! ([`head_model`]) with `--source-crs` over it, as the whole read's frame
 //! ([`crate::pipeline::frame`]) tells it, and a CityGML output ([`LodRead::served`]: OBJ and
 //! CityJSON are written from the whole read). Anything else is read whole, and [`WholeWhy`]
-//! says why, for the info line of the command ([`LodRead::note`]); where the hollow read
+//! says why (for the info line of the command); where the hollow read
 //! itself declines ([`LodRead::read_hollow`] gives `None`) the command reads whole too.
 //!
 //! **Whole where it fits.** The hollow read holds a chunk and what the selection keeps, the
@@ -26,7 +26,6 @@
 use super::site::head_model;
 use crate::model::crs::{model_crs, Crs, LocalFrame};
 use crate::model::runtime::available::available_bytes;
-use crate::model::shown;
 #[cfg(doc)]
 use crate::pipeline::batch::convert::chunk_for;
 use crate::pipeline::batch::convert::len_and_chunk;
@@ -69,15 +68,15 @@ pub enum WholeWhy {
     Fits {
         /// The file's size.
         bytes: u64,
-        /// The memory `lod` may take, and whether the user set it (`--max-memory`).
+        /// The memory `lod` may take, and whether the user set it (given).
         budget: Budget,
     },
     /// Compressed, CityJSON, or a document whose first chunk does not stream.
     NotPlain,
     /// The tracing frame is not the identity (its CRS named).
     Frame(String),
-    /// An option the hollow read does not serve (named as the command line names it).
-    Option(String),
+    /// An option the hollow read does not serve.
+    Option(Unserved),
     /// An output other than CityGML (OBJ and CityJSON are written from the whole read; the
     /// levels, bound, report and CityGML writer run on the hollow read:
     /// [`super::hollow_study`]).
@@ -102,7 +101,7 @@ impl std::fmt::Display for WholeWhy {
                 "not a plain CityGML file (compressed, CityJSON, or its first objects do not stream)"
             ),
             WholeWhy::Frame(crs) => write!(f, "{crs} is not traced in its own coordinates"),
-            WholeWhy::Option(o) => write!(f, "{o} is given"),
+            WholeWhy::Option(o) => write!(f, "{o} are asked for"),
             WholeWhy::NotServed => write!(
                 f,
                 "OBJ and CityJSON outputs are written from the whole read"
@@ -119,7 +118,7 @@ pub const DEFAULT_BUDGET: u64 = 1 << 30;
 /// The memory `lod` may take ([`memory_budget`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Budget {
-    /// Set by the user (`--max-memory`), in bytes.
+    /// Set by the user, in bytes.
     Given(u64),
     /// Not set: [`DEFAULT_BUDGET`], or half of what was available ([`available_bytes`]) where
     /// that is less, in bytes.
@@ -138,10 +137,10 @@ impl Budget {
 impl std::fmt::Display for Budget {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Budget::Given(b) => write!(f, "the {} of --max-memory", mib(*b)),
+            Budget::Given(b) => write!(f, "the {} given", mib(*b)),
             Budget::Default(b) => write!(
                 f,
-                "the {} lod may take by default (1 GiB, or half the memory available where that is less); --max-memory sets it",
+                "the {} lod may take by default (1 GiB, or half the memory available where that is less)",
                 mib(*b)
             ),
         }
@@ -149,11 +148,11 @@ impl std::fmt::Display for Budget {
 }
 
 /// `b` bytes in MiB, for a message.
-fn mib(b: u64) -> String {
+pub fn mib(b: u64) -> String {
     format!("{:.1} MiB", b as f64 / f64::from(1u32 << 20))
 }
 
-/// The memory `lod` may take: `given` (`--max-memory`), else [`DEFAULT_BUDGET`] or half of
+/// The memory `lod` may take: `given` (the user's), else [`DEFAULT_BUDGET`] or half of
 /// what the system and the job's control group have left ([`available_bytes`]), whichever is
 /// less (where what is left is not known, [`DEFAULT_BUDGET`]).
 pub fn memory_budget(given: Option<u64>) -> Budget {
@@ -165,7 +164,7 @@ pub fn memory_budget(given: Option<u64>) -> Budget {
     }
 }
 
-/// A size of memory as `--max-memory` takes it: bytes, or with a unit of 1024s (`2G`, `2GB`
+/// A size of memory: bytes, or with a unit of 1024s (`2G`, `2GB`
 /// and `2GiB` are all 2^31 bytes; decimals allowed: `1.5G`).
 ///
 /// # Errors
@@ -184,9 +183,31 @@ pub fn memory_size(text: &str) -> Result<u64, String> {
         .map_err(|e| format!("{e}: {text:?}"))
 }
 
-/// The options of `lod` the hollow read does not serve, as [`lod_read`] takes whether each
-/// is given: POIs in another CRS than the model's, POIs of a region, the reduce step.
-pub const NOT_SERVED: [&str; 3] = ["--poi-crs", "--facade or --region", "--reduce"];
+/// What the hollow read does not serve, each of which makes `lod` read whole.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unserved {
+    /// POIs in another CRS than the model's.
+    PoiCrs,
+    /// POIs sampled over a facade or a region.
+    Region,
+    /// The reduce step of shards' levels.
+    Reduce,
+}
+
+impl Unserved {
+    /// Each, in the order [`lod_read`] takes whether it is given.
+    pub const ALL: [Unserved; 3] = [Unserved::PoiCrs, Unserved::Region, Unserved::Reduce];
+}
+
+impl std::fmt::Display for Unserved {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Unserved::PoiCrs => "POIs in another CRS than the model's",
+            Unserved::Region => "POIs over a facade or a region",
+            Unserved::Reduce => "the reduce step of shards' levels",
+        })
+    }
+}
 
 impl LodRead {
     /// This read as the `lod` command takes it for an output in CityGML (`citygml`) or not:
@@ -197,20 +218,6 @@ impl LodRead {
             read => read,
         }
     }
-
-    /// The info line of a command that reads `inputs` (named by the first) this way: hollow
-    /// in chunks, or whole and why; `None` for no input or a file read whole for being under
-    /// the streaming threshold (the ordinary case, said by nothing).
-    pub fn note(&self, inputs: &[PathBuf]) -> Option<String> {
-        let input = shown(inputs.first()?);
-        match self {
-            LodRead::Whole(WholeWhy::Small { .. }) => None,
-            LodRead::Whole(why) => Some(format!("{input}: lod reads whole ({why})")),
-            LodRead::Hollow { chunk } => Some(format!(
-                "{input}: lod reads hollow, in chunks of {chunk} bytes (what the selection needs, the rest read again where it is written)"
-            )),
-        }
-    }
 }
 
 /// The read of `inputs` for `lod` (module docs): hollow in chunks of `chunk` bytes when there
@@ -218,20 +225,20 @@ impl LodRead {
 /// of at least four chunks whose frame, with `source_crs` over its `srsName`, is the identity;
 /// else whole, with the first reason found (the cheap ones first: the file's first objects
 /// are read only for a file large enough); whole too when an option of [`NOT_SERVED`] is
-/// given (`given`: whether each is); whole too when the file's size is within the memory
-/// `lod` may take (`max_memory`, `--max-memory`, or half of what is available:
+/// given (`given`: whether each of [`Unserved::ALL`] is); whole too when the file's size is within the memory
+/// `lod` may take (`max_memory`, the user's, or half of what is available:
 /// [`memory_budget`]; module docs).
 pub fn lod_read(
     inputs: &[PathBuf],
     stdin: bool,
     chunk: u64,
     source_crs: Option<&Crs>,
-    given: [bool; NOT_SERVED.len()],
+    given: [bool; Unserved::ALL.len()],
     max_memory: Option<u64>,
 ) -> LodRead {
     let whole = LodRead::Whole;
-    if let Some((_, o)) = given.iter().zip(NOT_SERVED).find(|(g, _)| **g) {
-        return whole(WholeWhy::Option(o.to_string()));
+    if let Some((_, o)) = given.iter().zip(Unserved::ALL).find(|(g, _)| **g) {
+        return whole(WholeWhy::Option(o));
     }
     let [path] = inputs else {
         return whole(WholeWhy::Inputs(inputs.len()));
@@ -337,23 +344,6 @@ mod tests {
             )),
             WholeWhy::NotPlain
         );
-        let r = lod_read(
-            std::slice::from_ref(&gz),
-            false,
-            small / 4,
-            None,
-            N,
-            Some(0),
-        );
-        let note = r.note(std::slice::from_ref(&gz)).unwrap();
-        assert!(note.ends_with("lod reads whole (not a plain CityGML file (compressed, CityJSON, or its first objects do not stream))"), "{note}");
-        let note = LodRead::Hollow { chunk: 1 }.note(std::slice::from_ref(&gz));
-        assert!(note
-            .unwrap()
-            .contains("lod reads hollow, in chunks of 1 bytes"));
-        assert_eq!(r.note(&[]), None);
-        let quiet = LodRead::Whole(WholeWhy::Small { bytes: 1, chunk: 1 });
-        assert_eq!(quiet.note(one), None);
         let served = LodRead::Hollow { chunk: 1 }.served(false);
         assert_eq!(served, LodRead::Whole(WholeWhy::NotServed));
         let served = LodRead::Hollow { chunk: 1 }.served(true);
@@ -368,7 +358,7 @@ mod tests {
                 budget: fits
             }
         );
-        assert!(w.to_string().ends_with("MiB of --max-memory"), "{w}");
+        assert!(w.to_string().ends_with("MiB given"), "{w}");
         let r = lod_read(one, false, small, None, N, Some(len - 1));
         assert_eq!(r, LodRead::Hollow { chunk: small });
         let half = Budget::Default(len).to_string();
@@ -389,6 +379,10 @@ mod tests {
             [false, true, true],
             Some(0),
         ));
-        assert_eq!(w.to_string(), "--facade or --region is given");
+        assert_eq!(w, WholeWhy::Option(Unserved::Region));
+        assert_eq!(
+            w.to_string(),
+            "POIs over a facade or a region are asked for"
+        );
     }
 }

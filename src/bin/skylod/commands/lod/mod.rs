@@ -3,6 +3,7 @@
 //! the shards' levels files, [`shard`]), the error bound, outputs written
 //! ([`skylod::pipeline::session::lod_write`]) and the report ([`skylod::pipeline::session::report`]).
 
+mod read_note;
 pub mod shard;
 
 use crate::args::{output::OutputArgs, poi::PoiArgs, rough::RoughArgs, select::SelectArgs};
@@ -90,7 +91,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (chunk, crs) = (args.stream.stream_chunk, c.source.source_crs.as_ref());
     let read = lod_read(ins, spool.is_used(), chunk, crs, given, args.max_memory)
         .served(layout.batch.format == skylod::export::Format::CityGml);
-    read.note(ins).iter().for_each(|l| info!("{l}"));
+    read_note::read_note(&read, ins)
+        .iter()
+        .for_each(|l| info!("{l}"));
     // The sun's table, but for the site the model gives, computed while the model is read
     // (in rayon's pool: sized first), near the site of the first input's first objects.
     args.pois.jobs.global()?;
