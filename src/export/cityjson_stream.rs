@@ -1,46 +1,27 @@
-//! CityJSON and CityJSONSeq of a whole file from a streamed read
-//! ([`crate::io::citygml::read::stream`]): the bytes of [`super::cityjson::write_cityjson`] and
-//! [`super::cityjson::write_cityjsonseq`] of the whole model with [`Content::Full`], memory that
-//! follows a chunk.
+//! The vertex index of a CityJSON document written from a streamed read
+//! ([`super::cityjson::write`] over [`super::Chunks::Stream`]), on disk: memory that follows
+//! a chunk, not the document.
 //!
-//! What the whole model gives at once is gathered in passes over the file, one chunk at a time:
-//!
-//! 1. **plan**: the bounding box (the header's extent and `transform`), the CRS, the
-//!    buildings' ids (made unique in document order, as the whole writer does);
-//! 2. **objects**: buildings (with their parts and installations) in document order, then, in
-//!    another pass when the file has any, the city objects outside buildings (the whole
-//!    writer's order). The installations' and other objects' ids are made unique in the first
-//!    of these passes, after every building's.
-//!
-//! CityJSONSeq writes each feature's vertices on its line: the objects passes write the
-//! document. CityJSON shares one vertex list over the whole document, numbered by first use:
-//! a list as large as the document's distinct vertices. So CityJSON runs the objects passes
-//! twice. The first writes nothing: every use of a vertex (its integer coordinates and its
-//! number among all uses) goes to one of `B` temporary bucket files chosen by a hash of the
-//! coordinates. Each bucket is then read alone, 1 MiB of records at a time (a map of its
-//! distinct vertices in memory: `B` grows with the file, about one per 32 MiB of document),
-//! to find every use's first use, written back over the record; a bit per use marks the first
-//! uses, and a vertex's index is the number of first uses before its own (the bits and a
-//! count per 64 of them: 0.19 bytes a use, the part of memory that grows with the
-//! document, 15 MB for 80 million uses). The second objects pass writes the document: a
-//! use's index is read from its bucket (in the order of the first pass) and a vertex met
-//! the first time goes to a temporary list, copied out after the city objects.
+//! CityJSON shares one vertex list over the whole document, numbered by first use: a list
+//! as large as the document's distinct vertices, which a model in memory keeps in memory. A
+//! stream runs the objects passes twice instead. The first writes nothing
+//! ([`record_uses`]): every use of a vertex (its integer coordinates and its number among
+//! all uses) goes to one of `B` temporary bucket files chosen by a hash of the coordinates.
+//! Each bucket is then read alone, 1 MiB of records at a time (a map of its distinct
+//! vertices in memory: `B` grows with the file, about one per 32 MiB of document), to find
+//! every use's first use, written back over the record; a bit per use marks the first uses,
+//! and a vertex's index is the number of first uses before its own (the bits and a count
+//! per 64 of them: 0.19 bytes a use, the part of memory that grows with the document, 15 MB
+//! for 80 million uses). The second objects pass writes the document: a use's index is read
+//! from its bucket (in the order of the first pass) and a vertex met the first time goes to
+//! a temporary list, copied out after the city objects.
 //!
 //! Temporary files are unnamed (in the system's temporary directory, `TMPDIR`), gone when
 //! the writer ends whatever happens: 32 bytes a vertex use plus 24 a distinct vertex.
-//! Unique ids are kept as 128-bit hashes of the ids of buildings, installations and objects
-//! outside buildings.
 
-use super::cityjson::{
-    scale_for, standalone_or_installation, write_head_open, write_members, write_vertices, Feature,
-    Plan, Vertices,
-};
-use super::{asset_name_as, Content, ExportSummary};
-use crate::io::citygml::read::{Chunk, Passes, StreamSummary};
-use crate::model::Bbox;
-use foldhash::{HashMap, HashMapExt, HashSet};
-use glam::DVec3;
-use serde_json::Value;
+use super::cityjson::{write_vertices, Plan, Vertices};
+use super::ExportSummary;
+use foldhash::{HashMap, HashMapExt};
 use std::fs::File;
 use std::hash::BuildHasher;
 use std::io::{self, BufReader, BufWriter, Read, Seek, Write};
@@ -63,252 +44,39 @@ const BUCKET_BYTES: u64 = 32 << 20;
 /// At most this many bucket files (open at once).
 const MAX_BUCKETS: u64 = 256;
 
-/// Which output ([`write_streamed`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Kind {
-    /// One CityJSON document.
-    CityJson,
-    /// CityJSONSeq.
-    Seq,
-}
+/// The passes over the objects of [`super::cityjson::write`]: from the pass given on, `each`
+/// sees every chunk's plan and the part (buildings, then the other city objects); false
+/// where the stream declines.
+pub(super) type OverParts<'o> =
+    dyn FnMut(usize, &mut dyn FnMut(&Plan<'_>, bool) -> io::Result<()>) -> io::Result<bool> + 'o;
 
-/// [`super::cityjson::write_cityjson`] (or `write_cityjsonseq`) of the whole file at `path`
-/// with [`Content::Full`], from streamed reads ([`Passes`]; module docs): pass 0 the plan; 1
-/// and 2 the objects, CityJSON only: written; 3 and 4 the objects counted first, CityJSON
-/// only. `Ok(None)` where the stream declines: read the whole file then (what was written is
-/// to be dropped).
+/// The first run of the objects passes (3 and 4) over the document at `path`: every vertex
+/// use recorded in its bucket, then the buckets resolved, `verts` ready to number the uses of
+/// the second run. False where the stream declines.
 ///
 /// # Errors
-/// I/O errors of `w` and of the temporary files.
-pub(super) fn write_streamed(
-    kind: Kind,
+/// I/O errors of the temporary files.
+pub(super) fn record_uses(
     path: &Path,
-    passes: &Passes<'_>,
-    w: &mut dyn Write,
-) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
-    // 1. the plan
-    let mut ids = Ids::default();
-    let mut bbox = Bbox::EMPTY;
-    let mut others = false;
-    let Some(sum) = passes.pass(path, 0, |c: Chunk| -> io::Result<()> {
-        let plan = Plan::bare(&c.model, 0, Content::Full);
-        bbox.union(&plan.bbox);
-        others |= plan
-            .features
-            .iter()
-            .any(|f| matches!(f, Feature::Standalone(_)));
-        for (b, bd) in c.model.buildings.iter().enumerate() {
-            let global = c.buildings_before + b;
-            let cand = bd
-                .id
-                .clone()
-                .unwrap_or_else(|| format!("building_{global}"));
-            if let Some(id) = ids.unique(cand) {
-                ids.buildings.insert(global, id);
-            }
-        }
-        Ok(())
-    })?
-    else {
-        return Ok(None);
-    };
-    let srs = sum.srs_name.clone();
-    let scale = scale_for(srs.as_deref());
-    let translate = if bbox.is_empty() {
-        DVec3::ZERO
-    } else {
-        bbox.min.floor()
-    };
-    let frame = Frame {
-        bbox,
-        translate,
-        scale,
-    };
-    let parts: &[bool] = if others { &[false, true] } else { &[false] };
-    let mut s = ExportSummary::default();
-    let mut verts = Vertices::new(translate, scale);
-    // the passes over the parts (buildings, then the other city objects) from pass `first`
-    // on: `each` sees every chunk's plan and the part; false when the stream declines
-    let mut over_parts = |first: usize,
-                          each: &mut dyn FnMut(&Plan<'_>, bool) -> io::Result<()>|
-     -> io::Result<bool> {
-        for (k, &standalone) in parts.iter().enumerate() {
-            let done = passes.pass(path, first + k, |c: Chunk| {
-                each(&frame.plan(&c, &mut ids), standalone)
-            })?;
-            if done.is_none() {
-                return Ok(false);
-            }
-        }
-        Ok(true)
-    };
-    match kind {
-        Kind::Seq => {
-            let mut head_done = false;
-            let done = over_parts(1, &mut |plan, standalone| {
-                if !head_done {
-                    serde_json::to_writer(&mut *w, &Value::Object(plan.header_in(srs.as_deref())))?;
-                    w.write_all(b"\n")?;
-                    head_done = true;
-                }
-                write_features(plan, standalone, &mut verts, &mut s, w)
-            })?;
-            if !done {
-                return Ok(None);
-            }
-        }
-        Kind::CityJson => {
-            let buckets = (std::fs::metadata(path).map_or(0, |m| m.len()) / BUCKET_BYTES)
-                .clamp(1, MAX_BUCKETS) as usize;
-            verts.external = Some(External::Record(Recorder::new(buckets)?));
-            let mut throwaway = ExportSummary::default();
-            let done = over_parts(3, &mut |plan, standalone| {
-                for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
-                    plan.objects(*f, &mut verts, &mut throwaway);
-                }
-                verts.check()
-            })?;
-            if !done {
-                return Ok(None);
-            }
-            let Some(External::Record(rec)) = verts.external.take() else {
-                return Err(io::Error::other("vertex index lost"));
-            };
-            verts.external = Some(External::Replay(rec.resolve()?));
-            let mut first = true;
-            let mut head_done = false;
-            let done = over_parts(1, &mut |plan, standalone| {
-                if !head_done {
-                    write_head_open(plan.header_in(srs.as_deref()), w)?;
-                    head_done = true;
-                }
-                for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
-                    write_members(&plan.objects(*f, &mut verts, &mut s), &mut first, w)?;
-                }
-                verts.check()
-            })?;
-            if !done {
-                return Ok(None);
-            }
-            let Some(External::Replay(rep)) = verts.external.take() else {
-                return Err(io::Error::other("vertex index lost"));
-            };
-            w.write_all(b"},\"vertices\":[")?;
-            s.vertices = rep.copy_vertices(w)?;
-            w.write_all(b"]}\n")?;
-        }
-    }
-    Ok(Some((s, sum)))
-}
-
-/// Whether feature `f` is written in the pass of buildings (`standalone` false) or of the
-/// other city objects.
-fn is_part(f: &Feature, standalone: bool) -> bool {
-    matches!(f, Feature::Standalone(_)) == standalone
-}
-
-/// One CityJSONSeq line per feature of `plan` in the pass (see [`is_part`]).
-fn write_features(
-    plan: &Plan<'_>,
-    standalone: bool,
     verts: &mut Vertices,
-    s: &mut ExportSummary,
-    w: &mut dyn Write,
-) -> io::Result<()> {
-    for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
-        super::cityjson::write_feature_line(plan, *f, verts, s, w)?;
+    over_parts: &mut OverParts<'_>,
+) -> io::Result<bool> {
+    let buckets = (std::fs::metadata(path).map_or(0, |m| m.len()) / BUCKET_BYTES)
+        .clamp(1, MAX_BUCKETS) as usize;
+    verts.external = Some(External::Record(Recorder::new(buckets)?));
+    let mut throwaway = ExportSummary::default();
+    let done = over_parts(3, &mut |plan, standalone| {
+        plan.count_uses(standalone, verts, &mut throwaway);
+        verts.check()
+    })?;
+    if !done {
+        return Ok(false);
     }
-    Ok(())
-}
-
-/// The whole document's box and transform.
-struct Frame {
-    bbox: Bbox,
-    translate: DVec3,
-    scale: DVec3,
-}
-
-impl Frame {
-    /// The plan of chunk `c` in the whole document's frame, with the whole writer's ids (the
-    /// installations' and other objects' made unique on the first call for the chunk).
-    fn plan<'a>(&self, c: &'a Chunk, ids: &mut Ids) -> Plan<'a> {
-        let m = &c.model;
-        let mut plan = Plan::bare(m, 0, Content::Full);
-        plan.source = c.source.clone();
-        plan.bbox = self.bbox;
-        plan.translate = self.translate;
-        plan.scale = self.scale;
-        for (b, bd) in m.buildings.iter().enumerate() {
-            let global = c.buildings_before + b;
-            let id = match ids.buildings.get(&global) {
-                Some(id) => id.clone(),
-                None => bd
-                    .id
-                    .clone()
-                    .unwrap_or_else(|| format!("building_{global}")),
-            };
-            plan.building_ids.insert(b, id);
-        }
-        // the first pass over the objects takes the ids, chunk after chunk
-        let fresh = c.index >= ids.chunks_done;
-        for (i, a) in m.assets.iter().enumerate() {
-            if !standalone_or_installation(a) {
-                continue;
-            }
-            // bodies are never installations nor outside a building: `i` is not a body
-            let global = c.assets_before + i;
-            let cand = asset_name_as(m, i, global);
-            if fresh {
-                if let Some(id) = ids.unique(cand.clone()) {
-                    ids.assets.insert(global, id);
-                }
-            }
-            let id = ids.assets.get(&global).cloned().unwrap_or(cand);
-            plan.asset_ids.insert(i, id);
-        }
-        if fresh {
-            ids.chunks_done = c.index + 1;
-        }
-        plan
-    }
-}
-
-/// The whole writer's unique ids: candidates taken in its order (buildings, then
-/// installations and other objects), a repeated one given `_2`, `_3`, ...; only the renamed
-/// ones are kept as text.
-#[derive(Default)]
-struct Ids {
-    /// 128-bit hashes of the ids taken.
-    used: HashSet<u128>,
-    /// Renamed buildings, by index in the whole document.
-    buildings: HashMap<usize, String>,
-    /// Renamed installations and other objects, by asset index in the whole document.
-    assets: HashMap<usize, String>,
-    /// Chunks whose assets' ids were taken.
-    chunks_done: usize,
-}
-
-impl Ids {
-    fn hash(id: &str) -> u128 {
-        let a = foldhash::fast::FixedState::with_seed(0x51c1_0d5e).hash_one(id);
-        let b = foldhash::fast::FixedState::with_seed(0x7e57_ab1e).hash_one(id);
-        (u128::from(a) << 64) | u128::from(b)
-    }
-
-    /// Take `cand`, or `cand_2`, `cand_3`, ... when taken: `Some` of the id when renamed.
-    fn unique(&mut self, cand: String) -> Option<String> {
-        if self.used.insert(Self::hash(&cand)) {
-            return None;
-        }
-        let mut k = 2;
-        loop {
-            let id = format!("{cand}_{k}");
-            if self.used.insert(Self::hash(&id)) {
-                return Some(id);
-            }
-            k += 1;
-        }
-    }
+    let Some(External::Record(rec)) = verts.external.take() else {
+        return Err(io::Error::other("vertex index lost"));
+    };
+    verts.external = Some(External::Replay(rec.resolve()?));
+    Ok(true)
 }
 
 /// The vertex index of a streamed CityJSON document, on disk (module docs).
@@ -332,7 +100,7 @@ impl External {
 
 impl Vertices {
     /// The first I/O error of the external index, if any.
-    fn check(&mut self) -> io::Result<()> {
+    pub(super) fn check(&mut self) -> io::Result<()> {
         let err = match &mut self.external {
             Some(External::Record(r)) => r.err.take(),
             Some(External::Replay(r)) => r.err.take(),
@@ -503,8 +271,8 @@ impl Replayer {
         index
     }
 
-    /// Write the vertex list to `w` (as the whole writer does); how many.
-    fn copy_vertices(self, w: &mut dyn Write) -> io::Result<usize> {
+    /// Write the vertex list to `w` (as the in-memory index does); how many.
+    pub(super) fn copy_vertices(self, w: &mut dyn Write) -> io::Result<usize> {
         if let Some(e) = self.err {
             return Err(e);
         }

@@ -156,7 +156,7 @@ pub fn write_merged(
     let v = view(model, files, &renames);
     let mut summary = ExportSummary::default();
     let bytes = crate::io::citygml::write::atomic_write(out, |w| {
-        summary = super::write_to(format, &v, 0, content, w)?;
+        summary = super::write_to(format, &super::Chunks::model(&v, 0, content), w)?.0;
         Ok(summary.bytes)
     })?;
     summary.bytes = bytes;
