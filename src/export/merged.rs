@@ -13,7 +13,7 @@
 //!   the CityGML merge: [`crate::pipeline::batch::outputs::Plan::targets`]).
 //!
 //! `convert` does not hold the scene: it merges the inputs into a staged CityGML document and
-//! streams that ([`super::write_streamed`]), so its output is, by construction, the
+//! streams that ([`super::Chunks::Stream`]), so its output is, by construction, the
 //! CityGML merge converted. `lod` holds the scene and writes it through
 //! [`write_merged`]: a view of the model with one file ([`view`]).
 

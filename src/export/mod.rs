@@ -160,16 +160,13 @@ pub fn write(
 ) -> Result<(ExportSummary, StreamSummary), WriteError> {
     let input = chunks.check()?;
     crate::io::citygml::write::check_target(out, opts, input)?;
-    let mut done = None;
+    let mut done: (ExportSummary, StreamSummary) = Default::default();
     let bytes = crate::io::citygml::write::atomic_write(out, |w| {
-        let d = export(format, chunks, w, out)?;
-        let n = d.0.bytes;
-        done = Some(d);
-        Ok(n)
+        done = export(format, chunks, w, out)?;
+        Ok(done.0.bytes)
     })?;
-    let (mut s, sum) = done.ok_or_else(|| WriteError::Invalid("nothing written".into()))?;
-    s.bytes = bytes;
-    Ok((s, sum))
+    done.0.bytes = bytes;
+    Ok(done)
 }
 
 /// [`write()`] into any writer `w` (uncompressed, no target checks); the summary counts the
@@ -217,15 +214,10 @@ fn export(
     }
 }
 
-/// Name of asset `i` in an export: its `gml:id`, else its building's id and its index among
-/// the building's assets (`B1_3`), else `asset_<i>`.
-pub fn asset_name(model: &CityModel, i: usize) -> String {
-    asset_name_as(model, i, i)
-}
-
-/// [`asset_name`] of asset `i` of `model` that is asset `global` of the whole document (a
-/// chunk of a streamed read): `asset_<global>` when it has no name.
-pub fn asset_name_as(model: &CityModel, i: usize, global: usize) -> String {
+/// Name in an export of asset `i` of `model`, asset `global` of the whole document (`i` itself
+/// but in a chunk of a streamed read): its `gml:id`, else its building's id and its index
+/// among the building's assets (`B1_3`), else `asset_<global>`.
+pub fn asset_name(model: &CityModel, i: usize, global: usize) -> String {
     let Some(a) = model.assets.get(i) else {
         return format!("asset_{global}");
     };

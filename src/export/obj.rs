@@ -39,7 +39,7 @@
 //! ```
 
 use super::chunks::{Chunks, Part};
-use super::{asset_name_as, ExportSummary};
+use super::{asset_name, ExportSummary};
 use crate::io::citygml::read::StreamSummary;
 use crate::lod::level::traced as level_polygons;
 use crate::model::triangulate;
@@ -86,7 +86,7 @@ pub fn write_obj(
         }
         let done = chunks.pass(1 + usize::from(bodies), |p: &Part<'_>| -> io::Result<()> {
             for (i, a, global) in p.in_order(bodies, sum.assets) {
-                let name = asset_name_as(p.model, i, global);
+                let name = asset_name(p.model, i, global);
                 let level = p.content.level(i);
                 let polys = level_polygons(a, p.content.rough(i), level);
                 let obj = (a.kind.as_str(), name.as_str(), level);

@@ -232,7 +232,13 @@ pub fn convert_file(
         };
         let ropts = ReadOptions::default();
         let passes = Passes::new(&ropts, chunk, &pass);
-        match write_out(input, out, o, Read::Stream(&passes))? {
+        let label = None;
+        let stream = Chunks::Stream {
+            path: input,
+            label,
+            passes: &passes,
+        };
+        match write_out(input, out, o, &stream)? {
             Some(c) => return Ok(c),
             None => note(read_whole(input, "the stream declined")),
         }
@@ -259,7 +265,7 @@ pub fn convert_file(
         return Ok(converted(Some(line), warnings, polygons, None));
     }
     let model = read_file_observed(input, &ReadOptions::default(), &passed)?;
-    write_out(input, out, o, Read::Whole(&model))?
+    write_out(input, out, o, &Chunks::model(&model, 0, Content::Full))?
         .ok_or_else(|| WriteError::Declined(input.to_path_buf()).into())
 }
 
@@ -273,74 +279,53 @@ fn document_line(input: &Path, out: &Path, bytes: u64, edits: usize, warnings: u
     )
 }
 
-/// What [`convert_file`] writes from: the file's streamed passes, or its model read whole.
-#[derive(Clone, Copy)]
-enum Read<'a> {
-    Stream(&'a Passes<'a>),
-    Whole(&'a CityModel),
-}
-
-/// [`convert_file`] of `input` from `read`, but for CityJSON → CityGML; `None` where the
-/// stream declines.
+/// [`convert_file`] of `input` from `chunks` (its streamed passes, or its model read whole),
+/// but for CityJSON → CityGML; `None` where the stream declines.
 fn write_out(
     input: &Path,
     out: &Path,
     o: &ConvertOptions<'_>,
-    read: Read<'_>,
+    chunks: &Chunks<'_>,
 ) -> Result<Option<Converted>, ConvertError> {
     if o.mirror {
         create_parent(out)?;
     }
+    let model = match *chunks {
+        Chunks::Model { model, .. } => Some(model),
+        Chunks::Stream { .. } => None,
+    };
     if o.format == Format::CityGml {
-        let (s, warnings, polygons) = match read {
-            Read::Stream(passes) => {
+        let (s, warnings, polygons) = match *chunks {
+            Chunks::Model { model: m, .. } => {
+                let s = write_document(m, 0, Vec::new(), out, o.write)?;
+                (s, m.warnings.len(), m.polygon_count())
+            }
+            Chunks::Stream { passes, .. } => {
                 let Some(d) = write_document_streamed(input, passes, out, o.write)? else {
                     return Ok(None);
                 };
                 (d.summary, d.stream.warnings, d.polygons)
             }
-            Read::Whole(m) => {
-                let s = write_document(m, 0, Vec::new(), out, o.write)?;
-                (s, m.warnings.len(), m.polygon_count())
-            }
         };
         let line = document_line(input, out, s.bytes, s.edits, warnings);
-        return Ok(Some(converted(
-            Some(line),
-            warnings,
-            (polygons, polygons),
-            None,
-        )));
+        let polygons = (polygons, polygons);
+        return Ok(Some(converted(Some(line), warnings, polygons, None)));
     }
-    // a stream counts no polygons; the model read whole is named as it names itself
-    let (chunks, shown_input, polygons) = match read {
-        Read::Stream(passes) => {
-            let label = None;
-            (
-                Chunks::Stream {
-                    path: input,
-                    label,
-                    passes,
-                },
-                input,
-                0,
-            )
-        }
-        Read::Whole(m) => {
-            let name = m.files.first().map_or(Path::new(""), |f| &f.path);
-            (Chunks::model(m, 0, Content::Full), name, m.polygon_count())
-        }
-    };
-    let (s, sum) = match crate::export::write(o.format, &chunks, out, o.write) {
+    let (s, sum) = match crate::export::write(o.format, chunks, out, o.write) {
         Ok(w) => w,
         Err(WriteError::Declined(_)) => return Ok(None),
         // a stream's errors are said naming the output
-        Err(error) if matches!(read, Read::Stream(_)) => {
+        Err(error) if model.is_none() => {
             let out = out.to_path_buf();
             return Err(ConvertError::Streamed { out, error });
         }
         Err(e) => return Err(e.into()),
     };
+    // a stream counts no polygons; the model read whole is named as it names itself
+    let polygons = model.map_or(0, CityModel::polygon_count);
+    let shown_input = model
+        .and_then(|m| m.files.first())
+        .map_or(input, |f| &f.path);
     let written = Some(s.describe(o.format, shown_input, out));
     let polygons = (polygons, polygons);
     Ok(Some(converted(None, sum.warnings, polygons, written)))
