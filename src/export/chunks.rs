@@ -122,22 +122,20 @@ impl<'a> Chunks<'a> {
     /// The source's checks before anything is written: a model's file exists and its
     /// `content` has one entry per asset. The input file not to write over, if any.
     pub(super) fn check(&self) -> Result<Option<&'a Path>, WriteError> {
-        match *self {
+        let (model, file, content) = match *self {
+            Chunks::Stream { path, .. } => return Ok(Some(path)),
             Chunks::Model {
                 model,
                 file,
                 content,
                 ..
-            } => {
-                if let Content::Levels { rough, levels } = content {
-                    crate::lod::mixed::check_per_asset(model, rough, levels)?;
-                }
-                Ok(crate::io::citygml::write::source_file(model, file)?
-                    .source
-                    .path())
-            }
-            Chunks::Stream { path, .. } => Ok(Some(path)),
+            } => (model, file, content),
+        };
+        if let Content::Levels { rough, levels } = content {
+            crate::lod::mixed::check_per_asset(model, rough, levels)?;
         }
+        let src = crate::io::citygml::write::source_file(model, file)?;
+        Ok(src.source.path())
     }
 
     /// How the output names its source: the label, or the file's name.
@@ -174,23 +172,15 @@ fn summary(model: &CityModel, file: usize) -> StreamSummary {
 
 impl<'a> Part<'a> {
     /// The assets of the file, with their indices in the part's model.
-    pub(super) fn assets(&self) -> impl Iterator<Item = (usize, &'a Asset)> + '_ {
-        let file = self.file;
-        self.model
-            .assets
-            .iter()
-            .enumerate()
-            .filter(move |(_, a)| a.file == file)
+    pub(super) fn assets(&self) -> impl Iterator<Item = (usize, &'a Asset)> {
+        let (f, all) = (self.file, self.model.assets.iter());
+        all.enumerate().filter(move |(_, a)| a.file == f)
     }
 
     /// The buildings (and parts) of the file, with their indices in the part's model.
-    pub(super) fn buildings(&self) -> impl Iterator<Item = (usize, &'a Building)> + '_ {
-        let file = self.file;
-        self.model
-            .buildings
-            .iter()
-            .enumerate()
-            .filter(move |(_, b)| b.file == file)
+    pub(super) fn buildings(&self) -> impl Iterator<Item = (usize, &'a Building)> {
+        let (f, all) = (self.file, self.model.buildings.iter());
+        all.enumerate().filter(move |(_, b)| b.file == f)
     }
 
     /// The assets a pass in document order writes of this part: in the pass over the
