@@ -153,7 +153,7 @@ impl<'a> Chunks<'a> {
     }
 }
 
-/// A model's file as the summary of a stream of one chunk.
+/// A model's file as the summary of a stream of one chunk (its warnings: the model's).
 fn summary(model: &CityModel, file: usize) -> StreamSummary {
     let f = model.files.get(file);
     let assets = model.assets.iter().filter(|a| a.file == file);

@@ -58,7 +58,7 @@
 
 use super::chunks::{Chunks, Part};
 use super::cityjson_source::{from_source, FromSource};
-use super::cityjson_stream::{record_uses, External};
+use super::cityjson_vertices::{record_uses, Vertices};
 use super::{asset_name, Content, ExportSummary};
 use crate::io::citygml::read::StreamSummary;
 use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon};
@@ -106,7 +106,7 @@ pub(crate) enum Kind {
 /// CityJSONSeq writes each feature's vertices on its line. CityJSON shares one vertex list
 /// over the document, numbered by first use: a model's in memory, a stream's on disk (the
 /// objects passes run twice, the first recording every vertex use:
-/// [`super::cityjson_stream`]). With what was written, the source's summary; `Ok(None)`
+/// [`super::cityjson_vertices`]). With what was written, the source's summary; `Ok(None)`
 /// where the stream declines (what was written is to be dropped).
 ///
 /// # Errors
@@ -206,14 +206,7 @@ pub(crate) fn write(
         return Ok(None);
     }
     w.write_all(b"},\"vertices\":[")?;
-    s.vertices = match verts.external.take() {
-        Some(External::Replay(rep)) => rep.copy_vertices(w)?,
-        Some(External::Record(_)) => return Err(io::Error::other("vertex index lost")),
-        None => {
-            write_vertices(w, &verts.list)?;
-            verts.list.len()
-        }
-    };
+    s.vertices = verts.write_list(w)?;
     w.write_all(b"]}\n")?;
     Ok(Some((s, sum)))
 }
@@ -325,9 +318,8 @@ fn write_feature_line(
     w.write_all(b",\"CityObjects\":{")?;
     write_members(&objs, &mut true, w)?;
     w.write_all(b"},\"vertices\":[")?;
-    write_vertices(w, &verts.list)?;
+    s.vertices += verts.write_list(w)?;
     w.write_all(b"]}\n")?;
-    s.vertices += verts.list.len();
     s.features += 1;
     Ok(())
 }
@@ -352,20 +344,6 @@ fn write_members(objs: &[(String, Value)], first: &mut bool, w: &mut dyn Write) 
         serde_json::to_writer(&mut *w, id)?;
         w.write_all(b":")?;
         serde_json::to_writer(&mut *w, obj)?;
-    }
-    Ok(())
-}
-
-pub(super) fn write_vertices(w: &mut dyn Write, list: &[[i64; 3]]) -> io::Result<()> {
-    let mut buf = String::with_capacity(64);
-    for (k, v) in list.iter().enumerate() {
-        buf.clear();
-        if k > 0 {
-            buf.push(',');
-        }
-        use std::fmt::Write as _;
-        let _ = write!(buf, "[{},{},{}]", v[0], v[1], v[2]);
-        w.write_all(buf.as_bytes())?;
     }
     Ok(())
 }
@@ -401,76 +379,6 @@ fn scale_for(srs_name: Option<&str>) -> DVec3 {
     match srs_name.and_then(epsg_code) {
         Some(c) if GEOGRAPHIC.contains(&c) => DVec3::new(SCALE_DEGREES, SCALE_DEGREES, SCALE),
         _ => DVec3::splat(SCALE),
-    }
-}
-
-/// Integer vertices (millimetres from `translate`), each distinct one stored once: in memory,
-/// or numbered by an [`External`] index (a streamed document's, on disk).
-pub(super) struct Vertices {
-    translate: DVec3,
-    scale: DVec3,
-    map: HashMap<[i64; 3], u32>,
-    pub(super) list: Vec<[i64; 3]>,
-    /// Where the indices come from instead of `map` and `list`.
-    pub(super) external: Option<External>,
-}
-
-impl Vertices {
-    pub(super) fn new(translate: DVec3, scale: DVec3) -> Self {
-        Vertices {
-            translate,
-            scale,
-            map: HashMap::new(),
-            list: Vec::new(),
-            external: None,
-        }
-    }
-
-    pub(super) fn clear(&mut self) {
-        self.map.clear();
-        self.list.clear();
-    }
-
-    fn key(&self, p: DVec3) -> [i64; 3] {
-        let q = ((p - self.translate) / self.scale).round();
-        [q.x as i64, q.y as i64, q.z as i64]
-    }
-
-    /// The index of `key` (every call is one use of a vertex: an [`External`] index numbers
-    /// the calls).
-    fn index(&mut self, key: [i64; 3]) -> u32 {
-        if let Some(x) = &mut self.external {
-            return x.index(key);
-        }
-        let n = self.list.len() as u32;
-        let k = *self.map.entry(key).or_insert(n);
-        if k == n {
-            self.list.push(key);
-        }
-        k
-    }
-
-    /// Indices of a ring, consecutive duplicates (after rounding) removed; `None` below 3.
-    /// (Duplicates are found by their integer coordinates: equal keys, equal indices.)
-    fn ring(&mut self, ring: &[DVec3]) -> Option<Vec<u32>> {
-        let mut v: Vec<u32> = Vec::with_capacity(ring.len());
-        let mut keys: Vec<[i64; 3]> = Vec::with_capacity(ring.len());
-        for p in ring {
-            if !p.is_finite() {
-                continue;
-            }
-            let key = self.key(*p);
-            let k = self.index(key);
-            if keys.last() != Some(&key) {
-                v.push(k);
-                keys.push(key);
-            }
-        }
-        while v.len() > 1 && keys.first() == keys.last() {
-            v.pop();
-            keys.pop();
-        }
-        (v.len() >= 3).then_some(v)
     }
 }
 
@@ -1009,25 +917,6 @@ fn asset_lods<'a>(a: &'a Asset, i: usize, content: Content<'a>) -> Vec<(u8, Cow<
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn rings_drop_duplicates_after_rounding() {
-        let mut v = Vertices::new(DVec3::new(100.0, 200.0, 0.0), DVec3::splat(SCALE));
-        let r = v
-            .ring(&[
-                DVec3::new(100.0, 200.0, 0.0),
-                DVec3::new(100.0002, 200.0, 0.0),
-                DVec3::new(101.0, 200.0, 0.0),
-                DVec3::new(101.0, 201.0, 0.0),
-                DVec3::new(100.0, 200.0001, 0.0),
-            ])
-            .unwrap();
-        assert_eq!(r, vec![0, 1, 2]);
-        assert_eq!(v.list[2], [1000, 1000, 0]);
-        assert!(v
-            .ring(&[DVec3::ZERO, DVec3::X * 1e-5, DVec3::Y * 1e-5])
-            .is_none());
-    }
 
     #[test]
     fn members_are_written_between_the_head_and_the_vertices() {

@@ -34,7 +34,7 @@ pub mod citygml_via_cityjson;
 pub mod cityjson;
 pub mod cityjson_edit;
 pub(crate) use crate::io::citygml::json::source as cityjson_source;
-mod cityjson_stream;
+mod cityjson_vertices;
 pub mod format;
 pub mod merged;
 pub mod obj;

@@ -539,8 +539,8 @@ fn streamed_citygml_is_the_whole_reads_bytes() {
 }
 
 /// Ids repeated across chunks (buildings, and an object outside buildings with a building's
-/// id) are made unique as the whole writer does; the objects outside buildings follow every
-/// building, as in the whole model's CityJSON.
+/// id) are made unique as in the model's CityJSON (one chunk); the objects outside buildings
+/// follow every building there too.
 #[test]
 fn streamed_cityjson_ids_are_the_whole_writers() {
     use skylod::export::{write, Chunks, Content, Format};

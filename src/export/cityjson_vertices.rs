@@ -1,6 +1,7 @@
-//! The vertex index of a CityJSON document written from a streamed read
-//! ([`super::cityjson::write`] over [`super::Chunks::Stream`]), on disk: memory that follows
-//! a chunk, not the document.
+//! The vertices of the CityJSON writer ([`super::cityjson::write`]): integer coordinates,
+//! each distinct one numbered once ([`Vertices`]), in memory for a model, on disk for a
+//! document written from a streamed read ([`super::Chunks::Stream`]: memory that follows a
+//! chunk, not the document).
 //!
 //! CityJSON shares one vertex list over the whole document, numbered by first use: a list
 //! as large as the document's distinct vertices, which a model in memory keeps in memory. A
@@ -19,13 +20,118 @@
 //! Temporary files are unnamed (in the system's temporary directory, `TMPDIR`), gone when
 //! the writer ends whatever happens: 32 bytes a vertex use plus 24 a distinct vertex.
 
-use super::cityjson::{write_vertices, Plan, Vertices};
+use super::cityjson::Plan;
 use super::ExportSummary;
 use foldhash::{HashMap, HashMapExt};
+use glam::DVec3;
 use std::fs::File;
 use std::hash::BuildHasher;
 use std::io::{self, BufReader, BufWriter, Read, Seek, Write};
 use std::path::Path;
+
+/// Integer vertices (millimetres from `translate`), each distinct one stored once: in memory,
+/// or numbered by an [`External`] index (a streamed document's, on disk).
+pub(super) struct Vertices {
+    translate: DVec3,
+    scale: DVec3,
+    map: HashMap<[i64; 3], u32>,
+    list: Vec<[i64; 3]>,
+    /// Where the indices come from instead of `map` and `list`.
+    external: Option<External>,
+}
+
+impl Vertices {
+    pub(super) fn new(translate: DVec3, scale: DVec3) -> Self {
+        Vertices {
+            translate,
+            scale,
+            map: HashMap::new(),
+            list: Vec::new(),
+            external: None,
+        }
+    }
+
+    pub(super) fn clear(&mut self) {
+        self.map.clear();
+        self.list.clear();
+    }
+
+    fn key(&self, p: DVec3) -> [i64; 3] {
+        let q = ((p - self.translate) / self.scale).round();
+        [q.x as i64, q.y as i64, q.z as i64]
+    }
+
+    /// The index of `key` (every call is one use of a vertex: an [`External`] index numbers
+    /// the calls).
+    fn index(&mut self, key: [i64; 3]) -> u32 {
+        if let Some(x) = &mut self.external {
+            return x.index(key);
+        }
+        let n = self.list.len() as u32;
+        let k = *self.map.entry(key).or_insert(n);
+        if k == n {
+            self.list.push(key);
+        }
+        k
+    }
+
+    /// Indices of a ring, consecutive duplicates (after rounding) removed; `None` below 3.
+    /// (Duplicates are found by their integer coordinates: equal keys, equal indices.)
+    pub(super) fn ring(&mut self, ring: &[DVec3]) -> Option<Vec<u32>> {
+        let mut v: Vec<u32> = Vec::with_capacity(ring.len());
+        let mut keys: Vec<[i64; 3]> = Vec::with_capacity(ring.len());
+        for p in ring {
+            if !p.is_finite() {
+                continue;
+            }
+            let key = self.key(*p);
+            let k = self.index(key);
+            if keys.last() != Some(&key) {
+                v.push(k);
+                keys.push(key);
+            }
+        }
+        while v.len() > 1 && keys.first() == keys.last() {
+            v.pop();
+            keys.pop();
+        }
+        (v.len() >= 3).then_some(v)
+    }
+
+    /// The first I/O error of the external index, if any.
+    pub(super) fn check(&mut self) -> io::Result<()> {
+        let err = match &mut self.external {
+            Some(External::Record(r)) => r.err.take(),
+            Some(External::Replay(r)) => r.err.take(),
+            None => None,
+        };
+        err.map_or(Ok(()), Err)
+    }
+
+    /// Write the vertex list to `w`, from memory or from the external index; how many.
+    pub(super) fn write_list(&mut self, w: &mut dyn Write) -> io::Result<usize> {
+        match self.external.take() {
+            Some(External::Replay(rep)) => rep.copy_vertices(w),
+            Some(External::Record(_)) => Err(io::Error::other("vertex index lost")),
+            None => write_vertices(w, &self.list).map(|()| self.list.len()),
+        }
+    }
+}
+
+/// Vertices `list` as JSON arrays, a comma between two.
+fn write_vertices(w: &mut dyn Write, list: &[[i64; 3]]) -> io::Result<()> {
+    let mut buf = String::with_capacity(64);
+    for (k, v) in list.iter().enumerate() {
+        buf.clear();
+        if k > 0 {
+            buf.push(',');
+        }
+        use std::fmt::Write as _;
+        let _ = write!(buf, "[{},{},{}]", v[0], v[1], v[2]);
+        w.write_all(buf.as_bytes())?;
+    }
+    Ok(())
+}
 
 /// Bytes of a bucket record: the vertex's three integer coordinates, then the number of its
 /// use (replaced by the number of its first use once the bucket is resolved).
@@ -80,7 +186,7 @@ pub(super) fn record_uses(
 }
 
 /// The vertex index of a streamed CityJSON document, on disk (module docs).
-pub(super) enum External {
+enum External {
     /// First pass: every use recorded in its bucket.
     Record(Recorder),
     /// Second pass: every use's index read back.
@@ -90,23 +196,11 @@ pub(super) enum External {
 impl External {
     /// The index of one use of vertex `key` (0 while recording: the ring's duplicates are
     /// found by key, so the number does not matter yet).
-    pub(super) fn index(&mut self, key: [i64; 3]) -> u32 {
+    fn index(&mut self, key: [i64; 3]) -> u32 {
         match self {
             External::Record(r) => r.record(key),
             External::Replay(r) => r.index(key),
         }
-    }
-}
-
-impl Vertices {
-    /// The first I/O error of the external index, if any.
-    pub(super) fn check(&mut self) -> io::Result<()> {
-        let err = match &mut self.external {
-            Some(External::Record(r)) => r.err.take(),
-            Some(External::Replay(r)) => r.err.take(),
-            None => None,
-        };
-        err.map_or(Ok(()), Err)
     }
 }
 
@@ -116,7 +210,7 @@ fn bucket_of(key: [i64; 3], n: usize) -> usize {
 }
 
 /// Records every use of a vertex in its bucket.
-pub(super) struct Recorder {
+struct Recorder {
     buckets: Vec<BufWriter<File>>,
     uses: u64,
     err: Option<io::Error>,
@@ -229,7 +323,7 @@ fn key_of(r: &[u8]) -> [i64; 3] {
 }
 
 /// Reads every use's index back in the order of the record.
-pub(super) struct Replayer {
+struct Replayer {
     buckets: Vec<BufReader<File>>,
     /// Bit `u`: use `u` is its vertex's first.
     first: Vec<u64>,
@@ -272,7 +366,7 @@ impl Replayer {
     }
 
     /// Write the vertex list to `w` (as the in-memory index does); how many.
-    pub(super) fn copy_vertices(self, w: &mut dyn Write) -> io::Result<usize> {
+    fn copy_vertices(self, w: &mut dyn Write) -> io::Result<usize> {
         if let Some(e) = self.err {
             return Err(e);
         }
@@ -309,4 +403,28 @@ fn flush_vertices(w: &mut dyn Write, batch: &[[i64; 3]], n: usize) -> io::Result
         w.write_all(b",")?;
     }
     write_vertices(w, batch)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rings_drop_duplicates_after_rounding() {
+        let mut v = Vertices::new(DVec3::new(100.0, 200.0, 0.0), DVec3::splat(0.001));
+        let r = v
+            .ring(&[
+                DVec3::new(100.0, 200.0, 0.0),
+                DVec3::new(100.0002, 200.0, 0.0),
+                DVec3::new(101.0, 200.0, 0.0),
+                DVec3::new(101.0, 201.0, 0.0),
+                DVec3::new(100.0, 200.0001, 0.0),
+            ])
+            .unwrap();
+        assert_eq!(r, vec![0, 1, 2]);
+        assert_eq!(v.list[2], [1000, 1000, 0]);
+        assert!(v
+            .ring(&[DVec3::ZERO, DVec3::X * 1e-5, DVec3::Y * 1e-5])
+            .is_none());
+    }
 }
