@@ -439,8 +439,8 @@ fn lod_of_a_large_file_peaks_under_the_file_size_and_a_seventh() {
 /// the whole model gives, on every file of the shared data and the fixtures.
 #[test]
 fn streamed_exports_are_the_whole_models_bytes() {
-    use skylod::citygml::WriteError;
     use skylod::export::{write, Chunks, Content, Format};
+    use skylod::WriteError;
     let dir = tempfile::tempdir().unwrap();
     let opts = skylod::io::citygml::write::WriteOptions {
         overwrite: true,
