@@ -10,6 +10,9 @@
 //! ([`crate::lod::scene::mixed_scene`], for OBJ) and the mixed CityGML writer
 //! ([`crate::lod::level::properties`], for CityJSON's per-LoD geometry) do.
 //!
+//! Each format has one writer, which goes over a [`Chunks`] a chunk at a time: a file read
+//! in streamed passes (memory follows the chunk), or a model in memory as one chunk.
+//!
 //! # Example
 //! ```
 //! use skylod::export::{write, Chunks, Content, Format};
