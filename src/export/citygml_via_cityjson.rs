@@ -86,6 +86,7 @@ pub fn write_citygml_levels_to(
 ) -> Result<FromCityJsonSummary, WriteError> {
     let src = crate::io::citygml::write::source_file(model, file)?;
     let mut json = Vec::new();
-    super::write_to(Format::CityJson, model, file, content, &mut json)?;
+    let chunks = super::Chunks::model(model, file, content);
+    super::write_to(Format::CityJson, &chunks, &mut json)?;
     Ok(write_citygml(std::io::Cursor::new(json), &src.path, w)?)
 }

@@ -34,35 +34,40 @@
 //!
 //! # Streaming
 //!
-//! City objects are written one building at a time. CityJSONSeq writes one line per building
-//! (its parts and installations included) or other city object, each with its own vertices,
-//! so memory follows the largest building. CityJSON keeps only the shared vertex list (integers)
-//! until the end of the document.
+//! One writer ([`write`]) goes over its source a chunk at a time ([`Chunks`]: a model in
+//! memory is one chunk) and city objects are written one building at a time. CityJSONSeq
+//! writes one line per building (its parts and installations included) or other city object,
+//! each with its own vertices, so memory follows the chunk. CityJSON keeps only the shared
+//! vertex list (integers) until the end of the document: a stream's on disk.
 //!
 //! # Example
 //! ```
-//! use skylod::export::{cityjson::write_cityjsonseq, Content};
+//! use skylod::export::{write_to, Chunks, Content, Format};
 //! use skylod::model::synth::{generate, Preset};
 //! let mut xml = Vec::new();
 //! generate(&Preset::Small.defaults(), &mut xml).unwrap();
 //! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
 //! let mut out = Vec::new();
-//! let s = write_cityjsonseq(&model, 0, Content::Full, &mut out).unwrap();
+//! let chunks = Chunks::model(&model, 0, Content::Full);
+//! let (s, _) = write_to(Format::CityJsonSeq, &chunks, &mut out).unwrap();
 //! let text = String::from_utf8(out).unwrap();
 //! let header: serde_json::Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
 //! assert_eq!(header["version"], "2.0");
 //! assert_eq!(text.lines().count(), 1 + s.features);
 //! ```
 
+use super::chunks::{Chunks, Part};
 use super::cityjson_source::{from_source, FromSource};
-use super::cityjson_stream::External;
+use super::cityjson_vertices::{record_uses, Vertices};
 use super::{asset_name, Content, ExportSummary};
+use crate::io::citygml::read::StreamSummary;
 use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon};
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;
 use serde_json::{json, Map, Value};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
+use std::hash::BuildHasher;
 use std::io::{self, Write};
 
 /// Scale of the integer vertices: millimetres.
@@ -78,76 +83,225 @@ const GEOGRAPHIC: &[u32] = &[
     4326, 4979, 4258, 4937, 4612, 6668, 6697, 4269, 4283, 7844, 4490, 4171,
 ];
 
-/// Write file `file` of `model` as one CityJSON 2.0 document.
-///
-/// # Errors
-/// I/O errors of `w`.
-pub fn write_cityjson(
-    model: &CityModel,
-    file: usize,
-    content: Content<'_>,
-    w: &mut dyn Write,
-) -> io::Result<ExportSummary> {
-    write_cityjson_with(model, file, content, None, w)
+/// Which output of [`write`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Kind {
+    /// One CityJSON document.
+    CityJson,
+    /// CityJSONSeq: the CityJSON header object on the first line, then one
+    /// `CityJSONFeature` per building (with its parts and installations) or other city object.
+    Seq,
 }
 
-/// [`write_cityjson`] with extra attributes on the semantic surface objects of some assets
-/// (asset index → attributes; `irradiance --output-attributes`).
+/// Write `chunks` as CityJSON or CityJSONSeq (`kind`), in passes over the chunks (see
+/// [`super::write()`] for their numbers):
+///
+/// 1. **plan**: the bounding box (the header's extent and `transform`), the buildings' ids
+///    (made unique in document order);
+/// 2. **objects**: buildings (with their parts and installations) in document order, then, in
+///    another pass when there are any, the city objects outside buildings. The
+///    installations' and other objects' ids are made unique in the first of these passes,
+///    after every building's.
+///
+/// CityJSONSeq writes each feature's vertices on its line. CityJSON shares one vertex list
+/// over the document, numbered by first use: a model's in memory, a stream's on disk (the
+/// objects passes run twice, the first recording every vertex use:
+/// [`super::cityjson_vertices`]). With what was written, the source's summary; `Ok(None)`
+/// where the stream declines (what was written is to be dropped).
 ///
 /// # Errors
-/// I/O errors of `w`.
-pub fn write_cityjson_with(
-    model: &CityModel,
-    file: usize,
-    content: Content<'_>,
-    surface_attributes: Option<&BTreeMap<usize, Map<String, Value>>>,
+/// I/O errors of `w`, of the temporary files, or of a CityJSON source read again.
+pub(crate) fn write(
+    kind: Kind,
+    chunks: &Chunks<'_>,
     w: &mut dyn Write,
-) -> io::Result<ExportSummary> {
-    let mut plan = Plan::new(model, file, content);
-    plan.surface_attributes = surface_attributes;
-    plan.source = from_source(model, file)?;
+) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
+    // a model's CityJSON source is read again for what it gives; a stream's chunks carry it
+    let (whole_source, surface_attributes) = match *chunks {
+        Chunks::Model {
+            model,
+            file,
+            surface_attributes,
+            ..
+        } => (from_source(model, file)?, surface_attributes),
+        Chunks::Stream { .. } => (None, None),
+    };
+    // 1. the plan
+    let mut ids = Ids::default();
+    let mut bbox = Bbox::EMPTY;
+    let mut others = false;
+    let Some(sum) = chunks.pass(0, |p: &Part<'_>| -> io::Result<()> {
+        bbox.union(&extent(p.model, p.file, p.content));
+        others |= p.assets().any(|(_, a)| a.building.is_none());
+        for (b, bd) in p.buildings() {
+            let global = p.buildings_before + b;
+            if let Some(id) = ids.unique(building_id(bd, global)) {
+                ids.buildings.insert(global, id);
+            }
+        }
+        Ok(())
+    })?
+    else {
+        return Ok(None);
+    };
+    let scale = scale_for(sum.srs_name.as_deref());
+    let translate = if bbox.is_empty() {
+        DVec3::ZERO
+    } else {
+        bbox.min.floor()
+    };
+    let frame = Frame {
+        bbox,
+        translate,
+        scale,
+        source: whole_source.as_ref(),
+        surface_attributes,
+    };
+    let header = frame.header(sum.srs_name.as_deref());
+    let parts: &[bool] = if others { &[false, true] } else { &[false] };
     let mut s = ExportSummary::default();
-    let mut verts = Vertices::new(plan.translate, plan.scale);
-    // `{...header` without its closing brace, then the city objects, then the vertices.
-    write_head_open(plan.header(), w)?;
+    let mut verts = Vertices::new(translate, scale);
+    // the passes over the parts (buildings, then the other city objects) from pass `first`
+    // on: `each` sees every chunk's plan and the part; false when the stream declines
+    let mut over_parts = |first: usize,
+                          each: &mut dyn FnMut(&Plan<'_>, bool) -> io::Result<()>|
+     -> io::Result<bool> {
+        for (k, &standalone) in parts.iter().enumerate() {
+            let done = chunks.pass(first + k, |p: &Part<'_>| {
+                each(&Plan::new(p, &frame, &mut ids), standalone)
+            })?;
+            if done.is_none() {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    };
+    if kind == Kind::Seq {
+        serde_json::to_writer(&mut *w, &Value::Object(header))?;
+        w.write_all(b"\n")?;
+        let done = over_parts(1, &mut |plan, standalone| {
+            for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
+                write_feature_line(plan, *f, &mut verts, &mut s, w)?;
+            }
+            Ok(())
+        })?;
+        return Ok(done.then_some((s, sum)));
+    }
+    if let Chunks::Stream { path, .. } = chunks {
+        // a stream's vertices are numbered on disk, every use recorded in a first pass
+        if !record_uses(path, &mut verts, &mut over_parts)? {
+            return Ok(None);
+        }
+    }
+    // `{...header` without its closing brace, then the city objects, then the vertices
+    write_head_open(header, w)?;
     let mut first = true;
-    for f in &plan.features {
-        write_members(&plan.objects(*f, &mut verts, &mut s), &mut first, w)?;
+    let done = over_parts(1, &mut |plan, standalone| {
+        for f in plan.features.iter().filter(|f| is_part(f, standalone)) {
+            write_members(&plan.objects(*f, &mut verts, &mut s), &mut first, w)?;
+        }
+        verts.check()
+    })?;
+    if !done {
+        return Ok(None);
     }
     w.write_all(b"},\"vertices\":[")?;
-    write_vertices(w, &verts.list)?;
+    s.vertices = verts.write_list(w)?;
     w.write_all(b"]}\n")?;
-    s.vertices = verts.list.len();
-    Ok(s)
+    Ok(Some((s, sum)))
 }
 
-/// Write file `file` of `model` as CityJSONSeq: the CityJSON header object on the first line,
-/// then one `CityJSONFeature` per building (with its parts and installations) or other city
-/// object.
-///
-/// # Errors
-/// I/O errors of `w`.
-pub fn write_cityjsonseq(
-    model: &CityModel,
-    file: usize,
-    content: Content<'_>,
-    w: &mut dyn Write,
-) -> io::Result<ExportSummary> {
-    let mut plan = Plan::new(model, file, content);
-    plan.source = from_source(model, file)?;
-    let mut s = ExportSummary::default();
-    serde_json::to_writer(&mut *w, &Value::Object(plan.header()))?;
-    w.write_all(b"\n")?;
-    let mut verts = Vertices::new(plan.translate, plan.scale);
-    for f in &plan.features {
-        write_feature_line(&plan, *f, &mut verts, &mut s, w)?;
+/// Whether feature `f` is written in the pass of buildings (`standalone` false) or of the
+/// other city objects.
+fn is_part(f: &Feature, standalone: bool) -> bool {
+    matches!(f, Feature::Standalone(_)) == standalone
+}
+
+/// The id building `bd`, building `global` of the document, asks for.
+fn building_id(bd: &crate::model::Building, global: usize) -> String {
+    bd.id
+        .clone()
+        .unwrap_or_else(|| format!("building_{global}"))
+}
+
+/// The whole document's box and transform, and what its objects get from elsewhere than
+/// their chunk.
+struct Frame<'s> {
+    bbox: Bbox,
+    translate: DVec3,
+    scale: DVec3,
+    /// A model's CityJSON source's attributes (a streamed chunk carries its own).
+    source: Option<&'s FromSource>,
+    /// Extra attributes of the semantic surface objects of some assets.
+    surface_attributes: Option<&'s BTreeMap<usize, Map<String, Value>>>,
+}
+
+impl Frame<'_> {
+    /// The document's header (empty `CityObjects` and `vertices`) in CRS `srs_name`.
+    fn header(&self, srs_name: Option<&str>) -> Map<String, Value> {
+        let mut meta = Map::new();
+        if let Some(rs) = srs_name.and_then(reference_system) {
+            meta.insert("referenceSystem".into(), rs.into());
+        }
+        if let Some(b) = self.bbox.to_array() {
+            meta.insert("geographicalExtent".into(), json!(b));
+        }
+        let t = self.translate;
+        let mut h = Map::new();
+        h.insert("type".into(), "CityJSON".into());
+        h.insert("version".into(), "2.0".into());
+        h.insert(
+            "transform".into(),
+            json!({"scale": self.scale.to_array(), "translate": [t.x, t.y, t.z]}),
+        );
+        h.insert("metadata".into(), Value::Object(meta));
+        h.insert("CityObjects".into(), json!({}));
+        h.insert("vertices".into(), json!([]));
+        h
     }
-    Ok(s)
+}
+
+/// The document's unique ids: candidates taken in the writer's order (buildings, then
+/// installations and other objects), a repeated one given `_2`, `_3`, ...; only the renamed
+/// ones are kept as text.
+#[derive(Default)]
+struct Ids {
+    /// 128-bit hashes of the ids taken.
+    used: HashSet<u128>,
+    /// Renamed buildings, by index in the whole document.
+    buildings: HashMap<usize, String>,
+    /// Renamed installations and other objects, by asset index in the whole document.
+    assets: HashMap<usize, String>,
+    /// Chunks whose assets' ids were taken.
+    chunks_done: usize,
+}
+
+impl Ids {
+    fn hash(id: &str) -> u128 {
+        let a = foldhash::fast::FixedState::with_seed(0x51c1_0d5e).hash_one(id);
+        let b = foldhash::fast::FixedState::with_seed(0x7e57_ab1e).hash_one(id);
+        (u128::from(a) << 64) | u128::from(b)
+    }
+
+    /// Take `cand`, or `cand_2`, `cand_3`, ... when taken: `Some` of the id when renamed.
+    fn unique(&mut self, cand: String) -> Option<String> {
+        if self.used.insert(Self::hash(&cand)) {
+            return None;
+        }
+        let mut k = 2;
+        loop {
+            let id = format!("{cand}_{k}");
+            if self.used.insert(Self::hash(&id)) {
+                return Some(id);
+            }
+            k += 1;
+        }
+    }
 }
 
 /// One CityJSONSeq line: feature `f` of `plan` as a `CityJSONFeature` with its own vertex
 /// list (nothing when it has no city object to write).
-pub(super) fn write_feature_line(
+fn write_feature_line(
     plan: &Plan<'_>,
     f: Feature,
     verts: &mut Vertices,
@@ -164,16 +318,15 @@ pub(super) fn write_feature_line(
     w.write_all(b",\"CityObjects\":{")?;
     write_members(&objs, &mut true, w)?;
     w.write_all(b"},\"vertices\":[")?;
-    write_vertices(w, &verts.list)?;
+    s.vertices += verts.write_list(w)?;
     w.write_all(b"]}\n")?;
-    s.vertices += verts.list.len();
     s.features += 1;
     Ok(())
 }
 
 /// A CityJSON document's header (`header`, without its `vertices` and `CityObjects`) up to
 /// the opening of `"CityObjects":{`, for city objects written one by one ([`write_members`]).
-pub(super) fn write_head_open(mut header: Map<String, Value>, w: &mut dyn Write) -> io::Result<()> {
+fn write_head_open(mut header: Map<String, Value>, w: &mut dyn Write) -> io::Result<()> {
     header.remove("vertices");
     header.remove("CityObjects");
     let head = serde_json::to_string(&Value::Object(header))?;
@@ -183,11 +336,7 @@ pub(super) fn write_head_open(mut header: Map<String, Value>, w: &mut dyn Write)
 
 /// City objects as `"id":{...}` members of `CityObjects`, a comma before each one but the
 /// first of the object (`first`, cleared once one is written).
-pub(super) fn write_members(
-    objs: &[(String, Value)],
-    first: &mut bool,
-    w: &mut dyn Write,
-) -> io::Result<()> {
+fn write_members(objs: &[(String, Value)], first: &mut bool, w: &mut dyn Write) -> io::Result<()> {
     for (id, obj) in objs {
         if !std::mem::take(first) {
             w.write_all(b",")?;
@@ -195,20 +344,6 @@ pub(super) fn write_members(
         serde_json::to_writer(&mut *w, id)?;
         w.write_all(b":")?;
         serde_json::to_writer(&mut *w, obj)?;
-    }
-    Ok(())
-}
-
-pub(super) fn write_vertices(w: &mut dyn Write, list: &[[i64; 3]]) -> io::Result<()> {
-    let mut buf = String::with_capacity(64);
-    for (k, v) in list.iter().enumerate() {
-        buf.clear();
-        if k > 0 {
-            buf.push(',');
-        }
-        use std::fmt::Write as _;
-        let _ = write!(buf, "[{},{},{}]", v[0], v[1], v[2]);
-        w.write_all(buf.as_bytes())?;
     }
     Ok(())
 }
@@ -240,80 +375,10 @@ fn epsg_code(srs_name: &str) -> Option<u32> {
 
 /// Scale per axis for a CRS: millimetres, or about a millimetre in degrees for the horizontal
 /// axes of a geographic CRS.
-pub(super) fn scale_for(srs_name: Option<&str>) -> DVec3 {
+fn scale_for(srs_name: Option<&str>) -> DVec3 {
     match srs_name.and_then(epsg_code) {
         Some(c) if GEOGRAPHIC.contains(&c) => DVec3::new(SCALE_DEGREES, SCALE_DEGREES, SCALE),
         _ => DVec3::splat(SCALE),
-    }
-}
-
-/// Integer vertices (millimetres from `translate`), each distinct one stored once: in memory,
-/// or numbered by an [`External`] index (a streamed document's, on disk).
-pub(super) struct Vertices {
-    translate: DVec3,
-    scale: DVec3,
-    map: HashMap<[i64; 3], u32>,
-    pub(super) list: Vec<[i64; 3]>,
-    /// Where the indices come from instead of `map` and `list`.
-    pub(super) external: Option<External>,
-}
-
-impl Vertices {
-    pub(super) fn new(translate: DVec3, scale: DVec3) -> Self {
-        Vertices {
-            translate,
-            scale,
-            map: HashMap::new(),
-            list: Vec::new(),
-            external: None,
-        }
-    }
-
-    pub(super) fn clear(&mut self) {
-        self.map.clear();
-        self.list.clear();
-    }
-
-    fn key(&self, p: DVec3) -> [i64; 3] {
-        let q = ((p - self.translate) / self.scale).round();
-        [q.x as i64, q.y as i64, q.z as i64]
-    }
-
-    /// The index of `key` (every call is one use of a vertex: an [`External`] index numbers
-    /// the calls).
-    fn index(&mut self, key: [i64; 3]) -> u32 {
-        if let Some(x) = &mut self.external {
-            return x.index(key);
-        }
-        let n = self.list.len() as u32;
-        let k = *self.map.entry(key).or_insert(n);
-        if k == n {
-            self.list.push(key);
-        }
-        k
-    }
-
-    /// Indices of a ring, consecutive duplicates (after rounding) removed; `None` below 3.
-    /// (Duplicates are found by their integer coordinates: equal keys, equal indices.)
-    fn ring(&mut self, ring: &[DVec3]) -> Option<Vec<u32>> {
-        let mut v: Vec<u32> = Vec::with_capacity(ring.len());
-        let mut keys: Vec<[i64; 3]> = Vec::with_capacity(ring.len());
-        for p in ring {
-            if !p.is_finite() {
-                continue;
-            }
-            let key = self.key(*p);
-            let k = self.index(key);
-            if keys.last() != Some(&key) {
-                v.push(k);
-                keys.push(key);
-            }
-        }
-        while v.len() > 1 && keys.first() == keys.last() {
-            v.pop();
-            keys.pop();
-        }
-        (v.len() >= 3).then_some(v)
     }
 }
 
@@ -395,127 +460,125 @@ impl Geom {
 /// A line of CityJSONSeq: a root building with its parts and installations, or one other
 /// city object.
 #[derive(Debug, Clone, Copy)]
-pub(super) enum Feature {
+enum Feature {
     Building(usize),
     Standalone(usize),
 }
 
-/// What to write for one file: ids, kept objects, transform.
+/// What to write of one chunk: ids, kept objects.
 pub(super) struct Plan<'a> {
     model: &'a CityModel,
-    file: usize,
     content: Content<'a>,
     /// Ids per building (index into `model.buildings`) of this file.
-    pub(super) building_ids: HashMap<usize, String>,
+    building_ids: HashMap<usize, String>,
     /// Ids per installation or standalone asset.
-    pub(super) asset_ids: HashMap<usize, String>,
+    asset_ids: HashMap<usize, String>,
     /// Parts (index) of each building or part.
     parts: HashMap<usize, Vec<usize>>,
     /// Buildings written.
     kept: HashSet<usize>,
-    pub(super) features: Vec<Feature>,
-    pub(super) translate: DVec3,
-    pub(super) scale: DVec3,
-    pub(super) bbox: Bbox,
+    features: Vec<Feature>,
     /// Extra attributes of the semantic surface objects of some assets.
     surface_attributes: Option<&'a BTreeMap<usize, Map<String, Value>>>,
     /// A CityJSON source's attributes and semantic surface members, copied to the output.
-    pub(super) source: Option<FromSource>,
+    source: Option<&'a FromSource>,
+}
+
+/// The box of what file `file` of `model` contributes with `content`.
+fn extent(model: &CityModel, file: usize, content: Content<'_>) -> Bbox {
+    let mut bbox = Bbox::EMPTY;
+    let assets = model.assets.iter().enumerate();
+    for (i, a) in assets.filter(|(_, a)| a.file == file) {
+        for (_, polys) in asset_lods(a, i, content) {
+            polys
+                .iter()
+                .flat_map(Polygon::points)
+                .for_each(|q| bbox.add(*q));
+        }
+    }
+    for (b, bd) in model.buildings.iter().enumerate() {
+        if bd.file == file {
+            for (_, g) in own_geometries(model, b) {
+                g.iter()
+                    .flat_map(Polygon::points)
+                    .for_each(|q| bbox.add(*q));
+            }
+        }
+    }
+    bbox
+}
+
+/// A building's own geometry written: its LoD properties at LoDs none of its assets has.
+fn own_geometries(model: &CityModel, b: usize) -> Vec<(u8, &[Polygon])> {
+    let Some(bd) = model.buildings.get(b) else {
+        return Vec::new();
+    };
+    let covered: HashSet<u8> = bd
+        .assets
+        .iter()
+        .filter_map(|&i| model.assets.get(i))
+        .flat_map(|a| a.geometries.iter().map(|g| g.lod))
+        .collect();
+    bd.geometries
+        .iter()
+        .filter(|g| !covered.contains(&g.lod) && !g.polygons.is_empty())
+        .map(|g| (g.lod, g.polygons.as_slice()))
+        .collect()
 }
 
 impl<'a> Plan<'a> {
-    fn new(model: &'a CityModel, file: usize, content: Content<'a>) -> Self {
-        let mut plan = Self::bare(model, file, content);
-        let mut used: HashSet<String> = HashSet::new();
-        let mut unique = |cand: String| {
-            let mut id = cand.clone();
-            let mut k = 2;
-            while !used.insert(id.clone()) {
-                id = format!("{cand}_{k}");
-                k += 1;
-            }
-            id
-        };
-        for (b, bd) in model.buildings.iter().enumerate() {
-            if bd.file != file {
-                continue;
-            }
-            let cand = bd.id.clone().unwrap_or_else(|| format!("building_{b}"));
-            plan.building_ids.insert(b, unique(cand));
-        }
-        for (i, a) in model.assets.iter().enumerate() {
-            if a.file != file || !standalone_or_installation(a) {
-                continue;
-            }
-            plan.asset_ids.insert(i, unique(asset_name(model, i)));
-        }
-        plan
-    }
-
-    /// The plan without ids ([`Plan::building_ids`], [`Plan::asset_ids`]: the caller's).
-    pub(super) fn bare(model: &'a CityModel, file: usize, content: Content<'a>) -> Self {
+    /// The plan of part `p` in the document's `frame`, with the document's unique ids (the
+    /// installations' and other objects' made unique on the first call for the part).
+    fn new(p: &Part<'a>, frame: &Frame<'a>, ids: &mut Ids) -> Self {
+        let model = p.model;
         let mut plan = Plan {
             model,
-            file,
-            content,
+            content: p.content,
             building_ids: HashMap::new(),
             asset_ids: HashMap::new(),
             parts: HashMap::new(),
             kept: HashSet::new(),
             features: Vec::new(),
-            translate: DVec3::ZERO,
-            scale: scale_for(model.files.get(file).and_then(|f| f.srs_name.as_deref())),
-            bbox: Bbox::EMPTY,
-            surface_attributes: None,
-            source: None,
+            surface_attributes: frame.surface_attributes,
+            source: p.from_source.or(frame.source),
         };
-        for (b, bd) in model.buildings.iter().enumerate() {
-            if bd.file != file {
-                continue;
+        for (b, bd) in p.buildings() {
+            if let Some(parent) = bd.parent {
+                plan.parts.entry(parent).or_default().push(b);
             }
-            if let Some(p) = bd.parent {
-                plan.parts.entry(p).or_default().push(b);
-            }
+            let global = p.buildings_before + b;
+            let id = ids.buildings.get(&global).cloned();
+            plan.building_ids
+                .insert(b, id.unwrap_or_else(|| building_id(bd, global)));
         }
-        // Bounding box of what is written, and the buildings kept.
-        let mut bbox = Bbox::EMPTY;
-        for (i, a) in model.assets.iter().enumerate() {
-            if a.file != file {
-                continue;
-            }
-            for (_, polys) in asset_lods(a, i, content) {
-                for p in polys.iter() {
-                    for q in p.points() {
-                        bbox.add(*q);
-                    }
-                }
-            }
-        }
-        for (b, bd) in model.buildings.iter().enumerate() {
-            if bd.file == file {
-                for (_, g) in plan.own_geometries(b) {
-                    for p in g {
-                        for q in p.points() {
-                            bbox.add(*q);
-                        }
-                    }
-                }
-            }
-        }
-        plan.bbox = bbox;
-        if !bbox.is_empty() {
-            plan.translate = bbox.min.floor();
-        }
-        for (b, bd) in model.buildings.iter().enumerate() {
-            if bd.file == file && bd.parent.is_none() {
+        for (b, bd) in p.buildings() {
+            if bd.parent.is_none() {
                 plan.mark_kept(b);
                 plan.features.push(Feature::Building(b));
             }
         }
-        for (i, a) in model.assets.iter().enumerate() {
-            if a.file == file && a.building.is_none() {
+        // the first pass over the objects takes the ids, chunk after chunk
+        let fresh = p.index >= ids.chunks_done;
+        for (i, a) in p.assets() {
+            if a.building.is_none() {
                 plan.features.push(Feature::Standalone(i));
             }
+            if !standalone_or_installation(a) {
+                continue;
+            }
+            // bodies are never installations nor outside a building: `i` is not a body
+            let global = p.assets_before + i;
+            let cand = asset_name(model, i, global);
+            if fresh {
+                if let Some(id) = ids.unique(cand.clone()) {
+                    ids.assets.insert(global, id);
+                }
+            }
+            let id = ids.assets.get(&global).cloned().unwrap_or(cand);
+            plan.asset_ids.insert(i, id);
+        }
+        if fresh {
+            ids.chunks_done = p.index + 1;
         }
         plan
     }
@@ -528,7 +591,7 @@ impl<'a> Plan<'a> {
             keep |= self.mark_kept(p);
         }
         if let Some(bd) = self.model.buildings.get(b) {
-            keep |= !self.own_geometries(b).is_empty();
+            keep |= !own_geometries(self.model, b).is_empty();
             keep |= bd.assets.iter().any(|&i| {
                 self.model
                     .assets
@@ -542,54 +605,7 @@ impl<'a> Plan<'a> {
         keep
     }
 
-    /// The building's own geometry written: its LoD properties at LoDs none of its assets has.
-    fn own_geometries(&self, b: usize) -> Vec<(u8, &'a [Polygon])> {
-        let model = self.model;
-        let Some(bd) = model.buildings.get(b) else {
-            return Vec::new();
-        };
-        let covered: HashSet<u8> = bd
-            .assets
-            .iter()
-            .filter_map(|&i| model.assets.get(i))
-            .flat_map(|a| a.geometries.iter().map(|g| g.lod))
-            .collect();
-        bd.geometries
-            .iter()
-            .filter(|g| !covered.contains(&g.lod) && !g.polygons.is_empty())
-            .map(|g| (g.lod, g.polygons.as_slice()))
-            .collect()
-    }
-
-    fn header(&self) -> Map<String, Value> {
-        let srs = self.model.files.get(self.file);
-        self.header_in(srs.and_then(|f| f.srs_name.as_deref()))
-    }
-
-    /// [`Plan::header`] of a document in CRS `srs_name`.
-    pub(super) fn header_in(&self, srs_name: Option<&str>) -> Map<String, Value> {
-        let mut meta = Map::new();
-        if let Some(rs) = srs_name.and_then(reference_system) {
-            meta.insert("referenceSystem".into(), rs.into());
-        }
-        if let Some(b) = self.bbox.to_array() {
-            meta.insert("geographicalExtent".into(), json!(b));
-        }
-        let t = self.translate;
-        let mut h = Map::new();
-        h.insert("type".into(), "CityJSON".into());
-        h.insert("version".into(), "2.0".into());
-        h.insert(
-            "transform".into(),
-            json!({"scale": self.scale.to_array(), "translate": [t.x, t.y, t.z]}),
-        );
-        h.insert("metadata".into(), Value::Object(meta));
-        h.insert("CityObjects".into(), json!({}));
-        h.insert("vertices".into(), json!([]));
-        h
-    }
-
-    pub(super) fn feature_id(&self, f: Feature) -> String {
+    fn feature_id(&self, f: Feature) -> String {
         match f {
             Feature::Building(b) => self.building_ids.get(&b).cloned(),
             Feature::Standalone(i) => self.asset_ids.get(&i).cloned(),
@@ -597,8 +613,16 @@ impl<'a> Plan<'a> {
         .unwrap_or_default()
     }
 
+    /// The objects of the part (`standalone`: the city objects outside buildings) made and
+    /// dropped: their vertex uses told to `verts`.
+    pub(super) fn count_uses(&self, standalone: bool, verts: &mut Vertices, s: &mut ExportSummary) {
+        for f in self.features.iter().filter(|f| is_part(f, standalone)) {
+            self.objects(*f, verts, s);
+        }
+    }
+
     /// The city objects of a feature, their vertices added to `verts`.
-    pub(super) fn objects(
+    fn objects(
         &self,
         f: Feature,
         verts: &mut Vertices,
@@ -669,7 +693,7 @@ impl<'a> Plan<'a> {
             for (lod, polys) in lods {
                 let g = geoms.entry(lod).or_default();
                 let sem = g.semantic(model, self.content, i);
-                let copied = self.source.as_ref().and_then(|s| s.surfaces.get(&i));
+                let copied = self.source.and_then(|s| s.surfaces.get(&i));
                 let extra = self.surface_attributes.and_then(|m| m.get(&i));
                 for extra in [copied, extra].into_iter().flatten() {
                     if let Some(surface) = sem.and_then(|k| g.surfaces.get_mut(k)) {
@@ -684,7 +708,7 @@ impl<'a> Plan<'a> {
                 s.polygons += g.add(verts, &polys, sem);
             }
         }
-        for (lod, polys) in self.own_geometries(b) {
+        for (lod, polys) in own_geometries(model, b) {
             // Own geometry at a LoD of its own: a geometry apart from the surfaces'.
             let g = geoms.entry(lod).or_default();
             s.polygons += g.add(verts, polys, None);
@@ -799,7 +823,6 @@ impl<'a> Plan<'a> {
     /// The attributes of city object `id` in a CityJSON source (empty otherwise).
     fn source_attributes(&self, id: Option<&str>) -> Map<String, Value> {
         self.source
-            .as_ref()
             .zip(id)
             .and_then(|(s, id)| s.objects.get(id).cloned())
             .unwrap_or_default()
@@ -842,7 +865,7 @@ impl<'a> Plan<'a> {
 }
 
 /// Installations and assets outside any building are city objects of their own.
-pub(super) fn standalone_or_installation(a: &Asset) -> bool {
+fn standalone_or_installation(a: &Asset) -> bool {
     a.building.is_none() || a.kind == AssetKind::Installation
 }
 
@@ -894,25 +917,6 @@ fn asset_lods<'a>(a: &'a Asset, i: usize, content: Content<'a>) -> Vec<(u8, Cow<
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn rings_drop_duplicates_after_rounding() {
-        let mut v = Vertices::new(DVec3::new(100.0, 200.0, 0.0), DVec3::splat(SCALE));
-        let r = v
-            .ring(&[
-                DVec3::new(100.0, 200.0, 0.0),
-                DVec3::new(100.0002, 200.0, 0.0),
-                DVec3::new(101.0, 200.0, 0.0),
-                DVec3::new(101.0, 201.0, 0.0),
-                DVec3::new(100.0, 200.0001, 0.0),
-            ])
-            .unwrap();
-        assert_eq!(r, vec![0, 1, 2]);
-        assert_eq!(v.list[2], [1000, 1000, 0]);
-        assert!(v
-            .ring(&[DVec3::ZERO, DVec3::X * 1e-5, DVec3::Y * 1e-5])
-            .is_none());
-    }
 
     #[test]
     fn members_are_written_between_the_head_and_the_vertices() {

@@ -13,7 +13,7 @@
 //!   the CityGML merge: [`crate::pipeline::batch::outputs::Plan::targets`]).
 //!
 //! `convert` does not hold the scene: it merges the inputs into a staged CityGML document and
-//! streams that ([`super::write_streamed`]), so its output is, by construction, the
+//! streams that ([`super::Chunks::Stream`]), so its output is, by construction, the
 //! CityGML merge converted. `lod` holds the scene and writes it through
 //! [`write_merged`]: a view of the model with one file ([`view`]).
 
@@ -156,7 +156,7 @@ pub fn write_merged(
     let v = view(model, files, &renames);
     let mut summary = ExportSummary::default();
     let bytes = crate::io::citygml::write::atomic_write(out, |w| {
-        summary = super::write_to(format, &v, 0, content, w)?;
+        summary = super::write_to(format, &super::Chunks::model(&v, 0, content), w)?.0;
         Ok(summary.bytes)
     })?;
     summary.bytes = bytes;

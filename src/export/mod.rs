@@ -10,9 +10,12 @@
 //! ([`crate::lod::scene::mixed_scene`], for OBJ) and the mixed CityGML writer
 //! ([`crate::lod::level::properties`], for CityJSON's per-LoD geometry) do.
 //!
+//! Each format has one writer, which goes over a [`Chunks`] a chunk at a time: a file read
+//! in streamed passes (memory follows the chunk), or a model in memory as one chunk.
+//!
 //! # Example
 //! ```
-//! use skylod::export::{write, Content, Format};
+//! use skylod::export::{write, Chunks, Content, Format};
 //! use skylod::model::synth::{generate, Preset};
 //! let dir = tempfile::tempdir().unwrap();
 //! let gml = dir.path().join("small.gml");
@@ -21,18 +24,20 @@
 //! std::fs::write(&gml, &xml).unwrap();
 //! let model = skylod::io::citygml::read_file(&gml).unwrap();
 //! let out = dir.path().join("small.obj");
-//! let s = write(Format::Obj, &model, 0, Content::Full, &out, &Default::default()).unwrap();
+//! let chunks = Chunks::model(&model, 0, Content::Full);
+//! let (s, _) = write(Format::Obj, &chunks, &out, &Default::default()).unwrap();
 //! let text = std::fs::read_to_string(&out).unwrap();
 //! assert!(text.starts_with("# origin "));
 //! assert_eq!(s.objects, model.assets.len());
 //! ```
 
+mod chunks;
 pub mod citygml_from_cityjson;
 pub mod citygml_via_cityjson;
 pub mod cityjson;
 pub mod cityjson_edit;
 pub(crate) use crate::io::citygml::json::source as cityjson_source;
-mod cityjson_stream;
+mod cityjson_vertices;
 pub mod format;
 pub mod merged;
 pub mod obj;
@@ -40,13 +45,14 @@ pub mod obj;
 #[allow(clippy::module_inception)] // `report::report` is the `lod` report
 pub mod report;
 
+pub use chunks::Chunks;
 pub use format::{Format, UnknownFormat};
 
-use crate::io::citygml::read::{Passes, StreamSummary};
+use crate::io::citygml::read::StreamSummary;
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::WriteError;
 use crate::lod::rough::RoughGeometry;
-use crate::model::{Asset, CityModel};
+use crate::model::CityModel;
 use std::path::Path;
 
 /// What the export holds per asset.
@@ -84,15 +90,6 @@ impl<'a> Content<'a> {
     /// True when levels are written as `skylod_level`.
     pub fn has_levels(&self) -> bool {
         matches!(self, Content::Levels { .. })
-    }
-
-    fn check(&self, model: &CityModel) -> Result<(), WriteError> {
-        match self {
-            Content::Levels { rough, levels } => {
-                crate::lod::mixed::check_per_asset(model, rough, levels)
-            }
-            Content::Full => Ok(()),
-        }
     }
 }
 
@@ -140,31 +137,39 @@ impl ExportSummary {
     }
 }
 
-/// Write file `file` of `model` to `out` in `format` (OBJ, CityJSON or CityJSONSeq), atomically
-/// (temporary file + rename), refusing to write over an input or, without `overwrite`, over an
-/// existing file.
+/// Write `chunks` to `out` in `format` (OBJ, CityJSON or CityJSONSeq), atomically
+/// (temporary file + rename), refusing to write over its source or, without `overwrite`, over
+/// an existing file. With what was written, the source's summary (a model's: its file as one
+/// chunk).
+///
+/// Every writer goes over its source in passes, a chunk at a time: a model in memory is one
+/// chunk; a stream ([`Chunks::Stream`]) reads its document once a pass, memory following the
+/// chunk, and gives the bytes of the whole model with [`Content::Full`]. The passes
+/// (`passes.passed(k, n)`): OBJ: 0 the origin, 1 and 2 the objects; CityJSON: 0 the plan, 3
+/// and 4 the vertex uses (a stream's only: it numbers its shared vertices in temporary files
+/// in `TMPDIR`, about 32 bytes a vertex use), 1 and 2 the objects written; CityJSONSeq: 0 the
+/// plan, 1 and 2 the objects; a pass 2 or 4 only for a source with such objects.
 ///
 /// # Errors
 /// [`WriteError`] for a refused target, I/O errors, mismatched `content` lengths, or
-/// [`Format::CityGml`] (written by [`crate::io::citygml::write`] and [`crate::lod::mixed`]).
+/// [`Format::CityGml`] (written by [`crate::io::citygml::write`] and [`crate::lod::mixed`]);
+/// [`WriteError::Declined`], nothing written, where a stream declines: read the whole file
+/// and write that model then.
 pub fn write(
     format: Format,
-    model: &CityModel,
-    file: usize,
-    content: Content<'_>,
+    chunks: &Chunks<'_>,
     out: &Path,
     opts: &WriteOptions,
-) -> Result<ExportSummary, WriteError> {
-    content.check(model)?;
-    let src = crate::io::citygml::write::source_file(model, file)?;
-    crate::io::citygml::write::check_target(out, opts, src.source.path())?;
-    let mut summary = ExportSummary::default();
+) -> Result<(ExportSummary, StreamSummary), WriteError> {
+    let input = chunks.check()?;
+    crate::io::citygml::write::check_target(out, opts, input)?;
+    let mut done: (ExportSummary, StreamSummary) = Default::default();
     let bytes = crate::io::citygml::write::atomic_write(out, |w| {
-        summary = write_to(format, model, file, content, w)?;
-        Ok(summary.bytes)
+        done = export(format, chunks, w, out)?;
+        Ok(done.0.bytes)
     })?;
-    summary.bytes = bytes;
-    Ok(summary)
+    done.0.bytes = bytes;
+    Ok(done)
 }
 
 /// [`write()`] into any writer `w` (uncompressed, no target checks); the summary counts the
@@ -174,106 +179,48 @@ pub fn write(
 /// As [`write()`].
 pub fn write_to(
     format: Format,
-    model: &CityModel,
-    file: usize,
-    content: Content<'_>,
+    chunks: &Chunks<'_>,
     w: &mut dyn std::io::Write,
-) -> Result<ExportSummary, WriteError> {
-    content.check(model)?;
-    crate::io::citygml::write::source_file(model, file)?;
-    let io = |e| WriteError::Io {
-        file: crate::io::files::WRITER_NAME.into(),
-        source: e,
-    };
-    let mut cw = crate::io::files::CountingWriter::new(w);
-    let mut summary = match format {
-        Format::Obj => obj::write_obj(model, file, content, &mut cw).map_err(io)?,
-        Format::CityJson => cityjson::write_cityjson(model, file, content, &mut cw).map_err(io)?,
-        Format::CityJsonSeq => {
-            cityjson::write_cityjsonseq(model, file, content, &mut cw).map_err(io)?
-        }
-        Format::CityGml => {
-            return Err(WriteError::Invalid(
-                "CityGML is written by citygml::write / lod::mixed".into(),
-            ))
-        }
-    };
-    summary.bytes = cw.count();
-    Ok(summary)
+) -> Result<(ExportSummary, StreamSummary), WriteError> {
+    chunks.check()?;
+    export(format, chunks, w, Path::new(crate::io::files::WRITER_NAME))
 }
 
-/// [`write()`] of the whole file at `input` in `format` (OBJ, CityJSON or CityJSONSeq) from
-/// streamed reads ([`Passes`]: chunks of `passes.chunk_bytes`, memory follows the chunk, the
-/// same bytes as [`write()`] of the whole model with [`Content::Full`]), atomically. OBJ:
-/// [`obj::write_obj_streamed`], its comment line naming `label` instead of `input` when given
-/// (a merge's staged document is named by the inputs it holds: [`merged`]); CityJSON and
-/// CityJSONSeq read the file in several passes, and CityJSON numbers its shared vertices in
-/// temporary files (in `TMPDIR`: about 32 bytes a vertex use; see the module
-/// `cityjson_stream`'s docs in the source). The passes (`passes.passed(k, n)`): OBJ: 0 the
-/// origin, 1 and 2 the objects; CityJSON: 0 the plan, 3 and 4 the vertex uses, 1 and 2 the
-/// objects written; CityJSONSeq: 0 the plan, 1 and 2 the objects; a pass 2 or 4 only for a
-/// file with such objects. `Ok(None)`, nothing written, where the stream declines: read the
-/// whole file and [`write()`] it then.
-///
-/// # Errors
-/// As [`write()`]; [`WriteError::Invalid`] for [`Format::CityGml`].
-pub fn write_streamed(
+/// The writer of `format` over `chunks` into `w` (named `name` in errors).
+fn export(
     format: Format,
-    input: &Path,
-    label: Option<&str>,
-    passes: &Passes<'_>,
-    out: &Path,
-    opts: &WriteOptions,
-) -> Result<Option<(ExportSummary, StreamSummary)>, WriteError> {
-    let kind = match format {
-        Format::Obj => None,
-        Format::CityJson => Some(cityjson_stream::Kind::CityJson),
-        Format::CityJsonSeq => Some(cityjson_stream::Kind::Seq),
+    chunks: &Chunks<'_>,
+    w: &mut dyn std::io::Write,
+    name: &Path,
+) -> Result<(ExportSummary, StreamSummary), WriteError> {
+    let mut cw = crate::io::files::CountingWriter::new(w);
+    let written = match format {
+        Format::Obj => obj::write_obj(chunks, &mut cw),
+        Format::CityJson => cityjson::write(cityjson::Kind::CityJson, chunks, &mut cw),
+        Format::CityJsonSeq => cityjson::write(cityjson::Kind::Seq, chunks, &mut cw),
         Format::CityGml => {
             return Err(WriteError::Invalid(
                 "CityGML is written by citygml::write / lod::mixed".into(),
             ))
         }
     };
-    crate::io::citygml::write::check_target(out, opts, std::iter::once(input))?;
-    let io = |e| WriteError::Io {
-        file: out.to_path_buf(),
-        source: e,
+    let io = |source| WriteError::Io {
+        file: name.to_path_buf(),
+        source,
     };
-    let mut done = None;
-    let r = crate::io::citygml::write::atomic_write(out, |w| {
-        let mut cw = crate::io::files::CountingWriter::new(w);
-        let r = match kind {
-            None => obj::write_obj_streamed(input, label, passes, &mut cw),
-            Some(k) => cityjson_stream::write_streamed(k, input, passes, &mut cw),
-        };
-        match r.map_err(io)? {
-            Some(d) => done = Some(d),
-            // nothing is kept of a declined stream's output
-            None => return Err(WriteError::Invalid("declined".into())),
+    match written.map_err(io)? {
+        Some((mut s, sum)) => {
+            s.bytes = cw.count();
+            Ok((s, sum))
         }
-        Ok(cw.count())
-    });
-    match (r, done) {
-        (Ok(bytes), Some((mut s, sum))) => {
-            s.bytes = bytes;
-            Ok(Some((s, sum)))
-        }
-        (Err(WriteError::Invalid(_)), None) => Ok(None),
-        (Err(e), _) => Err(e),
-        (Ok(_), None) => Ok(None),
+        None => Err(WriteError::Declined(chunks.label().into())),
     }
 }
 
-/// Name of asset `i` in an export: its `gml:id`, else its building's id and its index among
-/// the building's assets (`B1_3`), else `asset_<i>`.
-pub fn asset_name(model: &CityModel, i: usize) -> String {
-    asset_name_as(model, i, i)
-}
-
-/// [`asset_name`] of asset `i` of `model` that is asset `global` of the whole document (a
-/// chunk of a streamed read): `asset_<global>` when it has no name.
-pub fn asset_name_as(model: &CityModel, i: usize, global: usize) -> String {
+/// Name in an export of asset `i` of `model`, asset `global` of the whole document (`i` itself
+/// but in a chunk of a streamed read): its `gml:id`, else its building's id and its index
+/// among the building's assets (`B1_3`), else `asset_<global>`.
+pub fn asset_name(model: &CityModel, i: usize, global: usize) -> String {
     let Some(a) = model.assets.get(i) else {
         return format!("asset_{global}");
     };
@@ -287,13 +234,4 @@ pub fn asset_name_as(model: &CityModel, i: usize, global: usize) -> String {
         }
     }
     format!("asset_{global}")
-}
-
-/// Assets of file `file`, with their indices.
-fn assets_of(model: &CityModel, file: usize) -> impl Iterator<Item = (usize, &Asset)> {
-    model
-        .assets
-        .iter()
-        .enumerate()
-        .filter(move |(_, a)| a.file == file)
 }

@@ -19,7 +19,7 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::export::{obj::write_obj, Content};
+//! use skylod::export::{obj::write_obj, Chunks, Content};
 //! use skylod::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
 //! let mut m = CityModel::default();
 //! let quad = Polygon::new(vec![
@@ -30,7 +30,7 @@
 //!     vec![LodGeometry { lod: 2, polygons: vec![quad], ..Default::default() }],
 //! ));
 //! let mut out = Vec::new();
-//! let s = write_obj(&m, 0, Content::Full, &mut out).unwrap();
+//! let (s, _) = write_obj(&Chunks::model(&m, 0, Content::Full), &mut out).unwrap().unwrap();
 //! let text = String::from_utf8(out).unwrap();
 //! assert!(text.starts_with("# origin 430005 4581005 20\n"));
 //! assert!(text.contains("o r1\nusemtl roof_l2\nv "));
@@ -38,64 +38,67 @@
 //! assert_eq!((s.objects, s.triangles, s.vertices), (1, 2, 4));
 //! ```
 
-use super::{asset_name, asset_name_as, assets_of, Content, ExportSummary};
-use crate::io::citygml::read::{Chunk, Passes, StreamSummary};
+use super::chunks::{Chunks, Part};
+use super::{asset_name, ExportSummary};
+use crate::io::citygml::read::StreamSummary;
 use crate::lod::level::traced as level_polygons;
 use crate::model::triangulate;
-use crate::model::{Bbox, CityModel, Polygon};
+use crate::model::{Bbox, Polygon};
 use foldhash::HashMap;
 use glam::DVec3;
 use std::io::{self, Write};
 
-/// Write the assets of file `file` of `model` as OBJ to `w` (see the module docs).
+/// Write the assets of `chunks` as OBJ to `w` (see the module docs), in passes over the
+/// chunks: 0 the origin (the centre of all the geometry written), 1 the assets, and 2, for
+/// a stream with body assets (buildings without thematic surfaces: last in the whole model,
+/// after each chunk's other assets in a stream's chunk), the bodies. With what was written,
+/// the source's summary; `Ok(None)` where the stream declines.
 ///
 /// # Errors
 /// I/O errors of `w`.
 pub fn write_obj(
-    model: &CityModel,
-    file: usize,
-    content: Content<'_>,
+    chunks: &Chunks<'_>,
     w: &mut dyn Write,
-) -> io::Result<ExportSummary> {
+) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
     let mut bbox = Bbox::EMPTY;
-    for (i, a) in assets_of(model, file) {
-        for p in level_polygons(a, content.rough(i), content.level(i)).iter() {
-            for q in p.points() {
-                bbox.add(*q);
+    let Some(sum) = chunks.pass(0, |p: &Part<'_>| -> io::Result<()> {
+        for (i, a) in p.assets() {
+            for q in level_polygons(a, p.content.rough(i), p.content.level(i)).iter() {
+                q.points().for_each(|q| bbox.add(*q));
             }
         }
-    }
+        Ok(())
+    })?
+    else {
+        return Ok(None);
+    };
     let origin = if bbox.is_empty() {
         DVec3::ZERO
     } else {
         bbox.center().round()
     };
-    let src = model.files.get(file);
-    let label = src.map(|f| crate::model::shown(&f.path).to_string());
-    write_header(
-        w,
-        origin,
-        label.as_deref(),
-        src.and_then(|f| f.srs_name.as_deref()),
-    )?;
+    write_header(w, origin, &chunks.label(), sum.srs_name.as_deref())?;
     let mut s = ExportSummary::default();
     let mut scratch = Scratch::default();
-    for (i, a) in assets_of(model, file) {
-        let name = asset_name(model, i);
-        let level = content.level(i);
-        let polys = level_polygons(a, content.rough(i), level);
-        write_asset(
-            w,
-            a.kind.as_str(),
-            &name,
-            level,
-            &polys,
-            origin,
-            &mut s,
-            &mut scratch,
-        )?;
+    for bodies in [false, true] {
+        if bodies && sum.bodies == 0 {
+            break;
+        }
+        let done = chunks.pass(1 + usize::from(bodies), |p: &Part<'_>| -> io::Result<()> {
+            for (i, a, global) in p.in_order(bodies, sum.assets) {
+                let name = asset_name(p.model, i, global);
+                let level = p.content.level(i);
+                let polys = level_polygons(a, p.content.rough(i), level);
+                let obj = (a.kind.as_str(), name.as_str(), level);
+                write_asset(w, obj, &polys, origin, &mut s, &mut scratch)?;
+            }
+            Ok(())
+        })?;
+        if done.is_none() {
+            return Ok(None);
+        }
     }
-    Ok(s)
+    Ok(Some((s, sum)))
 }
 
 /// The origin line and the comment line of an OBJ of the file shown as `label` in CRS
@@ -103,7 +106,7 @@ pub fn write_obj(
 fn write_header(
     w: &mut dyn Write,
     origin: DVec3,
-    label: Option<&str>,
+    label: &str,
     srs_name: Option<&str>,
 ) -> io::Result<()> {
     writeln!(w, "# origin {} {} {}", origin.x, origin.y, origin.z)?;
@@ -111,7 +114,7 @@ fn write_header(
         w,
         "# skylod {} OBJ of {}; CRS {}; metres, Z up, vertices relative to the origin",
         env!("CARGO_PKG_VERSION"),
-        label.unwrap_or(""),
+        label,
         srs_name.unwrap_or("unknown"),
     )
 }
@@ -125,14 +128,11 @@ struct Scratch {
     line: String,
 }
 
-/// One asset as an OBJ object (nothing when its polygons give no triangle); `s` counts what
-/// was written (its vertices number the next object's).
-#[allow(clippy::too_many_arguments)]
+/// One asset as an OBJ object (nothing when its polygons give no triangle): `(kind, name,
+/// level)`; `s` counts what was written (its vertices number the next object's).
 fn write_asset(
     w: &mut dyn Write,
-    kind: &str,
-    name: &str,
-    level: u8,
+    (kind, name, level): (&str, &str, u8),
     polys: &[Polygon],
     origin: DVec3,
     s: &mut ExportSummary,
@@ -196,90 +196,6 @@ fn write_asset(
     Ok(())
 }
 
-/// [`write_obj`] of the whole file at `path` (with [`Content::Full`], as `convert` writes
-/// it) from streamed reads ([`Passes`]): memory follows the chunk, the bytes are
-/// [`write_obj`]'s of the whole model, the comment line naming `label` (when given) instead
-/// of `path`. Passes over the file: one for the origin (the centre of all the geometry), one
-/// writing the assets, and, for a file with body assets (buildings without thematic
-/// surfaces, last in the whole model), one more writing them (pass 0: the origin, 1: the
-/// assets, 2: the bodies).
-///
-/// With what was written, the stream's summary (of the first pass). `Ok(None)` where the
-/// stream declines ([`crate::io::citygml::read::Streamed::Declined`]): read the whole file
-/// then.
-///
-/// # Errors
-/// I/O errors of `w`.
-pub fn write_obj_streamed(
-    path: &std::path::Path,
-    label: Option<&str>,
-    passes: &Passes<'_>,
-    w: &mut dyn Write,
-) -> io::Result<Option<(ExportSummary, StreamSummary)>> {
-    let mut bbox = Bbox::EMPTY;
-    let Some(sum) = passes.pass(path, 0, |c: Chunk| -> io::Result<()> {
-        for a in &c.model.assets {
-            for p in level_polygons(a, None, 2).iter() {
-                for q in p.points() {
-                    bbox.add(*q);
-                }
-            }
-        }
-        Ok(())
-    })?
-    else {
-        return Ok(None);
-    };
-    let origin = if bbox.is_empty() {
-        DVec3::ZERO
-    } else {
-        bbox.center().round()
-    };
-    let label = label.map_or_else(|| crate::model::shown(path).to_string(), str::to_string);
-    write_header(w, origin, Some(&label), sum.srs_name.as_deref())?;
-    let mut s = ExportSummary::default();
-    let mut scratch = Scratch::default();
-    for bodies in [false, true] {
-        if bodies && sum.bodies == 0 {
-            break;
-        }
-        let done = passes.pass(
-            path,
-            1 + usize::from(bodies),
-            |c: Chunk| -> io::Result<()> {
-                let nb = c.non_body_assets();
-                for (i, a) in c.model.assets.iter().enumerate() {
-                    if (i >= nb) != bodies {
-                        continue;
-                    }
-                    let global = if bodies {
-                        sum.assets + c.bodies_before + (i - nb)
-                    } else {
-                        c.assets_before + i
-                    };
-                    let name = asset_name_as(&c.model, i, global);
-                    let polys = level_polygons(a, None, 2);
-                    write_asset(
-                        w,
-                        a.kind.as_str(),
-                        &name,
-                        2,
-                        &polys,
-                        origin,
-                        &mut s,
-                        &mut scratch,
-                    )?;
-                }
-                Ok(())
-            },
-        )?;
-        if done.is_none() {
-            return Ok(None);
-        }
-    }
-    Ok(Some((s, sum)))
-}
-
 /// A coordinate with 0.1 mm resolution, without trailing zeros (`-5`, `12.25`).
 fn push_coord(s: &mut String, x: f64) {
     let mut t = format!("{x:.4}");
@@ -300,8 +216,9 @@ fn push_coord(s: &mut String, x: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::export::Content;
     use crate::lod::rough::RoughGeometry;
-    use crate::model::{Asset, AssetKind, LodGeometry, Polygon};
+    use crate::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
 
     fn asset(kind: AssetKind, id: Option<&str>, z: f64) -> Asset {
         let sq = Polygon::new(vec![
@@ -355,16 +272,13 @@ mod tests {
         ];
         let levels = [2, 1, 0];
         let mut out = Vec::new();
-        let s = write_obj(
-            &m,
-            0,
-            Content::Levels {
-                rough: &rough,
-                levels: &levels,
-            },
-            &mut out,
-        )
-        .unwrap();
+        let content = Content::Levels {
+            rough: &rough,
+            levels: &levels,
+        };
+        let (s, _) = write_obj(&Chunks::model(&m, 0, content), &mut out)
+            .unwrap()
+            .unwrap();
         let text = String::from_utf8(out).unwrap();
         assert!(text.contains("o r\nusemtl roof_l2\n"), "{text}");
         assert!(

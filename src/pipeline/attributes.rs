@@ -14,8 +14,8 @@
 //! ```
 
 use super::Framed;
-use crate::export::cityjson::write_cityjson_with;
-use crate::export::{Content, Format};
+use crate::export::cityjson::{write as write_cityjson, Kind};
+use crate::export::{Chunks, Content, Format};
 use crate::io::citygml::ns::CORE_LEADING;
 use crate::io::citygml::write::{escape_attr, write_document, Edit, WriteOptions};
 use crate::io::citygml::WriteError;
@@ -269,7 +269,13 @@ pub fn write_surface_means(
             })
             .collect();
         atomic_write(out, |w| {
-            let written = write_cityjson_with(model, 0, Content::Full, Some(&attrs), w);
+            let chunks = Chunks::Model {
+                model,
+                file: 0,
+                content: Content::Full,
+                surface_attributes: Some(&attrs),
+            };
+            let written = write_cityjson(Kind::CityJson, &chunks, w);
             written.map(|_| 0).map_err(|e| FileError::new(out, e))
         })
         .map_err(|source| AttributesError::CityJson {

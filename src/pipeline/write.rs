@@ -76,7 +76,8 @@ pub fn write_levels<'a>(
         )?;
         return Ok(mixed_written(s));
     }
-    let s = crate::export::write(format, model, file, content(levels), out, wopts)?;
+    let chunks = crate::export::Chunks::model(model, file, content(levels));
+    let (s, _) = crate::export::write(format, &chunks, out, wopts)?;
     Ok(export_written(model, file, levels, s))
 }
 
@@ -120,7 +121,8 @@ pub fn write_levels_to(
         let s = write_mixed_to(model, file, rough, lv, w, wopts)?;
         return Ok(mixed_written(s));
     }
-    let s = crate::export::write_to(format, model, file, content(levels), w)?;
+    let chunks = crate::export::Chunks::model(model, file, content(levels));
+    let (s, _) = crate::export::write_to(format, &chunks, w)?;
     Ok(export_written(model, file, levels, s))
 }
 

@@ -7,7 +7,7 @@
 use crate::util::*;
 use serde_json::Value;
 use skylod::export::report::stats::Stats;
-use skylod::export::{write, Content, Format};
+use skylod::export::{write, Chunks, Content, Format};
 use skylod::io::citygml::read_file;
 use skylod::model::{AssetKind, CityModel};
 use std::path::{Path, PathBuf};
@@ -212,7 +212,8 @@ fn every_file_valid_and_counted() {
         versions.extend(stats.citygml_version.clone());
         for format in [Format::CityJson, Format::CityJsonSeq] {
             let out = dir.path().join(format!("{k}{}", format.extension()));
-            match write(format, &model, 0, Content::Full, &out, &Default::default()) {
+            let chunks = Chunks::model(&model, 0, Content::Full);
+            match write(format, &chunks, &out, &Default::default()) {
                 Ok(_) => written.push((input.clone(), stats.clone(), out)),
                 Err(e) => problems.push(format!("{}: {format}: {e}", short(input))),
             }
@@ -295,9 +296,7 @@ fn cjval_rejects_broken_output() {
     let good = dir.path().join("good.city.json");
     write(
         Format::CityJson,
-        &model,
-        0,
-        Content::Full,
+        &Chunks::model(&model, 0, Content::Full),
         &good,
         &Default::default(),
     )

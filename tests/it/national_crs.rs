@@ -228,9 +228,7 @@ fn bavarian_cityjson_has_reference_system() {
     let out = dir.path().join("by.city.json");
     skylod::export::write(
         skylod::export::Format::CityJson,
-        &m,
-        0,
-        skylod::export::Content::Full,
+        &skylod::export::Chunks::model(&m, 0, skylod::export::Content::Full),
         &out,
         &Default::default(),
     )

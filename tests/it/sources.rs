@@ -58,7 +58,8 @@ fn written(model: &CityModel) -> Vec<(&'static str, Vec<u8>)> {
         ("cityjsonseq", Format::CityJsonSeq),
     ] {
         let mut w = Vec::new();
-        let s = skylod::export::write_to(format, model, 0, content, &mut w).unwrap();
+        let chunks = skylod::export::Chunks::model(model, 0, content);
+        let (s, _) = skylod::export::write_to(format, &chunks, &mut w).unwrap();
         assert_eq!(s.bytes, w.len() as u64, "{name}");
         out.push((name, w));
     }

@@ -439,7 +439,8 @@ fn lod_of_a_large_file_peaks_under_the_file_size_and_a_seventh() {
 /// the whole model gives, on every file of the shared data and the fixtures.
 #[test]
 fn streamed_exports_are_the_whole_models_bytes() {
-    use skylod::export::{write, write_streamed, Content, Format};
+    use skylod::export::{write, Chunks, Content, Format};
+    use skylod::WriteError;
     let dir = tempfile::tempdir().unwrap();
     let opts = skylod::io::citygml::write::WriteOptions {
         overwrite: true,
@@ -461,20 +462,21 @@ fn streamed_exports_are_the_whole_models_bytes() {
             .enumerate()
         {
             let ropts = ReadOptions::default();
-            let s = write_streamed(
-                format,
-                &path,
-                None,
-                &Passes::new(&ropts, 4096, &|_, _| {}),
-                &b,
-                &opts,
-            )
-            .unwrap_or_else(|e| panic!("{name} {format}: {e}"));
-            let Some((s, _)) = s else {
-                declined.push(format!("{name} {format}"));
-                continue;
+            let passes = Passes::new(&ropts, 4096, &|_, _| {});
+            let stream = Chunks::Stream {
+                path: &path,
+                label: None,
+                passes: &passes,
             };
-            let w = write(format, &model, 0, Content::Full, &a, &opts).unwrap();
+            let s = match write(format, &stream, &b, &opts) {
+                Err(WriteError::Declined(_)) => {
+                    declined.push(format!("{name} {format}"));
+                    continue;
+                }
+                s => s.unwrap_or_else(|e| panic!("{name} {format}: {e}")).0,
+            };
+            let (w, _) =
+                write(format, &Chunks::model(&model, 0, Content::Full), &a, &opts).unwrap();
             assert_eq!(s, w, "{name} {format}: summaries");
             let (x, y) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
             assert!(x == y, "{name} {format}: the streamed output differs");
@@ -537,11 +539,11 @@ fn streamed_citygml_is_the_whole_reads_bytes() {
 }
 
 /// Ids repeated across chunks (buildings, and an object outside buildings with a building's
-/// id) are made unique as the whole writer does; the objects outside buildings follow every
-/// building, as in the whole model's CityJSON.
+/// id) are made unique as in the model's CityJSON (one chunk); the objects outside buildings
+/// follow every building there too.
 #[test]
 fn streamed_cityjson_ids_are_the_whole_writers() {
-    use skylod::export::{write, write_streamed, Content, Format};
+    use skylod::export::{write, Chunks, Content, Format};
     let roof = |id: &str| {
         format!(
             r#"<bldg:boundedBy><bldg:RoofSurface gml:id="{id}_r"><bldg:lod2MultiSurface><gml:MultiSurface>
@@ -601,12 +603,16 @@ fn streamed_cityjson_ids_are_the_whole_writers() {
         dir.path().join("streamed.out"),
     );
     for format in [Format::CityJson, Format::CityJsonSeq] {
-        write(format, &model, 0, Content::Full, &a, &opts).unwrap();
+        write(format, &Chunks::model(&model, 0, Content::Full), &a, &opts).unwrap();
         // one member a chunk
         let ropts = ReadOptions::default();
         let passes = Passes::new(&ropts, 1, &|_, _| {});
-        let s = write_streamed(format, &path, None, &passes, &b, &opts).unwrap();
-        assert!(s.is_some(), "{format}: declined");
+        let stream = Chunks::Stream {
+            path: &path,
+            label: None,
+            passes: &passes,
+        };
+        write(format, &stream, &b, &opts).unwrap_or_else(|e| panic!("{format}: {e}"));
         let (x, y) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
         let text = String::from_utf8_lossy(&x);
         for id in ["\"a_2\"", "\"a_2_2\"", "\"a_3\"", "\"building_3\"", "\"g\""] {

@@ -178,6 +178,11 @@ pub enum WriteError {
     /// The arguments do not fit the model (e.g. one level per asset expected).
     #[error("invalid writer input: {0}")]
     Invalid(String),
+    /// A document written from a streamed read ([`crate::export::Chunks::Stream`]) does not
+    /// read in chunks alone (see [`crate::io::citygml::read::stream`]): nothing was written;
+    /// read it whole and write the model instead.
+    #[error("{}: the stream declined (read it whole)", crate::model::shown(.0))]
+    Declined(PathBuf),
 }
 
 impl From<crate::io::files::FileError> for WriteError {

@@ -11,13 +11,13 @@ use crate::export::citygml_from_cityjson::{
     TargetVersion,
 };
 use crate::export::report::stats::Stats;
-use crate::export::{Content, Format};
+use crate::export::{Chunks, Content, Format};
 use crate::io::citygml::read::{read_file_observed, stream, Passes, ReadOptions, Streamed};
 use crate::io::citygml::write::{write_document, write_document_streamed, WriteOptions};
 use crate::io::citygml::{ReadError, WriteError};
 use crate::model::crs::Crs;
 use crate::model::runtime::progress::{Progress, Stage};
-use crate::model::{shown, Warning};
+use crate::model::{shown, CityModel, Warning};
 use std::path::Path;
 
 /// The chunk size to stream `path` with (`chunk` bytes), or `None` to read it whole: small
@@ -210,15 +210,37 @@ pub fn convert_file(
     note: &(dyn Fn(String) + Sync),
 ) -> Result<Converted, ConvertError> {
     let passed = |n| progress.advance(Stage::Read, 0, n, None);
-    // CityJSON → CityGML goes from the document itself (convert_whole: in chunks of city
-    // objects where `chunk` says so)
-    let chunk = o
-        .chunk
-        .filter(|_| o.format != Format::CityGml || !is_json_file(input));
-    if let Some(chunk) = chunk {
-        match convert_streamed(input, out, o, chunk, &passed)? {
-            Ok(c) => return Ok(c),
-            Err(why) => note(read_whole(input, why)),
+    // CityJSON → CityGML goes from the document itself (below: in chunks of city objects
+    // where `chunk` says so)
+    let cityjson_to_citygml = o.format == Format::CityGml && is_json_file(input);
+    if let Some(chunk) = o.chunk.filter(|_| !cityjson_to_citygml) {
+        // the bar's share of each pass: OBJ origin 1/2, objects 1/2; CityJSONSeq plan 1/2,
+        // buildings 1/2; CityJSON plan, vertex uses and objects 1/3 each (the passes over
+        // the objects outside buildings, when a file has them, are not counted)
+        let thirds = o.format == Format::CityJson;
+        let pass = |pass, n: u64| {
+            let share = match (thirds, pass) {
+                (false, 0) => n.div_ceil(2),
+                (false, 1) => n / 2,
+                (true, 0) => n.div_ceil(3),
+                (true, 1 | 3) => n / 3,
+                _ => 0,
+            };
+            if share > 0 {
+                passed(share);
+            }
+        };
+        let ropts = ReadOptions::default();
+        let passes = Passes::new(&ropts, chunk, &pass);
+        let label = None;
+        let stream = Chunks::Stream {
+            path: input,
+            label,
+            passes: &passes,
+        };
+        match write_out(input, out, o, &stream)? {
+            Some(c) => return Ok(c),
+            None => note(read_whole(input, "the stream declined")),
         }
     }
     if progress.is_cancelled() {
@@ -226,100 +248,7 @@ pub fn convert_file(
             input: input.to_path_buf(),
         });
     }
-    convert_whole(input, out, o, &passed)
-}
-
-/// A CityGML output's line: its size, envelopes recomputed, warnings.
-fn document_line(input: &Path, out: &Path, bytes: u64, edits: usize, warnings: usize) -> String {
-    format!(
-        "{} -> {}: {}, {edits} envelope(s) recomputed, {warnings} warning(s)",
-        shown(input),
-        out.display(),
-        size_note(out, bytes),
-    )
-}
-
-/// [`convert_file`] from a streamed read; `Err(why)` where the stream declines.
-fn convert_streamed(
-    input: &Path,
-    out: &Path,
-    o: &ConvertOptions<'_>,
-    chunk: u64,
-    passed: &(dyn Fn(u64) + Sync),
-) -> Result<Result<Converted, &'static str>, ConvertError> {
-    // the bar's share of each pass: OBJ origin 1/2, objects 1/2; CityJSONSeq plan 1/2,
-    // buildings 1/2; CityJSON plan, vertex uses and objects 1/3 each (the passes over the
-    // objects outside buildings, when a file has them, are not counted)
-    let thirds = o.format == Format::CityJson;
-    let pass = |pass, n: u64| {
-        let share = match (thirds, pass) {
-            (false, 0) => n.div_ceil(2),
-            (false, 1) => n / 2,
-            (true, 0) => n.div_ceil(3),
-            (true, 1 | 3) => n / 3,
-            _ => 0,
-        };
-        if share > 0 {
-            passed(share);
-        }
-    };
-    const DECLINED: &str = "the stream declined";
-    if o.mirror {
-        create_parent(out)?;
-    }
-    let ropts = ReadOptions::default();
-    let passes = Passes::new(&ropts, chunk, &pass);
-    if o.format == Format::CityGml {
-        let Some(d) = write_document_streamed(input, &passes, out, o.write)? else {
-            return Ok(Err(DECLINED));
-        };
-        let (bytes, edits, w) = (d.summary.bytes, d.summary.edits, d.stream.warnings);
-        let done = Done {
-            line: Some(document_line(input, out, bytes, edits, w)),
-            warnings: w,
-            polygons: (d.polygons, d.polygons),
-        };
-        return Ok(Ok(Converted {
-            done,
-            ..Converted::default()
-        }));
-    }
-    let r = crate::export::write_streamed(o.format, input, None, &passes, out, o.write);
-    let Some((s, sum)) = r.map_err(|error| ConvertError::Streamed {
-        out: out.to_path_buf(),
-        error,
-    })?
-    else {
-        return Ok(Err(DECLINED));
-    };
-    Ok(Ok(Converted {
-        done: Done {
-            line: None,
-            warnings: sum.warnings,
-            polygons: (0, 0),
-        },
-        written: Some(s.describe(o.format, input, out)),
-    }))
-}
-
-/// [`convert_file`] from the whole model.
-fn convert_whole(
-    input: &Path,
-    out: &Path,
-    o: &ConvertOptions<'_>,
-    passed: &(dyn Fn(u64) + Sync),
-) -> Result<Converted, ConvertError> {
-    let done = |line, warnings, polygons| Converted {
-        done: Done {
-            line,
-            warnings,
-            polygons,
-        },
-        ..Converted::default()
-    };
-    if o.format == Format::CityGml && is_json_file(input) {
-        // CityJSON → CityGML from the document itself, feature by feature (a document in
-        // chunks of city-object trees where `chunk` says so).
+    if cityjson_to_citygml {
         if o.mirror {
             create_parent(out)?;
         }
@@ -332,25 +261,89 @@ fn convert_whole(
             &format!(", {}", size_note(out, s.bytes_out)),
         );
         let warnings = s.dropped.values().sum();
-        return Ok(done(Some(line), warnings, (s.polygons, s.polygons)));
+        let polygons = (s.polygons, s.polygons);
+        return Ok(converted(Some(line), warnings, polygons, None));
     }
-    let model = read_file_observed(input, &ReadOptions::default(), passed)?;
-    let polygons = model.polygon_count();
-    let warnings = model.warnings.len();
+    let model = read_file_observed(input, &ReadOptions::default(), &passed)?;
+    write_out(input, out, o, &Chunks::model(&model, 0, Content::Full))?
+        .ok_or_else(|| WriteError::Declined(input.to_path_buf()).into())
+}
+
+/// A CityGML output's line: its size, envelopes recomputed, warnings.
+fn document_line(input: &Path, out: &Path, bytes: u64, edits: usize, warnings: usize) -> String {
+    format!(
+        "{} -> {}: {}, {edits} envelope(s) recomputed, {warnings} warning(s)",
+        shown(input),
+        out.display(),
+        size_note(out, bytes),
+    )
+}
+
+/// [`convert_file`] of `input` from `chunks` (its streamed passes, or its model read whole),
+/// but for CityJSON → CityGML; `None` where the stream declines.
+fn write_out(
+    input: &Path,
+    out: &Path,
+    o: &ConvertOptions<'_>,
+    chunks: &Chunks<'_>,
+) -> Result<Option<Converted>, ConvertError> {
     if o.mirror {
         create_parent(out)?;
     }
-    if o.format != Format::CityGml {
-        // The export's errors name the output.
-        let s = crate::export::write(o.format, &model, 0, Content::Full, out, o.write)?;
-        let shown_input = model.files.first().map_or(Path::new(""), |f| &f.path);
-        let mut c = done(None, warnings, (polygons, polygons));
-        c.written = Some(s.describe(o.format, shown_input, out));
-        return Ok(c);
+    let model = match *chunks {
+        Chunks::Model { model, .. } => Some(model),
+        Chunks::Stream { .. } => None,
+    };
+    if o.format == Format::CityGml {
+        let (s, warnings, polygons) = match *chunks {
+            Chunks::Model { model: m, .. } => {
+                let s = write_document(m, 0, Vec::new(), out, o.write)?;
+                (s, m.warnings.len(), m.polygon_count())
+            }
+            Chunks::Stream { passes, .. } => {
+                let Some(d) = write_document_streamed(input, passes, out, o.write)? else {
+                    return Ok(None);
+                };
+                (d.summary, d.stream.warnings, d.polygons)
+            }
+        };
+        let line = document_line(input, out, s.bytes, s.edits, warnings);
+        let polygons = (polygons, polygons);
+        return Ok(Some(converted(Some(line), warnings, polygons, None)));
     }
-    let s = write_document(&model, 0, Vec::new(), out, o.write)?;
-    let line = document_line(input, out, s.bytes, s.edits, warnings);
-    Ok(done(Some(line), warnings, (polygons, polygons)))
+    let (s, sum) = match crate::export::write(o.format, chunks, out, o.write) {
+        Ok(w) => w,
+        Err(WriteError::Declined(_)) => return Ok(None),
+        // a stream's errors are said naming the output
+        Err(error) if model.is_none() => {
+            let out = out.to_path_buf();
+            return Err(ConvertError::Streamed { out, error });
+        }
+        Err(e) => return Err(e.into()),
+    };
+    // a stream counts no polygons; the model read whole is named as it names itself
+    let polygons = model.map_or(0, CityModel::polygon_count);
+    let shown_input = model
+        .and_then(|m| m.files.first())
+        .map_or(input, |f| &f.path);
+    let written = Some(s.describe(o.format, shown_input, out));
+    let polygons = (polygons, polygons);
+    Ok(Some(converted(None, sum.warnings, polygons, written)))
+}
+
+/// What [`convert_file`] says of one input.
+fn converted(
+    line: Option<String>,
+    warnings: usize,
+    polygons: (usize, usize),
+    written: Option<String>,
+) -> Converted {
+    let done = Done {
+        line,
+        warnings,
+        polygons,
+    };
+    Converted { done, written }
 }
 
 #[cfg(test)]

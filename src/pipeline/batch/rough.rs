@@ -59,7 +59,8 @@ pub fn rough_file(
     };
     let warnings = model.warnings.len();
     if o.format != Format::CityGml {
-        let s = crate::export::write(o.format, &model, 0, content, out, o.write)?;
+        let chunks = crate::export::Chunks::model(&model, 0, content);
+        let (s, _) = crate::export::write(o.format, &chunks, out, o.write)?;
         let input = model.files.first().map_or(Path::new(""), |f| &f.path);
         let line = Some(s.describe(o.format, input, out));
         let polygons = (0, 0);

@@ -313,7 +313,7 @@ fn partial_merge(target: &Path, parts: usize, inputs: usize) -> Option<Said> {
 
 /// [`merge_parts`] into a target in another format than CityGML (`target`: the file and its
 /// format): the parts merged into a staged CityGML document ([`Staging::merged`]), then that
-/// converted to `target` from a streamed read ([`crate::export::write_streamed`]; read
+/// converted to `target` from a streamed read ([`crate::export::Chunks::Stream`]; read
 /// whole where the stream declines). The output is the CityGML merge converted, named in the
 /// OBJ's comment line by the inputs it holds ([`crate::export::merged`]).
 pub fn merge_converted(
@@ -369,7 +369,8 @@ pub fn merge_converted(
     }
 }
 
-/// The staged merge at `staged` written to `target` in `format`, streamed (or read whole).
+/// The staged merge at `staged` written to `target` in `format`, streamed (or read whole
+/// where the stream declines), named `label`.
 fn convert_staged(
     staged: &Path,
     label: &str,
@@ -377,25 +378,26 @@ fn convert_staged(
     format: Format,
     opts: &WriteOptions,
 ) -> Result<crate::export::ExportSummary, crate::io::citygml::WriteError> {
+    use crate::export::{Chunks, Content};
     use crate::io::citygml::read::{Passes, ReadOptions, CHUNK_BYTES};
+    use crate::io::citygml::WriteError;
     let read = ReadOptions::default();
     let passes = Passes::new(&read, CHUNK_BYTES, &|_, _| {});
-    let streamed =
-        crate::export::write_streamed(format, staged, Some(label), &passes, target, opts)?;
-    if let Some((e, _)) = streamed {
-        return Ok(e);
+    let stream = Chunks::Stream {
+        path: staged,
+        label: Some(label),
+        passes: &passes,
+    };
+    match crate::export::write(format, &stream, target, opts) {
+        Err(WriteError::Declined(_)) => {}
+        r => return r.map(|(e, _)| e),
     }
     let mut model = crate::io::citygml::read_file(staged)?;
     if let Some(f) = model.files.first_mut() {
         f.path = label.into();
     }
-    let mut summary = crate::export::ExportSummary::default();
-    let bytes = crate::io::citygml::write::atomic_write(target, |w| {
-        summary = crate::export::write_to(format, &model, 0, crate::export::Content::Full, w)?;
-        Ok(summary.bytes)
-    })?;
-    summary.bytes = bytes;
-    Ok(summary)
+    let chunks = Chunks::model(&model, 0, Content::Full);
+    crate::export::write(format, &chunks, target, opts).map(|(e, _)| e)
 }
 
 /// The line said after a merge (of CityJSON documents when `cityjson`: their ids are not
