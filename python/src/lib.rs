@@ -26,7 +26,10 @@ fn json<T: serde::Serialize>(doc: &T) -> Result<String, String> {
 }
 
 /// `(lat, lon)` given, or the centre of the study's model from its CRS.
-fn site(study: &skylod::pipeline::session::Study, given: Option<(f64, f64)>) -> Result<(f64, f64), String> {
+fn site(
+    study: &skylod::pipeline::session::Study,
+    given: Option<(f64, f64)>,
+) -> Result<(f64, f64), String> {
     if let Some(s) = given {
         return Ok(s);
     }

@@ -4,10 +4,10 @@
 
 use crate::relay::message;
 use pyo3::prelude::*;
-use skylod::pipeline::batch::inputs::expand;
-use skylod::model::crs::Crs;
 use skylod::lod::poi::{check_pois, read_pois_csv, Located, Poi};
+use skylod::model::crs::Crs;
 use skylod::model::runtime::progress::Progress;
+use skylod::pipeline::batch::inputs::expand;
 use skylod::pipeline::session::{Scene, SceneOptions, Study};
 use std::path::PathBuf;
 use std::time::Instant;

@@ -224,7 +224,7 @@ impl LodRead {
 /// is one input, not standard input (`stdin`: the input is its spool), a plain CityGML file
 /// of at least four chunks whose frame, with `source_crs` over its `srsName`, is the identity;
 /// else whole, with the first reason found (the cheap ones first: the file's first objects
-/// are read only for a file large enough); whole too when an option of [`NOT_SERVED`] is
+/// are read only for a file large enough); whole too when something of [`Unserved::ALL`] is
 /// given (`given`: whether each of [`Unserved::ALL`] is); whole too when the file's size is within the memory
 /// `lod` may take (`max_memory`, the user's, or half of what is available:
 /// [`memory_budget`]; module docs).
