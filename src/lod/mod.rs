@@ -87,6 +87,16 @@ pub enum LodInput<'a> {
     Hollow(&'a hollow::Hollow),
 }
 
+impl<'a> LodInput<'a> {
+    /// The model the stage runs on (a hollow read's holds the polygons of a few assets).
+    pub fn model(&self) -> &'a CityModel {
+        match *self {
+            LodInput::Whole(m) => m,
+            LodInput::Hollow(h) => &h.model,
+        }
+    }
+}
+
 impl<'a> From<&'a CityModel> for LodInput<'a> {
     fn from(m: &'a CityModel) -> Self {
         LodInput::Whole(m)
@@ -113,10 +123,7 @@ pub fn lod<'a>(
     progress: &dyn Progress,
 ) -> Result<LodResult, SelectError> {
     let input = input.into();
-    let model = match input {
-        LodInput::Whole(m) => m,
-        LodInput::Hollow(h) => &h.model,
-    };
+    let model = input.model();
     let n = model.assets.len() as u64;
     check(progress, Stage::Rough)?;
     let t = Instant::now();
@@ -128,18 +135,21 @@ pub fn lod<'a>(
         progress.advance(Stage::Rough, n, 0, None);
         r
     });
-    match input {
+    let (facts, around, rough_s): (&dyn FullFacts, _, _) = match input {
         LodInput::Whole(m) => {
             crate::model::runtime::mem::give_back_for(m.assets.len());
-            let rough_s = t.elapsed().as_secs_f64();
-            let around = Surroundings::new(m);
-            select_and_flag((m, m, &around), rough, rough_s, pois, opts, progress)
+            (m, Surroundings::new(m), t.elapsed().as_secs_f64())
         }
-        LodInput::Hollow(h) => {
-            let around = Surroundings::with_boxes(&h.model, &h.boxes);
-            select_and_flag((&h.model, h, &around), rough, 0.0, pois, opts, progress)
-        }
-    }
+        LodInput::Hollow(h) => (h, Surroundings::with_boxes(&h.model, &h.boxes), 0.0),
+    };
+    select_and_flag(
+        (model, facts, &around),
+        rough,
+        rough_s,
+        pois,
+        opts,
+        progress,
+    )
 }
 
 /// The rest of [`lod`] after the rough stage: selection scene, selection, POI flags.

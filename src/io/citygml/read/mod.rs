@@ -160,6 +160,22 @@ fn chunk_bytes(opts: &ReadOptions, len: u64) -> u64 {
     }
 }
 
+/// The whole model of the uncompressed document `doc` (named `name`) read in chunks
+/// ([`ReadOptions::chunk_bytes`]), `passed(n)` told as bytes are read; `None` where it is one
+/// chunk or the stream declines (the caller reads it as one chunk).
+fn read_in_chunks(
+    doc: &source::Bytes,
+    name: &Path,
+    opts: &ReadOptions,
+    passed: &dyn Fn(u64),
+) -> Option<CityModel> {
+    let len = doc.len() as u64;
+    let chunk = chunk_bytes(opts, len);
+    (chunk < len)
+        .then(|| collect::read_collected(doc, name, opts, chunk, passed))
+        .flatten()
+}
+
 /// [`read_file_observed`] on a [`Source`] named `name`.
 pub fn read_source_observed(
     src: Source,
@@ -171,13 +187,8 @@ pub fn read_source_observed(
     let mut model = match json_or_xml(source::load_source(&src, name)?, &src, name)? {
         Ok(model) => model,
         Err(source::Loaded::Plain(doc)) => {
-            let len = doc.len() as u64;
-            let told = Told::new(len, passed);
-            let chunk = chunk_bytes(opts, len);
-            let collected = (chunk < len)
-                .then(|| collect::read_collected(&doc, name, opts, chunk, &|n| told.more(n)))
-                .flatten();
-            match collected {
+            let told = Told::new(doc.len() as u64, passed);
+            match read_in_chunks(&doc, name, opts, &|n| told.more(n)) {
                 Some(model) => model,
                 None => {
                     // one chunk: the serial read, which also reports any error
@@ -281,12 +292,7 @@ impl<'a> Told<'a> {
 /// The file cannot be opened.
 pub fn read_file_chunked(path: &Path, opts: &ReadOptions) -> Result<Option<CityModel>, ReadError> {
     match source::load(path)? {
-        source::Loaded::Plain(doc) => {
-            let len = doc.len() as u64;
-            let chunk = chunk_bytes(opts, len);
-            let read = || collect::read_collected(&doc, path, opts, chunk, &|_| {});
-            Ok((chunk < len).then(read).flatten())
-        }
+        source::Loaded::Plain(doc) => Ok(read_in_chunks(&doc, path, opts, &|_| {})),
         source::Loaded::Gzip(..) => Ok(None),
     }
 }
