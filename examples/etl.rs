@@ -21,7 +21,7 @@ pub fn etl(tiles: &Path, csv: &Path, out: &Path, json: impl std::io::Write) -> R
         eprintln!("etl: skipped {e}");
     }
     let pois = read_pois_csv(csv)?.into_iter().map(|l| l.poi).collect();
-    let study = scene.frame(pois)?;
+    let mut study = scene.frame(pois)?;
     let levels = study.levels(&LevelsOptions::default(), &Silent)?;
     for (path, w) in study.write_levels(&levels, out, None, true, &Silent)? {
         let [l0, l1, l2] = w.levels;

@@ -72,7 +72,7 @@
 //!
 //! The mixed CityGML writer runs on it too ([`crate::lod::mixed::MixedSource::Hollow`]: each
 //! chunk's kept assets and buildings read back for its plan, [`Hollow::read_back_geometries`]),
-//! so `lod` with a CityGML output runs on a [`Hollow`] (`session::lod_study`); OBJ and
+//! so `lod` with a CityGML output runs on a [`Hollow`] ([`crate::pipeline::session::Study::read_hollow`]); OBJ and
 //! CityJSON outputs still take the whole read.
 
 use crate::io::citygml::read::{Chunk, ChunkStart, Passes, Reread, StreamSummary};

@@ -71,6 +71,16 @@ pub enum Error {
     /// The caller asked to stop.
     #[error(transparent)]
     Cancelled(#[from] Cancelled),
+    /// What needs the model read whole asked of a study read hollow
+    /// ([`super::Study::read_hollow`]).
+    #[error(
+        "{}: read hollow (the polygons near the POIs only): this needs the model read whole",
+        crate::model::shown(file)
+    )]
+    Hollow {
+        /// The document read hollow.
+        file: std::path::PathBuf,
+    },
 }
 
 /// `Result` with the library's [`Error`].

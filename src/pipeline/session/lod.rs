@@ -18,6 +18,7 @@ impl Study {
     /// # Errors
     /// [`super::Error::Select`], [`super::Error::Cancelled`].
     pub fn lod(&self, opts: &LodOptions, progress: &dyn Progress) -> Result<LodResult> {
+        self.whole()?;
         let framed = self.framed();
         Ok(lod(&*framed.model, &framed.local_pois, opts, progress)?)
     }
@@ -34,6 +35,7 @@ impl Study {
         opts: &LevelsOptions,
         progress: &dyn Progress,
     ) -> Result<Levels> {
+        self.whole()?;
         let framed = self.framed();
         let lod = crate::pipeline::batch::reduce::lod_result(&framed.model, combined, &opts.lod);
         levels_of(&framed, opts, lod, progress)
@@ -43,8 +45,12 @@ impl Study {
     /// with their flags, assets, totals in the input's CRS, the bound; the outputs are
     /// added with [`Report::record_output`] as they are written.
     pub fn report(&self, lv: &Levels, opts: &LodOptions, timings: Timings) -> Report {
-        let source = self.source();
-        report_of(source, source, self.pois(), lv, opts, timings)
+        let (source, opts) = (self.source(), &self.lod_options(opts));
+        let facts: &dyn FullFacts = match self.hollow() {
+            Some(h) => h,
+            None => source,
+        };
+        report_of(source, facts, self.pois(), lv, opts, timings)
     }
 
     /// The buildings and building parts of input `file` (what [`Report::record_output`]
@@ -61,7 +67,7 @@ pub(super) fn buildings_in(model: &CityModel, file: usize) -> usize {
 
 /// The report of `lv` made with `opts` on `model` as read (its polygon counts from `facts`:
 /// the model, or its hollow read), at `pois` in its CRS ([`Study::report`]).
-pub(super) fn report_of(
+fn report_of(
     model: &CityModel,
     facts: &dyn FullFacts,
     pois: &[Poi],

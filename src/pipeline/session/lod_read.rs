@@ -79,7 +79,7 @@ pub enum WholeWhy {
     Option(Unserved),
     /// An output other than CityGML (OBJ and CityJSON are written from the whole read; the
     /// levels, bound, report and CityGML writer run on the hollow read:
-    /// [`super::hollow_study`]).
+    /// [`super::Study::read_hollow`]).
     NotServed,
 }
 

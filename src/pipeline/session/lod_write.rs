@@ -3,21 +3,16 @@
 //! and, for a merge, the staged parts merged into the target ([`LodLayout::write`]). Nothing
 //! is printed: what to tell the user comes back in order.
 
-use super::Result;
+use super::{Result, Study};
 use crate::export::report::report::Report;
 use crate::export::Format;
-use crate::io::citygml::read::Reread;
 use crate::io::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
-use crate::lod::hollow::Hollow;
-use crate::lod::mixed::MixedSource;
-use crate::model::runtime::progress::{check, Progress, Stage};
+use crate::model::runtime::progress::Progress;
 use crate::model::CityModel;
 use crate::pipeline::batch::outputs::Plan;
 use crate::pipeline::batch::run::{merge_parts, Batch, Said};
-use crate::pipeline::{
-    buildings_without_kept_assets, write_all, write_levels, write_merged_levels, Levels, Written,
-};
+use crate::pipeline::{buildings_without_kept_assets, write_merged_levels, Levels, Written};
 use std::path::{Path, PathBuf};
 
 /// Why the outputs of a `lod` run cannot be laid out.
@@ -113,62 +108,33 @@ impl LodLayout {
             .collect()
     }
 
-    /// Write every file of `model` (the inputs that could be read, in input order) at the
-    /// levels `lv`, then merge them when the layout says so. A file that fails does not
-    /// stop the others; a failed merge counts every file as not written.
+    /// Every file of the study's model written at the levels `lv` to its target
+    /// ([`Study::write_files`]), then, for a merge, the staged parts merged into the target
+    /// (OBJ and CityJSON: merged as they are written, [`write_merged_levels`]). A file that
+    /// fails is reported and the others written.
     ///
     /// # Errors
-    /// [`super::Error::Io`] (a folder that cannot be made), [`super::Error::Cancelled`].
+    /// [`super::Error::Cancelled`], [`super::Error::Io`] (a mirrored folder not made).
     pub fn write(
         &self,
-        model: &CityModel,
+        study: &mut Study,
         all_inputs: &[PathBuf],
         lv: &Levels,
         progress: &dyn Progress,
     ) -> Result<LodWritten> {
-        let targets = self.targets(model, all_inputs);
+        let targets = self.targets(study.source(), all_inputs);
         self.make_folders(&targets)?;
         let batch = &self.batch;
         let (format, wopts) = (batch.format, &batch.targets.write_opts);
         if let (Some(_), Plan::Merge(t)) = (&batch.targets.staging, &batch.plan) {
             if format != Format::CityGml {
-                return Ok(merged_export(model, &targets, t, lv, batch));
+                return Ok(merged_export(study.whole()?, &targets, t, lv, batch));
             }
         }
-        let results = write_all(model, &targets, lv, format, wopts, progress)?;
-        Ok(self.done(model, &targets, results))
+        let results = study.write_files(&targets, lv, format, wopts, progress)?;
+        Ok(self.done(study.source(), &targets, results))
     }
 
-    /// [`LodLayout::write`] of the one document read hollow as `hollow` in CityGML, the
-    /// polygons the writer needs read back through `rr`, planned in chunks of about
-    /// `chunk_bytes` ([`crate::pipeline::write_levels`]): what the whole read writes.
-    /// Another format fails the file ([`WriteError::Invalid`]: it takes the whole read).
-    ///
-    /// # Errors
-    /// As [`LodLayout::write`].
-    pub fn write_hollow(
-        &self,
-        (hollow, rr, chunk_bytes): (&mut Hollow, &Reread, u64),
-        all_inputs: &[PathBuf],
-        lv: &Levels,
-        progress: &dyn Progress,
-    ) -> Result<LodWritten> {
-        let targets = self.targets(&hollow.model, all_inputs);
-        self.make_folders(&targets)?;
-        let (format, wopts) = (self.batch.format, &self.batch.targets.write_opts);
-        check(progress, Stage::Write)?;
-        progress.start(Stage::Write, targets.len() as u64, 0);
-        let mut results = Vec::new();
-        for (_, out) in &targets {
-            let src = MixedSource::Hollow(hollow, rr, chunk_bytes);
-            results.push(write_levels(src, lv, out, format, wopts));
-            progress.advance(Stage::Write, 1, 0, Some(&out.display().to_string()));
-        }
-        progress.finish(Stage::Write);
-        Ok(self.done(&hollow.model, &targets, results))
-    }
-
-    /// Make the folders of `targets` where the layout mirrors the inputs.
     fn make_folders(&self, targets: &[(usize, PathBuf)]) -> Result<()> {
         if self.batch.targets.mirror {
             for (_, out) in targets {
@@ -357,14 +323,14 @@ mod tests {
         let layout = LodLayout::new(batch, ins.len()).unwrap();
         let scene = Scene::load_inputs(ins.clone(), &SceneOptions::default(), &Silent).unwrap();
         let pois = grid_pois(scene.model(), 2);
-        let study = scene.frame(pois).unwrap();
+        let mut study = scene.frame(pois).unwrap();
         let lv = study.levels(&LevelsOptions::default(), &Silent).unwrap();
         // Only the second input read: only it is written, to the second input's output.
         let b = Scene::load_inputs(ins[1..].to_vec(), &SceneOptions::default(), &Silent).unwrap();
         let t = layout.targets(b.model(), &paths);
         assert_eq!(t, vec![(0, layout.batch.targets.todo[1].1.clone())]);
         assert_eq!(layout.targets(study.source(), &paths).len(), 2);
-        let w = layout.write(study.source(), &paths, &lv, &Silent).unwrap();
+        let w = layout.write(&mut study, &paths, &lv, &Silent).unwrap();
         assert!(!w.failed);
         assert_eq!(w.files.len(), 2);
         let shown = target.display().to_string();

@@ -21,12 +21,11 @@ pub mod bound_plan;
 pub mod documents;
 mod error;
 pub mod flags;
-pub mod hollow_study;
 mod lod;
 pub mod lod_read;
-pub mod lod_study;
 pub mod lod_write;
 pub mod pictures;
+mod read_hollow;
 pub mod report;
 pub mod site;
 pub mod weather;
@@ -36,9 +35,12 @@ pub use error::{Error, Result};
 use crate::export::Format;
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::ReadError;
+use crate::io::citygml::WriteError;
 use crate::lod::evaluation::Evaluation;
+use crate::lod::mixed::MixedSource;
 use crate::lod::poi::checks::TrustError;
 use crate::lod::scene::full_scene;
+use crate::lod::LodOptions;
 use crate::model::crs::{box_site, Crs, LocalFrame, ModelSite};
 use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::{Bbox, CityModel, Poi, Source};
@@ -46,8 +48,8 @@ use crate::pipeline::batch::inputs::{expand, Input};
 use crate::pipeline::batch::outputs::{create_parent, plan, Plan};
 use crate::pipeline::{check_model_in, PoiIrradiance, Traced, Written};
 use crate::pipeline::{evaluate, frame_in, horizon, levels, read_inputs, read_sources};
-use crate::pipeline::{trace_in, write_all};
-use crate::pipeline::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsOptions};
+use crate::pipeline::{trace_in, write_all, write_levels};
+use crate::pipeline::{EvaluateOptions, FrameOptions, Framed, Levels, LevelsInput, LevelsOptions};
 use crate::solar::irradiance::{IrradianceOptions, IrradianceTable};
 use crate::solar::{poi_horizon, poi_sky_view, poi_sun_hours, HorizonOptions, HorizonProfile};
 use crate::solar::{Site, SkyBundles, SkyView, SunHours, SunTable, DEFAULT_STEP_MIN, DEFAULT_YEAR};
@@ -299,7 +301,7 @@ impl Scene {
         Ok(Study {
             inputs,
             bbox,
-            source: model,
+            read: Read::Whole(model),
             local,
             crs,
             frame: lframe,
@@ -318,10 +320,15 @@ impl Scene {
 
 /// A framed scene with its POIs, owning its model: levels, solar figures and outputs
 /// ([`Scene::frame`]). The full-detail scene and the sun table are built on first use.
+///
+/// A study of one large document may be read hollow ([`Study::read_hollow`]): it holds the
+/// polygons of the POIs' surroundings only, and gives the levels, the report and the CityGML
+/// output of the whole read; what traces or exports the full model asks for a whole read
+/// ([`Error::Hollow`]).
 #[derive(Debug)]
 pub struct Study {
     inputs: Vec<Input>,
-    source: CityModel,
+    read: Read,
     /// The source's box ([`CityModel::bbox`]): the one the [`Scene`] took, kept here alone
     /// ([`Framed`] does not carry it).
     bbox: Bbox,
@@ -339,12 +346,19 @@ pub struct Study {
     sun: Mutex<Option<(SunOptions, Arc<SunTable>)>>,
 }
 
+/// What a [`Study`] read: its model whole, or one document hollow.
+#[derive(Debug)]
+enum Read {
+    Whole(CityModel),
+    Hollow(Box<read_hollow::HollowRead>),
+}
+
 impl Study {
     /// The borrowed view the pipeline's functions take.
     pub fn framed(&self) -> Framed<'_> {
         Framed {
-            source: &self.source,
-            model: Cow::Borrowed(self.local.as_ref().unwrap_or(&self.source)),
+            source: self.source(),
+            model: Cow::Borrowed(self.local_model()),
             crs: self.crs.clone(),
             frame: self.frame,
             pois: self.pois.clone(),
@@ -355,9 +369,27 @@ impl Study {
         }
     }
 
-    /// The model as read (the input's CRS).
+    /// The model as read (the input's CRS; read hollow, the polygons of a few assets only).
     pub fn source(&self) -> &CityModel {
-        &self.source
+        match &self.read {
+            Read::Whole(m) => m,
+            Read::Hollow(h) => &h.hollow.model,
+        }
+    }
+
+    /// The model read whole: [`Error::Hollow`] for a study read hollow.
+    pub(super) fn whole(&self) -> Result<&CityModel> {
+        match &self.read {
+            Read::Whole(m) => Ok(m),
+            Read::Hollow(h) => Err(Error::Hollow {
+                file: h.reread.path().to_path_buf(),
+            }),
+        }
+    }
+
+    /// The box of every asset as read ([`CityModel::bbox`] of the whole read).
+    pub fn bbox(&self) -> Bbox {
+        self.bbox
     }
 
     /// The POIs in the model's CRS, in order.
@@ -402,7 +434,7 @@ impl Study {
 
     /// The model in the local metric frame: what is traced.
     pub fn local_model(&self) -> &CityModel {
-        self.local.as_ref().unwrap_or(&self.source)
+        self.local.as_ref().unwrap_or(self.source())
     }
 
     /// The site of the sun from the model's CRS: the centre of the model in WGS 84.
@@ -424,15 +456,39 @@ impl Study {
         lat: Option<f64>,
         lon: Option<f64>,
     ) -> std::result::Result<SunSite, site::SiteError> {
-        site::site_in(lat, lon, &self.source, &self.bbox)
+        site::site_in(lat, lon, self.source(), &self.bbox)
     }
 
-    /// Levels of every asset ([`crate::pipeline::levels`]).
+    /// Levels of every asset ([`crate::pipeline::levels`]; read hollow, with the rough forms
+    /// of the read).
     ///
     /// # Errors
     /// [`Error::Select`], [`Error::Bound`], [`Error::Cancelled`].
     pub fn levels(&self, opts: &LevelsOptions, progress: &dyn Progress) -> Result<Levels> {
-        levels(&self.framed(), opts, progress)
+        let Read::Hollow(h) = &self.read else {
+            return levels(&self.framed(), opts, progress);
+        };
+        let opts = LevelsOptions {
+            lod: self.lod_options(&opts.lod),
+            bound: opts.bound.clone(),
+        };
+        let input = LevelsInput::Hollow {
+            hollow: &h.hollow,
+            reread: &h.reread,
+            pois: &self.pois,
+        };
+        levels(input, &opts, progress)
+    }
+
+    /// `opts`, with the rough forms of the read where it was hollow.
+    fn lod_options(&self, opts: &LodOptions) -> LodOptions {
+        match &self.read {
+            Read::Whole(_) => *opts,
+            Read::Hollow(h) => LodOptions {
+                rough: h.rough,
+                select: opts.select,
+            },
+        }
     }
 
     /// The full-detail scene (built on first use) and the seconds this call spent building it.
@@ -459,6 +515,7 @@ impl Study {
         sky_rays: impl Fn(&T) -> Option<usize> + Sync,
         progress: &dyn Progress,
     ) -> Result<Traced<T>> {
+        self.whole()?;
         let (scene, bvh_s) = self.full(progress)?;
         let mut t = trace_in(&self.framed(), scene, f, sky_rays, progress)?;
         t.bvh_s = bvh_s;
@@ -530,6 +587,7 @@ impl Study {
         opts: &HorizonOptions,
         progress: &dyn Progress,
     ) -> Result<Traced<HorizonProfile>> {
+        self.whole()?;
         if self.full.get().is_none() {
             return horizon(&self.framed(), opts, progress);
         }
@@ -557,6 +615,7 @@ impl Study {
         hourly: bool,
         progress: &dyn Progress,
     ) -> Result<Traced<PoiIrradiance>> {
+        self.whole()?;
         let f = self.framed();
         Ok(crate::pipeline::irradiance(
             &f, bundles, table, opts, hourly, progress,
@@ -568,6 +627,7 @@ impl Study {
     /// # Errors
     /// [`Error::Eval`], [`Error::Cancelled`].
     pub fn evaluate(&self, opts: &EvaluateOptions, progress: &dyn Progress) -> Result<Evaluation> {
+        self.whole()?;
         evaluate(&self.framed(), opts, progress)
     }
 
@@ -575,12 +635,13 @@ impl Study {
     /// CityGML): one input to a file, several mirrored below a directory (parent folders
     /// created) or merged into one CityGML file ([`crate::pipeline::batch::outputs::plan`]). An
     /// existing output is replaced only with `overwrite`. The outputs written, in input order.
+    /// A study read hollow writes CityGML only.
     ///
     /// # Errors
     /// [`Error::Plan`] (before anything is written), [`Error::Write`] (the first output
-    /// that failed; the others are written), [`Error::Cancelled`].
+    /// that failed; the others are written), [`Error::Hollow`], [`Error::Cancelled`].
     pub fn write_levels(
-        &self,
+        &mut self,
         levels: &Levels,
         out: &Path,
         format: Option<Format>,
@@ -588,6 +649,9 @@ impl Study {
         progress: &dyn Progress,
     ) -> Result<Vec<(PathBuf, Written)>> {
         let (plan, format) = plan(&self.inputs, out, format)?;
+        if format != Format::CityGml {
+            self.whole()?;
+        }
         let paths: Vec<PathBuf> = self.inputs.iter().map(|i| i.path.clone()).collect();
         let wopts = WriteOptions {
             overwrite,
@@ -601,14 +665,8 @@ impl Study {
         for (_, p) in &targets.todo {
             create_parent(p)?;
         }
-        let results = write_all(
-            &self.source,
-            &targets.todo,
-            levels,
-            format,
-            &targets.write_opts,
-            progress,
-        )?;
+        let results =
+            self.write_files(&targets.todo, levels, format, &targets.write_opts, progress)?;
         let mut written = Vec::with_capacity(results.len());
         for ((_, p), r) in targets.todo.iter().zip(results) {
             written.push((p.clone(), r?));
@@ -628,6 +686,41 @@ impl Study {
         Ok(written)
     }
 
+    /// [`write_all`] of the study's model to `targets` ((file, output) pairs); read hollow,
+    /// its one document written a chunk at a time ([`MixedSource::Hollow`]: CityGML only).
+    ///
+    /// # Errors
+    /// [`Error::Cancelled`].
+    pub(super) fn write_files(
+        &mut self,
+        targets: &[(usize, PathBuf)],
+        levels: &Levels,
+        format: Format,
+        wopts: &WriteOptions,
+        progress: &dyn Progress,
+    ) -> Result<Vec<std::result::Result<Written, WriteError>>> {
+        let Some((hollow, rr, chunk)) = self.hollow_mut() else {
+            return Ok(write_all(
+                self.source(),
+                targets,
+                levels,
+                format,
+                wopts,
+                progress,
+            )?);
+        };
+        check(progress, Stage::Write)?;
+        progress.start(Stage::Write, targets.len() as u64, 0);
+        let mut results = Vec::with_capacity(targets.len());
+        for (_, out) in targets {
+            let src = MixedSource::Hollow(hollow, rr, chunk);
+            results.push(write_levels(src, levels, out, format, wopts));
+            progress.advance(Stage::Write, 1, 0, Some(&out.display().to_string()));
+        }
+        progress.finish(Stage::Write);
+        Ok(results)
+    }
+
     /// Write input `file` at `levels` in `format` to `w` (e.g. a buffer or a socket),
     /// uncompressed ([`crate::pipeline::write_levels_to`]).
     ///
@@ -642,7 +735,7 @@ impl Study {
     ) -> Result<Written> {
         let wopts = WriteOptions::default();
         Ok(crate::pipeline::write_levels_to(
-            &self.source,
+            self.whole()?,
             file,
             levels,
             w,
@@ -706,7 +799,7 @@ mod tests {
 
     #[test]
     fn writes_create_folders_and_reach_a_writer() {
-        let s = study(2);
+        let mut s = study(2);
         let lv = s.levels(&LevelsOptions::default(), &Silent).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("a/b/lod.gml");

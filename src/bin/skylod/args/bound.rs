@@ -11,7 +11,7 @@ use anyhow::{anyhow, bail};
 use skylod::export::report::report::Guarantee;
 use skylod::pipeline::session::bound_plan::BoundRequest;
 use skylod::pipeline::session::flags::site_text;
-use skylod::pipeline::session::lod_study::LodStudy;
+use skylod::pipeline::session::Study;
 use skylod::pipeline::BoundSpec;
 use skylod::solar::ephemeris::SunEphemeris;
 
@@ -85,11 +85,11 @@ impl BoundArgs {
     }
 
     /// The bound to run after the selection ([`skylod::pipeline::session::bound_plan`]) and what it
-    /// guarantees; `study`'s model as read gives the sun's site ([`LodStudy::sun_site`]), `ahead`
+    /// guarantees; `study`'s model as read gives the sun's site ([`Study::sun_site`]), `ahead`
     /// (from [`BoundArgs::ephemeris`]) the site-independent half of the sun's table.
     pub fn spec(
         &self,
-        study: &LodStudy,
+        study: &Study,
         seed: u64,
         ahead: Option<&SunEphemeris>,
     ) -> anyhow::Result<(Option<BoundSpec>, Guarantee)> {

@@ -17,7 +17,7 @@ use skylod::pipeline::session::lod_write::{
     check_report, write_report, LodLayout, ReportTargetError,
 };
 use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
-use skylod::pipeline::session::{lod_read::lod_read, lod_study::LodStudy, SceneOptions};
+use skylod::pipeline::session::{flags::frame_said, lod_read::lod_read, SceneOptions};
 use skylod::pipeline::LevelsOptions;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -103,10 +103,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (mut study, combined, unread, _spool) =
         match read.read_hollow(ins, &pois, &lod.rough, &so, &progress)? {
             Some(h) => {
-                h.frame_said()
-                    .iter()
+                (frame_said(h.warnings(), h.frame_warning()).iter())
                     .for_each(|w| warning!("lod: warning: {w}"));
-                (LodStudy::Hollow(h), None, false, spool)
+                (h, None, false, spool)
             }
             _ => {
                 let Some(scene) = args.pois.scene()? else {
@@ -117,13 +116,15 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
                     None => (None, args.region.extend(pois, scene.model())?),
                 };
                 let s = args.pois.study(scene, pois, None, spool, "lod")?;
-                let whole = LodStudy::Whole(Box::new(s.study));
-                (whole, combined, s.failed, s._spool)
+                (s.study, combined, s.failed, s._spool)
             }
         };
     let (bound, guarantee) = args.bound.spec(&study, lod.select.seed, ahead.as_ref())?;
     let opts = LevelsOptions { lod, bound };
-    let lv = study.levels(combined, &opts, &progress)?;
+    let lv = match combined {
+        Some(c) => study.levels_combined(c, &opts, &progress)?,
+        None => study.levels(&opts, &progress)?,
+    };
     crate::commands::warn_flags(study.pois(), &lv.lod.flags);
     let (said, failed) = bound_lines(&lv, &guarantee);
     said.iter().for_each(|l| summary!("{l}"));
@@ -133,13 +134,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     // Written geometry and the report are in the input's CRS.
     let t_write = Instant::now();
-    let mut w = study.write(&layout, &all_inputs, &lv, &progress)?;
+    let mut w = layout.write(&mut study, &all_inputs, &lv, &progress)?;
     crate::outputs::say(w.said());
     let written = (w.written.into_iter().enumerate())
         .filter_map(|(f, w)| w.map(|(path, dropped)| (f, path, dropped)));
     let (read, write, total) = (study.read_ms(), ms_since(t_write), ms_since(t_all));
     let run = RunMs { read, write, total };
-    let report = study.lod_report((&lv, &opts.lod), (run, guarantee), written);
+    let report = study.lod_report(&lv, &opts.lod, run, guarantee, written);
     let lines = lod_lines(&report, &lv, study.pois().len(), args.region.active());
     lines.iter().for_each(|l| summary!("{l}"));
     if let Some(path) = &args.report {
