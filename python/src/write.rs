@@ -96,11 +96,10 @@ impl BoundArgs {
         study: &skylod::pipeline::session::Study,
         seed: u64,
     ) -> Result<(Option<BoundSpec>, Guarantee), String> {
-        let mut r = BoundRequest::new(self.bound_rays, seed);
+        let mut r = BoundRequest::new(self.bound_rays, seed, ("bound=False", "site=(lat, lon)"));
         r.bound = self.bound;
         (r.max_svf_error, r.max_sun_hours_error) = (self.max_svf_error, self.max_sun_hours_error);
         (r.year, r.step_min) = (self.year, self.step);
-        (r.no_bound_option, r.site_option) = ("bound=False".into(), "site=(lat, lon)".into());
         let site = match self.site {
             Some((a, o)) => Ok(SunSite::Given(a, o)),
             None => model_site(study.source(), study.crs())

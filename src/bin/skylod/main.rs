@@ -2,13 +2,14 @@
 //! terminal, the exit codes (0 ok, 1 some inputs failed, 2 usage or fatal, 143 / 129 stopped
 //! by SIGTERM / SIGHUP) and progress.
 
+use crate::flags::cli_text;
 use clap::{Parser, Subcommand};
 use skylod::io::message::{chain_message, is_broken_pipe};
-use skylod::pipeline::session::flags::cli_text;
 use std::process::ExitCode;
 
 mod args;
 mod commands;
+mod flags;
 mod inputs;
 mod log;
 mod outputs;
@@ -136,7 +137,7 @@ fn main() -> ExitCode {
 }
 
 /// The error and its causes joined by ": ", each thing said once, in the CLI's words
-/// ([`skylod::io::message::chain_message`], [`skylod::pipeline::session::flags::cli_text`]).
+/// ([`skylod::io::message::chain_message`], [`crate::flags::cli_text`]).
 fn message(e: &anyhow::Error) -> String {
     chain_message(e.as_ref(), cli_text)
 }

@@ -46,10 +46,7 @@ fn refused_said(
     }
     let n = t.refused.len();
     for e in std::mem::take(&mut t.refused) {
-        refused(&anyhow!(
-            "{}",
-            skylod::pipeline::session::flags::cli_text(&e)
-        ));
+        refused(&anyhow!("{}", crate::flags::cli_text(&e)));
     }
     n
 }
@@ -116,7 +113,7 @@ pub fn per_input_jobs(
     b.counts_polygons = false;
     let each = |i: &Path, o: &Path, shown: &Path, w: &WriteOptions| {
         let done = edit.apply(i, o, shown, w).map(Done::with_line);
-        done.map_err(|e| anyhow!(skylod::pipeline::session::flags::cli_text(&e)))
+        done.map_err(|e| anyhow!(crate::flags::cli_text(&e)))
     };
     let results = jobs.install(|| b.run_each(&inputs, true, &each))?;
     let failure = |e: &anyhow::Error| e.to_string();

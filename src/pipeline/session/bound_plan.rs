@@ -40,17 +40,17 @@ pub struct BoundRequest {
     /// Minutes per step of the sun-hours bound.
     pub step_min: u32,
     /// How the caller names its option that turns the bound off, in the report's lines
-    /// (`--no-bound`).
+    /// (a command line's flag, a keyword argument).
     pub no_bound_option: String,
-    /// How the caller names its option that gives the site, in the report's lines
-    /// (`--lat/--lon`).
+    /// How the caller names its option that gives the site, in the report's lines.
     pub site_option: String,
 }
 
 impl BoundRequest {
     /// The default bound (1 % everywhere it can be checked), `rays` and `seed` for its SVF
-    /// bundle, the default year and step; the options named as the command line names them.
-    pub fn new(rays: usize, seed: u64) -> Self {
+    /// bundle, the default year and step; `(no_bound_option, site_option)` as the caller
+    /// names the options that turn the bound off and give the site.
+    pub fn new(rays: usize, seed: u64, (no_bound_option, site_option): (&str, &str)) -> Self {
         BoundRequest {
             bound: true,
             max_svf_error: None,
@@ -60,8 +60,8 @@ impl BoundRequest {
             seed,
             year: DEFAULT_YEAR,
             step_min: DEFAULT_STEP_MIN,
-            no_bound_option: "--no-bound".into(),
-            site_option: "--lat/--lon".into(),
+            no_bound_option: no_bound_option.into(),
+            site_option: site_option.into(),
         }
     }
 
@@ -229,9 +229,8 @@ mod tests {
 
     #[test]
     fn off_bounds_nothing_and_says_which_option_turned_it_off() {
-        let mut r = BoundRequest::new(500, 3);
+        let mut r = BoundRequest::new(500, 3, ("bound=False", "site"));
         r.bound = false;
-        r.no_bound_option = "bound=False".into();
         let p = r.plan(Ok(SunSite::Given(41.0, 2.0))).unwrap();
         assert!(!p.bounded() && p.site.is_none());
         assert!(p.sun_table(&Silent).unwrap().is_none());
@@ -246,7 +245,7 @@ mod tests {
 
     #[test]
     fn svf_always_sun_hours_where_the_sun_has_a_site() {
-        let mut r = BoundRequest::new(500, 3);
+        let mut r = BoundRequest::new(500, 3, ("off", "site"));
         r.step_min = 240;
         let p = r
             .plan(Ok(SunSite::Model(41.4, 2.2, "EPSG:25831".into())))
@@ -285,7 +284,7 @@ mod tests {
 
     #[test]
     fn no_site_leaves_sun_hours_unbounded_unless_asked_for() {
-        let r = BoundRequest::new(500, 3);
+        let r = BoundRequest::new(500, 3, ("off", "--lat/--lon"));
         let p = r.plan(no_site()).unwrap();
         assert!(p.site.is_none() && p.bounded());
         let (spec, g) = p.finish(None, None);

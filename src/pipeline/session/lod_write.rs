@@ -62,20 +62,6 @@ pub struct LodWritten {
     pub failed: bool,
 }
 
-impl LodWritten {
-    /// What to tell the user, in order, taken out of `files` and `merge`: each file's line
-    /// (a failure in the command line's words, [`super::flags::cli_text`]), then the merge's.
-    pub fn said(&mut self) -> Vec<Said> {
-        let files = std::mem::take(&mut self.files)
-            .into_iter()
-            .map(|f| match f {
-                FileOutcome::Written(line) => Said::Summary(line),
-                FileOutcome::Failed(e) => Said::Error(super::flags::cli_text(&e)),
-            });
-        files.chain(std::mem::take(&mut self.merge)).collect()
-    }
-}
-
 impl LodLayout {
     /// The layout of `batch` ([`Batch::new`] for every input, its refused targets reported
     /// by the caller): every target must be writable, since a refusal after minutes of

@@ -20,7 +20,6 @@
 pub mod bound_plan;
 pub mod documents;
 mod error;
-pub mod flags;
 mod lod;
 pub mod lod_read;
 pub mod lod_write;

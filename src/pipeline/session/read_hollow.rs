@@ -171,10 +171,10 @@ mod tests {
     use super::*;
     use crate::export::report::report::Guarantee;
     use crate::lod::bound::BoundOptions;
-    use crate::pipeline::session::report::RunMs;
-    use crate::pipeline::{BoundSpec, LevelsOptions};
     use crate::model::runtime::progress::Silent;
+    use crate::pipeline::session::report::RunMs;
     use crate::pipeline::session::Scene;
+    use crate::pipeline::{BoundSpec, LevelsOptions};
 
     /// On six blocks of the small preset read hollow in small chunks, with a bound that
     /// promotes: the levels, the bound's report, the flags and the rough forms of the whole

@@ -7,10 +7,10 @@ use crate::args::non_negative;
 use crate::args::site::SiteArgs;
 use crate::args::sun::SunArgs;
 use crate::args::weather::WeatherArgs;
+use crate::flags::site_text;
 use anyhow::{anyhow, bail};
 use skylod::export::report::report::Guarantee;
 use skylod::pipeline::session::bound_plan::BoundRequest;
-use skylod::pipeline::session::flags::site_text;
 use skylod::pipeline::session::Study;
 use skylod::pipeline::BoundSpec;
 use skylod::solar::ephemeris::SunEphemeris;
@@ -69,7 +69,7 @@ impl BoundArgs {
 
     /// The request these options make (the bound's seed comes with the selection's options).
     fn request(&self, seed: u64) -> BoundRequest {
-        let mut r = BoundRequest::new(self.bound_rays, seed);
+        let mut r = BoundRequest::new(self.bound_rays, seed, ("--no-bound", "--lat/--lon"));
         r.bound = !self.no_bound;
         (r.max_svf_error, r.max_sun_hours_error) = (self.max_svf_error, self.max_sun_hours_error);
         r.max_irradiance_error = self.max_irradiance_error;

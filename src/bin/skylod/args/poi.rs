@@ -5,6 +5,7 @@ use super::crs::CrsArgs;
 use super::jobs::JobsArgs;
 use super::non_negative;
 use crate::args::tracing::Session;
+use crate::flags::frame_said;
 use crate::inputs::Spool;
 use crate::log::{error, summary, warning};
 use anyhow::bail;
@@ -12,7 +13,7 @@ use skylod::lod::poi::checks::DEFAULT_POI_MARGIN;
 use skylod::lod::poi::{check_pois, parse_poi_at, read_pois_csv, Located, Poi};
 use skylod::pipeline::batch::inputs::Input;
 use skylod::pipeline::batch::shard::Shard;
-use skylod::pipeline::session::{flags::frame_said, Scene, SceneOptions};
+use skylod::pipeline::session::{Scene, SceneOptions};
 use std::path::PathBuf;
 
 /// Inputs and points of interest.

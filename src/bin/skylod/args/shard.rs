@@ -1,9 +1,9 @@
 //! `--shard I/N` and `--shards N`: the part of an array job this run does
 //! ([`skylod::pipeline::batch::shard`]), flattened into every command that reads inputs.
 
+use crate::flags::shard_text;
 use skylod::lod::poi::Poi;
 use skylod::pipeline::batch::shard::Shard;
-use skylod::pipeline::session::flags::shard_text;
 
 /// The shard options of a command.
 #[derive(clap::Args, Debug, Clone, Default)]

@@ -1,9 +1,9 @@
 //! `--lat`, `--lon`: the site of the sun, given or from the model's CRS
 //! ([`skylod::pipeline::session::site`]); the messages name the flags.
 
+use crate::flags::site_text;
 use anyhow::anyhow;
 use skylod::model::CityModel;
-use skylod::pipeline::session::flags::site_text;
 use skylod::pipeline::session::site::{given_site, site_of};
 
 /// The site of the sun position: `--lat`/`--lon`, both or neither (then from the model's CRS).

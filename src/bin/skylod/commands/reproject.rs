@@ -116,7 +116,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             );
             let t = skylod::model::crs::ProjTransform;
             let r = reproject_cityjson(input, out, from.as_ref(), &to, &t, &write_opts)
-                .map_err(|e| anyhow::anyhow!(skylod::pipeline::session::flags::cli_text(&e)));
+                .map_err(|e| anyhow::anyhow!(crate::flags::cli_text(&e)));
             if r.is_ok() {
                 parts.push(out.clone());
                 names.push(input.clone());

@@ -46,7 +46,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // or CityJSON file's line is said as it is written).
     let each = |input: &Path, out: &Path, _: &Path, _: &WriteOptions| {
         let warned = |w: &FrameWarning| {
-            let w = skylod::pipeline::session::flags::frame_warning_text(w);
+            let w = crate::flags::frame_warning_text(w);
             warning!("rough: warning: {}: {w}", skylod::model::shown(input));
         };
         let mut d = rough_file(input, out, &o, &warned)?;

@@ -3,21 +3,25 @@
 //! the shards' levels files, [`shard`]), the error bound, outputs written
 //! ([`skylod::pipeline::session::lod_write`]) and the report ([`skylod::pipeline::session::report`]).
 
+mod lines;
 mod read_note;
 pub mod shard;
 
 use crate::args::{output::OutputArgs, poi::PoiArgs, rough::RoughArgs, select::SelectArgs};
+use crate::flags::frame_said;
 use crate::log::{error, info, summary, warning};
 use crate::Outcome;
 use anyhow::Context;
+use lines::{bound_lines, lod_lines};
 use skylod::lod::LodOptions;
 use skylod::pipeline::batch::inputs::Input;
+use skylod::pipeline::batch::run::Said;
 use skylod::pipeline::session::documents::ms_since;
 use skylod::pipeline::session::lod_write::{
-    check_report, write_report, LodLayout, ReportTargetError,
+    check_report, write_report, FileOutcome, LodLayout, LodWritten, ReportTargetError,
 };
-use skylod::pipeline::session::report::{bound_lines, lod_lines, RunMs};
-use skylod::pipeline::session::{flags::frame_said, lod_read::lod_read, SceneOptions};
+use skylod::pipeline::session::report::RunMs;
+use skylod::pipeline::session::{lod_read::lod_read, SceneOptions};
 use skylod::pipeline::LevelsOptions;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -135,7 +139,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // Written geometry and the report are in the input's CRS.
     let t_write = Instant::now();
     let mut w = layout.write(&mut study, &all_inputs, &lv, &progress)?;
-    crate::outputs::say(w.said());
+    crate::outputs::say(written_said(&mut w));
     let written = (w.written.into_iter().enumerate())
         .filter_map(|(f, w)| w.map(|(path, dropped)| (f, path, dropped)));
     let (read, write, total) = (study.read_ms(), ms_since(t_write), ms_since(t_all));
@@ -150,6 +154,16 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     // would cost time for nothing (the temporary input spool is still removed).
     std::mem::forget((report, lv, study));
     Ok(Outcome::failed_if(unread || w.failed))
+}
+
+/// What to tell the user of the outputs written, in order: each file's line (a failure in
+/// the command line's words), then the merge's.
+fn written_said(w: &mut LodWritten) -> Vec<Said> {
+    let files = (std::mem::take(&mut w.files).into_iter()).map(|f| match f {
+        FileOutcome::Written(line) => Said::Summary(line),
+        FileOutcome::Failed(e) => Said::Error(crate::flags::cli_text(&e)),
+    });
+    files.chain(std::mem::take(&mut w.merge)).collect()
 }
 
 /// Where the model goes, every target checked before any work (a refused target is fatal:

@@ -1,31 +1,30 @@
-//! The library's errors and warnings in the words of the `skylod` command line: each error
-//! says what is wrong in the library's terms (its `Display` names no flag); this module adds
-//! the flag that fixes it (`--poi-crs`, `--source-crs`, `--allow-mixed-crs`, `--overwrite`,
-//! `--poi`, `--shard`, `--shards`, `--weather`, `--lat`/`--lon`, `-o`), for the binary and any
-//! front end that keeps its flag names. Nothing is printed: the texts come back.
+//! The library's errors and warnings in the words of the command line: each error says what
+//! is wrong in the library's terms (its `Display` names no flag); this module adds the flag
+//! that fixes it (`--poi-crs`, `--source-crs`, `--allow-mixed-crs`, `--overwrite`, `--poi`,
+//! `--shard`, `--shards`, `--weather`, `--lat`/`--lon`, `-o`).
 
-use crate::io::citygml::WriteError;
-use crate::io::files::TargetError;
-use crate::lod::bound::BoundError;
-use crate::lod::poi::checks::TrustError;
-use crate::lod::poi::region::RegionError;
-use crate::model::crs::FrameWarning;
-use crate::pipeline::attributes::AttributesError;
-use crate::pipeline::batch::convert::ConvertError;
-use crate::pipeline::batch::outputs::PlanError;
-use crate::pipeline::batch::shard::{Setting, ShardError, ENV_VARS};
-use crate::pipeline::batch::shard_levels::LevelsTargetError;
-use crate::pipeline::batch::synth::SynthFilesError;
-use crate::pipeline::session::site::SiteError;
-use crate::pipeline::session::Error;
-use crate::pipeline::PoiCrsError;
+use skylod::io::citygml::WriteError;
+use skylod::io::files::TargetError;
+use skylod::lod::bound::BoundError;
+use skylod::lod::poi::checks::TrustError;
+use skylod::lod::poi::region::RegionError;
+use skylod::model::crs::FrameWarning;
+use skylod::pipeline::attributes::AttributesError;
+use skylod::pipeline::batch::convert::ConvertError;
+use skylod::pipeline::batch::outputs::PlanError;
+use skylod::pipeline::batch::shard::{Setting, ShardError, ENV_VARS};
+use skylod::pipeline::batch::shard_levels::LevelsTargetError;
+use skylod::pipeline::batch::synth::SynthFilesError;
+use skylod::pipeline::session::site::SiteError;
+use skylod::pipeline::session::Error;
+use skylod::pipeline::PoiCrsError;
 use std::error::Error as StdError;
 
 /// The text of `e` with the CLI's flags named where the library has a flag's equivalent
 /// (one cause of a chain: [`crate::io::message::chain_message`] joins them).
-pub fn cli_text(e: &(dyn StdError + 'static)) -> String {
+pub(crate) fn cli_text(e: &(dyn StdError + 'static)) -> String {
     // A full disk in plain words, as the library's file errors say it.
-    (TEXTS.iter().find_map(|text| text(e))).unwrap_or_else(|| crate::io::message::plain_text(e))
+    (TEXTS.iter().find_map(|text| text(e))).unwrap_or_else(|| skylod::io::message::plain_text(e))
 }
 
 /// The wording of one kind of error, `None` for an error of another kind (or a variant
@@ -113,11 +112,12 @@ fn levels_target(e: &LevelsTargetError) -> String {
             shard.index()
         ),
         LevelsTargetError::Target(w) => write(w),
+        e => e.to_string(),
     }
 }
 
 /// A site error in the words of `--lat` and `--lon`, for `cmd` (e.g. `sun-hours`).
-pub fn site_text(e: &SiteError, cmd: &str) -> String {
+pub(crate) fn site_text(e: &SiteError, cmd: &str) -> String {
     match e {
         SiteError::OutOfRange { lat, lon } => {
             format!("--lat must be in -90..90 and --lon in -180..180 (got {lat}, {lon})")
@@ -136,6 +136,7 @@ fn poi_crs(e: &PoiCrsError) -> String {
             "--poi-crs {from}: the model's CRS ({model}) is not known, so POIs cannot be \
              converted to it (give --source-crs)"
         ),
+        e => e.to_string(),
     }
 }
 
@@ -179,7 +180,7 @@ fn setting(s: &Setting) -> String {
 }
 
 /// A shard error in the words of `--shard` and `--shards`.
-pub fn shard_text(e: &ShardError) -> String {
+pub(crate) fn shard_text(e: &ShardError) -> String {
     const CONFLICT: &str = "conflicting shard settings";
     match e {
         ShardError::Syntax(s) => format!("--shard {s:?}: expected I/N with 0 <= I < N (e.g. 0/4)"),
@@ -217,7 +218,7 @@ pub fn shard_text(e: &ShardError) -> String {
 
 /// The frame's warnings `said` as the command line says them: the one that is the
 /// structured warning `fw` in its words ([`frame_warning_text`]), the others as they are.
-pub fn frame_said(said: &[String], fw: Option<&FrameWarning>) -> Vec<String> {
+pub(crate) fn frame_said(said: &[String], fw: Option<&FrameWarning>) -> Vec<String> {
     let frame = fw.map(|w| (w.to_string(), frame_warning_text(w)));
     (said.iter())
         .map(|w| match &frame {
@@ -228,7 +229,7 @@ pub fn frame_said(said: &[String], fw: Option<&FrameWarning>) -> Vec<String> {
 }
 
 /// The frame's warning with the flag that fixes it.
-pub fn frame_warning_text(w: &FrameWarning) -> String {
+pub(crate) fn frame_warning_text(w: &FrameWarning) -> String {
     let metres = "coordinates are taken as metres";
     match w {
         FrameWarning::NoCrs => {
@@ -256,7 +257,7 @@ mod tests {
         assert_eq!(cli_text(&w), "out.gml: output exists (use --overwrite)");
         let e = Error::from(WriteError::Exists("o.gml".into()));
         assert!(cli_text(&e).ends_with("(use --overwrite)"));
-        let p = crate::pipeline::PipelineError::from(PoiCrsError::UnknownModelCrs {
+        let p = skylod::pipeline::PipelineError::from(PoiCrsError::UnknownModelCrs {
             from: "EPSG:4326".into(),
             model: "none".into(),
         });
@@ -268,14 +269,15 @@ mod tests {
         assert!(cli_text(&m).contains("--allow-mixed-crs"));
         assert!(!m.to_string().contains("--"));
         let s = "5/4"
-            .parse::<crate::pipeline::batch::shard::Shard>()
+            .parse::<skylod::pipeline::batch::shard::Shard>()
             .unwrap_err();
         assert!(!s.to_string().contains("--"), "{s}");
         assert_eq!(
             cli_text(&s),
             "--shard 5/4: shard index 5 is not below the shard count 4"
         );
-        let s = crate::pipeline::batch::shard::Shard::resolve(None, Some(0), |_| None).unwrap_err();
+        let s =
+            skylod::pipeline::batch::shard::Shard::resolve(None, Some(0), |_| None).unwrap_err();
         assert_eq!(
             shard_text(&s),
             "--shards 0: the shard count must be at least 1"
