@@ -1,5 +1,4 @@
-//! The mixed writer's plan made one chunk of whole top-level members at a time
-//! ([`plan_chunked`]): each chunk is indexed ([`index::scan_chunk`]), planned and its index
+//! The mixed writer's plan ([`plan`]), made one chunk of whole top-level members at a time: each chunk is indexed ([`index::scan_chunk`]), planned and its index
 //! dropped, so that the writer's memory follows the chunk, not the document. The chunks are
 //! those of the streamed read ([`crate::io::citygml::read::member_chunks`]). While a chunk is
 //! filled and planned, the next one is indexed on a thread of its own (`skylod-plan`): one
@@ -28,10 +27,11 @@
 //! the whole index reports it).
 
 use super::encode::IdPool;
-use super::hollow::PlanModel;
 use super::id_table::IdTable;
 use super::plan::{self, Plan, Scope, Shared};
+use super::plan_model::PlanModel;
 use super::{index, MixedSummary};
+use crate::io::citygml::error::WriteError;
 use crate::io::citygml::read::{member_chunks, ReadOptions, SeenIds};
 use crate::io::citygml::source::{self, Bytes, Loaded};
 use crate::io::citygml::write::{envelope_xml, Edit};
@@ -39,40 +39,41 @@ use crate::lod::rough::RoughGeometry;
 use crate::model::{Bbox, CityModel, Source};
 use foldhash::HashSet;
 
-/// The edits that write `file` at `levels` (as `super::plan_file`), planned chunk by chunk
-/// (chunks of about `chunk_bytes`); `None` where the document is not a plain file of two
-/// chunks or more, or where a chunk's plan could differ from the whole index's (module
-/// docs): plan it whole then. The plan of a model read whole (for tests: the writer plans a
-/// model read whole on the whole index, in one chunk).
-#[cfg(test)]
-pub(super) fn plan_chunked(
-    model: &CityModel,
-    parts: (usize, &[RoughGeometry], &[u8]),
-    keep_envelopes: bool,
-    chunk_bytes: u64,
-) -> Option<(Vec<Edit>, MixedSummary)> {
-    plan_chunked_with(
-        &mut super::hollow::Whole(model),
-        parts,
-        keep_envelopes,
-        chunk_bytes,
-    )
-}
-
-/// [`plan_chunked`] on `m`: each chunk's assets and buildings given their polygons
-/// ([`PlanModel::fill`]) while the chunk is planned (`None` too where they cannot be). The
-/// next chunk is indexed on a thread of its own while a chunk is filled and planned
-/// ([`plan_in_chunks`]).
-pub(super) fn plan_chunked_with(
+/// The edits that write `file` of `m` at `levels`, and what they do: planned a chunk of
+/// about `chunk_bytes` at a time, each chunk's assets and buildings given their polygons
+/// ([`PlanModel::fill`]) while it is planned (module docs); where the document is one chunk,
+/// or a chunk's plan declines, on the index of the whole document with every asset and
+/// building given its polygons (for a hollow read, the memory of the whole read).
+///
+/// # Errors
+/// The document cannot be indexed; a hollow read's polygons cannot be read back.
+pub(super) fn plan(
     m: &mut dyn PlanModel,
     parts: (usize, &[RoughGeometry], &[u8]),
     keep_envelopes: bool,
     chunk_bytes: u64,
-) -> Option<(Vec<Edit>, MixedSummary)> {
-    plan_in_chunks(m, parts, keep_envelopes, chunk_bytes, true)
+) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
+    let planned = plan_in_chunks(m, parts, keep_envelopes, chunk_bytes, true);
+    m.empty();
+    if let Some(p) = planned {
+        return Ok(p);
+    }
+    let (n, b) = (m.model().assets.len(), m.model().buildings.len());
+    let all = |n: usize| (0..n).map(|i| u32::try_from(i).unwrap_or(u32::MAX));
+    let (assets, buildings): (Vec<u32>, Vec<u32>) = (all(n).collect(), all(b).collect());
+    if !m.fill(&assets, &buildings, parts.2) {
+        return Err(WriteError::Invalid(format!(
+            "{}: the polygons to write could not be read again",
+            m.model().files[parts.0].path.display()
+        )));
+    }
+    let p = super::plan_file_with(m.model(), m.facts(), parts, keep_envelopes, true);
+    m.empty();
+    p
 }
 
-/// [`plan_chunked_with`], the index of chunk k + 1 made while chunk k is filled and planned
+/// The chunked plan of [`plan`] (`None` where it declines), the index of chunk k + 1 made
+/// while chunk k is filled and planned
 /// where `ahead` (on a thread named `skylod-plan`; where none is to be had, in its turn). Only
 /// the index moves: it reads nothing the plan of an earlier chunk decides (the bytes, the
 /// skip spans, the options), so it is the same index; every check of a chunk against the
@@ -91,6 +92,9 @@ fn plan_in_chunks(
     let Source::File(path) = &src.source else {
         return None;
     };
+    if chunk_bytes >= src.len {
+        return None;
+    }
     let Ok(Loaded::Plain(bytes @ Bytes::Mapped(_))) = source::load_source(&src.source, path) else {
         return None;
     };
@@ -244,6 +248,17 @@ mod tests {
     use crate::io::citygml::write::{write_document_to, WriteOptions};
     use crate::lod::rough::{rough_model, RoughOptions};
     use std::path::{Path, PathBuf};
+
+    /// The chunked plan of `model` read whole, `None` where it declines.
+    fn plan_chunked(
+        model: &CityModel,
+        parts: (usize, &[RoughGeometry], &[u8]),
+        keep_envelopes: bool,
+        chunk_bytes: u64,
+    ) -> Option<(Vec<Edit>, MixedSummary)> {
+        let m = &mut super::super::plan_model::Whole(model);
+        plan_in_chunks(m, parts, keep_envelopes, chunk_bytes, true)
+    }
 
     /// The document `model` writes with `edits`.
     fn written(model: &CityModel, edits: Vec<Edit>) -> Vec<u8> {
@@ -482,7 +497,7 @@ mod tests {
             for (what, levels) in levels {
                 let plan = |ahead| {
                     plan_in_chunks(
-                        &mut super::super::hollow::Whole(model),
+                        &mut super::super::plan_model::Whole(model),
                         (0, rough, &levels),
                         false,
                         1,

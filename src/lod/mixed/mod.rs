@@ -160,10 +160,10 @@ mod chunked;
 mod content_ids;
 mod doc;
 mod encode;
-mod hollow;
 mod id_table;
 mod index;
 mod plan;
+mod plan_model;
 mod push_back;
 
 use crate::io::citygml::error::WriteError;
@@ -275,26 +275,21 @@ pub fn write_mixed<'a>(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<MixedSummary, WriteError> {
-    let (model, file) = match src.into() {
-        MixedSource::Whole(model, file) => (model, file),
-        MixedSource::Hollow(h, rr, chunk) => {
-            return hollow::write_hollow(h, rr, (rough, levels), out, opts, chunk)
-        }
-    };
-    let (edits, mut summary) = mixed_edits(model, file, rough, levels, opts, |src| {
+    let mut src = src.into();
+    let (edits, mut summary) = mixed_edits(&mut src, rough, levels, opts, |src| {
         check_target(out, opts, src.source.path())
     })?;
-    let wopts = WriteOptions {
-        keep_envelopes: true,
-        ..opts.clone()
+    let (model, file) = match &src {
+        MixedSource::Whole(model, file) => (*model, *file),
+        MixedSource::Hollow(h, ..) => (&h.model, 0),
     };
-    let w = write_document(model, file, edits, out, &wopts)?;
+    let w = write_document(model, file, edits, out, &kept_envelopes(opts))?;
     summary.bytes = w.bytes;
     Ok(summary)
 }
 
-/// [`write_mixed`] into any writer `w` (uncompressed, no target checks; of `opts` only
-/// `keep_envelopes` matters).
+/// [`write_mixed`] of file `file` of `model` into any writer `w` (uncompressed, no target
+/// checks; of `opts` only `keep_envelopes` matters).
 pub fn write_mixed_to(
     model: &CityModel,
     file: usize,
@@ -303,13 +298,18 @@ pub fn write_mixed_to(
     w: &mut dyn std::io::Write,
     opts: &WriteOptions,
 ) -> Result<MixedSummary, WriteError> {
-    let (edits, mut summary) = mixed_edits(model, file, rough, levels, opts, |_| Ok(()))?;
-    let wopts = WriteOptions {
+    let src = &mut MixedSource::Whole(model, file);
+    let (edits, mut summary) = mixed_edits(src, rough, levels, opts, |_| Ok(()))?;
+    summary.bytes = write_document_to(model, file, edits, w, &kept_envelopes(opts))?.bytes;
+    Ok(summary)
+}
+
+/// `opts` for the document's writer: the envelopes are the plan's to edit.
+fn kept_envelopes(opts: &WriteOptions) -> WriteOptions {
+    WriteOptions {
         keep_envelopes: true,
         ..opts.clone()
-    };
-    summary.bytes = write_document_to(model, file, edits, w, &wopts)?.bytes;
-    Ok(summary)
+    }
 }
 
 /// One rough geometry and one level per asset of `model`, or [`WriteError::Invalid`] naming
@@ -330,23 +330,40 @@ pub(crate) fn check_per_asset(
     Ok(())
 }
 
-/// The arguments checked, `check` passed for the source file, the edits planned.
+/// The arguments checked, `check` passed for the source file, the edits planned
+/// ([`chunked::plan`]: a model read whole in one chunk, a hollow read a chunk at a time).
 fn mixed_edits(
-    model: &CityModel,
-    file: usize,
+    src: &mut MixedSource<'_>,
     rough: &[RoughGeometry],
     levels: &[u8],
     opts: &WriteOptions,
     check: impl FnOnce(&crate::model::SourceFile) -> Result<(), WriteError>,
 ) -> Result<(Vec<Edit>, MixedSummary), WriteError> {
-    check_per_asset(model, rough, levels)?;
-    let src = crate::io::citygml::write::source_file(model, file)?;
-    check(src)?;
-    plan_file(model, file, rough, levels, opts.keep_envelopes, true)
+    let (mut whole, mut filled);
+    let (m, file, chunk): (&mut dyn plan_model::PlanModel, usize, u64) = match src {
+        MixedSource::Whole(model, file) => {
+            whole = plan_model::Whole(model);
+            (&mut whole, *file, u64::MAX)
+        }
+        MixedSource::Hollow(hollow, rr, chunk) => {
+            filled = plan_model::Filled {
+                hollow,
+                rr,
+                assets: Vec::new(),
+                buildings: Vec::new(),
+            };
+            (&mut filled, 0, *chunk)
+        }
+    };
+    check_per_asset(m.model(), rough, levels)?;
+    check(crate::io::citygml::write::source_file(m.model(), file)?)?;
+    chunked::plan(m, (file, rough, levels), opts.keep_envelopes, chunk)
 }
 
-/// The edits that write `file` at `levels`, and what they do. `skip`: do not parse the
-/// content of elements that go whole (false only to check that skipping changes nothing).
+/// The edits that write `file` at `levels` on the whole index, and what they do. `skip`: do
+/// not parse the content of elements that go whole (false only to check that skipping
+/// changes nothing).
+#[cfg(test)]
 fn plan_file(
     model: &CityModel,
     file: usize,

@@ -94,10 +94,10 @@ impl LodLayout {
             .collect()
     }
 
-    /// Every file of the study's model written at the levels `lv` to its target
-    /// ([`Study::write_files`]), then, for a merge, the staged parts merged into the target
-    /// (OBJ and CityJSON: merged as they are written, [`write_merged_levels`]). A file that
-    /// fails is reported and the others written.
+    /// Every file of the study's model written at the levels `lv` to its target (files in
+    /// parallel; read hollow, the one document a chunk at a time), then, for a merge, the
+    /// staged parts merged into the target (OBJ and CityJSON: merged as they are written,
+    /// [`write_merged_levels`]). A file that fails is reported and the others written.
     ///
     /// # Errors
     /// [`super::Error::Cancelled`], [`super::Error::Io`] (a mirrored folder not made).
