@@ -5,7 +5,8 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use quick_xml::events::Event;
 use quick_xml::NsReader;
-use skylod::io::citygml::read::{read_bytes_with, ReadOptions};
+use skylod::io::citygml::read::{read_source, ReadOptions};
+use skylod::model::Source;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -121,9 +122,14 @@ fn bench(c: &mut Criterion) {
             };
             g.bench_with_input(BenchmarkId::new(id, &name), &bytes, |b, x| {
                 b.iter(|| {
-                    read_bytes_with(x, "bench.gml", &opts)
-                        .map(|m| m.assets.len())
-                        .unwrap_or(0)
+                    read_source(
+                        Source::Memory(x.as_slice().into()),
+                        "bench.gml".as_ref(),
+                        &opts,
+                        &|_| {},
+                    )
+                    .map(|m| m.assets.len())
+                    .unwrap_or(0)
                 })
             });
         }

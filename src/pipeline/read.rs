@@ -1,6 +1,6 @@
 //! Step 1: the inputs read and merged, and the checks of the model alone.
 
-use crate::io::citygml::read::read_source_observed;
+use crate::io::citygml::read::read_source;
 use crate::io::citygml::source::resolve;
 use crate::io::citygml::{ReadError, ReadOptions};
 use crate::lod::poi::checks::{self, TrustError};
@@ -113,7 +113,7 @@ fn read_all(
             // bytes move while a large file is read; the rest when it is done
             let seen = AtomicU64::new(0);
             let r = src.and_then(|src| {
-                read_source_observed(src, p, &ReadOptions::default(), &|n| {
+                read_source(src, p, &ReadOptions::default(), &|n| {
                     seen.fetch_add(n, Ordering::Relaxed);
                     progress.advance(Stage::Read, 0, n, None);
                 })

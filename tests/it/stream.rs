@@ -1,12 +1,13 @@
 //! Issue 22: reading a large file reports its bytes as it goes
-//! ([`skylod::io::citygml::read_file_observed`]), with the same model as the plain read.
+//! ([`skylod::io::citygml::read_source`]), with the same model as the plain read.
 //!
 //! The file (~70 MB) is made by the shared generator (`../shared/tools/bench_inputs.py`: the
 //! Ingolstadt street repeated) in a temporary directory.
 
 use crate::util;
 use skylod::io::citygml::read::{read_file_with, stream, Chunk, Passes, ReadOptions, Streamed};
-use skylod::io::citygml::read_file_observed;
+use skylod::io::citygml::read_source;
+use skylod::io::citygml::source::resolve;
 use skylod::model::CityModel;
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -22,7 +23,7 @@ fn observed_matches(path: &Path, opts: &ReadOptions, threads: usize) {
     let (calls, total) = (AtomicU64::new(0), AtomicU64::new(0));
     let (plain, seen) = pool.install(|| {
         let plain = read_file_with(path, opts).unwrap();
-        let seen = read_file_observed(path, opts, &|n| {
+        let seen = read_source(resolve(path).unwrap(), path, opts, &|n| {
             assert!(n > 0, "a report of 0 bytes");
             calls.fetch_add(1, Ordering::Relaxed);
             total.fetch_add(n, Ordering::Relaxed);

@@ -12,4 +12,4 @@ pub mod upgrade;
 pub mod write;
 
 pub use error::{Location, ReadError, WriteError};
-pub use read::{read_file, read_file_observed, read_file_with, ReadOptions};
+pub use read::{read_file, read_file_with, read_source, ReadOptions};

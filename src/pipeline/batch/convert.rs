@@ -12,7 +12,8 @@ use crate::export::citygml_from_cityjson::{
 };
 use crate::export::report::stats::Stats;
 use crate::export::{Chunks, Content, Format};
-use crate::io::citygml::read::{read_file_observed, stream, Passes, ReadOptions, Streamed};
+use crate::io::citygml::read::{read_source, stream, Passes, ReadOptions, Streamed};
+use crate::io::citygml::source::resolve;
 use crate::io::citygml::write::{write_document, write_document_streamed, WriteOptions};
 use crate::io::citygml::{ReadError, WriteError};
 use crate::model::crs::Crs;
@@ -84,7 +85,7 @@ pub fn file_stats(
             None => {}
         }
     }
-    let mut m = read_file_observed(path, &ReadOptions::default(), &passed)?;
+    let mut m = read_source(resolve(path)?, path, &ReadOptions::default(), &passed)?;
     if let Some(c) = source_crs {
         for f in &mut m.files {
             f.srs_name = Some(c.name.clone());
@@ -264,7 +265,7 @@ pub fn convert_file(
         let polygons = (s.polygons, s.polygons);
         return Ok(converted(Some(line), warnings, polygons, None));
     }
-    let model = read_file_observed(input, &ReadOptions::default(), &passed)?;
+    let model = read_source(resolve(input)?, input, &ReadOptions::default(), &passed)?;
     write_out(input, out, o, &Chunks::model(&model, 0, Content::Full))?
         .ok_or_else(|| WriteError::Declined(input.to_path_buf()).into())
 }

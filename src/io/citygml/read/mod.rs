@@ -115,37 +115,9 @@ pub fn read_file(path: &Path) -> Result<CityModel, ReadError> {
     read_file_with(path, &ReadOptions::default())
 }
 
-/// [`read_file`] with explicit limits. An uncompressed file is read whole into memory and
-/// parsed from there (events borrow from it); a gzip-compressed one is decompressed as it is
-/// parsed.
+/// [`read_file`] with explicit limits ([`read_source`]).
 pub fn read_file_with(path: &Path, opts: &ReadOptions) -> Result<CityModel, ReadError> {
-    read_source_with(source::resolve(path)?, path, opts)
-}
-
-/// Read a document from where it is ([`Source`]: a file, or bytes in memory), naming it
-/// `name` in the model ([`crate::model::SourceFile::path`]), errors and warnings. A model read
-/// from memory keeps the bytes ([`crate::model::SourceFile::source`]), so that every writer
-/// can copy from them as from a file.
-pub fn read_source_with(
-    src: Source,
-    name: &Path,
-    opts: &ReadOptions,
-) -> Result<CityModel, ReadError> {
-    read_source_observed(src, name, opts, &|_| {})
-}
-
-/// [`read_file_with`] that reports its way through the file: `passed(n)` is called, from
-/// any of the reading threads, each time `n` more bytes of an uncompressed document have been
-/// parsed (every few MiB), so that progress moves while one large file is read. The calls add
-/// up to at most the file's size, also where the chunked read declines and the document is
-/// read as one chunk; a gzip-compressed file is not reported (`passed` is never called). The
-/// model is the same as [`read_file_with`]'s.
-pub fn read_file_observed(
-    path: &Path,
-    opts: &ReadOptions,
-    passed: &(dyn Fn(u64) + Sync),
-) -> Result<CityModel, ReadError> {
-    read_source_observed(source::resolve(path)?, path, opts, passed)
+    read_source(source::resolve(path)?, path, opts, &|_| {})
 }
 
 /// The least bytes of a chunk of the whole read by default ([`ReadOptions::chunk_bytes`]).
@@ -176,8 +148,19 @@ fn read_in_chunks(
         .flatten()
 }
 
-/// [`read_file_observed`] on a [`Source`] named `name`.
-pub fn read_source_observed(
+/// Read a document from where it is ([`Source`]: a file, or bytes in memory; for a path,
+/// [`source::resolve`]), naming it `name` in the model ([`crate::model::SourceFile::path`]),
+/// errors and warnings. An uncompressed document is parsed in chunks on every core (events
+/// borrow from its bytes); a gzip-compressed one is decompressed as it is parsed. A model read
+/// from memory keeps the bytes ([`crate::model::SourceFile::source`]), so that every writer
+/// can copy from them as from a file.
+///
+/// `passed(n)` is called, from any of the reading threads, each time `n` more bytes of an
+/// uncompressed document have been parsed (every few MiB), so that progress moves while one
+/// large file is read. The calls add up to at most the document's size, also where the
+/// chunked read declines and the document is read as one chunk; a gzip-compressed document
+/// is not reported (`passed` is never called).
+pub fn read_source(
     src: Source,
     name: &Path,
     opts: &ReadOptions,
@@ -255,7 +238,7 @@ fn json_or_xml(
     }))
 }
 
-/// The bytes [`read_file_observed`] has told, capped at the document's length (a read that
+/// The bytes [`read_source`] has told, capped at the document's length (a read that
 /// starts over after the chunked read declined tells no byte twice).
 struct Told<'a> {
     total: std::sync::atomic::AtomicU64,
@@ -299,20 +282,11 @@ pub fn read_file_chunked(path: &Path, opts: &ReadOptions) -> Result<Option<CityM
 
 /// Read a document held in memory, plain or gzip-compressed. `name` names it in the model,
 /// errors and warnings. The bytes are copied once and kept with the model, so that it can be
-/// written as a model read from a file can ([`read_source_with`] keeps shared bytes without
+/// written as a model read from a file can ([`read_source`] keeps shared bytes without
 /// the copy).
 pub fn read_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<CityModel, ReadError> {
-    read_bytes_with(bytes, name, &ReadOptions::default())
-}
-
-/// [`read_bytes`] with explicit limits (a large document is read in chunks by every core as
-/// [`read_file_with`] does).
-pub fn read_bytes_with(
-    bytes: &[u8],
-    name: impl AsRef<Path>,
-    opts: &ReadOptions,
-) -> Result<CityModel, ReadError> {
-    read_source_with(Source::Memory(bytes.into()), name.as_ref(), opts)
+    let src = Source::Memory(bytes.into());
+    read_source(src, name.as_ref(), &ReadOptions::default(), &|_| {})
 }
 
 /// Largest accepted coordinate magnitude: far beyond any real CRS (geocentric coordinates are
