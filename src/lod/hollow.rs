@@ -31,15 +31,14 @@
 //! POI, whose full geometry the inside-a-building check looks at: `keep` sees the chunk with
 //! its polygons, so it can judge a building by all its assets). What is left of the chunk
 //! (asset and building metadata, byte spans, the file's envelope sites and counts, warnings)
-//! is appended to the whole document's model with the indices of the whole read: a chunk's
-//! non-body assets follow the earlier chunks', its bodies go after every non-body asset of the
-//! document ([`crate::io::citygml::read::Chunk`]), building and parent indices shift with
-//! them. The root envelope's box is the union of every chunk's content box, as the streamed
-//! CityGML writer computes it.
+//! is put together with the other chunks as the whole read puts them
+//! ([`crate::io::citygml::read::Chunk`]): a chunk's non-body assets follow the earlier chunks',
+//! its bodies go after every non-body asset of the document, building and parent indices
+//! shift with them, and the root envelope's box is the union of every chunk's content box.
 //!
 //! Where the stream declines (a reference across chunks, a DOCTYPE, a document that fails to
-//! read) or the first chunk holds no geometry to tell the root envelope by, [`read_hollow`]
-//! gives `None`: the caller reads the document whole, which also reports any error.
+//! read), [`read_hollow`] gives `None`: the caller reads the document whole, which also
+//! reports any error.
 //!
 //! The selection runs on a [`Hollow`] ([`crate::lod::lod`]): the rough forms are the
 //! read's, the selection scene needs only metadata, the facts of the full polygons it takes
@@ -75,14 +74,14 @@
 //! so `lod` with a CityGML output runs on a [`Hollow`] ([`crate::pipeline::session::Study::read_hollow`]); OBJ and
 //! CityJSON outputs still take the whole read.
 
-use crate::io::citygml::read::{Chunk, ChunkStart, Passes, Reread, StreamSummary};
+use crate::io::citygml::read::{Chunk, ChunkStart, Collected, Passes, Reread, StreamSummary};
 use crate::lod::level::{polygon_count_of, rough_is_own};
 use crate::lod::poi::checks::enclosure::ON_SURFACE;
 use crate::lod::poi::checks::Surroundings;
 use crate::lod::rough::{rough_asset, RoughGeometry, RoughOptions};
 use crate::lod::scene::{detail_boxes, detail_key};
 use crate::lod::select::FullFacts;
-use crate::model::{content_bbox_of, Asset, Bbox, Building, CityModel, LodGeometry, SourceFile};
+use crate::model::{content_bbox_of, Asset, Bbox, CityModel, LodGeometry};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::path::Path;
@@ -347,56 +346,19 @@ impl FullFacts for Hollow {
     }
 }
 
-/// An asset index of the whole model while the document's count of non-body assets is not
-/// known yet: a non-body asset's index, or a body's among the bodies.
-#[derive(Clone, Copy)]
-enum At {
-    Plain(usize),
-    Body(usize),
-}
-
-/// A chunk's assets (non-bodies or bodies) with what their full geometry gave.
-#[derive(Default)]
-struct Part {
-    assets: Vec<Asset>,
-    parents: Vec<Option<At>>,
-    kept: Vec<bool>,
-    rough: Vec<RoughGeometry>,
-    boxes: Vec<Bbox>,
-    detail: Vec<Bbox>,
-    own: Vec<bool>,
-    counts: Vec<Vec<u32>>,
-    chunks: Vec<u32>,
-    /// [`detail_key`] of each (0: none).
-    keys: Vec<u128>,
-}
-
-impl Part {
-    /// `asset` (with its parent as `parent`) hollowed unless `keep` holds for its box.
-    fn push(
-        &mut self,
-        mut asset: Asset,
-        parent: Option<At>,
-        (rough, bbox, detail, key): (RoughGeometry, Bbox, Bbox, u128),
-        (keep, chunk): (bool, u32),
-    ) {
-        self.own.push(rough_is_own(&asset, &rough));
-        let counts = (asset.geometries.iter())
-            .map(|g| u32::try_from(g.polygons.len()).unwrap_or(u32::MAX))
-            .collect();
-        if !keep {
-            drop_polygons(&mut asset.geometries);
-        }
-        self.assets.push(asset);
-        self.parents.push(parent);
-        self.kept.push(keep);
-        self.rough.push(rough);
-        self.boxes.push(bbox);
-        self.detail.push(detail);
-        self.counts.push(counts);
-        self.chunks.push(chunk);
-        self.keys.push(key);
-    }
+/// What the hollow read made of an asset from its full geometry, before its polygons went.
+struct Made {
+    kept: bool,
+    rough: RoughGeometry,
+    bbox: Bbox,
+    detail: Bbox,
+    own: bool,
+    /// Polygons per geometry property.
+    counts: Vec<u32>,
+    /// The chunk it was read in.
+    chunk: u32,
+    /// [`detail_key`] of it (0: none).
+    key: u128,
 }
 
 /// Which assets of a chunk keep their polygons in [`read_hollow`]: `keep(chunk, rough, boxes)`
@@ -406,38 +368,25 @@ pub type Keep<'a> = dyn Fn(&CityModel, &[RoughGeometry], &[Bbox]) -> Vec<bool> +
 /// Read the CityGML document at `path` hollow (see the module docs): in chunks of `passes`
 /// (pass 0 of its progress), each asset's rough form made with `rough`, its polygons kept
 /// only where `keep` says so (`keep(chunk, rough, boxes)`: for each asset of a chunk's model,
-/// with its polygons, rough forms and boxes, whether it keeps them; e.g. [`near_pois`]). `None` where the document is to be read whole
-/// instead (the stream declines, or the first chunk holds no geometry while the document has
-/// a root envelope).
+/// with its polygons, rough forms and boxes, whether it keeps them; e.g. [`near_pois`]). The
+/// chunks are put together as the whole read's (the same model, but for the polygons). `None` where the document is to be read whole instead (the stream declines).
 pub fn read_hollow(
     path: &Path,
     passes: &Passes<'_>,
     rough: &RoughOptions,
     keep: &Keep<'_>,
 ) -> Option<Hollow> {
-    let (mut plain, mut bodies) = (Part::default(), Part::default());
-    let mut buildings: Vec<Building> = Vec::new();
+    let mut all: Collected<Made> = Collected::default();
     let mut building_chunk = Vec::new();
-    let mut warnings = Vec::new();
-    let mut file: Option<SourceFile> = None;
-    let (mut content, mut frame) = (Bbox::EMPTY, Bbox::EMPTY);
-    let (mut root_site, mut unsure) = (None, false);
+    let mut frame = Bbox::EMPTY;
     let mut starts = Vec::new();
-    let summary = passes.pass_citygml(path, 0, |c: Chunk| {
+    let summary = passes.pass_citygml(path, 0, |mut c: Chunk| {
         let Some(start) = c.start.clone() else {
             return Err(());
         };
         let chunk = u32::try_from(starts.len()).map_err(|_| ())?;
         starts.push(start);
-        let nb = c.non_body_assets();
-        let at = |i: usize| {
-            if i < nb {
-                At::Plain(c.assets_before + i)
-            } else {
-                At::Body(c.bodies_before + (i - nb))
-            }
-        };
-        let mut model = c.model;
+        let model = &mut c.model;
         let (rough, (boxes, keys)): (Vec<RoughGeometry>, (Vec<Bbox>, Vec<u128>)) =
             (model.assets.par_iter())
                 .map(|a| {
@@ -446,73 +395,45 @@ pub fn read_hollow(
                 })
                 .unzip();
         // the chunk's content box from its assets' boxes (content_bbox)
-        let b = content_bbox_of(boxes.iter().copied(), &model.buildings);
-        if c.index == 0 {
-            root_site = crate::io::citygml::write::root_site_of(&model);
-            unsure = root_site.is_some() && b.is_empty();
-        }
-        content.union(&b);
-        let (detail, tris) = detail_boxes(&model);
+        let content = content_bbox_of(boxes.iter().copied(), &model.buildings);
+        let (detail, tris) = detail_boxes(model);
         frame.union(&tris);
-        let kept = keep(&model, &rough, &boxes);
-        let made = rough.into_iter().zip(boxes).zip(detail).zip(keys);
-        let each = model.assets.drain(..).zip(made).zip(kept);
-        for (i, ((mut a, (((r, b), d), key)), k)) in each.enumerate() {
-            a.building = a.building.map(|b| b + c.buildings_before);
-            let parent = a.parent.map(at);
-            let part = if i < nb { &mut plain } else { &mut bodies };
-            part.push(a, parent, (r, b, d, key), (k, chunk));
-        }
-        for mut b in model.buildings.drain(..) {
-            b.parent = b.parent.map(|p| p + c.buildings_before);
-            // placed once the document's non-body assets are counted
-            b.assets = (b.assets.iter())
-                .map(|&i| match at(i) {
-                    At::Plain(k) => k,
-                    At::Body(k) => usize::MAX - k,
-                })
-                .collect();
+        let kept = keep(model, &rough, &boxes);
+        let made = rough.into_iter().zip(boxes).zip(detail).zip(keys).zip(kept);
+        let made = (model.assets.iter_mut().zip(made))
+            .map(|(a, ((((rough, bbox), detail), key), kept))| {
+                let made = Made {
+                    own: rough_is_own(a, &rough),
+                    counts: (a.geometries.iter())
+                        .map(|g| u32::try_from(g.polygons.len()).unwrap_or(u32::MAX))
+                        .collect(),
+                    kept,
+                    rough,
+                    bbox,
+                    detail,
+                    key,
+                    chunk,
+                };
+                if !kept {
+                    drop_polygons(&mut a.geometries);
+                }
+                made
+            })
+            .collect();
+        for b in &mut model.buildings {
             drop_polygons(&mut b.geometries);
-            buildings.push(b);
             building_chunk.push(chunk);
         }
-        warnings.append(&mut model.warnings);
-        let f = model.files.into_iter().next();
-        match (&mut file, f) {
-            (None, f) => file = f,
-            (Some(whole), Some(f)) => crate::io::citygml::read::add_file(whole, f),
-            (Some(_), None) => {}
-        }
+        all.add(c, content, made);
         Ok::<(), ()>(())
     });
-    let summary = match summary {
-        Ok(Some(s)) if !unsure => s,
-        _ => return None,
+    let Ok(Some(summary)) = summary else {
+        return None;
     };
-    let n_plain = plain.assets.len();
-    let place = |a: At| match a {
-        At::Plain(k) => k,
-        At::Body(k) => n_plain + k,
-    };
-    for b in &mut buildings {
-        for i in &mut b.assets {
-            if *i > usize::MAX / 2 {
-                *i = n_plain + (usize::MAX - *i);
-            }
-        }
-    }
-    let mut file = file?;
-    file.version = summary.version.unwrap_or(file.version);
-    file.srs_name = summary.srs_name.clone();
-    // a compressed document is streamed from its decompressed copy
-    file.gzip = crate::io::files::is_gzip_file(path);
-    for e in &mut file.envelopes {
-        if root_site == Some(e.span.start) && !e.bbox.is_empty() {
-            e.bbox = content;
-        }
-    }
-    summary.patch_warnings(&mut warnings);
+    let content = all.content();
+    let (model, made) = all.finish(&summary)?;
     let mut h = Hollow {
+        model,
         content,
         frame,
         summary,
@@ -520,26 +441,19 @@ pub fn read_hollow(
         building_chunk,
         ..Hollow::default()
     };
-    h.twin = twins(plain.keys.iter().chain(&bodies.keys));
-    for part in [plain, bodies] {
-        for (mut a, p) in part.assets.into_iter().zip(part.parents) {
-            a.parent = p.map(place);
-            h.model.assets.push(a);
-        }
-        h.kept.extend(part.kept);
-        h.rough.extend(part.rough);
-        h.boxes.extend(part.boxes);
-        h.detail.extend(part.detail);
-        h.own.extend(part.own);
-        h.chunk_of.extend(part.chunks);
-        for c in part.counts {
-            h.count_starts.push(h.counts.len());
-            h.counts.extend(c);
-        }
+    // a compressed document is streamed from its decompressed copy
+    h.model.files[0].gzip = crate::io::files::is_gzip_file(path);
+    h.twin = twins(made.iter().map(|m| &m.key));
+    for m in made {
+        h.kept.push(m.kept);
+        h.rough.push(m.rough);
+        h.boxes.push(m.bbox);
+        h.detail.push(m.detail);
+        h.own.push(m.own);
+        h.chunk_of.push(m.chunk);
+        h.count_starts.push(h.counts.len());
+        h.counts.extend(m.counts);
     }
-    h.model.buildings = buildings;
-    h.model.warnings = warnings;
-    h.model.files = vec![file];
     Some(h)
 }
 

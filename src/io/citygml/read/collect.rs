@@ -13,7 +13,7 @@
 use super::stream::{stream_document, Chunk, StreamSummary, Streamed};
 use super::ReadOptions;
 use crate::io::citygml::source::Bytes;
-use crate::model::{content_bbox, Asset, Building, CityModel, SourceFile, Warning};
+use crate::model::{content_bbox, Asset, Bbox, Building, CityModel, SourceFile, Warning};
 use std::path::Path;
 
 /// The whole model of `doc` (named `name`) read in chunks of about `chunk_bytes`, `passed(n)`
@@ -28,31 +28,57 @@ pub(super) fn read_collected(
 ) -> Option<CityModel> {
     let mut all = Collected::default();
     let each = |c: Chunk| {
-        all.add(c);
+        let content = content_bbox(&c.model.assets, &c.model.buildings);
+        let none = vec![(); c.model.assets.len()];
+        all.add(c, content, none);
         Ok::<(), std::convert::Infallible>(())
     };
     match stream_document(doc, None, name, opts, chunk_bytes, passed, each) {
-        Ok(Streamed::Done(sum)) => all.finish(&sum),
+        Ok(Streamed::Done(sum)) => all.finish(&sum).map(|(model, _)| model),
         Ok(Streamed::Declined(_)) => None,
         Err(never) => match never {},
     }
 }
 
-/// The chunks handed over so far. A body's index is not known until every chunk's other
-/// assets are counted: until then it is held as `usize::MAX - k` (body `k` of the document).
-#[derive(Default)]
-struct Collected {
+/// The chunks of a document handed over so far, each asset with what its reader made of it
+/// (`X`: nothing for the whole read; a hollow read's rough form, boxes, polygon counts).
+/// A body's index is not known until every chunk's other assets are counted: until then it
+/// is held as `usize::MAX - k` (body `k` of the document).
+pub(crate) struct Collected<X> {
     buildings: Vec<Building>,
     assets: Vec<Asset>,
     bodies: Vec<Asset>,
+    extras: Vec<X>,
+    body_extras: Vec<X>,
     warnings: Vec<Warning>,
     file: Option<SourceFile>,
     /// Indices of the root's envelopes in the file's ([`Chunk::root_envelopes`]).
     root_envelopes: Vec<usize>,
+    /// The box of every polygon of the chunks, assets' and buildings' own geometry.
+    content: Bbox,
 }
 
-impl Collected {
-    fn add(&mut self, c: Chunk) {
+impl<X> Default for Collected<X> {
+    fn default() -> Self {
+        Collected {
+            buildings: Vec::new(),
+            assets: Vec::new(),
+            bodies: Vec::new(),
+            extras: Vec::new(),
+            body_extras: Vec::new(),
+            warnings: Vec::new(),
+            file: None,
+            root_envelopes: Vec::new(),
+            content: Bbox::EMPTY,
+        }
+    }
+}
+
+impl<X> Collected<X> {
+    /// Chunk `c` added: `content` the box of its polygons ([`content_bbox`] of its model as
+    /// parsed), `extras[i]` going with its asset `i`.
+    pub(crate) fn add(&mut self, c: Chunk, content: Bbox, extras: Vec<X>) {
+        self.content.union(&content);
         let nb = c.non_body_assets();
         let global = |i: usize| {
             if i < nb {
@@ -67,13 +93,16 @@ impl Collected {
             b.assets.iter_mut().for_each(|a| *a = global(*a));
             self.buildings.push(b);
         }
-        for (i, mut a) in model.assets.drain(..).enumerate() {
+        let assets = model.assets.drain(..).zip(extras);
+        for (i, (mut a, x)) in assets.enumerate() {
             a.building = a.building.map(|x| x + c.buildings_before);
             a.parent = a.parent.map(global);
             if i < nb {
                 self.assets.push(a);
+                self.extras.push(x);
             } else {
                 self.bodies.push(a);
+                self.body_extras.push(x);
             }
         }
         self.warnings.append(&mut model.warnings);
@@ -88,8 +117,10 @@ impl Collected {
         }
     }
 
-    /// The document's model, after its last chunk summed up as `sum`.
-    fn finish(mut self, sum: &StreamSummary) -> Option<CityModel> {
+    /// The document's model, after its last chunk summed up as `sum`, and each asset's
+    /// extras in its order: the model one parser reading the whole document makes (but for
+    /// what the caller took out of the chunks).
+    pub(crate) fn finish(mut self, sum: &StreamSummary) -> Option<(CityModel, Vec<X>)> {
         let n_plain = self.assets.len();
         let place = |i: &mut usize| {
             if *i > usize::MAX / 2 {
@@ -100,31 +131,37 @@ impl Collected {
             b.assets.iter_mut().for_each(place);
         }
         self.assets.append(&mut self.bodies);
+        self.extras.append(&mut self.body_extras);
         for a in &mut self.assets {
             a.parent.as_mut().map(place);
         }
         let mut file = self.file?;
         file.version = sum.version.unwrap_or(file.version);
         file.srs_name.clone_from(&sum.srs_name);
-        let content = content_bbox(&self.assets, &self.buildings);
         for &i in &self.root_envelopes {
             if let Some(e) = file.envelopes.get_mut(i) {
-                e.bbox = content;
+                e.bbox = self.content;
             }
         }
         sum.patch_warnings(&mut self.warnings);
-        Some(CityModel {
+        let model = CityModel {
             files: vec![file],
             buildings: self.buildings,
             assets: self.assets,
             warnings: self.warnings,
-        })
+        };
+        Some((model, self.extras))
+    }
+
+    /// The box of every polygon of the chunks added.
+    pub(crate) fn content(&self) -> Bbox {
+        self.content
     }
 }
 
 /// `part`'s facts of the document added to `whole`'s (both the same document's, `part` the
 /// later members): its envelope sites, counts, library objects and features.
-pub(crate) fn add_file(whole: &mut SourceFile, part: SourceFile) {
+fn add_file(whole: &mut SourceFile, part: SourceFile) {
     whole.envelopes.extend(part.envelopes);
     whole.implicit_geometries += part.implicit_geometries;
     whole.library_objects.extend(part.library_objects);

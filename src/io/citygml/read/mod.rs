@@ -48,7 +48,7 @@ mod state;
 mod stream;
 mod xlink;
 
-pub(crate) use collect::add_file;
+pub(crate) use collect::Collected;
 pub use events::read_from;
 pub(crate) use seen::SeenIds;
 pub(crate) use stream::{member_chunks, MemberChunks};
