@@ -163,9 +163,8 @@ pub struct StreamedDocument {
 /// chunk's assets and building geometry, the whole read's root envelope), and a second
 /// writes the document chunk by chunk, each chunk's envelopes recomputed from the chunk (an
 /// envelope's owner is within one top-level member). Pass 0: the root's box, 1: the
-/// writing. `Ok(None)`, nothing written, where the
-/// stream declines (or where the first chunk holds no geometry to tell the root's envelope
-/// by): read the whole file and [`write_document`] it then.
+/// writing. `Ok(None)`, nothing written, where the stream declines: read the whole file and
+/// [`write_document`] it then.
 ///
 /// # Errors
 /// As [`write_document`].
@@ -178,21 +177,16 @@ pub fn write_document_streamed(
     use crate::io::citygml::read::Chunk;
     use crate::model::Bbox;
     check_target(out, opts, std::iter::once(input))?;
-    // Pass 0: the root envelope's box, and where that envelope is (the first chunk's
-    // envelope before every building and asset: every other one is inside its owner).
+    // Pass 0: the root envelope's box.
     let mut root = Bbox::EMPTY;
-    let mut root_site: Option<u64> = None;
-    let mut unsure = false;
     let first = passes.pass_citygml(input, 0, |c: Chunk| {
-        let b = crate::model::content_bbox(&c.model.assets, &c.model.buildings);
-        if c.index == 0 {
-            root_site = root_site_of(&c.model);
-            unsure = root_site.is_some() && b.is_empty();
-        }
-        root.union(&b);
+        root.union(&crate::model::content_bbox(
+            &c.model.assets,
+            &c.model.buildings,
+        ));
         Ok::<(), WriteError>(())
     })?;
-    if first.is_none() || unsure {
+    if first.is_none() {
         return Ok(None);
     }
     // Pass 1: the document, chunk by chunk.
@@ -209,11 +203,11 @@ pub fn write_document_streamed(
             };
             len = f.len;
             let mut edits = Vec::new();
-            for env in f.envelopes.iter().filter(|_| !keep) {
-                let text = if c.index == 0 && root_site == Some(env.span.start) {
-                    // an envelope of no dimension stays empty, as in the whole read
+            for (i, env) in f.envelopes.iter().enumerate().filter(|_| !keep) {
+                let text = if c.root_envelopes.contains(&i) {
+                    // the root's, bounding the whole document (one of no dimension is none)
                     let whole = EnvelopeSite {
-                        bbox: if env.bbox.is_empty() { env.bbox } else { root },
+                        bbox: root,
                         ..env.clone()
                     };
                     envelope_xml(&whole)
@@ -255,20 +249,6 @@ pub fn write_document_streamed(
         (Err(WriteError::Invalid(_)), None) | (Ok(_), None) => Ok(None),
         (Err(e), _) => Err(e),
     }
-}
-
-/// Where the root's envelope starts in the first chunk's model: its first envelope, when
-/// that comes before every building and asset (an owner's envelope is inside its owner).
-pub(crate) fn root_site_of(model: &CityModel) -> Option<u64> {
-    let f = model.files.first()?;
-    let first = f.envelopes.iter().map(|e| e.span.start).min()?;
-    let owners = model
-        .buildings
-        .iter()
-        .map(|b| b.span.start)
-        .chain(model.assets.iter().map(|a| a.span.start))
-        .min();
-    owners.is_none_or(|o| first < o).then_some(first)
 }
 
 /// A source the edits are applied from, read in order: what no edit touches is read and
