@@ -8,7 +8,7 @@ use skylod::export::citygml_from_cityjson::TargetVersion;
 use skylod::export::report::report::Guarantee;
 use skylod::export::report::stats::{FileStats, Stats, StatsOutput};
 use skylod::export::Format;
-use skylod::io::citygml::merge::merge_named;
+use skylod::export::merge::merge_named;
 use skylod::io::citygml::write::WriteOptions;
 use skylod::lod::rough::RoughOptions;
 use skylod::lod::select::SelectOptions;

@@ -8,9 +8,9 @@
 //! * an output file with one input is that input's output (format from its ending or the
 //!   one named).
 //! * a file (or `-`, standard output) with several inputs merges them into one document
-//!   ([`crate::io::citygml::merge`]): each input is written to a [`Staging`] directory beside the
+//!   ([`crate::export::merge`]): each input is written to a [`Staging`] directory beside the
 //!   target, then merged into it. An OBJ, CityJSON or CityJSONSeq target holds the merge
-//!   converted: one origin, the merge's ids ([`crate::export::merged`]).
+//!   converted: one origin, the merge's ids.
 //!
 //! # Example
 //! ```
@@ -31,7 +31,7 @@
 //! ```
 
 use crate::export::{Format, UnknownFormat};
-use crate::io::citygml::merge::{check_mergeable, MergeError};
+use crate::export::merge::{check_mergeable, MergeError};
 use crate::io::citygml::write::{check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
 use crate::pipeline::batch::inputs::Input;
@@ -244,7 +244,7 @@ pub struct Targets {
     /// same with `overwrite` (the merge target was checked instead).
     pub write_opts: WriteOptions,
     /// Whether the staged parts are CityJSON, merged as CityJSON
-    /// ([`crate::export::cityjson_edit::merge_cityjson`]; [`Plan::edit_targets`]).
+    /// ([`crate::export::merge::merge_cityjson`]; [`Plan::edit_targets`]).
     pub cityjson: bool,
 }
 

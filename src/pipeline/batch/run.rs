@@ -8,7 +8,7 @@ use super::inputs::Input;
 use super::outputs::{create_parent, plan, Plan, PlanError, Staging, Targets};
 use super::shard::Shard;
 use crate::export::Format;
-use crate::io::citygml::merge::{merge_named, MergeSummary};
+use crate::export::merge::{label, merge_cityjson, merge_named, MergeSummary};
 use crate::io::citygml::write::{is_stdout, WriteOptions};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -247,7 +247,7 @@ pub fn summary_line(
 }
 
 /// Merge `parts` (in input order; written from the inputs `names`) into `target` (CityJSON
-/// parts, named so, as CityJSON: [`crate::export::cityjson_edit::merge_cityjson`]), the last
+/// parts, named so, as CityJSON: [`merge_cityjson`]), the last
 /// step of every batch that merges: whether `target` was written, and what to say — the
 /// merge line, with a warning when some of the `inputs` failed and the target holds only
 /// the others, or why nothing was written (then every input counts as failed).
@@ -275,7 +275,7 @@ pub fn merge_parts(
                 true => names.first().is_some_and(|n| seq_name(n)),
                 false => seq_name(target),
             };
-            crate::export::cityjson_edit::merge_cityjson(parts, names, target, seq, opts)
+            merge_cityjson(parts, names, target, seq, opts)
         }
         false => merge_named(parts, names, target, opts),
     };
@@ -315,7 +315,7 @@ fn partial_merge(target: &Path, parts: usize, inputs: usize) -> Option<Said> {
 /// format): the parts merged into a staged CityGML document ([`Staging::merged`]), then that
 /// converted to `target` from a streamed read ([`crate::export::Chunks::Stream`]; read
 /// whole where the stream declines). The output is the CityGML merge converted, named in the
-/// OBJ's comment line by the inputs it holds ([`crate::export::merged`]).
+/// OBJ's comment line by the inputs it holds ([`label`]).
 pub fn merge_converted(
     parts: &[PathBuf],
     names: &[PathBuf],
@@ -341,13 +341,7 @@ pub fn merge_converted(
         Ok(m) => m,
         Err(e) => return (false, vec![Said::Error(format!("{e:#}"))]),
     };
-    let first = names
-        .first()
-        .map_or(String::new(), |p| crate::model::shown(p).to_string());
-    let label = match names.len() {
-        0 | 1 => first,
-        n => format!("{first} and {} more", n - 1),
-    };
+    let label = label(names.first().map(PathBuf::as_path), names.len());
     let r = convert_staged(&staged, &label, target, format, opts);
     let _ = std::fs::remove_file(&staged);
     match r {

@@ -258,7 +258,7 @@ fn merged_export(
     match write_merged_levels(model, &files, lv, target, batch.format, &batch.wopts) {
         Ok(s) => {
             if let Some(e) = &s.export {
-                let label = crate::export::merged::label(model, &files);
+                let label = crate::export::merge::model_label(model, &files);
                 let line = e.describe(batch.format, Path::new(&label), target);
                 done.files.push(FileOutcome::Written(line));
             }
