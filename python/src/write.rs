@@ -129,7 +129,7 @@ fn layout(
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
     let mut wopts = WriteOptions::default();
     (wopts.overwrite, wopts.protect, wopts.keep_envelopes) = (overwrite, paths.clone(), false);
-    let targets = (plan.targets(&paths, &wopts, None, true)).map_err(|e| message(&e))?;
+    let targets = (plan.targets(&paths, &wopts, None, (true, false))).map_err(|e| message(&e))?;
     if let Some(e) = targets.refused.first() {
         return Err(message(e));
     }

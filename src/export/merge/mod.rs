@@ -18,10 +18,10 @@
 //! * **one CRS**, that of the first input naming one, and **one box**, the union of the
 //!   inputs' boxes.
 //!
-//! The formats: [`merge_files`] copies CityGML members ([`citygml`]), [`merge_cityjson`]
-//! CityJSON city objects ([`cityjson`]), and [`write_merged`] writes the inputs of a model in
-//! memory as one OBJ or CityJSON file ([`model`]). A merge of CityGML into another format is
-//! the CityGML merge converted, so every format holds the same ids.
+//! The formats write the bytes: [`merge_named`] copies CityGML members, [`merge_cityjson`]
+//! CityJSON city objects, and [`write_merged`] writes the inputs of a model in memory as one
+//! OBJ or CityJSON file. A merge of CityGML into another format is the CityGML merge
+//! converted, so every format holds the same ids.
 //!
 //! ```
 //! use std::collections::HashSet;
@@ -35,7 +35,7 @@ mod citygml;
 mod cityjson;
 mod model;
 
-pub use citygml::{check_mergeable, merge_files, merge_named, merge_named_to, HEAD_BYTES};
+pub use citygml::{check_mergeable, merge_named, merge_named_to, HEAD_BYTES};
 pub use cityjson::merge_cityjson;
 pub(crate) use model::model_label;
 pub use model::write_merged;

@@ -1,5 +1,5 @@
 //! Several files of a model in one OBJ, CityJSON or CityJSONSeq file (`lod tiles/*.gml -o
-//! street.obj`): the scene as the CityGML merge ([`super::merge_files`]) would hold it, then
+//! street.obj`): the scene as the CityGML merge ([`super::merge_named`]) would hold it, then
 //! written as one file is.
 //!
 //! * **Ids**: the plan's rule ([`super::rename_ids`] over every `gml:id` of each input): the

@@ -223,13 +223,14 @@ impl LodLayout {
                 *w = Some((shown(out), s.buildings_dropped + s.parts_dropped));
             }
         }
-        if let (Some(_), Plan::Merge(t)) = (&batch.targets.staging, &batch.plan) {
+        if let (Some(st), Plan::Merge(t)) = (&batch.targets.staging, &batch.plan) {
             let (parts, names): (Vec<PathBuf>, Vec<PathBuf>) = targets
                 .iter()
                 .filter(|(f, _)| done.written.get(*f).is_some_and(Option::is_some))
                 .map(|(f, out)| (out.clone(), model.files[*f].path.clone()))
                 .unzip();
-            let (merged, said) = merge_parts(&parts, &names, t, &batch.wopts, targets.len());
+            let to = (t.as_path(), batch.format);
+            let (merged, said) = merge_parts(&parts, &names, to, st, &batch.wopts, targets.len());
             done.merge = said;
             if !merged {
                 done.failed = true;

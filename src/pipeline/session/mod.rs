@@ -594,7 +594,7 @@ impl Study {
             protect: paths.clone(),
             ..WriteOptions::default()
         };
-        let targets = plan.targets(&paths, &wopts, None, true)?;
+        let targets = plan.targets(&paths, &wopts, None, (true, false))?;
         if let Some(e) = targets.refused.into_iter().next() {
             return Err(e.into());
         }

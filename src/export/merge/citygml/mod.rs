@@ -1,4 +1,4 @@
-//! Several CityGML documents merged into one ([`merge_files`]) by the plan of
+//! Several CityGML documents merged into one ([`merge_named`]) by the plan of
 //! [`crate::export::merge`]: the members' XML copied, their start tags rewritten where an id
 //! is renamed or a reference follows one (`xlink:href="#id"`, an appearance target's
 //! `uri="#id"` attribute and the `#id` text of an `app:target` element). The merged document
@@ -22,7 +22,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::export::merge::merge_files;
+//! use skylod::export::merge::merge_named;
 //! use skylod::io::citygml::write::WriteOptions;
 //! let dir = tempfile::tempdir().unwrap();
 //! let doc = |x: f64| format!(r##"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0"
@@ -37,7 +37,8 @@
 //! std::fs::write(&a, doc(0.0)).unwrap();
 //! std::fs::write(&b, doc(5.0)).unwrap();
 //! let out = dir.path().join("merged.gml");
-//! let s = merge_files(&[a, b], &out, &WriteOptions::default()).unwrap();
+//! let inputs = [a, b];
+//! let s = merge_named(&inputs, &inputs, &out, &WriteOptions::default()).unwrap();
 //! assert_eq!((s.members, s.ids_renamed, s.refs_rewritten), (4, 2, 1));
 //! let text = std::fs::read_to_string(&out).unwrap();
 //! assert!(text.contains(r#"gml:id="b__2""#) && text.contains(r##"xlink:href="#b__2""##));
@@ -151,17 +152,9 @@ pub(crate) fn document_ids(path: &Path) -> Result<Vec<String>, ReadError> {
 }
 
 /// Merge the CityGML documents `inputs` (plain or gzip) into `out` (gzip when it ends in `.gz`;
-/// `-` for standard output), written atomically. See the module docs for the rules.
-pub fn merge_files(
-    inputs: &[PathBuf],
-    out: &Path,
-    opts: &WriteOptions,
-) -> Result<MergeSummary, MergeError> {
-    merge_named(inputs, inputs, out, opts)
-}
-
-/// [`merge_files`], naming the inputs `names` (same length) in the errors that refuse a merge:
-/// for documents staged in temporary files, the files they were made from.
+/// `-` for standard output), written atomically, naming the inputs `names` (same length) in
+/// the errors that refuse a merge: for documents staged in temporary files, the files they
+/// were made from. See the module docs for the rules.
 pub fn merge_named(
     inputs: &[PathBuf],
     names: &[PathBuf],
@@ -436,7 +429,7 @@ mod tests {
             })
             .collect();
         let out = d.path().join("m.gml");
-        let s = merge_files(&paths, &out, &WriteOptions::default())?;
+        let s = merge_named(&paths, &paths, &out, &WriteOptions::default())?;
         Ok((std::fs::read_to_string(out).unwrap(), s))
     }
 
