@@ -1,9 +1,9 @@
 //! Several inputs merged into one output (`-o FILE` with several inputs): one plan for every
 //! format, the formats writing only the bytes.
 //!
-//! # The plan ([`Plan`])
+//! # The plan
 //!
-//! A first pass over each input gives its [`Head`]: its version, its CRS, its ids in document
+//! A first pass over each input gives its head: its version, its CRS, its ids in document
 //! order and its box. From the heads, in input order, the plan decides once:
 //!
 //! * **refused**: inputs of different versions (CityGML: the root's namespace; CityJSON:

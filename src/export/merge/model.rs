@@ -29,10 +29,7 @@ use std::path::Path;
 /// The renaming of each of `files` (indices into `model.files`, in merge order): the
 /// plan's ([`rename_ids`]) over every `gml:id` of each document; a CityJSON input (no
 /// `gml:id`s to scan) gives its buildings' and assets' ids.
-fn renames(
-    model: &CityModel,
-    files: &[usize],
-) -> Result<Vec<HashMap<String, String>>, ReadError> {
+fn renames(model: &CityModel, files: &[usize]) -> Result<Vec<HashMap<String, String>>, ReadError> {
     let mut ids: Vec<Vec<String>> = Vec::with_capacity(files.len());
     for &f in files {
         let Some(src) = model.files.get(f) else {
@@ -123,7 +120,8 @@ fn view(model: &CityModel, files: &[usize], renames: &[HashMap<String, String>])
 
 /// Write `files` of `model` (in merge order) as one `format` file at `out` (module docs),
 /// atomically, refusing to write over any of their sources or, without `overwrite`, over an
-/// existing file. The view ([`view`]) is a copy of the model while it is written.
+/// existing file. The view (the model with the inputs as one file) is a copy of the model
+/// while it is written.
 ///
 /// # Errors
 /// [`WriteError`] as [`crate::export::write()`]; an input whose ids cannot be scanned.
@@ -146,7 +144,8 @@ pub fn write_merged(
     let v = view(model, files, &renames);
     let mut summary = ExportSummary::default();
     let bytes = crate::io::citygml::write::atomic_write(out, |w| {
-        summary = crate::export::write_to(format, &crate::export::Chunks::model(&v, 0, content), w)?.0;
+        summary =
+            crate::export::write_to(format, &crate::export::Chunks::model(&v, 0, content), w)?.0;
         Ok(summary.bytes)
     })?;
     summary.bytes = bytes;

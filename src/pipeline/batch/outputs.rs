@@ -30,8 +30,8 @@
 //! # Ok::<(), skylod::pipeline::batch::outputs::PlanError>(())
 //! ```
 
-use crate::export::{Format, UnknownFormat};
 use crate::export::merge::{check_mergeable, MergeError};
+use crate::export::{Format, UnknownFormat};
 use crate::io::citygml::write::{check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
 use crate::pipeline::batch::inputs::Input;

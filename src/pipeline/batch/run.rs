@@ -7,8 +7,8 @@
 use super::inputs::Input;
 use super::outputs::{create_parent, plan, Plan, PlanError, Staging, Targets};
 use super::shard::Shard;
-use crate::export::Format;
 use crate::export::merge::{label, merge_cityjson, merge_named, MergeSummary};
+use crate::export::Format;
 use crate::io::citygml::write::{is_stdout, WriteOptions};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -435,7 +435,10 @@ mod tests {
         assert_eq!(line, "rough: 1 file(s) ok, 2 failed, 3 warning(s), 1.23 s");
         assert!(target.exists());
         // Nothing to merge: every input failed, the target is not written.
-        let (x, st) = (dir.path().join("x.gml"), b.targets.staging.as_ref().unwrap());
+        let (x, st) = (
+            dir.path().join("x.gml"),
+            b.targets.staging.as_ref().unwrap(),
+        );
         let (ok, said) = merge_parts(&[], &[], (&x, Format::CityGml), st, &b.wopts, 2);
         assert!(!ok && matches!(&said[0], Said::Error(e) if e.starts_with("nothing to merge")));
     }
@@ -506,7 +509,10 @@ mod tests {
                 "warning: {} holds 1 of the 3 inputs (the others failed)",
                 t.display()
             );
-            assert!(ok && matches!(&said[0], Said::Warning(l) if *l == w), "{said:?}");
+            assert!(
+                ok && matches!(&said[0], Said::Warning(l) if *l == w),
+                "{said:?}"
+            );
             std::fs::remove_file(&t).unwrap();
             let (ok, said) = merge_parts(&parts, &parts, (&t, format), &staging, &o, 1);
             assert!(ok && matches!(&said[0], Said::Summary(_)), "{said:?}");
