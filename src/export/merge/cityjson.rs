@@ -9,14 +9,10 @@
 //!   scale; none at all: 0.001). Each vertex is stored again as
 //!   `round((v·scale + translate − translate') / scale')`: exact where the scales agree and the
 //!   translates differ by whole steps (every skylod output), else within half a step;
-//! * **one CRS**: the first `metadata.referenceSystem` given; inputs naming CRSs that differ
-//!   ([`crate::model::crs::same_crs`]; an input naming none agrees with any) are refused,
-//!   naming each CRS once ([`MergeError::Crs`]); inputs of different CityJSON versions are
-//!   refused too ([`MergeError::Version`]): the plan of [`crate::export::merge`];
-//! * **the city objects of every input**, in input order, their ids renamed by the plan (the
-//!   first input keeps its ids, an id of input `k` (1-based) that an earlier input used
-//!   becomes `<id>__<k>`), their `parents` / `children` (and a CityJSONSeq feature's `id`)
-//!   following;
+//! * what the plan decides ([`crate::export::merge`]): inputs of different CityJSON versions
+//!   or CRSs (`metadata.referenceSystem`) refused, the first CRS given written, ids renamed;
+//! * **the city objects of every input**, in input order, their `parents` / `children` (and
+//!   a CityJSONSeq feature's `id`) following the renamed ids;
 //! * **geometry templates** and **appearances** (`materials`, `textures`,
 //!   `vertices-texture`) concatenated, the indices of each input offset past those of the
 //!   inputs before it; the other members of the first input's header (`metadata`,
@@ -24,15 +20,14 @@
 //!
 //! A `.city.json` target is one document, written as it is read: the first pass over each
 //! input keeps its small members, ids, box and vertex count (a document input streamed
-//! member by member, [`super::stream`]), then the merged header (appearances gathered), the
-//! city objects of every input one at a time, and their vertices one at a time (each input
-//! read again for each). Memory: the ids of every input and the appearances, not the
-//! documents. A CityJSONSeq
-//! target (`seq`) is one header line, then one feature per line: a CityJSONSeq input's
-//! features are streamed through one at a time (memory: one feature, the ids of every input,
-//! the templates); a document input's top-level objects become features (with their
-//! descendants; a document's appearance goes whole into each of its features, its indices
-//! unchanged). A document input is read in passes too: the links of its city objects (as
+//! member by member, [`stream`]), then the merged header (appearances gathered), the city
+//! objects of every input one at a time, and their vertices one at a time (each input read
+//! again for each). Memory: the ids of every input and the appearances, not the documents.
+//! A CityJSONSeq target (`seq`) is one header line, then one feature per line: a
+//! CityJSONSeq input's features are streamed through one at a time (memory: one feature, the
+//! ids of every input, the templates); a document input's top-level objects become features
+//! (with their descendants; a document's appearance goes whole into each of its features, its
+//! indices unchanged). A document input is read in passes too: the links of its city objects (as
 //! hashes) and its vertices (as [`Vertex`]es: 16 bytes each for integer triples, the part
 //! that grows with it), then its objects one at a time, each tree written once all its
 //! objects are read (a document with at most one top-level object is one feature: held
