@@ -5,10 +5,10 @@ use crate::relay::{message, run};
 use crate::setup::{crs, failures, load, ms, Setup};
 use pyo3::prelude::*;
 use skylod::export::citygml_from_cityjson::TargetVersion;
+use skylod::export::merge::merge_named;
 use skylod::export::report::report::Guarantee;
 use skylod::export::report::stats::{FileStats, Stats, StatsOutput};
 use skylod::export::Format;
-use skylod::io::citygml::merge::merge_named;
 use skylod::io::citygml::write::WriteOptions;
 use skylod::lod::rough::RoughOptions;
 use skylod::lod::select::SelectOptions;
@@ -128,7 +128,7 @@ fn layout(
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
     let mut wopts = WriteOptions::default();
     (wopts.overwrite, wopts.protect, wopts.keep_envelopes) = (overwrite, paths.clone(), false);
-    let targets = (plan.targets(&paths, &wopts, None, true)).map_err(|e| message(&e))?;
+    let targets = (plan.targets(&paths, &wopts, None, (true, false))).map_err(|e| message(&e))?;
     if let Some(e) = targets.refused.first() {
         return Err(message(e));
     }

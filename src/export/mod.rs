@@ -39,7 +39,7 @@ pub mod cityjson_edit;
 pub(crate) use crate::io::citygml::json::source as cityjson_source;
 mod cityjson_vertices;
 pub mod format;
-pub mod merged;
+pub mod merge;
 pub mod obj;
 // What the commands report (typed JSON with schemas): the `lod` report, model counts.
 #[allow(clippy::module_inception)] // `report::report` is the `lod` report

@@ -224,13 +224,13 @@ pub fn write_all(
 }
 
 /// `files` of `model` (in input order) merged into one OBJ, CityJSON or CityJSONSeq file at
-/// `out` with every asset at its level ([`crate::export::merged::write_merged`]: one origin,
+/// `out` with every asset at its level ([`crate::export::merge::write_merged`]: one origin,
 /// the CityGML merge's ids); `out`'s missing parent folders are created. What was written,
 /// counted over all of `files` (buildings and parts dropped summed).
 ///
 /// # Errors
 /// [`WriteError`]; [`WriteError::Invalid`] for [`Format::CityGml`] (merged by
-/// [`crate::io::citygml::merge`] from the per-file documents).
+/// [`crate::export::merge`] from the per-file documents).
 pub fn write_merged_levels(
     model: &CityModel,
     files: &[usize],
@@ -253,7 +253,7 @@ pub fn write_merged_levels(
             source,
         })?;
     }
-    let s = crate::export::merged::write_merged(format, model, files, content(levels), out, wopts)?;
+    let s = crate::export::merge::write_merged(format, model, files, content(levels), out, wopts)?;
     let (mut buildings_dropped, mut parts_dropped) = (0, 0);
     for &f in files {
         let (b, p) = buildings_without_kept_assets(model, f, levels.levels());

@@ -28,7 +28,7 @@ pub fn targets(
     keeps_crs: bool,
     refused: impl Fn(&anyhow::Error),
 ) -> anyhow::Result<(Targets, usize)> {
-    let mut t = plan.edit_targets(inputs, wopts, shard, keeps_crs)?;
+    let mut t = plan.targets(inputs, wopts, shard, (keeps_crs, true))?;
     let n = refused_said(&mut t, shard, inputs.len(), cmd, refused);
     Ok((t, n))
 }

@@ -54,14 +54,12 @@
 //! ```
 
 mod document;
-mod merge;
 mod reproject;
 mod rules;
 pub(crate) use crate::io::citygml::json::stream;
 use crate::io::citygml::json::stream::{cj, cj_error, forest, id_hash};
 mod upgrade;
 
-pub use merge::merge_cityjson;
 pub use reproject::{reproject_cityjson, CityJsonReproject};
 pub use rules::{filter_lods, subset};
 pub use upgrade::{upgrade_cityjson, CityJsonUpgrade};
@@ -355,12 +353,12 @@ fn renumber_object(
 }
 
 /// `metadata.referenceSystem` of a header as CRS text.
-fn srs_of(head: &Value) -> Option<String> {
+pub(crate) fn srs_of(head: &Value) -> Option<String> {
     crate::io::cityjson::reference_system_text(head.get("metadata")?.get("referenceSystem")?)
 }
 
 /// `transform` of a document as `(scale, translate)`.
-fn transform_of(head: &Value) -> Option<Transform> {
+pub(crate) fn transform_of(head: &Value) -> Option<Transform> {
     let t = head.get("transform")?;
     let three = |k: &str| -> Option<[f64; 3]> {
         let a = t.get(k)?.as_array()?;
@@ -374,7 +372,7 @@ fn transform_of(head: &Value) -> Option<Transform> {
 }
 
 /// Set (or remove, for an empty box) `metadata.geographicalExtent` of `head`.
-fn set_extent(head: &mut Value, b: &Bbox) {
+pub(crate) fn set_extent(head: &mut Value, b: &Bbox) {
     let Some(h) = head.as_object_mut() else {
         return;
     };
@@ -397,19 +395,19 @@ fn set_extent(head: &mut Value, b: &Bbox) {
 
 /// The JSON values of a (possibly gzip-compressed) CityJSON / CityJSONSeq source, one at a time,
 /// and the bytes read so far.
-struct Values {
+pub(crate) struct Values {
     inner: serde_json::StreamDeserializer<
         'static,
         serde_json::de::IoRead<Box<dyn BufRead + Send>>,
         Value,
     >,
-    input: std::path::PathBuf,
+    pub(crate) input: std::path::PathBuf,
     /// Values read so far: the line of the last one (a CityJSONSeq has one a line).
     line: u64,
 }
 
 impl Values {
-    fn open(input: &Path) -> Result<Values, WriteError> {
+    pub(crate) fn open(input: &Path) -> Result<Values, WriteError> {
         let r = stream::open_json(input)?;
         Ok(Values {
             inner: serde_json::Deserializer::from_reader(r).into_iter::<Value>(),
@@ -418,7 +416,7 @@ impl Values {
         })
     }
 
-    fn next(&mut self) -> Result<Option<Value>, WriteError> {
+    pub(crate) fn next(&mut self) -> Result<Option<Value>, WriteError> {
         match self.inner.next() {
             None => Ok(None),
             Some(Ok(v)) => {
@@ -456,7 +454,7 @@ impl Values {
     }
 
     /// The header: the first value, of type `CityJSON`.
-    fn header(&mut self) -> Result<Value, WriteError> {
+    pub(crate) fn header(&mut self) -> Result<Value, WriteError> {
         let Some(head) = self.next()? else {
             return Err(cj(&self.input, 0, None, "empty document".into()));
         };
@@ -637,7 +635,7 @@ fn check_document(
 }
 
 /// A document's members: of type `CityJSON`.
-fn check_type(input: &Path, head: &Map<String, Value>) -> Result<(), WriteError> {
+pub(crate) fn check_type(input: &Path, head: &Map<String, Value>) -> Result<(), WriteError> {
     let ty = head.get("type").and_then(Value::as_str).unwrap_or("");
     if ty != "CityJSON" {
         let m = format!("the first object is of type {ty:?}, not \"CityJSON\"");

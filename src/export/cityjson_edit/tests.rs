@@ -450,7 +450,14 @@ fn a_merge_of_documents_streams_whatever_the_order_of_their_members() {
         std::fs::write(&pb, serde_json::to_vec(b).unwrap()).unwrap();
         let out = dir.path().join("m.city.json");
         let inputs = [pa, pb];
-        let s = merge_cityjson(&inputs, &inputs, &out, false, &Default::default()).unwrap();
+        let s = crate::export::merge::merge_cityjson(
+            &inputs,
+            &inputs,
+            &out,
+            false,
+            &Default::default(),
+        )
+        .unwrap();
         let v: Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
         std::fs::remove_file(&out).unwrap();
         ((s.members, s.ids_renamed, s.refs_rewritten), v)

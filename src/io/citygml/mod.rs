@@ -3,7 +3,6 @@
 pub mod edit;
 pub mod error;
 pub mod json;
-pub mod merge;
 pub mod ns;
 pub mod read;
 pub mod reproject;

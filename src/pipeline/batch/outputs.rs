@@ -8,9 +8,9 @@
 //! * an output file with one input is that input's output (format from its ending or the
 //!   one named).
 //! * a file (or `-`, standard output) with several inputs merges them into one document
-//!   ([`crate::io::citygml::merge`]): each input is written to a [`Staging`] directory beside the
+//!   ([`crate::export::merge`]): each input is written to a [`Staging`] directory beside the
 //!   target, then merged into it. An OBJ, CityJSON or CityJSONSeq target holds the merge
-//!   converted: one origin, the merge's ids ([`crate::export::merged`]).
+//!   converted: one origin, the merge's ids.
 //!
 //! # Example
 //! ```
@@ -30,8 +30,8 @@
 //! # Ok::<(), skylod::pipeline::batch::outputs::PlanError>(())
 //! ```
 
+use crate::export::merge::{check_mergeable, MergeError};
 use crate::export::{Format, UnknownFormat};
-use crate::io::citygml::merge::{check_mergeable, MergeError};
 use crate::io::citygml::write::{check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
 use crate::pipeline::batch::inputs::Input;
@@ -243,9 +243,6 @@ pub struct Targets {
     /// How each output is written: the given options, or for a merge's staged parts the
     /// same with `overwrite` (the merge target was checked instead).
     pub write_opts: WriteOptions,
-    /// Whether the staged parts are CityJSON, merged as CityJSON
-    /// ([`crate::export::cityjson_edit::merge_cityjson`]; [`Plan::edit_targets`]).
-    pub cityjson: bool,
 }
 
 impl Plan {
@@ -254,17 +251,23 @@ impl Plan {
     /// where the serial run writes it), then each is checked (a refused one lands in
     /// [`Targets::refused`]). A merge checks its target, refuses inputs that cannot be
     /// merged (CityGML versions; CRSs when the outputs keep their input's, `keeps_crs`) from
-    /// their heads before any work, and makes its staging directory.
+    /// their heads before any work, and makes its staging directory. The parts are CityGML
+    /// (CityJSON inputs written as CityGML first), but for an edit that writes each input in
+    /// its own format (`own_format`: `subset`, `filter-lods`, `upgrade`, `reproject`), whose
+    /// CityJSON inputs stage CityJSON parts ([`Staging::json_part`]) to be merged as CityJSON
+    /// ([`crate::pipeline::batch::run::merge_parts`]); there, CityJSON and CityGML inputs
+    /// together, or CityJSON inputs into a CityGML name, are refused
+    /// ([`PlanError::MixedMerge`]).
     ///
     /// # Errors
-    /// A merge under a shard (it needs every input), a refused merge target, inputs that
-    /// cannot be merged, a staging directory that cannot be made.
+    /// [`PlanError::MixedMerge`], a merge under a shard (it needs every input), a refused
+    /// merge target, inputs that cannot be merged, a staging directory that cannot be made.
     pub fn targets(
         &self,
         inputs: &[PathBuf],
         wopts: &WriteOptions,
         shard: Option<Shard>,
-        keeps_crs: bool,
+        (keeps_crs, own_format): (bool, bool),
     ) -> Result<Targets, PlanError> {
         let protect = || inputs.iter().map(PathBuf::as_path);
         match self {
@@ -286,10 +289,24 @@ impl Plan {
                     staging: None,
                     mirror: matches!(self, Plan::Mirror(_)),
                     write_opts: wopts.clone(),
-                    cityjson: false,
                 })
             }
             Plan::Merge(target) => {
+                let (json, xml): (Vec<PathBuf>, Vec<PathBuf>) = inputs
+                    .iter()
+                    .cloned()
+                    .partition(|p| crate::export::citygml_from_cityjson::is_json_file(p));
+                if let (true, Some(j)) = (own_format, json.first()) {
+                    let gml_name = !is_stdout(target)
+                        && Format::from_path(target).is_none_or(|f| f == Format::CityGml);
+                    if gml_name || !xml.is_empty() {
+                        return Err(PlanError::MixedMerge {
+                            target: target.clone(),
+                            json: j.clone(),
+                            other: xml.first().cloned(),
+                        });
+                    }
+                }
                 if let Some(shard) = shard {
                     return Err(PlanError::ShardedMerge {
                         shard,
@@ -297,18 +314,16 @@ impl Plan {
                     });
                 }
                 check_target(target, wopts, protect())?;
-                // CityJSON inputs are written as CityGML first; their parts are checked
-                // when merged.
-                let xml: Vec<PathBuf> = inputs
-                    .iter()
-                    .filter(|p| !crate::export::citygml_from_cityjson::is_json_file(p))
-                    .cloned()
-                    .collect();
+                // The parts of CityJSON inputs are checked when merged.
                 check_mergeable(&xml, keeps_crs)?;
                 let staging = Staging::new(target)?;
+                let json_parts = own_format && !json.is_empty();
+                let part = |k| match json_parts {
+                    true => (k, staging.json_part(k)),
+                    false => (k, staging.part(k)),
+                };
                 Ok(Targets {
-                    cityjson: false,
-                    todo: (0..inputs.len()).map(|k| (k, staging.part(k))).collect(),
+                    todo: (0..inputs.len()).map(part).collect(),
                     refused: Vec::new(),
                     staging: Some(staging),
                     mirror: false,
@@ -319,48 +334,6 @@ impl Plan {
                 })
             }
         }
-    }
-}
-
-impl Plan {
-    /// [`Plan::targets`] for an edit that writes each input in its own format (`subset`,
-    /// `filter-lods`, `upgrade`, `reproject`): a merge of CityJSON inputs stages CityJSON
-    /// parts ([`Staging::json_part`], [`Targets::cityjson`]) to be merged as CityJSON
-    /// ([`crate::pipeline::batch::run::merge_parts`]). CityJSON and CityGML inputs together,
-    /// or CityJSON inputs into a CityGML name, are refused ([`PlanError::MixedMerge`]) before
-    /// any work.
-    ///
-    /// # Errors
-    /// As [`Plan::targets`], and [`PlanError::MixedMerge`].
-    pub fn edit_targets(
-        &self,
-        inputs: &[PathBuf],
-        wopts: &WriteOptions,
-        shard: Option<Shard>,
-        keeps_crs: bool,
-    ) -> Result<Targets, PlanError> {
-        let (json, xml): (Vec<&PathBuf>, Vec<&PathBuf>) = inputs
-            .iter()
-            .partition(|p| crate::export::citygml_from_cityjson::is_json_file(p));
-        if let (Plan::Merge(target), Some(j)) = (self, json.first()) {
-            let gml_name = !is_stdout(target)
-                && Format::from_path(target).is_none_or(|f| f == Format::CityGml);
-            if gml_name || !xml.is_empty() {
-                return Err(PlanError::MixedMerge {
-                    target: target.clone(),
-                    json: j.to_path_buf(),
-                    other: xml.first().map(|p| p.to_path_buf()),
-                });
-            }
-        }
-        let mut t = self.targets(inputs, wopts, shard, keeps_crs)?;
-        if let (Some(st), false) = (&t.staging, json.is_empty()) {
-            for (k, out) in &mut t.todo {
-                *out = st.json_part(*k);
-            }
-            t.cityjson = true;
-        }
-        Ok(t)
     }
 }
 

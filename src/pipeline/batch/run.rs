@@ -7,8 +7,8 @@
 use super::inputs::Input;
 use super::outputs::{create_parent, plan, Plan, PlanError, Staging, Targets};
 use super::shard::Shard;
+use crate::export::merge::{label, merge_cityjson, merge_named, MergeSummary};
 use crate::export::Format;
-use crate::io::citygml::merge::{merge_named, MergeSummary};
 use crate::io::citygml::write::{is_stdout, WriteOptions};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -96,7 +96,7 @@ impl Batch {
 
     /// [`Batch::new`] for an edit that writes each input in its own format (`subset`,
     /// `filter-lods`, `upgrade`): CityJSON inputs merged into one file are merged as CityJSON
-    /// ([`Plan::edit_targets`], [`merge_parts`]).
+    /// ([`Plan::targets`], [`merge_parts`]).
     ///
     /// # Errors
     /// As [`Batch::new`], and [`PlanError::MixedMerge`].
@@ -123,10 +123,7 @@ impl Batch {
             protect: paths.clone(),
             keep_envelopes,
         };
-        let targets = match edits {
-            true => plan.edit_targets(&paths, &wopts, shard, true)?,
-            false => plan.targets(&paths, &wopts, shard, true)?,
-        };
+        let targets = plan.targets(&paths, &wopts, shard, (true, edits))?;
         Ok(Batch {
             counts_polygons: format == Format::CityGml,
             refused: targets.refused.len(),
@@ -206,17 +203,9 @@ impl Batch {
                 }
             }
         }
-        if let (true, Plan::Merge(target)) = (staged, &self.plan) {
-            let (merged, s) = match &self.targets.staging {
-                _ if self.targets.cityjson => {
-                    merge_parts(&parts, &names, target, &self.wopts, inputs)
-                }
-                Some(st) if self.format != Format::CityGml => {
-                    let to = (target.as_path(), self.format);
-                    merge_converted(&parts, &names, to, st, &self.wopts, inputs)
-                }
-                _ => merge_parts(&parts, &names, target, &self.wopts, inputs),
-            };
+        if let (Some(st), Plan::Merge(target)) = (&self.targets.staging, &self.plan) {
+            let to = (target.as_path(), self.format);
+            let (merged, s) = merge_parts(&parts, &names, to, st, &self.wopts, inputs);
             said.extend(s);
             if !merged {
                 failed += ok;
@@ -246,77 +235,17 @@ pub fn summary_line(
     )
 }
 
-/// Merge `parts` (in input order; written from the inputs `names`) into `target` (CityJSON
-/// parts, named so, as CityJSON: [`crate::export::cityjson_edit::merge_cityjson`]), the last
-/// step of every batch that merges: whether `target` was written, and what to say — the
-/// merge line, with a warning when some of the `inputs` failed and the target holds only
-/// the others, or why nothing was written (then every input counts as failed).
+/// Merge `parts` (in input order; written from the inputs `names`) into `target` in
+/// `format`, the last step of every batch that merges: CityJSON parts (an edit's,
+/// [`super::outputs::Plan::targets`], named so) as CityJSON ([`merge_cityjson`]),
+/// CityJSONSeq for a `.jsonl` target or for `-` when the first input is named so; CityGML
+/// parts as CityGML ([`merge_named`]), into another format through a CityGML merge staged in
+/// `staging` ([`Staging::merged`]) then converted from a streamed read (read whole where the
+/// stream declines), named by the inputs it holds ([`label`]). Whether `target` was written,
+/// and what to say: the merge's lines, with a warning when some of the `inputs` failed and
+/// the target holds only the others, or why nothing was written (then every input counts as
+/// failed).
 pub fn merge_parts(
-    parts: &[PathBuf],
-    names: &[PathBuf],
-    target: &Path,
-    opts: &WriteOptions,
-    inputs: usize,
-) -> (bool, Vec<Said>) {
-    if parts.is_empty() {
-        return nothing_to_merge(target);
-    }
-    let json = |p: &PathBuf| crate::pipeline::batch::inputs::is_cityjson_name(&p.to_string_lossy());
-    let cityjson = parts.iter().all(json);
-    let r = match cityjson {
-        // CityJSON parts (an edit's: [`Plan::edit_targets`]): CityJSONSeq for a `.jsonl` target,
-        // or for `-` when the first input is named so.
-        true => {
-            let seq_name = |p: &Path| {
-                let n = p.to_string_lossy().to_ascii_lowercase();
-                n.strip_suffix(".gz").unwrap_or(&n).ends_with(".jsonl")
-            };
-            let seq = match is_stdout(target) {
-                true => names.first().is_some_and(|n| seq_name(n)),
-                false => seq_name(target),
-            };
-            crate::export::cityjson_edit::merge_cityjson(parts, names, target, seq, opts)
-        }
-        false => merge_named(parts, names, target, opts),
-    };
-    match r {
-        Ok(s) => {
-            let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs)
-                .into_iter()
-                .collect();
-            said.push(Said::Summary(merge_line(&s, target, cityjson)));
-            (true, said)
-        }
-        Err(e) => (false, vec![Said::Error(format!("{e:#}"))]),
-    }
-}
-
-/// What a merge says when every input failed: nothing written (the shared first step of
-/// [`merge_parts`] and [`merge_converted`]).
-fn nothing_to_merge(target: &Path) -> (bool, Vec<Said>) {
-    let e = format!(
-        "nothing to merge (every input failed); {} not written",
-        target.display()
-    );
-    (false, vec![Said::Error(e)])
-}
-
-/// The warning of a merge written from `parts` of the `inputs` (none when every input is in).
-fn partial_merge(target: &Path, parts: usize, inputs: usize) -> Option<Said> {
-    (parts < inputs).then(|| {
-        Said::Warning(format!(
-            "warning: {} holds {parts} of the {inputs} inputs (the others failed)",
-            target.display()
-        ))
-    })
-}
-
-/// [`merge_parts`] into a target in another format than CityGML (`target`: the file and its
-/// format): the parts merged into a staged CityGML document ([`Staging::merged`]), then that
-/// converted to `target` from a streamed read ([`crate::export::Chunks::Stream`]; read
-/// whole where the stream declines). The output is the CityGML merge converted, named in the
-/// OBJ's comment line by the inputs it holds ([`crate::export::merged`]).
-pub fn merge_converted(
     parts: &[PathBuf],
     names: &[PathBuf],
     (target, format): (&Path, Format),
@@ -325,48 +254,79 @@ pub fn merge_converted(
     inputs: usize,
 ) -> (bool, Vec<Said>) {
     if parts.is_empty() {
-        return nothing_to_merge(target);
+        let e = format!(
+            "nothing to merge (every input failed); {} not written",
+            target.display()
+        );
+        return (false, vec![Said::Error(e)]);
     }
-    if let Err(e) =
-        crate::io::citygml::write::check_target(target, opts, parts.iter().map(PathBuf::as_path))
-    {
-        return (false, vec![Said::Error(format!("{e:#}"))]);
+    let json = |p: &PathBuf| crate::pipeline::batch::inputs::is_cityjson_name(&p.to_string_lossy());
+    let lines = match format {
+        _ if parts.iter().all(json) => {
+            let seq_name = |p: &Path| {
+                let n = p.to_string_lossy().to_ascii_lowercase();
+                n.strip_suffix(".gz").unwrap_or(&n).ends_with(".jsonl")
+            };
+            let seq = match is_stdout(target) {
+                true => names.first().is_some_and(|n| seq_name(n)),
+                false => seq_name(target),
+            };
+            let s = merge_cityjson(parts, names, target, seq, opts);
+            s.map(|s| vec![merge_line(&s, target, true)])
+                .map_err(|e| format!("{e:#}"))
+        }
+        Format::CityGml => merge_named(parts, names, target, opts)
+            .map(|s| vec![merge_line(&s, target, false)])
+            .map_err(|e| format!("{e:#}")),
+        _ => merge_converted(parts, names, (target, format), staging, opts),
+    };
+    match lines {
+        Ok(lines) => {
+            let partial = (parts.len() < inputs).then(|| {
+                Said::Warning(format!(
+                    "warning: {} holds {} of the {inputs} inputs (the others failed)",
+                    target.display(),
+                    parts.len()
+                ))
+            });
+            let lines = lines.into_iter().map(Said::Summary);
+            (true, partial.into_iter().chain(lines).collect())
+        }
+        Err(e) => (false, vec![Said::Error(e)]),
     }
+}
+
+/// The lines of a merge of CityGML `parts` into `target` in another format than CityGML
+/// ([`merge_parts`]), or the error's message.
+fn merge_converted(
+    parts: &[PathBuf],
+    names: &[PathBuf],
+    (target, format): (&Path, Format),
+    staging: &Staging,
+    opts: &WriteOptions,
+) -> Result<Vec<String>, String> {
+    let protect = parts.iter().map(PathBuf::as_path);
+    crate::io::citygml::write::check_target(target, opts, protect).map_err(|e| format!("{e:#}"))?;
     let staged = staging.merged();
     let sopts = WriteOptions {
         overwrite: true,
         ..opts.clone()
     };
-    let m = match merge_named(parts, names, &staged, &sopts) {
-        Ok(m) => m,
-        Err(e) => return (false, vec![Said::Error(format!("{e:#}"))]),
-    };
-    let first = names
-        .first()
-        .map_or(String::new(), |p| crate::model::shown(p).to_string());
-    let label = match names.len() {
-        0 | 1 => first,
-        n => format!("{first} and {} more", n - 1),
-    };
+    let m = merge_named(parts, names, &staged, &sopts).map_err(|e| format!("{e:#}"))?;
+    let label = label(names.first().map(PathBuf::as_path), names.len());
     let r = convert_staged(&staged, &label, target, format, opts);
     let _ = std::fs::remove_file(&staged);
-    match r {
-        Ok(e) => {
-            let mut said: Vec<Said> = partial_merge(target, parts.len(), inputs)
-                .into_iter()
-                .collect();
-            said.push(Said::Summary(format!(
-                "merged {} file(s) into {} ({format}): {} member(s), {} gml:id(s) renamed",
-                m.files,
-                target.display(),
-                m.members,
-                m.ids_renamed
-            )));
-            said.push(Said::Summary(e.describe(format, Path::new(&label), target)));
-            (true, said)
-        }
-        Err(e) => (false, vec![Said::Error(format!("{e:#}"))]),
-    }
+    let e = r.map_err(|e| format!("{e:#}"))?;
+    Ok(vec![
+        format!(
+            "merged {} file(s) into {} ({format}): {} member(s), {} gml:id(s) renamed",
+            m.files,
+            target.display(),
+            m.members,
+            m.ids_renamed
+        ),
+        e.describe(format, Path::new(&label), target),
+    ])
 }
 
 /// The staged merge at `staged` written to `target` in `format`, streamed (or read whole
@@ -475,7 +435,11 @@ mod tests {
         assert_eq!(line, "rough: 1 file(s) ok, 2 failed, 3 warning(s), 1.23 s");
         assert!(target.exists());
         // Nothing to merge: every input failed, the target is not written.
-        let (ok, said) = merge_parts(&[], &[], &dir.path().join("x.gml"), &b.wopts, 2);
+        let (x, st) = (
+            dir.path().join("x.gml"),
+            b.targets.staging.as_ref().unwrap(),
+        );
+        let (ok, said) = merge_parts(&[], &[], (&x, Format::CityGml), st, &b.wopts, 2);
         assert!(!ok && matches!(&said[0], Said::Error(e) if e.starts_with("nothing to merge")));
     }
 
@@ -523,25 +487,36 @@ mod tests {
     }
 
     #[test]
-    fn both_merges_say_the_same_when_inputs_fail() {
-        let t = Path::new("m.gml");
-        assert!(partial_merge(t, 2, 2).is_none());
-        let w = "warning: m.gml holds 1 of the 3 inputs (the others failed)";
-        assert!(matches!(partial_merge(t, 1, 3), Some(Said::Warning(l)) if l == w));
+    fn every_merge_says_the_same_when_inputs_fail() {
         let dir = tempfile::tempdir().unwrap();
-        let t = dir.path().join("m.obj");
-        let staging = Staging::new(&t).unwrap();
+        let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml");
+        let part = dir.path().join("a.gml");
+        std::fs::copy(&fix, &part).unwrap();
         let o = WriteOptions::default();
-        let (a, said_a) = merge_parts(&[], &[], &t, &o, 2);
-        let (b, said_b) = merge_converted(&[], &[], (&t, Format::Obj), &staging, &o, 2);
-        let e = format!(
-            "nothing to merge (every input failed); {} not written",
-            t.display()
-        );
-        for (ok, said) in [(a, said_a), (b, said_b)] {
+        for (name, format) in [("m.gml", Format::CityGml), ("m.obj", Format::Obj)] {
+            let t = dir.path().join(name);
+            let staging = Staging::new(&t).unwrap();
+            let (ok, said) = merge_parts(&[], &[], (&t, format), &staging, &o, 2);
+            let e = format!(
+                "nothing to merge (every input failed); {} not written",
+                t.display()
+            );
             assert!(!ok && matches!(&said[..], [Said::Error(l)] if *l == e));
+            assert!(!t.exists());
+            let parts = [part.clone()];
+            let (ok, said) = merge_parts(&parts, &parts, (&t, format), &staging, &o, 3);
+            let w = format!(
+                "warning: {} holds 1 of the 3 inputs (the others failed)",
+                t.display()
+            );
+            assert!(
+                ok && matches!(&said[0], Said::Warning(l) if *l == w),
+                "{said:?}"
+            );
+            std::fs::remove_file(&t).unwrap();
+            let (ok, said) = merge_parts(&parts, &parts, (&t, format), &staging, &o, 1);
+            assert!(ok && matches!(&said[0], Said::Summary(_)), "{said:?}");
         }
-        assert!(!t.exists());
     }
 
     #[test]

@@ -61,7 +61,7 @@ pub enum Error {
     Write(#[from] crate::io::citygml::WriteError),
     /// Per-input outputs could not be merged into one document.
     #[error(transparent)]
-    Merge(Box<crate::io::citygml::merge::MergeError>),
+    Merge(Box<crate::export::merge::MergeError>),
     /// The model gives no site for the sun (empty, or a CRS not converted).
     #[error(transparent)]
     Site(#[from] crate::model::crs::NoSite),

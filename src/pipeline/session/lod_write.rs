@@ -175,13 +175,14 @@ impl LodLayout {
                 *w = Some((shown(out), s.buildings_dropped + s.parts_dropped));
             }
         }
-        if let (Some(_), Plan::Merge(t)) = (&batch.targets.staging, &batch.plan) {
+        if let (Some(st), Plan::Merge(t)) = (&batch.targets.staging, &batch.plan) {
             let (parts, names): (Vec<PathBuf>, Vec<PathBuf>) = targets
                 .iter()
                 .filter(|(f, _)| done.written.get(*f).is_some_and(Option::is_some))
                 .map(|(f, out)| (out.clone(), model.files[*f].path.clone()))
                 .unzip();
-            let (merged, said) = merge_parts(&parts, &names, t, &batch.wopts, targets.len());
+            let to = (t.as_path(), batch.format);
+            let (merged, said) = merge_parts(&parts, &names, to, st, &batch.wopts, targets.len());
             done.merge = said;
             if !merged {
                 done.failed = true;
@@ -210,7 +211,7 @@ fn merged_export(
     match write_merged_levels(model, &files, lv, target, batch.format, &batch.wopts) {
         Ok(s) => {
             if let Some(e) = &s.export {
-                let label = crate::export::merged::label(model, &files);
+                let label = crate::export::merge::model_label(model, &files);
                 let line = e.describe(batch.format, Path::new(&label), target);
                 done.files.push(FileOutcome::Written(line));
             }

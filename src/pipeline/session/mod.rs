@@ -657,7 +657,7 @@ impl Study {
             protect: paths.clone(),
             ..WriteOptions::default()
         };
-        let targets = plan.targets(&paths, &wopts, None, true)?;
+        let targets = plan.targets(&paths, &wopts, None, (true, false))?;
         if let Some(e) = targets.refused.into_iter().next() {
             return Err(e.into());
         }
@@ -672,7 +672,7 @@ impl Study {
         }
         if let (Plan::Merge(target), Some(staging)) = (&plan, &targets.staging) {
             let parts: Vec<PathBuf> = (0..paths.len()).map(|k| staging.part(k)).collect();
-            crate::io::citygml::merge::merge_named(&parts, &paths, target, &wopts)
+            crate::export::merge::merge_named(&parts, &paths, target, &wopts)
                 .map_err(|e| Error::Merge(Box::new(e)))?;
             let total = written.iter().fold(Written::default(), |mut a, (_, w)| {
                 a.bytes += w.bytes;

@@ -145,9 +145,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
             }
         }
     }
-    if let (Some(_), Plan::Merge(t)) = (&staging, &plan) {
+    if let (Some(st), Plan::Merge(t)) = (&staging, &plan) {
+        let to = (t.as_path(), skylod::export::Format::CityGml);
         let (merged, said) =
-            skylod::pipeline::batch::run::merge_parts(&parts, &names, t, &wopts, total);
+            skylod::pipeline::batch::run::merge_parts(&parts, &names, to, st, &wopts, total);
         crate::outputs::say(said);
         if !merged {
             failed = total;

@@ -1,9 +1,12 @@
 //! The first pass over each input: its prolog, root start tag and namespace declarations,
 //! `srsName`, envelope (or coordinate bounds), `gml:id`s and member kinds.
 
+use crate::export::merge::Head;
 use crate::io::citygml::error::ReadError;
 use crate::io::citygml::ns::{classify, Ns};
 use crate::io::citygml::source;
+use crate::model::Bbox;
+use glam::DVec3;
 use quick_xml::events::Event;
 use quick_xml::name::ResolveResult;
 use quick_xml::{NsReader, Writer};
@@ -26,14 +29,10 @@ pub(super) struct Scan {
     pub(super) decls: Vec<(Vec<u8>, Vec<u8>)>,
     /// `xsi:schemaLocation` of the root.
     pub(super) schema_location: Option<String>,
-    /// The root envelope's srsName, or the first srsName of the document.
-    pub(super) srs: Option<String>,
-    /// Bounds of the root envelope, or of the coordinates when there is none.
-    pub(super) lower: [f64; 3],
-    pub(super) upper: [f64; 3],
-    pub(super) has_root_envelope: bool,
-    /// Every gml:id, in document order (duplicates kept once).
-    pub(super) ids: Vec<String>,
+    /// What the plan needs: the root's namespace as the version, the root envelope's
+    /// srsName (or the first of the document), every gml:id, the bounds of the root envelope
+    /// (or of the coordinates when there is none).
+    pub(super) head: Head,
     /// Member kinds in order of first appearance.
     pub(super) kinds: Vec<Key>,
 }
@@ -105,11 +104,9 @@ fn parse_coords(text: &str, dim: usize, lower: &mut [f64; 3], upper: &mut [f64; 
 }
 pub(super) fn scan(path: &Path) -> Result<Scan, ReadError> {
     let mut reader = open(path)?;
-    let mut s = Scan {
-        lower: [f64::INFINITY; 3],
-        upper: [f64::NEG_INFINITY; 3],
-        ..Default::default()
-    };
+    let mut s = Scan::default();
+    let (mut lower, mut upper) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    let mut has_root_envelope = false;
     let mut env_lower = [f64::INFINITY; 3];
     let mut env_upper = [f64::NEG_INFINITY; 3];
     let mut buf = Vec::new();
@@ -141,6 +138,8 @@ pub(super) fn scan(path: &Path) -> Result<Scan, ReadError> {
                 if depth == 0 {
                     s.root = e.to_vec();
                     s.root_ns = ns.clone();
+                    s.head.version = String::from_utf8_lossy(&ns).into_owned();
+                    s.head.shown = super::version_of(&ns);
                     for a in e.attributes().with_checks(false).flatten() {
                         let key = a.key.as_ref();
                         if key == b"xmlns" {
@@ -167,14 +166,15 @@ pub(super) fn scan(path: &Path) -> Result<Scan, ReadError> {
                         b"id" if classify(&ans) == Ns::Gml => {
                             let v = value()?;
                             if seen_ids.insert(v.clone()) {
-                                s.ids.push(v);
+                                s.head.ids.push(v);
                             }
                         }
                         b"srsName"
                             if ans.is_empty()
-                                && (s.srs.is_none() || (in_root_bound && local == b"Envelope")) =>
+                                && (s.head.srs.is_none()
+                                    || (in_root_bound && local == b"Envelope")) =>
                         {
-                            s.srs = Some(value()?);
+                            s.head.srs = Some(value()?);
                         }
                         b"schemaLocation"
                             if depth == 0
@@ -215,7 +215,7 @@ pub(super) fn scan(path: &Path) -> Result<Scan, ReadError> {
                             let mut hi = [f64::NEG_INFINITY; 3];
                             parse_coords(&coord_text, dim, &mut lo, &mut hi);
                             if lo[0].is_finite() {
-                                s.has_root_envelope = true;
+                                has_root_envelope = true;
                                 let (l, h) = (&mut env_lower, &mut env_upper);
                                 for i in 0..3 {
                                     if lo[i].is_finite() {
@@ -225,7 +225,7 @@ pub(super) fn scan(path: &Path) -> Result<Scan, ReadError> {
                                 }
                             }
                         }
-                        _ => parse_coords(&coord_text, dim, &mut s.lower, &mut s.upper),
+                        _ => parse_coords(&coord_text, dim, &mut lower, &mut upper),
                     }
                 }
                 depth = depth.saturating_sub(1);
@@ -240,9 +240,12 @@ pub(super) fn scan(path: &Path) -> Result<Scan, ReadError> {
     if s.root.is_empty() {
         return Err(ReadError::Empty(path.to_path_buf()));
     }
-    if s.has_root_envelope {
-        s.lower = env_lower;
-        s.upper = env_upper;
+    if has_root_envelope {
+        (lower, upper) = (env_lower, env_upper);
     }
+    s.head.bbox = Bbox {
+        min: DVec3::from_array(lower),
+        max: DVec3::from_array(upper),
+    };
     Ok(s)
 }

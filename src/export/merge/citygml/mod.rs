@@ -1,6 +1,8 @@
-//! Several CityGML documents merged into one: what `-o FILE` writes for several inputs.
-//!
-//! The merged document has
+//! Several CityGML documents merged into one ([`merge_named`]) by the plan of
+//! [`crate::export::merge`]: the members' XML copied, their start tags rewritten where an id
+//! is renamed or a reference follows one (`xlink:href="#id"`, an appearance target's
+//! `uri="#id"` attribute and the `#id` text of an `app:target` element). The merged document
+//! has
 //!
 //! * the XML declaration and the `CityModel` start tag of the **first** input, with the
 //!   namespace declarations of every input added: a prefix the root does not declare yet is
@@ -18,25 +20,9 @@
 //!   grouped by member element (`cityObjectMember`, then `appearanceMember`, ... in the order
 //!   they first appear), so that the CityGML 3.0 content model, which orders them, holds.
 //!
-//! # Identifiers
-//!
-//! `gml:id`s must be unique in a document. The ids of the first input are kept. In the `k`-th
-//! input (1-based, k ≥ 2), an id already used by an earlier input is renamed `<id>__<k>`
-//! (`wall-1` in the 2nd input becomes `wall-1__2`); should that name be taken too (by any
-//! input), `<id>__<k>_2`, `<id>__<k>_3`, ... is the first free one. Inside that input every
-//! local reference to a renamed id follows: `xlink:href="#id"`, an appearance target's
-//! `uri="#id"` attribute and the `#id` text of an `app:target` element. The rule depends only on
-//! the inputs and their order, so the same inputs always give the same bytes.
-//!
-//! # Refused
-//!
-//! Inputs of different CityGML versions, and inputs whose `srsName`s denote different CRSs
-//! ([`crate::model::crs::same_crs`]; an input without one agrees with any), are refused
-//! before anything is written, naming the files.
-//!
 //! # Example
 //! ```
-//! use skylod::io::citygml::merge::merge_files;
+//! use skylod::export::merge::merge_named;
 //! use skylod::io::citygml::write::WriteOptions;
 //! let dir = tempfile::tempdir().unwrap();
 //! let doc = |x: f64| format!(r##"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0"
@@ -51,7 +37,8 @@
 //! std::fs::write(&a, doc(0.0)).unwrap();
 //! std::fs::write(&b, doc(5.0)).unwrap();
 //! let out = dir.path().join("merged.gml");
-//! let s = merge_files(&[a, b], &out, &WriteOptions::default()).unwrap();
+//! let inputs = [a, b];
+//! let s = merge_named(&inputs, &inputs, &out, &WriteOptions::default()).unwrap();
 //! assert_eq!((s.members, s.ids_renamed, s.refs_rewritten), (4, 2, 1));
 //! let text = std::fs::read_to_string(&out).unwrap();
 //! assert!(text.contains(r#"gml:id="b__2""#) && text.contains(r##"xlink:href="#b__2""##));
@@ -60,95 +47,25 @@
 //! ```
 
 mod copy;
-mod ids;
 mod scan;
 
-pub use ids::renamed_id;
-
-use super::error::{ReadError, WriteError};
-use super::ns::{classify, Ns};
-use crate::model::crs::same_crs;
+use super::{Head, MergeError, MergeSummary, Plan};
+use crate::io::citygml::error::{ReadError, WriteError};
+use crate::io::citygml::ns::{classify, Ns};
+use crate::io::citygml::write::{check_target, WriteOptions};
+use crate::io::files::CountingWriter;
+use copy::{copy_children, xmlns_key, CopyError, Rewrite};
 use quick_xml::escape::escape;
 use quick_xml::events::attributes::Attribute;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::name::QName;
 use quick_xml::Writer;
-use std::collections::{HashMap, HashSet};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use super::write::{check_target, WriteOptions};
-use crate::io::files::CountingWriter;
-use copy::{copy_children, xmlns_key, CopyError};
-use ids::Rewrite;
 use scan::{is_header, next_event, ns_of, open, scan, xml_err, Key};
 
-/// Why documents cannot be merged.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum MergeError {
-    /// An input cannot be read or is not well-formed.
-    #[error(transparent)]
-    Read(#[from] ReadError),
-    /// Writing the merged document failed (nothing is left behind).
-    #[error(transparent)]
-    Write(#[from] WriteError),
-    /// Nothing to merge.
-    #[error("no document to merge")]
-    NoInput,
-    /// Inputs of different CityGML versions.
-    #[error("cannot merge CityGML {first_version} ({first}) with CityGML {other_version} ({other})", first = crate::model::shown(.first), other = crate::model::shown(.other))]
-    Version {
-        /// The first input.
-        first: PathBuf,
-        /// Its version.
-        first_version: String,
-        /// An input of another version.
-        other: PathBuf,
-        /// Its version.
-        other_version: String,
-    },
-    /// CityJSON inputs of different versions.
-    #[error("cannot merge CityJSON {first_version} ({first}) with CityJSON {other_version} ({other})", first = crate::model::shown(.first), other = crate::model::shown(.other))]
-    CityJsonVersion {
-        /// The first input.
-        first: PathBuf,
-        /// Its version.
-        first_version: String,
-        /// An input of another version.
-        other: PathBuf,
-        /// Its version.
-        other_version: String,
-    },
-    /// Inputs in different CRSs.
-    #[error("cannot merge inputs in different CRSs: {} ({first_srs}) and {} ({other_srs})", crate::model::shown(.first), crate::model::shown(.other))]
-    Crs {
-        /// The first input naming a CRS.
-        first: PathBuf,
-        /// Its srsName.
-        first_srs: String,
-        /// An input in another CRS.
-        other: PathBuf,
-        /// Its srsName.
-        other_srs: String,
-    },
-}
-
-/// What was merged.
-#[derive(Debug, Clone, PartialEq, Eq)]
-#[non_exhaustive]
-pub struct MergeSummary {
-    /// Input documents.
-    pub files: usize,
-    /// Members copied (children of the root after its header).
-    pub members: usize,
-    /// `gml:id`s renamed to keep ids unique.
-    pub ids_renamed: usize,
-    /// References (`xlink:href`, appearance targets) rewritten to follow a renamed id.
-    pub refs_rewritten: usize,
-    /// Bytes written (before compression).
-    pub bytes: u64,
-}
+/// A version as a refusal names it: the last segment of the root's namespace (`2.0`).
 fn version_of(ns: &[u8]) -> String {
     String::from_utf8_lossy(ns.rsplit(|&c| c == b'/').next().unwrap_or(b"?")).into_owned()
 }
@@ -174,31 +91,26 @@ pub fn check_mergeable(inputs: &[PathBuf], same_crs_needed: bool) -> Result<(), 
         .iter()
         .map(|p| head(p))
         .collect::<Result<Vec<_>, _>>()?;
-    let name = |k: usize| inputs[k].clone();
-    compare(
-        &heads,
-        |(ns, srs)| (ns.as_slice(), srs.as_deref()),
-        &name,
-        same_crs_needed,
-    )
+    let heads: Vec<&Head> = heads.iter().collect();
+    super::check(&heads, "CityGML", &|k| inputs[k].clone(), same_crs_needed)
 }
 
 /// How far [`check_mergeable`] looks for a document's first `srsName`.
 pub const HEAD_BYTES: u64 = 8 << 20;
 
 /// The root's namespace and the first `srsName` within [`HEAD_BYTES`] of a document.
-fn head(path: &Path) -> Result<(Vec<u8>, Option<String>), ReadError> {
+fn head(path: &Path) -> Result<Head, ReadError> {
     let mut reader = open(path)?;
     let mut buf = Vec::new();
     let mut root_ns = None;
     loop {
         if reader.buffer_position() > HEAD_BYTES && root_ns.is_some() {
-            return Ok((root_ns.unwrap_or_default(), None));
+            return Ok(head_named(root_ns, None));
         }
         buf.clear();
         let (pos, ev) = next_event(&mut reader, &mut buf, path)?;
         match ev {
-            Event::Eof => return Ok((root_ns.unwrap_or_default(), None)),
+            Event::Eof => return Ok(head_named(root_ns, None)),
             Event::Start(ref e) | Event::Empty(ref e) => {
                 if root_ns.is_none() {
                     root_ns = Some(ns_of(reader.resolve_element(e.name()).0));
@@ -210,7 +122,7 @@ fn head(path: &Path) -> Result<(Vec<u8>, Option<String>), ReadError> {
                             .unescape_value()
                             .map_err(|err| xml_err(path, pos, err))?
                             .into_owned();
-                        return Ok((root_ns.unwrap_or_default(), Some(v)));
+                        return Ok(head_named(root_ns, Some(v)));
                     }
                 }
             }
@@ -219,129 +131,30 @@ fn head(path: &Path) -> Result<(Vec<u8>, Option<String>), ReadError> {
     }
 }
 
-/// The version and CRS rules of a merge over each input's root namespace and srsName
-/// (`head` of what was read of each input, `docs`); `name(k)` names the k-th input in an
-/// error.
-fn compare<T>(
-    docs: &[T],
-    head: impl Fn(&T) -> (&[u8], Option<&str>),
-    name: &dyn Fn(usize) -> PathBuf,
-    same_crs_needed: bool,
-) -> Result<(), MergeError> {
-    let heads: Vec<(&[u8], Option<&str>)> = docs.iter().map(head).collect();
-    let Some(&(first_ns, _)) = heads.first() else {
-        return Ok(());
-    };
-    for (k, &(ns, _)) in heads.iter().enumerate().skip(1) {
-        if ns != first_ns {
-            return Err(MergeError::Version {
-                first: name(0),
-                first_version: version_of(first_ns),
-                other: name(k),
-                other_version: version_of(ns),
-            });
-        }
+/// The head of a document of root namespace `ns` naming `srs` (no ids, no box).
+fn head_named(ns: Option<Vec<u8>>, srs: Option<String>) -> Head {
+    let ns = ns.unwrap_or_default();
+    Head {
+        version: String::from_utf8_lossy(&ns).into_owned(),
+        shown: version_of(&ns),
+        srs,
+        ..Head::default()
     }
-    if !same_crs_needed {
-        return Ok(());
-    }
-    check_same_crs(heads.iter().map(|&(_, srs)| srs), name)
-}
-
-/// Refuse inputs whose CRSs differ ([`same_crs`]): the first input naming one against the
-/// first that names another, each named once. An input naming no CRS agrees with any. Used
-/// by the CityGML merge and by the CityJSON merge (`metadata.referenceSystem`).
-///
-/// # Errors
-/// [`MergeError::Crs`].
-pub fn check_same_crs<'a>(
-    srs: impl IntoIterator<Item = Option<&'a str>>,
-    name: &dyn Fn(usize) -> PathBuf,
-) -> Result<(), MergeError> {
-    let mut seen: Option<(usize, &str)> = None;
-    for (k, srs_name) in srs.into_iter().enumerate() {
-        let Some(srs_name) = srs_name else {
-            continue;
-        };
-        match seen {
-            None => seen = Some((k, srs_name)),
-            Some((j, first_srs)) if !same_crs(first_srs, srs_name) => {
-                return Err(MergeError::Crs {
-                    first: name(j),
-                    first_srs: first_srs.to_string(),
-                    other: name(k),
-                    other_srs: srs_name.to_string(),
-                })
-            }
-            _ => {}
-        }
-    }
-    Ok(())
-}
-
-impl From<crate::io::files::FileError> for MergeError {
-    fn from(e: crate::io::files::FileError) -> Self {
-        MergeError::Write(e.into())
-    }
-}
-
-/// The renaming of a merge (module docs, "Identifiers"): for the `gml:id`s of each input in
-/// document order (`ids[k]` those of input `k`, 0-based), the ids of that input that are
-/// renamed and their new names. The first input keeps its own; a later input renames what an
-/// earlier one used. The merged OBJ and CityJSON ([`crate::export::merged`]) name their
-/// objects by the same rule.
-///
-/// ```
-/// use skylod::io::citygml::merge::rename_ids;
-/// let a = ["b".to_string(), "w".to_string()];
-/// let b = ["b".to_string(), "x".to_string()];
-/// let r = rename_ids(&[&a[..], &b[..]]);
-/// assert!(r[0].is_empty());
-/// assert_eq!(r[1].get("b").map(String::as_str), Some("b__2"));
-/// assert_eq!(r[1].len(), 1);
-/// ```
-pub fn rename_ids(ids: &[&[String]]) -> Vec<HashMap<String, String>> {
-    let mut taken: HashSet<String> = ids.iter().flat_map(|s| s.iter().cloned()).collect();
-    let mut used: HashSet<String> = HashSet::new();
-    let mut renames: Vec<HashMap<String, String>> = Vec::with_capacity(ids.len());
-    for (k, s) in ids.iter().enumerate() {
-        let mut map = HashMap::new();
-        for id in s.iter() {
-            if used.contains(id) {
-                let new = renamed_id(id, k + 1, &taken);
-                taken.insert(new.clone());
-                used.insert(new.clone());
-                map.insert(id.clone(), new);
-            } else {
-                used.insert(id.clone());
-            }
-        }
-        renames.push(map);
-    }
-    renames
 }
 
 /// Every `gml:id` of the CityGML document at `path` (plain or gzip), in document order, each
-/// once: what [`rename_ids`] takes for one input of a merge.
+/// once: what [`super::rename_ids`] takes for one input of a merge.
 ///
 /// # Errors
 /// [`ReadError`] for a document that cannot be read or is not well-formed.
-pub fn document_ids(path: &Path) -> Result<Vec<String>, ReadError> {
-    Ok(scan(path)?.ids)
+pub(crate) fn document_ids(path: &Path) -> Result<Vec<String>, ReadError> {
+    Ok(scan(path)?.head.ids)
 }
 
 /// Merge the CityGML documents `inputs` (plain or gzip) into `out` (gzip when it ends in `.gz`;
-/// `-` for standard output), written atomically. See the module docs for the rules.
-pub fn merge_files(
-    inputs: &[PathBuf],
-    out: &Path,
-    opts: &WriteOptions,
-) -> Result<MergeSummary, MergeError> {
-    merge_named(inputs, inputs, out, opts)
-}
-
-/// [`merge_files`], naming the inputs `names` (same length) in the errors that refuse a merge:
-/// for documents staged in temporary files, the files they were made from.
+/// `-` for standard output), written atomically, naming the inputs `names` (same length) in
+/// the errors that refuse a merge: for documents staged in temporary files, the files they
+/// were made from. See the module docs for the rules.
 pub fn merge_named(
     inputs: &[PathBuf],
     names: &[PathBuf],
@@ -387,22 +200,9 @@ fn merge_into(
         .iter()
         .map(|p| scan(p))
         .collect::<Result<Vec<_>, _>>()?;
-    compare(
-        &scans,
-        |s| (s.root_ns.as_slice(), s.srs.as_deref()),
-        &name,
-        true,
-    )?;
+    let heads: Vec<&Head> = scans.iter().map(|s| &s.head).collect();
+    let plan = Plan::new(&heads, "CityGML", &name)?;
     let first = &scans[0];
-    // The CRS written: the first input's that names one.
-    let srs: Option<(usize, &str)> = scans
-        .iter()
-        .enumerate()
-        .find_map(|(k, s)| s.srs.as_deref().map(|n| (k, n)));
-
-    let id_lists: Vec<&[String]> = scans.iter().map(|s| s.ids.as_slice()).collect();
-    let renames = rename_ids(&id_lists);
-    let ids_renamed = renames.iter().map(HashMap::len).sum();
 
     // Namespaces: the root's, plus what later inputs declare; conflicting prefixes go on the
     // members of the input that binds them differently.
@@ -472,14 +272,7 @@ fn merge_into(
     }
 
     // The envelope over all inputs.
-    let mut lower = [f64::INFINITY; 3];
-    let mut upper = [f64::NEG_INFINITY; 3];
-    for s in &scans {
-        for i in 0..3 {
-            lower[i] = lower[i].min(s.lower[i]);
-            upper[i] = upper[i].max(s.upper[i]);
-        }
-    }
+    let (lower, upper) = (plan.bbox.min.to_array(), plan.bbox.max.to_array());
     let gml_prefix = decls
         .iter()
         .find(|(_, u)| classify(u) == Ns::Gml)
@@ -499,8 +292,8 @@ fn merge_into(
                 },
             ),
         };
-        let srs_attr = srs
-            .map(|(_, n)| format!(r#" srsName="{}""#, escape(n)))
+        let srs_attr = (plan.srs.as_deref())
+            .map(|n| format!(r#" srsName="{}""#, escape(n)))
             .unwrap_or_default();
         format!(
             "\n <{pre}boundedBy{decl}>\n  <{pre}Envelope{srs_attr} srsDimension=\"{dims}\">\n   \
@@ -560,7 +353,7 @@ fn merge_into(
                     continue;
                 }
                 let ctx = Rewrite {
-                    ids: &renames[k],
+                    ids: &plan.renames[k],
                     decls: &local_decls[k],
                     rewritten: 0,
                 };
@@ -584,7 +377,7 @@ fn merge_into(
     Ok(MergeSummary {
         files: inputs.len(),
         members,
-        ids_renamed,
+        ids_renamed: plan.ids_renamed(),
         refs_rewritten,
         bytes,
     })
@@ -636,7 +429,7 @@ mod tests {
             })
             .collect();
         let out = d.path().join("m.gml");
-        let s = merge_files(&paths, &out, &WriteOptions::default())?;
+        let s = merge_named(&paths, &paths, &out, &WriteOptions::default())?;
         Ok((std::fs::read_to_string(out).unwrap(), s))
     }
 

@@ -9,14 +9,10 @@
 //!   scale; none at all: 0.001). Each vertex is stored again as
 //!   `round((v·scale + translate − translate') / scale')`: exact where the scales agree and the
 //!   translates differ by whole steps (every skylod output), else within half a step;
-//! * **one CRS**: the first `metadata.referenceSystem` given; inputs naming CRSs that differ
-//!   ([`crate::model::crs::same_crs`]; an input naming none agrees with any) are refused,
-//!   naming each CRS once, as the CityGML merge refuses them ([`MergeError::Crs`]); inputs of
-//!   different CityJSON versions are refused too ([`MergeError::CityJsonVersion`]);
-//! * **the city objects of every input**, in input order, their ids renamed by the CityGML
-//!   merge's rule ([`rename_ids`]: the first input keeps its ids, an id of input `k`
-//!   (1-based) that an earlier input used becomes `<id>__<k>`), their `parents` / `children`
-//!   (and a CityJSONSeq feature's `id`) following;
+//! * what the plan decides ([`crate::export::merge`]): inputs of different CityJSON versions
+//!   or CRSs (`metadata.referenceSystem`) refused, the first CRS given written, ids renamed;
+//! * **the city objects of every input**, in input order, their `parents` / `children` (and
+//!   a CityJSONSeq feature's `id`) following the renamed ids;
 //! * **geometry templates** and **appearances** (`materials`, `textures`,
 //!   `vertices-texture`) concatenated, the indices of each input offset past those of the
 //!   inputs before it; the other members of the first input's header (`metadata`,
@@ -24,25 +20,26 @@
 //!
 //! A `.city.json` target is one document, written as it is read: the first pass over each
 //! input keeps its small members, ids, box and vertex count (a document input streamed
-//! member by member, [`super::stream`]), then the merged header (appearances gathered), the
-//! city objects of every input one at a time, and their vertices one at a time (each input
-//! read again for each). Memory: the ids of every input and the appearances, not the
-//! documents. A CityJSONSeq
-//! target (`seq`) is one header line, then one feature per line: a CityJSONSeq input's
-//! features are streamed through one at a time (memory: one feature, the ids of every input,
-//! the templates); a document input's top-level objects become features (with their
-//! descendants; a document's appearance goes whole into each of its features, its indices
-//! unchanged). A document input is read in passes too: the links of its city objects (as
+//! member by member, [`stream`]), then the merged header (appearances gathered), the city
+//! objects of every input one at a time, and their vertices one at a time (each input read
+//! again for each). Memory: the ids of every input and the appearances, not the documents.
+//! A CityJSONSeq target (`seq`) is one header line, then one feature per line: a
+//! CityJSONSeq input's features are streamed through one at a time (memory: one feature, the
+//! ids of every input, the templates); a document input's top-level objects become features
+//! (with their descendants; a document's appearance goes whole into each of its features, its
+//! indices unchanged). A document input is read in passes too: the links of its city objects (as
 //! hashes) and its vertices (as [`Vertex`]es: 16 bytes each for integer triples, the part
 //! that grows with it), then its objects one at a time, each tree written once all its
 //! objects are read (a document with at most one top-level object is one feature: held
 //! whole; one with an id given twice is parsed whole). Every input is read at least twice:
 //! first for its header, ids and box, then to write.
 
-use super::stream::{self, EachObject, EachVertex, Pass, Vertex};
-use super::{check_type, cj, srs_of, transform_of, trees, write_line, Transform, Values};
+use super::{Head as Common, MergeError, MergeSummary, Plan};
+use crate::export::cityjson_edit::{
+    check_type, set_extent, srs_of, transform_of, trees, write_line, Transform, Values,
+};
 use crate::io::citygml::error::WriteError;
-use crate::io::citygml::merge::{check_same_crs, rename_ids, MergeError, MergeSummary};
+use crate::io::citygml::json::stream::{self, cj, EachObject, EachVertex, Pass, Vertex};
 use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
 use crate::model::Bbox;
 use glam::DVec3;
@@ -52,13 +49,10 @@ use std::path::{Path, PathBuf};
 
 /// What the first pass learns of one input.
 struct Head {
+    /// What the plan needs: `version`, `metadata.referenceSystem`, every city object id in
+    /// document order, the box of its vertices (real coordinates).
+    common: Common,
     transform: Option<Transform>,
-    srs: Option<String>,
-    version: String,
-    /// Every city object id, in document order.
-    ids: Vec<String>,
-    /// The box of its vertices, real coordinates.
-    bbox: Bbox,
     templates: Vec<Value>,
     template_vertices: Vec<Value>,
     /// The small top-level members (of a CityJSONSeq input: its header's).
@@ -125,9 +119,9 @@ pub fn merge_cityjson(
     for (k, p) in inputs.iter().enumerate() {
         heads.push(first_pass(p, &name(k), &mut app)?);
     }
-    check_heads(&heads, &name)?;
-    let lists: Vec<&[String]> = heads.iter().map(|h| h.ids.as_slice()).collect();
-    let renames = rename_ids(&lists);
+    let common: Vec<&Common> = heads.iter().map(|h| &h.common).collect();
+    let plan = Plan::new(&common, "CityJSON", &name)?;
+    let renames = &plan.renames;
     let to = common_transform(&heads);
     // The merged header: the first input's, its objects and vertices taken out.
     let mut head = Value::Object(heads[0].members.clone());
@@ -141,15 +135,14 @@ pub fn merge_cityjson(
         );
     }
     join_extensions(&mut head, &heads);
-    set_srs(&mut head, heads.iter().find_map(|h| h.srs.as_deref()));
+    set_srs(&mut head, plan.srs.as_deref());
+    // (the rounding is monotonic: the box of the inputs' boxes rounded is their union's)
     let mut ext = Bbox::EMPTY;
-    for h in &heads {
-        if !h.bbox.is_empty() {
-            ext.add(quantised(h.bbox.min, to));
-            ext.add(quantised(h.bbox.max, to));
-        }
+    if !plan.bbox.is_empty() {
+        ext.add(quantised(plan.bbox.min, to));
+        ext.add(quantised(plan.bbox.max, to));
     }
-    super::set_extent(&mut head, &ext);
+    set_extent(&mut head, &ext);
     // Templates: concatenated, each input's template vertices offset.
     let mut tpl_off = Vec::with_capacity(heads.len());
     let (mut templates, mut tverts) = (Vec::new(), Vec::new());
@@ -175,7 +168,7 @@ pub fn merge_cityjson(
     let mut summary = MergeSummary {
         files: inputs.len(),
         members: 0,
-        ids_renamed: renames.iter().map(HashMap::len).sum(),
+        ids_renamed: plan.ids_renamed(),
         refs_rewritten: 0,
         bytes: 0,
     };
@@ -184,7 +177,7 @@ pub fn merge_cityjson(
             inputs,
             names: (0..inputs.len()).map(name).collect(),
             heads: &heads,
-            renames: &renames,
+            renames,
             tpl_off: &tpl_off,
             to,
         };
@@ -253,16 +246,16 @@ fn first_pass(p: &Path, name: &Path, app: &mut Appearance) -> Result<Head, Write
             .cloned()
             .unwrap_or_default()
     };
+    let version = h.get("version").and_then(Value::as_str).unwrap_or("");
     let mut head = Head {
+        common: Common {
+            version: version.to_string(),
+            shown: version.to_string(),
+            srs: srs_of(&h),
+            ids: std::mem::take(&mut scan.ids),
+            bbox: Bbox::EMPTY,
+        },
         transform,
-        srs: srs_of(&h),
-        version: h
-            .get("version")
-            .and_then(Value::as_str)
-            .unwrap_or("")
-            .to_string(),
-        ids: std::mem::take(&mut scan.ids),
-        bbox: Bbox::EMPTY,
         templates: list("templates"),
         template_vertices: list("vertices-templates"),
         members: Map::new(),
@@ -272,7 +265,7 @@ fn first_pass(p: &Path, name: &Path, app: &mut Appearance) -> Result<Head, Write
     // transform is monotonic per axis, and so is its rounding)
     if !scan.raw.is_empty() {
         for c in [scan.raw.min, scan.raw.max] {
-            head.bbox.add(to_real(c.to_array(), transform));
+            head.common.bbox.add(to_real(c.to_array(), transform));
         }
     }
     if seen.objects {
@@ -284,7 +277,7 @@ fn first_pass(p: &Path, name: &Path, app: &mut Appearance) -> Result<Head, Write
         values.header()?;
         while let Some(f) = values.next()? {
             if let Some(o) = f.get("CityObjects").and_then(Value::as_object) {
-                head.ids.extend(o.keys().cloned());
+                head.common.ids.extend(o.keys().cloned());
             }
             for x in f
                 .get("vertices")
@@ -293,7 +286,7 @@ fn first_pass(p: &Path, name: &Path, app: &mut Appearance) -> Result<Head, Write
                 .flatten()
             {
                 if let Some(q) = real(x, transform) {
-                    head.bbox.add(q);
+                    head.common.bbox.add(q);
                 }
             }
             app.append(f.get("appearance"));
@@ -305,20 +298,6 @@ fn first_pass(p: &Path, name: &Path, app: &mut Appearance) -> Result<Head, Write
         head.members = m;
     }
     Ok(head)
-}
-
-/// Refuse inputs of different versions or CRSs.
-fn check_heads(heads: &[Head], name: &dyn Fn(usize) -> PathBuf) -> Result<(), MergeError> {
-    let first = &heads[0].version;
-    if let Some(k) = heads.iter().position(|h| &h.version != first) {
-        return Err(MergeError::CityJsonVersion {
-            first: name(0),
-            first_version: first.clone(),
-            other: name(k),
-            other_version: heads[k].version.clone(),
-        });
-    }
-    check_same_crs(heads.iter().map(|h| h.srs.as_deref()), name)
 }
 
 /// The merged `transform` (module docs).
@@ -333,8 +312,8 @@ fn common_transform(heads: &[Head]) -> Transform {
                 }
                 t
             }
-            None if h.bbox.is_empty() => continue,
-            None => h.bbox.min.to_array(),
+            None if h.common.bbox.is_empty() => continue,
+            None => h.common.bbox.min.to_array(),
         };
         for (a, b) in translate.iter_mut().zip(t) {
             *a = a.min(b);

@@ -1,24 +1,25 @@
 //! Several files of a model in one OBJ, CityJSON or CityJSONSeq file (`lod tiles/*.gml -o
-//! street.obj`, `convert tiles/ -o all.city.json`): the scene as the CityGML merge
-//! ([`crate::io::citygml::merge`]) would hold it, then written as one file is.
+//! street.obj`): the scene as the CityGML merge ([`super::merge_named`]) would hold it, then
+//! written as one file is.
 //!
-//! * **Ids**: the merge's rule ([`crate::io::citygml::merge::rename_ids`] over every `gml:id` of
-//!   each input, [`crate::io::citygml::merge::document_ids`]): the first input keeps its ids, an
-//!   id a later input `k` (1-based) shares with an earlier one becomes `<id>__<k>`. The
-//!   objects are named from the renamed ids as one file's are ([`super::asset_name`]).
+//! * **Ids**: the plan's rule ([`super::rename_ids`] over every `gml:id` of each input): the
+//!   first input keeps its ids, an id a later input `k` (1-based) shares with an earlier one
+//!   becomes `<id>__<k>`. The objects are named from the renamed ids as one file's are
+//!   ([`crate::export::asset_name`]).
 //! * **One origin**: the OBJ origin and CityJSON's `transform` are picked over the whole
 //!   scene as the single-file writers pick them over one file (the centre of all the geometry
 //!   written, rounded to whole metres; the floor of its lower corner).
 //! * **One CRS**: that of the first input (the inputs were checked before any work, as for
-//!   the CityGML merge: [`crate::pipeline::batch::outputs::Plan::targets`]).
+//!   the CityGML merge: [`super::check_mergeable`]).
 //!
 //! `convert` does not hold the scene: it merges the inputs into a staged CityGML document and
-//! streams that ([`super::Chunks::Stream`]), so its output is, by construction, the
+//! streams that ([`crate::export::Chunks::Stream`]), so its output is, by construction, the
 //! CityGML merge converted. `lod` holds the scene and writes it through
 //! [`write_merged`]: a view of the model with one file ([`view`]).
 
-use super::{Content, ExportSummary, Format};
-use crate::io::citygml::merge::{document_ids, rename_ids};
+use super::citygml::document_ids;
+use super::rename_ids;
+use crate::export::{Content, ExportSummary, Format};
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::{ReadError, WriteError};
 use crate::model::CityModel;
@@ -26,15 +27,9 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// The renaming of each of `files` (indices into `model.files`, in merge order): the
-/// CityGML merge's ([`rename_ids`]) over every `gml:id` of each document; a CityJSON input
-/// (no `gml:id`s to scan) gives its buildings' and assets' ids.
-///
-/// # Errors
-/// A CityGML input that can no longer be read.
-pub fn renames(
-    model: &CityModel,
-    files: &[usize],
-) -> Result<Vec<HashMap<String, String>>, ReadError> {
+/// plan's ([`rename_ids`]) over every `gml:id` of each document; a CityJSON input (no
+/// `gml:id`s to scan) gives its buildings' and assets' ids.
+fn renames(model: &CityModel, files: &[usize]) -> Result<Vec<HashMap<String, String>>, ReadError> {
     let mut ids: Vec<Vec<String>> = Vec::with_capacity(files.len());
     for &f in files {
         let Some(src) = model.files.get(f) else {
@@ -69,27 +64,19 @@ fn model_ids(model: &CityModel, f: usize) -> Vec<String> {
         .collect()
 }
 
-/// How a merge of `files` is named where one file's name goes (the OBJ's comment line): the
-/// first input's name and how many more.
-pub fn label(model: &CityModel, files: &[usize]) -> String {
-    let first = files
-        .first()
-        .and_then(|&f| model.files.get(f))
-        .map(|f| crate::model::shown(&f.path).to_string())
-        .unwrap_or_default();
-    match files.len() {
-        0 | 1 => first,
-        n => format!("{first} and {} more", n - 1),
-    }
+/// How a merge of `files` of `model` is named where one file's name goes ([`super::label`]).
+pub(crate) fn model_label(model: &CityModel, files: &[usize]) -> String {
+    let first = files.first().and_then(|&f| model.files.get(f));
+    super::label(first.map(|f| f.path.as_path()), files.len())
 }
 
 /// `model` with `files` (in merge order) as its one file, 0, and their ids renamed by
 /// `renames` (one map per file, [`renames`]): what the single-file writers write as the
-/// merge. File 0 is the first input's, named [`label`], without its CityJSON origin (the
+/// merge. File 0 is the first input's, named [`model_label`], without its CityJSON origin (the
 /// attributes a CityJSON source carries beyond the model are not copied into a merge). Every
 /// asset and building keeps its index (so [`Content::Levels`] applies unchanged); those of
 /// other files belong to no file of the view.
-pub fn view(model: &CityModel, files: &[usize], renames: &[HashMap<String, String>]) -> CityModel {
+fn view(model: &CityModel, files: &[usize], renames: &[HashMap<String, String>]) -> CityModel {
     let slot = |f: usize| files.iter().position(|&g| g == f);
     let mut v = model.clone();
     let mut first = files
@@ -99,7 +86,7 @@ pub fn view(model: &CityModel, files: &[usize], renames: &[HashMap<String, Strin
         .into_iter()
         .collect::<Vec<_>>();
     for f in &mut first {
-        f.path = label(model, files).into();
+        f.path = model_label(model, files).into();
         f.cityjson = None;
     }
     v.files = first;
@@ -133,10 +120,11 @@ pub fn view(model: &CityModel, files: &[usize], renames: &[HashMap<String, Strin
 
 /// Write `files` of `model` (in merge order) as one `format` file at `out` (module docs),
 /// atomically, refusing to write over any of their sources or, without `overwrite`, over an
-/// existing file. The view ([`view`]) is a copy of the model while it is written.
+/// existing file. The view (the model with the inputs as one file) is a copy of the model
+/// while it is written.
 ///
 /// # Errors
-/// [`WriteError`] as [`super::write()`]; an input whose ids cannot be scanned.
+/// [`WriteError`] as [`crate::export::write()`]; an input whose ids cannot be scanned.
 pub fn write_merged(
     format: Format,
     model: &CityModel,
@@ -156,7 +144,8 @@ pub fn write_merged(
     let v = view(model, files, &renames);
     let mut summary = ExportSummary::default();
     let bytes = crate::io::citygml::write::atomic_write(out, |w| {
-        summary = super::write_to(format, &super::Chunks::model(&v, 0, content), w)?.0;
+        summary =
+            crate::export::write_to(format, &crate::export::Chunks::model(&v, 0, content), w)?.0;
         Ok(summary.bytes)
     })?;
     summary.bytes = bytes;

@@ -1,12 +1,16 @@
 //! The second pass: the members of an input copied into the merged document, their start
-//! tags rewritten ([`super::ids`]).
+//! tags rewritten: renamed ids, the references that follow them, and the namespace
+//! declarations the input needs.
 
-use super::ids::{rewrite_start, Rewrite};
 use super::scan::{next_event, ns_of, open, xml_err};
 use crate::io::citygml::error::ReadError;
 use crate::io::citygml::ns::{classify, Ns};
-use quick_xml::events::{BytesText, Event};
-use quick_xml::Writer;
+use quick_xml::escape::escape;
+use quick_xml::events::attributes::Attribute;
+use quick_xml::events::{BytesStart, BytesText, Event};
+use quick_xml::name::QName;
+use quick_xml::{NsReader, Writer};
+use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
@@ -108,4 +112,85 @@ pub(super) fn copy_children(
         buf.clear();
     }
     Ok(n)
+}
+
+/// Renaming applied to the members of one input.
+pub(super) struct Rewrite<'a> {
+    pub(super) ids: &'a HashMap<String, String>,
+    /// Declarations added to each member's start tag.
+    pub(super) decls: &'a [(Vec<u8>, Vec<u8>)],
+    pub(super) rewritten: usize,
+}
+/// The start tag `e` with renamed ids and references (and, on a member, the declarations the
+/// input needs), or `None` when nothing changes.
+fn rewrite_start<R>(
+    reader: &NsReader<R>,
+    e: &BytesStart<'_>,
+    rw: &mut Rewrite<'_>,
+    member: bool,
+    path: &Path,
+    pos: u64,
+) -> Result<Option<BytesStart<'static>>, ReadError> {
+    let add_decls = member && !rw.decls.is_empty();
+    if rw.ids.is_empty() && !add_decls {
+        return Ok(None);
+    }
+    let mut changed = add_decls;
+    let mut attrs: Vec<(Vec<u8>, Vec<u8>)> = Vec::new();
+    for a in e.attributes().with_checks(false) {
+        let a = a.map_err(|err| xml_err(path, pos, err))?;
+        let (ns, local) = reader.resolve_attribute(a.key);
+        let ns = ns_of(ns);
+        let kind = match local.as_ref() {
+            b"id" if classify(&ns) == Ns::Gml => Some(false),
+            b"href" if classify(&ns) == Ns::Xlink => Some(true),
+            b"uri" if ns.is_empty() => Some(true),
+            _ => None,
+        };
+        let mut value = a.value.to_vec();
+        if let Some(is_ref) = kind {
+            let v = a.unescape_value().map_err(|err| xml_err(path, pos, err))?;
+            let id = if is_ref {
+                v.strip_prefix('#')
+            } else {
+                Some(&*v)
+            };
+            if let Some(new) = id.and_then(|id| rw.ids.get(id)) {
+                let new = if is_ref {
+                    format!("#{new}")
+                } else {
+                    new.clone()
+                };
+                value = escape(new.as_str()).as_bytes().to_vec();
+                changed = true;
+                if is_ref {
+                    rw.rewritten += 1;
+                }
+            }
+        }
+        attrs.push((a.key.as_ref().to_vec(), value));
+    }
+    if !changed {
+        return Ok(None);
+    }
+    let name = String::from_utf8_lossy(e.name().as_ref()).into_owned();
+    let mut out = BytesStart::new(name);
+    for (k, v) in &attrs {
+        out.push_attribute(Attribute {
+            key: QName(k),
+            value: v.as_slice().into(),
+        });
+    }
+    if add_decls {
+        for (p, u) in rw.decls {
+            let key = xmlns_key(p);
+            if !attrs.iter().any(|(k, _)| *k == key) {
+                out.push_attribute(Attribute {
+                    key: QName(&key),
+                    value: u.as_slice().into(),
+                });
+            }
+        }
+    }
+    Ok(Some(out))
 }
