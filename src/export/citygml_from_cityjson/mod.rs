@@ -195,7 +195,7 @@ pub fn citygml_from_cityjson(
 }
 
 /// [`citygml_from_cityjson`] of a `.city.json` document in chunks of whole city-object
-/// trees of about `chunk_bytes` of document (`io::citygml::json::chunks`): the same
+/// trees of about `chunk_bytes` of document (`io::cityjson::chunks`): the same
 /// bytes, memory that follows the chunk and the document's vertices (24 bytes each), not the
 /// document. The document is read twice (its vertices and links, then its objects).
 /// CityJSONSeq, and a document the chunked read declines (an id given twice, one that does
@@ -221,7 +221,7 @@ fn convert(
     opts: &WriteOptions,
     chunk: Option<u64>,
 ) -> Result<FromCityJsonSummary, FromCityJsonError> {
-    use crate::io::citygml::json::chunks::{prepare, Input};
+    use crate::io::cityjson::chunks::{prepare, Input};
     check_target(out, opts, std::iter::once(input))?;
     // pass 1 of the chunked read; what it declines is read whole (and its errors said so)
     let mut prepared = chunk
@@ -271,8 +271,16 @@ fn convert(
     Ok(summary)
 }
 
-pub use crate::io::citygml::json::is_json_file;
-pub(crate) use crate::io::citygml::json::open;
+pub use crate::io::cityjson::is_json_file;
+
+/// Open a (possibly gzip-compressed) file, or standard input for `-`.
+fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
+    let (r, _) = crate::io::files::open_decoded(input).map_err(|source| ReadError::Io {
+        file: input.to_path_buf(),
+        source,
+    })?;
+    Ok(r)
+}
 
 /// Write the CityJSON / CityJSONSeq read from `r` (named `name` in errors) as CityGML 2.0
 /// to `w`, value by value.

@@ -28,9 +28,13 @@
 //! assert_eq!(model.assets[0].detail_polygons()[0].exterior()[1].x, 1001.0);
 //! ```
 
+pub(crate) mod chunks;
 pub(crate) mod doc;
 pub mod map;
 pub(crate) mod read;
+mod seq;
+pub(crate) mod source;
+pub(crate) mod stream;
 pub(crate) use read::reference_system_text;
 
 pub use map::Origin;
@@ -38,6 +42,7 @@ pub use read::{read_reader, read_slice, read_slice_with_origins};
 
 use crate::model::CityModel;
 use std::fmt;
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
 /// Why a CityJSON document could not be read.
@@ -119,6 +124,13 @@ pub fn sniff(head: &[u8]) -> Sniffed {
         Some(b'{') => Sniffed::Json,
         _ => Sniffed::Other,
     }
+}
+
+/// Whether the file at `path` holds JSON (CityJSON, CityJSONSeq; gzip-compressed or not), by
+/// its first bytes ([`sniff`]); false when it cannot be read.
+pub fn is_json_file(path: &Path) -> bool {
+    crate::io::files::open_decoded(path)
+        .is_ok_and(|(mut r, _)| r.fill_buf().is_ok_and(|h| sniff(h) == Sniffed::Json))
 }
 
 /// True when `model`'s file `file` was read from CityJSON.

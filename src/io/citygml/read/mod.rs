@@ -223,7 +223,7 @@ fn json_or_xml(
     src: &Source,
     name: &Path,
 ) -> Result<Result<CityModel, source::Loaded>, ReadError> {
-    use crate::io::citygml::json::chunks::{whole_model, Input};
+    use crate::io::cityjson::chunks::{whole_model, Input};
     // through the chunked read's passes (memory follows the model, not a value of the whole
     // document); what they decline is read whole, as before
     Ok(Ok(match doc {

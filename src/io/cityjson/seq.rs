@@ -1,4 +1,4 @@
-//! CityJSONSeq (`.city.jsonl`) read in chunks of whole lines: the same [`Chunk`]s as
+//! CityJSONSeq (`.city.jsonl`) read in chunks of whole lines: the same [`Part`]s as
 //! [`super::chunks`] gives of a document, from one pass over the file. The first line is the
 //! header (`transform`, `metadata`, `geometry-templates`); each feature line is one
 //! top-level city object with its children and its own vertices, mapped as the whole read
@@ -11,14 +11,13 @@
 //! the whole read: an object linked (`parents`, `children`) with an object of another chunk,
 //! an id given twice, and any line that does not read.
 
-use super::chunks::{next_chunk, Copied, Input, Stop};
+use super::chunks::{part, Copied, Input, Part, Shared, Stop};
+use super::doc::{CityObject, Metadata, Templates, Transform};
+use super::map::{real_vertices, Mapper, Vertices};
+use super::read::{check_version, model_version, source_file, template_vertices};
 use super::source::{add_object, FromSource};
 use super::stream::{id_hash, Counted};
-use crate::io::citygml::read::{Chunk, StreamSummary};
-use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
-use crate::io::cityjson::map::{real_vertices, Mapper, Vertices};
-use crate::io::cityjson::read::{check_version, model_version, source_file, template_vertices};
-use crate::io::cityjson::CityJsonError;
+use super::CityJsonError;
 use serde::de::{Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
 use serde_json::value::RawValue;
@@ -124,16 +123,17 @@ pub(super) fn stream_seq<E>(
     path: &Path,
     chunk_bytes: u64,
     passed: &dyn Fn(u64),
-    mut each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<StreamSummary, Stop<E>> {
+    mut each: impl FnMut(Part) -> Result<(), E>,
+) -> Result<Shared, Stop<E>> {
     let read = |e: &serde_json::Error| Stop::Read(CityJsonError::json(path, e));
-    let r = input.open().map_err(|e| Stop::Declined(e.to_string()))?;
+    let r = input.open(path).map_err(|e| Stop::Declined(e.to_string()))?;
     let gzip = input.gzip();
     // the file's size (a chunk's model is of the whole file)
     let len = match input {
         _ if gzip => 0,
         Input::File(p) => std::fs::metadata(p).map_or(0, |m| m.len()),
         Input::Bytes(b) => b.len() as u64,
+        Input::Gzip(_) => 0,
     };
     let n = Rc::new(Cell::new(0u64));
     let counted = Counted {
@@ -152,17 +152,16 @@ pub(super) fn stream_seq<E>(
     let kept = head.templates.take();
     let templates = kept.as_ref();
     let template_list = template_vertices(templates, path).map_err(Stop::Read)?;
-    let mut sum = StreamSummary {
+    let shared = Shared {
         version: Some(model_version(&version)),
         srs_name: srs_name.clone(),
-        ..StreamSummary::default()
     };
     let mut mapper = Mapper::new(path);
     check_version(&mut mapper, &version);
     let mut source = FromSource::default();
     let mut links = Links::default();
     let mut reported = 0u64;
-    let mut hand_over = |mapper: Mapper, source, sum: &mut StreamSummary| {
+    let mut hand_over = |mapper: Mapper, source| {
         let (buildings, assets, _, warnings, counts) = mapper.finish();
         let mut file = source_file(path, &version, srs_name.clone(), gzip, len, counts);
         if let Some(c) = &mut file.cityjson {
@@ -170,7 +169,7 @@ pub(super) fn stream_seq<E>(
         }
         let at = n.get();
         let parts = (buildings, assets, warnings);
-        let chunk = next_chunk(sum, file, parts, (reported, at), source);
+        let chunk = part(file, parts, (reported, at), source);
         if at > reported {
             passed(at - reported);
             reported = at;
@@ -228,11 +227,11 @@ pub(super) fn stream_seq<E>(
         if next.is_none() || (line > 2 && n.get() - from >= chunk_bytes) {
             from = n.get();
             let m = std::mem::replace(&mut mapper, Mapper::new(path));
-            hand_over(m, std::mem::take(&mut source), &mut sum)?;
+            hand_over(m, std::mem::take(&mut source))?;
             links.cut();
         }
     }
-    Ok(sum)
+    Ok(shared)
 }
 
 #[cfg(test)]
@@ -246,7 +245,7 @@ mod tests {
 "#;
 
     /// Each chunk's model and source, or why the stream stopped.
-    fn chunks(doc: &str, chunk: u64) -> Result<Vec<Chunk>, Stop<()>> {
+    fn chunks(doc: &str, chunk: u64) -> Result<Vec<Part>, Stop<()>> {
         let mut out = Vec::new();
         stream_seq(
             Input::Bytes(doc.as_bytes()),
@@ -288,13 +287,14 @@ mod tests {
         }
         assert_eq!(c[0].model.buildings[0].parent, Some(1));
         assert!(c[0].model.files[0].cityjson.as_ref().is_some_and(|j| j.seq));
-        let s = c[0].source.as_ref().unwrap();
+        let s = &c[0].source;
         assert_eq!(s.objects.get("b").map(|a| a["h"].clone()), Some(1.into()));
         assert_eq!(
             s.surfaces.get(&0).map(|m| m["slope"].clone()),
             Some(9.into())
         );
-        assert_eq!((c[1].buildings_before, c[2].assets_before), (2, 1));
+        let counts: Vec<_> = c.iter().map(|c| c.model.buildings.len()).collect();
+        assert_eq!(counts, [2, 1, 1]);
         let Ok(one) = chunks(SEQ, u64::MAX) else {
             panic!("stopped")
         };

@@ -1,7 +1,8 @@
 //! A CityJSON document (`.city.json`) read in chunks of whole city-object
-//! trees ([`stream`]): the same [`Chunk`]s, in the same order, as the chunked CityGML read
-//! gives, so that `stats` and `convert` consume both alike; memory follows the chunk, not
-//! the document.
+//! trees ([`stream`]): each chunk a [`Part`], which the chunked CityGML read
+//! (`crate::io::citygml::read::stream`) hands over as the same `Chunk`s, in the same order,
+//! as it gives of CityGML, so that `stats` and `convert` consume both alike; memory follows
+//! the chunk, not the document.
 //!
 //! Two passes over the document, through the streaming reader of the CityJSON edits
 //! (`super::stream`, shared with the CityJSON edits: its members in any order, `CityObjects` one
@@ -21,33 +22,31 @@
 //! What grows with the document: the vertices in real coordinates, 24 bytes a vertex (the
 //! whole document's list, since any object may use any vertex), and the list of cuts.
 //!
-//! The stream declines ([`Streamed::Declined`]: the caller reads the document whole, as
+//! The stream declines ([`Stop::Declined`]: the caller reads the document whole, as
 //! before) where a chunk could differ from the whole read: a first value that is no
 //! `CityJSON` object, a city object id given twice, and any document that does not read (the
 //! reason names the file and the line:column where the JSON parser was). CityJSONSeq (a
 //! second JSON value after the first) is read in chunks of lines (`super::seq`).
 //!
 //! Pass 1's results ([`Prepared`]) serve every later pass over the objects: the CityGML
-//! writer's (`crate::export::citygml_from_cityjson`), a streamed writer's passes
-//! ([`crate::io::citygml::read::Passes`] keeps them), and the whole model of a CityJSON input
-//! ([`whole_model`]: one chunk of everything, no serde value of the document).
+//! writer's (`crate::export::citygml_from_cityjson`), a streamed writer's passes (kept in
+//! a [`Kept`]), and the whole model of a CityJSON input ([`whole_model`]: one chunk of
+//! everything, no serde value of the document).
 
+use super::doc::{CityObject, Metadata, Templates, Transform};
+use super::map::{real_vertices, Mapper, Vertices};
+use super::read::{check_version, model_version, source_file, template_vertices};
 use super::source::{add_object, FromSource};
 use super::stream::{open_json, read_from, read_slice, EachText, Pass, Seen, Structure, Vertex};
-use crate::io::citygml::read::{Chunk, StreamSummary, Streamed};
-use crate::io::citygml::{ReadError, WriteError};
-use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
-use crate::io::cityjson::map::{real_vertices, Mapper, Vertices};
-use crate::io::cityjson::read::{check_version, source_file, template_vertices};
-use crate::io::cityjson::CityJsonError as Error;
-use crate::model::{Asset, AssetKind, Building, CityModel, Warning};
+use super::CityJsonError as Error;
+use crate::model::{Asset, Building, CityGmlVersion, CityModel, SourceFile, Warning};
 use glam::DVec3;
 use serde::Deserialize;
 use serde_json::value::RawValue;
 use serde_json::{Map, Value};
 use std::path::Path;
 
-/// Why [`stream_chunks`] stopped.
+/// Why [`stream`] stopped.
 #[derive(Debug)]
 pub(crate) enum Stop<E> {
     /// The caller's function failed.
@@ -58,30 +57,22 @@ pub(crate) enum Stop<E> {
     Read(Error),
 }
 
-/// [`crate::io::citygml::read::stream`] of a CityJSON document (see the module docs): each
-/// chunk handed to `each` in document order; `passed(n)`: `n` more bytes of the document
-/// read (they add up to its size when it is done).
-///
-/// # Errors
-/// Errors of `each`; a document that cannot be read, or could differ from the whole read, is
-/// [`Streamed::Declined`] with the reason.
-pub(crate) fn stream<E>(
-    path: &Path,
-    chunk_bytes: u64,
-    passed: &dyn Fn(u64),
-    each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<Streamed, E> {
-    streamed(stream_chunks(path, chunk_bytes, passed, each))
+/// One chunk of a document: a model of one file (the document's path and CRS), its first
+/// and last byte (exclusive) in the document (of a `.city.json`: in proportion to its city
+/// objects), and what a CityJSON output copies of its city objects (empty unless asked for).
+#[derive(Debug)]
+pub(crate) struct Part {
+    pub model: CityModel,
+    pub bytes: (u64, u64),
+    pub source: FromSource,
 }
 
-/// How a stream ended, as [`stream`] tells it.
-fn streamed<E>(r: Result<StreamSummary, Stop<E>>) -> Result<Streamed, E> {
-    match r {
-        Ok(sum) => Ok(Streamed::Done(sum)),
-        Err(Stop::Each(e)) => Err(e),
-        Err(Stop::Declined(why)) => Ok(Streamed::Declined(why)),
-        Err(Stop::Read(e)) => Ok(Streamed::Declined(e.to_string())),
-    }
+/// What the chunks of a document share: the CityGML version its CityJSON version encodes
+/// and its `srsName`.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Shared {
+    pub version: Option<CityGmlVersion>,
+    pub srs_name: Option<String>,
 }
 
 /// Pass 1: the head, the vertices as stored, the links of the city objects.
@@ -230,21 +221,31 @@ fn chunk_ends(reach: &[u32], per: usize) -> Vec<u32> {
 pub(crate) enum Input<'a> {
     File(&'a Path),
     Bytes(&'a [u8]),
+    /// Gzip-compressed bytes in memory.
+    Gzip(&'a [u8]),
 }
 
 impl<'a> Input<'a> {
     /// The JSON text (decompressed, a byte-order mark skipped).
-    pub(super) fn open(self) -> Result<Box<dyn std::io::BufRead + 'a>, WriteError> {
+    pub(super) fn open(self, name: &Path) -> Result<Box<dyn std::io::BufRead + 'a>, Error> {
         Ok(match self {
-            Input::File(p) => open_json(p)?,
+            Input::File(p) => open_json(p)
+                .map_err(|e| Error::at(name, 0, None, format!("cannot read: {e}")))?,
             Input::Bytes(b) => Box::new(b.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(b)),
+            Input::Gzip(b) => {
+                let mut r = std::io::BufReader::new(flate2::bufread::MultiGzDecoder::new(b));
+                if std::io::BufRead::fill_buf(&mut r).is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF")) {
+                    std::io::BufRead::consume(&mut r, 3);
+                }
+                Box::new(r)
+            }
         })
     }
 
     /// A pass of `pass` over the document (named `name` in errors).
-    fn read(self, name: &Path, pass: &mut dyn Pass) -> Result<Seen, WriteError> {
+    fn read(self, name: &Path, pass: &mut dyn Pass) -> Result<Seen, Error> {
         match self {
-            Input::File(_) => read_from(self.open()?, name, pass),
+            Input::File(_) | Input::Gzip(_) => read_from(self.open(name)?, name, pass),
             Input::Bytes(b) => read_slice(b.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(b), name, pass),
         }
     }
@@ -257,16 +258,16 @@ impl<'a> Input<'a> {
                 std::fs::File::open(path)
                     .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
                     .is_ok()
-                    && crate::io::is_gzip(&magic)
+                    && crate::io::files::is_gzip(&magic)
             }
             Input::Bytes(_) => false,
+            Input::Gzip(_) => true,
         }
     }
 }
 
 /// What pass 1 found of a document (module docs): what every pass over its objects needs.
-/// Kept by [`crate::io::citygml::read::Passes`] for the later passes of a writer over the
-/// same document; its size grows with the document's vertices (24 bytes each) and chunks.
+/// Kept ([`Kept`]) for the later passes of a writer over the same document; its size grows with the document's vertices (24 bytes each) and chunks.
 #[derive(Debug)]
 pub(crate) struct Prepared {
     /// `version` (empty when absent).
@@ -303,7 +304,7 @@ pub(crate) fn prepare<E>(
 ) -> Result<Option<Prepared>, Stop<E>> {
     let path = name;
     let mut head = Head::default();
-    let seen = input.read(path, &mut head).map_err(read_error)?;
+    let seen = input.read(path, &mut head).map_err(Stop::Read)?;
     if seen.more {
         return Ok(None);
     }
@@ -363,14 +364,6 @@ pub(crate) fn prepare<E>(
     }))
 }
 
-/// A reader's error as a [`Stop`]: the document's own (file, line:column) or declined.
-fn read_error<E>(e: WriteError) -> Stop<E> {
-    match e {
-        WriteError::Read(ReadError::CityJson(e)) => Stop::Read(e),
-        e => Stop::Declined(e.to_string()),
-    }
-}
-
 /// Why the function of [`each_object`] stopped.
 pub(crate) enum Fail<E> {
     /// The caller's error.
@@ -421,14 +414,9 @@ pub(crate) fn each_object<E>(
     if let Some(f) = failed {
         return Err(Stop::Each(f));
     }
-    if let Err(e) = r {
-        return Err(match read_error(e) {
-            Stop::Read(mut e) => {
-                e.id = failed_id.or(e.id);
-                Stop::Read(e)
-            }
-            other => other,
-        });
+    if let Err(mut e) = r {
+        e.id = failed_id.or(e.id);
+        return Err(Stop::Read(e));
     }
     if k != p.objects {
         return Err(Stop::Declined("the document changed while read".into()));
@@ -474,56 +462,62 @@ fn map_object(
     Ok(())
 }
 
-/// [`stream`], with why it stopped.
-pub(crate) fn stream_chunks<E>(
+/// The document `input` (named `path`) read in chunks of whole city-object trees of about
+/// `chunk_bytes` (CityJSONSeq: of whole lines), each handed to `each` in document order;
+/// `passed(n)`: `n` more bytes of the document read (they add up to its size when it is
+/// done). With `kept`, pass 1 of a `.city.json` is made once for the file and chunk size
+/// and kept there for later streams.
+///
+/// # Errors
+/// [`Stop::Each`]: `each`'s; [`Stop::Read`]: the document does not read;
+/// [`Stop::Declined`]: the chunks could differ from the whole read.
+pub(crate) fn stream<E>(
+    input: Input<'_>,
     path: &Path,
     chunk_bytes: u64,
+    kept: Option<&Kept>,
     passed: &dyn Fn(u64),
-    each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<StreamSummary, Stop<E>> {
-    match prepare(Input::File(path), path, chunk_bytes)? {
-        Some(p) => stream_prepared(Input::File(path), path, &p, true, passed, each),
-        None => super::seq::stream_seq(Input::File(path), path, chunk_bytes, passed, each),
-    }
+    each: impl FnMut(Part) -> Result<(), E>,
+) -> Result<Shared, Stop<E>> {
+    let found = kept.and_then(|k| k.find(path, chunk_bytes));
+    let prepared = match found {
+        Some(p) => p,
+        None => match prepare(input, path, chunk_bytes)? {
+            Some(p) => {
+                let p = std::sync::Arc::new(p);
+                if let Some(k) = kept {
+                    k.keep(path, &p);
+                }
+                p
+            }
+            None => return super::seq::stream_seq(input, path, chunk_bytes, passed, each),
+        },
+    };
+    stream_prepared(input, path, &prepared, true, passed, each)
 }
 
-/// The next chunk after those `sum` counts (which it then counts too): a model of one file.
-pub(super) fn next_chunk(
-    sum: &mut StreamSummary,
-    file: crate::model::SourceFile,
+/// A chunk's model: `file` and the chunk's buildings, assets and warnings.
+pub(super) fn part(
+    file: SourceFile,
     (buildings, assets, warnings): (Vec<Building>, Vec<Asset>, Vec<Warning>),
     bytes: (u64, u64),
     source: FromSource,
-) -> Chunk {
-    let bodies = assets.iter().filter(|a| a.kind == AssetKind::Body).count();
-    let chunk = Chunk {
-        index: sum.chunks,
-        buildings_before: sum.buildings,
-        assets_before: sum.assets,
-        bodies_before: sum.bodies,
-        warnings_before: sum.warnings,
-        bytes,
-        source: Some(source),
-        start: None,
-        root_envelopes: Vec::new(),
+) -> Part {
+    Part {
         model: CityModel {
             files: vec![file],
             buildings,
             assets,
             warnings,
         },
-    };
-    sum.chunks += 1;
-    sum.buildings += chunk.model.buildings.len();
-    sum.assets += chunk.model.assets.len() - bodies;
-    sum.bodies += bodies;
-    sum.warnings += chunk.model.warnings.len();
-    chunk
+        bytes,
+        source,
+    }
 }
 
 /// The chunks of a document (pass 2, after [`prepare`]) handed to `each`; with
 /// `keep_source`, each with what a CityJSON output copies of its objects
-/// ([`Chunk::source`], else empty).
+/// ([`Part::source`], else empty).
 ///
 /// # Errors
 /// As [`each_object`].
@@ -533,8 +527,8 @@ pub(crate) fn stream_prepared<E>(
     p: &Prepared,
     keep_source: bool,
     passed: &dyn Fn(u64),
-    mut each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<StreamSummary, Stop<E>> {
+    mut each: impl FnMut(Part) -> Result<(), E>,
+) -> Result<Shared, Stop<E>> {
     let srs_name = p.metadata.as_ref().and_then(Metadata::srs_name);
     let verts = Vertices {
         list: &p.list,
@@ -548,18 +542,13 @@ pub(crate) fn stream_prepared<E>(
         }
         m
     };
-    let mut sum = StreamSummary {
-        version: Some(crate::io::cityjson::read::model_version(&p.version)),
+    let shared = Shared {
+        version: Some(model_version(&p.version)),
         srs_name: srs_name.clone(),
-        ..StreamSummary::default()
     };
     let mut reported = 0u64;
     let (n, bytes) = (p.objects, p.bytes);
-    let mut hand_over = |mapper: Mapper,
-                         source: FromSource,
-                         done: usize,
-                         sum: &mut StreamSummary|
-     -> Result<(), E> {
+    let mut hand_over = |mapper: Mapper, source: FromSource, done: usize| -> Result<(), E> {
         let (buildings, assets, _, warnings, counts) = mapper.finish();
         let file = source_file(path, &p.version, srs_name.clone(), p.gzip, bytes, counts);
         let at = match n {
@@ -567,7 +556,7 @@ pub(crate) fn stream_prepared<E>(
             n => u64::try_from(u128::from(bytes) * done as u128 / n as u128).unwrap_or(bytes),
         };
         let parts = (buildings, assets, warnings);
-        let chunk = next_chunk(sum, file, parts, (reported, at), source);
+        let chunk = part(file, parts, (reported, at), source);
         if at > reported {
             passed(at - reported);
             reported = at;
@@ -582,56 +571,36 @@ pub(crate) fn stream_prepared<E>(
         if let Some(done) = last {
             let m = std::mem::replace(&mut mapper, new_mapper(false));
             let s = std::mem::take(&mut source);
-            hand_over(m, s, done, &mut sum).map_err(Fail::Each)?;
+            hand_over(m, s, done).map_err(Fail::Each)?;
         }
         Ok(())
     })?;
     if n == 0 {
-        hand_over(mapper, source, 0, &mut sum).map_err(Stop::Each)?;
+        hand_over(mapper, source, 0).map_err(Stop::Each)?;
     }
-    Ok(sum)
+    Ok(shared)
 }
 
-/// A document's first pass kept for the later passes of a writer over it
-/// ([`crate::io::citygml::read::Passes`]): the file and chunk size it was made for.
+/// A document's first pass kept for the later passes of a writer over it (the chunked
+/// read's `Passes`): the file and chunk size it was made for.
 #[derive(Debug, Default)]
 pub(crate) struct Kept(std::sync::Mutex<Option<(std::path::PathBuf, std::sync::Arc<Prepared>)>>);
 
-/// [`stream`] with the first pass made once for the file and chunk size and kept in `kept`
-/// (CityJSONSeq has none: it is read in one pass).
-///
-/// # Errors
-/// As [`stream`].
-pub(crate) fn stream_kept<E>(
-    path: &Path,
-    chunk_bytes: u64,
-    kept: &Kept,
-    passed: &dyn Fn(u64),
-    each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<Streamed, E> {
-    let found = match kept.0.lock() {
-        Ok(k) => k
-            .as_ref()
+impl Kept {
+    /// The first pass kept for `path` in chunks of `chunk_bytes`, if any.
+    fn find(&self, path: &Path, chunk_bytes: u64) -> Option<std::sync::Arc<Prepared>> {
+        let k = self.0.lock().ok()?;
+        k.as_ref()
             .filter(|(p, prep)| p == path && prep.chunk_bytes == chunk_bytes)
-            .map(|(_, prep)| prep.clone()),
-        Err(_) => None,
-    };
-    let prepared = match found {
-        Some(p) => p,
-        None => match prepare::<E>(Input::File(path), path, chunk_bytes) {
-            Ok(Some(p)) => {
-                let p = std::sync::Arc::new(p);
-                if let Ok(mut k) = kept.0.lock() {
-                    *k = Some((path.to_path_buf(), p.clone()));
-                }
-                p
-            }
-            Ok(None) => return stream(path, chunk_bytes, passed, each),
-            Err(e) => return streamed(Err(e)),
-        },
-    };
-    let input = Input::File(path);
-    streamed(stream_prepared(input, path, &prepared, true, passed, each))
+            .map(|(_, prep)| prep.clone())
+    }
+
+    /// Keep `prepared`, the first pass over `path`.
+    fn keep(&self, path: &Path, prepared: &std::sync::Arc<Prepared>) {
+        if let Ok(mut k) = self.0.lock() {
+            *k = Some((path.to_path_buf(), prepared.clone()));
+        }
+    }
 }
 
 /// The whole model of the CityJSON document or CityJSONSeq `input` (named `name`) read
@@ -640,7 +609,7 @@ pub(crate) fn stream_kept<E>(
 /// given twice, a document that does not read): read it whole then.
 pub(crate) fn whole_model(input: Input<'_>, name: &Path) -> Option<CityModel> {
     let mut out = None;
-    let each = |c: Chunk| {
+    let each = |c: Part| {
         let mut model = c.model;
         if let Some(f) = model.files.first_mut() {
             f.len = c.bytes.1;
@@ -665,7 +634,8 @@ mod tests {
         let path = dir.path().join("d.city.json");
         std::fs::write(&path, doc).unwrap();
         let mut out = Vec::new();
-        stream_chunks(&path, chunk, &|_| {}, |c: Chunk| {
+        let input = Input::File(&path);
+        stream(input, &path, chunk, None, &|_| {}, |c: Part| {
             let ids = c
                 .model
                 .buildings
@@ -758,11 +728,12 @@ mod tests {
         let mut runs = Vec::new();
         for _ in 0..2 {
             let mut ids = Vec::new();
-            let r = stream_kept(&path, 1, &kept, &|_| {}, |c: Chunk| {
+            let input = Input::File(&path);
+            let r = stream(input, &path, 1, Some(&kept), &|_| {}, |c: Part| {
                 ids.push(c.model.buildings.len());
                 Ok::<(), ()>(())
             });
-            assert!(matches!(r, Ok(Streamed::Done(_))));
+            assert!(r.is_ok());
             runs.push(ids);
             let k = kept.0.lock().unwrap();
             assert!(k
@@ -777,8 +748,9 @@ mod tests {
         let fewer = format!("{}{}", &DOC[..start], &DOC[end..]);
         assert!(crate::io::cityjson::read_slice(fewer.as_bytes(), "d".as_ref()).is_ok());
         std::fs::write(&path, fewer).unwrap();
-        let r = stream_kept(&path, 1, &kept, &|_| {}, |_| Ok::<(), ()>(()));
-        assert!(matches!(r, Ok(Streamed::Declined(_))));
+        let input = Input::File(&path);
+        let r = stream(input, &path, 1, Some(&kept), &|_| {}, |_| Ok::<(), ()>(()));
+        assert!(matches!(r, Err(Stop::Declined(_))));
     }
 
     #[test]
