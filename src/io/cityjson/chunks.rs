@@ -22,11 +22,12 @@
 //! What grows with the document: the vertices in real coordinates, 24 bytes a vertex (the
 //! whole document's list, since any object may use any vertex), and the list of cuts.
 //!
-//! The stream declines ([`Stop::Declined`]: the caller reads the document whole, as
-//! before) where a chunk could differ from the whole read: a first value that is no
-//! `CityJSON` object, a city object id given twice, and any document that does not read (the
-//! reason names the file and the line:column where the JSON parser was). CityJSONSeq (a
-//! second JSON value after the first) is read in chunks of lines (`super::seq`).
+//! A document with a city object id given twice is one chunk, its objects mapped at once
+//! (the links cannot tell which object of the id another one names). A document that does
+//! not read stops the stream ([`Stop::Read`]: the file, and the line:column where the JSON
+//! parser was). CityJSONSeq (a second JSON value after the first) is read in chunks of
+//! lines (`super::seq`). The whole read ([`whole_model`]) is the chunks collected, as one
+//! chunk.
 //!
 //! Pass 1's results ([`Prepared`]) serve every later pass over the objects: the CityGML
 //! writer's (`crate::export::citygml_from_cityjson`), a streamed writer's passes (kept in
@@ -35,7 +36,7 @@
 
 use super::doc::{CityObject, Metadata, Templates, Transform};
 use super::map::{real_vertices, Mapper, Vertices};
-use super::read::{check_version, model_version, source_file, template_vertices};
+use super::head::{check_version, model_version, source_file, template_vertices};
 use super::source::{add_object, FromSource};
 use super::stream::{open_json, read_from, read_slice, EachText, Pass, Seen, Structure, Vertex};
 use super::CityJsonError as Error;
@@ -44,6 +45,7 @@ use glam::DVec3;
 use serde::Deserialize;
 use serde_json::value::RawValue;
 use serde_json::{Map, Value};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// Why [`stream`] stopped.
@@ -83,8 +85,10 @@ struct Head {
     members: Map<String, Value>,
     vertices: Vec<[f64; 3]>,
     structure: Structure,
-    /// An id given twice.
-    repeated: Option<String>,
+    /// City objects, ids given twice counted twice.
+    count: usize,
+    /// Whether an id is given twice.
+    repeated: bool,
     /// Whether `appearance` is given (not `null`).
     appearance: bool,
 }
@@ -110,8 +114,9 @@ impl Pass for Head {
         true
     }
     fn object_text(&mut self, id: String, o: &RawValue) -> Result<(), String> {
+        self.count += 1;
         if self.structure.contains(&id) {
-            self.repeated.get_or_insert(id);
+            self.repeated = true;
             return Ok(());
         }
         let l: Links = serde_json::from_str(o.get()).map_err(|e| format!("{id}: {e}"))?;
@@ -138,50 +143,6 @@ struct Links {
     parents: Option<Value>,
     #[serde(default)]
     children: Option<Value>,
-}
-
-/// What a CityJSON output copies of a city object ([`add_object`]): its attributes and its
-/// semantic surface objects (the rest skipped unparsed).
-#[derive(Deserialize)]
-pub(super) struct Copied {
-    #[serde(default)]
-    attributes: Option<Value>,
-    #[serde(default)]
-    geometry: Vec<CopiedGeometry>,
-}
-
-#[derive(Deserialize)]
-struct CopiedGeometry {
-    #[serde(default)]
-    semantics: Option<CopiedSemantics>,
-}
-
-#[derive(Deserialize)]
-struct CopiedSemantics {
-    #[serde(default)]
-    surfaces: Option<Value>,
-}
-
-impl Copied {
-    /// The object as [`add_object`] reads it.
-    pub(super) fn into_object(self) -> Map<String, Value> {
-        let geometry = self
-            .geometry
-            .into_iter()
-            .map(|g| match g.semantics {
-                Some(CopiedSemantics { surfaces: Some(s) }) => {
-                    serde_json::json!({"semantics": {"surfaces": s}})
-                }
-                _ => Value::Object(Map::new()),
-            })
-            .collect();
-        let mut o = Map::new();
-        o.insert("geometry".into(), Value::Array(geometry));
-        if let Some(a) = self.attributes {
-            o.insert("attributes".into(), a);
-        }
-        o
-    }
 }
 
 /// A member of the head as `T` (absent: `None`).
@@ -283,6 +244,9 @@ pub(crate) struct Prepared {
     pub appearance: bool,
     /// The last object of each chunk, in document order.
     ends: Vec<u32>,
+    /// Whether a chunk's objects are mapped at once (an id given twice) rather than one by
+    /// one.
+    batch: bool,
     /// How many city objects.
     pub objects: usize,
     /// The document's bytes (decompressed, a byte-order mark left out).
@@ -308,13 +272,12 @@ pub(crate) fn prepare<E>(
     if seen.more {
         return Ok(None);
     }
-    if head.members.get("type").and_then(Value::as_str) != Some("CityJSON") {
-        return Err(Stop::Declined("not a CityJSON object".into()));
-    }
-    if let Some(id) = head.repeated {
-        return Err(Stop::Declined(format!("city object id {id:?} given twice")));
-    }
     let stop = Stop::Read;
+    match head.members.get("type") {
+        Some(Value::String(t)) if t == "CityJSON" => {}
+        Some(Value::String(t)) => return Err(stop(not_cityjson(path, t))),
+        _ => return Err(stop(Error::at(path, 1, None, "no \"type\" string".into()))),
+    }
     let version = match head.members.remove("version") {
         Some(Value::String(v)) => v,
         None => String::new(),
@@ -340,14 +303,19 @@ pub(crate) fn prepare<E>(
     let template_list = template_vertices(templates.as_ref(), path).map_err(stop)?;
     let list = real_vertices(&head.vertices, transform.as_ref(), path, 0).map_err(stop)?;
     drop(std::mem::take(&mut head.vertices));
-    let n = head.structure.len();
+    let n = head.count;
     let per = match seen.bytes {
         0 => n.max(1),
         b => usize::try_from(u128::from(chunk_bytes) * n as u128 / u128::from(b))
             .unwrap_or(usize::MAX)
             .max(1),
     };
-    let ends = chunk_ends(&head.structure.reach(), per);
+    // an id given twice: one chunk, its objects mapped at once, as the links cannot tell
+    // which object of an id another one names
+    let ends = match head.repeated {
+        true => n.checked_sub(1).map(|l| l as u32).into_iter().collect(),
+        false => chunk_ends(&head.structure.reach(), per),
+    };
     Ok(Some(Prepared {
         version,
         transform,
@@ -357,6 +325,7 @@ pub(crate) fn prepare<E>(
         template_list,
         appearance: head.appearance,
         ends,
+        batch: head.repeated,
         objects: n,
         bytes: seen.bytes,
         gzip: input.gzip(),
@@ -364,12 +333,21 @@ pub(crate) fn prepare<E>(
     }))
 }
 
+/// The error of a first value of type `ty`, not `CityJSON`.
+pub(super) fn not_cityjson(name: &Path, ty: &str) -> Error {
+    let m = format!("the first object is of type {ty:?}, not \"CityJSON\"");
+    Error::at(name, 1, None, m)
+}
+
 /// Why the function of [`each_object`] stopped.
 pub(crate) enum Fail<E> {
     /// The caller's error.
     Each(E),
-    /// The object is refused: the object's id where known, what is wrong.
+    /// The object is refused: the object's id where known, what is wrong (the reader adds
+    /// where it is).
     Object(Option<String>, String),
+    /// The objects are refused: the error as it is.
+    Read(Error),
 }
 
 /// Pass 2 over the document `p` was prepared from: each city object's id and text handed to
@@ -388,6 +366,7 @@ pub(crate) fn each_object<E>(
     let mut k = 0usize;
     let mut failed: Option<E> = None;
     let mut failed_id: Option<String> = None;
+    let mut refused: Option<Error> = None;
     let mut end = p.ends.iter().copied();
     let mut next_end = end.next();
     let r = input.read(
@@ -408,11 +387,18 @@ pub(crate) fn each_object<E>(
                     failed_id = id;
                     Err(m)
                 }
+                Err(Fail::Read(e)) => {
+                    refused = Some(e);
+                    Err("stopped".into())
+                }
             }
         }),
     );
     if let Some(f) = failed {
         return Err(Stop::Each(f));
+    }
+    if let Some(e) = refused {
+        return Err(Stop::Read(e));
     }
     if let Err(mut e) = r {
         e.id = failed_id.or(e.id);
@@ -424,41 +410,68 @@ pub(crate) fn each_object<E>(
     Ok(())
 }
 
-/// City object `id` (its text `o`) mapped into `mapper`, what a CityJSON output copies of it
-/// kept in `source` (when given: else not parsed). Errors: the object's id where known, what is wrong.
-fn map_object(
+/// City object `id` (its text `o`) parsed into `objects`. Errors: the object's id, what is
+/// wrong.
+fn parse_object<E>(
+    objects: &mut Vec<(String, CityObject)>,
+    id: String,
+    o: &RawValue,
+) -> Result<(), Fail<E>> {
+    match serde_json::from_str::<CityObject>(o.get()) {
+        Ok(t) => {
+            objects.push((id, t));
+            Ok(())
+        }
+        Err(e) => {
+            let e = e.to_string();
+            let m = e.rsplit_once(" at line ").map_or(e.as_str(), |(m, _)| m);
+            Err(Fail::Object(Some(id), m.to_string()))
+        }
+    }
+}
+
+/// The city objects `objects` mapped into `mapper` at once (of CityJSONSeq line `line`; a
+/// document's: 0), what a CityJSON output copies of them kept in `source` where given (of an
+/// id given twice, the last object's, for all of the id's assets).
+///
+/// # Errors
+/// What [`Mapper::add`] refuses.
+pub(super) fn map_objects(
     mapper: &mut Mapper,
     source: Option<&mut FromSource>,
     verts: &Vertices<'_>,
-    id: String,
-    o: &RawValue,
+    objects: &mut Vec<(String, CityObject)>,
     line: u64,
-) -> Result<(), (Option<String>, String)> {
+) -> Result<(), Error> {
     let before = mapper.origins.len();
-    let parsed = serde_json::from_str::<CityObject>(o.get()).and_then(|t| {
-        let c = source
-            .is_some()
-            .then(|| serde_json::from_str::<Copied>(o.get()));
-        Ok((t, c.transpose()?))
-    });
-    let (typed, copied) = match parsed {
-        Ok(t) => t,
-        Err(e) => return Err((Some(id), e.to_string())),
-    };
-    let one = [(id, typed)];
-    mapper
-        .add(&one, verts, line)
-        .map_err(|e| (e.id.clone(), e.message))?;
-    let [(id, _)] = one;
-    let (Some(source), Some(copied)) = (source, copied) else {
-        return Ok(());
-    };
-    let wanted: Vec<(usize, usize, usize)> = mapper.origins[before..]
-        .iter()
-        .enumerate()
-        .filter_map(|(i, o)| o.surface.map(|(g, s)| (before + i, g, s)))
-        .collect();
-    add_object(source, id, &mut copied.into_object(), &wanted);
+    mapper.add(objects, verts, line)?;
+    if let Some(source) = source {
+        // (asset, geometry, surface) of each object's semantic surface objects
+        let mut wanted: HashMap<&str, Vec<(usize, usize, usize)>> = HashMap::new();
+        for (i, o) in mapper.origins[before..].iter().enumerate() {
+            if let Some((g, s)) = o.surface {
+                let w = wanted.entry(o.object.as_str()).or_default();
+                w.push((before + i, g, s));
+            }
+        }
+        // an object whose id comes again later
+        let mut later = std::collections::HashSet::new();
+        let mut skip = vec![false; objects.len()];
+        if objects.len() > 1 {
+            for (k, (id, _)) in objects.iter().enumerate().rev() {
+                skip[k] = !later.insert(id.as_str());
+            }
+        }
+        drop(later);
+        for ((id, o), skip) in objects.iter_mut().zip(skip) {
+            if skip {
+                continue;
+            }
+            let w = wanted.get(id.as_str()).map_or(&[][..], Vec::as_slice);
+            add_object(source, id.clone(), o, w);
+        }
+    }
+    objects.clear();
     Ok(())
 }
 
@@ -515,9 +528,10 @@ pub(super) fn part(
     }
 }
 
-/// The chunks of a document (pass 2, after [`prepare`]) handed to `each`; with
-/// `keep_source`, each with what a CityJSON output copies of its objects
-/// ([`Part::source`], else empty).
+/// The chunks of a document (pass 2, after [`prepare`]) handed to `each`. `streamed`: each
+/// with what a CityJSON output copies of its objects ([`Part::source`], else empty), and
+/// an object the model refuses said where the parser is (else as the whole read says it:
+/// the file and the object).
 ///
 /// # Errors
 /// As [`each_object`].
@@ -525,7 +539,7 @@ pub(crate) fn stream_prepared<E>(
     input: Input<'_>,
     path: &Path,
     p: &Prepared,
-    keep_source: bool,
+    streamed: bool,
     passed: &dyn Fn(u64),
     mut each: impl FnMut(Part) -> Result<(), E>,
 ) -> Result<Shared, Stop<E>> {
@@ -565,9 +579,16 @@ pub(crate) fn stream_prepared<E>(
     };
     let mut mapper = new_mapper(true);
     let mut source = FromSource::default();
+    let mut objects = Vec::new();
     each_object(input, path, p, |id, o, last| {
-        let copy = keep_source.then_some(&mut source);
-        map_object(&mut mapper, copy, &verts, id, o, 0).map_err(|(id, m)| Fail::Object(id, m))?;
+        parse_object(&mut objects, id, o)?;
+        if !p.batch || last.is_some() {
+            let copy = streamed.then_some(&mut source);
+            map_objects(&mut mapper, copy, &verts, &mut objects, 0).map_err(|e| match streamed {
+                true => Fail::Object(e.id, e.message),
+                false => Fail::Read(e),
+            })?;
+        }
         if let Some(done) = last {
             let m = std::mem::replace(&mut mapper, new_mapper(false));
             let s = std::mem::take(&mut source);
@@ -603,11 +624,13 @@ impl Kept {
     }
 }
 
-/// The whole model of the CityJSON document or CityJSONSeq `input` (named `name`) read
-/// through the passes of the chunked read, as one chunk (no serde value of the document:
-/// memory follows the model): the model [`crate::io::cityjson::read_slice`] reads. `None` where the chunked read declines (an id
-/// given twice, a document that does not read): read it whole then.
-pub(crate) fn whole_model(input: Input<'_>, name: &Path) -> Option<CityModel> {
+/// The whole model of the CityJSON document or CityJSONSeq `input` (named `name`): its
+/// chunks collected, as one chunk (no serde value of the document: memory follows the
+/// model).
+///
+/// # Errors
+/// The document does not read: the file, line:column and city object where known.
+pub(crate) fn whole_model(input: Input<'_>, name: &Path) -> Result<CityModel, Error> {
     let mut out = None;
     let each = |c: Part| {
         let mut model = c.model;
@@ -615,13 +638,19 @@ pub(crate) fn whole_model(input: Input<'_>, name: &Path) -> Option<CityModel> {
             f.len = c.bytes.1;
         }
         out = Some(model);
-        Ok::<(), ()>(())
+        Ok::<(), std::convert::Infallible>(())
     };
-    match prepare::<()>(input, name, u64::MAX).ok()? {
-        Some(p) => stream_prepared(input, name, &p, false, &|_| {}, each).ok()?,
-        None => super::seq::stream_seq(input, name, u64::MAX, &|_| {}, each).ok()?,
+    let r = match prepare(input, name, u64::MAX) {
+        Ok(Some(p)) => stream_prepared(input, name, &p, false, &|_| {}, each),
+        Ok(None) => super::seq::stream_seq(input, name, u64::MAX, &|_| {}, each),
+        Err(e) => Err(e),
     };
-    out
+    match r {
+        Ok(_) => out.ok_or_else(|| Error::at(name, 0, None, "no chunk".into())),
+        Err(Stop::Read(e)) => Err(e),
+        Err(Stop::Declined(why)) => Err(Error::at(name, 0, None, why)),
+        Err(Stop::Each(never)) => match never {},
+    }
 }
 
 #[cfg(test)]
@@ -680,11 +709,17 @@ mod tests {
         };
         assert_eq!((e.line, e.id.as_deref()), (4, Some("c")), "{e}");
         assert!(e.column > 0 && e.message.contains("vertex index 7"), "{e}");
-        assert!(
-            e.to_string()
-                .starts_with(&format!("{}:4:", e.file.display())),
-            "{e}"
-        );
+        let at = format!("{}:4:", e.file.display());
+        assert!(e.to_string().starts_with(&at), "{e}");
+        // the whole read's names the object (a CityJSONSeq's also the line)
+        let e = whole_model(Input::Bytes(bad.as_bytes()), "d".as_ref()).unwrap_err();
+        assert_eq!(e.to_string(), "d [city object c]: invalid CityJSON: vertex index 7 out of range (3 vertices)");
+        // a parser's error where the parser was
+        let typo = DOC.replace(r#""c":{"type":"Building","#, r#""c":{"type":"Building",,"#);
+        let Err(Stop::Read(e)) = chunks_of(&typo, 1) else {
+            panic!("a syntax error is an error");
+        };
+        assert_eq!((e.line, e.column), (4, 32), "{e}");
         let Err(Stop::Read(e)) = chunks_of(&DOC[..DOC.len() - 30], 1) else {
             panic!("a truncated document is an error");
         };
@@ -692,9 +727,14 @@ mod tests {
             e.line == 7 && e.column > 0 && e.message.contains("EOF"),
             "{e}"
         );
-        // what could differ from the whole read declines
+        // an id given twice: one chunk, whatever the chunk size
         let twice = DOC.replace(r#""d":"#, r#""c":"#);
-        assert!(matches!(chunks_of(&twice, 1), Err(Stop::Declined(_))));
+        assert_eq!(chunks_of(&twice, 1).unwrap_or_default().len(), 1);
+        let not = DOC.replace(r#""type":"CityJSON""#, r#""type":"FeatureCollection""#);
+        let Err(Stop::Read(e)) = chunks_of(&not, 1) else {
+            panic!("not CityJSON is an error");
+        };
+        assert!(e.to_string().ends_with(r#"of type "FeatureCollection", not "CityJSON""#));
         let seq = format!(
             "{}\n{{\"type\":\"CityJSONFeature\"}}",
             DOC.replace('\n', " ")
@@ -707,16 +747,26 @@ mod tests {
     }
 
     #[test]
-    fn the_whole_model_through_the_passes_is_the_whole_read_s() {
-        let whole = crate::io::cityjson::read_slice(DOC.as_bytes(), "d".as_ref()).unwrap();
-        let m = whole_model(Input::Bytes(DOC.as_bytes()), "d".as_ref()).unwrap();
-        assert_eq!(m.buildings, whole.buildings);
-        assert_eq!(m.assets, whole.assets);
-        assert_eq!(m.warnings, whole.warnings);
-        assert_eq!(m.files[0].len, whole.files[0].len);
-        // an id given twice: declined, read whole
+    fn the_whole_model_is_the_chunks_collected() {
+        let whole = whole_model(Input::Bytes(DOC.as_bytes()), "d".as_ref()).unwrap();
+        assert_eq!(whole.files[0].len, DOC.len() as u64);
+        let mut parts = Vec::new();
+        let input = Input::Bytes(DOC.as_bytes());
+        let r = stream(input, "d".as_ref(), 1, None, &|_| {}, |p: Part| {
+            parts.push(p.model);
+            Ok::<(), ()>(())
+        });
+        assert!(r.is_ok() && parts.len() == 2);
+        let buildings: Vec<_> = parts.iter().flat_map(|m| m.buildings.clone()).collect();
+        let ids = |b: &[Building]| b.iter().map(|b| b.id.clone()).collect::<Vec<_>>();
+        assert_eq!(ids(&buildings), ids(&whole.buildings));
+        let polygons = |m: &CityModel| m.assets.iter().map(|a| a.polygon_count()).sum::<usize>();
+        assert_eq!(parts.iter().map(polygons).sum::<usize>(), polygons(&whole));
+        // an id given twice: its objects mapped at once, the duplicate said first
         let twice = DOC.replace(r#""d":"#, r#""c":"#);
-        assert!(whole_model(Input::Bytes(twice.as_bytes()), "d".as_ref()).is_none());
+        let m = whole_model(Input::Bytes(twice.as_bytes()), "d".as_ref()).unwrap();
+        assert_eq!(m.buildings.len(), 4);
+        assert_eq!(m.warnings[0].message, "duplicate city object id");
     }
 
     #[test]

@@ -212,16 +212,44 @@ pub(crate) struct Semantics {
 
 /// A semantic surface object.
 #[derive(Debug, Deserialize)]
+#[serde(try_from = "Map<String, Value>")]
 pub(crate) struct Surface {
-    #[serde(rename = "type")]
     pub ty: String,
-    #[serde(default)]
     pub parent: Option<usize>,
-    #[serde(default)]
-    pub id: Option<Value>,
-    /// Its other members in document order (`children` and its own attributes).
-    #[serde(flatten)]
-    pub others: Map<String, Value>,
+    /// All its members in document order (`type`, `parent`, `children`, `id` and its own
+    /// attributes), as a CityJSON output copies them.
+    pub members: Map<String, Value>,
+}
+
+impl TryFrom<Map<String, Value>> for Surface {
+    type Error = String;
+    fn try_from(members: Map<String, Value>) -> Result<Self, String> {
+        let ty = match members.get("type") {
+            Some(Value::String(t)) => t.clone(),
+            Some(_) => return Err("a semantic surface's \"type\" is not a string".into()),
+            None => return Err("missing field `type`".into()),
+        };
+        let parent = match members.get("parent") {
+            None | Some(Value::Null) => None,
+            Some(p) => Some(usize::deserialize(p).map_err(|e| e.to_string())?),
+        };
+        Ok(Surface {
+            ty,
+            parent,
+            members,
+        })
+    }
+}
+
+impl Surface {
+    /// `id` as a string.
+    pub fn id(&self) -> Option<String> {
+        match self.members.get("id")? {
+            Value::String(t) => Some(t.clone()),
+            Value::Number(n) => Some(n.to_string()),
+            _ => None,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -264,11 +292,11 @@ mod tests {
             (s[0].ty.as_str(), s[0].parent, s[1].parent),
             ("RoofSurface", None, Some(0))
         );
-        assert_eq!(s[0].id, Some(Value::from("r1")));
-        let others: Vec<&str> = s[0].others.keys().map(String::as_str).collect();
+        assert_eq!(s[0].id().as_deref(), Some("r1"));
+        let members: Vec<&str> = s[0].members.keys().map(String::as_str).collect();
         assert_eq!(
-            (others, s[1].others.contains_key("children")),
-            (vec!["slope"], true)
+            (members, s[1].members.contains_key("children")),
+            (vec!["type", "slope", "id"], true)
         );
         assert_eq!(g.boundaries_text.as_ref().unwrap().get(), "[[[0,1,2]]]");
         assert_eq!(g.boundaries(), serde_json::json!([[[0, 1, 2]]]));

@@ -4,6 +4,7 @@
 //! ([`super::chunks::stream`]), each chunk's surface objects by their asset in the model.
 
 use super::chunks::{stream, Input, Part, Stop};
+use super::doc::CityObject;
 use crate::model::{AssetKind, CityModel, Source};
 use serde_json::{Map, Value};
 use std::collections::{BTreeMap, HashMap};
@@ -74,21 +75,18 @@ pub(crate) fn from_source(
 }
 
 /// What city object `id` (`o`) of the source gives: its attributes, and the members of the
-/// semantic surface objects `wanted` (asset, geometry, surface).
+/// semantic surface objects `wanted` (asset, geometry, surface) but for `type`, `parent`
+/// and `children`.
 pub(crate) fn add_object(
     out: &mut FromSource,
     id: String,
-    o: &mut Map<String, Value>,
+    o: &mut CityObject,
     wanted: &[(usize, usize, usize)],
 ) {
-    let geoms = o.get("geometry").and_then(Value::as_array);
     for &(i, g, k) in wanted {
-        let s = geoms
-            .and_then(|gs| gs.get(g))
-            .and_then(|g| g.pointer(&format!("/semantics/surfaces/{k}")))
-            .and_then(Value::as_object);
+        let s = o.geometry.get(g).and_then(|g| g.semantics.as_ref()?.surfaces.get(k));
         if let Some(s) = s {
-            let mut m = s.clone();
+            let mut m = s.members.clone();
             for key in ["type", "parent", "children"] {
                 m.remove(key);
             }
@@ -97,9 +95,7 @@ pub(crate) fn add_object(
             }
         }
     }
-    if let Some(Value::Object(a)) = o.remove("attributes") {
-        if !a.is_empty() {
-            out.objects.insert(id, a);
-        }
+    if let Some(a) = o.attributes.take().filter(|a| !a.is_empty()) {
+        out.objects.insert(id, a);
     }
 }
