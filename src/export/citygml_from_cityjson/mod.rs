@@ -314,7 +314,7 @@ pub fn write_citygml<R: BufRead>(
     }
     let meta = head.metadata.as_ref();
     let transform = head.transform;
-    let list = real(&head.vertices, transform, name, 0)?;
+    let list = real(&head.vertices, transform.as_ref(), name, 0)?;
     let mut out = Out::new(w, name, meta, transform.as_ref());
     out.root(bbox(&list).or_else(|| meta?.extent()))?;
     if head.appearance.is_some() {
@@ -333,7 +333,7 @@ pub fn write_citygml<R: BufRead>(
         }
         seq = true;
         appearances += usize::from(f.appearance.is_some());
-        let list = real(&f.vertices, transform, name, line)?;
+        let list = real(&f.vertices, transform.as_ref(), name, line)?;
         out.unit(&f.objects.0, templates, &list, line)?;
     }
     out.finish(head.version.unwrap_or_default(), seq, appearances)
@@ -476,25 +476,12 @@ fn srs_name(v: &serde_json::Value) -> Option<String> {
 /// Real coordinates (the `transform` applied), each finite and at most 1e12.
 fn real(
     raw: &[[f64; 3]],
-    t: Option<doc::Transform>,
+    t: Option<&doc::Transform>,
     name: &Path,
     line: u64,
 ) -> Result<Vec<[f64; 3]>, crate::io::cityjson::CityJsonError> {
-    let (s, o) = t.map_or(([1.0; 3], [0.0; 3]), |t| (t.scale, t.translate));
-    raw.iter()
-        .enumerate()
-        .map(|(k, v)| {
-            let p = [v[0] * s[0] + o[0], v[1] * s[1] + o[1], v[2] * s[2] + o[2]];
-            if p.iter().all(|x| x.is_finite() && x.abs() <= 1e12) {
-                Ok(p)
-            } else {
-                let m = format!(
-                    "vertex {k} {v:?} is not a finite coordinate of magnitude at most 1e12"
-                );
-                Err(crate::io::cityjson::CityJsonError::at(name, line, None, m))
-            }
-        })
-        .collect()
+    let list = crate::io::cityjson::map::real_vertices(raw, t, name, line)?;
+    Ok(list.into_iter().map(|p| p.to_array()).collect())
 }
 
 fn bbox(list: &[[f64; 3]]) -> Option<[f64; 6]> {

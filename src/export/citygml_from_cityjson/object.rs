@@ -386,7 +386,7 @@ fn geometry(
                         .filter(|k| polys[*k].sem == Some(j))
                         .collect();
                     let ms = multi(verts, &polys, &ks, solid.then_some(&pid), t);
-                    let _ = write!(inner, "<{p}:opening><{p}:{op}>{}<{p}:lod{lod}MultiSurface>{ms}</{p}:lod{lod}MultiSurface></{p}:{op}></{p}:opening>", attrs_of(&sems[j].members, t));
+                    let _ = write!(inner, "<{p}:opening><{p}:{op}>{}<{p}:lod{lod}MultiSurface>{ms}</{p}:lod{lod}MultiSurface></{p}:{op}></{p}:opening>", attrs_of(&sems[j].others, t));
                 }
             }
         }
@@ -396,7 +396,7 @@ fn geometry(
         let x = if p == "wtr" {
             let ms = multi(verts, &polys, &mine, solid.then_some(&pid), t)
                 .replace("gml:MultiSurface>", "gml:CompositeSurface>");
-            format!("<wtr:boundedBy><wtr:{th}>{}<wtr:lod{lod}Surface>{ms}</wtr:lod{lod}Surface></wtr:{th}></wtr:boundedBy>", attrs_of(&sems[i].members, t))
+            format!("<wtr:boundedBy><wtr:{th}>{}<wtr:lod{lod}Surface>{ms}</wtr:lod{lod}Surface></wtr:{th}></wtr:boundedBy>", attrs_of(&sems[i].others, t))
         } else {
             let ms = if mine.is_empty() {
                 String::new()
@@ -411,7 +411,7 @@ fn geometry(
             };
             format!(
                 "<{p}:{prop}><{p}:{th}>{}{ms}{inner}</{p}:{th}></{p}:{prop}>",
-                attrs_of(&sems[i].members, t)
+                attrs_of(&sems[i].others, t)
             )
         };
         *t.objects.entry(th.to_string()).or_default() += 1;

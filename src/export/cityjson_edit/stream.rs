@@ -1,9 +1,9 @@
 //! The CityJSON edits' side of the streaming reader ([`crate::io::cityjson::stream`]): its
 //! passes with the edits' errors, and the writer of a document's members and entries.
 
-pub(crate) use crate::io::cityjson::stream::*;
 use crate::io::citygml::error::{ReadError, WriteError};
 use crate::io::citygml::write::atomic_write;
+pub(crate) use crate::io::cityjson::stream::*;
 use crate::io::cityjson::CityJsonError;
 use crate::io::files::CountingWriter;
 use serde_json::{Map, Value};

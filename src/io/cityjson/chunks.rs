@@ -35,8 +35,8 @@
 //! everything, no serde value of the document).
 
 use super::doc::{CityObject, Metadata, Templates, Transform};
-use super::map::{real_vertices, Mapper, Vertices};
 use super::head::{check_version, model_version, source_file, template_vertices};
+use super::map::{real_vertices, Mapper, Vertices};
 use super::source::{add_object, FromSource};
 use super::stream::{open_json, read_from, read_slice, EachText, Pass, Seen, Structure, Vertex};
 use super::CityJsonError as Error;
@@ -190,12 +190,14 @@ impl<'a> Input<'a> {
     /// The JSON text (decompressed, a byte-order mark skipped).
     pub(super) fn open(self, name: &Path) -> Result<Box<dyn std::io::BufRead + 'a>, Error> {
         Ok(match self {
-            Input::File(p) => open_json(p)
-                .map_err(|e| Error::at(name, 0, None, format!("cannot read: {e}")))?,
+            Input::File(p) => {
+                open_json(p).map_err(|e| Error::at(name, 0, None, format!("cannot read: {e}")))?
+            }
             Input::Bytes(b) => Box::new(b.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(b)),
             Input::Gzip(b) => {
                 let mut r = std::io::BufReader::new(flate2::bufread::MultiGzDecoder::new(b));
-                if std::io::BufRead::fill_buf(&mut r).is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF")) {
+                if std::io::BufRead::fill_buf(&mut r).is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF"))
+                {
                     std::io::BufRead::consume(&mut r, 3);
                 }
                 Box::new(r)
@@ -584,10 +586,12 @@ pub(crate) fn stream_prepared<E>(
         parse_object(&mut objects, id, o)?;
         if !p.batch || last.is_some() {
             let copy = streamed.then_some(&mut source);
-            map_objects(&mut mapper, copy, &verts, &mut objects, 0).map_err(|e| match streamed {
-                true => Fail::Object(e.id, e.message),
-                false => Fail::Read(e),
-            })?;
+            map_objects(&mut mapper, copy, &verts, &mut objects, 0).map_err(
+                |e| match streamed {
+                    true => Fail::Object(e.id, e.message),
+                    false => Fail::Read(e),
+                },
+            )?;
         }
         if let Some(done) = last {
             let m = std::mem::replace(&mut mapper, new_mapper(false));
@@ -713,7 +717,10 @@ mod tests {
         assert!(e.to_string().starts_with(&at), "{e}");
         // the whole read's names the object (a CityJSONSeq's also the line)
         let e = whole_model(Input::Bytes(bad.as_bytes()), "d".as_ref()).unwrap_err();
-        assert_eq!(e.to_string(), "d [city object c]: invalid CityJSON: vertex index 7 out of range (3 vertices)");
+        assert_eq!(
+            e.to_string(),
+            "d [city object c]: invalid CityJSON: vertex index 7 out of range (3 vertices)"
+        );
         // a parser's error where the parser was
         let typo = DOC.replace(r#""c":{"type":"Building","#, r#""c":{"type":"Building",,"#);
         let Err(Stop::Read(e)) = chunks_of(&typo, 1) else {
@@ -734,7 +741,9 @@ mod tests {
         let Err(Stop::Read(e)) = chunks_of(&not, 1) else {
             panic!("not CityJSON is an error");
         };
-        assert!(e.to_string().ends_with(r#"of type "FeatureCollection", not "CityJSON""#));
+        assert!(e
+            .to_string()
+            .ends_with(r#"of type "FeatureCollection", not "CityJSON""#));
         let seq = format!(
             "{}\n{{\"type\":\"CityJSONFeature\"}}",
             DOC.replace('\n', " ")

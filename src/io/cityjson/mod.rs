@@ -34,8 +34,8 @@
 
 pub(crate) mod chunks;
 pub(crate) mod doc;
-pub mod map;
 mod head;
+pub mod map;
 mod seq;
 pub(crate) mod source;
 pub(crate) mod stream;

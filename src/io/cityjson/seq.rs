@@ -13,8 +13,8 @@
 
 use super::chunks::{map_objects, not_cityjson, part, Input, Part, Shared, Stop};
 use super::doc::{CityObject, Doc as Line, Metadata};
-use super::map::{real_vertices, Mapper, Vertices};
 use super::head::{check_version, model_version, source_file, template_vertices};
+use super::map::{real_vertices, Mapper, Vertices};
 use super::source::FromSource;
 use super::stream::{id_hash, Counted};
 use super::CityJsonError;
@@ -197,7 +197,12 @@ pub(super) fn stream_seq<E>(
             Some(Err(e)) => return Err(read(&e)),
             Some(Ok(f)) if f.ty != "CityJSONFeature" => {
                 let m = format!("a value of type {:?} after the CityJSON header (CityJSONSeq holds CityJSONFeature lines)", f.ty);
-                return Err(Stop::Read(CityJsonError::at(path, line, f.id.as_deref(), m)));
+                return Err(Stop::Read(CityJsonError::at(
+                    path,
+                    line,
+                    f.id.as_deref(),
+                    m,
+                )));
             }
             Some(Ok(f)) => Some(f),
         };

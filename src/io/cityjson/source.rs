@@ -59,7 +59,12 @@ pub(crate) fn from_source(
                 let i = assets.get(before + j).ok_or_else(|| changed(before + j))?;
                 found.surfaces.insert(*i, m);
             }
-            before += c.model.assets.iter().filter(|a| a.kind != AssetKind::Body).count();
+            before += c
+                .model
+                .assets
+                .iter()
+                .filter(|a| a.kind != AssetKind::Body)
+                .count();
             total += c.model.assets.len();
             Ok(())
         });
@@ -84,15 +89,12 @@ pub(crate) fn add_object(
     wanted: &[(usize, usize, usize)],
 ) {
     for &(i, g, k) in wanted {
-        let s = o.geometry.get(g).and_then(|g| g.semantics.as_ref()?.surfaces.get(k));
-        if let Some(s) = s {
-            let mut m = s.members.clone();
-            for key in ["type", "parent", "children"] {
-                m.remove(key);
-            }
-            if !m.is_empty() {
-                out.surfaces.insert(i, m);
-            }
+        let s = o
+            .geometry
+            .get(g)
+            .and_then(|g| g.semantics.as_ref()?.surfaces.get(k));
+        if let Some(m) = s.map(|s| s.copied()).filter(|m| !m.is_empty()) {
+            out.surfaces.insert(i, m);
         }
     }
     if let Some(a) = o.attributes.take().filter(|a| !a.is_empty()) {

@@ -281,28 +281,35 @@ fn stream_json<E>(
 ) -> Result<Streamed, E> {
     use crate::io::cityjson::chunks::{stream, Input, Part, Stop};
     let mut sum = StreamSummary::default();
-    let r = stream(Input::File(path), path, chunk_bytes, kept, passed, |p: Part| {
-        let bodies = p.model.assets.iter().filter(|a| a.kind == AssetKind::Body);
-        let bodies = bodies.count();
-        let chunk = Chunk {
-            index: sum.chunks,
-            buildings_before: sum.buildings,
-            assets_before: sum.assets,
-            bodies_before: sum.bodies,
-            warnings_before: sum.warnings,
-            bytes: p.bytes,
-            source: Some(p.source),
-            start: None,
-            root_envelopes: Vec::new(),
-            model: p.model,
-        };
-        sum.chunks += 1;
-        sum.buildings += chunk.model.buildings.len();
-        sum.assets += chunk.model.assets.len() - bodies;
-        sum.bodies += bodies;
-        sum.warnings += chunk.model.warnings.len();
-        each(chunk)
-    });
+    let r = stream(
+        Input::File(path),
+        path,
+        chunk_bytes,
+        kept,
+        passed,
+        |p: Part| {
+            let bodies = p.model.assets.iter().filter(|a| a.kind == AssetKind::Body);
+            let bodies = bodies.count();
+            let chunk = Chunk {
+                index: sum.chunks,
+                buildings_before: sum.buildings,
+                assets_before: sum.assets,
+                bodies_before: sum.bodies,
+                warnings_before: sum.warnings,
+                bytes: p.bytes,
+                source: Some(p.source),
+                start: None,
+                root_envelopes: Vec::new(),
+                model: p.model,
+            };
+            sum.chunks += 1;
+            sum.buildings += chunk.model.buildings.len();
+            sum.assets += chunk.model.assets.len() - bodies;
+            sum.bodies += bodies;
+            sum.warnings += chunk.model.warnings.len();
+            each(chunk)
+        },
+    );
     match r {
         Ok(shared) => Ok(Streamed::Done(StreamSummary {
             version: shared.version,
