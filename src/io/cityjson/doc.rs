@@ -336,7 +336,7 @@ mod tests {
             (vec!["slope", "id"], true)
         );
         // a copy's members as the source's object gives them, `type` taken out
-        let copied: Vec<&str> = s[0].copied().keys().map(String::as_str).collect();
+        let copied: Vec<String> = s[0].copied().keys().cloned().collect();
         assert_eq!(copied, ["id", "slope"]);
         assert_eq!(g.boundaries_text.as_ref().unwrap().get(), "[[[0,1,2]]]");
         assert_eq!(g.boundaries(), serde_json::json!([[[0, 1, 2]]]));

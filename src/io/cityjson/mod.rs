@@ -8,11 +8,11 @@
 //! empty, [`crate::model::SourceFile::cityjson`] says what it is, and the writers that copy CityGML from
 //! their source refuse it.
 //!
-//! One reader, in chunks ([`chunks`]): a document's small members, vertices and the links of
+//! One reader, in chunks (`chunks`): a document's small members, vertices and the links of
 //! its city objects in a first pass, then its city objects one at a time, cut into chunks
-//! of whole city-object trees; CityJSONSeq in chunks of whole lines ([`seq`]). The whole
+//! of whole city-object trees; CityJSONSeq in chunks of whole lines (`seq`). The whole
 //! read ([`read_slice`], `crate::io::citygml::read::read_file`) is the chunks collected,
-//! as one chunk. [`stream`] reads a document in passes for the edits, [`source`] finds what
+//! as one chunk. `stream` reads a document in passes for the edits, `source` finds what
 //! a CityJSON output copies from a CityJSON source. Gzip is decompressed as it is read.
 //! Errors name the file, line:column where the JSON parser knows them, and the city
 //! object's id.
