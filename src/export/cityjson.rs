@@ -123,7 +123,10 @@ pub(crate) fn write(
             file,
             surface_attributes,
             ..
-        } => (from_source(model, file)?, surface_attributes),
+        } => (
+            from_source(model, file, crate::io::citygml::read::CHUNK_BYTES)?,
+            surface_attributes,
+        ),
         Chunks::Stream { .. } => (None, None),
     };
     // 1. the plan

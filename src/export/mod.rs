@@ -36,7 +36,7 @@ pub mod citygml_from_cityjson;
 pub mod citygml_via_cityjson;
 pub mod cityjson;
 pub mod cityjson_edit;
-pub(crate) use crate::io::citygml::json::source as cityjson_source;
+pub(crate) use crate::io::cityjson::source as cityjson_source;
 mod cityjson_vertices;
 pub mod format;
 pub mod merge;

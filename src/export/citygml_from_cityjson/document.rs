@@ -1,16 +1,16 @@
 //! A `.city.json` document written as CityGML in chunks of whole city-object trees
-//! ([`crate::io::citygml::json::chunks`]: pass 1 the small members, the vertices and the
+//! ([`crate::io::cityjson::chunks`]: pass 1 the small members, the vertices and the
 //! links; pass 2 the objects, a chunk's at a time): the bytes [`super::write_citygml`] writes
 //! of the whole document, memory that follows the chunk and the vertices (24 bytes each).
 
 use super::{bbox, FromCityJsonError, FromCityJsonSummary, Out};
-use crate::io::citygml::json::chunks::{each_object, Fail, Input, Prepared, Stop};
+use crate::io::cityjson::chunks::{each_object, Fail, Input, Prepared, Stop};
 use crate::io::cityjson::doc::CityObject;
 use crate::io::cityjson::CityJsonError as Error;
 use std::io::Write;
 use std::path::Path;
 
-/// Write the document `input`, prepared ([`crate::io::citygml::json::chunks::prepare`]) as
+/// Write the document `input`, prepared ([`crate::io::cityjson::chunks::prepare`]) as
 /// `p`, as CityGML 2.0 to `w`.
 ///
 /// # Errors

@@ -195,7 +195,7 @@ pub fn citygml_from_cityjson(
 }
 
 /// [`citygml_from_cityjson`] of a `.city.json` document in chunks of whole city-object
-/// trees of about `chunk_bytes` of document (`io::citygml::json::chunks`): the same
+/// trees of about `chunk_bytes` of document (`io::cityjson::chunks`): the same
 /// bytes, memory that follows the chunk and the document's vertices (24 bytes each), not the
 /// document. The document is read twice (its vertices and links, then its objects).
 /// CityJSONSeq, and a document the chunked read declines (an id given twice, one that does
@@ -221,7 +221,7 @@ fn convert(
     opts: &WriteOptions,
     chunk: Option<u64>,
 ) -> Result<FromCityJsonSummary, FromCityJsonError> {
-    use crate::io::citygml::json::chunks::{prepare, Input};
+    use crate::io::cityjson::chunks::{prepare, Input};
     check_target(out, opts, std::iter::once(input))?;
     // pass 1 of the chunked read; what it declines is read whole (and its errors said so)
     let mut prepared = chunk
@@ -271,8 +271,16 @@ fn convert(
     Ok(summary)
 }
 
-pub use crate::io::citygml::json::is_json_file;
-pub(crate) use crate::io::citygml::json::open;
+pub use crate::io::cityjson::is_json_file;
+
+/// Open a (possibly gzip-compressed) file, or standard input for `-`.
+fn open(input: &Path) -> Result<Box<dyn BufRead + Send>, ReadError> {
+    let (r, _) = crate::io::files::open_decoded(input).map_err(|source| ReadError::Io {
+        file: input.to_path_buf(),
+        source,
+    })?;
+    Ok(r)
+}
 
 /// Write the CityJSON / CityJSONSeq read from `r` (named `name` in errors) as CityGML 2.0
 /// to `w`, value by value.
@@ -306,7 +314,7 @@ pub fn write_citygml<R: BufRead>(
     }
     let meta = head.metadata.as_ref();
     let transform = head.transform;
-    let list = real(&head.vertices, transform, name, 0)?;
+    let list = real(&head.vertices, transform.as_ref(), name, 0)?;
     let mut out = Out::new(w, name, meta, transform.as_ref());
     out.root(bbox(&list).or_else(|| meta?.extent()))?;
     if head.appearance.is_some() {
@@ -325,7 +333,7 @@ pub fn write_citygml<R: BufRead>(
         }
         seq = true;
         appearances += usize::from(f.appearance.is_some());
-        let list = real(&f.vertices, transform, name, line)?;
+        let list = real(&f.vertices, transform.as_ref(), name, line)?;
         out.unit(&f.objects.0, templates, &list, line)?;
     }
     out.finish(head.version.unwrap_or_default(), seq, appearances)
@@ -468,25 +476,12 @@ fn srs_name(v: &serde_json::Value) -> Option<String> {
 /// Real coordinates (the `transform` applied), each finite and at most 1e12.
 fn real(
     raw: &[[f64; 3]],
-    t: Option<doc::Transform>,
+    t: Option<&doc::Transform>,
     name: &Path,
     line: u64,
 ) -> Result<Vec<[f64; 3]>, crate::io::cityjson::CityJsonError> {
-    let (s, o) = t.map_or(([1.0; 3], [0.0; 3]), |t| (t.scale, t.translate));
-    raw.iter()
-        .enumerate()
-        .map(|(k, v)| {
-            let p = [v[0] * s[0] + o[0], v[1] * s[1] + o[1], v[2] * s[2] + o[2]];
-            if p.iter().all(|x| x.is_finite() && x.abs() <= 1e12) {
-                Ok(p)
-            } else {
-                let m = format!(
-                    "vertex {k} {v:?} is not a finite coordinate of magnitude at most 1e12"
-                );
-                Err(crate::io::cityjson::CityJsonError::at(name, line, None, m))
-            }
-        })
-        .collect()
+    let list = crate::io::cityjson::map::real_vertices(raw, t, name, line)?;
+    Ok(list.into_iter().map(|p| p.to_array()).collect())
 }
 
 fn bbox(list: &[[f64; 3]]) -> Option<[f64; 6]> {

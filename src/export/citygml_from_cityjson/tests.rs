@@ -118,7 +118,7 @@ fn seq_is_written_feature_by_feature_and_errors_name_the_line() {
 
 #[test]
 fn a_document_in_chunks_is_written_as_whole() {
-    use crate::io::citygml::json::chunks::{prepare, Input};
+    use crate::io::cityjson::chunks::{prepare, Input};
     let dir = tempfile::tempdir().unwrap();
     // an appearance, and a tree that is its own chunk after the building's
     let doc = DOC.replace(

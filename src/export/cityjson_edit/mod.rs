@@ -56,8 +56,8 @@
 mod document;
 mod reproject;
 mod rules;
-pub(crate) use crate::io::citygml::json::stream;
-use crate::io::citygml::json::stream::{cj, cj_error, forest, id_hash};
+pub(crate) mod stream;
+use stream::{cj, cj_error, forest, id_hash};
 mod upgrade;
 
 pub use reproject::{reproject_cityjson, CityJsonReproject};

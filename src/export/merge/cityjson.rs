@@ -35,11 +35,11 @@
 //! first for its header, ids and box, then to write.
 
 use super::{Head as Common, MergeError, MergeSummary, Plan};
+use crate::export::cityjson_edit::stream::{self, cj, EachObject, EachVertex, Pass, Vertex};
 use crate::export::cityjson_edit::{
     check_type, set_extent, srs_of, transform_of, trees, write_line, Transform, Values,
 };
 use crate::io::citygml::error::WriteError;
-use crate::io::citygml::json::stream::{self, cj, EachObject, EachVertex, Pass, Vertex};
 use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
 use crate::model::Bbox;
 use glam::DVec3;

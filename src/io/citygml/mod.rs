@@ -2,7 +2,6 @@
 
 pub mod edit;
 pub mod error;
-pub mod json;
 pub mod ns;
 pub mod read;
 pub mod reproject;

@@ -211,17 +211,82 @@ pub(crate) struct Semantics {
 }
 
 /// A semantic surface object.
-#[derive(Debug, Deserialize)]
+#[derive(Debug)]
 pub(crate) struct Surface {
-    #[serde(rename = "type")]
     pub ty: String,
-    #[serde(default)]
     pub parent: Option<usize>,
-    #[serde(default)]
-    pub id: Option<Value>,
-    /// Its other members in document order (`children` and its own attributes).
-    #[serde(flatten)]
+    /// Its other members in document order (`children`, `id` and its own attributes).
     pub others: Map<String, Value>,
+    /// Where `type` and `parent` stood among the members.
+    at: [Option<usize>; 2],
+}
+
+impl<'de> Deserialize<'de> for Surface {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Surface;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a semantic surface object")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<Surface, A::Error> {
+                let (mut ty, mut parent) = (None, None);
+                let mut others = Map::new();
+                let mut at = [None; 2];
+                let mut k = 0;
+                while let Some(key) = m.next_key::<String>()? {
+                    match key.as_str() {
+                        "type" => (ty, at[0]) = (Some(m.next_value::<String>()?), Some(k)),
+                        "parent" => (parent, at[1]) = (m.next_value()?, Some(k)),
+                        _ => drop(others.insert(key, m.next_value()?)),
+                    }
+                    k += 1;
+                }
+                let ty = ty.ok_or_else(|| serde::de::Error::missing_field("type"))?;
+                Ok(Surface {
+                    ty,
+                    parent,
+                    others,
+                    at,
+                })
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+impl Surface {
+    /// `id` as a string.
+    pub fn id(&self) -> Option<String> {
+        match self.others.get("id")? {
+            Value::String(t) => Some(t.clone()),
+            Value::Number(n) => Some(n.to_string()),
+            _ => None,
+        }
+    }
+
+    /// Its members but `type`, `parent` and `children`, in the order the source's object
+    /// gives them after each is taken out by [`Map::remove`] (the last member moved into its
+    /// place), as a CityJSON output copies them.
+    pub fn copied(&self) -> Map<String, Value> {
+        let mut all = Map::new();
+        let mut others = self.others.iter();
+        for k in 0..self.others.len() + self.at.iter().flatten().count() {
+            match self.at.iter().position(|&a| a == Some(k)) {
+                Some(0) => drop(all.insert("type".into(), Value::Null)),
+                Some(_) => drop(all.insert("parent".into(), Value::Null)),
+                None => {
+                    if let Some((key, v)) = others.next() {
+                        all.insert(key.clone(), v.clone());
+                    }
+                }
+            }
+        }
+        for key in ["type", "parent", "children"] {
+            all.remove(key);
+        }
+        all
+    }
 }
 
 #[cfg(test)]
@@ -264,12 +329,15 @@ mod tests {
             (s[0].ty.as_str(), s[0].parent, s[1].parent),
             ("RoofSurface", None, Some(0))
         );
-        assert_eq!(s[0].id, Some(Value::from("r1")));
+        assert_eq!(s[0].id().as_deref(), Some("r1"));
         let others: Vec<&str> = s[0].others.keys().map(String::as_str).collect();
         assert_eq!(
             (others, s[1].others.contains_key("children")),
-            (vec!["slope"], true)
+            (vec!["slope", "id"], true)
         );
+        // a copy's members as the source's object gives them, `type` taken out
+        let copied: Vec<String> = s[0].copied().keys().cloned().collect();
+        assert_eq!(copied, ["id", "slope"]);
         assert_eq!(g.boundaries_text.as_ref().unwrap().get(), "[[[0,1,2]]]");
         assert_eq!(g.boundaries(), serde_json::json!([[[0, 1, 2]]]));
         let p = &d.objects.0[1].1;

@@ -323,7 +323,7 @@ impl Mapper {
                         let Some(kind) = building_surface(&s.ty) else {
                             continue;
                         };
-                        let sid = surface_id(s);
+                        let sid = s.id();
                         let geometries = if polys.is_empty() {
                             Vec::new()
                         } else {
@@ -623,15 +623,6 @@ impl Mapper {
             surfs: out,
             semantics: g.semantics.as_ref(),
         })
-    }
-}
-
-/// A semantic surface's `id` as a string.
-pub(crate) fn surface_id(s: &super::doc::Surface) -> Option<String> {
-    match s.id.as_ref()? {
-        Value::String(t) => Some(t.clone()),
-        Value::Number(n) => Some(n.to_string()),
-        _ => None,
     }
 }
 

@@ -8,10 +8,14 @@
 //! empty, [`crate::model::SourceFile::cityjson`] says what it is, and the writers that copy CityGML from
 //! their source refuse it.
 //!
-//! The document is read value by value ([`serde_json::StreamDeserializer`]): CityJSONSeq one
-//! feature line at a time, each line's objects mapped and dropped before the next; gzip is
-//! decompressed as it is read. Errors name the file, line:column where the JSON parser knows
-//! them, and the city object's id.
+//! One reader, in chunks (`chunks`): a document's small members, vertices and the links of
+//! its city objects in a first pass, then its city objects one at a time, cut into chunks
+//! of whole city-object trees; CityJSONSeq in chunks of whole lines (`seq`). The whole
+//! read ([`read_slice`], `crate::io::citygml::read::read_file`) is the chunks collected,
+//! as one chunk. `stream` reads a document in passes for the edits, `source` finds what
+//! a CityJSON output copies from a CityJSON source. Gzip is decompressed as it is read.
+//! Errors name the file, line:column where the JSON parser knows them, and the city
+//! object's id.
 //!
 //! # Example
 //! ```
@@ -28,16 +32,29 @@
 //! assert_eq!(model.assets[0].detail_polygons()[0].exterior()[1].x, 1001.0);
 //! ```
 
+pub(crate) mod chunks;
 pub(crate) mod doc;
+mod head;
 pub mod map;
-pub(crate) mod read;
-pub(crate) use read::reference_system_text;
+mod seq;
+pub(crate) mod source;
+pub(crate) mod stream;
+pub(crate) use head::reference_system_text;
 
 pub use map::Origin;
-pub use read::{read_reader, read_slice, read_slice_with_origins};
+
+/// Read a CityJSON or CityJSONSeq document held in memory (`name` names it in the model,
+/// errors and warnings): its chunks collected, as one chunk.
+///
+/// # Errors
+/// [`CityJsonError`]: not JSON, not CityJSON, a vertex index out of range, a non-finite coordinate...
+pub fn read_slice(bytes: &[u8], name: &Path) -> Result<CityModel, CityJsonError> {
+    chunks::whole_model(chunks::Input::Bytes(bytes), name)
+}
 
 use crate::model::CityModel;
 use std::fmt;
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
 /// Why a CityJSON document could not be read.
@@ -119,6 +136,13 @@ pub fn sniff(head: &[u8]) -> Sniffed {
         Some(b'{') => Sniffed::Json,
         _ => Sniffed::Other,
     }
+}
+
+/// Whether the file at `path` holds JSON (CityJSON, CityJSONSeq; gzip-compressed or not), by
+/// its first bytes ([`sniff`]); false when it cannot be read.
+pub fn is_json_file(path: &Path) -> bool {
+    crate::io::files::open_decoded(path)
+        .is_ok_and(|(mut r, _)| r.fill_buf().is_ok_and(|h| sniff(h) == Sniffed::Json))
 }
 
 /// True when `model`'s file `file` was read from CityJSON.
@@ -255,7 +279,7 @@ mod tests {
     }
 
     #[test]
-    fn gzip_reader_reads_the_same() {
+    fn gzip_reads_the_same() {
         use std::io::Write;
         let doc = format!(
             r#"{{{HEAD},"CityObjects":{{"b":{{"type":"Building","geometry":[{{"type":"MultiSurface","lod":"2","boundaries":[[[0,1,2]]]}}]}}}},"vertices":{SQUARE}}}"#
@@ -263,8 +287,7 @@ mod tests {
         let mut e = flate2::write::GzEncoder::new(Vec::new(), Default::default());
         e.write_all(doc.as_bytes()).unwrap();
         let gz = e.finish().unwrap();
-        let r = crate::io::files::gunzip(std::io::Cursor::new(gz));
-        let a = read_reader(r, Path::new("t.city.json.gz"), true).unwrap();
+        let a = chunks::whole_model(chunks::Input::Gzip(&gz), Path::new("t.city.json.gz")).unwrap();
         let b = read(&doc);
         assert_eq!(a.assets, b.assets);
         assert!(a.files[0].gzip);

@@ -206,32 +206,20 @@ fn json_or_xml(
     src: &Source,
     name: &Path,
 ) -> Result<Result<CityModel, source::Loaded>, ReadError> {
-    use crate::io::citygml::json::chunks::{whole_model, Input};
-    // through the chunked read's passes (memory follows the model, not a value of the whole
-    // document); what they decline is read whole, as before
+    use crate::io::cityjson::chunks::{whole_model, Input};
+    // the chunks of the chunked read collected (memory follows the model, not a value of
+    // the whole document)
     Ok(Ok(match doc {
         source::Loaded::Plain(doc) if source::is_json(&doc) => {
-            match whole_model(Input::Bytes(&doc), name) {
-                Some(model) => model,
-                None => crate::io::cityjson::read_slice(&doc, name)?,
-            }
+            whole_model(Input::Bytes(&doc), name)?
         }
         source::Loaded::Gzip(mut reader, n) => {
             if !source::is_json(source::peek(&mut reader)) {
                 return Ok(Err(source::Loaded::Gzip(reader, n)));
             }
-            let file = match src {
-                Source::File(p) => whole_model(Input::File(p), name),
-                Source::Memory(_) => None,
-            };
-            match file {
-                Some(mut model) => {
-                    for f in &mut model.files {
-                        f.gzip = true;
-                    }
-                    model
-                }
-                None => crate::io::cityjson::read_reader(reader, name, true)?,
+            match src {
+                Source::File(p) => whole_model(Input::File(p), name)?,
+                Source::Memory(b) => whole_model(Input::Gzip(b), name)?,
             }
         }
         doc => return Ok(Err(doc)),

@@ -75,7 +75,7 @@ pub struct Chunk {
     pub bytes: (u64, u64),
     /// A CityJSON document's: the attributes of the chunk's city objects and the members of
     /// their semantic surface objects, which its CityJSON output copies.
-    pub(crate) source: Option<crate::io::citygml::json::source::FromSource>,
+    pub(crate) source: Option<crate::io::cityjson::source::FromSource>,
     /// A CityGML document's: where the chunk starts, to parse it or some of its members
     /// again ([`Reread`]).
     pub start: Option<ChunkStart>,
@@ -159,7 +159,7 @@ impl Streamed {
 /// bytes read in pass `k`, the writer telling what its passes are).
 ///
 /// A CityJSON document's first pass (its small members, vertices and links:
-/// `io::citygml::json::chunks`) is made once and kept for the later passes over the
+/// `io::cityjson::chunks`) is made once and kept for the later passes over the
 /// same file: the document is read once a pass of the writer, not twice, for as long as the
 /// passes live at the cost of its vertices (24 bytes each) held between the passes.
 #[derive(Clone)]
@@ -171,7 +171,7 @@ pub struct Passes<'a> {
     /// Progress: `passed(k, n)`, `n` more bytes read in pass `k`.
     pub passed: &'a dyn Fn(usize, u64),
     /// A CityJSON document's first pass, kept.
-    kept: std::sync::Arc<crate::io::citygml::json::chunks::Kept>,
+    kept: std::sync::Arc<crate::io::cityjson::chunks::Kept>,
 }
 
 impl<'a> Passes<'a> {
@@ -226,14 +226,8 @@ impl<'a> Passes<'a> {
         let passed = &|n| passed(k, n);
         let r = if citygml_only {
             stream_citygml(path, self.read, self.chunk_bytes, passed, each)?
-        } else if crate::io::citygml::json::is_json_file(path) {
-            crate::io::citygml::json::chunks::stream_kept(
-                path,
-                self.chunk_bytes,
-                &self.kept,
-                passed,
-                each,
-            )?
+        } else if crate::io::cityjson::is_json_file(path) {
+            stream_json(path, self.chunk_bytes, Some(&self.kept), passed, each)?
         } else {
             stream(path, self.read, self.chunk_bytes, passed, each)?
         };
@@ -270,10 +264,62 @@ pub fn stream<E>(
     passed: &dyn Fn(u64),
     each: impl FnMut(Chunk) -> Result<(), E>,
 ) -> Result<Streamed, E> {
-    if crate::io::citygml::json::is_json_file(path) {
-        return crate::io::citygml::json::chunks::stream(path, chunk_bytes, passed, each);
+    if crate::io::cityjson::is_json_file(path) {
+        return stream_json(path, chunk_bytes, None, passed, each);
     }
     stream_citygml(path, opts, chunk_bytes, passed, each)
+}
+
+/// [`stream`] of a CityJSON document or CityJSONSeq ([`crate::io::cityjson`] reads its
+/// chunks), its first pass kept in `kept` where given.
+fn stream_json<E>(
+    path: &Path,
+    chunk_bytes: u64,
+    kept: Option<&crate::io::cityjson::chunks::Kept>,
+    passed: &dyn Fn(u64),
+    mut each: impl FnMut(Chunk) -> Result<(), E>,
+) -> Result<Streamed, E> {
+    use crate::io::cityjson::chunks::{stream, Input, Part, Stop};
+    let mut sum = StreamSummary::default();
+    let r = stream(
+        Input::File(path),
+        path,
+        chunk_bytes,
+        kept,
+        passed,
+        |p: Part| {
+            let bodies = p.model.assets.iter().filter(|a| a.kind == AssetKind::Body);
+            let bodies = bodies.count();
+            let chunk = Chunk {
+                index: sum.chunks,
+                buildings_before: sum.buildings,
+                assets_before: sum.assets,
+                bodies_before: sum.bodies,
+                warnings_before: sum.warnings,
+                bytes: p.bytes,
+                source: Some(p.source),
+                start: None,
+                root_envelopes: Vec::new(),
+                model: p.model,
+            };
+            sum.chunks += 1;
+            sum.buildings += chunk.model.buildings.len();
+            sum.assets += chunk.model.assets.len() - bodies;
+            sum.bodies += bodies;
+            sum.warnings += chunk.model.warnings.len();
+            each(chunk)
+        },
+    );
+    match r {
+        Ok(shared) => Ok(Streamed::Done(StreamSummary {
+            version: shared.version,
+            srs_name: shared.srs_name,
+            ..sum
+        })),
+        Err(Stop::Each(e)) => Err(e),
+        Err(Stop::Declined(why)) => Ok(Streamed::Declined(why)),
+        Err(Stop::Read(e)) => Ok(Streamed::Declined(e.to_string())),
+    }
 }
 
 /// [`stream`] of a CityGML document only (a CityJSON one declines): for the writers that

@@ -1,7 +1,8 @@
 //! A CityJSON document (`.city.json`) read in chunks of whole city-object
-//! trees ([`stream`]): the same [`Chunk`]s, in the same order, as the chunked CityGML read
-//! gives, so that `stats` and `convert` consume both alike; memory follows the chunk, not
-//! the document.
+//! trees ([`stream`]): each chunk a [`Part`], which the chunked CityGML read
+//! (`crate::io::citygml::read::stream`) hands over as the same `Chunk`s, in the same order,
+//! as it gives of CityGML, so that `stats` and `convert` consume both alike; memory follows
+//! the chunk, not the document.
 //!
 //! Two passes over the document, through the streaming reader of the CityJSON edits
 //! (`super::stream`, shared with the CityJSON edits: its members in any order, `CityObjects` one
@@ -21,33 +22,33 @@
 //! What grows with the document: the vertices in real coordinates, 24 bytes a vertex (the
 //! whole document's list, since any object may use any vertex), and the list of cuts.
 //!
-//! The stream declines ([`Streamed::Declined`]: the caller reads the document whole, as
-//! before) where a chunk could differ from the whole read: a first value that is no
-//! `CityJSON` object, a city object id given twice, and any document that does not read (the
-//! reason names the file and the line:column where the JSON parser was). CityJSONSeq (a
-//! second JSON value after the first) is read in chunks of lines (`super::seq`).
+//! A document with a city object id given twice is one chunk, its objects mapped at once
+//! (the links cannot tell which object of the id another one names). A document that does
+//! not read stops the stream ([`Stop::Read`]: the file, and the line:column where the JSON
+//! parser was). CityJSONSeq (a second JSON value after the first) is read in chunks of
+//! lines (`super::seq`). The whole read ([`whole_model`]) is the chunks collected, as one
+//! chunk.
 //!
 //! Pass 1's results ([`Prepared`]) serve every later pass over the objects: the CityGML
-//! writer's (`crate::export::citygml_from_cityjson`), a streamed writer's passes
-//! ([`crate::io::citygml::read::Passes`] keeps them), and the whole model of a CityJSON input
-//! ([`whole_model`]: one chunk of everything, no serde value of the document).
+//! writer's (`crate::export::citygml_from_cityjson`), a streamed writer's passes (kept in
+//! a [`Kept`]), and the whole model of a CityJSON input ([`whole_model`]: one chunk of
+//! everything, no serde value of the document).
 
+use super::doc::{CityObject, Metadata, Templates, Transform};
+use super::head::{check_version, model_version, source_file, template_vertices};
+use super::map::{real_vertices, Mapper, Vertices};
 use super::source::{add_object, FromSource};
 use super::stream::{open_json, read_from, read_slice, EachText, Pass, Seen, Structure, Vertex};
-use crate::io::citygml::read::{Chunk, StreamSummary, Streamed};
-use crate::io::citygml::{ReadError, WriteError};
-use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
-use crate::io::cityjson::map::{real_vertices, Mapper, Vertices};
-use crate::io::cityjson::read::{check_version, source_file, template_vertices};
-use crate::io::cityjson::CityJsonError as Error;
-use crate::model::{Asset, AssetKind, Building, CityModel, Warning};
+use super::CityJsonError as Error;
+use crate::model::{Asset, Building, CityGmlVersion, CityModel, SourceFile, Warning};
 use glam::DVec3;
 use serde::Deserialize;
 use serde_json::value::RawValue;
 use serde_json::{Map, Value};
+use std::collections::HashMap;
 use std::path::Path;
 
-/// Why [`stream_chunks`] stopped.
+/// Why [`stream`] stopped.
 #[derive(Debug)]
 pub(crate) enum Stop<E> {
     /// The caller's function failed.
@@ -58,30 +59,22 @@ pub(crate) enum Stop<E> {
     Read(Error),
 }
 
-/// [`crate::io::citygml::read::stream`] of a CityJSON document (see the module docs): each
-/// chunk handed to `each` in document order; `passed(n)`: `n` more bytes of the document
-/// read (they add up to its size when it is done).
-///
-/// # Errors
-/// Errors of `each`; a document that cannot be read, or could differ from the whole read, is
-/// [`Streamed::Declined`] with the reason.
-pub(crate) fn stream<E>(
-    path: &Path,
-    chunk_bytes: u64,
-    passed: &dyn Fn(u64),
-    each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<Streamed, E> {
-    streamed(stream_chunks(path, chunk_bytes, passed, each))
+/// One chunk of a document: a model of one file (the document's path and CRS), its first
+/// and last byte (exclusive) in the document (of a `.city.json`: in proportion to its city
+/// objects), and what a CityJSON output copies of its city objects (empty unless asked for).
+#[derive(Debug)]
+pub(crate) struct Part {
+    pub model: CityModel,
+    pub bytes: (u64, u64),
+    pub source: FromSource,
 }
 
-/// How a stream ended, as [`stream`] tells it.
-fn streamed<E>(r: Result<StreamSummary, Stop<E>>) -> Result<Streamed, E> {
-    match r {
-        Ok(sum) => Ok(Streamed::Done(sum)),
-        Err(Stop::Each(e)) => Err(e),
-        Err(Stop::Declined(why)) => Ok(Streamed::Declined(why)),
-        Err(Stop::Read(e)) => Ok(Streamed::Declined(e.to_string())),
-    }
+/// What the chunks of a document share: the CityGML version its CityJSON version encodes
+/// and its `srsName`.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Shared {
+    pub version: Option<CityGmlVersion>,
+    pub srs_name: Option<String>,
 }
 
 /// Pass 1: the head, the vertices as stored, the links of the city objects.
@@ -92,8 +85,10 @@ struct Head {
     members: Map<String, Value>,
     vertices: Vec<[f64; 3]>,
     structure: Structure,
-    /// An id given twice.
-    repeated: Option<String>,
+    /// City objects, ids given twice counted twice.
+    count: usize,
+    /// Whether an id is given twice.
+    repeated: bool,
     /// Whether `appearance` is given (not `null`).
     appearance: bool,
 }
@@ -119,8 +114,9 @@ impl Pass for Head {
         true
     }
     fn object_text(&mut self, id: String, o: &RawValue) -> Result<(), String> {
+        self.count += 1;
         if self.structure.contains(&id) {
-            self.repeated.get_or_insert(id);
+            self.repeated = true;
             return Ok(());
         }
         let l: Links = serde_json::from_str(o.get()).map_err(|e| format!("{id}: {e}"))?;
@@ -147,50 +143,6 @@ struct Links {
     parents: Option<Value>,
     #[serde(default)]
     children: Option<Value>,
-}
-
-/// What a CityJSON output copies of a city object ([`add_object`]): its attributes and its
-/// semantic surface objects (the rest skipped unparsed).
-#[derive(Deserialize)]
-pub(super) struct Copied {
-    #[serde(default)]
-    attributes: Option<Value>,
-    #[serde(default)]
-    geometry: Vec<CopiedGeometry>,
-}
-
-#[derive(Deserialize)]
-struct CopiedGeometry {
-    #[serde(default)]
-    semantics: Option<CopiedSemantics>,
-}
-
-#[derive(Deserialize)]
-struct CopiedSemantics {
-    #[serde(default)]
-    surfaces: Option<Value>,
-}
-
-impl Copied {
-    /// The object as [`add_object`] reads it.
-    pub(super) fn into_object(self) -> Map<String, Value> {
-        let geometry = self
-            .geometry
-            .into_iter()
-            .map(|g| match g.semantics {
-                Some(CopiedSemantics { surfaces: Some(s) }) => {
-                    serde_json::json!({"semantics": {"surfaces": s}})
-                }
-                _ => Value::Object(Map::new()),
-            })
-            .collect();
-        let mut o = Map::new();
-        o.insert("geometry".into(), Value::Array(geometry));
-        if let Some(a) = self.attributes {
-            o.insert("attributes".into(), a);
-        }
-        o
-    }
 }
 
 /// A member of the head as `T` (absent: `None`).
@@ -230,21 +182,33 @@ fn chunk_ends(reach: &[u32], per: usize) -> Vec<u32> {
 pub(crate) enum Input<'a> {
     File(&'a Path),
     Bytes(&'a [u8]),
+    /// Gzip-compressed bytes in memory.
+    Gzip(&'a [u8]),
 }
 
 impl<'a> Input<'a> {
     /// The JSON text (decompressed, a byte-order mark skipped).
-    pub(super) fn open(self) -> Result<Box<dyn std::io::BufRead + 'a>, WriteError> {
+    pub(super) fn open(self, name: &Path) -> Result<Box<dyn std::io::BufRead + 'a>, Error> {
         Ok(match self {
-            Input::File(p) => open_json(p)?,
+            Input::File(p) => {
+                open_json(p).map_err(|e| Error::at(name, 0, None, format!("cannot read: {e}")))?
+            }
             Input::Bytes(b) => Box::new(b.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(b)),
+            Input::Gzip(b) => {
+                let mut r = std::io::BufReader::new(flate2::bufread::MultiGzDecoder::new(b));
+                if std::io::BufRead::fill_buf(&mut r).is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF"))
+                {
+                    std::io::BufRead::consume(&mut r, 3);
+                }
+                Box::new(r)
+            }
         })
     }
 
     /// A pass of `pass` over the document (named `name` in errors).
-    fn read(self, name: &Path, pass: &mut dyn Pass) -> Result<Seen, WriteError> {
+    fn read(self, name: &Path, pass: &mut dyn Pass) -> Result<Seen, Error> {
         match self {
-            Input::File(_) => read_from(self.open()?, name, pass),
+            Input::File(_) | Input::Gzip(_) => read_from(self.open(name)?, name, pass),
             Input::Bytes(b) => read_slice(b.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(b), name, pass),
         }
     }
@@ -257,16 +221,16 @@ impl<'a> Input<'a> {
                 std::fs::File::open(path)
                     .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
                     .is_ok()
-                    && crate::io::is_gzip(&magic)
+                    && crate::io::files::is_gzip(&magic)
             }
             Input::Bytes(_) => false,
+            Input::Gzip(_) => true,
         }
     }
 }
 
 /// What pass 1 found of a document (module docs): what every pass over its objects needs.
-/// Kept by [`crate::io::citygml::read::Passes`] for the later passes of a writer over the
-/// same document; its size grows with the document's vertices (24 bytes each) and chunks.
+/// Kept ([`Kept`]) for the later passes of a writer over the same document; its size grows with the document's vertices (24 bytes each) and chunks.
 #[derive(Debug)]
 pub(crate) struct Prepared {
     /// `version` (empty when absent).
@@ -282,6 +246,9 @@ pub(crate) struct Prepared {
     pub appearance: bool,
     /// The last object of each chunk, in document order.
     ends: Vec<u32>,
+    /// Whether a chunk's objects are mapped at once (an id given twice) rather than one by
+    /// one.
+    batch: bool,
     /// How many city objects.
     pub objects: usize,
     /// The document's bytes (decompressed, a byte-order mark left out).
@@ -303,17 +270,16 @@ pub(crate) fn prepare<E>(
 ) -> Result<Option<Prepared>, Stop<E>> {
     let path = name;
     let mut head = Head::default();
-    let seen = input.read(path, &mut head).map_err(read_error)?;
+    let seen = input.read(path, &mut head).map_err(Stop::Read)?;
     if seen.more {
         return Ok(None);
     }
-    if head.members.get("type").and_then(Value::as_str) != Some("CityJSON") {
-        return Err(Stop::Declined("not a CityJSON object".into()));
-    }
-    if let Some(id) = head.repeated {
-        return Err(Stop::Declined(format!("city object id {id:?} given twice")));
-    }
     let stop = Stop::Read;
+    match head.members.get("type") {
+        Some(Value::String(t)) if t == "CityJSON" => {}
+        Some(Value::String(t)) => return Err(stop(not_cityjson(path, t))),
+        _ => return Err(stop(Error::at(path, 1, None, "no \"type\" string".into()))),
+    }
     let version = match head.members.remove("version") {
         Some(Value::String(v)) => v,
         None => String::new(),
@@ -339,14 +305,19 @@ pub(crate) fn prepare<E>(
     let template_list = template_vertices(templates.as_ref(), path).map_err(stop)?;
     let list = real_vertices(&head.vertices, transform.as_ref(), path, 0).map_err(stop)?;
     drop(std::mem::take(&mut head.vertices));
-    let n = head.structure.len();
+    let n = head.count;
     let per = match seen.bytes {
         0 => n.max(1),
         b => usize::try_from(u128::from(chunk_bytes) * n as u128 / u128::from(b))
             .unwrap_or(usize::MAX)
             .max(1),
     };
-    let ends = chunk_ends(&head.structure.reach(), per);
+    // an id given twice: one chunk, its objects mapped at once, as the links cannot tell
+    // which object of an id another one names
+    let ends = match head.repeated {
+        true => n.checked_sub(1).map(|l| l as u32).into_iter().collect(),
+        false => chunk_ends(&head.structure.reach(), per),
+    };
     Ok(Some(Prepared {
         version,
         transform,
@@ -356,6 +327,7 @@ pub(crate) fn prepare<E>(
         template_list,
         appearance: head.appearance,
         ends,
+        batch: head.repeated,
         objects: n,
         bytes: seen.bytes,
         gzip: input.gzip(),
@@ -363,20 +335,21 @@ pub(crate) fn prepare<E>(
     }))
 }
 
-/// A reader's error as a [`Stop`]: the document's own (file, line:column) or declined.
-fn read_error<E>(e: WriteError) -> Stop<E> {
-    match e {
-        WriteError::Read(ReadError::CityJson(e)) => Stop::Read(e),
-        e => Stop::Declined(e.to_string()),
-    }
+/// The error of a first value of type `ty`, not `CityJSON`.
+pub(super) fn not_cityjson(name: &Path, ty: &str) -> Error {
+    let m = format!("the first object is of type {ty:?}, not \"CityJSON\"");
+    Error::at(name, 1, None, m)
 }
 
 /// Why the function of [`each_object`] stopped.
 pub(crate) enum Fail<E> {
     /// The caller's error.
     Each(E),
-    /// The object is refused: the object's id where known, what is wrong.
+    /// The object is refused: the object's id where known, what is wrong (the reader adds
+    /// where it is).
     Object(Option<String>, String),
+    /// The objects are refused: the error as it is.
+    Read(Error),
 }
 
 /// Pass 2 over the document `p` was prepared from: each city object's id and text handed to
@@ -395,6 +368,7 @@ pub(crate) fn each_object<E>(
     let mut k = 0usize;
     let mut failed: Option<E> = None;
     let mut failed_id: Option<String> = None;
+    let mut refused: Option<Error> = None;
     let mut end = p.ends.iter().copied();
     let mut next_end = end.next();
     let r = input.read(
@@ -415,20 +389,22 @@ pub(crate) fn each_object<E>(
                     failed_id = id;
                     Err(m)
                 }
+                Err(Fail::Read(e)) => {
+                    refused = Some(e);
+                    Err("stopped".into())
+                }
             }
         }),
     );
     if let Some(f) = failed {
         return Err(Stop::Each(f));
     }
-    if let Err(e) = r {
-        return Err(match read_error(e) {
-            Stop::Read(mut e) => {
-                e.id = failed_id.or(e.id);
-                Stop::Read(e)
-            }
-            other => other,
-        });
+    if let Some(e) = refused {
+        return Err(Stop::Read(e));
+    }
+    if let Err(mut e) = r {
+        e.id = failed_id.or(e.id);
+        return Err(Stop::Read(e));
     }
     if k != p.objects {
         return Err(Stop::Declined("the document changed while read".into()));
@@ -436,94 +412,128 @@ pub(crate) fn each_object<E>(
     Ok(())
 }
 
-/// City object `id` (its text `o`) mapped into `mapper`, what a CityJSON output copies of it
-/// kept in `source` (when given: else not parsed). Errors: the object's id where known, what is wrong.
-fn map_object(
-    mapper: &mut Mapper,
-    source: Option<&mut FromSource>,
-    verts: &Vertices<'_>,
+/// City object `id` (its text `o`) parsed into `objects`. Errors: the object's id, what is
+/// wrong.
+fn parse_object<E>(
+    objects: &mut Vec<(String, CityObject)>,
     id: String,
     o: &RawValue,
-    line: u64,
-) -> Result<(), (Option<String>, String)> {
-    let before = mapper.origins.len();
-    let parsed = serde_json::from_str::<CityObject>(o.get()).and_then(|t| {
-        let c = source
-            .is_some()
-            .then(|| serde_json::from_str::<Copied>(o.get()));
-        Ok((t, c.transpose()?))
-    });
-    let (typed, copied) = match parsed {
-        Ok(t) => t,
-        Err(e) => return Err((Some(id), e.to_string())),
-    };
-    let one = [(id, typed)];
-    mapper
-        .add(&one, verts, line)
-        .map_err(|e| (e.id.clone(), e.message))?;
-    let [(id, _)] = one;
-    let (Some(source), Some(copied)) = (source, copied) else {
-        return Ok(());
-    };
-    let wanted: Vec<(usize, usize, usize)> = mapper.origins[before..]
-        .iter()
-        .enumerate()
-        .filter_map(|(i, o)| o.surface.map(|(g, s)| (before + i, g, s)))
-        .collect();
-    add_object(source, id, &mut copied.into_object(), &wanted);
-    Ok(())
-}
-
-/// [`stream`], with why it stopped.
-pub(crate) fn stream_chunks<E>(
-    path: &Path,
-    chunk_bytes: u64,
-    passed: &dyn Fn(u64),
-    each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<StreamSummary, Stop<E>> {
-    match prepare(Input::File(path), path, chunk_bytes)? {
-        Some(p) => stream_prepared(Input::File(path), path, &p, true, passed, each),
-        None => super::seq::stream_seq(Input::File(path), path, chunk_bytes, passed, each),
+) -> Result<(), Fail<E>> {
+    match serde_json::from_str::<CityObject>(o.get()) {
+        Ok(t) => {
+            objects.push((id, t));
+            Ok(())
+        }
+        Err(e) => {
+            let e = e.to_string();
+            let m = e.rsplit_once(" at line ").map_or(e.as_str(), |(m, _)| m);
+            Err(Fail::Object(Some(id), m.to_string()))
+        }
     }
 }
 
-/// The next chunk after those `sum` counts (which it then counts too): a model of one file.
-pub(super) fn next_chunk(
-    sum: &mut StreamSummary,
-    file: crate::model::SourceFile,
+/// The city objects `objects` mapped into `mapper` at once (of CityJSONSeq line `line`; a
+/// document's: 0), what a CityJSON output copies of them kept in `source` where given (of an
+/// id given twice, the last object's, for all of the id's assets).
+///
+/// # Errors
+/// What [`Mapper::add`] refuses.
+pub(super) fn map_objects(
+    mapper: &mut Mapper,
+    source: Option<&mut FromSource>,
+    verts: &Vertices<'_>,
+    objects: &mut Vec<(String, CityObject)>,
+    line: u64,
+) -> Result<(), Error> {
+    let before = mapper.origins.len();
+    mapper.add(objects, verts, line)?;
+    if let Some(source) = source {
+        // (asset, geometry, surface) of each object's semantic surface objects
+        let mut wanted: HashMap<&str, Vec<(usize, usize, usize)>> = HashMap::new();
+        for (i, o) in mapper.origins[before..].iter().enumerate() {
+            if let Some((g, s)) = o.surface {
+                let w = wanted.entry(o.object.as_str()).or_default();
+                w.push((before + i, g, s));
+            }
+        }
+        // an object whose id comes again later
+        let mut later = std::collections::HashSet::new();
+        let mut skip = vec![false; objects.len()];
+        if objects.len() > 1 {
+            for (k, (id, _)) in objects.iter().enumerate().rev() {
+                skip[k] = !later.insert(id.as_str());
+            }
+        }
+        drop(later);
+        for ((id, o), skip) in objects.iter_mut().zip(skip) {
+            if skip {
+                continue;
+            }
+            let w = wanted.get(id.as_str()).map_or(&[][..], Vec::as_slice);
+            add_object(source, id.clone(), o, w);
+        }
+    }
+    objects.clear();
+    Ok(())
+}
+
+/// The document `input` (named `path`) read in chunks of whole city-object trees of about
+/// `chunk_bytes` (CityJSONSeq: of whole lines), each handed to `each` in document order;
+/// `passed(n)`: `n` more bytes of the document read (they add up to its size when it is
+/// done). With `kept`, pass 1 of a `.city.json` is made once for the file and chunk size
+/// and kept there for later streams.
+///
+/// # Errors
+/// [`Stop::Each`]: `each`'s; [`Stop::Read`]: the document does not read;
+/// [`Stop::Declined`]: the chunks could differ from the whole read.
+pub(crate) fn stream<E>(
+    input: Input<'_>,
+    path: &Path,
+    chunk_bytes: u64,
+    kept: Option<&Kept>,
+    passed: &dyn Fn(u64),
+    each: impl FnMut(Part) -> Result<(), E>,
+) -> Result<Shared, Stop<E>> {
+    let found = kept.and_then(|k| k.find(path, chunk_bytes));
+    let prepared = match found {
+        Some(p) => p,
+        None => match prepare(input, path, chunk_bytes)? {
+            Some(p) => {
+                let p = std::sync::Arc::new(p);
+                if let Some(k) = kept {
+                    k.keep(path, &p);
+                }
+                p
+            }
+            None => return super::seq::stream_seq(input, path, chunk_bytes, passed, each),
+        },
+    };
+    stream_prepared(input, path, &prepared, true, passed, each)
+}
+
+/// A chunk's model: `file` and the chunk's buildings, assets and warnings.
+pub(super) fn part(
+    file: SourceFile,
     (buildings, assets, warnings): (Vec<Building>, Vec<Asset>, Vec<Warning>),
     bytes: (u64, u64),
     source: FromSource,
-) -> Chunk {
-    let bodies = assets.iter().filter(|a| a.kind == AssetKind::Body).count();
-    let chunk = Chunk {
-        index: sum.chunks,
-        buildings_before: sum.buildings,
-        assets_before: sum.assets,
-        bodies_before: sum.bodies,
-        warnings_before: sum.warnings,
-        bytes,
-        source: Some(source),
-        start: None,
-        root_envelopes: Vec::new(),
+) -> Part {
+    Part {
         model: CityModel {
             files: vec![file],
             buildings,
             assets,
             warnings,
         },
-    };
-    sum.chunks += 1;
-    sum.buildings += chunk.model.buildings.len();
-    sum.assets += chunk.model.assets.len() - bodies;
-    sum.bodies += bodies;
-    sum.warnings += chunk.model.warnings.len();
-    chunk
+        bytes,
+        source,
+    }
 }
 
-/// The chunks of a document (pass 2, after [`prepare`]) handed to `each`; with
-/// `keep_source`, each with what a CityJSON output copies of its objects
-/// ([`Chunk::source`], else empty).
+/// The chunks of a document (pass 2, after [`prepare`]) handed to `each`. `streamed`: each
+/// with what a CityJSON output copies of its objects ([`Part::source`], else empty), and
+/// an object the model refuses said where the parser is (else as the whole read says it:
+/// the file and the object).
 ///
 /// # Errors
 /// As [`each_object`].
@@ -531,10 +541,10 @@ pub(crate) fn stream_prepared<E>(
     input: Input<'_>,
     path: &Path,
     p: &Prepared,
-    keep_source: bool,
+    streamed: bool,
     passed: &dyn Fn(u64),
-    mut each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<StreamSummary, Stop<E>> {
+    mut each: impl FnMut(Part) -> Result<(), E>,
+) -> Result<Shared, Stop<E>> {
     let srs_name = p.metadata.as_ref().and_then(Metadata::srs_name);
     let verts = Vertices {
         list: &p.list,
@@ -548,18 +558,13 @@ pub(crate) fn stream_prepared<E>(
         }
         m
     };
-    let mut sum = StreamSummary {
-        version: Some(crate::io::cityjson::read::model_version(&p.version)),
+    let shared = Shared {
+        version: Some(model_version(&p.version)),
         srs_name: srs_name.clone(),
-        ..StreamSummary::default()
     };
     let mut reported = 0u64;
     let (n, bytes) = (p.objects, p.bytes);
-    let mut hand_over = |mapper: Mapper,
-                         source: FromSource,
-                         done: usize,
-                         sum: &mut StreamSummary|
-     -> Result<(), E> {
+    let mut hand_over = |mapper: Mapper, source: FromSource, done: usize| -> Result<(), E> {
         let (buildings, assets, _, warnings, counts) = mapper.finish();
         let file = source_file(path, &p.version, srs_name.clone(), p.gzip, bytes, counts);
         let at = match n {
@@ -567,7 +572,7 @@ pub(crate) fn stream_prepared<E>(
             n => u64::try_from(u128::from(bytes) * done as u128 / n as u128).unwrap_or(bytes),
         };
         let parts = (buildings, assets, warnings);
-        let chunk = next_chunk(sum, file, parts, (reported, at), source);
+        let chunk = part(file, parts, (reported, at), source);
         if at > reported {
             passed(at - reported);
             reported = at;
@@ -576,83 +581,80 @@ pub(crate) fn stream_prepared<E>(
     };
     let mut mapper = new_mapper(true);
     let mut source = FromSource::default();
+    let mut objects = Vec::new();
     each_object(input, path, p, |id, o, last| {
-        let copy = keep_source.then_some(&mut source);
-        map_object(&mut mapper, copy, &verts, id, o, 0).map_err(|(id, m)| Fail::Object(id, m))?;
+        parse_object(&mut objects, id, o)?;
+        if !p.batch || last.is_some() {
+            let copy = streamed.then_some(&mut source);
+            map_objects(&mut mapper, copy, &verts, &mut objects, 0).map_err(
+                |e| match streamed {
+                    true => Fail::Object(e.id, e.message),
+                    false => Fail::Read(e),
+                },
+            )?;
+        }
         if let Some(done) = last {
             let m = std::mem::replace(&mut mapper, new_mapper(false));
             let s = std::mem::take(&mut source);
-            hand_over(m, s, done, &mut sum).map_err(Fail::Each)?;
+            hand_over(m, s, done).map_err(Fail::Each)?;
         }
         Ok(())
     })?;
     if n == 0 {
-        hand_over(mapper, source, 0, &mut sum).map_err(Stop::Each)?;
+        hand_over(mapper, source, 0).map_err(Stop::Each)?;
     }
-    Ok(sum)
+    Ok(shared)
 }
 
-/// A document's first pass kept for the later passes of a writer over it
-/// ([`crate::io::citygml::read::Passes`]): the file and chunk size it was made for.
+/// A document's first pass kept for the later passes of a writer over it (the chunked
+/// read's `Passes`): the file and chunk size it was made for.
 #[derive(Debug, Default)]
 pub(crate) struct Kept(std::sync::Mutex<Option<(std::path::PathBuf, std::sync::Arc<Prepared>)>>);
 
-/// [`stream`] with the first pass made once for the file and chunk size and kept in `kept`
-/// (CityJSONSeq has none: it is read in one pass).
-///
-/// # Errors
-/// As [`stream`].
-pub(crate) fn stream_kept<E>(
-    path: &Path,
-    chunk_bytes: u64,
-    kept: &Kept,
-    passed: &dyn Fn(u64),
-    each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<Streamed, E> {
-    let found = match kept.0.lock() {
-        Ok(k) => k
-            .as_ref()
+impl Kept {
+    /// The first pass kept for `path` in chunks of `chunk_bytes`, if any.
+    fn find(&self, path: &Path, chunk_bytes: u64) -> Option<std::sync::Arc<Prepared>> {
+        let k = self.0.lock().ok()?;
+        k.as_ref()
             .filter(|(p, prep)| p == path && prep.chunk_bytes == chunk_bytes)
-            .map(|(_, prep)| prep.clone()),
-        Err(_) => None,
-    };
-    let prepared = match found {
-        Some(p) => p,
-        None => match prepare::<E>(Input::File(path), path, chunk_bytes) {
-            Ok(Some(p)) => {
-                let p = std::sync::Arc::new(p);
-                if let Ok(mut k) = kept.0.lock() {
-                    *k = Some((path.to_path_buf(), p.clone()));
-                }
-                p
-            }
-            Ok(None) => return stream(path, chunk_bytes, passed, each),
-            Err(e) => return streamed(Err(e)),
-        },
-    };
-    let input = Input::File(path);
-    streamed(stream_prepared(input, path, &prepared, true, passed, each))
+            .map(|(_, prep)| prep.clone())
+    }
+
+    /// Keep `prepared`, the first pass over `path`.
+    fn keep(&self, path: &Path, prepared: &std::sync::Arc<Prepared>) {
+        if let Ok(mut k) = self.0.lock() {
+            *k = Some((path.to_path_buf(), prepared.clone()));
+        }
+    }
 }
 
-/// The whole model of the CityJSON document or CityJSONSeq `input` (named `name`) read
-/// through the passes of the chunked read, as one chunk (no serde value of the document:
-/// memory follows the model): the model [`crate::io::cityjson::read_slice`] reads. `None` where the chunked read declines (an id
-/// given twice, a document that does not read): read it whole then.
-pub(crate) fn whole_model(input: Input<'_>, name: &Path) -> Option<CityModel> {
+/// The whole model of the CityJSON document or CityJSONSeq `input` (named `name`): its
+/// chunks collected, as one chunk (no serde value of the document: memory follows the
+/// model).
+///
+/// # Errors
+/// The document does not read: the file, line:column and city object where known.
+pub(crate) fn whole_model(input: Input<'_>, name: &Path) -> Result<CityModel, Error> {
     let mut out = None;
-    let each = |c: Chunk| {
+    let each = |c: Part| {
         let mut model = c.model;
         if let Some(f) = model.files.first_mut() {
             f.len = c.bytes.1;
         }
         out = Some(model);
-        Ok::<(), ()>(())
+        Ok::<(), std::convert::Infallible>(())
     };
-    match prepare::<()>(input, name, u64::MAX).ok()? {
-        Some(p) => stream_prepared(input, name, &p, false, &|_| {}, each).ok()?,
-        None => super::seq::stream_seq(input, name, u64::MAX, &|_| {}, each).ok()?,
+    let r = match prepare(input, name, u64::MAX) {
+        Ok(Some(p)) => stream_prepared(input, name, &p, false, &|_| {}, each),
+        Ok(None) => super::seq::stream_seq(input, name, u64::MAX, &|_| {}, each),
+        Err(e) => Err(e),
     };
-    out
+    match r {
+        Ok(_) => out.ok_or_else(|| Error::at(name, 0, None, "no chunk".into())),
+        Err(Stop::Read(e)) => Err(e),
+        Err(Stop::Declined(why)) => Err(Error::at(name, 0, None, why)),
+        Err(Stop::Each(never)) => match never {},
+    }
 }
 
 #[cfg(test)]
@@ -665,7 +667,8 @@ mod tests {
         let path = dir.path().join("d.city.json");
         std::fs::write(&path, doc).unwrap();
         let mut out = Vec::new();
-        stream_chunks(&path, chunk, &|_| {}, |c: Chunk| {
+        let input = Input::File(&path);
+        stream(input, &path, chunk, None, &|_| {}, |c: Part| {
             let ids = c
                 .model
                 .buildings
@@ -710,11 +713,20 @@ mod tests {
         };
         assert_eq!((e.line, e.id.as_deref()), (4, Some("c")), "{e}");
         assert!(e.column > 0 && e.message.contains("vertex index 7"), "{e}");
-        assert!(
-            e.to_string()
-                .starts_with(&format!("{}:4:", e.file.display())),
-            "{e}"
+        let at = format!("{}:4:", e.file.display());
+        assert!(e.to_string().starts_with(&at), "{e}");
+        // the whole read's names the object (a CityJSONSeq's also the line)
+        let e = whole_model(Input::Bytes(bad.as_bytes()), "d".as_ref()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "d [city object c]: invalid CityJSON: vertex index 7 out of range (3 vertices)"
         );
+        // a parser's error where the parser was
+        let typo = DOC.replace(r#""c":{"type":"Building","#, r#""c":{"type":"Building",,"#);
+        let Err(Stop::Read(e)) = chunks_of(&typo, 1) else {
+            panic!("a syntax error is an error");
+        };
+        assert_eq!((e.line, e.column), (4, 32), "{e}");
         let Err(Stop::Read(e)) = chunks_of(&DOC[..DOC.len() - 30], 1) else {
             panic!("a truncated document is an error");
         };
@@ -722,9 +734,16 @@ mod tests {
             e.line == 7 && e.column > 0 && e.message.contains("EOF"),
             "{e}"
         );
-        // what could differ from the whole read declines
+        // an id given twice: one chunk, whatever the chunk size
         let twice = DOC.replace(r#""d":"#, r#""c":"#);
-        assert!(matches!(chunks_of(&twice, 1), Err(Stop::Declined(_))));
+        assert_eq!(chunks_of(&twice, 1).unwrap_or_default().len(), 1);
+        let not = DOC.replace(r#""type":"CityJSON""#, r#""type":"FeatureCollection""#);
+        let Err(Stop::Read(e)) = chunks_of(&not, 1) else {
+            panic!("not CityJSON is an error");
+        };
+        assert!(e
+            .to_string()
+            .ends_with(r#"of type "FeatureCollection", not "CityJSON""#));
         let seq = format!(
             "{}\n{{\"type\":\"CityJSONFeature\"}}",
             DOC.replace('\n', " ")
@@ -737,16 +756,26 @@ mod tests {
     }
 
     #[test]
-    fn the_whole_model_through_the_passes_is_the_whole_read_s() {
-        let whole = crate::io::cityjson::read_slice(DOC.as_bytes(), "d".as_ref()).unwrap();
-        let m = whole_model(Input::Bytes(DOC.as_bytes()), "d".as_ref()).unwrap();
-        assert_eq!(m.buildings, whole.buildings);
-        assert_eq!(m.assets, whole.assets);
-        assert_eq!(m.warnings, whole.warnings);
-        assert_eq!(m.files[0].len, whole.files[0].len);
-        // an id given twice: declined, read whole
+    fn the_whole_model_is_the_chunks_collected() {
+        let whole = whole_model(Input::Bytes(DOC.as_bytes()), "d".as_ref()).unwrap();
+        assert_eq!(whole.files[0].len, DOC.len() as u64);
+        let mut parts = Vec::new();
+        let input = Input::Bytes(DOC.as_bytes());
+        let r = stream(input, "d".as_ref(), 1, None, &|_| {}, |p: Part| {
+            parts.push(p.model);
+            Ok::<(), ()>(())
+        });
+        assert!(r.is_ok() && parts.len() == 2);
+        let buildings: Vec<_> = parts.iter().flat_map(|m| m.buildings.clone()).collect();
+        let ids = |b: &[Building]| b.iter().map(|b| b.id.clone()).collect::<Vec<_>>();
+        assert_eq!(ids(&buildings), ids(&whole.buildings));
+        let polygons = |m: &CityModel| m.assets.iter().map(|a| a.polygon_count()).sum::<usize>();
+        assert_eq!(parts.iter().map(polygons).sum::<usize>(), polygons(&whole));
+        // an id given twice: its objects mapped at once, the duplicate said first
         let twice = DOC.replace(r#""d":"#, r#""c":"#);
-        assert!(whole_model(Input::Bytes(twice.as_bytes()), "d".as_ref()).is_none());
+        let m = whole_model(Input::Bytes(twice.as_bytes()), "d".as_ref()).unwrap();
+        assert_eq!(m.buildings.len(), 4);
+        assert_eq!(m.warnings[0].message, "duplicate city object id");
     }
 
     #[test]
@@ -758,11 +787,12 @@ mod tests {
         let mut runs = Vec::new();
         for _ in 0..2 {
             let mut ids = Vec::new();
-            let r = stream_kept(&path, 1, &kept, &|_| {}, |c: Chunk| {
+            let input = Input::File(&path);
+            let r = stream(input, &path, 1, Some(&kept), &|_| {}, |c: Part| {
                 ids.push(c.model.buildings.len());
                 Ok::<(), ()>(())
             });
-            assert!(matches!(r, Ok(Streamed::Done(_))));
+            assert!(r.is_ok());
             runs.push(ids);
             let k = kept.0.lock().unwrap();
             assert!(k
@@ -777,8 +807,9 @@ mod tests {
         let fewer = format!("{}{}", &DOC[..start], &DOC[end..]);
         assert!(crate::io::cityjson::read_slice(fewer.as_bytes(), "d".as_ref()).is_ok());
         std::fs::write(&path, fewer).unwrap();
-        let r = stream_kept(&path, 1, &kept, &|_| {}, |_| Ok::<(), ()>(()));
-        assert!(matches!(r, Ok(Streamed::Declined(_))));
+        let input = Input::File(&path);
+        let r = stream(input, &path, 1, Some(&kept), &|_| {}, |_| Ok::<(), ()>(()));
+        assert!(matches!(r, Err(Stop::Declined(_))));
     }
 
     #[test]

@@ -8,10 +8,7 @@
 //! integer triples), the tree structure of the city objects as id hashes
 //! ([`Structure`], about 50 bytes an object).
 
-use crate::io::citygml::error::ReadError;
-use crate::io::citygml::error::WriteError;
-use crate::io::citygml::write::atomic_write;
-use crate::io::files::CountingWriter;
+use super::CityJsonError;
 use serde::de::{DeserializeSeed, Error as _, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde_json::value::RawValue;
 use serde_json::{Map, Value};
@@ -19,21 +16,13 @@ use std::cell::Cell;
 use std::collections::HashMap;
 use std::fmt;
 use std::hash::{BuildHasher, Hash};
-use std::io::{BufRead, Read, Write};
+use std::io::{BufRead, Read};
 use std::path::Path;
 use std::rc::Rc;
 
 /// An 8-byte hash of an id (the ids that go, kept between the passes over CityJSONSeq).
 pub(crate) fn id_hash(id: &str) -> u64 {
     foldhash::fast::FixedState::with_seed(0x5b5e_7c17).hash_one(id.as_bytes())
-}
-
-pub(crate) fn cj_error(e: crate::io::cityjson::CityJsonError) -> WriteError {
-    WriteError::Read(ReadError::CityJson(e))
-}
-
-pub(crate) fn cj(file: &Path, line: u64, id: Option<&str>, m: String) -> WriteError {
-    cj_error(crate::io::cityjson::CityJsonError::at(file, line, id, m))
 }
 
 /// The trees (each top-level object, then its descendants) over objects `ids` (by index; `index` finds an id's) with their `parents` and
@@ -201,31 +190,28 @@ impl<R: Read> Read for Counted<R> {
 }
 
 /// The (decompressed) JSON text of `input`, a byte-order mark skipped.
-pub(crate) fn open_json(input: &Path) -> Result<Box<dyn BufRead + Send>, WriteError> {
-    let mut r = super::open(input)?;
+pub(crate) fn open_json(input: &Path) -> std::io::Result<Box<dyn BufRead + Send>> {
+    let (mut r, _) = crate::io::files::open_decoded(input)?;
     if r.fill_buf().is_ok_and(|h| h.starts_with(b"\xEF\xBB\xBF")) {
         r.consume(3);
     }
     Ok(r)
 }
 
-/// Read the first JSON value of `input` (named `name` in errors) through `pass`.
+/// Read the first JSON value of the JSON text `b` in memory (a byte-order mark already
+/// skipped; named `name` in errors) through `pass`, parsed as a slice (faster than through a
+/// reader).
 ///
 /// # Errors
-/// The source cannot be read, is empty, is not JSON, is not an object, or the pass refuses
-/// something (its message with the file, line and column).
-pub(crate) fn read(input: &Path, name: &Path, pass: &mut dyn Pass) -> Result<Seen, WriteError> {
-    read_from(open_json(input)?, name, pass)
-}
-
-/// [`read`] from the JSON text `b` in memory (a byte-order mark already skipped), parsed as
-/// a slice (faster than through a reader).
-///
-/// # Errors
-/// As [`read`].
-pub(crate) fn read_slice(b: &[u8], name: &Path, pass: &mut dyn Pass) -> Result<Seen, WriteError> {
+/// The text is empty, is not JSON, is not an object, or the pass refuses something (its
+/// message with the file, line and column).
+pub(crate) fn read_slice(
+    b: &[u8],
+    name: &Path,
+    pass: &mut dyn Pass,
+) -> Result<Seen, CityJsonError> {
     if b.is_empty() {
-        return Err(cj(name, 0, None, "empty document".into()));
+        return Err(CityJsonError::at(name, 0, None, "empty document".into()));
     }
     let mut de = serde_json::Deserializer::from_slice(b);
     let mut seen = Seen {
@@ -234,7 +220,7 @@ pub(crate) fn read_slice(b: &[u8], name: &Path, pass: &mut dyn Pass) -> Result<S
         objects: false,
         vertices: false,
     };
-    let json = |e: serde_json::Error| cj_error(crate::io::cityjson::CityJsonError::json(name, &e));
+    let json = |e: serde_json::Error| CityJsonError::json(name, &e);
     Top {
         pass,
         seen: &mut seen,
@@ -245,17 +231,17 @@ pub(crate) fn read_slice(b: &[u8], name: &Path, pass: &mut dyn Pass) -> Result<S
     Ok(seen)
 }
 
-/// [`read`] from the JSON text `r` (a byte-order mark already skipped).
+/// [`read_slice`] from the JSON text `r` (a byte-order mark already skipped).
 ///
 /// # Errors
-/// As [`read`].
+/// As [`read_slice`].
 pub(crate) fn read_from(
     mut r: impl BufRead,
     name: &Path,
     pass: &mut dyn Pass,
-) -> Result<Seen, WriteError> {
+) -> Result<Seen, CityJsonError> {
     if r.fill_buf().is_ok_and(<[u8]>::is_empty) {
-        return Err(cj(name, 0, None, "empty document".into()));
+        return Err(CityJsonError::at(name, 0, None, "empty document".into()));
     }
     let n = Rc::new(Cell::new(0));
     let counted = Counted {
@@ -269,7 +255,7 @@ pub(crate) fn read_from(
         objects: false,
         vertices: false,
     };
-    let json = |e: serde_json::Error| cj_error(crate::io::cityjson::CityJsonError::json(name, &e));
+    let json = |e: serde_json::Error| CityJsonError::json(name, &e);
     Top {
         pass,
         seen: &mut seen,
@@ -546,92 +532,4 @@ impl<F: FnMut(Vertex) -> Result<(), String>> Pass for EachVertex<F> {
     fn vertex(&mut self, v: Vertex) -> Result<(), String> {
         (self.0)(v)
     }
-}
-
-/// The entries of `CityObjects` (`"id":{…}`) or `vertices` being written, separated by
-/// commas; the first I/O error kept (the callers of a pass see only its message).
-pub(crate) struct Entries<'w> {
-    w: &'w mut dyn Write,
-    any: bool,
-    failed: Option<std::io::Error>,
-}
-
-impl Entries<'_> {
-    fn put(&mut self, f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<(), String> {
-        let go = || {
-            if std::mem::replace(&mut self.any, true) {
-                self.w.write_all(b",")?;
-            }
-            f(&mut *self.w)
-        };
-        go().map_err(|e| {
-            let m = e.to_string();
-            self.failed.get_or_insert(e);
-            m
-        })
-    }
-
-    /// `"id":o`.
-    pub fn object(&mut self, id: &str, o: &Value) -> Result<(), String> {
-        self.put(|w| {
-            serde_json::to_writer(&mut *w, id)?;
-            w.write_all(b":")?;
-            serde_json::to_writer(w, o).map_err(std::io::Error::other)
-        })
-    }
-
-    /// One vertex.
-    pub fn vertex(&mut self, v: &Vertex) -> Result<(), String> {
-        self.put(|w| v.write(w))
-    }
-}
-
-/// Write a document to `out` (atomically): the members of `head` in its order as one line
-/// of JSON, `CityObjects` and `vertices` (placeholders in `head`) by `body`, which is given
-/// the member's name and its entries. The bytes written.
-///
-/// # Errors
-/// `body`'s, I/O errors.
-pub(crate) fn write_document(
-    out: &Path,
-    head: &Map<String, Value>,
-    body: &mut dyn FnMut(&str, &mut Entries<'_>) -> Result<(), WriteError>,
-) -> Result<u64, WriteError> {
-    let io = |source| WriteError::Io {
-        file: out.to_path_buf(),
-        source,
-    };
-    atomic_write(out, |w| {
-        let mut w = CountingWriter::new(w);
-        w.write_all(b"{").map_err(io)?;
-        for (k, (key, v)) in head.iter().enumerate() {
-            if k > 0 {
-                w.write_all(b",").map_err(io)?;
-            }
-            serde_json::to_writer(&mut w, key).map_err(|e| io(e.into()))?;
-            w.write_all(b":").map_err(io)?;
-            let brackets = match key.as_str() {
-                "CityObjects" => b"{}",
-                "vertices" => b"[]",
-                _ => {
-                    serde_json::to_writer(&mut w, v).map_err(|e| io(e.into()))?;
-                    continue;
-                }
-            };
-            w.write_all(&brackets[..1]).map_err(io)?;
-            let mut entries = Entries {
-                w: &mut w,
-                any: false,
-                failed: None,
-            };
-            let r = body(key, &mut entries);
-            if let Some(e) = entries.failed {
-                return Err(io(e));
-            }
-            r?;
-            w.write_all(&brackets[1..]).map_err(io)?;
-        }
-        w.write_all(b"}\n").map_err(io)?;
-        Ok(w.count())
-    })
 }

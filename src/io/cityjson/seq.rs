@@ -1,75 +1,27 @@
-//! CityJSONSeq (`.city.jsonl`) read in chunks of whole lines: the same [`Chunk`]s as
+//! CityJSONSeq (`.city.jsonl`) read in chunks of whole lines: the same [`Part`]s as
 //! [`super::chunks`] gives of a document, from one pass over the file. The first line is the
 //! header (`transform`, `metadata`, `geometry-templates`); each feature line is one
-//! top-level city object with its children and its own vertices, mapped as the whole read
-//! ([`crate::io::cityjson::read_slice`]) maps it (its line number in warnings and assets).
+//! top-level city object with its children and its own vertices, mapped with its line
+//! number in warnings and assets.
 //! A chunk ends after the line that takes it past `chunk_bytes` of the file; memory follows
 //! the chunk, and what grows with the file is the ids of the city objects as 8-byte hashes
 //! (to find a link between chunks).
 //!
-//! The stream declines (the file is read whole, as before) where a chunk could differ from
-//! the whole read: an object linked (`parents`, `children`) with an object of another chunk,
-//! an id given twice, and any line that does not read.
+//! The stream declines (the file is read as one chunk) where chunks could differ from one:
+//! an object linked (`parents`, `children`) with an object of another chunk, or with the
+//! id of one.
 
-use super::chunks::{next_chunk, Copied, Input, Stop};
-use super::source::{add_object, FromSource};
+use super::chunks::{map_objects, not_cityjson, part, Input, Part, Shared, Stop};
+use super::doc::{CityObject, Doc as Line, Metadata};
+use super::head::{check_version, model_version, source_file, template_vertices};
+use super::map::{real_vertices, Mapper, Vertices};
+use super::source::FromSource;
 use super::stream::{id_hash, Counted};
-use crate::io::citygml::read::{Chunk, StreamSummary};
-use crate::io::cityjson::doc::{CityObject, Metadata, Templates, Transform};
-use crate::io::cityjson::map::{real_vertices, Mapper, Vertices};
-use crate::io::cityjson::read::{check_version, model_version, source_file, template_vertices};
-use crate::io::cityjson::CityJsonError;
-use serde::de::{Deserializer, MapAccess, Visitor};
-use serde::Deserialize;
-use serde_json::value::RawValue;
+use super::CityJsonError;
 use std::cell::Cell;
-use std::collections::{HashMap, HashSet};
-use std::fmt;
+use std::collections::HashSet;
 use std::path::Path;
 use std::rc::Rc;
-
-/// One line: the header or a `CityJSONFeature`, its city objects as their text.
-#[derive(Deserialize)]
-struct Line {
-    #[serde(rename = "type")]
-    ty: String,
-    #[serde(default)]
-    version: Option<String>,
-    #[serde(default)]
-    transform: Option<Transform>,
-    #[serde(default)]
-    metadata: Option<Metadata>,
-    #[serde(rename = "CityObjects", default)]
-    objects: Texts,
-    #[serde(default)]
-    vertices: Vec<[f64; 3]>,
-    #[serde(rename = "geometry-templates", default)]
-    templates: Option<Templates>,
-}
-
-/// `CityObjects` in line order, each object as its text.
-#[derive(Default)]
-struct Texts(Vec<(String, Box<RawValue>)>);
-
-impl<'de> Deserialize<'de> for Texts {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = Texts;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("an object of city objects")
-            }
-            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<Texts, A::Error> {
-                let mut v = Vec::new();
-                while let Some(e) = m.next_entry::<String, Box<RawValue>>()? {
-                    v.push(e);
-                }
-                Ok(Texts(v))
-            }
-        }
-        d.deserialize_map(V)
-    }
-}
 
 /// The ids of the chunks handed over and of the one being read, to find what links chunks.
 #[derive(Default)]
@@ -87,9 +39,11 @@ impl Links {
     /// Object `id` with `o`'s links; why the chunks could differ from the whole read.
     fn add(&mut self, id: &str, o: &CityObject) -> Result<(), String> {
         let h = id_hash(id);
-        if self.earlier.contains(&h) || !self.ids.insert(h) {
+        // an id given twice in one chunk is mapped as the whole read maps it
+        if self.earlier.contains(&h) {
             return Err(format!("city object id {id:?} given twice"));
         }
+        self.ids.insert(h);
         if self.pending.contains(&h) {
             return Err(format!("city object {id:?} is linked from an earlier line"));
         }
@@ -114,37 +68,82 @@ impl Links {
     }
 }
 
-/// [`super::chunks::stream_chunks`] of CityJSONSeq (module docs).
+/// The values of a CityJSONSeq, a line's each, parsed from a slice or a reader.
+enum Lines<'a> {
+    Slice(serde_json::StreamDeserializer<'a, serde_json::de::SliceRead<'a>, Line>),
+    Reader(
+        serde_json::StreamDeserializer<
+            'a,
+            serde_json::de::IoRead<Counted<Box<dyn std::io::BufRead + 'a>>>,
+            Line,
+        >,
+        Rc<Cell<u64>>,
+    ),
+}
+
+impl Lines<'_> {
+    fn next(&mut self) -> Option<Result<Line, serde_json::Error>> {
+        match self {
+            Lines::Slice(s) => s.next(),
+            Lines::Reader(r, _) => r.next(),
+        }
+    }
+
+    /// Bytes read so far.
+    fn read(&self) -> u64 {
+        match self {
+            Lines::Slice(s) => s.byte_offset() as u64,
+            Lines::Reader(_, n) => n.get(),
+        }
+    }
+}
+
+/// [`super::chunks::stream`] of CityJSONSeq (module docs).
 ///
 /// # Errors
-/// `each`'s; a line that does not read, or chunks that could differ from the whole read,
-/// decline.
+/// `each`'s; a line that does not read ([`Stop::Read`]); chunks that could differ from the
+/// whole read decline.
 pub(super) fn stream_seq<E>(
     input: Input<'_>,
     path: &Path,
     chunk_bytes: u64,
     passed: &dyn Fn(u64),
-    mut each: impl FnMut(Chunk) -> Result<(), E>,
-) -> Result<StreamSummary, Stop<E>> {
+    mut each: impl FnMut(Part) -> Result<(), E>,
+) -> Result<Shared, Stop<E>> {
     let read = |e: &serde_json::Error| Stop::Read(CityJsonError::json(path, e));
-    let r = input.open().map_err(|e| Stop::Declined(e.to_string()))?;
     let gzip = input.gzip();
     // the file's size (a chunk's model is of the whole file)
     let len = match input {
         _ if gzip => 0,
         Input::File(p) => std::fs::metadata(p).map_or(0, |m| m.len()),
         Input::Bytes(b) => b.len() as u64,
+        Input::Gzip(_) => 0,
     };
-    let n = Rc::new(Cell::new(0u64));
-    let counted = Counted {
-        inner: r,
-        n: n.clone(),
+    // as a slice where it is one: a parser's error is where the whole read's is
+    let mut values = match input {
+        Input::Bytes(b) => {
+            let b = b.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(b);
+            Lines::Slice(serde_json::Deserializer::from_slice(b).into_iter())
+        }
+        _ => {
+            let n = Rc::new(Cell::new(0u64));
+            let inner = input.open(path).map_err(Stop::Read)?;
+            let counted = Counted {
+                inner,
+                n: n.clone(),
+            };
+            let d = serde_json::Deserializer::from_reader(counted);
+            Lines::Reader(d.into_iter(), n)
+        }
     };
-    let mut values = serde_json::Deserializer::from_reader(counted).into_iter::<Line>();
     let mut head = match values.next() {
         Some(Ok(h)) if h.ty == "CityJSON" => h,
+        Some(Ok(h)) => return Err(Stop::Read(not_cityjson(path, &h.ty))),
         Some(Err(e)) => return Err(read(&e)),
-        _ => return Err(Stop::Declined("not CityJSON".into())),
+        None => {
+            let m = "empty document".to_string();
+            return Err(Stop::Read(CityJsonError::at(path, 0, None, m)));
+        }
     };
     let version = head.version.clone().unwrap_or_default();
     let srs_name = head.metadata.as_ref().and_then(Metadata::srs_name);
@@ -152,25 +151,23 @@ pub(super) fn stream_seq<E>(
     let kept = head.templates.take();
     let templates = kept.as_ref();
     let template_list = template_vertices(templates, path).map_err(Stop::Read)?;
-    let mut sum = StreamSummary {
+    let shared = Shared {
         version: Some(model_version(&version)),
         srs_name: srs_name.clone(),
-        ..StreamSummary::default()
     };
     let mut mapper = Mapper::new(path);
     check_version(&mut mapper, &version);
     let mut source = FromSource::default();
     let mut links = Links::default();
     let mut reported = 0u64;
-    let mut hand_over = |mapper: Mapper, source, sum: &mut StreamSummary| {
+    let mut hand_over = |mapper: Mapper, source, at: u64| {
         let (buildings, assets, _, warnings, counts) = mapper.finish();
         let mut file = source_file(path, &version, srs_name.clone(), gzip, len, counts);
         if let Some(c) = &mut file.cityjson {
             c.seq = true;
         }
-        let at = n.get();
         let parts = (buildings, assets, warnings);
-        let chunk = next_chunk(sum, file, parts, (reported, at), source);
+        let chunk = part(file, parts, (reported, at), source);
         if at > reported {
             passed(at - reported);
             reported = at;
@@ -188,51 +185,36 @@ pub(super) fn stream_seq<E>(
             templates,
             template_list: &template_list,
         };
-        let mut typed = Vec::with_capacity(l.objects.0.len());
-        let mut copied = Vec::with_capacity(l.objects.0.len());
-        for (id, o) in l.objects.0 {
-            let at = |m: String| Stop::Read(CityJsonError::at(path, line.max(1), Some(&id), m));
-            let t = serde_json::from_str::<CityObject>(o.get()).map_err(|e| at(e.to_string()))?;
-            let c = serde_json::from_str::<Copied>(o.get()).map_err(|e| at(e.to_string()))?;
-            links.add(&id, &t).map_err(Stop::Declined)?;
-            typed.push((id, t));
-            copied.push(c);
+        let mut objects = l.objects.0;
+        for (id, o) in &objects {
+            links.add(id, o).map_err(Stop::Declined)?;
         }
-        let before = mapper.origins.len();
-        mapper.add(&typed, &verts, line).map_err(Stop::Read)?;
-        let mut wanted: HashMap<&str, Vec<(usize, usize, usize)>> = HashMap::new();
-        for (i, o) in mapper.origins[before..].iter().enumerate() {
-            if let Some((g, s)) = o.surface {
-                let w = wanted.entry(o.object.as_str()).or_default();
-                w.push((before + i, g, s));
-            }
-        }
-        for ((id, _), c) in typed.iter().zip(copied) {
-            let w = wanted.get(id.as_str()).map_or(&[][..], Vec::as_slice);
-            add_object(&mut source, id.clone(), &mut c.into_object(), w);
-        }
-        drop(wanted);
+        let copy = Some(&mut source);
+        map_objects(&mut mapper, copy, &verts, &mut objects, line).map_err(Stop::Read)?;
         line += if line == 0 { 2 } else { 1 };
         next = match values.next() {
             None => None,
             Some(Err(e)) => return Err(read(&e)),
             Some(Ok(f)) if f.ty != "CityJSONFeature" => {
-                return Err(Stop::Declined(format!(
-                    "line {line}: a value of type {:?} after the CityJSON header",
-                    f.ty
-                )))
+                let m = format!("a value of type {:?} after the CityJSON header (CityJSONSeq holds CityJSONFeature lines)", f.ty);
+                return Err(Stop::Read(CityJsonError::at(
+                    path,
+                    line,
+                    f.id.as_deref(),
+                    m,
+                )));
             }
             Some(Ok(f)) => Some(f),
         };
         // the header goes with the first feature
-        if next.is_none() || (line > 2 && n.get() - from >= chunk_bytes) {
-            from = n.get();
+        if next.is_none() || (line > 2 && values.read() - from >= chunk_bytes) {
+            from = values.read();
             let m = std::mem::replace(&mut mapper, Mapper::new(path));
-            hand_over(m, std::mem::take(&mut source), &mut sum)?;
+            hand_over(m, std::mem::take(&mut source), from)?;
             links.cut();
         }
     }
-    Ok(sum)
+    Ok(shared)
 }
 
 #[cfg(test)]
@@ -246,7 +228,7 @@ mod tests {
 "#;
 
     /// Each chunk's model and source, or why the stream stopped.
-    fn chunks(doc: &str, chunk: u64) -> Result<Vec<Chunk>, Stop<()>> {
+    fn chunks(doc: &str, chunk: u64) -> Result<Vec<Part>, Stop<()>> {
         let mut out = Vec::new();
         stream_seq(
             Input::Bytes(doc.as_bytes()),
@@ -288,13 +270,14 @@ mod tests {
         }
         assert_eq!(c[0].model.buildings[0].parent, Some(1));
         assert!(c[0].model.files[0].cityjson.as_ref().is_some_and(|j| j.seq));
-        let s = c[0].source.as_ref().unwrap();
+        let s = &c[0].source;
         assert_eq!(s.objects.get("b").map(|a| a["h"].clone()), Some(1.into()));
         assert_eq!(
             s.surfaces.get(&0).map(|m| m["slope"].clone()),
             Some(9.into())
         );
-        assert_eq!((c[1].buildings_before, c[2].assets_before), (2, 1));
+        let counts: Vec<_> = c.iter().map(|c| c.model.buildings.len()).collect();
+        assert_eq!(counts, [2, 1, 1]);
         let Ok(one) = chunks(SEQ, u64::MAX) else {
             panic!("stopped")
         };
