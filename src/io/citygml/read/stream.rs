@@ -52,6 +52,10 @@ use std::path::Path;
 /// about its size again).
 pub const CHUNK_BYTES: u64 = 16 << 20;
 
+/// The most bytes of a stream's first chunk (whole members: it ends after the member that
+/// crosses this).
+const FIRST_CHUNK_BYTES: usize = 256 << 10;
+
 /// One chunk of a streamed document: its model and what came before it.
 #[derive(Debug)]
 pub struct Chunk {
@@ -415,7 +419,17 @@ pub(super) fn stream_document<E>(
         loop {
             let first = index == 0;
             let start = if first { root_end } else { from };
-            let to = chunk_end(body, start, step);
+            // the first chunk is parsed before any other can start (the others are seeded with
+            // the state after it): kept short, so that the other threads start early
+            let to = chunk_end(
+                body,
+                start,
+                if first {
+                    step.min(FIRST_CHUNK_BYTES)
+                } else {
+                    step
+                },
+            );
             let last = to == body.len();
             let before = (!first).then(|| std::sync::Arc::new(state.clone()));
             let ready = (!first).then(|| ahead.take((from, to), &state)).flatten();
