@@ -11,7 +11,7 @@
 //! ([`crate::pipeline::frame`]) tells it, and a CityGML output ([`LodRead::served`]: OBJ and
 //! CityJSON are written from the whole read). Anything else is read whole, and [`WholeWhy`]
 //! says why (for the info line of the command); where the hollow read
-//! itself declines ([`LodRead::read_hollow`] gives `None`) the command reads whole too.
+//! itself declines ([`super::Study::read_hollow`] gives `None`) the command reads whole too.
 //!
 //! **Whole where it fits.** The hollow read holds a chunk and what the selection keeps, the
 //! whole read about the file's size (measured: 0.73 to 1.0 times it, LoD3 files of 225 MB to

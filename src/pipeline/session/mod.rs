@@ -290,30 +290,40 @@ impl Scene {
             options,
             read_s,
         } = self;
-        let f = frame_in(&mut model, Some(bbox), pois, &options.frame)?;
-        let local = match f.model {
-            Cow::Owned(m) => Some(m),
-            Cow::Borrowed(_) => None,
-        };
-        let (crs, lframe, pois, local_pois) = (f.crs, f.frame, f.pois, f.local_pois);
-        let (warnings, note, frame_warning) = (f.warnings, f.note, f.frame_warning);
-        Ok(Study {
-            inputs,
-            bbox,
-            read: Read::Whole(model),
-            local,
-            crs,
-            frame: lframe,
-            pois,
-            local_pois,
-            warnings,
-            note,
-            frame_warning,
-            failures,
-            read_s,
-            full: OnceLock::new(),
-            sun: Mutex::new(None),
-        })
+        let f = Frame::from(frame_in(&mut model, Some(bbox), pois, &options.frame)?);
+        let read = Read::Whole(model);
+        Ok(Study::new((inputs, read, bbox), f, failures, read_s))
+    }
+}
+
+/// What the frame gave a [`Study`], owned: the model in the local frame where it is not the
+/// identity, the POIs in both frames, what to tell the user.
+struct Frame {
+    local: Option<CityModel>,
+    crs: Crs,
+    frame: LocalFrame,
+    pois: Vec<Poi>,
+    local_pois: Vec<Poi>,
+    warnings: Vec<String>,
+    note: Option<String>,
+    frame_warning: Option<crate::model::crs::FrameWarning>,
+}
+
+impl From<Framed<'_>> for Frame {
+    fn from(f: Framed<'_>) -> Self {
+        Frame {
+            local: match f.model {
+                Cow::Owned(m) => Some(m),
+                Cow::Borrowed(_) => None,
+            },
+            crs: f.crs,
+            frame: f.frame,
+            pois: f.pois,
+            local_pois: f.local_pois,
+            warnings: f.warnings,
+            note: f.note,
+            frame_warning: f.frame_warning,
+        }
     }
 }
 
@@ -353,6 +363,33 @@ enum Read {
 }
 
 impl Study {
+    /// The study of what was `read` (from `inputs`, its box `bbox`) framed as `f`, with the
+    /// inputs that could not be read and the seconds reading took.
+    fn new(
+        (inputs, read, bbox): (Vec<Input>, Read, Bbox),
+        f: Frame,
+        failures: Vec<ReadError>,
+        read_s: f64,
+    ) -> Study {
+        Study {
+            inputs,
+            read,
+            bbox,
+            local: f.local,
+            crs: f.crs,
+            frame: f.frame,
+            pois: f.pois,
+            local_pois: f.local_pois,
+            warnings: f.warnings,
+            note: f.note,
+            frame_warning: f.frame_warning,
+            failures,
+            read_s,
+            full: OnceLock::new(),
+            sun: Mutex::new(None),
+        }
+    }
+
     /// The borrowed view the pipeline's functions take.
     pub fn framed(&self) -> Framed<'_> {
         Framed {

@@ -7,7 +7,7 @@
 //! walked). The study then gives the whole read's levels, bound, report and CityGML bytes:
 //! the polygons the bound and the writer need are read back ([`Reread`]).
 
-use super::{Read, Result, SceneOptions, Study};
+use super::{Frame, Read, Result, SceneOptions, Study};
 use crate::io::citygml::read::{Passes, Reread};
 use crate::io::citygml::ReadOptions;
 use crate::lod::hollow::{near_pois, read_hollow, Hollow};
@@ -16,11 +16,9 @@ use crate::lod::rough::RoughOptions;
 use crate::model::runtime::progress::{check, Progress, Stage};
 use crate::model::{Bbox, Poi};
 use crate::pipeline::batch::inputs::Input;
-use crate::pipeline::session::lod_read::LodRead;
 use crate::pipeline::{check_model_in, frame_in};
 use glam::DVec3;
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
 /// A document read hollow, with what reads its polygons back.
@@ -89,12 +87,15 @@ impl Study {
             b
         });
         check_model_in(&hollow.model, &bbox, options.allow_mixed_crs)?;
-        let f = frame_in(&mut hollow.model, Some(bbox), pois, &options.frame)?;
+        let f = Frame::from(frame_in(
+            &mut hollow.model,
+            Some(bbox),
+            pois,
+            &options.frame,
+        )?);
         if !f.frame.is_identity() {
             return Ok(None);
         }
-        let (crs, frame, pois, local_pois) = (f.crs, f.frame, f.pois, f.local_pois);
-        let (warnings, note, frame_warning) = (f.warnings, f.note, f.frame_warning);
         let input = Input {
             path: path.to_path_buf(),
             relative: path
@@ -107,23 +108,14 @@ impl Study {
             rough: *rough,
             chunk,
         };
-        Ok(Some(Study {
-            inputs: vec![input],
-            read: Read::Hollow(Box::new(read)),
-            bbox,
-            local: None,
-            crs,
-            frame,
-            pois,
-            local_pois,
-            warnings,
-            note,
-            frame_warning,
-            failures: Vec::new(),
-            read_s: t.elapsed().as_secs_f64(),
-            full: OnceLock::new(),
-            sun: Mutex::new(None),
-        }))
+        let read = Read::Hollow(Box::new(read));
+        let read_s = t.elapsed().as_secs_f64();
+        Ok(Some(Study::new(
+            (vec![input], read, bbox),
+            f,
+            Vec::new(),
+            read_s,
+        )))
     }
 
     /// The document read hollow, what reads its polygons back and the bytes of a chunk:
@@ -141,28 +133,6 @@ impl Study {
             Read::Whole(_) => None,
             Read::Hollow(h) => Some(&h.hollow),
         }
-    }
-}
-
-impl LodRead {
-    /// The document of `inputs` read hollow ([`Study::read_hollow`], POIs `pois`, rough forms
-    /// made with `rough`) where this read is [`LodRead::Hollow`]; `None` where it is not, or
-    /// where the hollow read declines (the caller reads whole).
-    ///
-    /// # Errors
-    /// As [`Study::read_hollow`].
-    pub fn read_hollow(
-        &self,
-        inputs: &[PathBuf],
-        pois: &[Poi],
-        rough: &RoughOptions,
-        options: &SceneOptions,
-        progress: &dyn Progress,
-    ) -> Result<Option<Study>> {
-        let (LodRead::Hollow { chunk }, [path]) = (self, inputs) else {
-            return Ok(None);
-        };
-        Study::read_hollow(path, *chunk, pois.to_vec(), rough, options, progress)
     }
 }
 

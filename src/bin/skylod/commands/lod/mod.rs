@@ -17,11 +17,12 @@ use skylod::lod::LodOptions;
 use skylod::pipeline::batch::inputs::Input;
 use skylod::pipeline::batch::run::Said;
 use skylod::pipeline::session::documents::ms_since;
+use skylod::pipeline::session::lod_read::{lod_read, LodRead};
 use skylod::pipeline::session::lod_write::{
     check_report, write_report, FileOutcome, LodLayout, LodWritten, ReportTargetError,
 };
 use skylod::pipeline::session::report::RunMs;
-use skylod::pipeline::session::{lod_read::lod_read, SceneOptions};
+use skylod::pipeline::session::{SceneOptions, Study};
 use skylod::pipeline::LevelsOptions;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -104,25 +105,30 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let ahead = args.bound.ephemeris(ins.first().map(PathBuf::as_path));
     let (p, progress) = (&args.pois, crate::log::reporter());
     let so = SceneOptions::new(c.frame_options(p.poi_margin), p.allow_mixed_crs);
-    let (mut study, combined, unread, _spool) =
-        match read.read_hollow(ins, &pois, &lod.rough, &so, &progress)? {
-            Some(h) => {
-                (frame_said(h.warnings(), h.frame_warning()).iter())
-                    .for_each(|w| warning!("lod: warning: {w}"));
-                (h, None, false, spool)
-            }
-            _ => {
-                let Some(scene) = args.pois.scene()? else {
-                    return Ok(Outcome::SomeFailed);
-                };
-                let (combined, pois) = match reduce {
-                    Some(r) => (Some(r.combine(scene.model())?), pois),
-                    None => (None, args.region.extend(pois, scene.model())?),
-                };
-                let s = args.pois.study(scene, pois, None, spool, "lod")?;
-                (s.study, combined, s.failed, s._spool)
-            }
-        };
+    let hollow = match (&read, &ins[..]) {
+        (LodRead::Hollow { chunk }, [path]) => {
+            Study::read_hollow(path, *chunk, pois.clone(), &lod.rough, &so, &progress)?
+        }
+        _ => None,
+    };
+    let (mut study, combined, unread, _spool) = match hollow {
+        Some(h) => {
+            (frame_said(h.warnings(), h.frame_warning()).iter())
+                .for_each(|w| warning!("lod: warning: {w}"));
+            (h, None, false, spool)
+        }
+        _ => {
+            let Some(scene) = args.pois.scene()? else {
+                return Ok(Outcome::SomeFailed);
+            };
+            let (combined, pois) = match reduce {
+                Some(r) => (Some(r.combine(scene.model())?), pois),
+                None => (None, args.region.extend(pois, scene.model())?),
+            };
+            let s = args.pois.study(scene, pois, None, spool, "lod")?;
+            (s.study, combined, s.failed, s._spool)
+        }
+    };
     let (bound, guarantee) = args.bound.spec(&study, lod.select.seed, ahead.as_ref())?;
     let opts = LevelsOptions { lod, bound };
     let lv = match combined {
