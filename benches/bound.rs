@@ -15,7 +15,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use quick_xml::events::Event;
 use quick_xml::NsReader;
-use skylod::lod::bound::BoundOptions;
+use skylod::lod::BoundOptions;
 use skylod::lod::LodOptions;
 use skylod::model::synth::{generate, pois, Preset};
 use skylod::pipeline::BoundSpec;

@@ -5,7 +5,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use quick_xml::events::Event;
 use quick_xml::NsReader;
-use skylod::io::citygml::read::{read_source, ReadOptions};
+use skylod::io::citygml::{read_source, ReadOptions};
 use skylod::model::Source;
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -4,8 +4,8 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
-use skylod::lod::rough::obb::Obb;
-use skylod::lod::rough::plane::generalize;
+use skylod::lod::rough::generalize;
+use skylod::lod::rough::Obb;
 use skylod::lod::rough::{rough_asset, RoughOptions};
 use skylod::model::{Asset, AssetKind, LodGeometry, Polygon};
 use std::hint::black_box;

@@ -9,13 +9,13 @@
 //!   one window POI).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use skylod::io::citygml::read::read_bytes;
+use skylod::io::citygml::read_bytes;
 use skylod::lod::poi::POI_OFFSET;
 use skylod::lod::rough::{rough_model, RoughOptions};
-use skylod::lod::scene::{full_scene, rough_scene, selection_scene};
-use skylod::lod::select::{select, SelectOptions};
+use skylod::lod::{full_scene, rough_scene, selection_scene};
+use skylod::lod::{select, SelectOptions};
 use skylod::model::synth::{generate, pois, Preset};
-use skylod::solar::sky::{SkyPartition, SkyVariant};
+use skylod::solar::{SkyPartition, SkyVariant};
 use std::hint::black_box;
 use std::time::Duration;
 

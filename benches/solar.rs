@@ -7,13 +7,13 @@
 //! iteration; the `district/*` benchmarks cycle through the district's facade POIs).
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
-use skylod::io::citygml::read::read_bytes;
+use skylod::io::citygml::read_bytes;
+use skylod::lod::full_scene;
 use skylod::lod::poi::Poi;
-use skylod::lod::scene::full_scene;
 use skylod::model::synth::{generate, Preset};
-use skylod::solar::sky::{SkyPartition, SkyVariant};
 use skylod::solar::trace::SceneBuilder;
 use skylod::solar::{poi_sky_view, poi_sun_hours, sky_view, sun_hours, Site, SkyBundles, SunTable};
+use skylod::solar::{SkyPartition, SkyVariant};
 use std::cell::Cell;
 use std::hint::black_box;
 use std::time::Instant;
@@ -118,7 +118,7 @@ fn district(c: &mut Criterion) {
         b.iter(|| {
             let p = black_box(poi());
             let o = p.ray_origin();
-            let f = skylod::solar::sky::Frame::from_normal(p.normal.unwrap_or(DVec3::Z));
+            let f = skylod::solar::Frame::from_normal(p.normal.unwrap_or(DVec3::Z));
             bundles
                 .projected_dirs()
                 .iter()

@@ -20,7 +20,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use skylod::model::Polygon;
-use skylod::solar::trace::ray::ray_triangle;
+use skylod::solar::trace::ray_triangle;
 use skylod::solar::trace::{BuildQuality, BvhLayout, SceneBuilder, TraceScene};
 use std::hint::black_box;
 use std::time::Duration;

@@ -15,10 +15,10 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use quick_xml::events::Event;
 use quick_xml::NsReader;
-use skylod::io::citygml::read::read_file;
-use skylod::io::citygml::write::WriteOptions;
-use skylod::lod::mixed::write_mixed;
+use skylod::io::citygml::read_file;
+use skylod::io::citygml::WriteOptions;
 use skylod::lod::poi::Poi;
+use skylod::lod::write_mixed;
 use skylod::lod::{lod, LodOptions};
 use skylod::model::synth::{generate, pois, Preset};
 use std::hint::black_box;

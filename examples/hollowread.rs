@@ -1,4 +1,4 @@
-//! Profiling helper: the hollow read of `lod` ([`skylod::lod::hollow::read_hollow`], chunks of
+//! Profiling helper: the hollow read of `lod` ([`skylod::lod::read_hollow`], chunks of
 //! 16 MiB, every asset hollowed) or, with `whole`, the whole read and the rough model of
 //! `lod`, on one CityGML file; prints assets, polygons and chunks. Peak memory and CPU with
 //! `/usr/bin/time -f '%e s %U u %M KiB'`.
@@ -7,18 +7,18 @@
 //! With `bound` (`FILE.gml bound [whole]`): `lod`'s selection and its default error bound
 //! (SVF and sun hours within 1 %, the sun of Ingolstadt) at the two street POIs of the
 //! bench files' `lod` runs (678095,5403890,418 and 678150,5403776,419), on the hollow read
-//! with the bound's assets read back by span ([`skylod::lod::bound::HollowSource`]) or on
+//! with the bound's assets read back by span ([`skylod::lod::HollowSource`]) or on
 //! the whole read; prints the levels, promotions and reference (the same both ways) and, on
 //! stderr, each stage's seconds.
-use skylod::io::citygml::read::{read_file, Passes, Reread, CHUNK_BYTES};
 use skylod::io::citygml::ReadOptions;
-use skylod::lod::bound::{bound_against_from, full_answers_from, BoundOptions, FullSource};
-use skylod::lod::bound::{Bounded, HollowSource};
-use skylod::lod::hollow::{near_pois, read_hollow};
+use skylod::io::citygml::{read_file, Passes, Reread, CHUNK_BYTES};
 use skylod::lod::rough::{rough_model, RoughOptions};
+use skylod::lod::{bound_against_from, full_answers_from, BoundOptions, FullSource};
 use skylod::lod::{lod, LodOptions, LodResult};
-use skylod::model::runtime::progress::Silent;
+use skylod::lod::{near_pois, read_hollow};
+use skylod::lod::{Bounded, HollowSource};
 use skylod::model::Poi;
+use skylod::model::Silent;
 use std::path::Path;
 use std::time::Instant;
 

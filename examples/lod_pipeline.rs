@@ -4,7 +4,7 @@
 //! (without arguments: the committed synth fixture, written to a temporary directory).
 use skylod::export::Format;
 use skylod::lod::poi::read_pois_csv;
-use skylod::model::runtime::progress::{Progress, Stage};
+use skylod::model::{Progress, Stage};
 use skylod::pipeline::{frame, levels, read_inputs, write_all, FrameOptions, LevelsOptions};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};

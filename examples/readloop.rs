@@ -7,7 +7,7 @@ fn main() {
     let t = std::time::Instant::now();
     let mut a = 0;
     for _ in 0..n {
-        a += skylod::io::citygml::read::read_bytes(&bytes, "x")
+        a += skylod::io::citygml::read_bytes(&bytes, "x")
             .unwrap()
             .assets
             .len();

@@ -5,7 +5,7 @@ fn main() {
         let t = std::time::Instant::now();
         match skylod::io::citygml::read_file(std::path::Path::new(&p)) {
             Ok(m) => {
-                let s = skylod::export::report::stats::Stats::of(&m);
+                let s = skylod::export::report::Stats::of(&m);
                 println!(
                     "{p}: {:?} {:.1}ms",
                     serde_json::to_string(&s).unwrap(),

@@ -3,7 +3,7 @@
 //! path `skylod svf` takes: full-detail scene, POIs traced in parallel). `cargo run --release --example svf_of_points -- MODEL.gml POIS.csv`
 //! (without arguments: the committed synth fixture and its POIs).
 use skylod::lod::poi::read_pois_csv;
-use skylod::model::runtime::progress::Silent;
+use skylod::model::Silent;
 use skylod::pipeline::{frame, read_inputs, svf, FrameOptions};
 use skylod::solar::SkyBundles;
 use std::path::PathBuf;

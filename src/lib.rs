@@ -71,7 +71,7 @@ pub use model::{Asset, AssetKind, CityModel, Poi};
 pub use pipeline::session::{Error, Result, Scene, SceneOptions, Study, SunOptions};
 pub use pipeline::{
     frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, EvaluateOptions,
-    FrameOptions, Framed, Inputs, Levels, LevelsOptions, PipelineError, Traced, Written,
+    FrameOptions, Framed, Inputs, Levels, LevelsOptions, Traced, Written,
 };
 pub use solar::{HorizonOptions, Site, SkyBundles, SkyView, SunHours};
 

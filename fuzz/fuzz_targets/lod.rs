@@ -7,13 +7,13 @@
 
 use glam::DVec3;
 use libfuzzer_sys::fuzz_target;
-use skylod::lod::mixed::write_mixed;
+use skylod::lod::write_mixed;
 use skylod::io::citygml::read_file;
-use skylod::io::citygml::write::WriteOptions;
+use skylod::io::citygml::WriteOptions;
 use skylod::lod::{lod, LodOptions};
 use skylod::lod::poi::Poi;
-use skylod::lod::select::SelectOptions;
-use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
+use skylod::lod::SelectOptions;
+use skylod::model::synth::{BoxBuilding, boxes_citygml};
 
 struct Bytes<'a>(&'a [u8], usize);
 

@@ -5,7 +5,7 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(model) = skylod::io::citygml::read::read_bytes(data, "fuzz.gml") {
+    if let Ok(model) = skylod::io::citygml::read_bytes(data, "fuzz.gml") {
         // Touch the result so that the derived data (bboxes) is computed too.
         for a in &model.assets {
             let _ = a.bbox();

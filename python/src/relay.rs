@@ -5,7 +5,7 @@
 //! once the call has stopped; a panic is turned into a `SkylodError`, never carried across.
 
 use pyo3::prelude::*;
-use skylod::model::runtime::progress::{Progress, Stage};
+use skylod::model::{Progress, Stage};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, RecvTimeoutError, Sender};
 use std::sync::Mutex;

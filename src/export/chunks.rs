@@ -24,7 +24,7 @@ pub enum Chunks<'a> {
         /// What each asset contributes.
         content: Content<'a>,
         /// CityJSON only: extra members of the semantic surface objects of some assets (asset
-        /// index → members: the per-surface results of [`crate::pipeline::attributes`]).
+        /// index → members: the per-surface results of `crate::pipeline::attributes`).
         surface_attributes: Option<&'a BTreeMap<usize, Map<String, Value>>>,
     },
     /// The document at `path` read in streamed passes ([`Passes`]; [`Content::Full`]), named

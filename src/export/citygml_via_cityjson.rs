@@ -6,7 +6,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::export::citygml_via_cityjson::write_citygml_levels;
+//! use skylod::export::write_citygml_levels;
 //! use skylod::export::Content;
 //! let doc = br#"{"type":"CityJSON","version":"2.0",
 //!   "transform":{"scale":[0.001,0.001,0.001],"translate":[0,0,0]},

@@ -46,7 +46,7 @@
 //! use skylod::model::synth::{generate, Preset};
 //! let mut xml = Vec::new();
 //! generate(&Preset::Small.defaults(), &mut xml).unwrap();
-//! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let model = skylod::io::citygml::read_bytes(&xml, "small.gml").unwrap();
 //! let mut out = Vec::new();
 //! let chunks = Chunks::model(&model, 0, Content::Full);
 //! let (s, _) = write_to(Format::CityJsonSeq, &chunks, &mut out).unwrap();
@@ -355,7 +355,7 @@ fn write_members(objs: &[(String, Value)], first: &mut bool, w: &mut dyn Write) 
 /// EPSG code (the first one of a compound CRS) or an AdV `ETRS89_UTM<zone>` CRS.
 ///
 /// ```
-/// use skylod::export::cityjson::reference_system;
+/// use skylod::export::reference_system;
 /// let want = Some("https://www.opengis.net/def/crs/EPSG/0/25832".to_string());
 /// assert_eq!(reference_system("urn:ogc:def:crs,crs:EPSG::25832,crs:EPSG::5783"), want);
 /// assert_eq!(reference_system("urn:adv:crs:ETRS89_UTM32*DE_DHHN92_NH"), want);

@@ -1,8 +1,8 @@
 //! Interchange with the tools that come next (DESIGN.md "Interchange"): the model, the rough
-//! model or the mixed-LoD model written as OBJ ([`obj`]) for daylight tools, or as CityJSON 2.0
-//! and CityJSONSeq ([`cityjson`]) for the CityJSON tools. The format follows the output's name
-//! ([`mod@format`]). CityGML itself is written by [`crate::io::citygml::write`] and
-//! [`crate::lod::mixed`].
+//! model or the mixed-LoD model written as OBJ (`obj`) for daylight tools, or as CityJSON 2.0
+//! and CityJSONSeq (`cityjson`) for the CityJSON tools. The format follows the output's name
+//! (`mod@format`). CityGML itself is written by `crate::io::citygml::write` and
+//! `crate::lod::mixed`.
 //!
 //! What each asset contributes is decided once: [`Content::Full`] (`convert`) writes every asset
 //! at full detail; [`Content::Levels`] (`rough`, `lod`) writes level 2 at full detail, level 1
@@ -32,18 +32,24 @@
 //! ```
 
 mod chunks;
-pub mod citygml_from_cityjson;
-pub mod citygml_via_cityjson;
-pub mod cityjson;
-pub mod cityjson_edit;
+pub(crate) mod citygml_from_cityjson;
+pub(crate) mod citygml_via_cityjson;
+pub(crate) mod cityjson;
+pub(crate) mod cityjson_edit;
 pub(crate) use crate::io::cityjson::source as cityjson_source;
 mod cityjson_vertices;
-pub mod format;
-pub mod merge;
-pub mod obj;
+pub(crate) mod format;
+pub(crate) mod merge;
+pub(crate) mod obj;
 // What the commands report (typed JSON with schemas): the `lod` report, model counts.
 #[allow(clippy::module_inception)] // `report::report` is the `lod` report
 pub mod report;
+pub use citygml_from_cityjson::{gml_id, is_json_file, TargetVersion};
+pub use citygml_via_cityjson::write_citygml_levels;
+pub use cityjson::reference_system;
+pub use cityjson_edit::{reproject_cityjson, subset};
+pub use merge::{merge_cityjson, merge_named, rename_ids, renamed_id};
+pub use obj::write_obj;
 
 pub use chunks::Chunks;
 pub use format::{Format, UnknownFormat};
@@ -152,7 +158,7 @@ impl ExportSummary {
 ///
 /// # Errors
 /// [`WriteError`] for a refused target, I/O errors, mismatched `content` lengths, or
-/// [`Format::CityGml`] (written by [`crate::io::citygml::write`] and [`crate::lod::mixed`]);
+/// [`Format::CityGml`] (written by `crate::io::citygml::write` and `crate::lod::mixed`);
 /// [`WriteError::Declined`], nothing written, where a stream declines: read the whole file
 /// and write that model then.
 pub fn write(

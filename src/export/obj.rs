@@ -19,7 +19,7 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::export::{obj::write_obj, Chunks, Content};
+//! use skylod::export::{Chunks, Content, write_obj};
 //! use skylod::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
 //! let mut m = CityModel::default();
 //! let quad = Polygon::new(vec![

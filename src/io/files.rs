@@ -11,14 +11,14 @@
 //! use std::io::Write;
 //! let dir = tempfile::tempdir()?;
 //! let out = dir.path().join("table.csv");
-//! skylod::io::files::check_target(&out, [], false)?;
-//! let n = skylod::io::files::atomic_write(&out, |w| -> Result<u64, skylod::io::files::FileError> {
-//!     let mut c = skylod::io::files::CountingWriter::new(w);
-//!     c.write_all(b"id,svf\np1,0.5\n").map_err(|e| skylod::io::files::FileError::new("table.csv", e))?;
+//! skylod::io::check_target(&out, [], false)?;
+//! let n = skylod::io::atomic_write(&out, |w| -> Result<u64, skylod::io::FileError> {
+//!     let mut c = skylod::io::CountingWriter::new(w);
+//!     c.write_all(b"id,svf\np1,0.5\n").map_err(|e| skylod::io::FileError::new("table.csv", e))?;
 //!     Ok(c.count())
 //! })?;
 //! assert_eq!(n, 14);
-//! assert!(skylod::io::files::check_target(&out, [], false).is_err()); // exists now
+//! assert!(skylod::io::check_target(&out, [], false).is_err()); // exists now
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -31,8 +31,8 @@ pub const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 /// Whether bytes that start a file are gzip's (whatever the file's name says).
 ///
 /// ```
-/// assert!(skylod::io::files::is_gzip(&[0x1f, 0x8b, 8, 0]));
-/// assert!(!skylod::io::files::is_gzip(b"<?xml"));
+/// assert!(skylod::io::is_gzip(&[0x1f, 0x8b, 8, 0]));
+/// assert!(!skylod::io::is_gzip(b"<?xml"));
 /// ```
 pub fn is_gzip(head: &[u8]) -> bool {
     head.starts_with(&GZIP_MAGIC)
@@ -62,7 +62,7 @@ const READ_BUF: usize = 256 * 1024;
 /// let mut gz = flate2::write::GzEncoder::new(Vec::new(), Default::default());
 /// gz.write_all(b"<CityModel/>")?;
 /// let bytes = gz.finish()?;
-/// let (mut r, was_gzip) = skylod::io::files::decoded(std::io::Cursor::new(bytes))?;
+/// let (mut r, was_gzip) = skylod::io::decoded(std::io::Cursor::new(bytes))?;
 /// let mut text = String::new();
 /// r.read_to_string(&mut text)?;
 /// assert!(was_gzip);
@@ -102,8 +102,8 @@ pub fn open_decoded(path: &Path) -> std::io::Result<(Box<dyn BufRead + Send>, bo
 ///
 /// ```
 /// use std::path::Path;
-/// assert!(skylod::io::files::is_stdout(Path::new("-")));
-/// assert!(!skylod::io::files::is_stdout(Path::new("./-")));
+/// assert!(skylod::io::is_stdout(Path::new("-")));
+/// assert!(!skylod::io::is_stdout(Path::new("./-")));
 /// ```
 pub fn is_stdout(out: &Path) -> bool {
     out.as_os_str() == "-"
@@ -174,7 +174,7 @@ impl FileError {
 ///
 /// ```
 /// let full = std::io::Error::from_raw_os_error(28);
-/// assert_eq!(skylod::io::files::describe_io(&full), "no space left on device");
+/// assert_eq!(skylod::io::describe_io(&full), "no space left on device");
 /// ```
 pub fn describe_io(e: &std::io::Error) -> String {
     match e.kind() {

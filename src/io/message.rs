@@ -25,9 +25,9 @@ pub fn plain_text(e: &(dyn Error + 'static)) -> String {
 /// already holds is left out, as is an empty one.
 ///
 /// ```
-/// use skylod::io::message::{chain_message, plain_text};
+/// use skylod::io::{chain_message, plain_text};
 /// let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
-/// let e = skylod::io::files::FileError::new("in.gml", io);
+/// let e = skylod::io::FileError::new("in.gml", io);
 /// assert_eq!(chain_message(&e, plain_text), "in.gml: No such file");
 /// ```
 pub fn chain_message(

@@ -1,18 +1,19 @@
-//! Files and the city formats: the file helpers every reader and writer shares ([`files`]:
+//! Files and the city formats: the file helpers every reader and writer shares (`files`:
 //! gzip, standard input and output, target checks, atomic writes), CityGML ([`citygml`]:
 //! the streaming reader, the span-preserving writer, merge, reprojection, edits, upgrade)
 //! and CityJSON ([`cityjson`]), both read into the same [`crate::model::CityModel`]; an
-//! error's chain as one message ([`message`]).
+//! error's chain as one message (`message`).
 
 // CityGML 1.0/2.0/3.0: the streaming reader, the span-preserving writer, merge, reprojection.
 pub mod citygml;
 // CityJSON 1.x/2.0 and CityJSONSeq read into the same model as CityGML.
 pub mod cityjson;
 // Files in and out: gzip, standard output, target checks, atomic writes.
-pub mod files;
+pub(crate) mod files;
 // An error and its causes as one message.
-pub mod message;
-
-// The paths of release 0.1 (`skylod::io::files::atomic_write`, ...), kept for one release.
-#[doc(hidden)]
-pub use files::*;
+pub(crate) mod message;
+pub use files::{
+    atomic_write, check_target, decoded, describe_io, is_gzip, is_stdout, set_stdin_bytes,
+    stdin_bytes, CountingWriter, FileError, TargetError,
+};
+pub use message::{chain_message, is_broken_pipe, plain_text};

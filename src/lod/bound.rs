@@ -73,14 +73,14 @@
 //!
 //! # Example
 //! ```
-//! use skylod::lod::bound::{bound, BoundOptions};
+//! use skylod::lod::{BoundOptions, bound};
 //! use skylod::lod::{lod, LodOptions};
 //! use skylod::lod::poi::Poi;
 //! use skylod::model::synth::{generate, pois, Preset};
 //! let opts = Preset::Small.defaults();
 //! let mut xml = Vec::new();
 //! generate(&opts, &mut xml).unwrap();
-//! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let model = skylod::io::citygml::read_bytes(&xml, "small.gml").unwrap();
 //! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
 //! let r = lod(&model, &pois, &LodOptions::default(), &skylod::Silent).unwrap();
 //! let b = BoundOptions { max_svf_error: Some(0.001), ..Default::default() };
@@ -126,7 +126,7 @@ pub struct BoundOptions {
     /// Most rounds of promotions before giving up.
     pub max_rounds: usize,
     /// Largest relative error of the annual global irradiation allowed at any POI (`None`:
-    /// not bounded; needs a weather year, [`bound_with`]).
+    /// not bounded; needs a weather year, `bound_with`).
     pub max_irradiance_error: Option<f64>,
 }
 
@@ -715,11 +715,11 @@ pub fn full_answers<'a>(
     full_answers_from(model, pois, opts, table, irradiance)
 }
 
-/// [`full_answers`] of the full model `src` (e.g. a document read hollow, its assets read
+/// `full_answers` of the full model `src` (e.g. a document read hollow, its assets read
 /// back by span: [`HollowSource`]): the same answers as of the whole model.
 ///
 /// # Errors
-/// As [`full_answers`], and [`BoundError::ReadBack`].
+/// As `full_answers`, and [`BoundError::ReadBack`].
 pub fn full_answers_from<'a>(
     src: &dyn FullSource,
     pois: &'a [Poi],
@@ -794,11 +794,11 @@ pub fn bound_against(
     bound_against_from(model, rough, levels, full)
 }
 
-/// [`bound_against`] for the full model `src` ([`full_answers_from`]): the assets of the
+/// `bound_against` for the full model `src` ([`full_answers_from`]): the assets of the
 /// LoD scene read from it as they rise above level 0.
 ///
 /// # Errors
-/// As [`bound_against`], and [`BoundError::ReadBack`].
+/// As `bound_against`, and [`BoundError::ReadBack`].
 pub fn bound_against_from(
     src: &dyn FullSource,
     rough: &[RoughGeometry],

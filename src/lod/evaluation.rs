@@ -10,14 +10,14 @@
 //!
 //! # Example
 //! ```
-//! use skylod::lod::evaluation::{evaluate, EvalOptions};
+//! use skylod::lod::{EvalOptions, evaluate};
 //! use skylod::model::Poi;
 //! use skylod::solar::{Site, SunTable};
 //! use skylod::model::synth::{generate, pois, Preset};
 //! let opts = Preset::Small.defaults();
 //! let mut xml = Vec::new();
 //! generate(&opts, &mut xml).unwrap();
-//! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let model = skylod::io::citygml::read_bytes(&xml, "small.gml").unwrap();
 //! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
 //! let table = SunTable::year(2025, 60, &Site::new(41.39, 2.17)).unwrap();
 //! let e = evaluate(&model, &pois, &EvalOptions::default(), Some(&table)).unwrap();
@@ -209,7 +209,7 @@ fn figures(
 /// is given.
 ///
 /// # Errors
-/// [`EvalError`] when the selection or the SVF bundle cannot be made.
+/// `EvalError` when the selection or the SVF bundle cannot be made.
 pub fn evaluate(
     model: &CityModel,
     pois: &[Poi],

@@ -459,9 +459,9 @@ pub fn read_hollow(
 
 /// The assets whose full geometry the POI checks of `lod` look at, for POIs at `points` (in
 /// the document's coordinates), as a `keep` of [`read_hollow`]: every asset of a building
-/// whose box, grown by [`ON_SURFACE`], holds a POI ([`Surroundings::assets_holding`]: the
+/// whose box, grown by `ON_SURFACE`, holds a POI ([`Surroundings::assets_holding`]: the
 /// inside-a-building and normal checks) and every asset whose rough box holds one
-/// ([`crate::lod::select::rough_holds_poi_full_not`]). A building and its parts are one
+/// (`crate::lod::select::rough_holds_poi_full_not`). A building and its parts are one
 /// top-level member, so a chunk sees each whole.
 pub fn near_pois(
     points: &[DVec3],

@@ -23,7 +23,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::lod::level::{polygon_count, traced};
+//! use skylod::lod::{polygon_count, traced};
 //! use skylod::model::{Asset, AssetKind, LodGeometry, Polygon};
 //! use skylod::lod::rough::RoughGeometry;
 //! let wall = Asset::new(AssetKind::Wall, None, "WallSurface",

@@ -10,34 +10,44 @@
 //! let opts = Preset::Small.defaults();
 //! let mut xml = Vec::new();
 //! generate(&opts, &mut xml).unwrap();
-//! let model = skylod::io::citygml::read::read_bytes(&xml, "small.gml").unwrap();
+//! let model = skylod::io::citygml::read_bytes(&xml, "small.gml").unwrap();
 //! let pois: Vec<Poi> = pois(&opts).into_iter().map(Into::into).collect();
-//! let silent = &skylod::model::runtime::progress::Silent;
+//! let silent = &skylod::model::Silent;
 //! let r = lod(&model, &pois, &LodOptions::default(), silent).unwrap();
 //! let [l0, l1, l2] = r.selection.level_counts();
 //! assert_eq!(l0 + l1 + l2, model.assets.len());
 //! assert!(l1 > 0 && l0 > 0);
 //! ```
 
-pub mod bound;
+pub(crate) mod bound;
 mod bound_report;
 // The hollow read: rough forms, boxes and counts made chunk by chunk, polygons dropped.
-pub mod hollow;
+pub(crate) mod hollow;
 // Full vs LoD vs all-boxes model per POI (paper 5, Tables 1 and 2).
-pub mod evaluation;
-pub mod level;
-pub mod mixed;
+pub(crate) mod evaluation;
+pub(crate) mod level;
+pub(crate) mod mixed;
 // Reading POIs, POIs from regions and facades, trust checks.
 pub mod poi;
 pub mod rough;
-pub mod scene;
-pub mod select;
+pub(crate) mod scene;
+pub(crate) mod select;
+pub use bound::{
+    bound, bound_against_from, full_answers_from, BoundError, BoundOptions, Bounded, FullSource,
+    HollowSource,
+};
+pub use evaluation::{evaluate, EvalOptions};
+pub use hollow::{hollowed, near_pois, read_hollow};
+pub use level::{polygon_count, properties, traced};
+pub use mixed::{write_mixed, write_mixed_to, MixedSummary};
+pub use scene::{detail_boxes, detail_key, full_scene, mixed_scene, rough_scene, selection_scene};
+pub use select::{select, SelectError, SelectOptions, Selection};
 
 use crate::lod::poi::checks::enclosure::ON_SURFACE;
 use crate::lod::poi::checks::{poi_flags_around, PoiFlag, Surroundings};
 use crate::lod::rough::{rough_model, RoughGeometry, RoughOptions};
 use crate::lod::scene::selection_scene_for_rays;
-use crate::lod::select::{select_facts, FullFacts, SelectError, SelectOptions, Selection};
+use crate::lod::select::{select_facts, FullFacts};
 use crate::model::runtime::progress::{check, stage, Progress, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
@@ -69,7 +79,7 @@ pub struct LodResult {
     pub select_s: f64,
     /// Triangles of the selection scene.
     pub triangles: usize,
-    /// Per POI, what makes its result suspect ([`poi_flags_around`]: inside a building judged
+    /// Per POI, what makes its result suspect (`poi_flags_around`: inside a building judged
     /// on the full geometry of the buildings whose box holds the POI, not on the selection scene).
     pub flags: Vec<Vec<PoiFlag>>,
 }

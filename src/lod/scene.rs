@@ -15,7 +15,7 @@
 //!     parent: None, span: 0..0, line: 1, function: None, file: 0,
 //!     geometries: vec![LodGeometry { lod: 2, polygons: vec![quad], ..Default::default() }],
 //! });
-//! let scene = skylod::lod::scene::full_scene(&m);
+//! let scene = skylod::lod::full_scene(&m);
 //! let hit = scene.first_hit(DVec3::ZERO, DVec3::Z, 0.0, f64::INFINITY).unwrap();
 //! assert_eq!(hit.tag, 0);
 //! assert!((hit.t - 5.0).abs() < 1e-6);
@@ -27,8 +27,6 @@ use crate::model::{Asset, Bbox, CityModel};
 use crate::solar::trace::{SceneBuilder, TraceScene};
 use glam::DVec3;
 use rayon::prelude::*;
-
-pub use crate::solar::trace::scene_of;
 
 /// Assets triangulated per parallel task, and per group added before the next group is
 /// triangulated (the group's triangles are the only extra memory).
@@ -82,7 +80,8 @@ fn add_tagged(
 /// model read hollow are built from ([`full_scene_of`], [`mixed_scene_of`]).
 pub type Tagged<'a> = [(usize, &'a Asset)];
 
-/// [`full_scene`] (`frame`: `None`) or [`full_scene_part`] (`Some((frame, rays))`) of the
+/// [`full_scene`] (`frame`: `None`), or its part built in the frame `frame` for about `rays`
+/// rays (`Some((frame, rays))`), of the
 /// model whose assets `assets` hold every full-detail polygon: the same scene.
 pub fn full_scene_of(assets: &Tagged<'_>, frame: Option<(Bbox, usize)>) -> TraceScene {
     let mut b = SceneBuilder::new();
@@ -134,7 +133,7 @@ pub fn detail_boxes(model: &CityModel) -> (Vec<Bbox>, Bbox) {
 
 /// A 128-bit key of what [`full_scene`] makes of `asset`: its full-detail polygons' rings,
 /// their lengths and their points bit for bit (xxh3-128). Two assets with the same key
-/// give the same triangles ([`crate::lod::hollow::Hollow::twin`]: the error bound's
+/// give the same triangles (`crate::lod::hollow::Hollow::twin`: the error bound's
 /// reference traces such twins once); `None` for an asset without full-detail polygons.
 ///
 /// ```
@@ -148,7 +147,7 @@ pub fn detail_boxes(model: &CityModel) -> (Vec<Bbox>, Bbox) {
 ///     building: None, parent: None, span: 0..0, line: 1, function: None, file: 0,
 ///     geometries: vec![LodGeometry { lod: 3, polygons, ..Default::default() }],
 /// };
-/// let key = skylod::lod::scene::detail_key;
+/// let key = skylod::lod::detail_key;
 /// assert_eq!(key(&roof(vec![triangle(5.0)], "a")), key(&roof(vec![triangle(5.0)], "b")));
 /// assert_ne!(key(&roof(vec![triangle(5.0)], "a")), key(&roof(vec![triangle(6.0)], "a")));
 /// assert_eq!(key(&roof(vec![], "a")), None);
@@ -235,23 +234,6 @@ fn triangles_box(model: &CityModel, boxes: &[Bbox]) -> Bbox {
 /// Boxes sorted first on each side in [`triangles_box`].
 const TOP: usize = 64;
 
-/// The part of [`full_scene`] made of the assets `i` with `include[i]`, built in the
-/// frame of the full scene's box `frame` (the union of [`detail_boxes`]) and for about
-/// `rays` rays ([`SceneBuilder::for_rays`]): its triangles have the full scene's f32
-/// coordinates and order, so a ray's [`TraceScene::first_hit`] is the full scene's whenever
-/// no left-out asset holds a triangle the ray hits as close ([`SceneBuilder::with_frame`]).
-pub fn full_scene_part(
-    model: &CityModel,
-    include: &[bool],
-    frame: Bbox,
-    rays: usize,
-) -> TraceScene {
-    let tagged: Vec<(usize, &Asset)> = (model.assets.iter().enumerate())
-        .filter(|(i, _)| include.get(*i).copied().unwrap_or(false))
-        .collect();
-    full_scene_of(&tagged, Some((frame, rays)))
-}
-
 /// Every asset as its rough geometry (`rough[i]` belongs to asset `i`).
 pub fn rough_scene(rough: &[RoughGeometry]) -> TraceScene {
     let mut b = SceneBuilder::new();
@@ -264,7 +246,7 @@ pub fn rough_scene(rough: &[RoughGeometry]) -> TraceScene {
 }
 
 /// The scene the selection traces: the rough model without the openings that their
-/// surface's rough plane closes ([`crate::lod::level::selection_traced`]).
+/// surface's rough plane closes (`crate::lod::level::selection_traced`).
 pub fn selection_scene(model: &CityModel, rough: &[RoughGeometry]) -> TraceScene {
     selection_builder(model, rough).build()
 }

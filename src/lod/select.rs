@@ -35,7 +35,7 @@
 //! use skylod::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
 //! use skylod::lod::poi::Poi;
 //! use skylod::lod::rough::{rough_model, RoughOptions};
-//! use skylod::lod::select::{select, SelectOptions};
+//! use skylod::lod::{SelectOptions, select};
 //! // One flat roof 10 m above the POI, 20 m x 20 m: it hides the zenith.
 //! let roof = Polygon::new(vec![
 //!     DVec3::new(-10.0, -10.0, 10.0), DVec3::new(10.0, -10.0, 10.0),
@@ -46,12 +46,12 @@
 //!     vec![LodGeometry { lod: 2, polygons: vec![roof], ..Default::default() }],
 //! ));
 //! let rough = rough_model(&m, &RoughOptions::default());
-//! let scene = skylod::lod::scene::rough_scene(&rough);
+//! let scene = skylod::lod::rough_scene(&rough);
 //! let poi = Poi { id: "p".into(), position: DVec3::ZERO, normal: None };
 //! let sel = select(&m, &rough, &scene, &[poi], &SelectOptions::default())?;
 //! assert!(sel.hits[0] > 0);
 //! assert_eq!(sel.levels[0], 2); // its edges are the skyline
-//! # Ok::<(), skylod::lod::select::SelectError>(())
+//! # Ok::<(), skylod::lod::SelectError>(())
 //! ```
 
 use crate::lod::poi::{Poi, POI_OFFSET};

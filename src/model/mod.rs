@@ -1,6 +1,6 @@
 //! The in-memory city model: buildings and the *assets* that receive a level.
 //!
-//! The reader ([`crate::io::citygml::read`]) fills a [`CityModel`]; every later stage
+//! The reader (`crate::io::citygml::read`) fills a [`CityModel`]; every later stage
 //! (rough, trace, select, solar, write) works on it. Coordinates are `f64`
 //! ([`glam::DVec3`]) in the model's CRS.
 //!
@@ -17,17 +17,21 @@
 
 // Coordinate reference systems: the `srsName` parser, local frames, conversions, PROJ.
 pub mod crs;
-pub mod poi;
+pub(crate) mod poi;
 // Progress, cancellation, memory given back between stages.
-pub mod runtime;
+pub(crate) mod runtime;
 mod shown;
 // Deterministic synthetic districts (the paper's Eixample) and box scenes.
 pub mod synth;
-pub mod triangulate;
+pub(crate) mod triangulate;
 
 pub use shown::{made_line, shown, Shown, STDIN_NAME, STDIN_SHOWN};
 
 pub use poi::{Poi, POI_OFFSET};
+pub use runtime::available::available_bytes;
+pub use runtime::mem::{give_back, reserve_heap, set_give_back};
+pub use runtime::progress::{check, Progress, Silent, Stage};
+pub use runtime::progress_text::{Detail, Line, ProgressText};
 pub use triangulate::triangulate;
 
 use compact_str::CompactString;

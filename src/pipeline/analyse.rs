@@ -178,7 +178,7 @@ pub struct EvaluateOptions {
     pub irradiance: Option<crate::solar::irradiance::IrradianceSetting>,
 }
 
-/// Full vs LoD vs all-boxes model at every POI of `framed` ([`evaluation::evaluate_irradiance`](crate::lod::evaluation::evaluate_irradiance)): rough
+/// Full vs LoD vs all-boxes model at every POI of `framed` (`evaluation::evaluate_irradiance`): rough
 /// model ([`Stage::Rough`]), scenes ([`Stage::Bvh`]), then each POI selected and traced
 /// ([`Stage::Trace`], cancellable before each POI).
 ///

@@ -7,7 +7,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::pipeline::attributes::insertion_point;
+//! use skylod::pipeline::insertion_point;
 //! let xml = br#"<bldg:WallSurface gml:id="w"><gml:name>a > b</gml:name><bldg:lod2MultiSurface/></bldg:WallSurface>"#;
 //! let at = insertion_point(xml).unwrap();
 //! assert!(xml[at..].starts_with(b"<bldg:lod2MultiSurface"));
@@ -240,10 +240,10 @@ pub enum AttributesError {
 }
 
 /// Write the model of `framed` (file 0: its one input) to `out` with the mean of `values`
-/// (one per POI) over the POIs of each surface that holds POIs ([`holding_surfaces`],
-/// [`surface_means`]) as [`IRRADIATION_ATTRIBUTE`]: CityJSON for a `.city.json` name (an
+/// (one per POI) over the POIs of each surface that holds POIs (`holding_surfaces`,
+/// `surface_means`) as `IRRADIATION_ATTRIBUTE`: CityJSON for a `.city.json` name (an
 /// attribute of the surface's semantic object), else CityGML by span edits
-/// ([`write_attributes`]). Never over an input, nor over an existing file without
+/// (`write_attributes`). Never over an input, nor over an existing file without
 /// `overwrite`. The number of surfaces given it.
 ///
 /// # Errors

@@ -23,8 +23,3 @@ pub enum PoiCrsError {
         model: String,
     },
 }
-
-/// The errors of the pipeline's calls are the library's [`crate::Error`] (before 0.2 their own
-/// enum, flattened into it; the name kept for one release).
-#[doc(hidden)]
-pub type PipelineError = crate::Error;

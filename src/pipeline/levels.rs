@@ -102,9 +102,9 @@ impl<'a> From<&'a Framed<'a>> for LevelsInput<'a> {
 /// model read back by span ([`HollowSource`]), after the selection: the same levels, bound
 /// and flags as on the whole read.
 ///
-/// The bound's full-model side ([`crate::lod::bound::full_answers`]: the reference trace, which needs no
+/// The bound's full-model side (`crate::lod::bound::full_answers`: the reference trace, which needs no
 /// levels) runs beside the rough model and the selection, each filling the other's
-/// one-core stretches, for models under [`GIVE_BACK_MIN_ASSETS`] assets (a larger model's
+/// one-core stretches, for models under `GIVE_BACK_MIN_ASSETS` assets (a larger model's
 /// peak memory keeps them one after the other); the answers are the same either way.
 ///
 /// # Errors

@@ -27,7 +27,7 @@
 //! # Example
 //! ```
 //! use skylod::pipeline::{frame, levels, read_inputs, write_levels, FrameOptions, LevelsOptions};
-//! use skylod::model::runtime::progress::Silent;
+//! use skylod::model::Silent;
 //! use skylod::export::Format;
 //! use std::path::PathBuf;
 //! let input = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/synth-small.gml");
@@ -45,7 +45,7 @@
 //! ```
 
 mod analyse;
-pub mod attributes;
+pub(crate) mod attributes;
 // Batch work: input files, shards, levels files and their reduce, scene radius.
 pub mod batch;
 mod error;
@@ -59,10 +59,11 @@ pub mod session;
 #[cfg(test)]
 pub(crate) mod test_support;
 mod write;
+pub use attributes::{insertion_point, write_surface_means, AttributesError};
 
 pub(crate) use analyse::trace_in;
 pub use analyse::{evaluate, horizon, sun_hours, svf, trace, EvaluateOptions, Traced};
-pub use error::{PipelineError, PoiCrsError};
+pub use error::PoiCrsError;
 pub use fisheye::{sky_pictures, SkyPicture, SkyPictureOptions};
 pub(crate) use frame::frame_in;
 pub use frame::{frame, FrameOptions, Framed};

@@ -37,7 +37,7 @@ pub struct Written {
 /// Write `src` to `out` in `format` with every asset at its level; `out`'s missing parent
 /// folders are created. `src` is a file of the model as read, e.g.
 /// `(framed.source, 0)` ([`Framed::source`](super::Framed::source)), or a document read
-/// hollow ([`MixedSource::Hollow`]: CityGML only, the polygons the writer needs read back,
+/// hollow (`MixedSource::Hollow`: CityGML only, the polygons the writer needs read back,
 /// the bytes of the whole read's).
 ///
 /// # Errors
@@ -224,13 +224,13 @@ pub fn write_all(
 }
 
 /// `files` of `model` (in input order) merged into one OBJ, CityJSON or CityJSONSeq file at
-/// `out` with every asset at its level ([`crate::export::merge::write_merged`]: one origin,
+/// `out` with every asset at its level (`crate::export::merge::write_merged`: one origin,
 /// the CityGML merge's ids); `out`'s missing parent folders are created. What was written,
 /// counted over all of `files` (buildings and parts dropped summed).
 ///
 /// # Errors
 /// [`WriteError`]; [`WriteError::Invalid`] for [`Format::CityGml`] (merged by
-/// [`crate::export::merge`] from the per-file documents).
+/// `crate::export::merge` from the per-file documents).
 pub fn write_merged_levels(
     model: &CityModel,
     files: &[usize],

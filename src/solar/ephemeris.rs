@@ -31,8 +31,8 @@
 //! the same whatever the ephemeris holds.
 //!
 //! ```rust
-//! use skylod::solar::{ephemeris::SunEphemeris, Site, SunTable};
-//! use skylod::model::runtime::progress::Silent;
+//! use skylod::solar::{Site, SunEphemeris, SunTable};
+//! use skylod::model::Silent;
 //! let site = Site::new(41.39, 2.17);
 //! let ahead = SunEphemeris::year(2025, 60, site.delta_t_s)?;
 //! // ... the model is read here, and gives the site ...

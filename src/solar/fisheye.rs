@@ -19,8 +19,8 @@
 //! # Example
 //! ```rust
 //! use skylod::model::AssetKind;
-//! use skylod::solar::sky::{SkyPartition, SkyVariant};
-//! use skylod::solar::fisheye::{fisheye_svg, CellClass, FisheyeOptions};
+//! use skylod::solar::{SkyPartition, SkyVariant};
+//! use skylod::solar::{CellClass, FisheyeOptions, fisheye_svg};
 //! let sky = SkyPartition::new(145, SkyVariant::EqualSolidAngle)?;
 //! // The outer ring (30 cells) is blocked by asset 0, a wall.
 //! let mut cells = vec![CellClass::Sky; 145];
@@ -30,7 +30,7 @@
 //! let doc = fisheye_svg(&sky, &cells, &[AssetKind::Wall], None, &FisheyeOptions::default());
 //! let text = doc.to_string();
 //! assert!(text.starts_with("<svg") && text.contains("wall"));
-//! # Ok::<(), skylod::solar::sky::SkyError>(())
+//! # Ok::<(), skylod::solar::SkyError>(())
 //! ```
 
 use super::sun::{sun_position, Site};
@@ -294,7 +294,7 @@ pub struct FisheyeOptions {
     pub title: String,
     /// Extra caption lines under the title (e.g. SVF).
     pub caption: Vec<String>,
-    /// Sun paths drawn on top ([`sun_paths`]); empty for none.
+    /// Sun paths drawn on top (`sun_paths`); empty for none.
     pub sun_paths: Vec<SunPath>,
     /// Radius of the horizon circle in pixels.
     pub radius: f64,

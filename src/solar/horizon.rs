@@ -30,7 +30,7 @@
 //! # Example
 //! ```rust
 //! use glam::DVec3;
-//! use skylod::solar::horizon::{horizon_profile, HorizonOptions};
+//! use skylod::solar::{HorizonOptions, horizon_profile};
 //! // Floor centre of an infinitely long north-south canyon, walls x = ±5 m, 10 m high.
 //! let blocked = |d: DVec3| d.x != 0.0 && 5.0 / d.x.abs() * d.z < 10.0;
 //! let p = horizon_profile(&HorizonOptions::default(), None, blocked)?;
@@ -182,17 +182,6 @@ pub fn azimuth_elevation(d: DVec3) -> (f64, f64) {
     (az, el)
 }
 
-/// The skyline elevation (degrees) at one azimuth: the lowest elevation of visible sky,
-/// found by the march-and-bisect of the module docs; 0 when the horizontal is open, 90 when
-/// nothing from the horizontal to the zenith is.
-pub fn skyline_elevation(
-    azimuth_deg: f64,
-    opts: &HorizonOptions,
-    blocked: impl Fn(DVec3) -> bool,
-) -> f64 {
-    band_above(azimuth_deg, 0.0, opts, blocked).0
-}
-
 /// The first visible band at one azimuth searched above `floor` degrees: its lower edge
 /// (the skyline; 90 when nothing is open) and, when sky above it is blocked again, the
 /// elevation where that blocking starts (the overhang; `None` when open to the zenith).
@@ -268,10 +257,10 @@ pub fn plane_elevation(normal: DVec3, azimuth_deg: f64) -> f64 {
     }
 }
 
-/// The horizon profile of a point: [`skyline_elevation`] at every azimuth of `opts`.
+/// The horizon profile of a point: the skyline elevation (`band_above` from 0) at every azimuth of `opts`.
 /// `blocked(dir)` tells whether the ray from the point towards the unit direction `dir` is
 /// obstructed; with a `normal`, directions behind the surface count as obstructed (module
-/// docs): the profile is never below [`plane_elevation`]. A zero or non-finite normal is
+/// docs): the profile is never below `plane_elevation`. A zero or non-finite normal is
 /// ignored.
 pub fn horizon_profile(
     opts: &HorizonOptions,

@@ -1,23 +1,27 @@
 //! Solar analysis beside the LoD pipeline (paper 3, 5): the sky partition into ray bundles
-//! ([`sky`], shared with the selection), sun positions ([`sun`], with the site-independent
-//! half computed ahead: [`ephemeris`]), sky view factor and sky
-//! exposure ([`mod@svf`]), sun hours ([`mod@sun_hours`]), horizon profiles ([`horizon`]) and
-//! irradiation from hourly weather ([`weather`], [`mod@irradiance`]).
+//! (`sky`, shared with the selection), sun positions (`sun`, with the site-independent
+//! half computed ahead: `ephemeris`), sky view factor and sky
+//! exposure (`mod@svf`), sun hours (`mod@sun_hours`), horizon profiles (`horizon`) and
+//! irradiation from hourly weather (`weather`, [`mod@irradiance`]).
 //!
 //! All three take the scene only through an occlusion predicate (`true` = blocked), so
 //! they work with any ray caster; parallelism over points of interest is the caller's.
 
-pub mod ephemeris;
-pub mod fisheye;
-pub mod horizon;
+pub(crate) mod ephemeris;
+pub(crate) mod fisheye;
+pub(crate) mod horizon;
 pub mod irradiance;
-pub mod sky;
-pub mod sun;
-pub mod sun_hours;
-pub mod svf;
+pub(crate) mod sky;
+pub(crate) mod sun;
+pub(crate) mod sun_hours;
+pub(crate) mod svf;
 // Ray tracing: triangles in a BVH, first hit and occlusion, exact reference tests.
 pub mod trace;
-pub mod weather;
+pub(crate) mod weather;
+pub use ephemeris::SunEphemeris;
+pub use fisheye::{fisheye_svg, CellClass, FisheyeOptions, Projection};
+pub use sky::{Frame, SkyError, SkyPartition, SkyVariant};
+pub use weather::{parse_weather, read_weather, Weather, WeatherFormat, WeatherHour, WeatherSite};
 
 pub use horizon::{horizon_profile, HorizonOptions, HorizonProfile};
 pub use sun::{sun_position, Site, SiteTimeZone, SunPosition, SunStep, SunTable};

@@ -25,14 +25,14 @@
 //!
 //! # Example
 //! ```rust
-//! use skylod::solar::sky::{SkyPartition, SkyVariant};
+//! use skylod::solar::{SkyPartition, SkyVariant};
 //! let sky = SkyPartition::new(145, SkyVariant::EqualSolidAngle)?;
 //! let cells: Vec<usize> = sky.rings().iter().map(|r| r.cells).collect();
 //! assert_eq!(cells, vec![1, 7, 12, 18, 22, 26, 29, 30]);
 //! let dirs = sky.sample(42);
 //! assert_eq!(dirs.len(), 145);
 //! assert!(dirs.iter().enumerate().all(|(i, d)| sky.cell_of(*d) == Some(i)));
-//! # Ok::<(), skylod::solar::sky::SkyError>(())
+//! # Ok::<(), skylod::solar::SkyError>(())
 //! ```
 
 use glam::DVec3;
@@ -50,7 +50,7 @@ pub enum SkyError {
     /// The number of cells was zero.
     #[error("sky partition needs at least one cell")]
     NoCells,
-    /// The number of cells exceeded [`MAX_CELLS`].
+    /// The number of cells exceeded `MAX_CELLS`.
     #[error("sky partition with {0} cells exceeds the maximum of {MAX_CELLS}")]
     TooManyCells(usize),
 }
@@ -130,7 +130,7 @@ impl SkyPartition {
     /// Builds the partition with `n` cells.
     ///
     /// # Errors
-    /// [`SkyError::NoCells`] for `n == 0`, [`SkyError::TooManyCells`] above [`MAX_CELLS`].
+    /// [`SkyError::NoCells`] for `n == 0`, [`SkyError::TooManyCells`] above `MAX_CELLS`.
     pub fn new(n: usize, variant: SkyVariant) -> Result<Self, SkyError> {
         if n == 0 {
             return Err(SkyError::NoCells);
@@ -352,7 +352,7 @@ impl SkyPartition {
 /// # Example
 /// ```rust
 /// use glam::DVec3;
-/// use skylod::solar::sky::Frame;
+/// use skylod::solar::Frame;
 /// let f = Frame::from_normal(DVec3::new(0.0, -1.0, 0.0)); // a south-facing wall
 /// assert!((f.to_world(DVec3::Z) - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-12);
 /// assert!((f.to_world(DVec3::Y) - DVec3::Z).length() < 1e-12);

@@ -9,7 +9,7 @@
 //! # Example
 //! ```rust
 //! use chrono::{TimeZone, Utc};
-//! use skylod::solar::sun::{sun_position, Site};
+//! use skylod::solar::{Site, sun_position};
 //! let site = Site::new(41.39, 2.17); // Barcelona
 //! let noon = Utc.with_ymd_and_hms(2025, 6, 21, 11, 50, 0).unwrap();
 //! let p = sun_position(noon, &site)?;
@@ -336,7 +336,7 @@ impl SunTable {
 
     /// [`SunTable::year_with`], taking SPA's site-independent half of the steps from `ahead`
     /// where it has them ready (and asking its thread to stop): the same table to the bit
-    /// ([`super::ephemeris`]). An ephemeris of another year, step or delta T is not used.
+    /// (`super::ephemeris`). An ephemeris of another year, step or delta T is not used.
     ///
     /// # Errors
     /// As [`SunTable::year_with`].

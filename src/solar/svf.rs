@@ -18,14 +18,14 @@
 //! # Example
 //! ```rust
 //! use glam::DVec3;
-//! use skylod::solar::svf::{sky_view, SkyBundles};
+//! use skylod::solar::{SkyBundles, sky_view};
 //! let bundles = SkyBundles::new(2_000, 1)?;
 //! // A ground point next to an infinitely long wall of height 10 m, 10 m to the east.
 //! let wall = |o: DVec3, d: DVec3| d.x > 0.0 && o.z + (10.0 - o.x) / d.x * d.z < 10.0;
 //! let v = sky_view(DVec3::ZERO, None, &bundles, wall);
 //! let beta = std::f64::consts::FRAC_PI_4;
 //! assert!((v.svf - (1.0 + beta.cos()) / 2.0).abs() < 0.01);
-//! # Ok::<(), skylod::solar::sky::SkyError>(())
+//! # Ok::<(), skylod::solar::SkyError>(())
 //! ```
 
 use crate::model::Poi;

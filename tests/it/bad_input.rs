@@ -7,9 +7,9 @@
 //! big inputs are generated here; inputs over 100 MB only with `--ignored`.
 
 use crate::util::*;
-use skylod::export::report::stats::Stats;
-use skylod::io::citygml::read::{read_bytes, read_file, read_from, ReadOptions};
+use skylod::export::report::Stats;
 use skylod::io::citygml::ReadError;
+use skylod::io::citygml::{read_bytes, read_file, read_from, ReadOptions};
 use skylod::model::CityModel;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

@@ -10,8 +10,8 @@
 use glam::DVec3;
 use serde_json::Value;
 use skylod::io::citygml::read_file;
+use skylod::lod::full_scene;
 use skylod::lod::poi::Poi;
-use skylod::lod::scene::full_scene;
 use skylod::model::{AssetKind, CityModel};
 use skylod::solar::{poi_sky_view, SkyBundles};
 use std::ffi::OsStr;

@@ -6,7 +6,7 @@
 
 use crate::util::*;
 use serde_json::Value;
-use skylod::export::report::stats::Stats;
+use skylod::export::report::Stats;
 use skylod::export::{write, Chunks, Content, Format};
 use skylod::io::citygml::read_file;
 use skylod::model::{AssetKind, CityModel};

@@ -1,5 +1,5 @@
 //! Several CityJSON / CityJSONSeq inputs merged into one file by `subset`, `filter-lods` and
-//! `upgrade` (issue 24; `skylod::export::merge::merge_cityjson`):
+//! `upgrade` (issue 24; `skylod::export::merge_cityjson`):
 //!
 //! * the merge of each command's outputs holds the union of the outputs it writes for each
 //!   input alone: every city object with the same attributes and geometry, its vertices at the

@@ -2,7 +2,7 @@
 //! schema-valid input, idempotent (byte-identical round trip), gzip output.
 
 use crate::util::*;
-use skylod::export::report::stats::Stats;
+use skylod::export::report::Stats;
 use skylod::io::citygml::read_file;
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -570,8 +570,8 @@ fn crs_tables_match_pyproj() {
     if !python_has("pyproj, numpy", "pip install pyproj numpy") {
         return;
     }
-    use skylod::model::crs::feet::{foot_codes, US_SURVEY_FOOT};
-    use skylod::model::crs::parse::{GEOGRAPHIC, PROJECTED_METRES};
+    use skylod::model::crs::{foot_codes, US_SURVEY_FOOT};
+    use skylod::model::crs::{GEOGRAPHIC, PROJECTED_METRES};
     let (us, intl): (Vec<_>, Vec<_>) = foot_codes().partition(|(_, u)| *u == US_SURVEY_FOOT);
     let claims = serde_json::json!({
         "feet_us": us.iter().map(|x| x.0).collect::<Vec<_>>(),

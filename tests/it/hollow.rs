@@ -4,11 +4,11 @@
 //! document by span (`Hollow::read_back`) are the whole read's.
 
 use crate::util::*;
-use skylod::io::citygml::read::{read_file, Passes, Reread};
 use skylod::io::citygml::ReadOptions;
-use skylod::lod::hollow::{hollowed, read_hollow};
+use skylod::io::citygml::{read_file, Passes, Reread};
+use skylod::lod::detail_boxes;
 use skylod::lod::rough::{rough_model, RoughGeometry, RoughOptions};
-use skylod::lod::scene::detail_boxes;
+use skylod::lod::{hollowed, read_hollow};
 use skylod::model::{content_bbox, Asset, Bbox, CityModel};
 
 #[test]

@@ -4,7 +4,7 @@
 
 use crate::util::*;
 use serde_json::{json, Value};
-use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
+use skylod::model::synth::{boxes_citygml, BoxBuilding};
 use std::ffi::OsStr;
 use std::io::Write;
 use std::path::{Path, PathBuf};

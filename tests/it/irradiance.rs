@@ -8,7 +8,7 @@
 
 use crate::util::*;
 use serde_json::{json, Value};
-use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
+use skylod::model::synth::{boxes_citygml, BoxBuilding};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

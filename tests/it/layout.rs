@@ -490,6 +490,45 @@ fn source_files_stay_short_and_the_top_stays_small() {
     assert!(crowded.is_empty(), "{crowded:?}");
 }
 
+/// The library's public modules: `pub mod` (not `pub(crate)`) outside the binary.
+fn public_modules() -> Vec<String> {
+    let root = src();
+    let mut out = Vec::new();
+    for p in rust_files(&root) {
+        let rel = p
+            .strip_prefix(&root)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        if rel.starts_with("bin/") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&p).unwrap();
+        for l in code(&text).lines() {
+            if let Some(rest) = l.trim_start().strip_prefix("pub mod ") {
+                out.push(format!("{rel}: {}", ident(rest)));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_library_shows_few_modules() {
+    // The groups and the namespaces a program names; every other module is `pub(crate)`,
+    // its items re-exported by the nearest public parent.
+    let public = public_modules();
+    assert!(
+        public.len() <= 30,
+        "{} public modules: {public:#?}",
+        public.len()
+    );
+    assert!(
+        public.iter().any(|m| m.ends_with(": pipeline")),
+        "{public:?}"
+    );
+}
+
 #[test]
 fn the_path_reader_sees_imports() {
     // The checks above are only as good as the reader of imports: it must see these.

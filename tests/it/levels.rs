@@ -4,13 +4,13 @@
 //! the SVF of the written file read back and traced with the same rays.
 
 use glam::DVec3;
-use skylod::export::report::report::{Parameters, Report, Timings};
+use skylod::export::report::{Parameters, Report, Timings};
 use skylod::io::citygml::read_file;
-use skylod::io::citygml::write::WriteOptions;
-use skylod::lod::evaluation::{evaluate, EvalOptions};
-use skylod::lod::mixed::write_mixed;
+use skylod::io::citygml::WriteOptions;
 use skylod::lod::poi::Poi;
-use skylod::lod::scene::{full_scene, mixed_scene};
+use skylod::lod::write_mixed;
+use skylod::lod::{evaluate, EvalOptions};
+use skylod::lod::{full_scene, mixed_scene};
 use skylod::lod::{lod, LodOptions};
 use skylod::solar::{poi_sky_view, SkyBundles};
 use skylod::Silent;
@@ -122,7 +122,7 @@ fn report_evaluate_writer_and_written_file_agree() {
             .zip(levels)
             .filter(|((a, rg), l)| {
                 **l == 1
-                    && skylod::lod::level::properties(a, Some(rg), 1)
+                    && skylod::lod::properties(a, Some(rg), 1)
                         .iter()
                         .any(|p| !p.rough && !p.polygons.is_empty())
             })

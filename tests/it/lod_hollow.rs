@@ -7,11 +7,11 @@
 
 use crate::util::*;
 use skylod::export::Format;
-use skylod::io::citygml::write::WriteOptions;
-use skylod::lod::bound::BoundOptions;
-use skylod::model::runtime::progress::Silent;
+use skylod::io::citygml::WriteOptions;
+use skylod::lod::BoundOptions;
+use skylod::model::Silent;
 use skylod::model::{Bbox, Poi};
-use skylod::pipeline::session::report::RunMs;
+use skylod::pipeline::session::RunMs;
 use skylod::pipeline::session::{Scene, SceneOptions, Study};
 use skylod::pipeline::{write_levels, BoundSpec, LevelsOptions};
 use std::path::{Path, PathBuf};

@@ -4,7 +4,7 @@
 use glam::DVec3;
 use skylod::io::citygml::read_file;
 use skylod::lod::poi::Poi;
-use skylod::lod::select::SelectOptions;
+use skylod::lod::SelectOptions;
 use skylod::lod::{lod, LodOptions};
 use skylod::model::CityModel;
 

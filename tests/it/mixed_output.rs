@@ -5,11 +5,11 @@
 
 use crate::util::*;
 use rand::{Rng, SeedableRng};
-use skylod::export::report::stats::Stats;
+use skylod::export::report::Stats;
 use skylod::io::citygml::read_file;
-use skylod::io::citygml::write::WriteOptions;
-use skylod::lod::mixed::{write_mixed, MixedSummary};
+use skylod::io::citygml::WriteOptions;
 use skylod::lod::rough::{rough_model, RoughOptions};
+use skylod::lod::{write_mixed, MixedSummary};
 use skylod::model::{AssetKind, CityModel};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -22,7 +22,7 @@ fn inputs() -> Vec<PathBuf> {
 }
 
 fn decompressed(p: &Path) -> Vec<u8> {
-    let (mut r, _) = skylod::io::citygml::source::open(p).unwrap();
+    let (mut r, _) = skylod::io::citygml::open(p).unwrap();
     let mut v = Vec::new();
     std::io::Read::read_to_end(&mut r, &mut v).unwrap();
     v

@@ -15,7 +15,7 @@
 
 use crate::util::{json, missing, os, poi_args, python_has, run, shared_data, stderr};
 use glam::DVec3;
-use skylod::model::crs::convert::proj4_definition;
+use skylod::model::crs::proj4_definition;
 use skylod::model::crs::{Builtin, Crs, PointTransform};
 use std::io::Write;
 use std::process::{Command, Stdio};

@@ -6,10 +6,10 @@
 
 use glam::DVec3;
 use proptest::prelude::*;
-use skylod::export::report::stats::Stats;
-use skylod::io::citygml::read::{read_bytes, read_file};
-use skylod::io::citygml::write::{write_document, WriteOptions};
-use skylod::solar::trace::ray::{ray_aabb, ray_triangle};
+use skylod::export::report::Stats;
+use skylod::io::citygml::{read_bytes, read_file};
+use skylod::io::citygml::{write_document, WriteOptions};
+use skylod::solar::trace::{ray_aabb, ray_triangle};
 
 // ---------------------------------------------------------------------------------------------
 // ray-box against ray-triangle
@@ -296,9 +296,9 @@ proptest! {
 // lod levels under a UTM-sized translation of the scene and the POI
 
 use skylod::lod::poi::Poi;
-use skylod::lod::select::SelectOptions;
+use skylod::lod::SelectOptions;
 use skylod::lod::{lod, LodOptions};
-use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
+use skylod::model::synth::{boxes_citygml, BoxBuilding};
 
 /// Half-metre grid values, so that every coordinate and its translate are exact in f64.
 fn half(lo: i32, hi: i32) -> impl Strategy<Value = f64> {

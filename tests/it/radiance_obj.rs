@@ -290,7 +290,7 @@ fn obj_conventions() {
         .map(|l| l.poi)
         .collect();
     let r = skylod::lod::lod(&model, &p, &Default::default(), &skylod::Silent).unwrap();
-    let scene = skylod::lod::scene::mixed_scene(&model, &r.rough, &r.selection.levels);
+    let scene = skylod::lod::mixed_scene(&model, &r.rough, &r.selection.levels);
     assert_eq!(faces, scene.len());
     let kept = r.selection.levels.iter().filter(|l| **l > 0).count();
     assert_eq!(names.len(), kept);

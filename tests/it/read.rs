@@ -10,9 +10,9 @@
 
 use crate::util::*;
 use glam::DVec3;
-use skylod::export::report::stats::Stats;
-use skylod::io::citygml::read::{read_file_chunked, read_file_with, ReadOptions};
+use skylod::export::report::Stats;
 use skylod::io::citygml::{read_file, ReadError};
+use skylod::io::citygml::{read_file_chunked, read_file_with, ReadOptions};
 use skylod::model::{AssetKind, CityModel, Polygon};
 use std::path::{Path, PathBuf};
 
@@ -414,7 +414,7 @@ fn pool(threads: usize) -> rayon::ThreadPool {
         .unwrap()
 }
 
-fn show(r: &Result<CityModel, skylod::io::citygml::error::ReadError>) -> String {
+fn show(r: &Result<CityModel, skylod::io::citygml::ReadError>) -> String {
     match r {
         Ok(m) => format!(
             "ok: {} buildings, {} assets, {} warnings",

@@ -3,7 +3,7 @@
 
 use serde_json::Value;
 use skylod::io::citygml::read_file;
-use skylod::lod::poi::region::facade_pois;
+use skylod::lod::poi::facade_pois;
 use std::ffi::OsStr;
 use std::path::Path;
 

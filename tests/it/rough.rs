@@ -6,7 +6,7 @@ use flate2::read::GzDecoder;
 use glam::DVec3;
 use quick_xml::events::Event;
 use quick_xml::Reader;
-use skylod::lod::rough::plane::generalize;
+use skylod::lod::rough::generalize;
 use skylod::model::Polygon;
 use std::io::BufReader;
 use std::path::PathBuf;
@@ -149,7 +149,7 @@ fn ingolstadt_lod3_walls_and_roofs_generalise() {
 
 #[test]
 fn ingolstadt_lod3_installations_and_windows_boxes_contain_them() {
-    use skylod::lod::rough::obb::Obb;
+    use skylod::lod::rough::Obb;
     let Some(path) = data_path() else { return };
     for (element, count) in [(&b"BuildingInstallation"[..], 14), (&b"Window"[..], 54)] {
         let assets = surfaces(&path, element);
@@ -162,7 +162,7 @@ fn ingolstadt_lod3_installations_and_windows_boxes_contain_them() {
                 .flat_map(|p| p.points())
                 .all(|p| obb.contains(*p, 1e-6)));
             let b = skylod::model::Bbox::of_points(polys.iter().flat_map(|p| p.points()));
-            let e = (b.max - b.min).max(glam::DVec3::splat(skylod::lod::rough::obb::MIN_THICKNESS));
+            let e = (b.max - b.min).max(glam::DVec3::splat(skylod::lod::rough::MIN_THICKNESS));
             assert!(obb.volume() <= e.x * e.y * e.z * (1.0 + 1e-9));
             obb_vol += obb.volume();
             aabb_vol += e.x * e.y * e.z;

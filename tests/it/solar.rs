@@ -283,8 +283,8 @@ fn sun_hours_json_and_errors() {
     // A model without a CRS skylod converts: usage error naming --lat/--lon.
     let dir = tempfile::tempdir().unwrap();
     let nocrs = dir.path().join("nocrs.gml");
-    let boxes = skylod::model::synth::boxes::boxes_citygml(
-        &[skylod::model::synth::boxes::BoxBuilding {
+    let boxes = skylod::model::synth::boxes_citygml(
+        &[skylod::model::synth::BoxBuilding {
             id: "B".into(),
             min: [0.0, 0.0],
             max: [10.0, 10.0],

@@ -5,10 +5,10 @@
 
 use crate::util::{citygml_files, os, shared_data, short, stderr, BIN};
 use skylod::export::{Content, Format};
-use skylod::io::citygml::read::{read_bytes, read_file};
-use skylod::io::citygml::write::{write_document, write_document_to, WriteOptions};
-use skylod::lod::mixed::{write_mixed, write_mixed_to};
+use skylod::io::citygml::{read_bytes, read_file};
+use skylod::io::citygml::{write_document, write_document_to, WriteOptions};
 use skylod::lod::rough::{rough_model, RoughOptions};
+use skylod::lod::{write_mixed, write_mixed_to};
 use skylod::model::{AssetKind, CityModel, Source};
 use std::ffi::OsStr;
 use std::io::Write;

@@ -5,9 +5,9 @@
 //! Ingolstadt street repeated) in a temporary directory.
 
 use crate::util;
-use skylod::io::citygml::read::{read_file_with, stream, Chunk, Passes, ReadOptions, Streamed};
 use skylod::io::citygml::read_source;
-use skylod::io::citygml::source::resolve;
+use skylod::io::citygml::resolve;
+use skylod::io::citygml::{read_file_with, stream, Chunk, Passes, ReadOptions, Streamed};
 use skylod::model::CityModel;
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -443,7 +443,7 @@ fn streamed_exports_are_the_whole_models_bytes() {
     use skylod::export::{write, Chunks, Content, Format};
     use skylod::WriteError;
     let dir = tempfile::tempdir().unwrap();
-    let opts = skylod::io::citygml::write::WriteOptions {
+    let opts = skylod::io::citygml::WriteOptions {
         overwrite: true,
         ..Default::default()
     };
@@ -496,7 +496,7 @@ fn streamed_exports_are_the_whole_models_bytes() {
 /// back, on every file of the shared data and the fixtures (issue 22).
 #[test]
 fn streamed_citygml_is_the_whole_reads_bytes() {
-    use skylod::io::citygml::write::{write_document, write_document_streamed, WriteOptions};
+    use skylod::io::citygml::{write_document, write_document_streamed, WriteOptions};
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (
         dir.path().join("whole.gml"),
@@ -595,7 +595,7 @@ fn streamed_cityjson_ids_are_the_whole_writers() {
     let path = dir.path().join("ids.gml");
     std::fs::write(&path, doc).unwrap();
     let model = read_file_with(&path, &ReadOptions::default()).unwrap();
-    let opts = skylod::io::citygml::write::WriteOptions {
+    let opts = skylod::io::citygml::WriteOptions {
         overwrite: true,
         ..Default::default()
     };

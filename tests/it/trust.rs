@@ -161,7 +161,7 @@ fn poi_inside_a_building_is_flagged_everywhere() {
 /// the horizon, but it is not inside a closed solid.
 #[test]
 fn poi_without_sky_is_flagged() {
-    use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
+    use skylod::model::synth::{boxes_citygml, BoxBuilding};
     let b = BoxBuilding {
         id: "ARCADE".into(),
         min: [0.0, 0.0],

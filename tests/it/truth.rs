@@ -67,19 +67,19 @@ fn courtyard_poi_is_not_inside_a_building() {
     assert_eq!(names(&svf_flags(poi)), Vec::<&str>::new());
     assert_eq!(names(&lod_flags(poi)), Vec::<&str>::new());
     // The rough box of the whole block would enclose it: lod must not judge on that.
-    let m = skylod::io::citygml::read::read_file(&courtyard()).unwrap();
+    let m = skylod::io::citygml::read_file(&courtyard()).unwrap();
     let boxes = skylod::lod::rough::all_boxes(&m);
-    let rough = skylod::lod::scene::rough_scene(&boxes);
+    let rough = skylod::lod::rough_scene(&boxes);
     let p = skylod::lod::poi::Poi {
         id: "c".into(),
         position: glam::DVec3::new(690030.0, 5336030.0, 101.5),
         normal: None,
     };
-    let on_boxes = skylod::lod::poi::checks::poi_flags(&rough, &m, &p, None);
+    let on_boxes = skylod::lod::poi::poi_flags(&rough, &m, &p, None);
     assert!(
         matches!(
             on_boxes.as_slice(),
-            [skylod::lod::poi::checks::PoiFlag::InsideBuilding { .. }]
+            [skylod::lod::poi::PoiFlag::InsideBuilding { .. }]
         ),
         "the box fills the courtyard: {on_boxes:?}"
     );

@@ -288,7 +288,7 @@ pub fn oracle_counts(files: &[PathBuf]) -> Option<serde_json::Map<String, serde_
 pub fn unresolved_refs(path: &Path) -> Result<Vec<String>, String> {
     use quick_xml::events::Event;
     use quick_xml::name::ResolveResult;
-    let (reader, _) = skylod::io::citygml::source::open(path).map_err(|e| e.to_string())?;
+    let (reader, _) = skylod::io::citygml::open(path).map_err(|e| e.to_string())?;
     let mut r = quick_xml::NsReader::from_reader(reader);
     let mut buf = Vec::new();
     let mut ids = std::collections::HashSet::new();

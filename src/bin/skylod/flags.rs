@@ -4,19 +4,19 @@
 //! `--shard`, `--shards`, `--weather`, `--lat`/`--lon`, `-o`).
 
 use skylod::io::citygml::WriteError;
-use skylod::io::files::TargetError;
-use skylod::lod::bound::BoundError;
-use skylod::lod::poi::checks::TrustError;
-use skylod::lod::poi::region::RegionError;
+use skylod::io::TargetError;
+use skylod::lod::poi::RegionError;
+use skylod::lod::poi::TrustError;
+use skylod::lod::BoundError;
 use skylod::model::crs::FrameWarning;
-use skylod::pipeline::attributes::AttributesError;
-use skylod::pipeline::batch::convert::ConvertError;
-use skylod::pipeline::batch::outputs::PlanError;
-use skylod::pipeline::batch::shard::{Setting, ShardError, ENV_VARS};
-use skylod::pipeline::batch::shard_levels::LevelsTargetError;
-use skylod::pipeline::batch::synth::SynthFilesError;
-use skylod::pipeline::session::site::SiteError;
+use skylod::pipeline::batch::ConvertError;
+use skylod::pipeline::batch::LevelsTargetError;
+use skylod::pipeline::batch::PlanError;
+use skylod::pipeline::batch::SynthFilesError;
+use skylod::pipeline::batch::{Setting, ShardError, ENV_VARS};
 use skylod::pipeline::session::Error;
+use skylod::pipeline::session::SiteError;
+use skylod::pipeline::AttributesError;
 use skylod::pipeline::PoiCrsError;
 use std::error::Error as StdError;
 
@@ -24,7 +24,7 @@ use std::error::Error as StdError;
 /// (one cause of a chain: [`crate::io::message::chain_message`] joins them).
 pub(crate) fn cli_text(e: &(dyn StdError + 'static)) -> String {
     // A full disk in plain words, as the library's file errors say it.
-    (TEXTS.iter().find_map(|text| text(e))).unwrap_or_else(|| skylod::io::message::plain_text(e))
+    (TEXTS.iter().find_map(|text| text(e))).unwrap_or_else(|| skylod::io::plain_text(e))
 }
 
 /// The wording of one kind of error, `None` for an error of another kind (or a variant
@@ -67,7 +67,7 @@ const TEXTS: [Text; 12] = [
     },
 ];
 
-/// The library's one error (also `PipelineError`, its old name): its sub-errors with a flag.
+/// The library's one error: its sub-errors with a flag.
 fn library(e: &Error) -> String {
     match e {
         Error::Trust(t) => trust(t),
@@ -257,7 +257,7 @@ mod tests {
         assert_eq!(cli_text(&w), "out.gml: output exists (use --overwrite)");
         let e = Error::from(WriteError::Exists("o.gml".into()));
         assert!(cli_text(&e).ends_with("(use --overwrite)"));
-        let p = skylod::pipeline::PipelineError::from(PoiCrsError::UnknownModelCrs {
+        let p = skylod::Error::from(PoiCrsError::UnknownModelCrs {
             from: "EPSG:4326".into(),
             model: "none".into(),
         });
@@ -268,16 +268,13 @@ mod tests {
         };
         assert!(cli_text(&m).contains("--allow-mixed-crs"));
         assert!(!m.to_string().contains("--"));
-        let s = "5/4"
-            .parse::<skylod::pipeline::batch::shard::Shard>()
-            .unwrap_err();
+        let s = "5/4".parse::<skylod::pipeline::batch::Shard>().unwrap_err();
         assert!(!s.to_string().contains("--"), "{s}");
         assert_eq!(
             cli_text(&s),
             "--shard 5/4: shard index 5 is not below the shard count 4"
         );
-        let s =
-            skylod::pipeline::batch::shard::Shard::resolve(None, Some(0), |_| None).unwrap_err();
+        let s = skylod::pipeline::batch::Shard::resolve(None, Some(0), |_| None).unwrap_err();
         assert_eq!(
             shard_text(&s),
             "--shards 0: the shard count must be at least 1"

@@ -1,5 +1,5 @@
 //! Messages and progress on standard error: `--quiet`, `--log-level`, and the
-//! [`skylod::model::runtime::progress::Progress`] of the library drawn as `indicatif` bars on a terminal or
+//! [`skylod::model::Progress`] of the library drawn as `indicatif` bars on a terminal or
 //! written as plain lines otherwise.
 //!
 //! Levels: errors always (also with `--quiet`); warnings and the summary lines (one per
@@ -10,8 +10,8 @@
 //! step is silent.
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use skylod::model::runtime::progress::{Progress, Stage};
-use skylod::model::runtime::progress_text::{Detail, ProgressText};
+use skylod::model::{Detail, ProgressText};
+use skylod::model::{Progress, Stage};
 use std::collections::HashMap;
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -181,7 +181,7 @@ fn style(template: &str) -> ProgressStyle {
 }
 
 /// Write a line of [`ProgressText`] at its detail.
-fn text_line(l: Option<skylod::model::runtime::progress_text::Line>) {
+fn text_line(l: Option<skylod::model::Line>) {
     let Some(l) = l else { return };
     let level = match l.detail {
         Detail::Info => Level::Info,

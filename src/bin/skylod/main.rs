@@ -4,7 +4,7 @@
 
 use crate::flags::cli_text;
 use clap::{Parser, Subcommand};
-use skylod::io::message::{chain_message, is_broken_pipe};
+use skylod::io::{chain_message, is_broken_pipe};
 use std::process::ExitCode;
 
 mod args;
@@ -137,7 +137,7 @@ fn main() -> ExitCode {
 }
 
 /// The error and its causes joined by ": ", each thing said once, in the CLI's words
-/// ([`skylod::io::message::chain_message`], [`crate::flags::cli_text`]).
+/// ([`skylod::io::chain_message`], [`crate::flags::cli_text`]).
 fn message(e: &anyhow::Error) -> String {
     chain_message(e.as_ref(), cli_text)
 }

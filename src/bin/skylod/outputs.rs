@@ -6,21 +6,21 @@
 use crate::log::{error, summary, warning};
 use anyhow::anyhow;
 use skylod::export::Format;
-use skylod::io::citygml::write::WriteOptions;
-use skylod::pipeline::batch::inputs::Input;
-use skylod::pipeline::batch::outputs::Targets;
-use skylod::pipeline::batch::run::{Batch, Said};
-use skylod::pipeline::batch::shard::Shard;
+use skylod::io::citygml::WriteOptions;
+use skylod::pipeline::batch::Input;
+use skylod::pipeline::batch::Shard;
+use skylod::pipeline::batch::Targets;
+use skylod::pipeline::batch::{Batch, Said};
 use std::path::{Path, PathBuf};
 
-use skylod::pipeline::batch::run::Done;
+use skylod::pipeline::batch::Done;
 
-/// [`skylod::pipeline::batch::outputs::Plan::targets`] for `cmd`: this shard's files said on stderr, each refused target
+/// [`skylod::pipeline::batch::Plan::targets`] for `cmd`: this shard's files said on stderr, each refused target
 /// reported with `refused` (its input fails without being read); the number refused
 /// (`reproject`).
 #[cfg(feature = "proj")]
 pub fn targets(
-    plan: &skylod::pipeline::batch::outputs::Plan,
+    plan: &skylod::pipeline::batch::Plan,
     inputs: &[PathBuf],
     wopts: &WriteOptions,
     shard: Option<Shard>,
@@ -102,7 +102,7 @@ pub fn per_input_jobs(
     a: &crate::args::citygml_io::CityGmlIoArgs,
     cmd: &str,
     jobs: &crate::args::jobs::JobsArgs,
-    edit: skylod::pipeline::batch::edit::Transform,
+    edit: skylod::pipeline::batch::Transform,
 ) -> anyhow::Result<crate::Outcome> {
     let t0 = std::time::Instant::now();
     let shard = a.shard.resolve()?;

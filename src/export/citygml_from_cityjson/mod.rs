@@ -87,7 +87,7 @@ pub enum TargetVersion {
     /// CityGML 2.0.
     #[default]
     V2_0,
-    /// CityGML 3.0 (2.0 upgraded member by member: [`crate::io::citygml::upgrade`]).
+    /// CityGML 3.0 (2.0 upgraded member by member: `crate::io::citygml::upgrade`).
     V3_0,
 }
 

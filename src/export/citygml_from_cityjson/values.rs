@@ -28,7 +28,7 @@ pub(super) fn esc(s: &str) -> String {
 /// value says whether the key was changed.
 ///
 /// ```
-/// use skylod::export::citygml_from_cityjson::gml_id;
+/// use skylod::export::gml_id;
 /// assert_eq!(gml_id("b1"), ("b1".to_string(), false));
 /// assert_eq!(gml_id("NL.IMBAG.Pand.0503100000000010-0"), ("NL.IMBAG.Pand.0503100000000010-0".to_string(), false));
 /// assert_eq!(gml_id("3e2f"), ("id_3e2f".to_string(), true));

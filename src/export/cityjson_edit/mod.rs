@@ -32,8 +32,8 @@
 //!
 //! # Example
 //! ```
-//! use skylod::export::cityjson_edit::subset;
-//! use skylod::io::citygml::edit::Subset;
+//! use skylod::export::subset;
+//! use skylod::io::citygml::Subset;
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.city.json");
 //! std::fs::write(&src, br#"{"type":"CityJSON","version":"2.0",
@@ -60,9 +60,9 @@ pub(crate) mod stream;
 use stream::{cj, cj_error, forest, id_hash};
 mod upgrade;
 
-pub use reproject::{reproject_cityjson, CityJsonReproject};
+pub use reproject::reproject_cityjson;
 pub use rules::{filter_lods, subset};
-pub use upgrade::{upgrade_cityjson, CityJsonUpgrade};
+pub use upgrade::upgrade_cityjson;
 
 use crate::io::citygml::edit::EditSummary;
 use crate::io::citygml::error::WriteError;

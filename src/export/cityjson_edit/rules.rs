@@ -146,7 +146,7 @@ fn subtree(objects: &Map<String, Value>, ids: &[String], id: &str) -> Vec<String
 /// [`subset`](fn@crate::io::citygml::edit::subset) of a CityJSON / CityJSONSeq document: the trees
 /// (top-level objects with their descendants) that `rule` keeps, written to `out` as CityJSON
 /// (CityJSONSeq for CityJSONSeq; atomically; `-` for standard output; gzip for a name ending
-/// in `.gz`; see [`super`]).
+/// in `.gz`; see `super`).
 ///
 /// # Errors
 /// A refused target (a CityGML name among them), a source that cannot be read or is not

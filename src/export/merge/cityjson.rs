@@ -101,7 +101,7 @@ impl Pass for Scan {
 ///
 /// # Errors
 /// A refused target, an input that is not CityJSON, inputs in different CRSs or of
-/// different versions ([`MergeError`]), I/O errors. Nothing is written then.
+/// different versions (`MergeError`), I/O errors. Nothing is written then.
 pub fn merge_cityjson(
     inputs: &[PathBuf],
     names: &[PathBuf],

@@ -25,7 +25,7 @@
 //!
 //! ```
 //! use std::collections::HashSet;
-//! use skylod::export::merge::renamed_id;
+//! use skylod::export::renamed_id;
 //! let taken: HashSet<String> = ["w".into(), "w__2".into()].into();
 //! assert_eq!(renamed_id("w", 3, &taken), "w__3");
 //! assert_eq!(renamed_id("w", 2, &taken), "w__2_2");
@@ -35,7 +35,7 @@ mod citygml;
 mod cityjson;
 mod model;
 
-pub use citygml::{check_mergeable, merge_named, merge_named_to, HEAD_BYTES};
+pub use citygml::{check_mergeable, merge_named};
 pub use cityjson::merge_cityjson;
 pub(crate) use model::model_label;
 pub use model::write_merged;
@@ -220,7 +220,7 @@ fn check(
 /// new names. The first input keeps its own; a later input renames what an earlier one used.
 ///
 /// ```
-/// use skylod::export::merge::rename_ids;
+/// use skylod::export::rename_ids;
 /// let a = ["b".to_string(), "w".to_string()];
 /// let b = ["b".to_string(), "x".to_string()];
 /// let r = rename_ids(&[&a[..], &b[..]]);

@@ -112,7 +112,7 @@ fn hours(x: Option<f64>) -> String {
 /// The table of `skylod evaluate` (the paper's Tables 1 and 2): a header line (if
 /// `header`), then per POI one line for each model (full, lod, boxes) with its polygons,
 /// reduction, sky view factor, sun hours, their errors against the full model and timings;
-/// with a weather year (`--weather`: any POI with [`crate::lod::evaluation::ModelFigures::global_kwh_m2`]) three
+/// with a weather year (`--weather`: any POI with `crate::lod::evaluation::ModelFigures::global_kwh_m2`) three
 /// more columns, the annual global irradiation and its error (kWh/m² and relative).
 pub fn write_table(out: &mut impl Write, pois: &[PoiEval], header: bool) -> std::io::Result<()> {
     let irr = pois.iter().any(|p| p.full.global_kwh_m2.is_some());

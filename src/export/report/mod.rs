@@ -1,14 +1,20 @@
-//! What the commands report, as typed JSON: the `lod` report ([`report`],
+//! What the commands report, as typed JSON: the `lod` report (`report`,
 //! `schemas/report.schema.json`), the documents of `svf`, `sun-hours`, `horizon` and
-//! `evaluate` with `--json`, and the model counts of `skylod stats` ([`stats`]).
+//! `evaluate` with `--json`, and the model counts of `skylod stats` (`stats`).
 
-pub mod evaluate;
-pub mod horizon;
-pub mod irradiance;
-pub mod report;
-pub mod row;
+pub(crate) mod evaluate;
+pub(crate) mod horizon;
+pub(crate) mod irradiance;
+pub(crate) mod report;
+pub(crate) mod row;
 pub mod schema;
-pub mod stats;
-pub mod sun_hours;
-pub mod svf;
-pub mod text;
+pub(crate) mod stats;
+pub(crate) mod sun_hours;
+pub(crate) mod svf;
+pub(crate) mod text;
+pub use evaluate::write_table;
+pub use irradiance::write_csv;
+pub use report::{Guarantee, Parameters, Report, Timings};
+pub use stats::{FileStats, Stats, StatsOutput};
+pub use sun_hours::SunSetting;
+pub use text::{Document, TextContext};

@@ -5,8 +5,8 @@
 //! # Example
 //! ```
 //! use skylod::model::CityModel;
-//! use skylod::export::report::report::{Parameters, Report, Timings};
-//! use skylod::lod::select::Selection;
+//! use skylod::export::report::{Parameters, Report, Timings};
+//! use skylod::lod::Selection;
 //! let model = CityModel::default();
 //! let sel = Selection { levels: vec![], hits: vec![], roof_asset: vec![], pois: vec![],
 //!     threshold_deg: 2.0, rays: 100 };
@@ -18,8 +18,8 @@
 
 use crate::lod::rough::{RoughGeometry, RoughOptions};
 use crate::lod::select::{FullFacts, PoiSelection, Selection};
+use crate::model::CityModel;
 use crate::model::Poi;
-use crate::model::{Asset, CityModel};
 use rayon::prelude::*;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -36,7 +36,7 @@ pub const REPORT_VERSION: u32 = 2;
     extend("$id" = "https://github.com/skylod/skylod/schemas/report.schema.json")
 )]
 pub struct Report {
-    /// [`REPORT_VERSION`].
+    /// `REPORT_VERSION`.
     #[schemars(
         description = "Format version of the report (bumped on incompatible changes).",
         extend("const" = REPORT_VERSION)
@@ -252,7 +252,7 @@ pub struct AssetEntry {
     pub roof_asset: bool,
     /// Polygons in the input (all LoDs).
     pub polygons_in: usize,
-    /// Polygons in the output (see [`polygons_out`]).
+    /// Polygons in the output (`crate::lod::level::polygon_count` of its level).
     #[schemars(description = "Polygons in the output (at its level).")]
     pub polygons_out: usize,
 }
@@ -315,11 +315,6 @@ pub struct Timings {
     pub total: f64,
 }
 
-/// Polygons an asset has in the output at `level` ([`crate::lod::level::polygon_count`]).
-pub fn polygons_out(asset: &Asset, rough: Option<&RoughGeometry>, level: u8) -> usize {
-    crate::lod::level::polygon_count(asset, rough, level)
-}
-
 impl Report {
     /// Build the report. `outputs[f]` is the output path of input file `f` (if any).
     pub fn new(
@@ -334,7 +329,7 @@ impl Report {
     }
 
     /// [`Report::new`] of a model whose polygon counts `facts` gives (the model itself, or a
-    /// hollow read of it, [`crate::lod::hollow::Hollow`], whose `model` has no polygons).
+    /// hollow read of it, `crate::lod::hollow::Hollow`, whose `model` has no polygons).
     pub fn new_from(
         model: &CityModel,
         facts: &dyn FullFacts,

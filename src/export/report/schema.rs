@@ -26,25 +26,25 @@ pub fn report() -> Schema {
     root::<super::report::Report>()
 }
 
-/// `schemas/svf.schema.json`: `skylod svf --json` ([`super::svf::SvfOutput`]).
+/// `schemas/svf.schema.json`: `skylod svf --json` (`super::svf::SvfOutput`).
 pub fn svf() -> Schema {
     root::<super::svf::SvfOutput>()
 }
 
 /// `schemas/sun-hours.schema.json`: `skylod sun-hours --json`
-/// ([`super::sun_hours::SunHoursOutput`]).
+/// (`super::sun_hours::SunHoursOutput`).
 pub fn sun_hours() -> Schema {
     root::<super::sun_hours::SunHoursOutput>()
 }
 
 /// `schemas/horizon.schema.json`: `skylod horizon --json`
-/// ([`super::horizon::HorizonOutput`]).
+/// (`super::horizon::HorizonOutput`).
 pub fn horizon() -> Schema {
     root::<super::horizon::HorizonOutput>()
 }
 
 /// `schemas/evaluate.schema.json`: `skylod evaluate --json`
-/// ([`super::evaluate::EvaluateOutput`]).
+/// (`super::evaluate::EvaluateOutput`).
 pub fn evaluate() -> Schema {
     root::<super::evaluate::EvaluateOutput>()
 }
@@ -55,7 +55,7 @@ pub fn stats() -> Schema {
 }
 
 /// `schemas/irradiance.schema.json`: `skylod irradiance --json`
-/// ([`super::irradiance::IrradianceOutput`]).
+/// (`super::irradiance::IrradianceOutput`).
 pub fn irradiance() -> Schema {
     root::<super::irradiance::IrradianceOutput>()
 }

@@ -148,7 +148,7 @@ impl Stats {
     ///
     /// ```
     /// let m = skylod::model::CityModel::default();
-    /// let s = skylod::export::report::stats::Stats::of(&m);
+    /// let s = skylod::export::report::Stats::of(&m);
     /// assert_eq!(s.buildings, 0);
     /// assert_eq!(s.bbox, None);
     /// ```

@@ -61,7 +61,7 @@ pub enum ReadError {
         message: String,
     },
     /// A coordinate that is not a finite number, or is larger in magnitude than
-    /// [`MAX_COORDINATE`](super::read::MAX_COORDINATE).
+    /// `MAX_COORDINATE`.
     #[error("{loc}: bad coordinate {token:?}: not a finite number of magnitude at most 1e12")]
     Coordinate {
         /// Position.

@@ -48,7 +48,7 @@ pub enum Ns {
 /// Classify a namespace URI.
 ///
 /// ```
-/// use skylod::io::citygml::ns::{classify, Module, Ns};
+/// use skylod::io::citygml::{Module, Ns, classify};
 /// use skylod::model::CityGmlVersion;
 /// assert_eq!(
 ///     classify(b"http://www.opengis.net/citygml/building/2.0"),

@@ -8,7 +8,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::io::citygml::{read_file, write::{write_document, Edit, WriteOptions}};
+//! use skylod::io::citygml::{Edit, WriteOptions, read_file, write_document};
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");
 //! std::fs::write(&src, br#"<CityModel xmlns="http://www.opengis.net/citygml/2.0"
@@ -65,7 +65,7 @@ pub struct WriteSummary {
 
 /// Write file `file` of `model` to `out`, applying `edits` (any order; overlapping edits: the
 /// outermost wins, edits inside it are dropped): [`write_document_to`] into a temporary file
-/// renamed into place ([`atomic_write`]), after the target checks ([`check_target`]).
+/// renamed into place (`atomic_write`), after the target checks ([`check_target`]).
 pub fn write_document(
     model: &CityModel,
     file: usize,
@@ -436,7 +436,7 @@ where
     crate::io::files::atomic_write(out, f)
 }
 
-/// [`atomic_write`] of bytes already made (a report, a picture, a table): their length.
+/// `atomic_write` of bytes already made (a report, a picture, a table): their length.
 pub fn atomic_write_bytes(out: &Path, bytes: &[u8]) -> Result<u64, WriteError> {
     atomic_write(out, |w| {
         w.write_all(bytes).map_err(|source| WriteError::Io {
@@ -491,7 +491,7 @@ pub fn escape_attr(v: &str) -> String {
 /// Writes GML geometry with deterministic ids.
 ///
 /// ```
-/// use skylod::io::citygml::write::GmlWriter;
+/// use skylod::io::citygml::GmlWriter;
 /// use skylod::model::Polygon;
 /// use glam::DVec3;
 /// let w = GmlWriter { gml: "gml:".into(), ids: true };

@@ -1,6 +1,6 @@
 //! CityJSON 1.0 / 1.1 / 2.0 (`.city.json`, or any name: recognised by content) and
 //! CityJSONSeq (`.city.jsonl`: a `CityJSON` header line, then `CityJSONFeature` lines) read
-//! into the same [`CityModel`] as CityGML ([`map`] has the mapping).
+//! into the same [`CityModel`] as CityGML (`map` has the mapping).
 //!
 //! Vertices get the document's `transform`; `metadata.referenceSystem` (any form the CRS
 //! parser knows: `https://www.opengis.net/def/crs/EPSG/0/7415`, `urn:ogc:def:crs:EPSG::7415`,
@@ -35,7 +35,7 @@
 pub(crate) mod chunks;
 pub(crate) mod doc;
 mod head;
-pub mod map;
+pub(crate) mod map;
 mod seq;
 pub(crate) mod source;
 pub(crate) mod stream;

@@ -48,7 +48,7 @@ pub trait FullSource: Sync {
     }
 
     /// Each asset's twin, where known: an asset (of an index at most its own) whose
-    /// full-detail triangles are its own ([`Hollow::twin`]), which the reference traces in
+    /// full-detail triangles are its own (`Hollow::twin`), which the reference traces in
     /// its stead. `None`: every asset is its own.
     fn twins(&self) -> Option<&[u32]> {
         None
@@ -223,7 +223,7 @@ pub(super) fn as_twins(src: &dyn FullSource, of: &[bool]) -> Vec<bool> {
 }
 
 /// The part of the full scene made of the assets `i` with `include[i]`, in `frame` for about
-/// `rays` rays ([`crate::lod::scene::full_scene_part`]); the whole full scene
+/// `rays` rays ([`crate::lod::scene::full_scene_of`] with a frame); the whole full scene
 /// ([`crate::lod::scene::full_scene`]) with `frame` `None`.
 pub(super) fn full_part(
     src: &dyn FullSource,

@@ -123,8 +123,8 @@
 //!
 //! # Example
 //! ```
-//! use skylod::io::citygml::{read_file, write::WriteOptions};
-//! use skylod::lod::mixed::write_mixed;
+//! use skylod::io::citygml::{WriteOptions, read_file};
+//! use skylod::lod::write_mixed;
 //! use skylod::lod::rough::{rough_model, RoughOptions};
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");

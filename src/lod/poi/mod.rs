@@ -1,9 +1,15 @@
 //! Points of interest: `--poi X,Y,Z[,NX,NY,NZ]` arguments and POI CSV files
 //! (`id,x,y,z[,nx,ny,nz]`, described by `schemas/pois.schema.json`).
 
-pub mod checks;
-pub mod region;
+pub(crate) mod checks;
+pub(crate) mod region;
 mod validate;
+pub use checks::surroundings::Surroundings;
+pub use checks::{
+    check_heights, check_lat_lon_order, check_pois_near, poi_flags, OutsideHint, PoiFlag,
+    TrustError, DEFAULT_POI_MARGIN,
+};
+pub use region::{facade_pois, grid_pois, RegionError, RegionSpec};
 
 pub use validate::{check_poi, check_poi_list, check_pois, MIN_NORMAL_LENGTH};
 

@@ -19,7 +19,7 @@
 //! ```
 //! use glam::DVec3;
 //! use skylod::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
-//! use skylod::lod::poi::region::{facade_pois, grid_pois};
+//! use skylod::lod::poi::{facade_pois, grid_pois};
 //! let mut m = CityModel::default();
 //! // a 4 m x 3 m wall in the plane y = 0, facing -y (counter-clockwise seen from outside)
 //! let wall = Polygon::new(vec![
@@ -88,7 +88,7 @@ impl RegionSpec {
         !self.facades.is_empty() || self.area.is_some()
     }
 
-    /// `pois` followed by the facades' POIs ([`FACADE_OFFSET`] out) and the area's, sampled
+    /// `pois` followed by the facades' POIs (`FACADE_OFFSET` out) and the area's, sampled
     /// on `model`; every id once.
     ///
     /// # Errors

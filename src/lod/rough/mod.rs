@@ -30,14 +30,15 @@
 //! (its box) holds a POI that its full geometry does not
 //! ([`crate::lod::select`]).
 
-pub mod obb;
-pub mod plane;
+pub(crate) mod obb;
+pub(crate) mod plane;
 mod to_source;
+pub use obb::{Obb, MIN_THICKNESS};
+pub use plane::{generalize, generalize_keeping_holes};
 
 pub use to_source::rough_to_source;
 
 use crate::model::{Asset, AssetKind, CityModel, Polygon};
-use obb::Obb;
 use rayon::prelude::*;
 use std::borrow::Cow;
 

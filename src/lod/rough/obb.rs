@@ -39,7 +39,7 @@ impl Obb {
     /// # Example
     /// ```rust
     /// use glam::DVec3;
-    /// use skylod::lod::rough::obb::Obb;
+    /// use skylod::lod::rough::Obb;
     /// // A 4 x 2 x 3 box rotated by 30 degrees in plan.
     /// let (s, c) = 30f64.to_radians().sin_cos();
     /// let mut pts = Vec::new();
@@ -128,7 +128,7 @@ impl Obb {
     /// # Example
     /// ```rust
     /// use glam::DVec3;
-    /// use skylod::lod::rough::obb::Obb;
+    /// use skylod::lod::rough::Obb;
     /// let obb = Obb::of_points(&[DVec3::ZERO, DVec3::new(2.0, 1.0, 1.0)]).unwrap();
     /// let faces = obb.to_polygons();
     /// assert_eq!(faces.len(), 6);

@@ -38,7 +38,7 @@ const COLLINEAR_EPS: f64 = 1e-4;
 /// ```rust
 /// use glam::DVec3;
 /// use skylod::model::Polygon;
-/// use skylod::lod::rough::plane::generalize;
+/// use skylod::lod::rough::generalize;
 /// // Two halves of a 10 x 4 wall (y = 0, facing -y) and a recessed pane 0.1 m behind.
 /// let quad = |x0: f64, x1: f64, z0: f64, z1: f64, y: f64| Polygon::new(vec![
 ///     DVec3::new(x0, y, z0), DVec3::new(x1, y, z0), DVec3::new(x1, y, z1), DVec3::new(x0, y, z1),
@@ -67,7 +67,7 @@ pub fn generalize<'a>(
 /// ```rust
 /// use glam::DVec3;
 /// use skylod::model::Polygon;
-/// use skylod::lod::rough::plane::generalize_keeping_holes;
+/// use skylod::lod::rough::generalize_keeping_holes;
 /// let sq = |a: f64, b: f64| vec![
 ///     DVec3::new(a, a, 15.0), DVec3::new(b, a, 15.0), DVec3::new(b, b, 15.0), DVec3::new(a, b, 15.0),
 /// ];

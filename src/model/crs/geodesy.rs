@@ -6,7 +6,7 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::model::crs::{geodesy::Enu, Ellipsoid};
+//! use skylod::model::crs::{Ellipsoid, Enu};
 //! let enu = Enu::new(Ellipsoid::GRS80, 35.54_f64.to_radians(), 139.777_f64.to_radians(), 10.0);
 //! // 0.001 degree of latitude north of the origin is 110.95 m north (pyproj's geodesic:
 //! // 110.9505 m), and a little lower (the Earth curves away: ~1 mm at this distance).

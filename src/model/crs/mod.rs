@@ -1,19 +1,19 @@
 //! Coordinate reference systems and the local metric frame tracing works in.
 //!
-//! * [`parse`]: `srsName` (every spelling CityGML files use) → [`Crs`] with its kind
+//! * `parse`: `srsName` (every spelling CityGML files use) → [`Crs`] with its kind
 //!   (projected metres, projected feet, geographic with axis order and ellipsoid, unknown).
-//! * [`frame`]: [`LocalFrame`], source coordinates ⇄ a local east-north-up metric frame
+//! * `frame`: [`LocalFrame`], source coordinates ⇄ a local east-north-up metric frame
 //!   (identity for projected metres, a scale for feet, ellipsoidal ENU for degrees).
-//! * [`geodesy`]: geodetic ⇄ ECEF ⇄ ENU on an ellipsoid (pure Rust, no PROJ).
-//! * [`convert`]: [`PointTransform`], points between CRSs (POIs in `--poi-crs`, the sun's
+//! * `geodesy`: geodetic ⇄ ECEF ⇄ ENU on an ellipsoid (pure Rust, no PROJ).
+//! * `convert`: [`PointTransform`], points between CRSs (POIs in `--poi-crs`, the sun's
 //!   site); [`Builtin`] is the default build's, [`build_transform`] the build's best.
-//! * [`name`]: [`CrsName`], a CRS by its EPSG codes (read by [`Crs::parse`]), for PROJ and
+//! * `name`: [`CrsName`], a CRS by its EPSG codes (read by [`Crs::parse`]), for PROJ and
 //!   `skylod reproject`.
 //! * `proj` (feature `proj`): what PROJ says of a CRS, and `Reprojector`, PROJ in the axis
 //!   order of CityGML files.
 //! * `proj_transform` (feature `proj`): `ProjTransform`, [`Builtin`] first, then PROJ.
-//! * [`feet`]: the EPSG projected CRSs in US survey feet and international feet.
-//! * [`site`]: site latitude/longitude from a CRS name for the sun.
+//! * `feet`: the EPSG projected CRSs in US survey feet and international feet.
+//! * `site`: site latitude/longitude from a CRS name for the sun.
 //!
 //! # Example: trace a PLATEAU (EPSG:6697, latitude, longitude, metres) POI in metres
 //! ```
@@ -29,17 +29,23 @@
 //! assert!(local.truncate().length() < 1e-6 && (local.z - (1.5 - 11.0)).abs() < 1e-3);
 //! ```
 
-pub mod convert;
-pub mod feet;
-pub mod frame;
-pub mod geodesy;
-pub mod name;
-pub mod parse;
+pub(crate) mod convert;
+pub(crate) mod feet;
+pub(crate) mod frame;
+pub(crate) mod geodesy;
+pub(crate) mod name;
+pub(crate) mod parse;
 #[cfg(feature = "proj")]
-pub mod proj;
+pub(crate) mod proj;
 #[cfg(feature = "proj")]
-pub mod proj_transform;
-pub mod site;
+pub(crate) mod proj_transform;
+pub(crate) mod site;
+pub use convert::proj4_definition;
+pub use feet::{foot_codes, US_SURVEY_FOOT};
+pub use geodesy::Enu;
+pub use parse::{GEOGRAPHIC, PROJECTED_METRES};
+#[cfg(feature = "proj")]
+pub use proj::crs_info;
 
 pub use convert::{build_transform, site_lat_lon, Builtin, CrsError, PointTransform};
 pub use frame::{FrameWarning, LocalFrame};

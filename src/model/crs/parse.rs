@@ -143,7 +143,7 @@ pub enum CrsKind {
     /// Projected: `x` easting, `y` northing (what CityGML files in practice hold, also for
     /// CRSs that EPSG defines northing first), in units of `metres_per_unit` metres.
     Projected {
-        /// 1 for metres, [`US_SURVEY_FOOT`] or [`INTERNATIONAL_FOOT`].
+        /// 1 for metres, [`US_SURVEY_FOOT`] or `INTERNATIONAL_FOOT`.
         metres_per_unit: f64,
     },
     /// Geographic: degrees on `ellipsoid`, latitude first when `lat_first` (EPSG order).

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 /// headroom under its control group's limit (module docs); `None` where neither is known.
 ///
 /// ```
-/// if let Some(b) = skylod::model::runtime::available::available_bytes() {
+/// if let Some(b) = skylod::model::available_bytes() {
 ///     assert!(b > 0);
 /// }
 /// ```

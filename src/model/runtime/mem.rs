@@ -15,7 +15,7 @@ pub const GIVE_BACK_MIN_ASSETS: usize = 200_000;
 
 static ENABLED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
 
-/// Whether the pipeline gives pages back between stages ([`give_back_for`]); on by
+/// Whether the pipeline gives pages back between stages (`give_back_for`); on by
 /// default. A program whose own heap should not be trimmed turns it off (it is process-wide:
 /// `malloc_trim` acts on the whole process's heap).
 pub fn set_give_back(enabled: bool) {
@@ -40,7 +40,7 @@ pub fn give_back_for(assets: usize) {
 /// ```
 /// let v = vec![0u8; 1 << 20];
 /// drop(v);
-/// skylod::model::runtime::mem::give_back();
+/// skylod::model::give_back();
 /// ```
 pub fn give_back() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
@@ -64,12 +64,12 @@ pub const RESERVE_MAX_BYTES: usize = 56 << 20;
 /// A heap never makes writable again what it made writable once, even after giving the
 /// pages back. So the blocks of 120 KiB (below glibc's smallest threshold for a block of
 /// its own mapping) allocated here and freed at once leave the heap writable up to `bytes`
-/// more (at most [`RESERVE_MAX_BYTES`]) in one call per block; freed in order, they merge
+/// more (at most `RESERVE_MAX_BYTES`) in one call per block; freed in order, they merge
 /// into the heap's free top, whose pages glibc then gives back (none was ever touched but a
 /// block's header). The memory used, and the process's peak, are unchanged.
 ///
 /// ```
-/// skylod::model::runtime::mem::reserve_heap(1 << 20);
+/// skylod::model::reserve_heap(1 << 20);
 /// let v: Vec<u64> = (0..1000).collect();
 /// assert_eq!(v.len(), 1000);
 /// ```

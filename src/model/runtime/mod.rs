@@ -2,7 +2,7 @@
 //! cancellation ([`progress`]), progress as log lines ([`progress_text`]), giving memory back
 //! between stages ([`mem`]) and the memory a run may still take ([`available`]).
 
-pub mod available;
-pub mod mem;
-pub mod progress;
-pub mod progress_text;
+pub(crate) mod available;
+pub(crate) mod mem;
+pub(crate) mod progress;
+pub(crate) mod progress_text;

@@ -11,7 +11,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::model::runtime::progress::{Progress, Stage};
+//! use skylod::model::{Progress, Stage};
 //! use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 //!
 //! /// Counts the POIs selected and stops the work once `stop` is set.
@@ -32,9 +32,9 @@
 //! let p = Pois::default();
 //! p.advance(Stage::Select, 1, 0, None);
 //! assert_eq!(p.done.load(Ordering::Relaxed), 1);
-//! assert!(skylod::model::runtime::progress::check(&p, Stage::Select).is_ok());
+//! assert!(skylod::model::check(&p, Stage::Select).is_ok());
 //! p.stop.store(true, Ordering::Relaxed);
-//! let e = skylod::model::runtime::progress::check(&p, Stage::Select).unwrap_err();
+//! let e = skylod::model::check(&p, Stage::Select).unwrap_err();
 //! assert_eq!(e.to_string(), "cancelled while selecting levels");
 //! ```
 

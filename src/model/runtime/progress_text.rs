@@ -5,8 +5,8 @@
 //!
 //! # Example
 //! ```
-//! use skylod::model::runtime::progress::Stage;
-//! use skylod::model::runtime::progress_text::{Detail, ProgressText};
+//! use skylod::model::Stage;
+//! use skylod::model::{Detail, ProgressText};
 //!
 //! let text = ProgressText::default();
 //! let l = text.start(Stage::Read, 2, 3_000_000);

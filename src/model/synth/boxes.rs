@@ -5,11 +5,11 @@
 //!
 //! # Example
 //! ```
-//! use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
+//! use skylod::model::synth::{BoxBuilding, boxes_citygml};
 //! let b = BoxBuilding { id: "B".into(), min: [0.0, 0.0], max: [10.0, 8.0], height: 6.0,
 //!     installations: vec![[2.0, 2.0, 6.0, 3.0, 3.0, 7.5]] };
 //! let xml = boxes_citygml(&[b], [430000.0, 4581000.0, 10.0]);
-//! let m = skylod::io::citygml::read::read_bytes(xml.as_bytes(), "boxes.gml").unwrap();
+//! let m = skylod::io::citygml::read_bytes(xml.as_bytes(), "boxes.gml").unwrap();
 //! assert_eq!(m.assets.len(), 7); // 4 walls, roof, ground, one installation
 //! ```
 

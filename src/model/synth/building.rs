@@ -9,8 +9,8 @@
 //! # Example
 //!
 //! ```rust
-//! use skylod::model::synth::building::{build, BuildingGeom, SurfaceKind};
-//! use skylod::model::synth::layout::block_lots;
+//! use skylod::model::synth::{BuildingGeom, SurfaceKind, build};
+//! use skylod::model::synth::block_lots;
 //! use skylod::model::synth::Preset;
 //!
 //! let mut lots = Vec::new();

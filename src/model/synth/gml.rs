@@ -8,9 +8,9 @@
 //!
 //! ```rust
 //! let mut buf = Vec::new();
-//! skylod::model::synth::gml::push_num(&mut buf, -12.3456);
+//! skylod::model::synth::push_num(&mut buf, -12.3456);
 //! buf.push(b' ');
-//! skylod::model::synth::gml::push_num(&mut buf, 4581000.0004);
+//! skylod::model::synth::push_num(&mut buf, 4581000.0004);
 //! assert_eq!(buf, b"-12.346 4581000.000");
 //! ```
 

@@ -10,7 +10,7 @@
 //! # Example
 //!
 //! ```rust
-//! use skylod::model::synth::layout::{block_lots, LotEdge};
+//! use skylod::model::synth::{LotEdge, block_lots};
 //!
 //! let mut lots = Vec::new();
 //! block_lots(7, 0, 0, &mut lots);

@@ -7,7 +7,7 @@
 //!
 //! ```rust
 //! use glam::DVec3;
-//! use skylod::model::synth::mesh::Mesh;
+//! use skylod::model::synth::Mesh;
 //!
 //! let mut m = Mesh::default();
 //! // a unit cube: 6 faces, every normal pointing away from the centre

@@ -6,12 +6,12 @@
 //! A grid of `blocks_x` x `blocks_y` Eixample blocks (pitch 133.3 m, streets 20 m, 45 degree
 //! chamfers with 15 m legs) in EPSG:25831 with the south-west street corner at
 //! (430000, 4581000), ground at z = 12 m. Each block is a ring of 24–28 perimeter buildings of
-//! 4–9 storeys (3.1 m each) around a courtyard ([`layout`]). Each `bldg:Building` has
+//! 4–9 storeys (3.1 m each) around a courtyard (`layout`). Each `bldg:Building` has
 //! `bldg:WallSurface`s (street, courtyard and two party walls), a `bldg:GroundSurface` and a
 //! `bldg:RoofSurface` (flat with a parapet, or about 12% gabled), each with
 //! `bldg:lod3MultiSurface`. Facade openings are `bldg:Window`/`bldg:Door` with their own
 //! `lod3MultiSurface` (the pane/leaf, recessed 0.15/0.2 m); the wall polygon has a matching
-//! interior ring per opening and four reveal polygons ([`building`]). With `with_lod2` every
+//! interior ring per opening and four reveal polygons (`building`). With `with_lod2` every
 //! surface also carries its LoD2 shell as `bldg:lod2MultiSurface` (walls without holes, the
 //! flat roof at parapet height). `lod = 2` writes only the LoD2 shells.
 //!
@@ -54,12 +54,17 @@
 //! assert!(summary.windows > 0 && summary.buildings == 3);
 //! ```
 
-pub mod boxes;
-pub mod building;
-pub mod gml;
-pub mod layout;
-pub mod mesh;
-pub mod poi;
+pub(crate) mod boxes;
+pub(crate) mod building;
+pub(crate) mod gml;
+pub(crate) mod layout;
+pub(crate) mod mesh;
+pub(crate) mod poi;
+pub use boxes::{boxes_citygml, BoxBuilding};
+pub use building::{build, BuildingGeom, SurfaceKind};
+pub use gml::push_num;
+pub use layout::{block_lots, LotEdge};
+pub use mesh::Mesh;
 
 pub use poi::{pois, pois_path, write_pois_csv, SynthPoi};
 

@@ -21,7 +21,7 @@
 //! for f in ["a/one.gml", "a/b/two.xml.gz", "a/notes.txt"] {
 //!     std::fs::write(dir.path().join(f), "").unwrap();
 //! }
-//! let found = skylod::pipeline::batch::inputs::expand(&[dir.path().join("a")]).unwrap();
+//! let found = skylod::pipeline::batch::expand(&[dir.path().join("a")]).unwrap();
 //! let rel: Vec<_> = found.iter().map(|i| i.relative.display().to_string()).collect();
 //! assert_eq!(rel, ["b/two.xml.gz", "one.gml"]);
 //! ```
@@ -163,7 +163,7 @@ pub enum InputError {
 /// Whether a file name is a CityGML document skylod reads from a directory.
 ///
 /// ```
-/// use skylod::pipeline::batch::inputs::is_citygml_name;
+/// use skylod::pipeline::batch::is_citygml_name;
 /// assert!(is_citygml_name("4018215.XML.gz") && is_citygml_name("b.citygml"));
 /// assert!(!is_citygml_name("README.md") && !is_citygml_name("schema.xsd"));
 /// ```
@@ -177,7 +177,7 @@ pub fn is_citygml_name(name: &str) -> bool {
 /// `.city.json` and `.city.jsonl` (CityJSONSeq), each optionally `.gz`.
 ///
 /// ```
-/// use skylod::pipeline::batch::inputs::is_cityjson_name;
+/// use skylod::pipeline::batch::is_cityjson_name;
 /// assert!(is_cityjson_name("t/a.city.json") && is_cityjson_name("b.CITY.JSONL.gz"));
 /// assert!(!is_cityjson_name("package.json"));
 /// ```
@@ -281,8 +281,8 @@ fn keep_citygml(found: Vec<Input>, out: &mut Expanded) {
 
 /// Expand the arguments of a command into input files (see the module docs). A path that
 /// does not exist and holds no pattern is kept: reading it reports the error per file. Files
-/// found in a directory or by a pattern that are XML but not CityGML ([`sniff_other_xml`])
-/// are left out: [`expand_all`] lists them.
+/// found in a directory or by a pattern that are XML but not CityGML (`sniff_other_xml`)
+/// are left out: `expand_all` lists them.
 pub fn expand(args: &[PathBuf]) -> Result<Vec<Input>, InputError> {
     expand_all(args).map(|e| e.inputs)
 }
@@ -369,7 +369,7 @@ impl Spool {
     }
 }
 
-/// [`expand_all`], with `-` read now from `stdin` into memory (it becomes the bytes of the
+/// `expand_all`, with `-` read now from `stdin` into memory (it becomes the bytes of the
 /// input `-`, [`crate::io::files::set_stdin_bytes`]; its relative path is `stdin.gml`).
 ///
 /// # Errors

@@ -14,8 +14,8 @@
 //!
 //! # Example
 //! ```
-//! use skylod::pipeline::batch::inputs::Input;
-//! use skylod::pipeline::batch::outputs::{plan, Plan};
+//! use skylod::pipeline::batch::Input;
+//! use skylod::pipeline::batch::{Plan, plan};
 //! use skylod::export::Format;
 //! use std::path::{Path, PathBuf};
 //! let inputs = [
@@ -27,7 +27,7 @@
 //! assert_eq!(p, Plan::Mirror(vec![PathBuf::from("out/a/x.obj"), PathBuf::from("out/b/y.obj")]));
 //! assert_eq!(plan(&inputs, Path::new("all.gml"), None)?.0, Plan::Merge("all.gml".into()));
 //! assert_eq!(plan(&inputs, Path::new("all.obj"), None)?, (Plan::Merge("all.obj".into()), Format::Obj));
-//! # Ok::<(), skylod::pipeline::batch::outputs::PlanError>(())
+//! # Ok::<(), skylod::pipeline::batch::PlanError>(())
 //! ```
 
 use crate::export::merge::{check_mergeable, MergeError};
@@ -254,7 +254,7 @@ impl Plan {
     /// their heads before any work, and makes its staging directory. The parts are CityGML
     /// (CityJSON inputs written as CityGML first), but for an edit that writes each input in
     /// its own format (`own_format`: `subset`, `filter-lods`, `upgrade`, `reproject`), whose
-    /// CityJSON inputs stage CityJSON parts ([`Staging::json_part`]) to be merged as CityJSON
+    /// CityJSON inputs stage CityJSON parts (`Staging::json_part`) to be merged as CityJSON
     /// ([`crate::pipeline::batch::run::merge_parts`]); there, CityJSON and CityGML inputs
     /// together, or CityJSON inputs into a CityGML name, are refused
     /// ([`PlanError::MixedMerge`]).

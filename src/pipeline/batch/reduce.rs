@@ -3,7 +3,7 @@
 //! turned into the [`LodResult`] one serial run would have made, ready to write.
 //!
 //! ```no_run
-//! use skylod::pipeline::batch::reduce::{lod_result, Reduce};
+//! use skylod::pipeline::batch::{Reduce, lod_result};
 //! # fn f(model: &skylod::model::CityModel) -> Result<(), Box<dyn std::error::Error>> {
 //! let r = Reduce::read(&["levels-0.jsonl".into(), "levels-1.jsonl".into()])?;
 //! let opts = r.options(); // the options every shard ran with
@@ -37,7 +37,7 @@ impl Reduce {
     /// Read the levels files at `paths` (in any order).
     ///
     /// # Errors
-    /// A file that cannot be read or is not a levels file ([`shard_levels::read_levels`]);
+    /// A file that cannot be read or is not a levels file (`shard_levels::read_levels`);
     /// no file at all.
     pub fn read(paths: &[PathBuf]) -> Result<Reduce, LevelsError> {
         let files = paths
@@ -105,7 +105,7 @@ impl Reduce {
     /// Combine the shards' levels for the model read from the inputs (source CRS).
     ///
     /// # Errors
-    /// As [`shard_levels::combine`].
+    /// As `shard_levels::combine`.
     pub fn combine(self, model: &CityModel) -> Result<Combined, LevelsError> {
         shard_levels::combine(self.files, model)
     }

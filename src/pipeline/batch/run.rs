@@ -240,8 +240,8 @@ pub fn summary_line(
 /// [`super::outputs::Plan::targets`], named so) as CityJSON ([`merge_cityjson`]),
 /// CityJSONSeq for a `.jsonl` target or for `-` when the first input is named so; CityGML
 /// parts as CityGML ([`merge_named`]), into another format through a CityGML merge staged in
-/// `staging` ([`Staging::merged`]) then converted from a streamed read (read whole where the
-/// stream declines), named by the inputs it holds ([`label`]). Whether `target` was written,
+/// `staging` (`Staging::merged`) then converted from a streamed read (read whole where the
+/// stream declines), named by the inputs it holds (`label`). Whether `target` was written,
 /// and what to say: the merge's lines, with a warning when some of the `inputs` failed and
 /// the target holds only the others, or why nothing was written (then every input counts as
 /// failed).

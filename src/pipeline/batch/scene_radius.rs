@@ -9,7 +9,7 @@
 //! # Example
 //! ```
 //! use glam::{DVec2, DVec3};
-//! use skylod::pipeline::batch::scene_radius::Extent;
+//! use skylod::pipeline::batch::Extent;
 //! let tile = Extent { min: DVec2::new(0.0, 0.0), max: DVec2::new(100.0, 100.0) };
 //! assert!(tile.within(&[DVec3::new(150.0, 50.0, 10.0)], 60.0));
 //! assert!(!tile.within(&[DVec3::new(150.0, 150.0, 10.0)], 60.0));
@@ -323,7 +323,7 @@ impl Kept {
     }
 }
 
-/// `inputs` within `radius` of `pois` ([`within_reach`]), or of `shard`'s part of them: the
+/// `inputs` within `radius` of `pois` (`within_reach`), or of `shard`'s part of them: the
 /// others are not read. Nothing kept while POIs are given usually means POIs in another
 /// CRS; the caller says so.
 pub fn keep_within(

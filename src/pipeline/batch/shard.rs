@@ -19,7 +19,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::pipeline::batch::shard::Shard;
+//! use skylod::pipeline::batch::Shard;
 //! use std::collections::HashMap;
 //! let s: Shard = "1/3".parse()?;
 //! assert_eq!(s.files(7), 2..4); // 7 files: 0..2, 2..4, 4..7
@@ -32,7 +32,7 @@
 //! .into();
 //! let got = Shard::from_env(|k| env.get(k).map(|v| v.to_string()), None)?;
 //! assert_eq!(got, Some(s));
-//! # Ok::<(), skylod::pipeline::batch::shard::ShardError>(())
+//! # Ok::<(), skylod::pipeline::batch::ShardError>(())
 //! ```
 
 use glam::DVec3;
@@ -349,7 +349,7 @@ impl Shard {
 
     /// The range of `points` (in their order) this shard traces: N contiguous groups, each
     /// cut at the largest jump between neighbouring points within a quarter of a group's
-    /// size of the even cut ([`place_cuts`]).
+    /// size of the even cut (`place_cuts`).
     pub fn pois(&self, points: &[DVec3]) -> Range<usize> {
         let cuts = place_cuts(points, self.count);
         let lo = cuts.get(self.index).copied().unwrap_or(points.len());

@@ -357,7 +357,7 @@ impl ShardWritten {
     }
 }
 
-/// Write shard `shard`'s levels file `out` ([`header`] then [`write_levels_file`]) for
+/// Write shard `shard`'s levels file `out` (`header` then `write_levels_file`) for
 /// `pois` of `model`, selected with `opts` as `lod`.
 ///
 /// # Errors

@@ -19,7 +19,7 @@ use std::path::Path;
 /// irradiation with a weather year): 1 %.
 pub const DEFAULT_MAX_ERROR: f64 = 0.01;
 
-/// The error bound asked for. `None` errors take [`DEFAULT_MAX_ERROR`].
+/// The error bound asked for. `None` errors take `DEFAULT_MAX_ERROR`.
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub struct BoundRequest {
@@ -67,11 +67,11 @@ impl BoundRequest {
 
     /// SPA's site-independent half of the sun-hours bound's table, started in the
     /// background before the model (which gives the site) is read, for
-    /// [`BoundPlan::sun_table_ahead`]; `None` without a bound (or for a year or step the table
+    /// `BoundPlan::sun_table_ahead`; `None` without a bound (or for a year or step the table
     /// refuses: the table says so). The steps deep in the night of a site near the sun's are
     /// not computed ([`SunEphemeris::year_near`]): the `lat`, `lon` given, else the centre of
     /// the first city objects of `first` (the first input), found in the background
-    /// ([`super::site::site_hint`]).
+    /// (`super::site::site_hint`).
     pub fn ephemeris(
         &self,
         lat: Option<f64>,

@@ -124,7 +124,7 @@ impl Study {
     }
 
     /// `skylod horizon`: the horizon profile of every POI (azimuths from north in the
-    /// local metric frame), with one summary line per POI ([`profile_summary`]).
+    /// local metric frame), with one summary line per POI (`profile_summary`).
     ///
     /// # Errors
     /// As [`Study::horizon`].
@@ -339,7 +339,7 @@ pub struct IrradianceRequest<'a> {
     pub bundles: &'a SkyBundles,
     /// Rays per bundle.
     pub rays: usize,
-    /// Keep every hour's value ([`IrradianceRun::write_hourly`]).
+    /// Keep every hour's value (`IrradianceRun::write_hourly`).
     pub hourly: bool,
 }
 

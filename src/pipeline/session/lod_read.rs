@@ -64,7 +64,7 @@ pub enum WholeWhy {
         chunk: u64,
     },
     /// The whole read fits: the file's `bytes` within the memory `lod` may take
-    /// ([`memory_budget`]).
+    /// (`memory_budget`).
     Fits {
         /// The file's size.
         bytes: u64,
@@ -115,12 +115,12 @@ impl std::fmt::Display for WholeWhy {
 /// CPU; a larger file is read hollow.
 pub const DEFAULT_BUDGET: u64 = 1 << 30;
 
-/// The memory `lod` may take ([`memory_budget`]).
+/// The memory `lod` may take (`memory_budget`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Budget {
     /// Set by the user, in bytes.
     Given(u64),
-    /// Not set: [`DEFAULT_BUDGET`], or half of what was available ([`available_bytes`]) where
+    /// Not set: `DEFAULT_BUDGET`, or half of what was available ([`available_bytes`]) where
     /// that is less, in bytes.
     Default(u64),
 }
@@ -171,7 +171,7 @@ pub fn memory_budget(given: Option<u64>) -> Budget {
 /// The text, and why it is not a size.
 ///
 /// ```
-/// use skylod::pipeline::session::lod_read::memory_size;
+/// use skylod::pipeline::session::memory_size;
 /// assert_eq!(memory_size("1.5GiB"), Ok(3 << 29));
 /// assert_eq!(memory_size("512M"), memory_size("536870912"));
 /// assert!(memory_size("lots").is_err());
@@ -227,7 +227,7 @@ impl LodRead {
 /// are read only for a file large enough); whole too when something of [`Unserved::ALL`] is
 /// given (`given`: whether each of [`Unserved::ALL`] is); whole too when the file's size is within the memory
 /// `lod` may take (`max_memory`, the user's, or half of what is available:
-/// [`memory_budget`]; module docs).
+/// `memory_budget`; module docs).
 pub fn lod_read(
     inputs: &[PathBuf],
     stdin: bool,

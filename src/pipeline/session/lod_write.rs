@@ -68,7 +68,7 @@ impl LodLayout {
     /// reading and tracing helps nobody and one scene needs every input.
     ///
     /// # Errors
-    /// [`LodLayoutError::Refused`].
+    /// `LodLayoutError::Refused`.
     pub fn new(batch: Batch, inputs: usize) -> std::result::Result<LodLayout, LodLayoutError> {
         if batch.refused > 0 {
             let refused = batch.refused;

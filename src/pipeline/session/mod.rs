@@ -17,17 +17,27 @@
 //! # Ok::<(), skylod::Error>(())
 //! ```
 
-pub mod bound_plan;
-pub mod documents;
+pub(crate) mod bound_plan;
+pub(crate) mod documents;
 mod error;
 mod lod;
-pub mod lod_read;
-pub mod lod_write;
-pub mod pictures;
+pub(crate) mod lod_read;
+pub(crate) mod lod_write;
+pub(crate) mod pictures;
 mod read_hollow;
-pub mod report;
-pub mod site;
-pub mod weather;
+pub(crate) mod report;
+pub(crate) mod site;
+pub(crate) mod weather;
+pub use bound_plan::BoundRequest;
+pub use documents::{ms_since, EvaluateRequest, IrradianceRequest};
+pub use lod_read::{lod_read, memory_size, mib, Budget, LodRead, Unserved, WholeWhy};
+pub use lod_write::{
+    check_report, write_report, FileOutcome, LodLayout, LodWritten, ReportTargetError,
+};
+pub use pictures::{PictureSvg, Pictures};
+pub use report::RunMs;
+pub use site::{given_site, site_of, SiteError};
+pub use weather::{weather_site, SunSite, WeatherYear};
 
 pub use error::{Error, Result};
 
@@ -55,7 +65,6 @@ use crate::solar::{Site, SkyBundles, SkyView, SunHours, SunTable, DEFAULT_STEP_M
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
-use weather::SunSite;
 
 /// How a [`Scene`] is read and framed.
 #[derive(Debug, Clone)]
@@ -66,7 +75,7 @@ pub struct SceneOptions {
     /// Merge inputs whose `srsName`s name different CRSs anyway.
     pub allow_mixed_crs: bool,
     /// Give free heap pages back to the system between stages for large models
-    /// (`malloc_trim`, process-wide: [`crate::model::runtime::mem::set_give_back`]).
+    /// (`malloc_trim`, process-wide: `crate::model::runtime::mem::set_give_back`).
     pub trim_memory: bool,
 }
 

@@ -59,10 +59,10 @@ pub struct StationTooFar {
 }
 
 /// The sun's site for `weather`: `given`; else the model's centre `model` (refused when the
-/// station is farther than [`MAX_STATION_KM`]); else the station's.
+/// station is farther than `MAX_STATION_KM`); else the station's.
 ///
 /// # Errors
-/// [`StationTooFar`].
+/// `StationTooFar`.
 pub fn weather_site(
     given: Option<(f64, f64)>,
     model: Result<ModelSite, NoSite>,

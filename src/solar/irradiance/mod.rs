@@ -7,9 +7,9 @@
 //! * **direct**: DNI × cos θ when the sun is above the horizon, in front of the plane
 //!   (cos θ = n·s > 0) and the ray towards it is not blocked: one ray per such hour;
 //! * **diffuse**, [`SkyModel::Perez`] (default): the Perez 1990 transposition
-//!   ([`perez`]) with each of its three parts occluded by what blocks it:
+//!   (`perez`) with each of its three parts occluded by what blocks it:
 //!   the isotropic part `DHI (1 − F1) × SVF` (the point's cosine-weighted sky view factor of
-//!   [`crate::solar::svf`], which is `(1 + cos β)/2` for an unobstructed plane), the
+//!   `crate::solar::svf`, which is `(1 + cos β)/2` for an unobstructed plane), the
 //!   circumsolar part `DHI F1 a/b` only when the sun's own ray is free, the horizon band
 //!   `DHI F2 sin β × H` with `H` the share of the bundle's rays between 0 and 6.5° of
 //!   elevation (Perez's band) that reach the sky; the hour's sum is clamped at 0 as pvlib
@@ -30,7 +30,7 @@
 //! ```
 //! use glam::DVec3;
 //! use skylod::solar::irradiance::{irradiance, plane_view, IrradianceOptions, IrradianceTable};
-//! use skylod::solar::weather::{Weather, WeatherFormat, WeatherHour, WeatherSite};
+//! use skylod::solar::{Weather, WeatherFormat, WeatherHour, WeatherSite};
 //! use skylod::solar::{Site, SkyBundles};
 //! use chrono::{TimeZone, Utc};
 //! let site = WeatherSite { name: "x".into(), latitude: 41.39, longitude: 2.17,
@@ -47,7 +47,8 @@
 //! assert!((r.global_kwh_m2 - 0.9).abs() < 0.01, "{r:?}");
 //! ```
 
-pub mod perez;
+pub(crate) mod perez;
+pub use perez::{brightening, extraterrestrial, relative_airmass};
 
 use super::sky::Frame;
 use super::sun::{sun_position, Site};

@@ -12,7 +12,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::solar::irradiance::perez::{brightening, extraterrestrial, relative_airmass};
+//! use skylod::solar::irradiance::{brightening, extraterrestrial, relative_airmass};
 //! let z: f64 = 40.0;
 //! let (f1, f2) = brightening(120.0, 650.0, z, relative_airmass(z).unwrap(), extraterrestrial(172));
 //! // pvlib 0.16, irradiance.perez(90, 180, 120, 650, dni_extra, 40, 180, airmass,

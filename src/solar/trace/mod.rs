@@ -34,8 +34,9 @@
 mod boxes;
 mod polygons;
 mod query;
-pub mod ray;
+pub(crate) mod ray;
 mod scene;
+pub use ray::{ray_aabb, ray_triangle};
 
 pub use boxes::BoxIndex;
 pub use polygons::scene_of;

@@ -37,7 +37,7 @@ impl RayTriangleHit {
 /// # Example
 /// ```rust
 /// use glam::DVec3;
-/// use skylod::solar::trace::ray::ray_triangle;
+/// use skylod::solar::trace::ray_triangle;
 /// let tri = [
 ///     DVec3::new(430_000.0, 4_581_000.0, 10.0),
 ///     DVec3::new(430_010.0, 4_581_000.0, 10.0),
@@ -95,7 +95,7 @@ pub fn ray_triangle(
 /// # Example
 /// ```rust
 /// use glam::DVec3;
-/// use skylod::solar::trace::ray::ray_aabb;
+/// use skylod::solar::trace::ray_aabb;
 /// let (t0, t1) = ray_aabb(
 ///     DVec3::new(-5.0, 0.5, 0.5), DVec3::X,
 ///     DVec3::ZERO, DVec3::ONE, 0.0, f64::INFINITY,

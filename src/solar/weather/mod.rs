@@ -14,7 +14,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::solar::weather::parse_weather;
+//! use skylod::solar::parse_weather;
 //! let mut epw = String::from("LOCATION,Somewhere,,XX,test,000000,41.39,2.17,1.0,12.0\n");
 //! for l in ["DESIGN CONDITIONS,0", "TYPICAL/EXTREME PERIODS,0", "GROUND TEMPERATURES,0",
 //!           "HOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0", "COMMENTS 1,", "COMMENTS 2,",
@@ -123,7 +123,7 @@ pub enum WeatherError {
 /// Read an EPW or TMY3 file (told by content).
 ///
 /// # Errors
-/// [`WeatherError`] naming the file and line.
+/// `WeatherError` naming the file and line.
 pub fn read_weather(path: &Path) -> Result<Weather, WeatherError> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|source| WeatherError::Io {
@@ -141,7 +141,7 @@ pub fn read_weather(path: &Path) -> Result<Weather, WeatherError> {
 /// Parse the text of an EPW or TMY3 file; `name` is used in errors.
 ///
 /// # Errors
-/// [`WeatherError::Format`] naming `name` and the line.
+/// `WeatherError::Format` naming `name` and the line.
 pub fn parse_weather(text: &str, name: &str) -> Result<Weather, WeatherError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     if text.starts_with("LOCATION,") {

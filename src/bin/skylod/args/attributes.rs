@@ -1,12 +1,12 @@
 //! `--output-attributes -o OUT` of `irradiance`: with `--facade` or `--region`, the model
 //! written again with each thematic surface that holds POIs given the mean annual irradiation
-//! of its POIs ([`skylod::pipeline::attributes::write_surface_means`]): CityGML by span edits
+//! of its POIs ([`skylod::pipeline::write_surface_means`]): CityGML by span edits
 //! (a generic attribute `skylodAnnualIrradiation`, everything else byte for byte), or
 //! CityJSON (an attribute of the surface's semantic object).
 
 use anyhow::bail;
 use skylod::export::Format;
-use skylod::pipeline::attributes::write_surface_means;
+use skylod::pipeline::write_surface_means;
 use skylod::pipeline::Framed;
 use std::path::PathBuf;
 

@@ -9,11 +9,11 @@ use crate::args::sun::SunArgs;
 use crate::args::weather::WeatherArgs;
 use crate::flags::site_text;
 use anyhow::{anyhow, bail};
-use skylod::export::report::report::Guarantee;
-use skylod::pipeline::session::bound_plan::BoundRequest;
+use skylod::export::report::Guarantee;
+use skylod::pipeline::session::BoundRequest;
 use skylod::pipeline::session::Study;
 use skylod::pipeline::BoundSpec;
-use skylod::solar::ephemeris::SunEphemeris;
+use skylod::solar::SunEphemeris;
 
 #[derive(clap::Args, Debug)]
 pub struct BoundArgs {

@@ -28,7 +28,7 @@ pub struct OutputArgs {
 }
 
 impl OutputArgs {
-    /// `(-o, --format, --overwrite)`, as [`skylod::pipeline::batch::run::Batch::new`] takes them.
+    /// `(-o, --format, --overwrite)`, as [`skylod::pipeline::batch::Batch::new`] takes them.
     pub fn target(&self) -> (&Path, Option<Format>, bool) {
         (&self.output, self.format, self.overwrite)
     }

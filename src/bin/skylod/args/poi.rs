@@ -9,10 +9,10 @@ use crate::flags::frame_said;
 use crate::inputs::Spool;
 use crate::log::{error, summary, warning};
 use anyhow::bail;
-use skylod::lod::poi::checks::DEFAULT_POI_MARGIN;
+use skylod::lod::poi::DEFAULT_POI_MARGIN;
 use skylod::lod::poi::{check_pois, parse_poi_at, read_pois_csv, Located, Poi};
-use skylod::pipeline::batch::inputs::Input;
-use skylod::pipeline::batch::shard::Shard;
+use skylod::pipeline::batch::Input;
+use skylod::pipeline::batch::Shard;
 use skylod::pipeline::session::{Scene, SceneOptions};
 use std::path::PathBuf;
 

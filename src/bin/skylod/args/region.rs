@@ -5,8 +5,8 @@
 use crate::args::poi::PoiArgs;
 use crate::args::positive;
 use anyhow::bail;
-use skylod::lod::poi::region::RegionSpec;
 use skylod::lod::poi::Poi;
+use skylod::lod::poi::RegionSpec;
 use skylod::model::CityModel;
 
 #[derive(clap::Args, Debug)]

@@ -3,8 +3,8 @@
 use crate::args::poi::PoiArgs;
 use anyhow::bail;
 use skylod::lod::poi::Poi;
-use skylod::pipeline::batch::scene_radius::keep_within;
-use skylod::pipeline::batch::shard::Shard;
+use skylod::pipeline::batch::keep_within;
+use skylod::pipeline::batch::Shard;
 
 /// The scene options of the commands that trace POIs.
 #[derive(clap::Args, Debug, Clone, Default)]

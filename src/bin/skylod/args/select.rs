@@ -2,7 +2,7 @@
 //! selection.
 
 use super::{non_negative, positive};
-use skylod::lod::select::SelectOptions;
+use skylod::lod::SelectOptions;
 
 /// The silhouette test of the selection (`lod`, `evaluate`, `fisheye --colour-by level`).
 #[derive(clap::Args, Debug, Clone, Copy)]

@@ -3,7 +3,7 @@
 
 use crate::flags::shard_text;
 use skylod::lod::poi::Poi;
-use skylod::pipeline::batch::shard::Shard;
+use skylod::pipeline::batch::Shard;
 
 /// The shard options of a command.
 #[derive(clap::Args, Debug, Clone, Default)]

@@ -4,7 +4,7 @@
 use crate::flags::site_text;
 use anyhow::anyhow;
 use skylod::model::CityModel;
-use skylod::pipeline::session::site::{given_site, site_of};
+use skylod::pipeline::session::{given_site, site_of};
 
 /// The site of the sun position: `--lat`/`--lon`, both or neither (then from the model's CRS).
 #[derive(clap::Args, Debug)]

@@ -1,7 +1,7 @@
 //! `--stream-chunk` (hidden: for tests and measurements; the default suits every file): the
-//! chunk in which `stats`, `convert` and `lod` read a large file ([`skylod::pipeline::batch::convert::chunk_for`]).
+//! chunk in which `stats`, `convert` and `lod` read a large file ([`skylod::pipeline::batch::chunk_for`]).
 
-use skylod::io::citygml::read::CHUNK_BYTES;
+use skylod::io::citygml::CHUNK_BYTES;
 
 /// `--stream-chunk BYTES`.
 #[derive(clap::Args, Debug, Clone, Copy)]

@@ -9,9 +9,9 @@ use crate::args::scene::SceneArgs;
 use crate::args::shard::ShardArgs;
 use crate::inputs::{expand_inputs, Spool};
 use crate::Outcome;
-use skylod::export::report::text::TextContext;
-use skylod::lod::poi::checks::PoiFlag;
-use skylod::pipeline::batch::shard::Shard;
+use skylod::export::report::TextContext;
+use skylod::lod::poi::PoiFlag;
+use skylod::pipeline::batch::Shard;
 use skylod::pipeline::session::Study;
 
 #[derive(clap::Args, Debug)]

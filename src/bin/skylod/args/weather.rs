@@ -5,9 +5,9 @@
 use crate::args::site::SiteArgs;
 use anyhow::{anyhow, bail, Context};
 use skylod::model::CityModel;
-use skylod::pipeline::session::weather::{weather_site as sun_site, WeatherYear};
+use skylod::pipeline::session::{weather_site as sun_site, WeatherYear};
 use skylod::solar::irradiance::SkyModel;
-use skylod::solar::weather::{read_weather, Weather};
+use skylod::solar::{read_weather, Weather};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -57,7 +57,7 @@ pub fn albedo(a: f64) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The sun's site for a weather year ([`skylod::pipeline::session::weather::weather_site`]: --lat/--lon,
+/// The sun's site for a weather year ([`skylod::pipeline::session::weather_site`]: --lat/--lon,
 /// else the model's centre, else the station's), said on stderr.
 pub fn weather_site(
     args: &SiteArgs,

@@ -6,9 +6,9 @@
 use crate::args::jobs::JobsArgs;
 use crate::outputs;
 use crate::Outcome;
-use skylod::export::citygml_from_cityjson::TargetVersion;
 use skylod::export::Format;
-use skylod::pipeline::batch::convert_all::convert_all;
+use skylod::export::TargetVersion;
+use skylod::pipeline::batch::convert_all;
 use std::path::PathBuf;
 use std::time::Instant;
 

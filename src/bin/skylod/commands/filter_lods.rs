@@ -4,8 +4,8 @@
 
 use crate::args::citygml_io::EditArgs;
 use crate::Outcome;
-use skylod::io::citygml::edit::{LodMode, Lods};
-use skylod::pipeline::batch::edit::Transform;
+use skylod::io::citygml::{LodMode, Lods};
+use skylod::pipeline::batch::Transform;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

@@ -5,11 +5,11 @@ use crate::args::rough::RoughArgs;
 use crate::args::site::SiteArgs;
 use crate::Outcome;
 use anyhow::{bail, Context};
-use skylod::io::citygml::write::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
+use skylod::io::citygml::{atomic_write_bytes, check_target, is_stdout, WriteOptions};
 use skylod::lod::LodOptions;
-use skylod::pipeline::batch::outputs::per_poi;
-use skylod::pipeline::session::pictures::{PictureSvg, Pictures};
-use skylod::solar::fisheye::Projection;
+use skylod::pipeline::batch::per_poi;
+use skylod::pipeline::session::{PictureSvg, Pictures};
+use skylod::solar::Projection;
 use std::path::PathBuf;
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]

@@ -3,8 +3,8 @@
 use crate::commands::out_err;
 use crate::Outcome;
 use anyhow::Context;
-use skylod::export::report::text::Document;
-use skylod::io::citygml::write::{atomic_write_bytes, check_target, WriteOptions};
+use skylod::export::report::Document;
+use skylod::io::citygml::{atomic_write_bytes, check_target, WriteOptions};
 use skylod::solar::HorizonOptions;
 use std::io::Write;
 use std::path::PathBuf;

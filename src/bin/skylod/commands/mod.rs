@@ -3,9 +3,9 @@
 
 use crate::log::warning;
 use anyhow::Context;
-use skylod::export::report::text::{Document, TextContext};
-use skylod::lod::poi::checks::PoiFlag;
+use skylod::export::report::{Document, TextContext};
 use skylod::lod::poi::Poi;
+use skylod::lod::poi::PoiFlag;
 use std::io::Write;
 
 pub mod completions;

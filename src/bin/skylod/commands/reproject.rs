@@ -43,12 +43,12 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use anyhow::Context;
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
-    use skylod::export::cityjson_edit::reproject_cityjson;
-    use skylod::io::citygml::reproject::{reproject_file, ReprojectError};
-    use skylod::io::citygml::write::WriteOptions;
+    use skylod::export::reproject_cityjson;
+    use skylod::io::citygml::WriteOptions;
+    use skylod::io::citygml::{reproject_file, ReprojectError};
     use skylod::model::crs::Crs;
     use skylod::model::crs::CrsName;
-    use skylod::pipeline::batch::outputs::{Plan, Targets};
+    use skylod::pipeline::batch::{Plan, Targets};
 
     let parse = |flag: &str, text: &str| {
         CrsName::parse(text)
@@ -58,13 +58,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let target = parse("-t", &args.target)?;
     let source = args.source.as_deref().map(|s| parse("-s", s)).transpose()?;
     // Both CRSs known to PROJ before any file is touched (usage error otherwise).
-    skylod::model::crs::proj::crs_info(target.horizontal).context("-t")?;
+    skylod::model::crs::crs_info(target.horizontal).context("-t")?;
     if let Some(s) = source {
-        skylod::model::crs::proj::crs_info(s.horizontal).context("-s")?;
+        skylod::model::crs::crs_info(s.horizontal).context("-s")?;
     }
     let shard = args.shard.resolve()?;
     let citygml = Some(skylod::export::Format::CityGml);
-    let (plan, _) = skylod::pipeline::batch::outputs::plan(&inputs, &args.output, citygml)?;
+    let (plan, _) = skylod::pipeline::batch::plan(&inputs, &args.output, citygml)?;
     let wopts = WriteOptions {
         overwrite: args.overwrite,
         protect: args.inputs.clone(),
@@ -100,7 +100,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     for (k, out) in &todo {
         let input = &args.inputs[*k];
         if mirror {
-            skylod::pipeline::batch::outputs::create_parent(out)?;
+            skylod::pipeline::batch::create_parent(out)?;
         }
         // A staged part's path means nothing to the user: the merge line follows.
         let shown = if staging.is_some() {
@@ -108,7 +108,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         } else {
             out.as_path()
         };
-        if skylod::export::citygml_from_cityjson::is_json_file(input) {
+        if skylod::export::is_json_file(input) {
             // CityJSON / CityJSONSeq: vertices through PROJ, the same format written.
             let (from, to) = (
                 args.source.as_deref().map(Crs::parse),
@@ -148,7 +148,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if let (Some(st), Plan::Merge(t)) = (&staging, &plan) {
         let to = (t.as_path(), skylod::export::Format::CityGml);
         let (merged, said) =
-            skylod::pipeline::batch::run::merge_parts(&parts, &names, to, st, &wopts, total);
+            skylod::pipeline::batch::merge_parts(&parts, &names, to, st, &wopts, total);
         crate::outputs::say(said);
         if !merged {
             failed = total;

@@ -4,9 +4,9 @@ use crate::log::{summary, warning};
 use crate::outputs;
 use crate::Outcome;
 use skylod::export::Format;
-use skylod::io::citygml::write::WriteOptions;
+use skylod::io::citygml::WriteOptions;
 use skylod::model::crs::FrameWarning;
-use skylod::pipeline::batch::rough::{rough_file, RoughFile};
+use skylod::pipeline::batch::{rough_file, RoughFile};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]

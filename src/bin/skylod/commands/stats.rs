@@ -1,8 +1,8 @@
-//! `skylod stats`: each input's counts from [`skylod::pipeline::batch::stats::stats_files`].
+//! `skylod stats`: each input's counts from [`skylod::pipeline::batch::stats_files`].
 
 use crate::commands::out_err;
 use crate::Outcome;
-use skylod::pipeline::batch::stats::{stats_files, StatsFiles};
+use skylod::pipeline::batch::{stats_files, StatsFiles};
 use std::io::Write;
 use std::path::PathBuf;
 

@@ -5,9 +5,9 @@
 use crate::args::citygml_io::EditArgs;
 use crate::Outcome;
 use anyhow::Context;
-use skylod::io::citygml::edit::{BboxMode, Subset};
+use skylod::io::citygml::{BboxMode, Subset};
 use skylod::model::crs::Crs;
-use skylod::pipeline::batch::edit::Transform;
+use skylod::pipeline::batch::Transform;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

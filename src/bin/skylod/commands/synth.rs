@@ -3,7 +3,7 @@
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::model::synth::{Preset, SynthOptions};
-use skylod::pipeline::batch::synth::write_synth;
+use skylod::pipeline::batch::write_synth;
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -5,8 +5,8 @@
 
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
-use skylod::io::citygml::upgrade::UpgradeOptions;
-use skylod::pipeline::batch::edit::Transform;
+use skylod::io::citygml::UpgradeOptions;
+use skylod::pipeline::batch::Transform;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

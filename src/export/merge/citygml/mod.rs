@@ -22,8 +22,8 @@
 //!
 //! # Example
 //! ```
-//! use skylod::export::merge::merge_named;
-//! use skylod::io::citygml::write::WriteOptions;
+//! use skylod::export::merge_named;
+//! use skylod::io::citygml::WriteOptions;
 //! let dir = tempfile::tempdir().unwrap();
 //! let doc = |x: f64| format!(r##"<core:CityModel xmlns:core="http://www.opengis.net/citygml/2.0"
 //!  xmlns:gml="http://www.opengis.net/gml" xmlns:bldg="http://www.opengis.net/citygml/building/2.0"
@@ -173,16 +173,6 @@ pub fn merge_named(
         Ok::<u64, MergeError>(n)
     })?;
     summary.ok_or(MergeError::NoInput)
-}
-
-/// [`merge_named`] into any writer `w` (uncompressed, no target checks; `-` among `inputs`
-/// is standard input).
-pub fn merge_named_to(
-    inputs: &[PathBuf],
-    names: &[PathBuf],
-    w: &mut dyn Write,
-) -> Result<MergeSummary, MergeError> {
-    merge_into(inputs, names, w, Path::new(crate::io::files::WRITER_NAME))
 }
 
 /// The merge written into `w`; `out` names the output in errors.

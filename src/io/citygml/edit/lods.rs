@@ -13,7 +13,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::io::citygml::edit::{LodMode, Lods};
+//! use skylod::io::citygml::{LodMode, Lods};
 //! let keep2 = Lods { lods: vec![2], mode: LodMode::Keep, keep_empty: false };
 //! assert_eq!(keep2.kept(&[1, 2, 3]), vec![2]);
 //! let max = Lods { lods: vec![1, 2, 3], mode: LodMode::Maximum, keep_empty: false };
@@ -41,7 +41,7 @@ pub enum LodMode {
     Maximum,
 }
 
-/// What [`filter_lods`] keeps.
+/// What `filter_lods` keeps.
 #[derive(Debug, Clone, Default)]
 pub struct Lods {
     /// LoDs 0 to 4.

@@ -24,7 +24,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::io::citygml::edit::{subset, Subset};
+//! use skylod::io::citygml::{Subset, subset};
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");
 //! std::fs::write(&src, br##"<CityModel xmlns="http://www.opengis.net/citygml/2.0"
@@ -50,8 +50,8 @@
 //! assert!(text.contains("<gml:upperCorner>2 1 3</gml:upperCorner>"));
 //! ```
 
-pub mod lods;
-pub mod subset;
+pub(crate) mod lods;
+pub(crate) mod subset;
 mod tree;
 pub(crate) mod walk;
 

@@ -9,7 +9,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::io::citygml::edit::{BboxMode, Subset};
+//! use skylod::io::citygml::{BboxMode, Subset};
 //! let s = Subset { bbox: Some([0.0, 0.0, 10.0, 10.0]), mode: BboxMode::Within, ..Subset::default() };
 //! assert!(s.bbox_matches(&[1.0, 1.0, 9.0, 9.0]) && !s.bbox_matches(&[5.0, 5.0, 11.0, 9.0]));
 //! ```
@@ -185,7 +185,7 @@ impl Rule for SubsetRule<'_> {
 }
 
 /// Write the members of the document at `input` that `rule` keeps to `out` (atomically;
-/// `-` for standard output; gzip for a name ending in `.gz`), streamed (see [`super`]).
+/// `-` for standard output; gzip for a name ending in `.gz`), streamed (see `super`).
 ///
 /// # Errors
 /// A refused target, a source that cannot be read or is not CityGML, a box that cannot be

@@ -25,7 +25,7 @@
 //!    <gml:LinearRing><gml:posList>0 0 5 1 0 5 1 1 5 0 0 5</gml:posList></gml:LinearRing>
 //!   </gml:exterior></gml:Polygon></gml:surfaceMember></gml:MultiSurface></bldg:lod2MultiSurface>
 //!  </bldg:RoofSurface></bldg:boundedBy></bldg:Building></cityObjectMember></CityModel>"#;
-//! let model = skylod::io::citygml::read::read_bytes(xml, "inline.gml").unwrap();
+//! let model = skylod::io::citygml::read_bytes(xml, "inline.gml").unwrap();
 //! assert_eq!(model.buildings.len(), 1);
 //! assert_eq!(model.assets[0].kind, skylod::model::AssetKind::Roof);
 //! assert_eq!(model.assets[0].detail_polygons()[0].exterior().len(), 3);
@@ -77,7 +77,7 @@ pub struct ReadOptions {
     /// Bytes of whole top-level members (`cityObjectMember`s) the read of an uncompressed
     /// document parses at a time: the chunks of [`stream`], parsed ahead on rayon's threads
     /// ([`ReadOptions::stream_ahead`]) and collected into one model, the same whatever the
-    /// chunks. 0 (default): an eighth of the document, at least [`MIN_CHUNK_BYTES`] and at
+    /// chunks. 0 (default): an eighth of the document, at least `MIN_CHUNK_BYTES` and at
     /// most [`CHUNK_BYTES`], so that a city tile of a few MB is read by every core;
     /// `u64::MAX`: the document as one chunk, by one core.
     pub chunk_bytes: u64,

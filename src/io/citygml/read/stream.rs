@@ -204,7 +204,7 @@ impl<'a> Passes<'a> {
         self.run(path, k, false, each)
     }
 
-    /// [`Passes::pass`] over a CityGML document only ([`stream_citygml`]: a CityJSON one
+    /// [`Passes::pass`] over a CityGML document only (`stream_citygml`: a CityJSON one
     /// declines), for the writers that copy the document's XML.
     ///
     /// # Errors

@@ -38,8 +38,8 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::io::citygml::reproject::rewrite_file;
-//! use skylod::io::citygml::write::WriteOptions;
+//! use skylod::io::citygml::rewrite_file;
+//! use skylod::io::citygml::WriteOptions;
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");
 //! std::fs::write(&src, br#"<CityModel xmlns="http://www.opengis.net/citygml/2.0"
@@ -71,7 +71,7 @@ mod streamed;
 #[cfg(feature = "proj")]
 pub use file::reproject_file;
 pub use file::{reproject_with, CrsTransform, ReprojectError, ReprojectSummary};
-pub use streamed::{RewriteSource, STREAM_BYTES};
+pub use streamed::RewriteSource;
 
 use super::error::WriteError;
 use super::ns::{self, Module, Ns};
@@ -113,7 +113,7 @@ pub struct RewriteSummary {
 
 /// Write `src` to `out` with every coordinate passed through `transform` and every `srsName`
 /// set to `target_srs` (module docs): [`RewriteSource::read`] then
-/// [`RewriteSource::rewrite`] (in passes from [`STREAM_BYTES`] on). `opts.keep_envelopes` is
+/// [`RewriteSource::rewrite`] (in passes from `STREAM_BYTES` on). `opts.keep_envelopes` is
 /// ignored (envelopes are always recomputed: the old ones are in the old CRS).
 pub fn rewrite_file(
     src: &Path,

@@ -91,13 +91,13 @@ fn href_targets(path: &Path) -> Result<HashSet<u64>, WriteError> {
 }
 
 /// A document to rewrite, read first so that a broken input fails with the reader's error:
-/// whole below `stream_from` bytes ([`STREAM_BYTES`] by default), else chunk by chunk
+/// whole below `stream_from` bytes (`STREAM_BYTES` by default), else chunk by chunk
 /// (module docs), keeping only its `srsName`.
 ///
 /// ```
 /// use glam::DVec3;
-/// use skylod::io::citygml::reproject::RewriteSource;
-/// use skylod::io::citygml::write::WriteOptions;
+/// use skylod::io::citygml::RewriteSource;
+/// use skylod::io::citygml::WriteOptions;
 /// use skylod::io::citygml::WriteError;
 /// let dir = tempfile::tempdir().unwrap();
 /// let src = dir.path().join("in.gml");
@@ -129,7 +129,7 @@ pub struct RewriteSource {
 }
 
 impl RewriteSource {
-    /// [`RewriteSource::read_with`] from [`STREAM_BYTES`].
+    /// [`RewriteSource::read_with`] from `STREAM_BYTES`.
     pub fn read(path: &Path) -> Result<RewriteSource, ReadError> {
         RewriteSource::read_with(path, STREAM_BYTES)
     }
@@ -169,7 +169,7 @@ impl RewriteSource {
     }
 
     /// Write the document to `out` with every coordinate passed through `transform` and every
-    /// `srsName` set to `target_srs` ([`super`]'s module docs); `check` sees the summary
+    /// `srsName` set to `target_srs` (`super`'s module docs); `check` sees the summary
     /// before anything is written (it may add warnings, or refuse: nothing is written then).
     pub fn rewrite<E: From<WriteError>>(
         self,

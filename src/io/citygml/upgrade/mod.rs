@@ -51,7 +51,7 @@ use names::{Module, Src};
 use std::io::Write;
 use std::path::Path;
 
-/// What [`upgrade`] maps beyond the default (citygml-tools' `upgrade` options).
+/// What `upgrade` maps beyond the default (citygml-tools' `upgrade` options).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct UpgradeOptions {

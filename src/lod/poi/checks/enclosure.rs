@@ -14,14 +14,14 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::lod::poi::checks::{poi_flags, PoiFlag};
+//! use skylod::lod::poi::{PoiFlag, poi_flags};
 //! use skylod::lod::poi::Poi;
-//! use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
+//! use skylod::model::synth::{BoxBuilding, boxes_citygml};
 //! let b = BoxBuilding { id: "B".into(), min: [0.0, 0.0], max: [10.0, 10.0], height: 10.0,
 //!     installations: vec![] };
 //! let xml = boxes_citygml(&[b], [0.0, 0.0, 0.0]);
-//! let m = skylod::io::citygml::read::read_bytes(xml.as_bytes(), "b.gml").unwrap();
-//! let scene = skylod::lod::scene::full_scene(&m);
+//! let m = skylod::io::citygml::read_bytes(xml.as_bytes(), "b.gml").unwrap();
+//! let scene = skylod::lod::full_scene(&m);
 //! let inside = Poi { id: "in".into(), position: DVec3::new(5.0, 5.0, 5.0), normal: None };
 //! let flags = poi_flags(&scene, &m, &inside, None);
 //! assert_eq!(flags, vec![PoiFlag::InsideBuilding { building: Some("B".into()) }]);
@@ -51,14 +51,14 @@ pub enum PoiFlag {
     },
     /// Every ray of the hemisphere bundle is blocked: SVF and sun hours are 0.
     NoSky,
-    /// The POI lies more than [`FAR_BELOW_MARGIN`] below the lowest point of every building
-    /// (or other object) within [`FAR_BELOW_RADIUS`] horizontally: a height above ground, or
+    /// The POI lies more than `FAR_BELOW_MARGIN` below the lowest point of every building
+    /// (or other object) within `FAR_BELOW_RADIUS` horizontally: a height above ground, or
     /// in another vertical datum, given where the model wants its own heights.
     FarBelow {
         /// Metres below that lowest point (rounded down).
         below_m: u32,
     },
-    /// The POI lies within [`ON_SURFACE`] of a polygon and its normal points to the
+    /// The POI lies within `ON_SURFACE` of a polygon and its normal points to the
     /// polygon's inner side: its bundle looks into the building.
     NormalIntoSurface {
         /// gml:id of the surface (asset) the POI lies on, when it has one.
@@ -204,7 +204,7 @@ fn enclosed(scene: &TraceScene, model: &CityModel, origin: DVec3) -> Option<Opti
 
 /// The inside-building and no-sky flags of `poi` against `scene` (tagged with asset indices
 /// of `model`). `sky_rays`: how many rays of its hemisphere bundle reached the sky, when
-/// known. The commands call [`poi_flags_around`], which adds the flags that need the
+/// known. The commands call `poi_flags_around`, which adds the flags that need the
 /// surroundings.
 pub fn poi_flags(
     scene: &TraceScene,

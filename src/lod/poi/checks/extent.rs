@@ -5,7 +5,7 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::lod::poi::checks::check_pois_near;
+//! use skylod::lod::poi::check_pois_near;
 //! use skylod::model::Bbox;
 //! use skylod::lod::poi::Poi;
 //! let scene = Bbox::of_points(&[DVec3::new(430000.0, 4581000.0, 0.0), DVec3::new(430500.0, 4581500.0, 30.0)]);
@@ -13,9 +13,9 @@
 //! assert!(check_pois_near(&scene, &[near], 1000.0).is_ok());
 //! let latlon = Poi { id: "b".into(), position: DVec3::new(41.38, 2.16, 2.0), normal: None };
 //! let e = check_pois_near(&scene, &[latlon], 1000.0).unwrap_err();
-//! let skylod::lod::poi::checks::TrustError::PoiOutside(far) = e else { panic!("{e}") };
+//! let skylod::lod::poi::TrustError::PoiOutside(far) = e else { panic!("{e}") };
 //! assert_eq!(far.pois[0].id, "b");
-//! assert_eq!(far.pois[0].hint, Some(skylod::lod::poi::checks::OutsideHint::Degrees));
+//! assert_eq!(far.pois[0].hint, Some(skylod::lod::poi::OutsideHint::Degrees));
 //! ```
 
 use super::TrustError;
@@ -42,7 +42,7 @@ fn distance(b: &Bbox, p: DVec3) -> f64 {
 /// Refuse POIs farther than `margin` from the scene's box, naming each (up to five) with its
 /// distance and a hint: swapped axes when swapping x and y brings it inside, `--poi-crs
 /// EPSG:4326` when it looks like degrees. An empty scene accepts everything (nothing to trace).
-/// For a scene and POIs in a metric CRS; see [`check_pois_near_in_frame`] otherwise.
+/// For a scene and POIs in a metric CRS; see `check_pois_near_in_frame` otherwise.
 pub fn check_pois_near(scene: &Bbox, pois: &[Poi], margin: f64) -> Result<(), TrustError> {
     check_pois_near_in_frame(scene, pois, scene, pois, margin)
 }
@@ -192,7 +192,7 @@ impl std::fmt::Display for PoisOutside {
 /// ```
 /// use glam::DVec3;
 /// use skylod::model::Bbox;
-/// use skylod::lod::poi::checks::check_lat_lon_order;
+/// use skylod::lod::poi::check_lat_lon_order;
 /// use skylod::lod::poi::Poi;
 /// let scene = Bbox::of_points(&[DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 1.0)]);
 /// // a "scene" near latitude 48.77, longitude 11.42

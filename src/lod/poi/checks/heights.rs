@@ -5,7 +5,7 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::lod::poi::checks::check_heights;
+//! use skylod::lod::poi::check_heights;
 //! use skylod::model::{Asset, AssetKind, CityModel, LodGeometry, Polygon};
 //! let mut m = CityModel::default();
 //! let flat = Polygon::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y]);

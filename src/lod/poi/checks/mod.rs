@@ -13,16 +13,16 @@
 //! The refusals are [`TrustError`]s; the flags are data ([`PoiFlag`]) that the commands
 //! print as warnings and write into their JSON outputs.
 
-pub mod enclosure;
-pub mod extent;
-pub mod heights;
-pub mod same_crs;
-pub mod surroundings;
+pub(crate) mod enclosure;
+pub(crate) mod extent;
+pub(crate) mod heights;
+pub(crate) mod same_crs;
+pub(crate) mod surroundings;
 
-pub use enclosure::{poi_flags, poi_flags_around, OutwardRule, PoiFlag};
+pub use enclosure::{poi_flags, poi_flags_around, PoiFlag};
 pub use extent::{
-    check_lat_lon_order, check_pois_near, check_pois_near_in_frame, FarPoi, OutsideHint,
-    PoisOutside, DEFAULT_POI_MARGIN,
+    check_lat_lon_order, check_pois_near, check_pois_near_in_frame, OutsideHint, PoisOutside,
+    DEFAULT_POI_MARGIN,
 };
 pub use heights::{check_heights, check_heights_in};
 pub use same_crs::check_same_crs;

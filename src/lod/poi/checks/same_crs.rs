@@ -17,7 +17,6 @@
 //! ```
 
 use super::TrustError;
-pub use crate::model::crs::same_crs;
 use crate::model::crs::srs_key as key;
 use crate::model::CityModel;
 
@@ -56,7 +55,8 @@ fn listing(seen: &[(String, &str, usize, String)]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{check_same_crs, same_crs};
+    use super::check_same_crs;
+    use crate::model::crs::same_crs;
     use crate::model::{CityGmlVersion, CityModel, SourceFile};
 
     #[test]

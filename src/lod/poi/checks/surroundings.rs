@@ -8,11 +8,11 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::lod::poi::checks::surroundings::Surroundings;
-//! use skylod::model::synth::boxes::{boxes_citygml, BoxBuilding};
+//! use skylod::lod::poi::Surroundings;
+//! use skylod::model::synth::{BoxBuilding, boxes_citygml};
 //! let b = BoxBuilding { id: "B".into(), min: [0.0, 0.0], max: [10.0, 10.0], height: 10.0,
 //!     installations: vec![] };
-//! let m = skylod::io::citygml::read::read_bytes(boxes_citygml(&[b], [0.0, 0.0, 0.0]).as_bytes(),
+//! let m = skylod::io::citygml::read_bytes(boxes_citygml(&[b], [0.0, 0.0, 0.0]).as_bytes(),
 //!     "b.gml").unwrap();
 //! let around = Surroundings::new(&m);
 //! assert_eq!(around.lowest_near(DVec3::new(20.0, 5.0, 0.0), 100.0), Some(0.0));
@@ -59,7 +59,7 @@ impl Surroundings {
     }
 
     /// [`Surroundings::new`] with each asset's box given (`boxes[i]`: asset `i`'s
-    /// [`crate::model::Asset::bbox`], e.g. from a hollow read, [`crate::lod::hollow`]).
+    /// [`crate::model::Asset::bbox`], e.g. from a hollow read, `crate::lod::hollow`).
     pub fn with_boxes(model: &CityModel, boxes: &[Bbox]) -> Self {
         let mut groups: Vec<Group> = Vec::new();
         let mut of_root: HashMap<usize, usize> = HashMap::new();

@@ -1,7 +1,7 @@
 //! What `lod` tells the user of its levels and report: the error bound's lines
 //! ([`bound_lines`]) and the closing lines ([`lod_lines`]).
 
-use skylod::export::report::report::{Guarantee, Report};
+use skylod::export::report::{Guarantee, Report};
 use skylod::Levels;
 
 /// The lines of the error bound of `lv` (the guarantee first), and, when it cannot be met
@@ -73,7 +73,7 @@ pub(crate) fn lod_lines(report: &Report, lv: &Levels, pois: usize, region: bool)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use skylod::pipeline::session::report::RunMs;
+    use skylod::pipeline::session::RunMs;
     use skylod::prelude::*;
 
     #[test]

@@ -14,14 +14,14 @@ use crate::Outcome;
 use anyhow::Context;
 use lines::{bound_lines, lod_lines};
 use skylod::lod::LodOptions;
-use skylod::pipeline::batch::inputs::Input;
-use skylod::pipeline::batch::run::Said;
-use skylod::pipeline::session::documents::ms_since;
-use skylod::pipeline::session::lod_read::{lod_read, LodRead};
-use skylod::pipeline::session::lod_write::{
+use skylod::pipeline::batch::Input;
+use skylod::pipeline::batch::Said;
+use skylod::pipeline::session::ms_since;
+use skylod::pipeline::session::RunMs;
+use skylod::pipeline::session::{
     check_report, write_report, FileOutcome, LodLayout, LodWritten, ReportTargetError,
 };
-use skylod::pipeline::session::report::RunMs;
+use skylod::pipeline::session::{lod_read, LodRead};
 use skylod::pipeline::session::{SceneOptions, Study};
 use skylod::pipeline::LevelsOptions;
 use std::path::PathBuf;
@@ -55,7 +55,7 @@ pub struct Args {
     /// The memory lod may take for reading a file whole, e.g. 2GiB (default: 1GiB, or half
     /// of what the system and the job's memory limit leave where that is less): a larger
     /// file is read hollow, a chunk at a time, in less memory and a little more CPU.
-    #[arg(long, value_name = "SIZE", value_parser = skylod::pipeline::session::lod_read::memory_size)]
+    #[arg(long, value_name = "SIZE", value_parser = skylod::pipeline::session::memory_size)]
     pub(crate) max_memory: Option<u64>,
     /// Reduce step: write the model (and --report) from the levels files of all shards
     /// (levels combine by maximum) instead of tracing; POIs and options come from the files,

@@ -2,7 +2,7 @@
 //! library says why ([`WholeWhy`]), this names the flag that decided it.
 
 use skylod::model::shown;
-use skylod::pipeline::session::lod_read::{mib, Budget, LodRead, Unserved, WholeWhy};
+use skylod::pipeline::session::{mib, Budget, LodRead, Unserved, WholeWhy};
 use std::path::PathBuf;
 
 /// The info line of `lod` reading `inputs` (named by the first) as `read`: hollow in chunks,

@@ -6,10 +6,10 @@ use crate::inputs::Spool;
 use crate::Outcome;
 use anyhow::{bail, Context};
 use skylod::lod::LodOptions;
-use skylod::pipeline::batch::reduce::Reduce;
-use skylod::pipeline::batch::shard::Shard;
-use skylod::pipeline::batch::shard_levels::{check_levels_target, write_shard};
-use skylod::pipeline::session::documents::ms_since;
+use skylod::pipeline::batch::Reduce;
+use skylod::pipeline::batch::Shard;
+use skylod::pipeline::batch::{check_levels_target, write_shard};
+use skylod::pipeline::session::ms_since;
 use std::time::Instant;
 
 /// Run one shard of `lod`: trace this shard's POIs and write their levels to `-o`.
