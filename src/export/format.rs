@@ -37,7 +37,7 @@ pub enum Format {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
     "{}: unknown output format; name it .gml/.xml (+.gz) for CityGML, .obj, .city.json or \
-     .city.jsonl, or give --format citygml|obj|cityjson|cityjsonseq",
+     .city.jsonl, or give the format",
     .0.display()
 )]
 pub struct UnknownFormat(pub PathBuf);

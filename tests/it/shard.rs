@@ -302,6 +302,32 @@ fn gnu_parallel_runs_the_shards_for_real() {
     }
 }
 
+/// Shards made with other options are refused at `--reduce` (exit 2), the message naming both
+/// levels files and the options that must agree, in the command line's words.
+#[test]
+fn shards_of_other_options_are_refused_at_reduce() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = synth();
+    let mut levels = Vec::new();
+    for (i, rays) in ["3000", "2000"].into_iter().enumerate() {
+        let l = s(dir.path().join(format!("levels-{i}.jsonl")));
+        let shard = format!("{i}/2");
+        let e = ["--rays", rays, "--shard", &shard, "-o", &l];
+        ok(skylod(&with(&["lod"], &case, &e), &[]), &shard);
+        levels.push(l);
+    }
+    let out = s(dir.path().join("reduced.gml"));
+    let mut args: Vec<String> = vec!["lod".into(), case.args[0].clone(), "-o".into(), out];
+    args.push("--reduce".into());
+    args.extend(levels.iter().cloned());
+    let o = skylod(&args, &[]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let text = stderr(&o);
+    assert!(text.contains("levels-0.jsonl and "), "{text}");
+    assert!(text.contains("different options (rays, seed,"), "{text}");
+    assert!(text.contains("or --no-lod2)"), "{text}");
+}
+
 /// `lod` shards write levels; `--reduce` writes models byte-identical to the serial run's.
 #[test]
 fn lod_shards_reduce_to_the_serial_model() {

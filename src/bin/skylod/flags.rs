@@ -1,8 +1,9 @@
 //! The library's errors and warnings in the words of the command line: each error says what
 //! is wrong in the library's terms (its `Display` names no flag); this module adds the flag
 //! that fixes it (`--poi-crs`, `--source-crs`, `--allow-mixed-crs`, `--overwrite`, `--poi`,
-//! `--shard`, `--shards`, `--weather`, `--lat`/`--lon`, `-o`).
+//! `--shard`, `--shards`, `--weather`, `--lat`/`--lon`, `-o`, `--format`, `--no-lod2`).
 
+use skylod::export::UnknownFormat;
 use skylod::io::citygml::WriteError;
 use skylod::io::TargetError;
 use skylod::lod::poi::RegionError;
@@ -10,9 +11,9 @@ use skylod::lod::poi::TrustError;
 use skylod::lod::BoundError;
 use skylod::model::crs::FrameWarning;
 use skylod::pipeline::batch::ConvertError;
-use skylod::pipeline::batch::LevelsTargetError;
 use skylod::pipeline::batch::PlanError;
 use skylod::pipeline::batch::SynthFilesError;
+use skylod::pipeline::batch::{LevelsError, LevelsTargetError};
 use skylod::pipeline::batch::{Setting, ShardError, ENV_VARS};
 use skylod::pipeline::session::Error;
 use skylod::pipeline::session::SiteError;
@@ -33,7 +34,7 @@ type Text = fn(&(dyn StdError + 'static)) -> Option<String>;
 
 /// Every kind of error with words of its own, each with its wording (the kinds are
 /// distinct types: at most one applies).
-const TEXTS: [Text; 12] = [
+const TEXTS: [Text; 14] = [
     |e| e.downcast_ref().map(library),
     |e| e.downcast_ref().map(shard_text),
     |e| e.downcast_ref().map(plan),
@@ -58,6 +59,20 @@ const TEXTS: [Text; 12] = [
             "POI id {id:?} is given twice (a region POI and a --poi/--pois one?)"
         )),
         _ => None,
+    },
+    |e| match e.downcast_ref() {
+        Some(LevelsError::Options { first, other }) => Some(format!(
+            "{} and {} were made with different options (rays, seed, threshold, roof tolerance, \
+             angle, thickness or --no-lod2)",
+            first.display(),
+            other.display()
+        )),
+        _ => None,
+    },
+    |e| {
+        let text = e.downcast_ref::<UnknownFormat>()?.to_string();
+        let named = "give --format citygml|obj|cityjson|cityjsonseq";
+        Some(text.replace("give the format", named))
     },
     |e| match e.downcast_ref() {
         Some(TargetError::Exists(p)) => {

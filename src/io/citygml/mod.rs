@@ -22,8 +22,8 @@ pub use reproject::{
 pub use source::{open, resolve};
 pub use upgrade::UpgradeOptions;
 pub use write::{
-    atomic_write_bytes, check_target, is_stdout, write_document, write_document_streamed,
-    write_document_to, Edit, GmlWriter, WriteOptions,
+    atomic_write_bytes, check_target, is_stdout, write_document, write_document_to, Edit,
+    GmlWriter, WriteOptions,
 };
 
 pub use error::{Location, ReadError, WriteError};

@@ -146,7 +146,7 @@ fn write_edits(
 /// What [`write_document_streamed`] wrote.
 #[derive(Debug, Clone)]
 #[non_exhaustive]
-pub struct StreamedDocument {
+pub(crate) struct StreamedDocument {
     /// Bytes and edits, as [`write_document`] counts them.
     pub summary: WriteSummary,
     /// The stream's summary of the document (warnings, version, CRS).
@@ -168,7 +168,7 @@ pub struct StreamedDocument {
 ///
 /// # Errors
 /// As [`write_document`].
-pub fn write_document_streamed(
+pub(crate) fn write_document_streamed(
     input: &Path,
     passes: &crate::io::citygml::read::Passes<'_>,
     out: &Path,

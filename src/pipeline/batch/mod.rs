@@ -41,6 +41,6 @@ pub use rough::{rough_file, RoughFile};
 pub use run::{merge_parts, Batch, Done, Said};
 pub use scene_radius::{keep_within, Extent};
 pub use shard::{Setting, Shard, ShardError, ENV_VARS};
-pub use shard_levels::{check_levels_target, write_shard, LevelsTargetError};
+pub use shard_levels::{check_levels_target, write_shard, LevelsError, LevelsTargetError};
 pub use stats::{stats_files, StatsFiles};
 pub use synth::{write_synth, SynthFilesError};

@@ -167,6 +167,19 @@ pub enum LevelsError {
     /// The files do not belong together, or not to these inputs.
     #[error("{0}")]
     Mismatch(String),
+    /// Two shards' levels were made with different options.
+    #[error(
+        "{} and {} were made with different options (rays, seed, threshold, roof tolerance, \
+         angle, thickness or whether LoD2 bodies are read)",
+        .first.display(),
+        .other.display()
+    )]
+    Options {
+        /// The first shard's levels file.
+        first: PathBuf,
+        /// A shard's levels file made with other options.
+        other: PathBuf,
+    },
 }
 
 /// The header of a shard's levels for `model` with `opts`.
@@ -517,12 +530,10 @@ pub fn combine(mut files: Vec<LevelsFile>, model: &CityModel) -> Result<Combined
             return mismatch(what);
         }
         if !same(&f.header, &first.header) {
-            return mismatch(format!(
-                "{} and {} were made with different options (rays, seed, threshold, \
-                 roof tolerance, angle, thickness or --no-lod2)",
-                first.path.display(),
-                f.path.display()
-            ));
+            return Err(LevelsError::Options {
+                first: first.path.clone(),
+                other: f.path.clone(),
+            });
         }
     }
     if files.len() != count {
