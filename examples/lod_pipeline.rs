@@ -2,10 +2,8 @@
 //! printed by the caller and a cancellation flag (here: stop after a time limit).
 //! `cargo run --release --example lod_pipeline -- MODEL.gml POIS.csv OUT.gml [SECONDS]`
 //! (without arguments: the committed synth fixture, written to a temporary directory).
-use skylod::export::Format;
-use skylod::lod::poi::read_pois_csv;
-use skylod::model::{Progress, Stage};
-use skylod::pipeline::{frame, levels, read_inputs, write_all, FrameOptions, LevelsOptions};
+use skylod::model::Stage;
+use skylod::prelude::*;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -61,30 +59,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pois: AtomicU64::new(0),
     };
 
-    let mut inputs = read_inputs(&[model], &progress)?;
-    for e in &inputs.failures {
+    let scene = Scene::load(&[model], &SceneOptions::default(), &progress)?;
+    for e in scene.failures() {
         eprintln!("error: {e}");
     }
-    inputs.check(false)?;
     let pois = read_pois_csv(&csv)?.into_iter().map(|l| l.poi).collect();
-    let framed = frame(&mut inputs.model, pois, &FrameOptions::default())?;
-    let lv = levels(&framed, &LevelsOptions::default(), &progress)?;
+    let mut study = scene.frame(pois)?;
+    let lv = study.levels(&LevelsOptions::default(), &progress)?;
     let [l0, l1, l2] = lv.lod.selection.level_counts();
     eprintln!(
         "{} POI(s) selected: assets at level 0/1/2 = {l0}/{l1}/{l2}",
         progress.pois.load(Ordering::Relaxed)
     );
-    let targets = vec![(0, out)];
-    let written = write_all(
-        framed.source,
-        &targets,
-        &lv,
-        Format::CityGml,
-        &Default::default(),
-        &progress,
-    )?;
-    for ((_, path), w) in targets.iter().zip(written) {
-        let w = w?;
+    let written = study.write_levels(&lv, &out, Some(Format::CityGml), false, &progress)?;
+    for (path, w) in written {
         println!(
             "{}: polygons {} -> {}, {} bytes",
             path.display(),

@@ -1,15 +1,17 @@
 //! skylod: skyline-controlled mixed level-of-detail CityGML for solar analysis.
 //!
 //! The library follows the pipeline of `DESIGN.md`:
-//! read (CityGML → [`CityModel`]) → rough → sky → trace → select → write.
-//! [`pipeline`] runs it for a program in four calls — inputs → scene → levels → outputs —
-//! with progress and cancellation through a [`Progress`]; the `skylod` binary is a thin front
-//! end over the same calls. The library never prints and never panics on input.
+//! read (CityGML, CityJSON → [`CityModel`]) → rough → sky → trace → select → write.
+//! A program runs it through one session: a [`Scene`] (the inputs read and checked) framed
+//! with its POIs into a [`Study`], which chooses levels, traces (SVF, sun hours, horizons,
+//! irradiance, evaluation) and writes, with progress and cancellation through a
+//! [`Progress`]. The `skylod` binary is a front end over the same session and the batch
+//! work of [`pipeline::batch`]. The library never prints and never panics on input.
 //!
-//! The crate root re-exports what a program needs for that path (the calls, their options and
-//! results, the model, POIs, formats, errors, progress); the six modules below hold the rest,
-//! layered [`model`] < [`io`] < [`solar`] < [`lod`] < [`export`] < [`pipeline`], each importing
-//! only the groups before it (`ARCHITECTURE.md`).
+//! The crate root and [`prelude`] re-export the session, its options and results, the model,
+//! POIs, formats, errors and progress; the six modules below hold the rest, layered
+//! [`model`] < [`io`] < [`solar`] < [`lod`] < [`export`] < [`pipeline`], each importing only
+//! the groups before it (`ARCHITECTURE.md`).
 //!
 //! Cargo features: `cli` (default) builds the `skylod` program and its dependencies (clap,
 //! anyhow, indicatif, clap_complete, clap_mangen); `skylod = { default-features = false }`
@@ -17,29 +19,29 @@
 //!
 //! # Example: read → POIs → levels → write
 //! ```
-//! use skylod::{frame, levels, read_inputs, read_pois_csv, write_levels};
-//! use skylod::{Format, FrameOptions, LevelsOptions, Silent};
+//! use skylod::prelude::*;
 //! use std::path::Path;
 //!
 //! let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
-//! // Inputs: every file is read (in parallel) and merged into one scene.
-//! let mut inputs = read_inputs(&[dir.join("synth-small.gml")], &Silent)?;
-//! inputs.check(false)?; // one CRS, heights present
+//! // Inputs: every file is read (in parallel) and merged into one scene; one CRS, heights
+//! // present, or an error.
+//! let scene = Scene::load(&[dir.join("synth-small.gml")], &SceneOptions::default(), &Silent)?;
 //! // POIs: a CSV `id,x,y,z[,nx,ny,nz]` in the model's CRS.
 //! let pois = read_pois_csv(&dir.join("synth-small.pois.csv"))?
 //!     .into_iter()
 //!     .map(|l| l.poi)
 //!     .collect();
-//! // Scene: model and POIs in the local metric frame, POIs far outside refused.
-//! let framed = frame(&mut inputs.model, pois, &FrameOptions::default())?;
+//! // The study: model and POIs in the local metric frame, POIs far outside refused.
+//! let mut study = scene.frame(pois)?;
 //! // Levels: rough model, selection scene, silhouette selection (0 dropped, 1 rough, 2 full).
-//! let lv = levels(&framed, &LevelsOptions::default(), &Silent)?;
+//! let lv = study.levels(&LevelsOptions::default(), &Silent)?;
 //! let [dropped, rough, full] = lv.lod.selection.level_counts();
-//! assert_eq!(dropped + rough + full, framed.source.assets.len());
+//! assert_eq!(dropped + rough + full, study.source().assets.len());
 //! // Outputs: the input file with every asset at its level, written atomically.
 //! let tmp = tempfile::tempdir()?;
 //! let out = tmp.path().join("lod.gml");
-//! let w = write_levels((framed.source, 0), &lv, &out, Format::CityGml, &Default::default())?;
+//! let written = study.write_levels(&lv, &out, Some(Format::CityGml), false, &Silent)?;
+//! let (_, w) = &written[0];
 //! assert!(w.polygons_out < w.polygons_in);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -70,8 +72,7 @@ pub use io::citygml::{read_file, ReadError, WriteError};
 pub use model::{Asset, AssetKind, CityModel, Poi};
 pub use pipeline::session::{Error, Result, Scene, SceneOptions, Study, SunOptions};
 pub use pipeline::{
-    frame, levels, read_inputs, sun_hours, svf, write_all, write_levels, EvaluateOptions,
-    FrameOptions, Framed, Inputs, Levels, LevelsOptions, Traced, Written,
+    EvaluateOptions, FrameOptions, Framed, Inputs, Levels, LevelsOptions, Traced, Written,
 };
 pub use solar::{HorizonOptions, Site, SkyBundles, SkyView, SunHours};
 

@@ -23,7 +23,7 @@ use skylod::pipeline::session::BoundRequest;
 use skylod::pipeline::session::RunMs;
 use skylod::pipeline::session::SiteError;
 use skylod::pipeline::session::SunSite;
-use skylod::pipeline::{write_all, BoundSpec, LevelsOptions};
+use skylod::pipeline::{BoundSpec, LevelsOptions};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -211,8 +211,8 @@ pub fn lod(
         let expanded = expand(&setup.paths).map_err(|e| message(&e))?;
         // Every target is checked before any input is read.
         layout(&expanded, &output, format.as_deref(), overwrite)?;
-        let l = load(&setup, p)?;
-        let study = &l.study;
+        let mut l = load(&setup, p)?;
+        let study = &mut l.study;
         let (plan, format, targets, wopts) =
             layout(study.inputs(), &output, format.as_deref(), overwrite)?;
         let (bound, guarantee) = bound.spec(study, lod.seed)?;
@@ -233,8 +233,7 @@ pub fn lod(
                 create_parent(out).map_err(|e| message(&e))?;
             }
         }
-        let model = study.source();
-        let results = write_all(model, &targets.todo, &lv, format, &targets.write_opts, p)
+        let results = (study.write_targets(&targets.todo, &lv, format, &targets.write_opts, p))
             .map_err(|e| message(&e))?;
         let mut written = Vec::with_capacity(results.len());
         for ((f, out), r) in targets.todo.iter().zip(results) {
@@ -245,7 +244,12 @@ pub fn lod(
             };
             written.push((*f, shown, w.buildings_dropped + w.parts_dropped));
         }
-        let names: Vec<PathBuf> = model.files.iter().map(|f| f.path.clone()).collect();
+        let names: Vec<PathBuf> = study
+            .source()
+            .files
+            .iter()
+            .map(|f| f.path.clone())
+            .collect();
         let parts: Vec<PathBuf> = targets.todo.iter().map(|(_, o)| o.clone()).collect();
         merge(&plan, &parts, &names, &wopts)?;
         let (read, write, total) = (l.read_ms, ms(t_write), ms(t_all));

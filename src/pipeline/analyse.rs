@@ -10,14 +10,11 @@ use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
 use crate::solar::trace::TraceScene;
-use crate::solar::{
-    poi_horizon, poi_sky_view, poi_sun_hours, HorizonOptions, HorizonProfile, SkyBundles, SkyView,
-    SunHours, SunTable,
-};
+use crate::solar::{poi_horizon, HorizonOptions, HorizonProfile, SunTable};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// What [`trace`] (and [`svf`], [`sun_hours`], [`horizon`]) computed: one result per POI
+/// What `trace` (and `svf`, `sun_hours`, `horizon`) computed: one result per POI
 /// against the full-detail scene, in POI order.
 #[derive(Debug, Clone, serde::Serialize)]
 #[non_exhaustive]
@@ -112,40 +109,6 @@ pub(crate) fn trace_in<T: Send>(
     })
 }
 
-/// Sky view factor and sky exposure of every POI ([`poi_sky_view`]), through [`trace`].
-///
-/// # Errors
-/// [`Cancelled`] when `progress` asks to stop.
-pub fn svf(
-    framed: &Framed<'_>,
-    bundles: &SkyBundles,
-    progress: &dyn Progress,
-) -> Result<Traced<SkyView>, Cancelled> {
-    trace(
-        framed,
-        |s, p| poi_sky_view(s, p, bundles),
-        |v| (v.sky_exposure == 0.0).then_some(0),
-        progress,
-    )
-}
-
-/// Hours of direct sun of every POI over `table` ([`poi_sun_hours`]), through [`trace`].
-///
-/// # Errors
-/// [`Cancelled`] when `progress` asks to stop.
-pub fn sun_hours(
-    framed: &Framed<'_>,
-    table: &SunTable,
-    progress: &dyn Progress,
-) -> Result<Traced<SunHours>, Cancelled> {
-    trace(
-        framed,
-        |s, p| poi_sun_hours(s, p, table),
-        |_| None,
-        progress,
-    )
-}
-
 /// Horizon profile of every POI ([`poi_horizon`]; azimuths from north of the local frame),
 /// through [`trace`].
 ///
@@ -167,7 +130,7 @@ pub fn horizon(
     })
 }
 
-/// Options of [`evaluate`].
+/// Options of `evaluate`.
 #[derive(Debug, Clone, Default)]
 pub struct EvaluateOptions {
     /// Rough model, selection and SVF bundle.
@@ -205,6 +168,7 @@ mod tests {
     use super::*;
     use crate::lod::LodOptions;
     use crate::pipeline::test_support::*;
+    use crate::solar::{poi_sky_view, poi_sun_hours, SkyBundles};
     use std::sync::atomic::Ordering;
 
     #[test]

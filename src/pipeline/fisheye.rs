@@ -14,7 +14,7 @@ use crate::solar::fisheye::{classify_cells, CellClass};
 use crate::solar::sky::SkyPartition;
 use crate::solar::{poi_sky_view, SkyBundles, SkyView};
 
-/// Options of [`sky_pictures`].
+/// Options of `sky_pictures`.
 #[derive(Debug, Clone, Copy)]
 pub struct SkyPictureOptions<'o> {
     /// The cells of the picture (one ray through each centre).
@@ -25,7 +25,7 @@ pub struct SkyPictureOptions<'o> {
     pub levels: Option<LodOptions>,
 }
 
-/// What a fisheye picture of one POI shows ([`sky_pictures`]).
+/// What a fisheye picture of one POI shows (`sky_pictures`).
 #[derive(Debug, Clone)]
 #[non_exhaustive]
 pub struct SkyPicture {

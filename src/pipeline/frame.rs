@@ -10,7 +10,7 @@ use crate::model::{Bbox, CityModel};
 use glam::DVec3;
 use std::borrow::Cow;
 
-/// How the model and the POIs are brought into the tracing frame ([`frame`]).
+/// How the model and the POIs are brought into the tracing frame (`frame`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameOptions {
     /// CRS of the inputs instead of their `srsName` (written into the model's files, so
@@ -56,21 +56,6 @@ pub struct Framed<'a> {
     /// The frame's warning (no CRS, an unknown one, ...), structured; its text is the last
     /// of [`Framed::warnings`].
     pub frame_warning: Option<crate::model::crs::FrameWarning>,
-}
-
-/// Check `pois` ([`check_poi_list`]: finite, non-zero normals, unique ids), apply
-/// `source_crs`, choose the frame, convert `pois` from `poi_crs` to the model's CRS and
-/// everything into the frame; refuse POIs farther than `poi_margin` outside the scene.
-///
-/// # Errors
-/// [`Error::Poi`], [`Error::PoiCrs`],
-/// [`Error::Trust`].
-pub fn frame<'a>(
-    model: &'a mut CityModel,
-    pois: Vec<Poi>,
-    opts: &FrameOptions,
-) -> Result<Framed<'a>, Error> {
-    frame_in(model, None, pois, opts)
 }
 
 /// [`frame`] of a model whose box ([`CityModel::bbox`]) is `bbox` when given (the
@@ -177,8 +162,8 @@ mod tests {
     use super::*;
     use crate::lod::poi::PoiError;
     use crate::model::runtime::progress::Silent;
+    use crate::pipeline::read_inputs;
     use crate::pipeline::test_support::*;
-    use crate::pipeline::{read_inputs, svf};
     use crate::solar::SkyBundles;
     use glam::DVec3;
 

@@ -15,7 +15,7 @@ use crate::solar::SunTable;
 use std::borrow::Cow;
 use std::time::Instant;
 
-/// The error bound of [`levels`]: options and, for a sun-hours bound, the sun table.
+/// The error bound of `levels`: options and, for a sun-hours bound, the sun table.
 #[derive(Debug, Clone)]
 pub struct BoundSpec {
     /// Bound options (SVF and sun-hours errors allowed, rays).
@@ -26,7 +26,7 @@ pub struct BoundSpec {
     pub irradiance: Option<crate::solar::irradiance::IrradianceSetting>,
 }
 
-/// Options of [`levels`].
+/// Options of `levels`.
 #[derive(Debug, Clone, Default)]
 pub struct LevelsOptions {
     /// Rough model and selection.
@@ -49,7 +49,7 @@ pub struct Levels {
     /// does not, nothing should be written).
     pub bound: Option<BoundReport>,
     /// Seconds of the bound check after the selection (its full-model side, when
-    /// [`levels`] traced it beside the selection, not counted).
+    /// `levels` traced it beside the selection, not counted).
     pub bound_s: f64,
 }
 
@@ -71,7 +71,7 @@ impl Levels {
     }
 }
 
-/// What [`levels`] runs on: the inputs read whole and framed, or one document read hollow
+/// What `levels` runs on: the inputs read whole and framed, or one document read hollow
 /// ([`crate::lod::hollow::read_hollow`]) whose frame is the identity, with the same document
 /// to read its full polygons back from and the POIs in its coordinates.
 #[derive(Debug, Clone, Copy)]
@@ -240,7 +240,7 @@ fn bounded(
 mod tests {
     use super::*;
     use crate::pipeline::test_support::*;
-    use crate::pipeline::{frame, read_inputs, FrameOptions};
+    use crate::pipeline::{read_inputs, FrameOptions};
     use std::sync::atomic::Ordering;
 
     /// The bound's full-model side traced beside the selection ([`levels`]) gives the

@@ -1,10 +1,15 @@
 //! What the unit tests of the pipeline share: the fixture, POIs on it, progress that
 //! counts and cancels.
 
-use super::{frame, FrameOptions, Framed, Inputs};
+use super::analyse::trace;
+use super::session::Error;
+use super::Traced;
+use super::{frame_in, FrameOptions, Framed, Inputs};
+use crate::model::runtime::progress::Cancelled;
 use crate::model::runtime::progress::{Progress, Silent, Stage};
 use crate::model::CityModel;
 use crate::model::Poi;
+use crate::solar::{poi_sky_view, poi_sun_hours, SkyBundles, SkyView, SunHours, SunTable};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -136,4 +141,42 @@ pub(crate) fn assert_cancelled<T: std::fmt::Debug>(
         matches!(r, Err(Error::Cancelled(Cancelled { stage: s })) if *s == stage),
         "{r:?}"
     );
+}
+
+/// The model and `pois` in the local frame (as a `Study` frames them).
+pub(crate) fn frame<'a>(
+    model: &'a mut CityModel,
+    pois: Vec<Poi>,
+    opts: &FrameOptions,
+) -> Result<Framed<'a>, Error> {
+    frame_in(model, None, pois, opts)
+}
+
+/// SVF and sky exposure of every POI, as `Study::svf` traces them.
+pub(crate) fn svf(
+    framed: &Framed<'_>,
+    bundles: &SkyBundles,
+    progress: &dyn Progress,
+) -> Result<Traced<SkyView>, Cancelled> {
+    let exposed = |v: &SkyView| (v.sky_exposure == 0.0).then_some(0);
+    trace(
+        framed,
+        |s, p| poi_sky_view(s, p, bundles),
+        exposed,
+        progress,
+    )
+}
+
+/// Hours of direct sun of every POI over `table`, as `Study::sun_hours` traces them.
+pub(crate) fn sun_hours(
+    framed: &Framed<'_>,
+    table: &SunTable,
+    progress: &dyn Progress,
+) -> Result<Traced<SunHours>, Cancelled> {
+    trace(
+        framed,
+        |s, p| poi_sun_hours(s, p, table),
+        |_| None,
+        progress,
+    )
 }

@@ -13,7 +13,7 @@ use crate::model::CityModel;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
-/// What [`write_levels`] wrote.
+/// What `write_levels` wrote.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub struct Written {
@@ -306,7 +306,7 @@ pub fn buildings_without_kept_assets(model: &CityModel, f: usize, levels: &[u8])
 mod tests {
     use super::*;
     use crate::pipeline::test_support::*;
-    use crate::pipeline::{frame, levels, read_inputs, FrameOptions, LevelsOptions};
+    use crate::pipeline::{levels, read_inputs, FrameOptions, LevelsOptions};
 
     #[test]
     fn every_stage_advances_as_far_as_it_announced() {

@@ -7,13 +7,12 @@
 
 use crate::util::*;
 use skylod::export::Format;
-use skylod::io::citygml::WriteOptions;
 use skylod::lod::BoundOptions;
 use skylod::model::Silent;
 use skylod::model::{Bbox, Poi};
 use skylod::pipeline::session::RunMs;
 use skylod::pipeline::session::{Scene, SceneOptions, Study};
-use skylod::pipeline::{write_levels, BoundSpec, LevelsOptions};
+use skylod::pipeline::{BoundSpec, LevelsOptions};
 use std::path::{Path, PathBuf};
 
 /// The files compared, plain CityGML (the Ingolstadt tiles decompressed into `dir`).
@@ -75,7 +74,7 @@ fn lod_on_a_hollow_read_of_shared_files_is_the_whole_reads() {
         let name = short(&path);
         let scene = Scene::load(&[&path], &so, &Silent).unwrap();
         let pois = two_pois(&scene.model().bbox());
-        let study = scene.frame(pois.clone()).unwrap();
+        let mut study = scene.frame(pois.clone()).unwrap();
         let mut want = study.levels(&opts, &Silent).unwrap();
         let rough = &opts.lod.rough;
         let h = Study::read_hollow(&path, 1, pois, rough, &so, &Silent).unwrap();
@@ -110,11 +109,8 @@ fn lod_on_a_hollow_read_of_shared_files_is_the_whole_reads() {
         // the CityGML written from the hollow read (a member a chunk, the polygons read
         // back) is the whole read's, byte for byte, with the same counts
         let (a, b) = (dir.path().join("whole.gml"), dir.path().join("hollow.gml"));
-        let wopts = WriteOptions {
-            overwrite: true,
-            ..Default::default()
-        };
-        let w = write_levels((study.source(), 0), &want, &a, Format::CityGml, &wopts).unwrap();
+        let w = study.write_levels(&want, &a, Some(Format::CityGml), true, &Silent);
+        let w = w.unwrap().remove(0).1;
         let g = h.write_levels(&got, &b, Some(Format::CityGml), true, &Silent);
         let g = g.unwrap().remove(0).1;
         assert!(

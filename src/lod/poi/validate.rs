@@ -69,7 +69,7 @@ pub fn check_pois(pois: &[Located]) -> Result<(), PoiError> {
 
 /// [`check_pois`] for POIs without places: a POI is named by its position in the list
 /// (`POI 3`, counted from 1). Every pipeline path calls it
-/// ([`pipeline::frame`](crate::pipeline::frame)).
+/// (`pipeline::frame`).
 ///
 /// # Errors
 /// As [`check_pois`].

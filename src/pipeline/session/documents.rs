@@ -417,7 +417,8 @@ mod tests {
         assert_eq!(h.doc.steps, table.len());
         assert_eq!(h.doc.sun, SunSetting::new(41.39, 2.17, 2024, 120));
         assert_eq!(h.doc.timezone, "Europe/Madrid");
-        let direct = crate::pipeline::sun_hours(&s.framed(), &table, &Silent).unwrap();
+        let direct =
+            crate::pipeline::test_support::sun_hours(&s.framed(), &table, &Silent).unwrap();
         for (row, v) in h.doc.pois.iter().zip(&direct.results) {
             assert_eq!(row.values.sun_hours, v.hours);
             assert_eq!(row.values.monthly, v.monthly);

@@ -97,7 +97,7 @@ impl LodLayout {
     /// Every file of the study's model written at the levels `lv` to its target (files in
     /// parallel; read hollow, the one document a chunk at a time), then, for a merge, the
     /// staged parts merged into the target (OBJ and CityJSON: merged as they are written,
-    /// [`write_merged_levels`]). A file that fails is reported and the others written.
+    /// `write_merged_levels`). A file that fails is reported and the others written.
     ///
     /// # Errors
     /// [`super::Error::Cancelled`], [`super::Error::Io`] (a mirrored folder not made).
@@ -117,7 +117,7 @@ impl LodLayout {
                 return Ok(merged_export(study.whole()?, &targets, t, lv, batch));
             }
         }
-        let results = study.write_files(&targets, lv, format, wopts, progress)?;
+        let results = study.write_targets(&targets, lv, format, wopts, progress)?;
         Ok(self.done(study.source(), &targets, results))
     }
 

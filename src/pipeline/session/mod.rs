@@ -286,7 +286,7 @@ impl Scene {
     }
 
     /// Check `pois` ([`crate::lod::poi::check_poi_list`]) and bring them and the model into the
-    /// local metric frame ([`crate::pipeline::frame`]), refusing POIs far outside the scene.
+    /// local metric frame (`crate::pipeline::frame`), refusing POIs far outside the scene.
     ///
     /// # Errors
     /// [`Error::Poi`], [`Error::PoiCrs`], [`Error::Trust`].
@@ -504,7 +504,7 @@ impl Study {
         site::site_in(lat, lon, self.source(), &self.bbox)
     }
 
-    /// Levels of every asset ([`crate::pipeline::levels`]; read hollow, with the rough forms
+    /// Levels of every asset (`crate::pipeline::levels`; read hollow, with the rough forms
     /// of the read).
     ///
     /// # Errors
@@ -648,7 +648,7 @@ impl Study {
     }
 
     /// Annual irradiation of every POI under `table`'s weather
-    /// ([`crate::pipeline::irradiance`]); `hourly` keeps each hour's value.
+    /// (`crate::pipeline::irradiance`); `hourly` keeps each hour's value.
     ///
     /// # Errors
     /// [`Error::Cancelled`].
@@ -667,7 +667,7 @@ impl Study {
         )?)
     }
 
-    /// Full vs LoD vs all-boxes model at every POI ([`crate::pipeline::evaluate`]).
+    /// Full vs LoD vs all-boxes model at every POI (`crate::pipeline::evaluate`).
     ///
     /// # Errors
     /// [`Error::Eval`], [`Error::Cancelled`].
@@ -711,7 +711,7 @@ impl Study {
             create_parent(p)?;
         }
         let results =
-            self.write_files(&targets.todo, levels, format, &targets.write_opts, progress)?;
+            self.write_targets(&targets.todo, levels, format, &targets.write_opts, progress)?;
         let mut written = Vec::with_capacity(results.len());
         for ((_, p), r) in targets.todo.iter().zip(results) {
             written.push((p.clone(), r?));
@@ -731,12 +731,14 @@ impl Study {
         Ok(written)
     }
 
-    /// [`write_all`] of the study's model to `targets` ((file, output) pairs); read hollow,
-    /// its one document written a chunk at a time ([`MixedSource::Hollow`]: CityGML only).
+    /// Each input `file` of the study at `levels` to its output in `targets` ((file, output)
+    /// pairs laid out beforehand, e.g. by [`crate::pipeline::batch::plan`]: parent folders
+    /// made, targets checked), in parallel; the result of each, in order. Read hollow, its
+    /// one document is written a chunk at a time (CityGML only).
     ///
     /// # Errors
     /// [`Error::Cancelled`].
-    pub(super) fn write_files(
+    pub fn write_targets(
         &mut self,
         targets: &[(usize, PathBuf)],
         levels: &Levels,
@@ -767,7 +769,7 @@ impl Study {
     }
 
     /// Write input `file` at `levels` in `format` to `w` (e.g. a buffer or a socket),
-    /// uncompressed ([`crate::pipeline::write_levels_to`]).
+    /// uncompressed (`crate::pipeline::write_levels_to`).
     ///
     /// # Errors
     /// [`Error::Write`].
@@ -829,11 +831,11 @@ mod tests {
         let table = SunTable::year(DEFAULT_YEAR, 120, &Site::new(site.lat, site.lon)).unwrap();
         assert_eq!(
             v.results,
-            crate::pipeline::svf(&framed, &bundles, &Silent)
+            crate::pipeline::test_support::svf(&framed, &bundles, &Silent)
                 .unwrap()
                 .results
         );
-        let direct = crate::pipeline::sun_hours(&framed, &table, &Silent).unwrap();
+        let direct = crate::pipeline::test_support::sun_hours(&framed, &table, &Silent).unwrap();
         assert_eq!(h.results, direct.results);
         assert_eq!(v.flags.len(), 4);
         // Results serialise for a program's JSON.

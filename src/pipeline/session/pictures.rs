@@ -135,7 +135,7 @@ impl Study {
         Ok(SunSite::Model(s.lat, s.lon, self.crs().to_string()))
     }
 
-    /// The sky picture of every POI (in order, [`sky_pictures`]) as SVG with its captions,
+    /// The sky picture of every POI (in order, `sky_pictures`) as SVG with its captions,
     /// handed to `each` (POI index, picture) as soon as it is made.
     ///
     /// # Errors

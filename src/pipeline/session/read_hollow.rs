@@ -38,7 +38,7 @@ impl Study {
     /// Read the plain CityGML document at `path` hollow in chunks of `chunk` bytes
     /// ([`Stage::Read`]: its bytes), rough forms made with `rough`, the surroundings of
     /// `pois` (in the document's CRS) kept; check it (heights) and frame `pois` with
-    /// `options` ([`crate::pipeline::frame`]: POIs checked, refused far outside the scene).
+    /// `options` (`crate::pipeline::frame`: POIs checked, refused far outside the scene).
     /// `None` where the read declines ([`read_hollow`]) or the frame is not the identity: the
     /// caller reads whole.
     ///
