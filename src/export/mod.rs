@@ -35,7 +35,6 @@ mod chunks;
 pub(crate) mod citygml_from_cityjson;
 pub(crate) mod citygml_via_cityjson;
 pub(crate) mod cityjson;
-pub(crate) mod cityjson_edit;
 pub(crate) use crate::io::cityjson::source as cityjson_source;
 mod cityjson_vertices;
 pub(crate) mod format;
@@ -44,10 +43,11 @@ pub(crate) mod obj;
 // What the commands report (typed JSON with schemas): the `lod` report, model counts.
 #[allow(clippy::module_inception)] // `report::report` is the `lod` report
 pub mod report;
+// The edits of a document, CityGML and CityJSON alike: subset, filter-lods, upgrade, reproject.
+pub mod transform;
 pub use citygml_from_cityjson::{gml_id, is_json_file, TargetVersion};
 pub use citygml_via_cityjson::write_citygml_levels;
 pub use cityjson::reference_system;
-pub use cityjson_edit::{reproject_cityjson, subset};
 pub use merge::{merge_cityjson, merge_named, rename_ids, renamed_id};
 pub use obj::write_obj;
 

@@ -4,11 +4,11 @@
 
 use crate::util::{all_inputs, short};
 use glam::DVec3;
-use skylod::io::citygml::WriteError;
-use skylod::io::citygml::WriteOptions;
-use skylod::io::citygml::{
+use skylod::export::transform::{
     reproject_with, CrsTransform, ReprojectError, RewriteSource, RewriteSummary,
 };
+use skylod::io::citygml::WriteError;
+use skylod::io::citygml::WriteOptions;
 use skylod::model::crs::CrsName;
 use std::path::Path;
 

@@ -1,5 +1,5 @@
 //! CityJSON 1.0 / 1.1 / 2.0 and CityJSONSeq → CityGML 2.0 (or 3.0 through
-//! [`crate::io::citygml::upgrade`]), written from the CityJSON document itself (not the model
+//! [`crate::export::transform::citygml::upgrade`]), written from the CityJSON document itself (not the model
 //! [`crate::io::cityjson`] reads, which keeps only what the analysis needs).
 //!
 //! # Mapping
@@ -70,8 +70,8 @@ mod values;
 
 pub use values::gml_id;
 
+use crate::export::transform::citygml::upgrade::{upgrade, UpgradeOptions};
 use crate::io::citygml::error::{ReadError, WriteError};
-use crate::io::citygml::upgrade::{upgrade, UpgradeOptions};
 use crate::io::citygml::write::{check_target, WriteOptions};
 use crate::io::cityjson::doc::{self, Doc};
 use geometry::Verts;
@@ -87,7 +87,7 @@ pub enum TargetVersion {
     /// CityGML 2.0.
     #[default]
     V2_0,
-    /// CityGML 3.0 (2.0 upgraded member by member: `crate::io::citygml::upgrade`).
+    /// CityGML 3.0 (2.0 upgraded member by member: `crate::export::transform::citygml::upgrade`).
     V3_0,
 }
 

@@ -35,8 +35,8 @@
 //! first for its header, ids and box, then to write.
 
 use super::{Head as Common, MergeError, MergeSummary, Plan};
-use crate::export::cityjson_edit::stream::{self, cj, EachObject, EachVertex, Pass, Vertex};
-use crate::export::cityjson_edit::{
+use crate::export::transform::cityjson::stream::{self, cj, EachObject, EachVertex, Pass, Vertex};
+use crate::export::transform::cityjson::{
     check_type, set_extent, srs_of, transform_of, trees, write_line, Transform, Values,
 };
 use crate::io::citygml::error::WriteError;

@@ -1,26 +1,15 @@
 //! CityGML 1.0 / 2.0 / 3.0: streaming reader into the model, span-preserving writer.
 
-pub(crate) mod edit;
 pub(crate) mod error;
 pub(crate) mod ns;
 pub(crate) mod read;
-pub(crate) mod reproject;
 pub(crate) mod source;
-pub(crate) mod upgrade;
 pub(crate) mod write;
-pub use edit::{subset, BboxMode, LodMode, Lods, Subset};
 pub use ns::{classify, Module, Ns};
 pub use read::{
     read_bytes, read_file_chunked, read_from, stream, Chunk, Passes, Reread, Streamed, CHUNK_BYTES,
 };
-#[cfg(feature = "proj")]
-pub use reproject::reproject_file;
-pub use reproject::{
-    reproject_with, rewrite_file, CrsTransform, ReprojectError, ReprojectSummary, RewriteSource,
-    RewriteSummary,
-};
 pub use source::{open, resolve};
-pub use upgrade::UpgradeOptions;
 pub use write::{
     atomic_write_bytes, check_target, is_stdout, write_document, write_document_to, Edit,
     GmlWriter, WriteOptions,

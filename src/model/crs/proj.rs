@@ -6,7 +6,7 @@
 //! are passed through unchanged: the horizontal CRS is transformed, and a change of vertical
 //! datum would need geoid grids, which the bundled build has none of (PROJ itself falls back
 //! to the same "ballpark" identity then). Rewriting a whole document is
-//! [`crate::io::citygml::reproject::reproject_file`]'s.
+//! [`crate::export::transform::citygml::reproject::reproject_file`]'s.
 
 use super::name::CrsName;
 use glam::DVec3;

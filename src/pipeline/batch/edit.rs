@@ -1,15 +1,15 @@
 //! The streamed edits of `subset`, `filter-lods` and `upgrade`, one call each whatever the
-//! input's format: CityGML through [`crate::io::citygml::edit`] and
-//! [`crate::io::citygml::upgrade`], CityJSON and CityJSONSeq (by content, [`is_json_file`])
-//! through [`crate::export::cityjson_edit`] and, for an upgrade to a CityGML name,
+//! input's format: CityGML through [`crate::export::transform::citygml::edit`] and
+//! [`crate::export::transform::citygml::upgrade`], CityJSON and CityJSONSeq (by content, [`is_json_file`])
+//! through [`crate::export::transform::cityjson`] and, for an upgrade to a CityGML name,
 //! [`crate::export::citygml_from_cityjson`]. [`Transform::apply`] is what
 //! [`Batch::run_each`](super::run::Batch::run_each) runs on each input.
 
 use super::inputs::is_citygml_name;
 use crate::export::citygml_from_cityjson::{citygml_from_cityjson, is_json_file, TargetVersion};
-use crate::export::cityjson_edit;
-use crate::io::citygml::edit::{self, Lods, Subset};
-use crate::io::citygml::upgrade::{upgrade, UpgradeOptions};
+use crate::export::transform::citygml::edit::{self, Lods, Subset};
+use crate::export::transform::citygml::upgrade::{upgrade, UpgradeOptions};
+use crate::export::transform::cityjson;
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::WriteError;
 use std::path::Path;
@@ -44,11 +44,11 @@ impl Transform {
         let json = is_json_file(input);
         Ok(match self {
             Transform::Subset(r) if json => {
-                cityjson_edit::subset(input, out, r, opts)?.describe(input, shown)
+                cityjson::subset(input, out, r, opts)?.describe(input, shown)
             }
             Transform::Subset(r) => edit::subset(input, out, r, opts)?.describe(input, shown),
             Transform::FilterLods(r) if json => {
-                cityjson_edit::filter_lods(input, out, r, opts)?.describe(input, shown)
+                cityjson::filter_lods(input, out, r, opts)?.describe(input, shown)
             }
             Transform::FilterLods(r) => {
                 edit::filter_lods(input, out, r, opts)?.describe(input, shown)
@@ -59,7 +59,7 @@ impl Transform {
                 citygml_from_cityjson(input, out, v, opts)?.describe(input, shown)
             }
             Transform::Upgrade(_) => {
-                cityjson_edit::upgrade_cityjson(input, out, opts)?.describe(input, shown)
+                cityjson::upgrade_cityjson(input, out, opts)?.describe(input, shown)
             }
         })
     }
@@ -68,7 +68,7 @@ impl Transform {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::citygml::edit::LodMode;
+    use crate::export::transform::citygml::edit::LodMode;
     use std::path::PathBuf;
 
     fn fixture(name: &str) -> PathBuf {
@@ -121,7 +121,7 @@ mod tests {
         let json = fixture("cityjson/cjio-multi_lod.city.json");
         let [a, b] = both(&e, &json, "o.city.json", |o, shown| {
             let opts = WriteOptions::default();
-            let s = cityjson_edit::filter_lods(&json, o, &lods, &opts).unwrap();
+            let s = cityjson::filter_lods(&json, o, &lods, &opts).unwrap();
             s.describe(&json, shown)
         });
         assert_eq!(a, b);
@@ -143,7 +143,7 @@ mod tests {
         assert_eq!(a, b);
         assert!(String::from_utf8_lossy(&a.1).contains("citygml/3.0"));
         let [a, b] = both(&e, &json, "o.city.json", |o, shown| {
-            let s = cityjson_edit::upgrade_cityjson(&json, o, &WriteOptions::default()).unwrap();
+            let s = cityjson::upgrade_cityjson(&json, o, &WriteOptions::default()).unwrap();
             s.describe(&json, shown)
         });
         assert_eq!(a, b);

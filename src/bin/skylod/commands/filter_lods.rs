@@ -1,10 +1,10 @@
 //! `skylod filter-lods`: keep or remove LoD representations of the city objects of CityGML or
-//! CityJSON documents (citygml-tools' `filter-lods`; CityJSON: `skylod::export::cityjson_edit`),
+//! CityJSON documents (citygml-tools' `filter-lods`; CityJSON: `skylod::export::transform::cityjson`),
 //! streamed: memory follows the largest city object.
 
 use crate::args::citygml_io::EditArgs;
 use crate::Outcome;
-use skylod::io::citygml::{LodMode, Lods};
+use skylod::export::transform::{LodMode, Lods};
 use skylod::pipeline::batch::Transform;
 
 #[derive(clap::Args, Debug)]

@@ -43,9 +43,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     use anyhow::Context;
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     args.inputs = inputs.iter().map(|i| i.path.clone()).collect();
-    use skylod::export::reproject_cityjson;
+    use skylod::export::transform::reproject_cityjson;
+    use skylod::export::transform::{reproject_file, ReprojectError};
     use skylod::io::citygml::WriteOptions;
-    use skylod::io::citygml::{reproject_file, ReprojectError};
     use skylod::model::crs::Crs;
     use skylod::model::crs::CrsName;
     use skylod::pipeline::batch::{Plan, Targets};

@@ -1,11 +1,11 @@
 //! `skylod subset`: keep the top-level city objects of CityGML or CityJSON documents that match
-//! a box, ids or types (citygml-tools' `subset`; CityJSON: `skylod::export::cityjson_edit`),
+//! a box, ids or types (citygml-tools' `subset`; CityJSON: `skylod::export::transform::cityjson`),
 //! streamed: memory follows the largest city object.
 
 use crate::args::citygml_io::EditArgs;
 use crate::Outcome;
 use anyhow::Context;
-use skylod::io::citygml::{BboxMode, Subset};
+use skylod::export::transform::{BboxMode, Subset};
 use skylod::model::crs::Crs;
 use skylod::pipeline::batch::Transform;
 

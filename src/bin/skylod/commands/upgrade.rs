@@ -5,7 +5,7 @@
 
 use crate::args::citygml_io::CityGmlIoArgs;
 use crate::Outcome;
-use skylod::io::citygml::UpgradeOptions;
+use skylod::export::transform::UpgradeOptions;
 use skylod::pipeline::batch::Transform;
 
 #[derive(clap::Args, Debug)]

@@ -9,7 +9,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::io::citygml::{BboxMode, Subset};
+//! use skylod::export::transform::{BboxMode, Subset};
 //! let s = Subset { bbox: Some([0.0, 0.0, 10.0, 10.0]), mode: BboxMode::Within, ..Subset::default() };
 //! assert!(s.bbox_matches(&[1.0, 1.0, 9.0, 9.0]) && !s.bbox_matches(&[5.0, 5.0, 11.0, 9.0]));
 //! ```
@@ -99,7 +99,7 @@ fn box_test(mode: BboxMode, q: &[f64; 4], b: &[f64; 4]) -> bool {
 }
 
 /// A [`Subset`] applied to one document's members in order, whatever the format (the CityGML
-/// rule here and the CityJSON one of [`crate::export::cityjson_edit`]): the box in the
+/// rule here and the CityJSON one of [`crate::export::transform::cityjson`]): the box in the
 /// document's CRS, once known, and how many members were kept.
 pub(crate) struct Matcher<'a> {
     s: &'a Subset,

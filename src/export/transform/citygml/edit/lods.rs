@@ -13,7 +13,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::io::citygml::{LodMode, Lods};
+//! use skylod::export::transform::{LodMode, Lods};
 //! let keep2 = Lods { lods: vec![2], mode: LodMode::Keep, keep_empty: false };
 //! assert_eq!(keep2.kept(&[1, 2, 3]), vec![2]);
 //! let max = Lods { lods: vec![1, 2, 3], mode: LodMode::Maximum, keep_empty: false };

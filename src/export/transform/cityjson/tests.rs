@@ -1,5 +1,5 @@
 use super::*;
-use crate::io::citygml::edit::{BboxMode, LodMode, Lods, Subset};
+use crate::export::transform::citygml::edit::{BboxMode, LodMode, Lods, Subset};
 use serde_json::json;
 
 /// Two buildings: `a` (a part `a1` at LoD 1 and 2, an installation `a2` at LoD 3) near the

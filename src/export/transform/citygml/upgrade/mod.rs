@@ -43,7 +43,7 @@ mod feature;
 mod geometry;
 mod names;
 
-use crate::io::citygml::edit::walk::{self, Piece};
+use crate::export::transform::citygml::edit::walk::{self, Piece};
 use crate::io::citygml::error::{ReadError, WriteError};
 use crate::io::citygml::write::{check_target, WriteOptions};
 use dom::{El, Node};
@@ -201,7 +201,7 @@ pub fn upgrade(
                         loc: walk::location(input, line - 1, &bytes[..e.at.min(bytes.len())]),
                         message: e.message,
                     })?;
-                    if crate::io::citygml::edit::is_member(local) {
+                    if crate::export::transform::citygml::edit::is_member(local) {
                         counts.members += 1;
                     }
                     let mut ctx = feature::Ctx {

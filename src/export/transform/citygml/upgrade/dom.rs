@@ -3,7 +3,7 @@
 //! The tree never holds more than one member, so memory follows the largest member.
 
 use super::names::Src;
-use crate::io::citygml::edit::walk::MemberDoc;
+use crate::export::transform::citygml::edit::walk::MemberDoc;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::name::ResolveResult;
 use quick_xml::NsReader;

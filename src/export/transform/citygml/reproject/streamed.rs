@@ -96,7 +96,7 @@ fn href_targets(path: &Path) -> Result<HashSet<u64>, WriteError> {
 ///
 /// ```
 /// use glam::DVec3;
-/// use skylod::io::citygml::RewriteSource;
+/// use skylod::export::transform::RewriteSource;
 /// use skylod::io::citygml::WriteOptions;
 /// use skylod::io::citygml::WriteError;
 /// let dir = tempfile::tempdir().unwrap();

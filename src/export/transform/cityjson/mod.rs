@@ -1,6 +1,6 @@
 //! `subset`, `filter-lods` and `upgrade` of CityJSON 1.x / 2.0 documents and CityJSONSeq, into
 //! CityJSON (CityJSONSeq for a CityJSONSeq source): the rules of the CityGML edits
-//! ([`crate::io::citygml::edit`]) applied to CityJSON's city objects, as `cjio` users know them.
+//! ([`crate::export::transform::citygml::edit`]) applied to CityJSON's city objects, as `cjio` users know them.
 //!
 //! # How
 //! The unit of an edit is a **tree**: a top-level city object (one without `parents`) and its
@@ -32,8 +32,8 @@
 //!
 //! # Example
 //! ```
-//! use skylod::export::subset;
-//! use skylod::io::citygml::Subset;
+//! use skylod::export::transform::subset_cityjson;
+//! use skylod::export::transform::Subset;
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.city.json");
 //! std::fs::write(&src, br#"{"type":"CityJSON","version":"2.0",
@@ -45,7 +45,7 @@
 //!   "vertices":[[90,0,0],[99,9,9],[0,0,0],[2,0,0],[2,1,3]]}"#).unwrap();
 //! let out = dir.path().join("out.city.json");
 //! let rule = Subset { ids: vec!["a".into()], ..Subset::default() };
-//! let s = subset(&src, &out, &rule, &Default::default()).unwrap();
+//! let s = subset_cityjson(&src, &out, &rule, &Default::default()).unwrap();
 //! assert_eq!((s.members, s.members_kept), (2, 1));
 //! let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
 //! assert!(doc["CityObjects"]["a1"].is_object() && doc["CityObjects"]["b"].is_null());
@@ -64,7 +64,7 @@ pub use reproject::reproject_cityjson;
 pub use rules::{filter_lods, subset};
 pub use upgrade::upgrade_cityjson;
 
-use crate::io::citygml::edit::EditSummary;
+use crate::export::transform::citygml::edit::EditSummary;
 use crate::io::citygml::error::WriteError;
 use crate::io::citygml::write::{atomic_write, check_target, WriteOptions};
 use crate::model::Bbox;

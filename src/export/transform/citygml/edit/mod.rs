@@ -24,7 +24,7 @@
 //!
 //! # Example
 //! ```
-//! use skylod::io::citygml::{Subset, subset};
+//! use skylod::export::transform::{Subset, subset};
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");
 //! std::fs::write(&src, br##"<CityModel xmlns="http://www.opengis.net/citygml/2.0"

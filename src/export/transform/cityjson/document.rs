@@ -20,7 +20,7 @@ use super::{
     changed, cj, id_hash, prune_object, renumber_object, set_extent, srs_of, templates_of,
     transform_of, Ctx, Decision, TreeRule, Verts,
 };
-use crate::io::citygml::edit::EditSummary;
+use crate::export::transform::citygml::edit::EditSummary;
 use crate::io::citygml::error::WriteError;
 use crate::model::Bbox;
 use serde_json::{Map, Value};

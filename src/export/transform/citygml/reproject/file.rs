@@ -49,7 +49,7 @@ impl From<crate::model::crs::proj::ProjError> for ReprojectError {
 
 mod with_crs {
     use super::ReprojectError;
-    use crate::io::citygml::reproject::{RewriteSource, RewriteSummary};
+    use crate::export::transform::citygml::reproject::{RewriteSource, RewriteSummary};
     use crate::io::citygml::write::WriteOptions;
     use crate::model::crs::CrsName;
     use glam::DVec3;

@@ -1,8 +1,8 @@
-//! The rules of [`crate::io::citygml::edit`]'s `subset` and `filter-lods` on CityJSON trees.
+//! The rules of [`crate::export::transform::citygml::edit`]'s `subset` and `filter-lods` on CityJSON trees.
 
 use super::{run, Ctx, Decision, TreeRule};
-use crate::io::citygml::edit::subset::Matcher;
-use crate::io::citygml::edit::{EditSummary, Lods, Subset};
+use crate::export::transform::citygml::edit::subset::Matcher;
+use crate::export::transform::citygml::edit::{EditSummary, Lods, Subset};
 use crate::io::citygml::error::WriteError;
 use crate::io::citygml::write::WriteOptions;
 use crate::model::Bbox;
@@ -143,7 +143,7 @@ fn subtree(objects: &Map<String, Value>, ids: &[String], id: &str) -> Vec<String
     out
 }
 
-/// [`subset`](fn@crate::io::citygml::edit::subset) of a CityJSON / CityJSONSeq document: the trees
+/// [`subset`](fn@crate::export::transform::citygml::edit::subset) of a CityJSON / CityJSONSeq document: the trees
 /// (top-level objects with their descendants) that `rule` keeps, written to `out` as CityJSON
 /// (CityJSONSeq for CityJSONSeq; atomically; `-` for standard output; gzip for a name ending
 /// in `.gz`; see `super`).
@@ -162,7 +162,7 @@ pub fn subset(
     })
 }
 
-/// [`crate::io::citygml::edit::filter_lods`] of a CityJSON / CityJSONSeq document: a
+/// [`crate::export::transform::citygml::edit::filter_lods`] of a CityJSON / CityJSONSeq document: a
 /// geometry's LoD is its integer part (`"2.2"` → 2; a `GeometryInstance`'s is its
 /// template's); the mode picks, per tree, the LoDs that stay; the other geometries go; a
 /// nested object that lost geometry and has none left in its subtree goes, a tree left

@@ -38,7 +38,7 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use skylod::io::citygml::rewrite_file;
+//! use skylod::export::transform::rewrite_file;
 //! use skylod::io::citygml::WriteOptions;
 //! let dir = tempfile::tempdir().unwrap();
 //! let src = dir.path().join("in.gml");
@@ -73,10 +73,10 @@ pub use file::reproject_file;
 pub use file::{reproject_with, CrsTransform, ReprojectError, ReprojectSummary};
 pub use streamed::RewriteSource;
 
-use super::error::WriteError;
-use super::ns::{self, Module, Ns};
-use super::source;
-use super::write::{envelope_xml, escape_attr, push_num, Edit, WriteOptions};
+use crate::io::citygml::error::WriteError;
+use crate::io::citygml::ns::{self, Module, Ns};
+use crate::io::citygml::source;
+use crate::io::citygml::write::{envelope_xml, escape_attr, push_num, Edit, WriteOptions};
 use crate::model::{Bbox, EnvelopeSite};
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use glam::DVec3;
