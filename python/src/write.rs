@@ -127,7 +127,7 @@ fn layout(
     let (plan, format) = plan(inputs, output, format).map_err(|e| message(&e))?;
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
     let mut wopts = WriteOptions::default();
-    (wopts.overwrite, wopts.protect, wopts.keep_envelopes) = (overwrite, paths.clone(), false);
+    (wopts.overwrite, wopts.protect) = (overwrite, skylod::io::Protected::new(&paths));
     let targets = (plan.targets(&paths, &wopts, None, (true, false))).map_err(|e| message(&e))?;
     if let Some(e) = targets.refused.first() {
         return Err(message(e));

@@ -22,8 +22,10 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use std::collections::HashSet;
 use std::io::{BufRead, BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// The first two bytes of a gzip member (RFC 1952).
 pub const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
@@ -276,6 +278,41 @@ pub enum TargetError {
     IsInput(PathBuf),
 }
 
+/// Paths that no output may replace (the inputs of a batch), each resolved to its canonical
+/// path once, when the set is made: checking a target then costs one resolution of the
+/// target, however many paths are protected. A path that does not exist (yet) protects
+/// nothing; cloning shares the set.
+#[derive(Debug, Clone, Default)]
+pub struct Protected(Arc<HashSet<PathBuf>>);
+
+impl Protected {
+    /// The set of `paths`, resolved.
+    pub fn new<P: AsRef<Path>>(paths: impl IntoIterator<Item = P>) -> Protected {
+        Protected::default().and(paths)
+    }
+
+    /// These paths and `more` (resolved); `self` unchanged.
+    #[must_use]
+    pub fn and<P: AsRef<Path>>(&self, more: impl IntoIterator<Item = P>) -> Protected {
+        let mut set = (*self.0).clone();
+        set.extend(
+            more.into_iter()
+                .filter_map(|p| p.as_ref().canonicalize().ok()),
+        );
+        Protected(Arc::new(set))
+    }
+
+    /// How many paths (that exist) are protected.
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Whether nothing is protected.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
 /// Refuse to write over one of `protected` (the inputs), or over an existing file unless
 /// `overwrite`. Standard output (`-`) is always a valid target.
 pub fn check_target<'a>(
@@ -283,15 +320,25 @@ pub fn check_target<'a>(
     protected: impl IntoIterator<Item = &'a Path>,
     overwrite: bool,
 ) -> Result<(), TargetError> {
+    check_target_in(out, &Protected::default(), protected, overwrite)
+}
+
+/// [`check_target`] with the paths of `set` protected too (resolved once, when the set was
+/// made): `out` is resolved once, each of `protected` once.
+pub(crate) fn check_target_in<'a>(
+    out: &Path,
+    set: &Protected,
+    protected: impl IntoIterator<Item = &'a Path>,
+    overwrite: bool,
+) -> Result<(), TargetError> {
     if is_stdout(out) {
         return Ok(());
     }
     let canon_out = canonical_target(out);
-    for p in protected {
-        if let Ok(c) = p.canonicalize() {
-            if Some(&c) == canon_out.as_ref() {
-                return Err(TargetError::IsInput(out.to_path_buf()));
-            }
+    if let Some(c) = &canon_out {
+        let given = |p: &Path| p.canonicalize().is_ok_and(|p| &p == c);
+        if set.0.contains(c) || protected.into_iter().any(given) {
+            return Err(TargetError::IsInput(out.to_path_buf()));
         }
     }
     if out.exists() && !overwrite {
@@ -426,6 +473,38 @@ impl<W: Write> Write for CountingWriter<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_protected_set_refuses_its_paths_however_spelled() {
+        let dir = tempfile::tempdir().unwrap();
+        let inputs: Vec<PathBuf> = (0..3)
+            .map(|k| dir.path().join(format!("{k}.gml")))
+            .collect();
+        for p in &inputs {
+            std::fs::write(p, b"x").unwrap();
+        }
+        let missing = dir.path().join("not-yet.gml");
+        let set = Protected::new(&inputs).and([&missing]);
+        assert_eq!(set.len(), 3, "a path that does not exist protects nothing");
+        let again = dir.path().join(".").join("1.gml");
+        assert!(matches!(
+            check_target_in(&again, &set, [], true),
+            Err(TargetError::IsInput(_))
+        ));
+        let new = dir.path().join("out.gml");
+        assert!(check_target_in(&new, &set, [], false).is_ok());
+        assert!(check_target_in(Path::new("-"), &set, [], false).is_ok());
+        // the paths given beside the set count as well
+        assert!(matches!(
+            check_target_in(&new, &Protected::default(), [new.as_path()], true),
+            Ok(())
+        ));
+        std::fs::write(&new, b"y").unwrap();
+        assert!(matches!(
+            check_target_in(&new, &Protected::default(), [new.as_path()], true),
+            Err(TargetError::IsInput(_))
+        ));
+    }
 
     #[test]
     fn an_input_is_never_a_target_and_stdout_always_is() {

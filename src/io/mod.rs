@@ -14,6 +14,6 @@ pub(crate) mod files;
 pub(crate) mod message;
 pub use files::{
     atomic_write, check_target, decoded, describe_io, is_gzip, is_stdout, set_stdin_bytes,
-    stdin_bytes, CountingWriter, FileError, TargetError,
+    stdin_bytes, CountingWriter, FileError, Protected, TargetError,
 };
 pub use message::{chain_message, is_broken_pipe, plain_text};

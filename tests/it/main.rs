@@ -57,6 +57,8 @@ mod levels;
 mod layout;
 // The hollow read of `lod`: the whole read without its polygons, chunk by chunk.
 mod hollow;
+// Batch work linear in the number of input files, counted by strace, under `ulimit -n 256`.
+mod many_tiles;
 // `lod` end to end: valid outputs, resolved references, the report schema, determinism.
 mod lod;
 // `lod` on a hollow read: levels, bound and report the whole read's; which read it takes.

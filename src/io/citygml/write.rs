@@ -32,7 +32,7 @@ use super::source;
 use crate::model::{CityModel, EnvelopeSite, Polygon, SourceFile, Span};
 use std::fmt::Write as _;
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Replace the bytes of `span` in the source with `replacement` (empty: delete).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -48,8 +48,8 @@ pub struct Edit {
 pub struct WriteOptions {
     /// Replace an existing output file.
     pub overwrite: bool,
-    /// Paths that must never be written (the inputs).
-    pub protect: Vec<PathBuf>,
+    /// Paths that must never be written (the inputs), resolved once.
+    pub protect: crate::io::files::Protected,
     /// Keep the source's envelopes instead of recomputing them.
     pub keep_envelopes: bool,
 }
@@ -418,12 +418,9 @@ pub fn check_target<'a>(
     opts: &WriteOptions,
     inputs: impl IntoIterator<Item = &'a Path>,
 ) -> Result<(), WriteError> {
-    let mut protected: Vec<&Path> = inputs.into_iter().collect();
-    protected.extend(opts.protect.iter().map(PathBuf::as_path));
-    Ok(crate::io::files::check_target(
-        out,
-        protected,
-        opts.overwrite,
+    let (set, overwrite) = (&opts.protect, opts.overwrite);
+    Ok(crate::io::files::check_target_in(
+        out, set, inputs, overwrite,
     )?)
 }
 

@@ -269,7 +269,12 @@ impl Plan {
         shard: Option<Shard>,
         (keeps_crs, own_format): (bool, bool),
     ) -> Result<Targets, PlanError> {
-        let protect = || inputs.iter().map(PathBuf::as_path);
+        // every input resolved once: each target then costs one resolution of its own
+        let wopts = &WriteOptions {
+            protect: wopts.protect.and(inputs),
+            ..wopts.clone()
+        };
+        let protect = std::iter::empty;
         match self {
             Plan::PerInput(outs) | Plan::Mirror(outs) => {
                 // Laid out for all inputs, then this shard's part; only that part is

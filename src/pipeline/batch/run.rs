@@ -10,6 +10,7 @@ use super::shard::Shard;
 use crate::export::merge::{label, merge_cityjson, merge_named, MergeSummary};
 use crate::export::Format;
 use crate::io::citygml::write::{is_stdout, WriteOptions};
+use crate::io::files::Protected;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -120,7 +121,7 @@ impl Batch {
         let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
         let wopts = WriteOptions {
             overwrite,
-            protect: paths.clone(),
+            protect: Protected::new(&paths),
             keep_envelopes,
         };
         let targets = plan.targets(&paths, &wopts, shard, (true, edits))?;

@@ -23,6 +23,7 @@
 use crate::export::report::report::PoiSeen;
 use crate::io::citygml::write::{atomic_write, check_target, is_stdout, WriteOptions};
 use crate::io::citygml::WriteError;
+use crate::io::files::Protected;
 use crate::lod::poi::checks::PoiFlag;
 use crate::lod::rough::RoughOptions;
 use crate::lod::select::{PoiSelection, Selection};
@@ -331,10 +332,10 @@ pub fn check_levels_target(
     }
     let wopts = WriteOptions {
         overwrite,
-        protect: inputs.to_vec(),
+        protect: Protected::new(inputs),
         ..Default::default()
     };
-    check_target(out, &wopts, inputs.iter().map(PathBuf::as_path))?;
+    check_target(out, &wopts, std::iter::empty())?;
     Ok(())
 }
 

@@ -45,6 +45,7 @@ use crate::export::Format;
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::ReadError;
 use crate::io::citygml::WriteError;
+use crate::io::files::Protected;
 use crate::lod::evaluation::Evaluation;
 use crate::lod::mixed::MixedSource;
 use crate::lod::poi::checks::TrustError;
@@ -700,7 +701,7 @@ impl Study {
         let paths: Vec<PathBuf> = self.inputs.iter().map(|i| i.path.clone()).collect();
         let wopts = WriteOptions {
             overwrite,
-            protect: paths.clone(),
+            protect: Protected::new(&paths),
             ..WriteOptions::default()
         };
         let targets = plan.targets(&paths, &wopts, None, (true, false))?;

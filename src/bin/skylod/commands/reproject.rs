@@ -67,7 +67,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     let (plan, _) = skylod::pipeline::batch::plan(&inputs, &args.output, citygml)?;
     let wopts = WriteOptions {
         overwrite: args.overwrite,
-        protect: args.inputs.clone(),
+        protect: skylod::io::Protected::new(&args.inputs),
         keep_envelopes: true,
         ..Default::default()
     };
