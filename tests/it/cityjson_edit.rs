@@ -270,6 +270,174 @@ fn subset_by_box_lies_between_within_and_intersects_of_cjio() {
     assert!(compared >= 1);
 }
 
+/// The extent of a document's vertices in x and y: `[x0, y0, x1, y1]`.
+fn extent(d: &Value) -> [f64; 4] {
+    let (sc, t) = (&d["transform"]["scale"], &d["transform"]["translate"]);
+    let real = |v: &Value, k: usize| {
+        v[k].as_f64().unwrap() * sc[k].as_f64().unwrap() + t[k].as_f64().unwrap()
+    };
+    let mut e = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for v in d["vertices"].as_array().unwrap() {
+        e = [
+            e[0].min(real(v, 0)),
+            e[1].min(real(v, 1)),
+            e[2].max(real(v, 0)),
+            e[3].max(real(v, 1)),
+        ];
+    }
+    e
+}
+
+/// The top-level objects `subset ARGS` keeps of `input`.
+fn subset_tops(input: &Path, args: &[String], out: &Path) -> Vec<String> {
+    let mut a = vec![os("subset"), os(input)];
+    a.extend(args.iter().map(os));
+    a.extend([os("-o"), os(out), os("--overwrite")]);
+    ok(&a);
+    tops(&load(out))
+}
+
+/// `subset --bbox-mode centroid` and `--radius` keep exactly cjio's top-level objects
+/// (`get_subset_bbox`, `get_subset_radius`) on every CityJSON fixture and on CityJSON made
+/// from three CityGML files of the shared data: the four quarters of the extent, its middle,
+/// a box beside it holding nothing; a radius around the middle and one holding nothing.
+#[test]
+fn centroid_and_radius_keep_what_cjio_keeps() {
+    if !have("cjio", "cjio (pip install cjio)") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = inputs(dir.path());
+    for name in [
+        "cjio-DH_01_subs-v1.1.city.json",
+        "cjio-delft_1b-v1.1.city.json",
+        "cjio-dummy.city.json",
+        "cjio-multi_lod.city.json",
+        "cjval-japanese.city.json",
+    ] {
+        files.push(fixture_dir().join(name));
+    }
+    let out = dir.path().join("out.city.json");
+    let (mut compared, mut kept) = (0, 0);
+    for input in &files {
+        let name = short(input);
+        let [x0, y0, x1, y1] = extent(&load(input));
+        let (xm, ym) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        let (w, h) = (x1 - x0, y1 - y0);
+        let boxes = [
+            [x0, y0, xm, ym],
+            [xm, y0, x1, ym],
+            [x0, ym, xm, y1],
+            [xm, ym, x1, y1],
+            [x0 + w / 4.0, y0 + h / 4.0, x1 - w / 4.0, y1 - h / 4.0],
+            [x1 + 1.0, y1 + 1.0, x1 + 2.0 + w, y1 + 2.0 + h],
+        ];
+        for b in boxes {
+            let t: Vec<String> = b.iter().map(|v| format!("{v}")).collect();
+            let want = cjio_edit(
+                &[
+                    &["bbox", input.to_str().unwrap()][..],
+                    &[&t[0], &t[1], &t[2], &t[3]],
+                ]
+                .concat(),
+            );
+            let want: Vec<String> = serde_json::from_value(want["top"].clone()).unwrap();
+            let args = [
+                format!("--bbox={}", t.join(",")),
+                "--bbox-mode".into(),
+                "centroid".into(),
+            ];
+            let got = subset_tops(input, &args, &out);
+            assert_eq!(got, want, "{name}: box {b:?}");
+            kept += got.len();
+            compared += 1;
+        }
+        let r = w.hypot(h) / 4.0;
+        for (x, y, r) in [(xm, ym, r), (x1 + 10.0 * r + 1.0, y1, r)] {
+            let t: Vec<String> = [x, y, r].iter().map(|v| format!("{v}")).collect();
+            let want = cjio_edit(
+                &[
+                    &["radius", input.to_str().unwrap()][..],
+                    &[&t[0], &t[1], &t[2]],
+                ]
+                .concat(),
+            );
+            let want: Vec<String> = serde_json::from_value(want["top"].clone()).unwrap();
+            let got = subset_tops(input, &[format!("--radius={}", t.join(","))], &out);
+            assert_eq!(got, want, "{name}: radius {x},{y},{r}");
+            kept += got.len();
+            compared += 1;
+        }
+    }
+    eprintln!("{compared} selections compared, {kept} top-level objects kept in all");
+    assert!(compared >= 8 * 6 && kept > 0);
+}
+
+/// `--bbox-mode centroid` and `--radius` keep the same objects of a CityGML file as of its
+/// CityJSON conversion: the centroid of a CityGML member is the one cjio takes of its CityJSON
+/// object (its own geometry with its surfaces, not its parts).
+#[test]
+fn centroid_of_citygml_is_that_of_its_cityjson() {
+    let Some(data) = shared_data() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut compared = 0;
+    for src in [
+        "libcitygml/berlin_open_data_sample_data.citygml",
+        "plateau/yokosuka/52397519_bldg_6697_op.gml",
+        "tum/TUM-Main-Entrance.gml",
+    ] {
+        let src = data.join(src);
+        let json = dir.path().join("x.city.json");
+        ok(&[
+            os("convert"),
+            os(&src),
+            os("-o"),
+            os(&json),
+            os("--overwrite"),
+        ]);
+        let [x0, y0, x1, y1] = extent(&load(&json));
+        let (xm, ym) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        let r = (x1 - x0).hypot(y1 - y0) / 4.0;
+        let rules = [
+            vec![
+                format!("--bbox={x0},{y0},{xm},{ym}"),
+                "--bbox-mode=centroid".into(),
+            ],
+            vec![
+                format!("--bbox={},{},{},{}", x0 - 1.0, y0 - 1.0, x1 + 1.0, y1 + 1.0),
+                "--bbox-mode=centroid".into(),
+            ],
+            vec![format!("--radius={xm},{ym},{r}")],
+        ];
+        for args in rules {
+            let from_json = subset_tops(&json, &args, &dir.path().join("a.city.json"));
+            let gml = dir.path().join("b.gml");
+            let mut a = vec![os("subset"), os(&src)];
+            a.extend(args.iter().map(os));
+            a.extend([os("-o"), os(&gml), os("--overwrite")]);
+            ok(&a);
+            let back = dir.path().join("b.city.json");
+            ok(&[
+                os("convert"),
+                os(&gml),
+                os("-o"),
+                os(&back),
+                os("--overwrite"),
+            ]);
+            assert_eq!(tops(&load(&back)), from_json, "{}: {args:?}", short(&src));
+            compared += 1;
+        }
+    }
+    assert!(compared >= 6, "{compared}");
+}
+
 #[test]
 fn filter_lods_keeps_the_geometries_cjio_keeps() {
     if !have("cjio", "cjio (pip install cjio)") {

@@ -6,6 +6,8 @@ Usage:
   cjio_edit.py bbox FILE X0 Y0 X1 Y1   ->  {"top": [ids], "objects": [ids], "vertices": n}
       cjio's `subset --bbox` (CityJSON.get_subset_bbox: a city object whose vertex centroid
       lies in [X0, X1) x [Y0, Y1), with its children and parents).
+  cjio_edit.py radius FILE X Y R       ->  the same for cjio's `subset --radius`
+      (CityJSON.get_subset_radius: a vertex centroid closer than R to (X, Y)).
   cjio_edit.py lod FILE LOD            ->  {"objects": {id: [lod, ...]}, "vertices": n}
       cjio's `lod_filter LOD` (CityJSON.filter_lod: geometries whose lod, as text, is not
       LOD removed; city objects are kept, even left without geometry).
@@ -35,6 +37,10 @@ def main():
     if what == "bbox":
         box = [float(x) for x in sys.argv[3:7]]
         j = cm.get_subset_bbox(box).j
+        out = {"top": top(j), "objects": sorted(j["CityObjects"]), "vertices": len(j["vertices"])}
+    elif what == "radius":
+        x, y, r = (float(v) for v in sys.argv[3:6])
+        j = cm.get_subset_radius(x, y, r).j
         out = {"top": top(j), "objects": sorted(j["CityObjects"]), "vertices": len(j["vertices"])}
     elif what == "lod":
         cm.filter_lod(sys.argv[3])

@@ -21,9 +21,19 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     bbox: Option<Vec<f64>>,
-    /// How a city object's box is tested against --bbox.
+    /// How a city object is tested against --bbox: its box meets it or lies within it
+    /// (citygml-tools), or the centroid of its own vertices lies in it, half-open (cjio).
     #[arg(long, value_enum, default_value_t = BboxMode::Intersects, requires = "bbox")]
     bbox_mode: BboxMode,
+    /// Keep city objects whose centroid lies closer than R to (X, Y), in the document's CRS
+    /// (cjio's --radius).
+    #[arg(
+        long,
+        value_name = "X,Y,R",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    radius: Option<Vec<f64>>,
     /// CRS of --bbox (EPSG:n, in that CRS's axis order), converted into each document's CRS.
     #[arg(long, value_name = "CRS", requires = "bbox")]
     bbox_crs: Option<String>,
@@ -55,6 +65,11 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         Some(_) => anyhow::bail!("--bbox: X0,Y0,X1,Y1 with X0 <= X1 and Y0 <= Y1"),
         None => None,
     };
+    let radius = match args.radius.as_deref() {
+        Some(&[x, y, r]) if r >= 0.0 && r.is_finite() => Some([x, y, r]),
+        Some(_) => anyhow::bail!("--radius: X,Y,R with R >= 0"),
+        None => None,
+    };
     let rule = Subset {
         bbox,
         mode: args.bbox_mode,
@@ -63,6 +78,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         types: args.types,
         invert: args.invert,
         limit: args.limit,
+        radius,
     };
     crate::outputs::per_input_jobs(
         &args.edit.io,

@@ -131,6 +131,20 @@ impl Ctx<'_> {
         u8::try_from(d).ok()
     }
 
+    /// The sum and count of the vertices geometry `g` uses, each use counted (a
+    /// `GeometryInstance`: its reference point), as cjio sums them for a centroid.
+    pub fn add_uses(&self, g: &Value, (sum, count): &mut (DVec3, u64)) {
+        let mut each = |i: usize| {
+            if let Some(p) = self.point(i) {
+                *sum += p;
+                *count += 1;
+            }
+        };
+        if let Some(bd) = g.get("boundaries") {
+            for_each_index(bd, &mut each);
+        }
+    }
+
     /// The box of the vertices geometry `g` uses (a `GeometryInstance`: its reference point).
     pub fn add_box(&self, g: &Value, b: &mut Bbox) {
         let mut each = |i: usize| {

@@ -35,11 +35,24 @@ impl TreeRule for SubsetRule<'_> {
             }
             b
         };
-        Ok(if self.0.keep(q, Some(top.as_str()), Some(ty), boxed) {
-            Decision::Keep(Vec::new())
-        } else {
-            Decision::Drop
-        })
+        // cjio's centroid: the top-level object's own geometry, not its children's
+        let centroid = || {
+            let mut uses = (glam::DVec3::ZERO, 0u64);
+            for g in geometries(objects, top) {
+                ctx.add_uses(g, &mut uses);
+            }
+            (uses.1 > 0).then(|| uses.0 / uses.1 as f64)
+        };
+        Ok(
+            if self
+                .0
+                .keep(q, Some(top.as_str()), Some(ty), boxed, centroid)
+            {
+                Decision::Keep(Vec::new())
+            } else {
+                Decision::Drop
+            },
+        )
     }
 }
 

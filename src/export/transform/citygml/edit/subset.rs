@@ -4,7 +4,11 @@
 //! A member matches when every filter given holds: its feature's `gml:id` is one of
 //! [`Subset::ids`]; its feature's type (local name: `Building`, `CityFurniture`, ...) is one of
 //! [`Subset::types`]; its box (of its coordinates, x and y) intersects or lies within
-//! [`Subset::bbox`]. A member without coordinates never matches a box. [`Subset::invert`]
+//! [`Subset::bbox`] (citygml-tools' rules), or the centroid of its own vertices lies in the
+//! half-open box (cjio's rule, [`BboxMode::Centroid`]); that centroid lies within
+//! [`Subset::radius`] (cjio's `--radius`). A member without coordinates never matches a box
+//! or a radius. The centroid is cjio's: the mean of every vertex the top-level object's own
+//! geometry uses, each use counted (a ring's closing point once), without its children's. [`Subset::invert`]
 //! keeps what does not match; [`Subset::limit`] keeps the first N kept, in document order.
 //!
 //! # Example
@@ -31,6 +35,9 @@ pub enum BboxMode {
     Intersects,
     /// The member's box lies inside.
     Within,
+    /// The centroid of the member's own vertices lies in the half-open box
+    /// `x0 <= x < x1`, `y0 <= y < y1` (cjio's `subset --bbox`).
+    Centroid,
 }
 
 /// What [`subset`] keeps.
@@ -51,6 +58,9 @@ pub struct Subset {
     pub invert: bool,
     /// Keep at most this many.
     pub limit: Option<usize>,
+    /// `[x, y, r]`: keep the members whose centroid lies closer than `r` to `(x, y)` in the
+    /// document's CRS (cjio's `subset --radius`).
+    pub radius: Option<[f64; 3]>,
 }
 
 impl Subset {
@@ -95,6 +105,8 @@ fn box_test(mode: BboxMode, q: &[f64; 4], b: &[f64; 4]) -> bool {
     match mode {
         BboxMode::Intersects => b[0] <= q[2] && b[2] >= q[0] && b[1] <= q[3] && b[3] >= q[1],
         BboxMode::Within => b[0] >= q[0] && b[2] <= q[2] && b[1] >= q[1] && b[3] <= q[3],
+        // a centroid as a point box: cjio's half-open test
+        BboxMode::Centroid => b[0] >= q[0] && b[1] >= q[1] && b[0] < q[2] && b[1] < q[3],
     }
 }
 
@@ -126,23 +138,32 @@ impl<'a> Matcher<'a> {
     }
 
     /// Whether the next member stays (and count it if so): its feature's `id` and `ty`pe,
-    /// `bbox` the box of its coordinates (asked only when there is a box to test), `q` the
-    /// box from [`Matcher::bbox`].
+    /// `bbox` the box of its coordinates and `centroid` the mean of its own vertices (each
+    /// asked only when a test needs it), `q` the box from [`Matcher::bbox`].
     pub(crate) fn keep(
         &mut self,
         q: Option<[f64; 4]>,
         id: Option<&str>,
         ty: Option<&str>,
         bbox: impl FnOnce() -> crate::model::Bbox,
+        centroid: impl FnOnce() -> Option<DVec3>,
     ) -> bool {
         let s = self.s;
         let id_ok = s.ids.is_empty() || id.is_some_and(|id| s.ids.iter().any(|i| i == id));
         let type_ok = s.types.is_empty() || ty.is_some_and(|t| s.types.iter().any(|x| x == t));
-        let box_ok = q.is_none_or(|q| {
-            let b = bbox();
-            !b.is_empty() && box_test(s.mode, &q, &[b.min.x, b.min.y, b.max.x, b.max.y])
+        let needs_centroid = s.radius.is_some() || (q.is_some() && s.mode == BboxMode::Centroid);
+        let c = if needs_centroid { centroid() } else { None };
+        let box_ok = q.is_none_or(|q| match s.mode {
+            BboxMode::Centroid => c.is_some_and(|c| box_test(s.mode, &q, &[c.x, c.y, c.x, c.y])),
+            _ => {
+                let b = bbox();
+                !b.is_empty() && box_test(s.mode, &q, &[b.min.x, b.min.y, b.max.x, b.max.y])
+            }
         });
-        let matches = (id_ok && type_ok && box_ok) != s.invert;
+        let radius_ok = s.radius.is_none_or(|[x, y, r]| {
+            c.is_some_and(|c| (c.x - x).powi(2) + (c.y - y).powi(2) < r * r)
+        });
+        let matches = (id_ok && type_ok && box_ok && radius_ok) != s.invert;
         if !matches || s.limit.is_some_and(|l| self.kept >= l) {
             return false;
         }
@@ -171,16 +192,13 @@ impl Rule for SubsetRule<'_> {
             }
             b
         };
-        Ok(
-            if self
-                .0
-                .keep(q, tree.feature_id.as_deref(), tree.feature_type(), boxed)
-            {
-                Decision::Keep(Vec::new())
-            } else {
-                Decision::Drop
-            },
-        )
+        let centroid = || tree.own_centroid();
+        let (id, ty) = (tree.feature_id.as_deref(), tree.feature_type());
+        Ok(if self.0.keep(q, id, ty, boxed, centroid) {
+            Decision::Keep(Vec::new())
+        } else {
+            Decision::Drop
+        })
     }
 }
 

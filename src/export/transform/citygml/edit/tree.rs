@@ -8,6 +8,7 @@ use super::walk::MemberDoc;
 use crate::io::citygml::ns::{classify, Module, Ns};
 use crate::io::citygml::read::coords::parse_gml_points;
 use crate::model::Bbox;
+use glam::DVec3;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::name::ResolveResult;
 use quick_xml::NsReader;
@@ -50,6 +51,10 @@ pub(super) struct Node {
     /// other element, and for the prototype geometry of an implicit geometry and envelopes,
     /// which are not world coordinates of the object).
     pub(super) bbox: Bbox,
+    /// The sum of those coordinates and how many there are, a closed `posList` ring's
+    /// repeated first point counted once (as CityJSON stores a ring): the centroid of
+    /// [`super::subset`]'s `centroid` mode.
+    pub(super) sum: (DVec3, u32),
 }
 
 /// A member as a tree of elements, in document order (a parent before its children).
@@ -185,6 +190,35 @@ impl Tree {
     pub(super) fn feature_type(&self) -> Option<&str> {
         self.nodes.get(1).map(|n| &*n.local)
     }
+
+    /// The mean of the coordinates of the top-level feature's own geometry, as cjio takes the
+    /// centroid of a CityJSON object: its surfaces and openings (in CityJSON, semantic
+    /// surfaces of its geometry) count, the features nested in it that CityJSON makes objects
+    /// of their own (`BuildingPart`, `BuildingInstallation`, `Room`, ...) do not; `None`
+    /// without coordinates.
+    pub(super) fn own_centroid(&self) -> Option<DVec3> {
+        let mut own = vec![false; self.nodes.len()];
+        let (mut sum, mut count) = (DVec3::ZERO, 0u64);
+        for (i, n) in self.nodes.iter().enumerate() {
+            own[i] = i == 1
+                || n.parent.is_some_and(|p| {
+                    let q = &self.nodes[p];
+                    let nested = p != 1 && q.kind == Kind::Feature && !is_surface(&q.local);
+                    own[p] && !nested
+                });
+            if own[i] {
+                sum += n.sum.0;
+                count += u64::from(n.sum.1);
+            }
+        }
+        (count > 0).then(|| sum / count as f64)
+    }
+}
+
+/// A feature that CityJSON keeps inside its parent's geometry: a thematic surface or an
+/// opening.
+fn is_surface(local: &str) -> bool {
+    local.ends_with("Surface") || matches!(local, "Window" | "Door")
 }
 
 fn is_appearance(uri: &[u8]) -> bool {
@@ -224,6 +258,7 @@ fn node_of(
         href: href.as_deref().and_then(local_target),
         uri: target_uri.as_deref().and_then(local_target),
         bbox: Bbox::EMPTY,
+        sum: (DVec3::ZERO, 0),
     }
 }
 
@@ -278,9 +313,16 @@ fn close_capture(node: &mut Node, dim: u8, text: &[u8]) -> Result<(), String> {
     }
     let mut pts = Vec::new();
     parse_gml_points(node.local.as_bytes(), text, dim, &mut pts)?;
-    for p in pts {
+    for &p in &pts {
         node.bbox.add(p);
     }
+    if pts.len() > 1 && pts.first() == pts.last() {
+        pts.pop();
+    }
+    node.sum = (
+        pts.iter().sum(),
+        u32::try_from(pts.len()).unwrap_or(u32::MAX),
+    );
     Ok(())
 }
 
