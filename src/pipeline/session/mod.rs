@@ -308,6 +308,7 @@ impl Scene {
 
 /// What the frame gave a [`Study`], owned: the model in the local frame where it is not the
 /// identity, the POIs in both frames, what to tell the user.
+#[derive(Debug)]
 struct Frame {
     local: Option<CityModel>,
     crs: Crs,
@@ -351,14 +352,7 @@ pub struct Study {
     /// The source's box ([`CityModel::bbox`]): the one the [`Scene`] took, kept here alone
     /// ([`Framed`] does not carry it).
     bbox: Bbox,
-    local: Option<CityModel>,
-    crs: Crs,
-    frame: LocalFrame,
-    pois: Vec<Poi>,
-    local_pois: Vec<Poi>,
-    warnings: Vec<String>,
-    note: Option<String>,
-    frame_warning: Option<crate::model::crs::FrameWarning>,
+    framed: Frame,
     failures: Vec<ReadError>,
     read_s: f64,
     full: OnceLock<crate::solar::trace::TraceScene>,
@@ -385,14 +379,7 @@ impl Study {
             inputs,
             read,
             bbox,
-            local: f.local,
-            crs: f.crs,
-            frame: f.frame,
-            pois: f.pois,
-            local_pois: f.local_pois,
-            warnings: f.warnings,
-            note: f.note,
-            frame_warning: f.frame_warning,
+            framed: f,
             failures,
             read_s,
             full: OnceLock::new(),
@@ -405,13 +392,13 @@ impl Study {
         Framed {
             source: self.source(),
             model: Cow::Borrowed(self.local_model()),
-            crs: self.crs.clone(),
-            frame: self.frame,
-            pois: self.pois.clone(),
-            local_pois: self.local_pois.clone(),
-            warnings: self.warnings.clone(),
-            note: self.note.clone(),
-            frame_warning: self.frame_warning.clone(),
+            crs: self.framed.crs.clone(),
+            frame: self.framed.frame,
+            pois: self.framed.pois.clone(),
+            local_pois: self.framed.local_pois.clone(),
+            warnings: self.framed.warnings.clone(),
+            note: self.framed.note.clone(),
+            frame_warning: self.framed.frame_warning.clone(),
         }
     }
 
@@ -440,12 +427,12 @@ impl Study {
 
     /// The POIs in the model's CRS, in order.
     pub fn pois(&self) -> &[Poi] {
-        &self.pois
+        &self.framed.pois
     }
 
     /// The model's CRS.
     pub fn crs(&self) -> &Crs {
-        &self.crs
+        &self.framed.crs
     }
 
     /// The inputs read, in order.
@@ -460,17 +447,17 @@ impl Study {
 
     /// What to tell the user: other CRSs named by the inputs, the frame's accuracy.
     pub fn warnings(&self) -> &[String] {
-        &self.warnings
+        &self.framed.warnings
     }
 
     /// The frame's warning, structured (its text is the last of [`Study::warnings`]).
     pub fn frame_warning(&self) -> Option<&crate::model::crs::FrameWarning> {
-        self.frame_warning.as_ref()
+        self.framed.frame_warning.as_ref()
     }
 
     /// A note on the frame when it is not the identity ("tracing in ...").
     pub fn note(&self) -> Option<&str> {
-        self.note.as_deref()
+        self.framed.note.as_deref()
     }
 
     /// Seconds spent reading the inputs ([`Scene::read_s`]).
@@ -480,7 +467,7 @@ impl Study {
 
     /// The model in the local metric frame: what is traced.
     pub fn local_model(&self) -> &CityModel {
-        self.local.as_ref().unwrap_or(self.source())
+        self.framed.local.as_ref().unwrap_or(self.source())
     }
 
     /// The site of the sun from the model's CRS: the centre of the model in WGS 84.
@@ -488,7 +475,7 @@ impl Study {
     /// # Errors
     /// [`Error::Site`] for an empty model or a CRS the build does not convert.
     pub fn site(&self) -> Result<ModelSite> {
-        Ok(box_site(&self.bbox, &self.crs)?)
+        Ok(box_site(&self.bbox, &self.framed.crs)?)
     }
 
     /// The sun's site as [`site::site_of`] gives it for [`Study::source`] (the `lat`, `lon`
@@ -521,7 +508,7 @@ impl Study {
         let input = LevelsInput::Hollow {
             hollow: &h.hollow,
             reread: &h.reread,
-            pois: &self.pois,
+            pois: &self.framed.pois,
         };
         levels(input, &opts, progress)
     }
