@@ -226,7 +226,8 @@ fn is_unit_test_file(rel: &str) -> bool {
     name == "tests.rs" || name.ends_with("_tests.rs") || name == "test_support.rs"
 }
 
-fn library() -> Library {
+/// Every file of the library (outside `bin/`): its path below `src/` and its code ([`code`]).
+fn library_sources() -> Vec<(String, String)> {
     let root = src();
     let mut files = Vec::new();
     for p in rust_files(&root) {
@@ -235,12 +236,18 @@ fn library() -> Library {
             .unwrap()
             .to_string_lossy()
             .replace('\\', "/");
-        if rel.starts_with("bin/") || rel == "lib.rs" || is_unit_test_file(&rel) {
-            continue;
+        if !rel.starts_with("bin/") {
+            let text = std::fs::read_to_string(&p).unwrap();
+            files.push((rel, code(&text)));
         }
-        let text = std::fs::read_to_string(&p).unwrap();
-        files.push((rel, code(&text)));
     }
+    files
+}
+
+fn library() -> Library {
+    let files = (library_sources().into_iter())
+        .filter(|(rel, _)| rel != "lib.rs" && !is_unit_test_file(rel))
+        .collect();
     Library { files }
 }
 
@@ -499,19 +506,9 @@ fn source_files_stay_short_and_the_top_stays_small() {
 
 /// The library's public modules: `pub mod` (not `pub(crate)`) outside the binary.
 fn public_modules() -> Vec<String> {
-    let root = src();
     let mut out = Vec::new();
-    for p in rust_files(&root) {
-        let rel = p
-            .strip_prefix(&root)
-            .unwrap()
-            .to_string_lossy()
-            .replace('\\', "/");
-        if rel.starts_with("bin/") {
-            continue;
-        }
-        let text = std::fs::read_to_string(&p).unwrap();
-        for l in code(&text).lines() {
+    for (rel, code) in library_sources() {
+        for l in code.lines() {
             if let Some(rest) = l.trim_start().strip_prefix("pub mod ") {
                 out.push(format!("{rel}: {}", ident(rest)));
             }
