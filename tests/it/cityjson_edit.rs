@@ -378,8 +378,74 @@ fn centroid_and_radius_keep_what_cjio_keeps() {
     assert!(compared >= 8 * 6 && kept > 0);
 }
 
-/// `--bbox-mode centroid` and `--radius` keep the same objects of a CityGML file as of its
-/// CityJSON conversion: the centroid of a CityGML member is the one cjio takes of its CityJSON
+/// `subset --random N` keeps N top-level objects (all when fewer), each with what cjio's
+/// `subset --id` keeps of it (children, vertices); the same seed draws the same objects, other
+/// seeds others. cjio's own `--random` is unseeded, so its draw cannot be compared.
+#[test]
+fn random_keeps_n_objects_as_cjio_keeps_them() {
+    if !have("cjio", "cjio (pip install cjio)") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = inputs(dir.path());
+    files.push(fixture_dir().join("cjio-DH_01_subs-v1.1.city.json"));
+    let out = dir.path().join("out.city.json");
+    // the draw of a CityJSONSeq is that of its document
+    if let Some(doc) = files.get(1).cloned() {
+        let seq = dir.path().join("seq.city.jsonl");
+        ok(&[os("convert"), os(&doc), os("-o"), os(&seq)]);
+        let args = ["--random=4".to_string(), "--seed=9".into()];
+        let from_seq = dir.path().join("seq-out.city.jsonl");
+        let mut a = vec![os("subset"), os(&seq)];
+        a.extend(args.iter().map(os));
+        a.extend([os("-o"), os(&from_seq)]);
+        ok(&a);
+        let back = dir.path().join("seq-back.city.json");
+        ok(&[os("convert"), os(&from_seq), os("-o"), os(&back)]);
+        assert_eq!(tops(&load(&back)), subset_tops(&doc, &args, &out));
+    }
+    let mut drawn = 0;
+    for input in &files {
+        let name = short(input);
+        let all = tops(&load(input));
+        for n in [1, 3, all.len() + 2] {
+            let draw = |seed: u64| {
+                let args = [format!("--random={n}"), format!("--seed={seed}")];
+                subset_tops(input, &args, &out)
+            };
+            let got = draw(0);
+            assert_eq!(got.len(), n.min(all.len()), "{name}: --random {n}");
+            let d = load(&out);
+            let mut objects: Vec<String> = d["CityObjects"]
+                .as_object()
+                .unwrap()
+                .keys()
+                .cloned()
+                .collect();
+            objects.sort();
+            let ids: Vec<&str> = got.iter().map(String::as_str).collect();
+            let want = cjio_edit(&[&["ids", input.to_str().unwrap()][..], &ids].concat());
+            let want_objects: Vec<String> =
+                serde_json::from_value(want["objects"].clone()).unwrap();
+            assert_eq!(objects, want_objects, "{name}: --random {n}");
+            assert_eq!(
+                d["vertices"].as_array().unwrap().len() as u64,
+                want["vertices"].as_u64().unwrap(),
+                "{name}: --random {n}"
+            );
+            assert_eq!(draw(0), got, "{name}: the same seed draws the same");
+            if n < all.len() {
+                let others = (1..6).map(draw).filter(|o| *o != got).count();
+                assert!(others > 0, "{name}: five other seeds drew the same {n}");
+            }
+            drawn += got.len();
+        }
+    }
+    assert!(drawn > 0);
+}
+
+/// `--bbox-mode centroid`, `--radius` and `--random` keep the same objects of a CityGML file
+/// as of its CityJSON conversion: the centroid of a CityGML member is the one cjio takes of its CityJSON
 /// object (its own geometry with its surfaces, not its parts).
 #[test]
 fn centroid_of_citygml_is_that_of_its_cityjson() {
@@ -415,6 +481,7 @@ fn centroid_of_citygml_is_that_of_its_cityjson() {
                 "--bbox-mode=centroid".into(),
             ],
             vec![format!("--radius={xm},{ym},{r}")],
+            vec!["--random=3".into(), "--seed=5".into()],
         ];
         for args in rules {
             let from_json = subset_tops(&json, &args, &dir.path().join("a.city.json"));

@@ -8,6 +8,10 @@ Usage:
       lies in [X0, X1) x [Y0, Y1), with its children and parents).
   cjio_edit.py radius FILE X Y R       ->  the same for cjio's `subset --radius`
       (CityJSON.get_subset_radius: a vertex centroid closer than R to (X, Y)).
+  cjio_edit.py ids FILE ID...          ->  the same for cjio's `subset --id` (get_subset_ids:
+      the objects named, with their children and parents), to check what `subset --random`
+      keeps of the top-level objects it drew (cjio draws its own unseeded, so its ids
+      cannot be compared).
   cjio_edit.py lod FILE LOD            ->  {"objects": {id: [lod, ...]}, "vertices": n}
       cjio's `lod_filter LOD` (CityJSON.filter_lod: geometries whose lod, as text, is not
       LOD removed; city objects are kept, even left without geometry).
@@ -42,6 +46,9 @@ def main():
         x, y, r = (float(v) for v in sys.argv[3:6])
         j = cm.get_subset_radius(x, y, r).j
         out = {"top": top(j), "objects": sorted(j["CityObjects"]), "vertices": len(j["vertices"])}
+    elif what == "ids":
+        j = cm.get_subset_ids(sys.argv[3:]).j
+        out = {"top": top(j), "objects": sorted(j["CityObjects"]), "vertices": len(j["vertices"])}
     elif what == "lod":
         cm.filter_lod(sys.argv[3])
         j = cm.j
@@ -64,7 +71,7 @@ def main():
                 lods.add(str(g["lod"]))
         out = {"objects": objects, "vertices": len(j["vertices"]), "lods": sorted(lods)}
     else:
-        raise SystemExit(f"unknown request {what!r}: bbox, lod or info")
+        raise SystemExit(f"unknown request {what!r}: bbox, radius, ids, lod or info")
     json.dump(out, sys.stdout)
 
 

@@ -19,7 +19,7 @@ use std::path::Path;
 #[non_exhaustive]
 pub enum Transform {
     /// Keep the top-level city objects that match a box, ids or types.
-    Subset(Subset),
+    Subset(Box<Subset>),
     /// Keep or remove LoD representations.
     FilterLods(Lods),
     /// CityGML 1.0 / 2.0 → 3.0; CityJSON → CityGML 3.0 for a CityGML output name, else

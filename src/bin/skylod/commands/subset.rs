@@ -1,5 +1,5 @@
 //! `skylod subset`: keep the top-level city objects of CityGML or CityJSON documents that match
-//! a box, ids or types (citygml-tools' `subset`; CityJSON: `skylod::export::transform::cityjson`),
+//! a box, ids, types, a radius or a random draw (citygml-tools' and cjio's `subset`; CityJSON: `skylod::export::transform::cityjson`),
 //! streamed: memory follows the largest city object.
 
 use crate::args::citygml_io::EditArgs;
@@ -49,6 +49,13 @@ pub struct Args {
     /// Keep at most N city objects per input (the first N that match, in document order).
     #[arg(long, value_name = "N")]
     limit: Option<usize>,
+    /// Keep N of the top-level city objects that match, drawn at random per input (cjio's
+    /// --random); the same N for the same --seed, in CityGML and CityJSON alike.
+    #[arg(long, value_name = "N")]
+    random: Option<usize>,
+    /// Seed of --random: another seed draws other objects.
+    #[arg(long, value_name = "S", default_value_t = 0, requires = "random")]
+    seed: u64,
 }
 
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
@@ -79,11 +86,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         invert: args.invert,
         limit: args.limit,
         radius,
+        random: args.random,
+        seed: args.seed,
     };
     crate::outputs::per_input_jobs(
         &args.edit.io,
         "subset",
         &args.edit.jobs,
-        Transform::Subset(rule),
+        Transform::Subset(Box::new(rule)),
     )
 }

@@ -169,10 +169,10 @@ fn decide_pass<'a>(
 }
 
 /// Edit the document at `input` (its first pass `first`, of `bytes_in` bytes) with the rules
-/// `make` makes into `out` (module docs).
+/// `make` makes into `out` (module docs); with no `out`, the decisions only.
 pub(super) fn run<'r>(
     input: &Path,
-    out: &Path,
+    out: Option<&Path>,
     first: Collected,
     bytes_in: u64,
     make: &dyn Fn() -> Box<dyn TreeRule + 'r>,
@@ -211,12 +211,12 @@ pub(super) fn run<'r>(
         decide_pass(input, forest, make(), ctx(), counts, removed, sink)
     };
     // pass 2: decisions, the vertices that stay numbered
-    {
-        let mut scratch = EditSummary::default();
-        let mut sink =
-            |id: String, mut o: Value| renumber_object(&id, &mut o, &mut map, &mut order);
-        pass(&mut scratch, &mut removed, &mut sink)?;
-    }
+    let mut scratch = EditSummary::default();
+    let mut sink = |id: String, mut o: Value| renumber_object(&id, &mut o, &mut map, &mut order);
+    pass(&mut scratch, &mut removed, &mut sink)?;
+    let Some(out) = out else {
+        return Ok(scratch);
+    };
     let kept_box = {
         let c = ctx();
         let mut b = Bbox::EMPTY;

@@ -486,15 +486,18 @@ impl Values {
 }
 
 /// Run `make`'s rule over the CityJSON / CityJSONSeq document at `input` into `out` (see the
-/// module docs).
+/// module docs); with no `out`, the decisions only: the rule sees every tree and nothing is
+/// written.
 pub(crate) fn run<'r>(
     input: &Path,
-    out: &Path,
+    out: Option<&Path>,
     opts: &WriteOptions,
     make: &dyn Fn() -> Box<dyn TreeRule + 'r>,
 ) -> Result<EditSummary, WriteError> {
-    check_target(out, opts, std::iter::once(input))?;
-    check_json_target(out)?;
+    if let Some(out) = out {
+        check_target(out, opts, std::iter::once(input))?;
+        check_json_target(out)?;
+    }
     let mut collected = document::Collected::default();
     let seen = stream::read(input, input, &mut collected)?;
     if !seen.more {
@@ -530,6 +533,9 @@ pub(crate) fn run<'r>(
         }
         feature = values.next()?;
     }
+    let Some(out) = out else {
+        return Ok(scratch);
+    };
     // Pass 2: the same decisions, references pruned, written.
     set_extent(&mut head, &kept);
     let mut counts = EditSummary::default();

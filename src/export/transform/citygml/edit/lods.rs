@@ -154,5 +154,5 @@ pub fn filter_lods(
     rule: &Lods,
     opts: &WriteOptions,
 ) -> Result<EditSummary, WriteError> {
-    run(input, out, opts, &|| Box::new(LodRule(rule)))
+    run(input, Some(out), opts, &|| Box::new(LodRule(rule)))
 }

@@ -353,14 +353,17 @@ fn write_cut(w: &mut dyn Write, bytes: &[u8], tree: &Tree, cuts: &Cuts) -> std::
     Ok(n + rest.len() as u64)
 }
 
-/// Run `make`'s rule over the document at `input` into `out` (see the module docs).
+/// Run `make`'s rule over the document at `input` into `out` (see the module docs); with no
+/// `out`, the first pass only: the rule sees every member and nothing is written.
 fn run<'r>(
     input: &Path,
-    out: &Path,
+    out: Option<&Path>,
     opts: &WriteOptions,
     make: &dyn Fn() -> Box<dyn Rule + 'r>,
 ) -> Result<EditSummary, WriteError> {
-    check_target(out, opts, std::iter::once(input))?;
+    if let Some(out) = out {
+        check_target(out, opts, std::iter::once(input))?;
+    }
     let bad_rule = |m: String, line: u64| ReadError::Xml {
         loc: Location {
             file: input.to_path_buf(),
@@ -414,6 +417,9 @@ fn run<'r>(
         }
         Ok(())
     })?;
+    let Some(out) = out else {
+        return Ok(scratch);
+    };
     // Pass 2: the same decisions, references pruned, written.
     let mut counts = EditSummary::default();
     let mut rule = make();

@@ -61,6 +61,13 @@ pub struct Subset {
     /// `[x, y, r]`: keep the members whose centroid lies closer than `r` to `(x, y)` in the
     /// document's CRS (cjio's `subset --radius`).
     pub radius: Option<[f64; 3]>,
+    /// Keep this many of the members that match, at random (cjio's `subset --random`): the
+    /// ones whose key (gml:id, or `#n` for the n-th member without one) ranks lowest by a
+    /// hash seeded with [`Subset::seed`], so a seed picks the same members every run and in
+    /// every format. All of them when fewer match.
+    pub random: Option<usize>,
+    /// The seed of [`Subset::random`].
+    pub seed: u64,
 }
 
 impl Subset {
@@ -110,21 +117,36 @@ fn box_test(mode: BboxMode, q: &[f64; 4], b: &[f64; 4]) -> bool {
     }
 }
 
+/// How [`Subset::random`] takes part in a pass.
+#[derive(Clone, Copy)]
+pub(crate) enum Sample<'a> {
+    /// No sampling.
+    All,
+    /// The survey before the edit: every match's key is listed, nothing is kept.
+    Survey(&'a std::cell::RefCell<Vec<String>>),
+    /// The edit: only the drawn keys stay.
+    Drawn(&'a foldhash::HashSet<String>),
+}
+
 /// A [`Subset`] applied to one document's members in order, whatever the format (the CityGML
 /// rule here and the CityJSON one of [`crate::export::transform::cityjson`]): the box in the
-/// document's CRS, once known, and how many members were kept.
+/// document's CRS, once known, and how many members were seen and kept.
 pub(crate) struct Matcher<'a> {
     s: &'a Subset,
     /// The box in the document's CRS, once known.
     bbox: Option<Option<[f64; 4]>>,
+    sample: Sample<'a>,
+    seen: usize,
     kept: usize,
 }
 
 impl<'a> Matcher<'a> {
-    pub(crate) fn new(s: &'a Subset) -> Self {
+    pub(crate) fn new(s: &'a Subset, sample: Sample<'a>) -> Self {
         Matcher {
             s,
             bbox: None,
+            sample,
+            seen: 0,
             kept: 0,
         }
     }
@@ -164,6 +186,22 @@ impl<'a> Matcher<'a> {
             c.is_some_and(|c| (c.x - x).powi(2) + (c.y - y).powi(2) < r * r)
         });
         let matches = (id_ok && type_ok && box_ok && radius_ok) != s.invert;
+        self.seen += 1;
+        let key = || id.map_or_else(|| format!("#{}", self.seen), str::to_string);
+        match self.sample {
+            Sample::All => {}
+            Sample::Survey(keys) => {
+                if matches {
+                    keys.borrow_mut().push(key());
+                }
+                return false;
+            }
+            Sample::Drawn(drawn) => {
+                if !matches || !drawn.contains(&key()) {
+                    return false;
+                }
+            }
+        }
         if !matches || s.limit.is_some_and(|l| self.kept >= l) {
             return false;
         }
@@ -214,7 +252,47 @@ pub fn subset(
     rule: &Subset,
     opts: &WriteOptions,
 ) -> Result<EditSummary, WriteError> {
-    run(input, out, opts, &|| {
-        Box::new(SubsetRule(Matcher::new(rule)))
+    let drawn = drawn(rule, |sample| {
+        run(input, None, opts, &|| {
+            Box::new(SubsetRule(Matcher::new(rule, sample)))
+        })
+    })?;
+    let sample = drawn.as_ref().map_or(Sample::All, Sample::Drawn);
+    run(input, Some(out), opts, &|| {
+        Box::new(SubsetRule(Matcher::new(rule, sample)))
     })
+}
+
+/// The keys [`Subset::random`] draws, `None` without it: `survey` runs the rule over the
+/// document with the [`Sample`] it is given, which lists the keys of the members that match;
+/// the `n` with the lowest rank under the seed are drawn.
+pub(crate) fn drawn<E>(
+    rule: &Subset,
+    survey: impl FnOnce(Sample<'_>) -> Result<EditSummary, E>,
+) -> Result<Option<foldhash::HashSet<String>>, E> {
+    let Some(n) = rule.random else {
+        return Ok(None);
+    };
+    let keys = std::cell::RefCell::new(Vec::new());
+    survey(Sample::Survey(&keys))?;
+    let mut ranked: Vec<(u64, String)> = keys
+        .take()
+        .into_iter()
+        .map(|k| (rank(rule.seed, &k), k))
+        .collect();
+    ranked.sort_unstable();
+    Ok(Some(ranked.into_iter().take(n).map(|(_, k)| k).collect()))
+}
+
+/// A key's place in the draw of `seed`: FNV-1a of the key, mixed with the seed by
+/// SplitMix64's finaliser (fixed here, so a seed draws the same members in every version).
+fn rank(seed: u64, key: &str) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in key.bytes() {
+        h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+    }
+    let mut z = h ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
 }
