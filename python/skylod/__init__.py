@@ -247,7 +247,7 @@ def irradiance(
     weather: PathArg,
     *,
     site: Site = None,
-    sky: str = "perez",
+    sky: str = "all-weather",
     albedo: float = 0.2,
     rays: int = 10_000,
     seed: int = 1,
@@ -261,8 +261,9 @@ def irradiance(
 ) -> Any:
     """Global irradiation (kWh/m² over the weather's hours) of every POI (``skylod irradiance``).
 
-    ``weather`` is an EnergyPlus EPW or NREL TMY3 CSV file; ``sky`` is ``"perez"`` or
-    ``"isotropic"``. Returns an ``(N,)`` array, or with ``full=True`` the document of
+    ``weather`` is an EnergyPlus EPW or NREL TMY3 CSV file; ``sky`` is ``"all-weather"``
+    (the Perez all-weather sky by daylight coefficients, Radiance's model), ``"perez"`` (the
+    Perez 1990 transposition, pvlib's on open planes) or ``"isotropic"``. Returns an ``(N,)`` array, or with ``full=True`` the document of
     ``skylod irradiance --json`` (direct, diffuse, reflected, svf, sun hours per POI).
 
     >>> skylod.irradiance("tiles/", "pois.csv", "berlin.epw")              # doctest: +SKIP

@@ -101,7 +101,7 @@ fn horizon(
 
 /// `skylod irradiance --json`.
 #[pyfunction]
-#[pyo3(signature = (setup, weather, site=None, sky="perez", albedo=0.2, rays=10_000, seed=1, progress=None))]
+#[pyo3(signature = (setup, weather, site=None, sky="all-weather", albedo=0.2, rays=10_000, seed=1, progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn irradiance(
     py: Python<'_>,
@@ -115,11 +115,12 @@ fn irradiance(
     progress: Option<PyObject>,
 ) -> PyResult<String> {
     let sky = match sky {
+        "all-weather" => SkyModel::AllWeather,
         "perez" => SkyModel::Perez,
         "isotropic" => SkyModel::Isotropic,
         other => {
             return Err(SkylodError::new_err(format!(
-                "sky must be \"perez\" or \"isotropic\" (got {other:?})"
+                "sky must be \"all-weather\", \"perez\" or \"isotropic\" (got {other:?})"
             )))
         }
     };

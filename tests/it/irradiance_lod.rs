@@ -86,7 +86,7 @@ fn evaluate_weather_adds_irradiance_of_each_model() {
     check_stdout_schema("evaluate.schema.json", &o);
     let v = json(&o);
     assert_eq!(v["weather"]["weather"]["format"], "tmy3");
-    assert_eq!(v["weather"]["sky"], "perez");
+    assert_eq!(v["weather"]["sky"], "all-weather");
     // The full model's figure is `skylod irradiance`'s with the same bundle (4000 rays, seed 7).
     let mut irr = oss(&[
         &"irradiance",

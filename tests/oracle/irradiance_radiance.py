@@ -9,8 +9,9 @@ Usage: irradiance_radiance.py TMY3.csv POIS.csv MODEL.obj [MODEL.obj ...]
 The weather: the TMY3 file (pvlib's bundled Greensboro year) written as an EPW by Python's
 csv (as tests/it/irradiance.rs does), then epw2wea. The sky: `gendaymtx -m 4 -O1 -g 0 -r 0`
 (Reinhart subdivision MF 4, 2 305 patches + ground; Perez all-weather sky; the sun's energy
-shared among the patches around it; solar radiance in W/sr/m2; ground reflectance 0; no
-rotation). The daylight coefficients: every surface black (plastic, reflectance 0), one
+shared among the patches around it; solar radiance in W/sr/m2; a white sky, `-c 1 1 1`, so
+the three channels are the radiometric value rather than a tint whose mean is 2.7 % high;
+ground reflectance 0; no rotation). The daylight coefficients: every surface black (plastic, reflectance 0), one
 glow source over the whole sphere binned by reinhart.cal (`rcontrib -I+ -ab 1 -e MF:4`,
 65 536 hemisphere samples per point along its normal, bin 0 the ground), so each point sees
 each patch exactly where the model does not hide it; dctimestep multiplies them by the sky
@@ -18,9 +19,8 @@ of every hour (W/m2) and the hours are summed (Wh/m2, one hour each).
 
 The scene and the POIs as in radiance_svf.py (its OBJ origin convention, 1 cm along the
 normal). Compare with `skylod irradiance --albedo 0` (no ground nor obstruction light here).
-The sky models differ by design (skylod: the Perez 1990 transposition, the sun a ray;
-Radiance: the Perez all-weather luminance distribution, the sun smeared over ~2 degree
-patches), so a few percent apart is agreement.
+Both use the Perez all-weather sky on the same patches; skylod traces the sun as a ray per
+hour where Radiance smears it over the four patches nearest to it.
 """
 
 import csv
@@ -91,8 +91,8 @@ def main():
         # the whole sky, the sun alone (-d), the sky without the sun (-s)
         skies = {}
         for part, flag in (("global", []), ("direct", ["-d"]), ("diffuse", ["-s"])):
-            sky = run([tool("gendaymtx"), "-m", MF, "-O1", *flag, "-g", "0", "0", "0", "-r", "0",
-                       wea]).stdout
+            sky = run([tool("gendaymtx"), "-m", MF, "-O1", "-c", "1", "1", "1", *flag, "-g", "0",
+                       "0", "0", "-r", "0", wea]).stdout
             skies[part] = os.path.join(tmp, f"{part}.smx")
             with open(skies[part], "wb") as f:
                 f.write(sky)

@@ -66,10 +66,13 @@ impl IrradianceOutput {
     }
 }
 
-/// The sky model's name in the JSON (`perez` or `isotropic`).
+/// The sky model's name in the JSON (`all-weather`, `perez` or `isotropic`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum SkyName {
+    /// The Perez all-weather sky by daylight coefficients.
+    #[serde(rename = "all-weather")]
+    AllWeather,
     /// Perez 1990 anisotropic.
     Perez,
     /// Uniform radiance.
@@ -79,6 +82,7 @@ pub enum SkyName {
 impl From<SkyModel> for SkyName {
     fn from(s: SkyModel) -> Self {
         match s {
+            SkyModel::AllWeather => SkyName::AllWeather,
             SkyModel::Perez => SkyName::Perez,
             SkyModel::Isotropic => SkyName::Isotropic,
         }

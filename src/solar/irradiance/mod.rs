@@ -6,7 +6,15 @@
 //!
 //! * **direct**: DNI × cos θ when the sun is above the horizon, in front of the plane
 //!   (cos θ = n·s > 0) and the ray towards it is not blocked: one ray per such hour;
-//! * **diffuse**, [`SkyModel::Perez`] (default): the Perez 1990 transposition
+//! * **diffuse**, [`SkyModel::AllWeather`] (default): daylight coefficients. Every ray of
+//!   the plane's bundle that reaches the sky counts for the patch of [`Patches::reinhart`]
+//!   it passes through ([`PlaneView::patches`]); each hour's sky is the Perez all-weather
+//!   distribution of `all_weather` (the model of Radiance's `gendaymtx`), and the table keeps
+//!   each patch's radiance summed over the hours, so the year's diffuse part is one sum over
+//!   the patches the plane sees: `π / N × Σ rays(p) × L(p)`. A facade gets the brightness of
+//!   the part of the sky it faces; the sun stays a ray per hour (below), so the direct part is
+//!   exact rather than spread over patches.
+//! * **diffuse**, [`SkyModel::Perez`]: the Perez 1990 transposition
 //!   (`perez`) with each of its three parts occluded by what blocks it:
 //!   the isotropic part `DHI (1 − F1) × SVF` (the point's cosine-weighted sky view factor of
 //!   `crate::solar::svf`, which is `(1 + cos β)/2` for an unobstructed plane), the
@@ -14,9 +22,9 @@
 //!   `DHI F2 sin β × H` with `H` the share of the bundle's rays between 0 and 6.5° of
 //!   elevation (Perez's band) that reach the sky; the hour's sum is clamped at 0 as pvlib
 //!   does. With the sun below the horizon the Perez model is not defined and the hour's DHI
-//!   is treated as isotropic. Perez 1990 (rather than the all-weather sky luminance model)
-//!   because it is the transposition pvlib, SAM and PVGIS-style tools use and validate, so
-//!   an unobstructed plane gives exactly their numbers.
+//!   is treated as isotropic. It is the transposition pvlib, SAM and PVGIS-style tools use
+//!   and validate, so an unobstructed plane gives exactly their numbers; obstructed or
+//!   facing away from the sun, it treats the plane's sky as a scaled open one.
 //! * **diffuse**, [`SkyModel::Isotropic`]: `DHI × SVF`.
 //! * **reflected**: `albedo × GHI × (1 − SVF)`: whatever the plane sees that is not sky
 //!   (ground and obstructions) is taken as a Lambertian surface lit like open ground. For an
@@ -47,7 +55,9 @@
 //! assert!((r.global_kwh_m2 - 0.9).abs() < 0.01, "{r:?}");
 //! ```
 
+pub(crate) mod all_weather;
 pub(crate) mod perez;
+pub use all_weather::{HourSky, Patches, SUBDIVISION};
 pub use perez::{brightening, extraterrestrial, relative_airmass};
 
 use super::sky::Frame;
@@ -58,6 +68,7 @@ use super::SolarError;
 use chrono::Datelike;
 use glam::DVec3;
 use rayon::prelude::*;
+use std::f64::consts::PI;
 
 /// Perez's horizon band: elevations from 0 to 6.5°.
 pub const HORIZON_BAND_DEG: f64 = 6.5;
@@ -67,8 +78,15 @@ pub const HORIZON_BAND_DEG: f64 = 6.5;
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum SkyModel {
-    /// Perez 1990 anisotropic (isotropic, circumsolar and horizon parts).
+    /// The Perez all-weather sky on Reinhart's patches, by daylight coefficients (the
+    /// model of Radiance's `gendaymtx`; `all_weather`): right for any plane, seen sky
+    /// and obstruction.
     #[default]
+    #[serde(rename = "all-weather")]
+    #[cfg_attr(feature = "cli", value(name = "all-weather"))]
+    AllWeather,
+    /// The Perez 1990 transposition (isotropic, circumsolar and horizon parts scaled by
+    /// what blocks them): pvlib's, SAM's and PVGIS's numbers on unobstructed planes.
     Perez,
     /// Uniform radiance.
     Isotropic,
@@ -120,6 +138,9 @@ pub struct SkyHour {
     pub f1: f64,
     /// Perez horizon coefficient (0 for an isotropic sky or the sun down).
     pub f2: f64,
+    /// The all-weather sky of the hour ([`SkyModel::AllWeather`]; `None` otherwise or
+    /// without diffuse light).
+    pub sky: Option<HourSky>,
 }
 
 impl SkyHour {
@@ -133,6 +154,9 @@ impl SkyHour {
 #[derive(Debug, Clone, PartialEq)]
 pub struct IrradianceTable {
     hours: Vec<SkyHour>,
+    /// Per patch of [`Patches::reinhart`], its radiance summed over the hours
+    /// ([`SkyModel::AllWeather`]; empty otherwise).
+    patch_sums: Vec<f64>,
 }
 
 impl IrradianceTable {
@@ -142,7 +166,7 @@ impl IrradianceTable {
     /// # Errors
     /// [`SolarError`] when SPA rejects the site or a date.
     pub fn new(weather: &Weather, site: &Site, sky: SkyModel) -> Result<Self, SolarError> {
-        let hours = weather
+        let mut hours = weather
             .hours
             .par_iter()
             .map(|h| {
@@ -154,7 +178,7 @@ impl IrradianceTable {
                             perez::brightening(h.dhi, h.dni, p.zenith_deg, am, extra)
                         })
                         .unwrap_or((0.0, 0.0)),
-                    SkyModel::Isotropic => (0.0, 0.0),
+                    SkyModel::Isotropic | SkyModel::AllWeather => (0.0, 0.0),
                 };
                 Ok(SkyHour {
                     sun: p.direction,
@@ -164,10 +188,42 @@ impl IrradianceTable {
                     dhi: h.dhi,
                     f1,
                     f2,
+                    sky: None,
                 })
             })
             .collect::<Result<Vec<_>, SolarError>>()?;
-        Ok(IrradianceTable { hours })
+        let patch_sums = if sky == SkyModel::AllWeather {
+            let n = Patches::reinhart().len();
+            (hours.par_iter_mut().zip(&weather.hours))
+                .fold(
+                    || vec![0.0; n],
+                    |mut acc, (h, w)| {
+                        h.sky = HourSky::adding(h.sun, h.dni, h.dhi, w.mid_utc.ordinal(), &mut acc);
+                        acc
+                    },
+                )
+                .reduce(
+                    || vec![0.0; n],
+                    |mut a, b| {
+                        a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                        a
+                    },
+                )
+        } else {
+            Vec::new()
+        };
+        Ok(IrradianceTable { hours, patch_sums })
+    }
+
+    /// The diffuse irradiation (Wh/m²) over all hours of a plane whose free sky rays fall
+    /// in the patches of `view` ([`SkyModel::AllWeather`]).
+    fn all_weather_sum(&self, view: &PlaneView) -> f64 {
+        let rays = view.rays.max(1) as f64;
+        (view.patches.iter())
+            .map(|&(p, k)| self.patch_sums.get(p as usize).copied().unwrap_or(0.0) * f64::from(k))
+            .sum::<f64>()
+            * PI
+            / rays
     }
 
     /// The hours, in weather order.
@@ -187,13 +243,47 @@ impl IrradianceTable {
 }
 
 /// What a plane sees of the sky, from one bundle of rays: see [`plane_view`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct PlaneView {
     /// Cosine-weighted sky view factor (the isotropic share).
     pub svf: f64,
     /// Share of the bundle's rays in the horizon band (0–6.5° elevation) that reach the sky;
     /// 1 when the bundle has none there.
     pub horizon: f64,
+    /// The plane's daylight coefficients: per patch of [`Patches::reinhart`] the bundle's
+    /// rays that reach the sky through it, ascending by patch; a patch's coefficient is
+    /// `π × rays / `[`PlaneView::rays`] (the cosine-weighted solid angle of it the plane
+    /// sees).
+    pub patches: Vec<(u32, u32)>,
+    /// Rays of the bundle.
+    pub rays: usize,
+}
+
+impl PlaneView {
+    /// The view of `rays` rays of which those in `free` (patch indices of
+    /// [`Patches::reinhart`], in any order) reach the sky, `band` of `in_band` in the
+    /// horizon band.
+    fn of_free(rays: usize, mut free: Vec<u32>, band: usize, in_band: usize) -> PlaneView {
+        let svf = free.len() as f64 / rays.max(1) as f64;
+        free.sort_unstable();
+        let mut patches: Vec<(u32, u32)> = Vec::new();
+        for p in free {
+            match patches.last_mut() {
+                Some((q, k)) if *q == p => *k += 1,
+                _ => patches.push((p, 1)),
+            }
+        }
+        PlaneView {
+            svf,
+            horizon: if in_band == 0 {
+                1.0
+            } else {
+                band as f64 / in_band as f64
+            },
+            patches,
+            rays,
+        }
+    }
 }
 
 /// The [`PlaneView`] of a plane with `normal` (horizontal when `None`, zero or not finite):
@@ -207,7 +297,9 @@ pub fn plane_view(
     let n = normal.and_then(|n| n.try_normalize()).unwrap_or(DVec3::Z);
     let frame = Frame::from_normal(n);
     let band = HORIZON_BAND_DEG.to_radians().sin();
-    let (sky, in_band, band_sky) = bundles
+    let patches = Patches::reinhart();
+    // per ray above the horizon: its patch when free, and whether it is in the band
+    let rays: Vec<(Option<u32>, bool)> = bundles
         .projected_dirs()
         .par_iter()
         .with_min_len(1024)
@@ -216,19 +308,21 @@ pub fn plane_view(
             (d.z > 0.0).then_some(d)
         })
         .map(|d| {
-            let free = usize::from(!blocked(d));
-            let b = usize::from(d.z <= band);
-            (free, b, b * free)
+            let free = (!blocked(d)).then(|| patch_index(patches, d));
+            (free, d.z <= band)
         })
-        .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
-    PlaneView {
-        svf: sky as f64 / bundles.len().max(1) as f64,
-        horizon: if in_band == 0 {
-            1.0
-        } else {
-            band_sky as f64 / in_band as f64
-        },
-    }
+        .collect();
+    let in_band = rays.iter().filter(|r| r.1).count();
+    let band_sky = rays.iter().filter(|r| r.1 && r.0.is_some()).count();
+    let free = rays.iter().filter_map(|r| r.0).collect();
+    PlaneView::of_free(bundles.len(), free, band_sky, in_band)
+}
+
+/// The patch of a direction above the horizon, as stored in a [`PlaneView`].
+fn patch_index(patches: &Patches, d: DVec3) -> u32 {
+    patches
+        .patch_of(d)
+        .map_or(u32::MAX, |p| u32::try_from(p).unwrap_or(u32::MAX))
 }
 
 /// Annual irradiation of a plane (kWh/m²), see the module docs.
@@ -281,6 +375,7 @@ fn irradiance_of_hours(
     let cos85 = 85f64.to_radians().cos();
     let (mut direct, mut diffuse, mut reflected) = (0.0, 0.0, 0.0);
     let (mut possible, mut seen) = (0u32, 0u32);
+    let hour_by_hour = hourly.is_some();
     for (i, h) in table.hours.iter().enumerate() {
         let cos_inc = n.dot(h.sun);
         let facing = h.sun_up() && cos_inc > 0.0;
@@ -299,6 +394,14 @@ fn irradiance_of_hours(
                 let iso = (1.0 - h.f1) * view.svf;
                 (h.dhi * (iso + circ + h.f2 * sin_tilt * view.horizon)).max(0.0)
             }
+            // the year's sum at once below, unless the hours are asked for
+            SkyModel::AllWeather if hour_by_hour => h.sky.map_or(0.0, |s| {
+                let k: f64 = (view.patches.iter())
+                    .map(|&(p, k)| s.patch(p as usize) * f64::from(k))
+                    .sum();
+                k * PI / view.rays.max(1) as f64
+            }),
+            SkyModel::AllWeather => 0.0,
         };
         let refl = opts.albedo * h.ghi * (1.0 - view.svf);
         direct += dir;
@@ -307,6 +410,9 @@ fn irradiance_of_hours(
         if let Some(v) = hourly.as_deref_mut() {
             v.push(dir + dif + refl);
         }
+    }
+    if opts.sky == SkyModel::AllWeather && !hour_by_hour {
+        diffuse = table.all_weather_sum(&view);
     }
     Irradiance {
         global_kwh_m2: (direct + diffuse + reflected) / 1000.0,
@@ -343,6 +449,8 @@ pub struct PlaneRays {
     bundle_len: usize,
     /// Per sky ray: whether it is in Perez's horizon band.
     band: Vec<bool>,
+    /// Per sky ray: its patch of [`Patches::reinhart`].
+    patch: Vec<u32>,
     /// Hours (indices into the table) the sun is up in front of the plane, ascending.
     hours: Vec<usize>,
 }
@@ -362,10 +470,12 @@ impl PlaneRays {
             .filter(|(_, h)| h.sun_up() && n.dot(h.sun) > 0.0)
             .map(|(i, _)| i)
             .collect();
+        let patches = Patches::reinhart();
         PlaneRays {
             normal,
             bundle_len,
             band: sky_dirs.iter().map(|d| d.z <= band).collect(),
+            patch: sky_dirs.iter().map(|&d| patch_index(patches, d)).collect(),
             hours,
         }
     }
@@ -384,21 +494,16 @@ impl PlaneRays {
         sky_free: impl Fn(usize) -> bool,
         sun_free: impl Fn(usize) -> bool,
     ) -> Irradiance {
-        let (mut sky, mut in_band, mut band_sky) = (0usize, 0usize, 0usize);
-        for (j, &b) in self.band.iter().enumerate() {
-            let free = usize::from(sky_free(j));
-            sky += free;
+        let (mut free, mut in_band, mut band_sky) = (Vec::new(), 0usize, 0usize);
+        for (j, (&b, &p)) in self.band.iter().zip(&self.patch).enumerate() {
+            let f = sky_free(j);
+            if f {
+                free.push(p);
+            }
             in_band += usize::from(b);
-            band_sky += free * usize::from(b);
+            band_sky += usize::from(f && b);
         }
-        let view = PlaneView {
-            svf: sky as f64 / self.bundle_len.max(1) as f64,
-            horizon: if in_band == 0 {
-                1.0
-            } else {
-                band_sky as f64 / in_band as f64
-            },
-        };
+        let view = PlaneView::of_free(self.bundle_len, free, band_sky, in_band);
         let blocked_hour = |i: usize| self.hours.binary_search(&i).map_or(true, |k| !sun_free(k));
         irradiance_of_hours(table, self.normal, view, blocked_hour, opts, None)
     }
@@ -425,11 +530,17 @@ impl PlaneRays {
             }
         }
         let in_band = self.band.iter().filter(|&&b| b).count().max(1) as f64;
-        let per_ray = iso / self.bundle_len.max(1) as f64;
-        let sky = self
-            .band
-            .iter()
-            .map(|&b| per_ray + if b { band / in_band } else { 0.0 });
+        let rays = self.bundle_len.max(1) as f64;
+        let all_weather = opts.sky == SkyModel::AllWeather;
+        let reflected: f64 = table.hours.iter().map(|h| opts.albedo * h.ghi).sum();
+        let sky = self.band.iter().zip(&self.patch).map(|(&b, &p)| {
+            if all_weather {
+                let sum = table.patch_sums.get(p as usize).copied().unwrap_or(0.0);
+                (PI * sum - reflected) / rays
+            } else {
+                iso / rays + if b { band / in_band } else { 0.0 }
+            }
+        });
         let sun = self.hours.iter().map(|&i| {
             let h = &table.hours[i];
             let cos_inc = n.dot(h.sun);
@@ -490,7 +601,7 @@ mod tests {
         let (w, site) = year();
         let (ghi, _, _) = w.totals_kwh_m2();
         let b = SkyBundles::new(2000, 3).unwrap();
-        for sky in [SkyModel::Perez, SkyModel::Isotropic] {
+        for sky in [SkyModel::AllWeather, SkyModel::Perez, SkyModel::Isotropic] {
             let t = IrradianceTable::new(&w, &site, sky).unwrap();
             let o = IrradianceOptions { sky, albedo: 0.2 };
             let r = irradiance(&t, None, plane_view(None, &b, |_| false), |_| false, &o);
@@ -533,7 +644,7 @@ mod tests {
         let b = SkyBundles::new(1500, 5).unwrap();
         let n = DVec3::new(0.6, -0.8, 0.0);
         let blocked = |d: DVec3| d.x > 0.5 * d.z;
-        for sky in [SkyModel::Perez, SkyModel::Isotropic] {
+        for sky in [SkyModel::AllWeather, SkyModel::Perez, SkyModel::Isotropic] {
             let t = IrradianceTable::new(&w, &site, sky).unwrap();
             let o = IrradianceOptions { sky, albedo: 0.3 };
             let want = irradiance(&t, Some(n), plane_view(Some(n), &b, blocked), blocked, &o);

@@ -16,8 +16,9 @@ pub struct WeatherArgs {
     /// POI's annual global irradiation (kWh/m²) on its plane.
     #[arg(long, value_name = "FILE")]
     pub weather: Option<PathBuf>,
-    /// Diffuse sky model of --weather: perez (Perez 1990 anisotropic) or isotropic.
-    #[arg(long, value_enum, default_value = "perez", requires = "weather")]
+    /// Diffuse sky model of --weather: all-weather (the Perez all-weather sky by daylight coefficients, as
+    /// Radiance), perez (the Perez 1990 transposition, as pvlib on open planes) or isotropic.
+    #[arg(long, value_enum, default_value = "all-weather", requires = "weather")]
     pub sky: SkyModel,
     /// Reflectance of the ground and obstructions with --weather (0 turns reflection off).
     #[arg(long, default_value_t = 0.2, requires = "weather")]

@@ -24,8 +24,9 @@ pub struct Args {
     weather: PathBuf,
     #[command(flatten)]
     site: SiteArgs,
-    /// Diffuse sky model: perez (Perez 1990 anisotropic) or isotropic.
-    #[arg(long, value_enum, default_value = "perez")]
+    /// Diffuse sky model: all-weather (the Perez all-weather sky by daylight coefficients, as
+    /// Radiance), perez (the Perez 1990 transposition, as pvlib on open planes) or isotropic.
+    #[arg(long, value_enum, default_value = "all-weather")]
     sky: SkyModel,
     /// Reflectance of the ground and obstructions (0 turns reflection off).
     #[arg(long, default_value_t = 0.2)]
