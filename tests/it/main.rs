@@ -48,6 +48,8 @@ mod evaluate;
 // `horizon`: profiles against closed forms, and pvlib's masked sun hours against `sun-hours`.
 mod horizon;
 mod irradiance;
+// `irradiance --surfaces`: a cadastre's surfaces, areas and rows against an independent reader.
+mod cadastre;
 // `evaluate --weather`, `lod --max-irradiance-error`, `irradiance --output-attributes` on the
 // Ingolstadt street.
 mod irradiance_lod;

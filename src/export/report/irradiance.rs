@@ -79,6 +79,17 @@ pub enum SkyName {
     Isotropic,
 }
 
+impl SkyName {
+    /// Its name in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            SkyName::AllWeather => "all-weather",
+            SkyName::Perez => "perez",
+            SkyName::Isotropic => "isotropic",
+        }
+    }
+}
+
 impl From<SkyModel> for SkyName {
     fn from(s: SkyModel) -> Self {
         match s {
@@ -286,7 +297,7 @@ impl super::text::Document for IrradianceOutput {
     fn summary(&self, cx: &TextContext) -> Vec<String> {
         let (w, t) = (&self.weather, self.timings_ms.stages("weather and sun"));
         vec![format!(
-            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {:?} sky, albedo {}; {}",
+            "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {} sky, albedo {}; {}",
             self.pois.len(),
             w.hours,
             w.station,
@@ -294,7 +305,7 @@ impl super::text::Document for IrradianceOutput {
             w.ghi_kwh_m2,
             self.site[0],
             self.site[1],
-            self.sky,
+            self.sky.name(),
             self.albedo,
             run_part(self.polygons, cx, self.inputs.len(), &t)
         )]

@@ -2,6 +2,7 @@
 //! `schemas/report.schema.json`), the documents of `svf`, `sun-hours`, `horizon` and
 //! `evaluate` with `--json`, and the model counts of `skylod stats` (`stats`).
 
+pub(crate) mod cadastre;
 pub(crate) mod evaluate;
 pub(crate) mod horizon;
 pub(crate) mod irradiance;
@@ -12,6 +13,7 @@ pub(crate) mod stats;
 pub(crate) mod sun_hours;
 pub(crate) mod svf;
 pub(crate) mod text;
+pub use cadastre::{surface_rows, write_point_table, write_surface_table, SurfaceRow};
 pub use evaluate::write_table;
 pub use irradiance::write_csv;
 pub use report::{Guarantee, Parameters, Report, Timings};

@@ -3,6 +3,7 @@
 
 pub(crate) mod checks;
 pub(crate) mod region;
+pub(crate) mod surfaces;
 mod validate;
 pub use checks::surroundings::Surroundings;
 pub use checks::{
@@ -10,6 +11,10 @@ pub use checks::{
     TrustError, DEFAULT_POI_MARGIN,
 };
 pub use region::{facade_pois, grid_pois, RegionError, RegionSpec};
+pub use surfaces::{
+    cadastre_surfaces, surface_of_poi, surface_pois, surface_pois_of, CadastreSurface,
+    SurfaceClass, WALL_MAX_NZ,
+};
 
 pub use validate::{check_poi, check_poi_list, check_pois, MIN_NORMAL_LENGTH};
 

@@ -62,6 +62,10 @@ pub enum RegionError {
     /// Nothing to sample (the surface or polygon is smaller than one cell).
     #[error("{0}: no point falls inside at this spacing")]
     Empty(String),
+    /// The model has no roof or wall of the classes asked for, or none large enough for a
+    /// point of the grid.
+    #[error("the model has no {} surface with a point at this spacing", .0.iter().map(|c| c.as_str()).collect::<Vec<_>>().join(" or "))]
+    NoSurfaces(Vec<crate::lod::poi::SurfaceClass>),
     /// Two POIs of a run share an id (a region POI and a listed one).
     #[error("POI id {0:?} is given twice (a region POI and a listed one?)")]
     DuplicateId(String),
@@ -70,7 +74,8 @@ pub enum RegionError {
 /// Distance (m) facade POIs are moved out along the surface normal ([`RegionSpec`]).
 pub const FACADE_OFFSET: f64 = 0.05;
 
-/// The region POIs of a run (`--facade`, `--region`/`--height`, `--spacing`): sampled on the
+/// The region POIs of a run (`--facade`, `--region`/`--height`, `--surfaces`, `--spacing`):
+/// sampled on the
 /// model as read, after the listed POIs.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RegionSpec {
@@ -78,14 +83,16 @@ pub struct RegionSpec {
     pub facades: Vec<String>,
     /// A WKT polygon and the height of its grid ([`grid_pois`]).
     pub area: Option<(String, f64)>,
-    /// Grid spacing (m) of both.
+    /// Every roof and/or wall of the model ([`crate::lod::poi::cadastre_surfaces`]).
+    pub surfaces: Vec<crate::lod::poi::SurfaceClass>,
+    /// Grid spacing (m) of all three.
     pub spacing: f64,
 }
 
 impl RegionSpec {
     /// Whether any region is given.
     pub fn is_active(&self) -> bool {
-        !self.facades.is_empty() || self.area.is_some()
+        !self.facades.is_empty() || self.area.is_some() || !self.surfaces.is_empty()
     }
 
     /// `pois` followed by the facades' POIs (`FACADE_OFFSET` out) and the area's, sampled
@@ -99,6 +106,18 @@ impl RegionSpec {
         }
         if let Some((wkt, z)) = &self.area {
             pois.extend(grid_pois(wkt, *z, self.spacing)?);
+        }
+        if !self.surfaces.is_empty() {
+            let sampled = crate::lod::poi::surfaces::surface_pois_of(
+                model,
+                &self.surfaces,
+                self.spacing,
+                FACADE_OFFSET,
+            )?;
+            if sampled.is_empty() {
+                return Err(RegionError::NoSurfaces(self.surfaces.clone()));
+            }
+            pois.extend(sampled);
         }
         let mut seen = HashSet::new();
         if let Some(p) = pois.iter().find(|p| !seen.insert(p.id.as_str())) {
@@ -150,7 +169,7 @@ fn grid_in(outer: &[DVec2], holes: &[Vec<DVec2>], spacing: f64) -> Vec<DVec2> {
 }
 
 /// Points of one polygon at `spacing` in its plane, with its unit normal.
-fn sample_polygon(p: &Polygon, n: DVec3, spacing: f64) -> Vec<DVec3> {
+pub(crate) fn sample_polygon(p: &Polygon, n: DVec3, spacing: f64) -> Vec<DVec3> {
     let Some(&o) = p.exterior().first() else {
         return Vec::new();
     };
@@ -245,7 +264,7 @@ pub fn facade_pois(
 
 /// `pois` without those inside a closed solid of the buildings near them (every building
 /// with an asset within 2 m of the points' box, whole).
-fn outside_solids(model: &CityModel, pois: Vec<Poi>) -> Vec<Poi> {
+pub(crate) fn outside_solids(model: &CityModel, pois: Vec<Poi>) -> Vec<Poi> {
     let mut bb = Bbox::of_points(pois.iter().map(|p| &p.position));
     if bb.is_empty() {
         return pois;

@@ -18,7 +18,7 @@ use crate::lod::poi::checks::PoiFlag;
 use crate::lod::LodOptions;
 use crate::model::runtime::progress::Progress;
 use crate::pipeline::{EvaluateOptions, PoiIrradiance, Traced};
-use crate::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
+use crate::solar::irradiance::{Irradiance, IrradianceOptions, IrradianceTable, SkyModel};
 use crate::solar::weather::Weather;
 use crate::solar::{HorizonOptions, Site, SkyBundles, SunTable};
 use std::time::Instant;
@@ -281,13 +281,13 @@ fn irradiance_line(y: &WeatherYear, pois: &[PoiEval]) -> String {
         .filter_map(|p| p.lod_irradiance_error)
         .fold(0.0, f64::max);
     format!(
-        "irradiance: {} hours of {} (GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {:?} sky, albedo {}; largest LoD error {:.3}%",
+        "irradiance: {} hours of {} (GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {} sky, albedo {}; largest LoD error {:.3}%",
         y.setting.table.len(),
         y.summary.station,
         y.summary.ghi_kwh_m2,
         y.site[0],
         y.site[1],
-        y.setting.opts.sky,
+        y.setting.opts.sky.name(),
         y.setting.opts.albedo,
         100.0 * e
     )
@@ -355,6 +355,11 @@ pub struct IrradianceRun {
 }
 
 impl IrradianceRun {
+    /// Each POI's annual figures, in order.
+    pub fn annual(&self) -> Vec<Irradiance> {
+        self.traced.results.iter().map(|r| r.annual).collect()
+    }
+
     /// Each POI's annual global irradiation (kWh/m²), in order.
     pub fn annual_global(&self) -> Vec<f64> {
         let r = self.traced.results.iter();

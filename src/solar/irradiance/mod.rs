@@ -92,6 +92,17 @@ pub enum SkyModel {
     Isotropic,
 }
 
+impl SkyModel {
+    /// Its name: `all-weather`, `perez` or `isotropic`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SkyModel::AllWeather => "all-weather",
+            SkyModel::Perez => "perez",
+            SkyModel::Isotropic => "isotropic",
+        }
+    }
+}
+
 /// Options of [`irradiance`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IrradianceOptions {

@@ -1,12 +1,12 @@
-//! `--facade ID` / `--region WKT --height Z` with `--spacing M`: POIs sampled over a surface
-//! or an area ([`skylod::lod::poi::region`]), on `lod`, `svf`, `sun-hours` and `evaluate`. They are
+//! `--facade ID` / `--region WKT --height Z` / `--surfaces roof,wall` with `--spacing M`: POIs
+//! sampled over a surface, an area or every roof and wall ([`skylod::lod::poi::region`]), on `lod`, `svf`, `sun-hours` and `evaluate`. They are
 //! added after the `--poi`/`--pois` points, in the model's CRS.
 
 use crate::args::poi::PoiArgs;
 use crate::args::positive;
 use anyhow::bail;
 use skylod::lod::poi::Poi;
-use skylod::lod::poi::RegionSpec;
+use skylod::lod::poi::{RegionSpec, SurfaceClass};
 use skylod::model::CityModel;
 
 #[derive(clap::Args, Debug)]
@@ -20,30 +20,41 @@ pub struct RegionArgs {
     /// CRS, e.g. "POLYGON((x y, x y, x y, x y))" (holes allowed).
     #[arg(long, value_name = "WKT", requires = "height")]
     region: Option<String>,
+    /// POIs on every roof and/or wall of the model (roof, wall or roof,wall): a grid of
+    /// --spacing in the plane of each polygon, 5 cm out along its outward normal, not in
+    /// openings; a body without thematic surfaces split into roof-like and wall-like faces by
+    /// their normals. Named <surface>:<k>.
+    #[arg(long, value_enum, value_name = "KINDS", value_delimiter = ',', num_args = 1..)]
+    surfaces: Vec<SurfaceClass>,
     /// Height (model CRS) of the --region grid.
     #[arg(long, value_name = "Z", allow_hyphen_values = true)]
     height: Option<f64>,
-    /// Grid spacing (m) of --facade and --region.
+    /// Grid spacing (m) of --facade, --region and --surfaces.
     #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = positive)]
     spacing: f64,
 }
 
 impl RegionArgs {
-    /// Whether `--facade` or `--region` is given.
+    /// Whether `--facade`, `--region` or `--surfaces` is given.
     pub fn active(&self) -> bool {
-        !self.facade.is_empty() || self.region.is_some()
+        !self.facade.is_empty() || self.region.is_some() || !self.surfaces.is_empty()
+    }
+
+    /// The classes of `--surfaces`.
+    pub fn surfaces(&self) -> &[SurfaceClass] {
+        &self.surfaces
     }
 
     /// The `--poi`/`--pois` points; none needed when a region is given.
     pub fn points(&self, pois: &PoiArgs) -> anyhow::Result<Vec<Poi>> {
         if self.active() && pois.poi.is_empty() && pois.pois.is_none() {
             if pois.crs.poi_crs.is_some() {
-                bail!("--facade and --region POIs are in the model's CRS: --poi-crs does not apply to them");
+                bail!("--facade, --region and --surfaces POIs are in the model's CRS: --poi-crs does not apply to them");
             }
             return Ok(Vec::new());
         }
         if self.active() && pois.crs.poi_crs.is_some() {
-            bail!("--facade and --region POIs are in the model's CRS: give --poi-crs only with --poi/--pois alone");
+            bail!("--facade, --region and --surfaces POIs are in the model's CRS: give --poi-crs only with --poi/--pois alone");
         }
         pois.points()
     }
@@ -54,6 +65,7 @@ impl RegionArgs {
         let spec = RegionSpec {
             facades: self.facade.clone(),
             area: self.region.clone().zip(self.height),
+            surfaces: self.surfaces.clone(),
             spacing: self.spacing,
         };
         let pois = spec.extend(pois, model)?;

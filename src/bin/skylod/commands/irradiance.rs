@@ -5,7 +5,10 @@ use crate::args::weather::weather_site;
 use crate::commands::emit;
 use crate::Outcome;
 use anyhow::Context;
-use skylod::export::report::write_csv;
+use skylod::export::report::{
+    surface_rows, write_csv, write_point_table, write_surface_table, Document,
+};
+use skylod::lod::poi::cadastre_surfaces;
 use skylod::pipeline::session::ms_since;
 use skylod::pipeline::session::IrradianceRequest;
 use skylod::solar::irradiance::SkyModel;
@@ -51,13 +54,34 @@ pub struct Args {
     overwrite: bool,
     #[command(flatten)]
     attributes: crate::args::attributes::AttributeArgs,
+    /// With --surfaces: write one row per roof or wall surface to this CSV file (area,
+    /// points, mean, least and greatest kWh/m², the building's roof total in kWh/year).
+    #[arg(long, value_name = "FILE")]
+    table: Option<PathBuf>,
+    /// With --surfaces: write every sample point (surface, position and normal in the
+    /// model's CRS, global, direct, diffuse and reflected kWh/m²) to this CSV file.
+    #[arg(long, value_name = "FILE")]
+    points: Option<PathBuf>,
+    /// With --table: add each surface's area whose points reach KWH kWh/m² a year.
+    #[arg(long, value_name = "KWH", requires = "table")]
+    threshold: Option<f64>,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.site.check("irradiance", true)?;
     crate::args::weather::albedo(args.albedo)?;
-    if let Some(h) = &args.hourly {
-        skylod::io::check_target(h, [], args.overwrite)?;
+    for f in [&args.hourly, &args.table, &args.points]
+        .into_iter()
+        .flatten()
+    {
+        skylod::io::check_target(f, [], args.overwrite)?;
+    }
+    let surfaces = args.tracing.region.surfaces().to_vec();
+    if surfaces.is_empty() && (args.table.is_some() || args.points.is_some()) {
+        anyhow::bail!("--table and --points list the surfaces of --surfaces: give --surfaces roof,wall (or one of them)");
+    }
+    if !surfaces.is_empty() && args.tracing.shard.resolve()?.is_some() {
+        anyhow::bail!("--surfaces cannot be split with --shard yet: a surface's points would fall into several shards");
     }
     let region = args.tracing.region.active();
     args.attributes.check(region, args.overwrite)?;
@@ -86,6 +110,29 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if let Some(n) = (args.attributes).write(&s.study.framed(), &values, args.overwrite)? {
         crate::log::summary!("irradiance: {n} surface(s) given skylodAnnualIrradiation");
     }
+    if let Some(path) = &args.table {
+        // areas in metres: the model in its tracing frame (same surfaces as the source's)
+        let list = cadastre_surfaces(&s.study.framed().model, &surfaces);
+        let rows = surface_rows(&list, &run.ids, &values, args.threshold);
+        skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
+            write_surface_table(w, &rows, args.threshold)?;
+            Ok(0)
+        })
+        .with_context(|| format!("writing {}", path.display()))?;
+        let sampled = rows.iter().filter(|r| r.points > 0).count();
+        crate::log::summary!(
+            "irradiance: {} surface(s) in {}, {sampled} with points",
+            rows.len(),
+            path.display()
+        );
+    }
+    if let Some(path) = &args.points {
+        skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
+            write_point_table(w, s.study.pois(), &run.annual())?;
+            Ok(0)
+        })
+        .with_context(|| format!("writing {}", path.display()))?;
+    }
     if let Some(path) = &args.hourly {
         skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
             run.write_hourly(w, &weather)?;
@@ -93,10 +140,16 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         })
         .with_context(|| format!("writing {}", path.display()))?;
     }
+    // a cadastre's tables are its answer: the POI table only when asked for
+    let tables = args.table.is_some() || args.points.is_some();
     if args.csv {
         write_csv(std::io::stdout().lock(), &run.doc.doc.pois).context("writing to stdout")?;
-    } else {
+    } else if args.json || !tables {
         emit(&run.doc.doc, args.json, &s.text())?;
+    } else {
+        for line in run.doc.doc.summary(&s.text()) {
+            crate::log::summary!("{line}");
+        }
     }
     Ok(s.outcome())
 }

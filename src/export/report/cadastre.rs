@@ -1,0 +1,206 @@
+//! A solar cadastre's tables (`irradiance --surfaces`): one row per roof or wall surface
+//! ([`surface_rows`], [`write_surface_table`]) and one per sample point
+//! ([`write_point_table`]).
+//!
+//! A surface's row: its name, its building's `gml:id`, `roof` or `wall`, its area (the
+//! polygons', holes out), its points, the mean, least and greatest annual global irradiation
+//! of its points (kWh/m²; the mean is the plain mean of the points, which sample the surface
+//! evenly), with a threshold the area whose points reach it (the surface's area times the
+//! share of its points at or above it), and the building's roof total: the sum over its roof
+//! surfaces of mean × area (kWh/year). A surface without points (smaller than the grid) has
+//! an empty mean, least and greatest.
+//!
+//! # Example
+//! ```
+//! use skylod::export::report::{surface_rows, write_surface_table};
+//! use skylod::lod::poi::{CadastreSurface, SurfaceClass};
+//! let roof = CadastreSurface { name: "r".into(), asset: 0, class: SurfaceClass::Roof,
+//!     building: Some("B".into()), polygons: vec![0], area_m2: 20.0 };
+//! let rows = surface_rows(&[roof], &["r:0", "r:1"], &[1000.0, 1200.0], Some(1100.0));
+//! assert_eq!((rows[0].mean_kwh_m2, rows[0].area_above_m2), (Some(1100.0), Some(10.0)));
+//! assert_eq!(rows[0].building_roof_kwh, Some(22_000.0));
+//! let mut csv = Vec::new();
+//! write_surface_table(&mut csv, &rows, Some(1100.0)).unwrap();
+//! assert!(String::from_utf8(csv).unwrap().starts_with("surface_id,building_id,kind,area_m2"));
+//! ```
+
+use crate::lod::poi::{surface_of_poi, CadastreSurface, SurfaceClass};
+use crate::model::Poi;
+use crate::solar::irradiance::Irradiance;
+use std::collections::HashMap;
+use std::io::Write;
+
+/// One surface of a cadastre (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceRow {
+    /// The surface's name.
+    pub surface_id: String,
+    /// Its building's `gml:id`, if any.
+    pub building_id: Option<String>,
+    /// Roof or wall.
+    pub kind: SurfaceClass,
+    /// Its area (m²).
+    pub area_m2: f64,
+    /// Its sample points.
+    pub points: usize,
+    /// Mean annual global irradiation of its points (kWh/m²).
+    pub mean_kwh_m2: Option<f64>,
+    /// The least of its points.
+    pub min_kwh_m2: Option<f64>,
+    /// The greatest of its points.
+    pub max_kwh_m2: Option<f64>,
+    /// With a threshold: the area whose points reach it (m²).
+    pub area_above_m2: Option<f64>,
+    /// The building's roofs: Σ mean × area (kWh/year).
+    pub building_roof_kwh: Option<f64>,
+}
+
+/// The rows of `surfaces` from the annual global irradiation `global[k]` of each point
+/// `ids[k]` (named `<surface>:<k>`, as [`crate::lod::poi::surface_pois`] names them); points of
+/// other surfaces are left out.
+pub fn surface_rows<S: AsRef<str>>(
+    surfaces: &[CadastreSurface],
+    ids: &[S],
+    global: &[f64],
+    threshold: Option<f64>,
+) -> Vec<SurfaceRow> {
+    let index: HashMap<&str, usize> = (surfaces.iter().enumerate())
+        .map(|(i, s)| (s.name.as_str(), i))
+        .collect();
+    let mut values: Vec<Vec<f64>> = vec![Vec::new(); surfaces.len()];
+    for (id, &g) in ids.iter().zip(global) {
+        if let Some(&i) = index.get(surface_of_poi(id.as_ref())) {
+            values[i].push(g);
+        }
+    }
+    let mut rows: Vec<SurfaceRow> = (surfaces.iter().zip(&values))
+        .map(|(s, v)| {
+            let n = v.len();
+            let mean = (n > 0).then(|| v.iter().sum::<f64>() / n as f64);
+            let above = threshold.map(|t| {
+                let k = v.iter().filter(|&&g| g >= t).count();
+                if n == 0 {
+                    0.0
+                } else {
+                    s.area_m2 * k as f64 / n as f64
+                }
+            });
+            SurfaceRow {
+                surface_id: s.name.clone(),
+                building_id: s.building.clone(),
+                kind: s.class,
+                area_m2: s.area_m2,
+                points: n,
+                mean_kwh_m2: mean,
+                min_kwh_m2: v.iter().copied().reduce(f64::min),
+                max_kwh_m2: v.iter().copied().reduce(f64::max),
+                area_above_m2: above,
+                building_roof_kwh: None,
+            }
+        })
+        .collect();
+    let mut roofs: HashMap<String, f64> = HashMap::new();
+    for r in &rows {
+        if let (Some(b), SurfaceClass::Roof, Some(m)) = (&r.building_id, r.kind, r.mean_kwh_m2) {
+            *roofs.entry(b.clone()).or_default() += m * r.area_m2;
+        }
+    }
+    for r in &mut rows {
+        r.building_roof_kwh = r.building_id.as_ref().and_then(|b| roofs.get(b).copied());
+    }
+    rows
+}
+
+/// A number with `digits` decimals, empty for none.
+fn num(v: Option<f64>, digits: usize) -> String {
+    v.map_or(String::new(), |v| format!("{v:.digits$}"))
+}
+
+/// The surface table as CSV: `surface_id, building_id, kind, area_m2, points, mean_kwh_m2,
+/// min_kwh_m2, max_kwh_m2`, then `area_above_m2` when `threshold` is given, then
+/// `building_roof_kwh`.
+///
+/// # Errors
+/// The writer's.
+pub fn write_surface_table(
+    out: impl Write,
+    rows: &[SurfaceRow],
+    threshold: Option<f64>,
+) -> csv::Result<()> {
+    let mut w = csv::Writer::from_writer(out);
+    let mut head = vec![
+        "surface_id",
+        "building_id",
+        "kind",
+        "area_m2",
+        "points",
+        "mean_kwh_m2",
+        "min_kwh_m2",
+        "max_kwh_m2",
+    ];
+    if threshold.is_some() {
+        head.push("area_above_m2");
+    }
+    head.push("building_roof_kwh");
+    w.write_record(&head)?;
+    for r in rows {
+        let mut rec = vec![
+            r.surface_id.clone(),
+            r.building_id.clone().unwrap_or_default(),
+            r.kind.as_str().to_string(),
+            format!("{:.3}", r.area_m2),
+            r.points.to_string(),
+            num(r.mean_kwh_m2, 3),
+            num(r.min_kwh_m2, 3),
+            num(r.max_kwh_m2, 3),
+        ];
+        if threshold.is_some() {
+            rec.push(num(r.area_above_m2, 3));
+        }
+        rec.push(num(r.building_roof_kwh, 1));
+        w.write_record(&rec)?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// Every sample point as CSV: `surface_id, x, y, z, nx, ny, nz, global_kwh_m2,
+/// direct_kwh_m2, diffuse_kwh_m2, reflected_kwh_m2`, the point in the model's CRS (`pois`,
+/// named by [`crate::lod::poi::surface_pois`]) with its annual values `annual` in order.
+///
+/// # Errors
+/// The writer's.
+pub fn write_point_table(out: impl Write, pois: &[Poi], annual: &[Irradiance]) -> csv::Result<()> {
+    let mut w = csv::Writer::from_writer(out);
+    w.write_record([
+        "surface_id",
+        "x",
+        "y",
+        "z",
+        "nx",
+        "ny",
+        "nz",
+        "global_kwh_m2",
+        "direct_kwh_m2",
+        "diffuse_kwh_m2",
+        "reflected_kwh_m2",
+    ])?;
+    for (p, r) in pois.iter().zip(annual) {
+        let n = p.normal.unwrap_or(glam::DVec3::Z);
+        w.write_record([
+            surface_of_poi(&p.id).to_string(),
+            format!("{:.3}", p.position.x),
+            format!("{:.3}", p.position.y),
+            format!("{:.3}", p.position.z),
+            format!("{:.4}", n.x),
+            format!("{:.4}", n.y),
+            format!("{:.4}", n.z),
+            format!("{:.3}", r.global_kwh_m2),
+            format!("{:.3}", r.direct_kwh_m2),
+            format!("{:.3}", r.diffuse_kwh_m2),
+            format!("{:.3}", r.reflected_kwh_m2),
+        ])?;
+    }
+    w.flush()?;
+    Ok(())
+}
