@@ -39,6 +39,7 @@ __all__ = [
     "sun_hours",
     "horizon",
     "irradiance",
+    "irradiance_surfaces",
     "evaluate",
     "lod",
     "convert",
@@ -104,6 +105,8 @@ def _setup(
         "source_crs": source_crs,
         "poi_margin": float(poi_margin),
         "allow_mixed_crs": bool(allow_mixed_crs),
+        "surfaces": [],
+        "spacing": 1.0,
     }
 
 
@@ -276,6 +279,65 @@ def irradiance(
         )
     )
     return doc if full else _column(doc, "global_kwh_m2")
+
+
+def irradiance_surfaces(
+    paths: Paths,
+    weather: PathArg,
+    surfaces: Sequence[str] = ("roof",),
+    *,
+    spacing: float = 1.0,
+    site: Site = None,
+    sky: str = "all-weather",
+    albedo: float = 0.2,
+    rays: int = 10_000,
+    seed: int = 1,
+    threshold: Optional[float] = None,
+    points: bool = False,
+    source_crs: Optional[str] = None,
+    allow_mixed_crs: bool = False,
+    progress: Progress = None,
+) -> Dict[str, np.ndarray]:
+    """A solar cadastre: annual irradiation on every roof and/or wall of the model
+    (``skylod irradiance --surfaces … --table``).
+
+    ``surfaces`` holds ``"roof"`` and/or ``"wall"``; points are sampled every ``spacing``
+    metres on each surface. Returns the surface table as columns of numpy arrays
+    (``surface_id``, ``building_id``, ``kind``, ``area_m2``, ``points``, ``mean_kwh_m2``,
+    ``min_kwh_m2``, ``max_kwh_m2``, ``area_above_m2`` with ``threshold``,
+    ``building_roof_kwh``), or with ``points=True`` one row per sample point
+    (``surface_id``, ``x``, ``y``, ``z``, ``nx``, ``ny``, ``nz``, ``global_kwh_m2``,
+    ``direct_kwh_m2``, ``diffuse_kwh_m2``, ``reflected_kwh_m2``). A DataFrame in one line:
+    ``pandas.DataFrame(skylod.irradiance_surfaces(...))``.
+
+    >>> skylod.irradiance_surfaces("tiles/", "berlin.epw", ("roof", "wall"))  # doctest: +SKIP
+    {'surface_id': array(['R1', 'W1'], dtype=object), ..., 'mean_kwh_m2': array([1012.4, 455.0])}
+    """
+    kinds = [surfaces] if isinstance(surfaces, str) else list(surfaces)
+    setup = _setup(paths, [], None, None, source_crs, DEFAULT_POI_MARGIN, allow_mixed_crs)
+    setup["surfaces"] = [str(k) for k in kinds]
+    setup["spacing"] = float(spacing)
+    doc = json.loads(
+        _skylod.irradiance_surfaces(
+            setup, os.fspath(weather), site, sky, albedo, rays, seed, threshold,
+            progress=progress,
+        )
+    )
+    table = doc["points" if points else "surfaces"]
+    if not points and threshold is None:
+        table = [{k: v for k, v in r.items() if k != "area_above_m2"} for r in table]
+    keys = list(table[0]) if table else []
+    text = {"surface_id", "building_id", "kind"}
+
+    def column(k: str) -> np.ndarray:
+        values = [r[k] for r in table]
+        if k in text:
+            return np.array(values, dtype=object)
+        if k == "points":
+            return np.array(values, dtype=np.int64)
+        return np.array([np.nan if v is None else v for v in values], dtype=np.float64)
+
+    return {k: column(k) for k in keys}
 
 
 def evaluate(

@@ -11,13 +11,15 @@ mod write;
 use pyo3::prelude::*;
 use relay::{message, run, SkylodError};
 use setup::{load, ms, Setup};
-use skylod::export::report::SunSetting;
+use skylod::export::report::{surface_rows, SunSetting};
+use skylod::lod::poi::{cadastre_surfaces, surface_of_poi, SurfaceClass};
+use skylod::model::Progress;
 use skylod::pipeline::session::weather_site;
-use skylod::pipeline::session::{EvaluateRequest, IrradianceRequest};
+use skylod::pipeline::session::{EvaluateRequest, IrradianceRequest, IrradianceRun};
 use skylod::solar::irradiance::SkyModel;
 use skylod::solar::read_weather;
 use skylod::solar::{HorizonOptions, Site, SkyBundles, SunTable};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// A document as pretty JSON, as the commands print it.
@@ -99,6 +101,61 @@ fn horizon(
     })
 }
 
+/// The inputs of `setup` read and `irradiance` run on them under `weather` at `site` (the
+/// model's when `None`), with `sky` and albedo, rays and seed.
+fn irradiance_run(
+    setup: &Setup,
+    weather: &Path,
+    site: Option<(f64, f64)>,
+    (sky, albedo): (SkyModel, f64),
+    (rays, seed): (usize, u64),
+    p: &dyn Progress,
+) -> Result<(setup::Loaded, IrradianceRun), String> {
+    let t0 = Instant::now();
+    let w = read_weather(weather).map_err(|e| message(&e))?;
+    let weather_ms = ms(t0);
+    let bundles = SkyBundles::new(rays, seed).map_err(|e| message(&e))?;
+    let l = load(setup, p)?;
+    let model = skylod::model::crs::model_site(l.study.source(), l.study.crs());
+    let at = weather_site(site, model, &w)
+        .map_err(|e| format!("irradiance: {e}; give site=(lat, lon) to use this weather anyway"))?;
+    let req = IrradianceRequest {
+        path: weather,
+        weather: &w,
+        weather_ms,
+        site: at.lat_lon().into(),
+        sky,
+        albedo,
+        bundles: &bundles,
+        rays,
+        hourly: false,
+    };
+    let run = (l.study.irradiance_output(&req, p)).map_err(|e| message(&e))?;
+    Ok((l, run))
+}
+
+/// The sky model named `sky`.
+fn sky_model(sky: &str) -> PyResult<SkyModel> {
+    match sky {
+        "all-weather" => Ok(SkyModel::AllWeather),
+        "perez" => Ok(SkyModel::Perez),
+        "isotropic" => Ok(SkyModel::Isotropic),
+        other => Err(SkylodError::new_err(format!(
+            "sky must be \"all-weather\", \"perez\" or \"isotropic\" (got {other:?})"
+        ))),
+    }
+}
+
+/// An albedo in 0..1.
+fn check_albedo(albedo: f64) -> PyResult<()> {
+    if !(0.0..=1.0).contains(&albedo) {
+        return Err(SkylodError::new_err(format!(
+            "albedo must be in 0..1 (got {albedo})"
+        )));
+    }
+    Ok(())
+}
+
 /// `skylod irradiance --json`.
 #[pyfunction]
 #[pyo3(signature = (setup, weather, site=None, sky="all-weather", albedo=0.2, rays=10_000, seed=1, progress=None))]
@@ -114,44 +171,75 @@ fn irradiance(
     seed: u64,
     progress: Option<PyObject>,
 ) -> PyResult<String> {
-    let sky = match sky {
-        "all-weather" => SkyModel::AllWeather,
-        "perez" => SkyModel::Perez,
-        "isotropic" => SkyModel::Isotropic,
-        other => {
-            return Err(SkylodError::new_err(format!(
-                "sky must be \"all-weather\", \"perez\" or \"isotropic\" (got {other:?})"
-            )))
-        }
-    };
-    if !(0.0..=1.0).contains(&albedo) {
-        return Err(SkylodError::new_err(format!(
-            "albedo must be in 0..1 (got {albedo})"
-        )));
+    let sky = sky_model(sky)?;
+    check_albedo(albedo)?;
+    run(py, progress, move |p| {
+        let (_, run) = irradiance_run(&setup, &weather, site, (sky, albedo), (rays, seed), p)?;
+        json(&run.doc.doc)
+    })
+}
+
+/// `skylod irradiance --surfaces … --table --points`: `{"surfaces": [rows], "points":
+/// [rows]}` as JSON, rows as the CSV files' (numbers unrounded).
+#[pyfunction]
+#[pyo3(signature = (setup, weather, site=None, sky="all-weather", albedo=0.2, rays=10_000, seed=1, threshold=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn irradiance_surfaces(
+    py: Python<'_>,
+    setup: Setup,
+    weather: PathBuf,
+    site: Option<(f64, f64)>,
+    sky: &str,
+    albedo: f64,
+    rays: usize,
+    seed: u64,
+    threshold: Option<f64>,
+    progress: Option<PyObject>,
+) -> PyResult<String> {
+    let sky = sky_model(sky)?;
+    check_albedo(albedo)?;
+    if setup.surfaces.is_empty() {
+        return Err(SkylodError::new_err(
+            "surfaces: give \"roof\" and/or \"wall\"",
+        ));
     }
     run(py, progress, move |p| {
-        let t0 = Instant::now();
-        let w = read_weather(&weather).map_err(|e| message(&e))?;
-        let weather_ms = ms(t0);
-        let bundles = SkyBundles::new(rays, seed).map_err(|e| message(&e))?;
-        let l = load(&setup, p)?;
-        let model = skylod::model::crs::model_site(l.study.source(), l.study.crs());
-        let at = weather_site(site, model, &w).map_err(|e| {
-            format!("irradiance: {e}; give site=(lat, lon) to use this weather anyway")
-        })?;
-        let req = IrradianceRequest {
-            path: &weather,
-            weather: &w,
-            weather_ms,
-            site: at.lat_lon().into(),
-            sky,
-            albedo,
-            bundles: &bundles,
-            rays,
-            hourly: false,
-        };
-        let run = (l.study.irradiance_output(&req, p)).map_err(|e| message(&e))?;
-        json(&run.doc.doc)
+        let (l, run) = irradiance_run(&setup, &weather, site, (sky, albedo), (rays, seed), p)?;
+        let classes: Vec<SurfaceClass> = (setup.surfaces.iter())
+            .filter_map(|c| match c.as_str() {
+                "roof" => Some(SurfaceClass::Roof),
+                "wall" => Some(SurfaceClass::Wall),
+                _ => None,
+            })
+            .collect();
+        let list = cadastre_surfaces(&l.study.framed().model, &classes);
+        let annual = run.annual();
+        let global: Vec<f64> = annual.iter().map(|r| r.global_kwh_m2).collect();
+        let rows = surface_rows(&list, &run.ids, &global, threshold);
+        let surfaces: Vec<serde_json::Value> = rows
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "surface_id": r.surface_id, "building_id": r.building_id,
+                    "kind": r.kind.as_str(), "area_m2": r.area_m2, "points": r.points,
+                    "mean_kwh_m2": r.mean_kwh_m2, "min_kwh_m2": r.min_kwh_m2,
+                    "max_kwh_m2": r.max_kwh_m2, "area_above_m2": r.area_above_m2,
+                    "building_roof_kwh": r.building_roof_kwh,
+                })
+            })
+            .collect();
+        let points: Vec<serde_json::Value> = (l.study.pois().iter().zip(&annual))
+            .map(|(p, r)| {
+                let (nx, ny, nz) = p.normal.map_or((0.0, 0.0, 1.0), |n| (n.x, n.y, n.z));
+                serde_json::json!({
+                    "surface_id": surface_of_poi(&p.id), "x": p.position.x,
+                    "y": p.position.y, "z": p.position.z, "nx": nx, "ny": ny, "nz": nz,
+                    "global_kwh_m2": r.global_kwh_m2, "direct_kwh_m2": r.direct_kwh_m2,
+                    "diffuse_kwh_m2": r.diffuse_kwh_m2, "reflected_kwh_m2": r.reflected_kwh_m2,
+                })
+            })
+            .collect();
+        json(&serde_json::json!({"surfaces": surfaces, "points": points}))
     })
 }
 
@@ -198,6 +286,7 @@ fn _skylod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sun_hours, m)?)?;
     m.add_function(wrap_pyfunction!(horizon, m)?)?;
     m.add_function(wrap_pyfunction!(irradiance, m)?)?;
+    m.add_function(wrap_pyfunction!(irradiance_surfaces, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(write::stats, m)?)?;
     m.add_function(wrap_pyfunction!(write::lod, m)?)?;

@@ -1,10 +1,10 @@
 //! Inputs and POIs from Python into a [`Study`] (`Scene::load` → `Scene::frame`), as the
 //! tracing commands read and frame them (`--poi`, `--pois`, `--poi-crs`, `--source-crs`,
-//! `--poi-margin`, `--allow-mixed-crs`).
+//! `--poi-margin`, `--allow-mixed-crs`, `--surfaces` with `--spacing`).
 
 use crate::relay::message;
 use pyo3::prelude::*;
-use skylod::lod::poi::{check_pois, read_pois_csv, Located, Poi};
+use skylod::lod::poi::{check_pois, read_pois_csv, Located, Poi, RegionSpec, SurfaceClass};
 use skylod::model::crs::Crs;
 use skylod::model::Progress;
 use skylod::pipeline::batch::expand;
@@ -39,6 +39,25 @@ pub struct Setup {
     /// `--allow-mixed-crs`.
     #[pyo3(item)]
     pub allow_mixed_crs: bool,
+    /// `--surfaces`: `"roof"` and/or `"wall"`, points on every such surface after `pois`.
+    #[pyo3(item)]
+    pub surfaces: Vec<String>,
+    /// `--spacing` (m) of `surfaces`.
+    #[pyo3(item)]
+    pub spacing: f64,
+}
+
+impl Setup {
+    /// The classes of [`Setup::surfaces`].
+    fn surface_classes(&self) -> Result<Vec<SurfaceClass>, String> {
+        (self.surfaces.iter())
+            .map(|c| match c.as_str() {
+                "roof" => Ok(SurfaceClass::Roof),
+                "wall" => Ok(SurfaceClass::Wall),
+                other => Err(format!("surfaces: \"roof\" or \"wall\", not {other:?}")),
+            })
+            .collect()
+    }
 }
 
 /// A study and the milliseconds of its reading, as the documents of `lod` give them.
@@ -98,7 +117,7 @@ pub fn points(s: &Setup) -> Result<Vec<Poi>, String> {
     if let Some(csv) = &s.pois_csv {
         out.extend(read_pois_csv(csv).map_err(|e| message(&e))?);
     }
-    if out.is_empty() {
+    if out.is_empty() && s.surfaces.is_empty() {
         return Err("no point of interest: give pois=[(x, y, z), ...] or a CSV file".into());
     }
     check_pois(&out).map_err(|e| message(&e))?;
@@ -109,6 +128,7 @@ pub fn points(s: &Setup) -> Result<Vec<Poi>, String> {
 /// error here: a program gets no partial answer), frame the POIs.
 pub fn load(s: &Setup, progress: &dyn Progress) -> Result<Loaded, String> {
     let pois = points(s)?;
+    let classes = s.surface_classes()?;
     let mut opts = SceneOptions::default();
     opts.frame.poi_margin = s.poi_margin;
     opts.frame.poi_crs = s
@@ -125,6 +145,14 @@ pub fn load(s: &Setup, progress: &dyn Progress) -> Result<Loaded, String> {
     let scene = Scene::load_inputs(inputs, &opts, progress).map_err(|e| message(&e))?;
     let read_ms = ms(t);
     failures(scene.failures())?;
+    let region = RegionSpec {
+        surfaces: classes,
+        spacing: s.spacing,
+        ..RegionSpec::default()
+    };
+    let pois = region
+        .extend(pois, scene.model())
+        .map_err(|e| message(&e))?;
     let study = scene.frame(pois).map_err(|e| message(&e))?;
     Ok(Loaded { study, read_ms })
 }

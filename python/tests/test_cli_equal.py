@@ -128,6 +128,38 @@ def test_irradiance_equals_the_cli(cli, synth, synth_pois):
         skylod.irradiance(synth, synth_pois, tmy)
 
 
+def test_irradiance_surfaces_equals_the_cli_s_tables(cli, shared_data, tmp_path):
+    import csv
+
+    import pandas as pd
+
+    tmy = pvlib_tmy3()
+    house = shared_data / "kit-fzk-haus" / "citygml2" / "fzk_haus_lod2_v2.gml"
+    table, points = tmp_path / "t.csv", tmp_path / "p.csv"
+    cli.run(
+        "irradiance", house, "--surfaces", "roof,wall", "--weather", tmy, "--lat", 36.1,
+        "--lon", -79.9, "--rays", 1000, "--threshold", 1000, "--table", table,
+        "--points", points,
+    )
+    kw = dict(site=(36.1, -79.9), rays=1000)
+    got = skylod.irradiance_surfaces(house, tmy, ("roof", "wall"), threshold=1000, **kw)
+    want = list(csv.DictReader(open(table)))
+    assert got["surface_id"].tolist() == [r["surface_id"] for r in want]
+    assert got["kind"].tolist() == [r["kind"] for r in want]
+    assert got["points"].tolist() == [int(r["points"]) for r in want]
+    for k in ("area_m2", "mean_kwh_m2", "min_kwh_m2", "max_kwh_m2", "area_above_m2"):
+        assert np.allclose(got[k], [float(r[k]) for r in want], atol=6e-4), k
+    p = skylod.irradiance_surfaces(house, tmy, ["roof", "wall"], points=True, **kw)
+    want = list(csv.DictReader(open(points)))
+    assert p["surface_id"].tolist() == [r["surface_id"] for r in want]
+    assert np.allclose(p["global_kwh_m2"], [float(r["global_kwh_m2"]) for r in want], atol=6e-4)
+    # a DataFrame in one line; roofs only by default, no threshold column without one
+    roofs = pd.DataFrame(skylod.irradiance_surfaces(house, tmy, **kw))
+    assert set(roofs["kind"]) == {"roof"} and "area_above_m2" not in roofs
+    with pytest.raises(skylod.SkylodError, match="roof"):
+        skylod.irradiance_surfaces(house, tmy, ("roofs",), **kw)
+
+
 def test_lod_writes_the_cli_s_bytes_and_report(cli, synth, synth_pois, tmp_path):
     out = tmp_path / "lod.gml"
     rep = tmp_path / "report.json"

@@ -59,7 +59,7 @@
 use super::chunks::{Chunks, Part};
 use super::cityjson_source::{from_source, FromSource};
 use super::cityjson_vertices::{record_uses, Vertices};
-use super::{asset_name, Content, ExportSummary};
+use super::{Content, ExportSummary};
 use crate::io::citygml::read::StreamSummary;
 use crate::model::{Asset, AssetKind, Bbox, CityModel, Polygon};
 use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
@@ -571,7 +571,7 @@ impl<'a> Plan<'a> {
             }
             // bodies are never installations nor outside a building: `i` is not a body
             let global = p.assets_before + i;
-            let cand = asset_name(model, i, global);
+            let cand = model.asset_name(i, global);
             if fresh {
                 if let Some(id) = ids.unique(cand.clone()) {
                     ids.assets.insert(global, id);

@@ -58,7 +58,6 @@ use crate::io::citygml::read::StreamSummary;
 use crate::io::citygml::write::WriteOptions;
 use crate::io::citygml::WriteError;
 use crate::lod::rough::RoughGeometry;
-use crate::model::CityModel;
 use std::path::Path;
 
 /// What the export holds per asset.
@@ -221,23 +220,4 @@ fn export(
         }
         None => Err(WriteError::Declined(chunks.label().into())),
     }
-}
-
-/// Name in an export of asset `i` of `model`, asset `global` of the whole document (`i` itself
-/// but in a chunk of a streamed read): its `gml:id`, else its building's id and its index
-/// among the building's assets (`B1_3`), else `asset_<global>`.
-pub fn asset_name(model: &CityModel, i: usize, global: usize) -> String {
-    let Some(a) = model.assets.get(i) else {
-        return format!("asset_{global}");
-    };
-    if let Some(id) = &a.id {
-        return id.to_string();
-    }
-    if let Some(b) = a.building.and_then(|b| model.buildings.get(b)) {
-        if let Some(bid) = &b.id {
-            let k = b.assets.iter().position(|&x| x == i).unwrap_or(global);
-            return format!("{bid}_{k}");
-        }
-    }
-    format!("asset_{global}")
 }

@@ -5,7 +5,7 @@
 //!   geometry, rounded to whole metres); every vertex is written relative to it, so a reader in
 //!   single precision keeps centimetres on a UTM model;
 //! * one `o` per asset, named by its `gml:id` (or its building's id and its index,
-//!   [`super::asset_name`]);
+//!   [`crate::model::CityModel::asset_name`]);
 //! * one `usemtl` per semantic class and level: `roof_l2`, `wall_l1`, `installation_l1`,
 //!   `window_l2`, ... (the kinds of [`crate::model::AssetKind::as_str`]); `convert` writes full
 //!   detail as level 2;
@@ -39,7 +39,7 @@
 //! ```
 
 use super::chunks::{Chunks, Part};
-use super::{asset_name, ExportSummary};
+use super::ExportSummary;
 use crate::io::citygml::read::StreamSummary;
 use crate::lod::level::traced as level_polygons;
 use crate::model::triangulate;
@@ -86,7 +86,7 @@ pub fn write_obj(
         }
         let done = chunks.pass(1 + usize::from(bodies), |p: &Part<'_>| -> io::Result<()> {
             for (i, a, global) in p.in_order(bodies, sum.assets) {
-                let name = asset_name(p.model, i, global);
+                let name = p.model.asset_name(i, global);
                 let level = p.content.level(i);
                 let polys = level_polygons(a, p.content.rough(i), level);
                 let obj = (a.kind.as_str(), name.as_str(), level);

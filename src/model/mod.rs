@@ -841,6 +841,25 @@ impl CityModel {
         self.assets.iter().map(|a| a.detail_polygons().len()).sum()
     }
 
+    /// The name of asset `i`, asset `global` of the whole document (`i` itself but in a
+    /// chunk of a streamed read), in exports and tables: its `gml:id`, else its building's id
+    /// and its index among the building's assets (`B1_3`), else `asset_<global>`.
+    pub fn asset_name(&self, i: usize, global: usize) -> String {
+        let Some(a) = self.assets.get(i) else {
+            return format!("asset_{global}");
+        };
+        if let Some(id) = &a.id {
+            return id.to_string();
+        }
+        if let Some(b) = a.building.and_then(|b| self.buildings.get(b)) {
+            if let Some(bid) = &b.id {
+                let k = b.assets.iter().position(|&x| x == i).unwrap_or(global);
+                return format!("{bid}_{k}");
+            }
+        }
+        format!("asset_{global}")
+    }
+
     /// The top-level building of a building or part.
     pub fn root_building(&self, mut b: usize) -> usize {
         while let Some(p) = self.buildings.get(b).and_then(|x| x.parent) {

@@ -5,7 +5,7 @@
 //! * **Ids**: the plan's rule ([`super::rename_ids`] over every `gml:id` of each input): the
 //!   first input keeps its ids, an id a later input `k` (1-based) shares with an earlier one
 //!   becomes `<id>__<k>`. The objects are named from the renamed ids as one file's are
-//!   ([`crate::export::asset_name`]).
+//!   ([`crate::model::CityModel::asset_name`]).
 //! * **One origin**: the OBJ origin and CityJSON's `transform` are picked over the whole
 //!   scene as the single-file writers pick them over one file (the centre of all the geometry
 //!   written, rounded to whole metres; the floor of its lower corner).

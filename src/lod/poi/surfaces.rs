@@ -5,7 +5,7 @@
 //! surfaces (an LoD1 or LoD2 body), its body split by the normals of its polygons into a
 //! roof-like face (tilt under 75°, `n.z > 0.25`) and a wall-like one (`|n.z| <= 0.25`); faces
 //! turned downwards are neither. A surface is named as skylod names an asset elsewhere
-//! ([`crate::export::asset_name`]: its `gml:id`, else its building's id and its index among
+//! ([`CityModel::asset_name`]: its `gml:id`, else its building's id and its index among
 //! the building's assets; a name met before, such as a building in two tiles, gets the
 //! merge's `__<k>` with k its input), a body's faces `<name>:roof` and `<name>:wall`. Its area is the
 //! sum of its polygons' areas, holes (openings) taken out.
@@ -42,7 +42,6 @@
 //! ```
 
 use super::region::{outside_solids, sample_polygon, RegionError};
-use crate::export::asset_name;
 use crate::model::crs::{model_crs, LocalFrame};
 use crate::model::{AssetKind, CityModel, Poi};
 
@@ -105,7 +104,7 @@ pub fn cadastre_surfaces(model: &CityModel, classes: &[SurfaceClass]) -> Vec<Cad
     for (i, a) in model.assets.iter().enumerate() {
         // a name given before (the same building in two tiles) is the merge's `<name>__<k>`,
         // k the asset's input
-        let mut name = asset_name(model, i, i);
+        let mut name = model.asset_name(i, i);
         if !seen.insert(name.clone()) {
             name = format!("{name}__{}", a.file);
             seen.insert(name.clone());

@@ -470,7 +470,7 @@ mod tests {
         assert_eq!((ew.site, ew.albedo), ([at.0, at.1], 0.2));
         assert_eq!(e.summary.len(), 2);
         let l = &e.summary[1];
-        assert!(l.starts_with("irradiance: 1 hours of Somewhere (GHI 0 kWh/m²) at (41.3900, 2.1700), Isotropic sky, albedo 0.2; largest LoD error "), "{l}");
+        assert!(l.starts_with("irradiance: 1 hours of Somewhere (GHI 0 kWh/m²) at (41.3900, 2.1700), isotropic sky, albedo 0.2; largest LoD error "), "{l}");
         assert!(l.ends_with('%'), "{l}");
     }
 

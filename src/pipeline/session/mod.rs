@@ -29,7 +29,7 @@ pub(crate) mod report;
 pub(crate) mod site;
 pub(crate) mod weather;
 pub use bound_plan::BoundRequest;
-pub use documents::{ms_since, EvaluateRequest, IrradianceRequest};
+pub use documents::{ms_since, EvaluateRequest, IrradianceRequest, IrradianceRun};
 pub use lod_read::{lod_read, memory_size, mib, Budget, LodRead, Unserved, WholeWhy};
 pub use lod_write::{
     check_report, write_report, FileOutcome, LodLayout, LodWritten, ReportTargetError,
