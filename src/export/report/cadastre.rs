@@ -20,7 +20,7 @@
 //! assert_eq!((rows[0].mean_kwh_m2, rows[0].area_above_m2), (Some(1100.0), Some(10.0)));
 //! assert_eq!(rows[0].building_roof_kwh, Some(22_000.0));
 //! let mut csv = Vec::new();
-//! write_surface_table(&mut csv, &rows, Some(1100.0)).unwrap();
+//! write_surface_table(&mut csv, &rows, Some(1100.0), true).unwrap();
 //! assert!(String::from_utf8(csv).unwrap().starts_with("surface_id,building_id,kind,area_m2"));
 //! ```
 
@@ -118,7 +118,8 @@ fn num(v: Option<f64>, digits: usize) -> String {
 
 /// The surface table as CSV: `surface_id, building_id, kind, area_m2, points, mean_kwh_m2,
 /// min_kwh_m2, max_kwh_m2`, then `area_above_m2` when `threshold` is given, then
-/// `building_roof_kwh`.
+/// `building_roof_kwh`; the header line when `header` (an array job's first part only, so
+/// the parts concatenated are the whole table).
 ///
 /// # Errors
 /// The writer's.
@@ -126,6 +127,7 @@ pub fn write_surface_table(
     out: impl Write,
     rows: &[SurfaceRow],
     threshold: Option<f64>,
+    header: bool,
 ) -> csv::Result<()> {
     let mut w = csv::Writer::from_writer(out);
     let mut head = vec![
@@ -142,7 +144,9 @@ pub fn write_surface_table(
         head.push("area_above_m2");
     }
     head.push("building_roof_kwh");
-    w.write_record(&head)?;
+    if header {
+        w.write_record(&head)?;
+    }
     for r in rows {
         let mut rec = vec![
             r.surface_id.clone(),
@@ -166,13 +170,19 @@ pub fn write_surface_table(
 
 /// Every sample point as CSV: `surface_id, x, y, z, nx, ny, nz, global_kwh_m2,
 /// direct_kwh_m2, diffuse_kwh_m2, reflected_kwh_m2`, the point in the model's CRS (`pois`,
-/// named by [`crate::lod::poi::surface_pois`]) with its annual values `annual` in order.
+/// named by [`crate::lod::poi::surface_pois`]) with its annual values `annual` in order; the
+/// header line when `header`.
 ///
 /// # Errors
 /// The writer's.
-pub fn write_point_table(out: impl Write, pois: &[Poi], annual: &[Irradiance]) -> csv::Result<()> {
+pub fn write_point_table(
+    out: impl Write,
+    pois: &[Poi],
+    annual: &[Irradiance],
+    header: bool,
+) -> csv::Result<()> {
     let mut w = csv::Writer::from_writer(out);
-    w.write_record([
+    let head = [
         "surface_id",
         "x",
         "y",
@@ -184,7 +194,10 @@ pub fn write_point_table(out: impl Write, pois: &[Poi], annual: &[Irradiance]) -
         "direct_kwh_m2",
         "diffuse_kwh_m2",
         "reflected_kwh_m2",
-    ])?;
+    ];
+    if header {
+        w.write_record(head)?;
+    }
     for (p, r) in pois.iter().zip(annual) {
         let n = p.normal.unwrap_or(glam::DVec3::Z);
         w.write_record([

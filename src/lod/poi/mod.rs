@@ -12,7 +12,7 @@ pub use checks::{
 };
 pub use region::{facade_pois, grid_pois, RegionError, RegionSpec};
 pub use surfaces::{
-    cadastre_surfaces, surface_of_poi, surface_pois, surface_pois_of, CadastreSurface,
+    cadastre_surfaces, shard_range, surface_of_poi, surface_pois, surface_pois_of, CadastreSurface,
     SurfaceClass, WALL_MAX_NZ,
 };
 

@@ -44,6 +44,7 @@
 use super::region::{outside_solids, sample_polygon, RegionError};
 use crate::model::crs::{model_crs, LocalFrame};
 use crate::model::{AssetKind, CityModel, Poi};
+use std::ops::Range;
 
 /// Largest `|n.z|` of a wall-like face of a body; above it, a face turned up is roof-like.
 pub const WALL_MAX_NZ: f64 = 0.25;
@@ -228,6 +229,44 @@ pub fn surface_pois_of(
         .collect())
 }
 
+/// The surfaces part `index` of `count` of an array job works on: `count` contiguous runs of
+/// `surfaces`, cut only where the building changes (so a building's roof total is whole in
+/// one part), each cut at the building boundary nearest to an even share of the total area.
+/// The parts in order hold every surface once; the result depends only on the surfaces.
+pub fn shard_range(surfaces: &[CadastreSurface], index: usize, count: usize) -> Range<usize> {
+    let n = surfaces.len();
+    let count = count.max(1);
+    // the positions a cut may take: 0, n, and every change of building
+    let mut bounds = vec![0];
+    for k in 1..n {
+        let same =
+            surfaces[k].building.is_some() && surfaces[k].building == surfaces[k - 1].building;
+        if !same {
+            bounds.push(k);
+        }
+    }
+    bounds.push(n);
+    let mut area = vec![0.0; n + 1];
+    for (k, s) in surfaces.iter().enumerate() {
+        area[k + 1] = area[k] + s.area_m2.max(0.0);
+    }
+    let total = area[n];
+    let cut = |k: usize| -> usize {
+        if k == 0 {
+            return 0;
+        }
+        if k >= count {
+            return n;
+        }
+        let want = total * k as f64 / count as f64;
+        (bounds.iter().copied())
+            .min_by(|&a, &b| (area[a] - want).abs().total_cmp(&(area[b] - want).abs()))
+            .unwrap_or(n)
+    };
+    let (lo, hi) = (cut(index.min(count)), cut(index.min(count) + 1));
+    lo..hi.max(lo)
+}
+
 /// The name of the surface of a point [`surface_pois`] made.
 pub fn surface_of_poi(id: &str) -> &str {
     id.rsplit_once(':').map_or(id, |(s, _)| s)
@@ -280,6 +319,41 @@ mod tests {
             }],
         });
         m
+    }
+
+    #[test]
+    fn shards_cut_between_buildings_and_cover_every_surface_once() {
+        let s = |name: &str, b: Option<&str>, area: f64| CadastreSurface {
+            name: name.into(),
+            asset: 0,
+            class: SurfaceClass::Roof,
+            building: b.map(str::to_string),
+            polygons: vec![0],
+            area_m2: area,
+        };
+        let list = vec![
+            s("a1", Some("A"), 10.0),
+            s("a2", Some("A"), 10.0),
+            s("b1", Some("B"), 5.0),
+            s("x", None, 1.0),
+            s("c1", Some("C"), 20.0),
+            s("c2", Some("C"), 1.0),
+        ];
+        for count in 1..=8 {
+            let parts: Vec<Range<usize>> =
+                (0..count).map(|i| shard_range(&list, i, count)).collect();
+            assert_eq!(parts[0].start, 0);
+            assert_eq!(parts[count - 1].end, list.len());
+            for w in parts.windows(2) {
+                assert_eq!(w[0].end, w[1].start, "{count}: {parts:?}");
+            }
+            for p in &parts {
+                // never inside a building
+                assert!(p.start == 0 || p.start == list.len() || ![1, 5].contains(&p.start));
+            }
+        }
+        assert_eq!(shard_range(&list, 0, 2), 0..3);
+        assert_eq!(shard_range(&list, 1, 2), 3..6);
     }
 
     #[test]

@@ -6,8 +6,10 @@ use crate::args::poi::PoiArgs;
 use crate::args::positive;
 use anyhow::bail;
 use skylod::lod::poi::Poi;
-use skylod::lod::poi::{RegionSpec, SurfaceClass};
+use skylod::lod::poi::{cadastre_surfaces, shard_range, surface_of_poi, RegionSpec, SurfaceClass};
 use skylod::model::CityModel;
+use skylod::pipeline::batch::Shard;
+use std::collections::HashSet;
 
 #[derive(clap::Args, Debug)]
 pub struct RegionArgs {
@@ -47,6 +49,9 @@ impl RegionArgs {
 
     /// The `--poi`/`--pois` points; none needed when a region is given.
     pub fn points(&self, pois: &PoiArgs) -> anyhow::Result<Vec<Poi>> {
+        if !self.surfaces.is_empty() && (!pois.poi.is_empty() || pois.pois.is_some()) {
+            bail!("--surfaces makes the POIs: give it without --poi/--pois");
+        }
         if self.active() && pois.poi.is_empty() && pois.pois.is_none() {
             if pois.crs.poi_crs.is_some() {
                 bail!("--facade, --region and --surfaces POIs are in the model's CRS: --poi-crs does not apply to them");
@@ -57,6 +62,44 @@ impl RegionArgs {
             bail!("--facade, --region and --surfaces POIs are in the model's CRS: give --poi-crs only with --poi/--pois alone");
         }
         pois.points()
+    }
+
+    /// With `--surfaces` and a shard: the surfaces of `model` this shard works on
+    /// ([`skylod::lod::poi::shard_range`], by index into
+    /// [`skylod::lod::poi::cadastre_surfaces`]'s list).
+    pub fn surface_shard(
+        &self,
+        model: &CityModel,
+        shard: Option<Shard>,
+    ) -> Option<std::ops::Range<usize>> {
+        let s = shard.filter(|_| !self.surfaces.is_empty())?;
+        let list = cadastre_surfaces(model, &self.surfaces);
+        Some(shard_range(&list, s.index(), s.count()))
+    }
+
+    /// `pois` (the region's, from [`RegionArgs::extend`]) of this shard: with `--surfaces`
+    /// those of the shard's surfaces ([`RegionArgs::surface_shard`]), cut between buildings
+    /// so each building's table rows are whole in one shard; else by place.
+    pub fn shard_pois(
+        &self,
+        pois: Vec<Poi>,
+        model: &CityModel,
+        shard: Option<Shard>,
+        cmd: &str,
+    ) -> Vec<Poi> {
+        let (Some(s), Some(range)) = (shard, self.surface_shard(model, shard)) else {
+            return crate::args::shard::pois(shard, pois, cmd);
+        };
+        let list = cadastre_surfaces(model, &self.surfaces);
+        let mine: HashSet<&str> = list[range.clone()]
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect();
+        let total = list.len();
+        crate::args::shard::say(s, range, total, cmd, "surfaces");
+        pois.into_iter()
+            .filter(|p| mine.contains(surface_of_poi(&p.id)))
+            .collect()
     }
 
     /// `pois` followed by the region's POIs sampled on `model` (as read:

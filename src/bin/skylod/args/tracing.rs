@@ -100,7 +100,7 @@ impl TracingArgs {
             return Ok(None);
         };
         let pois = self.region.extend(pois, scene.model())?;
-        let pois = crate::args::shard::pois(shard, pois, cmd);
+        let pois = self.region.shard_pois(pois, scene.model(), shard, cmd);
         self.pois.study(scene, pois, shard, spool, cmd).map(Some)
     }
 }

@@ -80,9 +80,6 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if surfaces.is_empty() && (args.table.is_some() || args.points.is_some()) {
         anyhow::bail!("--table and --points list the surfaces of --surfaces: give --surfaces roof,wall (or one of them)");
     }
-    if !surfaces.is_empty() && args.tracing.shard.resolve()?.is_some() {
-        anyhow::bail!("--surfaces cannot be split with --shard yet: a surface's points would fall into several shards");
-    }
     let region = args.tracing.region.active();
     args.attributes.check(region, args.overwrite)?;
     let t = Instant::now();
@@ -112,10 +109,13 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     if let Some(path) = &args.table {
         // areas in metres: the model in its tracing frame (same surfaces as the source's)
-        let list = cadastre_surfaces(&s.study.framed().model, &surfaces);
+        let mut list = cadastre_surfaces(&s.study.framed().model, &surfaces);
+        if let Some(r) = (args.tracing.region).surface_shard(s.study.source(), s.shard) {
+            list = list.get(r).map(<[_]>::to_vec).unwrap_or_default();
+        }
         let rows = surface_rows(&list, &run.ids, &values, args.threshold);
         skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
-            write_surface_table(w, &rows, args.threshold)?;
+            write_surface_table(w, &rows, args.threshold, s.header())?;
             Ok(0)
         })
         .with_context(|| format!("writing {}", path.display()))?;
@@ -128,7 +128,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     if let Some(path) = &args.points {
         skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
-            write_point_table(w, s.study.pois(), &run.annual())?;
+            write_point_table(w, s.study.pois(), &run.annual(), s.header())?;
             Ok(0)
         })
         .with_context(|| format!("writing {}", path.display()))?;
