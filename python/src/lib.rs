@@ -214,8 +214,7 @@ fn irradiance_surfaces(
             .collect();
         let list = cadastre_surfaces(&l.study.framed().model, &classes);
         let annual = run.annual();
-        let global: Vec<f64> = annual.iter().map(|r| r.global_kwh_m2).collect();
-        let rows = surface_rows(&list, &run.ids, &global, threshold);
+        let rows = surface_rows(&list, &run.ids, &annual, threshold, false);
         let surfaces: Vec<serde_json::Value> = rows
             .iter()
             .map(|r| {

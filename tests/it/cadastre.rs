@@ -53,8 +53,8 @@ fn num(r: &HashMap<String, String>, k: &str) -> f64 {
 /// tile (LoD1 bodies in latitude and longitude, EPSG:6697, split into roof and wall faces):
 /// every surface the oracle finds is a row, with its area within 1 % (measured: 0.001 %,
 /// 0 %, 0.05 % — UTM against skylod's local frame); each row's points, mean, least and
-/// greatest are those of its rows in `--points`; the building's roof total is Σ mean × area of
-/// its roofs.
+/// greatest are those of its rows in `--points`, and so are its `--monthly` means; each
+/// point's months sum to its year; the building's roof total is Σ mean × area of its roofs.
 #[test]
 fn surface_tables_match_their_polygons_and_points() {
     if !python_has("numpy", "pip install numpy") || !python_has("pyproj", "pip install pyproj") {
@@ -93,6 +93,7 @@ fn surface_tables_match_their_polygons_and_points() {
             os(&points),
             os("--threshold"),
             os("900"),
+            os("--monthly"),
             os("--overwrite"),
         ]);
         assert!(o.status.success(), "{file}: {}", stderr(&o));
@@ -126,9 +127,21 @@ fn surface_tables_match_their_polygons_and_points() {
             );
             compared += 1;
         }
-        // each row from its points
+        // each row from its points; a point's months sum to its year, a row's months are
+        // its points' means
+        const MONTHS: [&str; 12] = [
+            "jan", "feb", "mar", "apr", "may", "jun", "jul", "aug", "sep", "oct", "nov", "dec",
+        ];
+        let month = |r: &HashMap<String, String>, m: &str| num(r, &format!("{m}_kwh_m2"));
         let mut of: HashMap<String, Vec<f64>> = HashMap::new();
+        let mut month_sums: HashMap<String, [f64; 12]> = HashMap::new();
         for p in rows(&points) {
+            let year: f64 = MONTHS.iter().map(|m| month(&p, m)).sum();
+            assert!((year - num(&p, "global_kwh_m2")).abs() < 0.01, "{p:?}");
+            let e = month_sums.entry(p["surface_id"].clone()).or_default();
+            for (k, m) in MONTHS.iter().enumerate() {
+                e[k] += month(&p, m);
+            }
             of.entry(p["surface_id"].clone())
                 .or_default()
                 .push(num(&p, "global_kwh_m2"));
@@ -152,6 +165,11 @@ fn surface_tables_match_their_polygons_and_points() {
                     (num(r, k) - want).abs() < 2e-3,
                     "{file} {k}: {r:?} vs {want}"
                 );
+            }
+            let sums = month_sums[&r["surface_id"]];
+            for (k, m) in MONTHS.iter().enumerate() {
+                let want = sums[k] / v.len() as f64;
+                assert!((month(r, m) - want).abs() < 2e-3, "{file} {m}: {r:?}");
             }
             let share = v.iter().filter(|&&g| g >= 900.0).count() as f64 / v.len() as f64;
             let above = num(r, "area_above_m2");

@@ -7,20 +7,28 @@
 //! of its points (kWh/m²; the mean is the plain mean of the points, which sample the surface
 //! evenly), with a threshold the area whose points reach it (the surface's area times the
 //! share of its points at or above it), and the building's roof total: the sum over its roof
-//! surfaces of mean × area (kWh/year). A surface without points (smaller than the grid) has
-//! an empty mean, least and greatest.
+//! surfaces of mean × area (kWh/year); with monthly values, the mean of its points per month
+//! of the weather's local time. A surface without points (smaller than the grid) has an
+//! empty mean, least and greatest.
 //!
 //! # Example
 //! ```
-//! use skylod::export::report::{surface_rows, write_surface_table};
+//! use skylod::export::report::{surface_rows, write_surface_table, TableLayout};
 //! use skylod::lod::poi::{CadastreSurface, SurfaceClass};
+//! use skylod::solar::irradiance::Irradiance;
 //! let roof = CadastreSurface { name: "r".into(), asset: 0, class: SurfaceClass::Roof,
 //!     building: Some("B".into()), polygons: vec![0], area_m2: 20.0 };
-//! let rows = surface_rows(&[roof], &["r:0", "r:1"], &[1000.0, 1200.0], Some(1100.0));
+//! let point = |g: f64| Irradiance { global_kwh_m2: g, direct_kwh_m2: 0.0, diffuse_kwh_m2: 0.0,
+//!     reflected_kwh_m2: 0.0, svf: 1.0, sun_hours_possible: 0, sun_hours: 0,
+//!     monthly_global_kwh_m2: [g / 12.0; 12] };
+//! let rows = surface_rows(&[roof], &["r:0", "r:1"], &[point(1000.0), point(1200.0)],
+//!     Some(1100.0), true);
 //! assert_eq!((rows[0].mean_kwh_m2, rows[0].area_above_m2), (Some(1100.0), Some(10.0)));
 //! assert_eq!(rows[0].building_roof_kwh, Some(22_000.0));
+//! assert!((rows[0].monthly_mean_kwh_m2.unwrap()[0] - 1100.0 / 12.0).abs() < 1e-9);
 //! let mut csv = Vec::new();
-//! write_surface_table(&mut csv, &rows, Some(1100.0), true).unwrap();
+//! let layout = TableLayout { threshold: Some(1100.0), monthly: true, header: true };
+//! write_surface_table(&mut csv, &rows, layout).unwrap();
 //! assert!(String::from_utf8(csv).unwrap().starts_with("surface_id,building_id,kind,area_m2"));
 //! ```
 
@@ -53,28 +61,65 @@ pub struct SurfaceRow {
     pub area_above_m2: Option<f64>,
     /// The building's roofs: Σ mean × area (kWh/year).
     pub building_roof_kwh: Option<f64>,
+    /// With monthly values: the mean of its points per month, January first (kWh/m²).
+    pub monthly_mean_kwh_m2: Option<[f64; 12]>,
 }
 
-/// The rows of `surfaces` from the annual global irradiation `global[k]` of each point
-/// `ids[k]` (named `<surface>:<k>`, as [`crate::lod::poi::surface_pois`] names them); points of
-/// other surfaces are left out.
+/// The columns and lines of a cadastre table: the threshold's column, the months' columns,
+/// the header line (an array job's first part only, so the parts concatenated are the whole
+/// table).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TableLayout {
+    /// The threshold of `area_above_m2` (kWh/m²), when that column is wanted.
+    pub threshold: Option<f64>,
+    /// Twelve columns `jan_kwh_m2` … `dec_kwh_m2`.
+    pub monthly: bool,
+    /// The header line.
+    pub header: bool,
+}
+
+/// The months' column names.
+const MONTHS: [&str; 12] = [
+    "jan_kwh_m2",
+    "feb_kwh_m2",
+    "mar_kwh_m2",
+    "apr_kwh_m2",
+    "may_kwh_m2",
+    "jun_kwh_m2",
+    "jul_kwh_m2",
+    "aug_kwh_m2",
+    "sep_kwh_m2",
+    "oct_kwh_m2",
+    "nov_kwh_m2",
+    "dec_kwh_m2",
+];
+
+/// The rows of `surfaces` from the annual figures `annual[k]` of each point `ids[k]` (named
+/// `<surface>:<k>`, as [`crate::lod::poi::surface_pois`] names them); points of other
+/// surfaces are left out. With `threshold`, each row's area above it; with `monthly`, its
+/// monthly means.
 pub fn surface_rows<S: AsRef<str>>(
     surfaces: &[CadastreSurface],
     ids: &[S],
-    global: &[f64],
+    annual: &[Irradiance],
     threshold: Option<f64>,
+    monthly: bool,
 ) -> Vec<SurfaceRow> {
     let index: HashMap<&str, usize> = (surfaces.iter().enumerate())
         .map(|(i, s)| (s.name.as_str(), i))
         .collect();
     let mut values: Vec<Vec<f64>> = vec![Vec::new(); surfaces.len()];
-    for (id, &g) in ids.iter().zip(global) {
+    let mut months: Vec<[f64; 12]> = vec![[0.0; 12]; surfaces.len()];
+    for (id, r) in ids.iter().zip(annual) {
         if let Some(&i) = index.get(surface_of_poi(id.as_ref())) {
-            values[i].push(g);
+            values[i].push(r.global_kwh_m2);
+            for (m, v) in months[i].iter_mut().zip(r.monthly_global_kwh_m2) {
+                *m += v;
+            }
         }
     }
-    let mut rows: Vec<SurfaceRow> = (surfaces.iter().zip(&values))
-        .map(|(s, v)| {
+    let mut rows: Vec<SurfaceRow> = (surfaces.iter().zip(&values).zip(&months))
+        .map(|((s, v), month_sums)| {
             let n = v.len();
             let mean = (n > 0).then(|| v.iter().sum::<f64>() / n as f64);
             let above = threshold.map(|t| {
@@ -96,6 +141,7 @@ pub fn surface_rows<S: AsRef<str>>(
                 max_kwh_m2: v.iter().copied().reduce(f64::max),
                 area_above_m2: above,
                 building_roof_kwh: None,
+                monthly_mean_kwh_m2: (monthly && n > 0).then(|| month_sums.map(|m| m / n as f64)),
             }
         })
         .collect();
@@ -117,17 +163,15 @@ fn num(v: Option<f64>, digits: usize) -> String {
 }
 
 /// The surface table as CSV: `surface_id, building_id, kind, area_m2, points, mean_kwh_m2,
-/// min_kwh_m2, max_kwh_m2`, then `area_above_m2` when `threshold` is given, then
-/// `building_roof_kwh`; the header line when `header` (an array job's first part only, so
-/// the parts concatenated are the whole table).
+/// min_kwh_m2, max_kwh_m2`, then as `layout` asks `area_above_m2` and the months, then
+/// `building_roof_kwh`.
 ///
 /// # Errors
 /// The writer's.
 pub fn write_surface_table(
     out: impl Write,
     rows: &[SurfaceRow],
-    threshold: Option<f64>,
-    header: bool,
+    layout: TableLayout,
 ) -> csv::Result<()> {
     let mut w = csv::Writer::from_writer(out);
     let mut head = vec![
@@ -140,11 +184,14 @@ pub fn write_surface_table(
         "min_kwh_m2",
         "max_kwh_m2",
     ];
-    if threshold.is_some() {
+    if layout.threshold.is_some() {
         head.push("area_above_m2");
     }
+    if layout.monthly {
+        head.extend(MONTHS);
+    }
     head.push("building_roof_kwh");
-    if header {
+    if layout.header {
         w.write_record(&head)?;
     }
     for r in rows {
@@ -158,8 +205,13 @@ pub fn write_surface_table(
             num(r.min_kwh_m2, 3),
             num(r.max_kwh_m2, 3),
         ];
-        if threshold.is_some() {
+        if layout.threshold.is_some() {
             rec.push(num(r.area_above_m2, 3));
+        }
+        if layout.monthly {
+            for m in 0..12 {
+                rec.push(num(r.monthly_mean_kwh_m2.map(|v| v[m]), 3));
+            }
         }
         rec.push(num(r.building_roof_kwh, 1));
         w.write_record(&rec)?;
@@ -170,8 +222,8 @@ pub fn write_surface_table(
 
 /// Every sample point as CSV: `surface_id, x, y, z, nx, ny, nz, global_kwh_m2,
 /// direct_kwh_m2, diffuse_kwh_m2, reflected_kwh_m2`, the point in the model's CRS (`pois`,
-/// named by [`crate::lod::poi::surface_pois`]) with its annual values `annual` in order; the
-/// header line when `header`.
+/// named by [`crate::lod::poi::surface_pois`]) with its annual values `annual` in order, and
+/// the months when `layout` asks for them.
 ///
 /// # Errors
 /// The writer's.
@@ -179,10 +231,10 @@ pub fn write_point_table(
     out: impl Write,
     pois: &[Poi],
     annual: &[Irradiance],
-    header: bool,
+    layout: TableLayout,
 ) -> csv::Result<()> {
     let mut w = csv::Writer::from_writer(out);
-    let head = [
+    let mut head = vec![
         "surface_id",
         "x",
         "y",
@@ -195,12 +247,15 @@ pub fn write_point_table(
         "diffuse_kwh_m2",
         "reflected_kwh_m2",
     ];
-    if header {
+    if layout.monthly {
+        head.extend(MONTHS);
+    }
+    if layout.header {
         w.write_record(head)?;
     }
     for (p, r) in pois.iter().zip(annual) {
         let n = p.normal.unwrap_or(glam::DVec3::Z);
-        w.write_record([
+        let mut rec = vec![
             surface_of_poi(&p.id).to_string(),
             format!("{:.3}", p.position.x),
             format!("{:.3}", p.position.y),
@@ -212,7 +267,11 @@ pub fn write_point_table(
             format!("{:.3}", r.direct_kwh_m2),
             format!("{:.3}", r.diffuse_kwh_m2),
             format!("{:.3}", r.reflected_kwh_m2),
-        ])?;
+        ];
+        if layout.monthly {
+            rec.extend(r.monthly_global_kwh_m2.iter().map(|m| format!("{m:.3}")));
+        }
+        w.write_record(rec)?;
     }
     w.flush()?;
     Ok(())

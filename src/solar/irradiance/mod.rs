@@ -152,6 +152,8 @@ pub struct SkyHour {
     /// The all-weather sky of the hour ([`SkyModel::AllWeather`]; `None` otherwise or
     /// without diffuse light).
     pub sky: Option<HourSky>,
+    /// The month of the hour in the weather's local standard time, 0 (January) to 11.
+    pub month: u8,
 }
 
 impl SkyHour {
@@ -168,6 +170,8 @@ pub struct IrradianceTable {
     /// Per patch of [`Patches::reinhart`], its radiance summed over the hours
     /// ([`SkyModel::AllWeather`]; empty otherwise).
     patch_sums: Vec<f64>,
+    /// The same per month: month `m`'s sums at `m * patches ..`.
+    patch_months: Vec<f64>,
 }
 
 impl IrradianceTable {
@@ -191,7 +195,10 @@ impl IrradianceTable {
                         .unwrap_or((0.0, 0.0)),
                     SkyModel::Isotropic | SkyModel::AllWeather => (0.0, 0.0),
                 };
+                let local = h.mid_utc
+                    + chrono::Duration::seconds((weather.site.utc_offset_hours * 3600.0) as i64);
                 Ok(SkyHour {
+                    month: local.month0() as u8,
                     sun: p.direction,
                     zenith_deg: p.zenith_deg,
                     ghi: h.ghi,
@@ -203,40 +210,58 @@ impl IrradianceTable {
                 })
             })
             .collect::<Result<Vec<_>, SolarError>>()?;
-        let patch_sums = if sky == SkyModel::AllWeather {
+        let (patch_sums, patch_months) = if sky == SkyModel::AllWeather {
             // fixed runs of hours summed in order: the same sums on every run and machine
             const RUN: usize = 168;
             let n = Patches::reinhart().len();
             let runs: Vec<Vec<f64>> = (hours.par_chunks_mut(RUN))
                 .zip(weather.hours.par_chunks(RUN))
                 .map(|(hs, ws)| {
-                    let mut acc = vec![0.0; n];
+                    let mut acc = vec![0.0; 12 * n];
                     for (h, w) in hs.iter_mut().zip(ws) {
-                        h.sky = HourSky::adding(h.sun, h.dni, h.dhi, w.mid_utc.ordinal(), &mut acc);
+                        let m = usize::from(h.month.min(11)) * n;
+                        let month = &mut acc[m..m + n];
+                        h.sky = HourSky::adding(h.sun, h.dni, h.dhi, w.mid_utc.ordinal(), month);
                     }
                     acc
                 })
                 .collect();
-            let mut sums = vec![0.0; n];
+            let mut months = vec![0.0; 12 * n];
             for r in runs {
-                sums.iter_mut().zip(r).for_each(|(x, y)| *x += y);
+                months.iter_mut().zip(r).for_each(|(x, y)| *x += y);
             }
-            sums
+            let mut sums = vec![0.0; n];
+            for m in months.chunks(n) {
+                sums.iter_mut().zip(m).for_each(|(x, y)| *x += y);
+            }
+            (sums, months)
         } else {
-            Vec::new()
+            (Vec::new(), Vec::new())
         };
-        Ok(IrradianceTable { hours, patch_sums })
+        Ok(IrradianceTable {
+            hours,
+            patch_sums,
+            patch_months,
+        })
     }
 
     /// The diffuse irradiation (Wh/m²) over all hours of a plane whose free sky rays fall
     /// in the patches of `view` ([`SkyModel::AllWeather`]).
     fn all_weather_sum(&self, view: &PlaneView) -> f64 {
-        let rays = view.rays.max(1) as f64;
-        (view.patches.iter())
-            .map(|&(p, k)| self.patch_sums.get(p as usize).copied().unwrap_or(0.0) * f64::from(k))
-            .sum::<f64>()
-            * PI
-            / rays
+        sum_over(&self.patch_sums, view)
+    }
+
+    /// [`IrradianceTable::all_weather_sum`] per month.
+    fn all_weather_months(&self, view: &PlaneView) -> [f64; 12] {
+        let n = Patches::reinhart().len();
+        let mut out = [0.0; 12];
+        for (m, o) in out.iter_mut().enumerate() {
+            *o = sum_over(
+                self.patch_months.get(m * n..(m + 1) * n).unwrap_or(&[]),
+                view,
+            );
+        }
+        out
     }
 
     /// The hours, in weather order.
@@ -253,6 +278,16 @@ impl IrradianceTable {
     pub fn is_empty(&self) -> bool {
         self.hours.is_empty()
     }
+}
+
+/// `π / N × Σ rays(p) × sums(p)` over the patches `view` sees.
+fn sum_over(sums: &[f64], view: &PlaneView) -> f64 {
+    let rays = view.rays.max(1) as f64;
+    (view.patches.iter())
+        .map(|&(p, k)| sums.get(p as usize).copied().unwrap_or(0.0) * f64::from(k))
+        .sum::<f64>()
+        * PI
+        / rays
 }
 
 /// What a plane sees of the sky, from one bundle of rays: see [`plane_view`].
@@ -355,6 +390,10 @@ pub struct Irradiance {
     pub sun_hours_possible: u32,
     /// Of those, hours with the sun's ray free.
     pub sun_hours: u32,
+    /// Global irradiation per month of the weather's local time, January first (kWh/m²);
+    /// they sum to [`Irradiance::global_kwh_m2`].
+    #[serde(skip)]
+    pub monthly_global_kwh_m2: [f64; 12],
 }
 
 /// The irradiation of a plane with `normal` over `table`, given its [`PlaneView`] and
@@ -388,6 +427,7 @@ fn irradiance_of_hours(
     let cos85 = 85f64.to_radians().cos();
     let (mut direct, mut diffuse, mut reflected) = (0.0, 0.0, 0.0);
     let (mut possible, mut seen) = (0u32, 0u32);
+    let mut months = [0.0f64; 12];
     let hour_by_hour = hourly.is_some();
     for (i, h) in table.hours.iter().enumerate() {
         let cos_inc = n.dot(h.sun);
@@ -420,12 +460,16 @@ fn irradiance_of_hours(
         direct += dir;
         diffuse += dif;
         reflected += refl;
+        months[usize::from(h.month.min(11))] += dir + dif + refl;
         if let Some(v) = hourly.as_deref_mut() {
             v.push(dir + dif + refl);
         }
     }
     if opts.sky == SkyModel::AllWeather && !hour_by_hour {
         diffuse = table.all_weather_sum(&view);
+        for (m, d) in months.iter_mut().zip(table.all_weather_months(&view)) {
+            *m += d;
+        }
     }
     Irradiance {
         global_kwh_m2: (direct + diffuse + reflected) / 1000.0,
@@ -435,6 +479,7 @@ fn irradiance_of_hours(
         svf: view.svf,
         sun_hours_possible: possible,
         sun_hours: seen,
+        monthly_global_kwh_m2: months.map(|m| m / 1000.0),
     }
 }
 
@@ -624,6 +669,19 @@ mod tests {
                 (r.global_kwh_m2 / ghi - 1.0).abs() < 1e-3,
                 "{sky:?}: {r:?} vs {ghi}"
             );
+            // the months sum to the year; each is its own GHI
+            let total: f64 = r.monthly_global_kwh_m2.iter().sum();
+            assert!((total - r.global_kwh_m2).abs() < 1e-9, "{sky:?}");
+            let mut month_ghi = [0.0; 12];
+            for (h, sh) in w.hours.iter().zip(t.hours()) {
+                month_ghi[usize::from(sh.month)] += h.ghi / 1000.0;
+            }
+            for (m, (got, want)) in r.monthly_global_kwh_m2.iter().zip(month_ghi).enumerate() {
+                assert!(
+                    (got / want - 1.0).abs() < 2e-3,
+                    "{sky:?} month {m}: {got} vs {want}"
+                );
+            }
             assert_eq!(r.reflected_kwh_m2, 0.0);
         }
     }

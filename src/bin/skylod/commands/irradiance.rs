@@ -6,7 +6,7 @@ use crate::commands::emit;
 use crate::Outcome;
 use anyhow::Context;
 use skylod::export::report::{
-    surface_rows, write_csv, write_point_table, write_surface_table, Document,
+    surface_rows, write_csv, write_point_table, write_surface_table, Document, TableLayout,
 };
 use skylod::lod::poi::cadastre_surfaces;
 use skylod::pipeline::session::ms_since;
@@ -65,6 +65,10 @@ pub struct Args {
     /// With --table: add each surface's area whose points reach KWH kWh/m² a year.
     #[arg(long, value_name = "KWH", requires = "table")]
     threshold: Option<f64>,
+    /// With --table or --points: add twelve columns, the global kWh/m² of each month of the
+    /// weather's local time.
+    #[arg(long)]
+    monthly: bool,
 }
 
 pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
@@ -77,6 +81,9 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         skylod::io::check_target(f, [], args.overwrite)?;
     }
     let surfaces = args.tracing.region.surfaces().to_vec();
+    if args.monthly && args.table.is_none() && args.points.is_none() {
+        anyhow::bail!("--monthly adds columns to --table and --points: give one of them");
+    }
     if surfaces.is_empty() && (args.table.is_some() || args.points.is_some()) {
         anyhow::bail!("--table and --points list the surfaces of --surfaces: give --surfaces roof,wall (or one of them)");
     }
@@ -107,15 +114,21 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if let Some(n) = (args.attributes).write(&s.study.framed(), &values, args.overwrite)? {
         crate::log::summary!("irradiance: {n} surface(s) given skylodAnnualIrradiation");
     }
+    let annual = run.annual();
+    let layout = TableLayout {
+        threshold: args.threshold,
+        monthly: args.monthly,
+        header: s.header(),
+    };
     if let Some(path) = &args.table {
         // areas in metres: the model in its tracing frame (same surfaces as the source's)
         let mut list = cadastre_surfaces(&s.study.framed().model, &surfaces);
         if let Some(r) = (args.tracing.region).surface_shard(s.study.source(), s.shard) {
             list = list.get(r).map(<[_]>::to_vec).unwrap_or_default();
         }
-        let rows = surface_rows(&list, &run.ids, &values, args.threshold);
+        let rows = surface_rows(&list, &run.ids, &annual, args.threshold, args.monthly);
         skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
-            write_surface_table(w, &rows, args.threshold, s.header())?;
+            write_surface_table(w, &rows, layout)?;
             Ok(0)
         })
         .with_context(|| format!("writing {}", path.display()))?;
@@ -128,7 +141,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     if let Some(path) = &args.points {
         skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
-            write_point_table(w, s.study.pois(), &run.annual(), s.header())?;
+            write_point_table(w, s.study.pois(), &annual, layout)?;
             Ok(0)
         })
         .with_context(|| format!("writing {}", path.display()))?;
