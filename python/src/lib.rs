@@ -113,6 +113,10 @@ fn irradiance_run(
 ) -> Result<(setup::Loaded, IrradianceRun), String> {
     let t0 = Instant::now();
     let w = read_weather(weather).map_err(|e| message(&e))?;
+    if !setup.surfaces.is_empty() {
+        // a cadastre's figures are annual
+        (w.check_year(&weather.display().to_string())).map_err(|e| message(&e))?;
+    }
     let weather_ms = ms(t0);
     let bundles = SkyBundles::new(rays, seed).map_err(|e| message(&e))?;
     let l = load(setup, p)?;

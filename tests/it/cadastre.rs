@@ -191,7 +191,8 @@ fn surface_tables_match_their_polygons_and_points() {
 }
 
 /// A model without roofs or walls is refused with what is missing; `--table` without
-/// `--surfaces` is a usage error; nothing is written either way.
+/// `--surfaces` is a usage error; a weather file short of a year is refused naming its line;
+/// nothing is written in any case.
 #[test]
 fn surfaces_refuse_what_they_cannot_do() {
     let Some(tmy) = tmy3() else { return };
@@ -219,6 +220,26 @@ fn surfaces_refuse_what_they_cannot_do() {
     let o = run(&args);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("--surfaces"), "{}", stderr(&o));
+    // a cadastre is annual: a weather file short of a year is refused at its last line
+    let short = dir.path().join("short.csv");
+    let text = std::fs::read_to_string(&tmy).unwrap();
+    let kept: Vec<&str> = text.lines().take(2 + 8000).collect();
+    std::fs::write(&short, kept.join("\n") + "\n").unwrap();
+    let mut a = irradiance_args(&data.join("berlin/Berlin_Moabit_1Bldg_v2.gml"), &short);
+    a.extend([
+        "--surfaces".into(),
+        "roof".into(),
+        "--table".into(),
+        table.clone().into(),
+    ]);
+    let args: Vec<&std::ffi::OsStr> = a.iter().map(|s| s.as_os_str()).collect();
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("short.csv:8002: 8000 hours: an annual figure needs one year"),
+        "{}",
+        stderr(&o)
+    );
     assert!(!table.exists());
 }
 

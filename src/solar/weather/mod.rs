@@ -34,7 +34,7 @@
 mod epw;
 mod tmy3;
 
-use chrono::{DateTime, Duration, NaiveDate, Utc};
+use chrono::{DateTime, Datelike, Duration, NaiveDate, Timelike, Utc};
 use std::path::Path;
 
 /// The weather file's site, as its header gives it.
@@ -152,6 +152,48 @@ pub fn parse_weather(text: &str, name: &str) -> Result<Weather, WeatherError> {
 }
 
 impl Weather {
+    /// Whether the hours are one whole year, as an annual figure needs: 8,760 hours (8,784 in
+    /// a leap year, summed as they are), each hour of the local calendar once (a TMY's months
+    /// may come from different years). `file` names the file in the error.
+    ///
+    /// # Errors
+    /// `WeatherError::Format` naming the line of the first hour seen twice, or the number of
+    /// hours when it is not a year's.
+    pub fn check_year(&self, file: &str) -> Result<(), WeatherError> {
+        let first_line = match self.format {
+            WeatherFormat::Epw => 9,
+            WeatherFormat::Tmy3 => 3,
+        };
+        let offset = Duration::seconds((self.site.utc_offset_hours * 3600.0) as i64);
+        let mut seen = std::collections::HashSet::new();
+        for (k, h) in self.hours.iter().enumerate() {
+            let t = h.mid_utc + offset;
+            if !seen.insert((t.month(), t.day(), t.hour())) {
+                return Err(format_error(
+                    file,
+                    first_line + k as u64,
+                    format!(
+                        "{:02}-{:02} {:02}:30 is given twice: an annual figure needs each hour of one year once",
+                        t.month(),
+                        t.day(),
+                        t.hour()
+                    ),
+                ));
+            }
+        }
+        let n = self.hours.len();
+        if n != 8760 && n != 8784 {
+            return Err(format_error(
+                file,
+                first_line + n as u64 - 1,
+                format!(
+                    "{n} hours: an annual figure needs one year, 8760 hours (8784 in a leap year)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Annual sums (kWh/m²) of GHI, DNI and DHI over every hour.
     pub fn totals_kwh_m2(&self) -> (f64, f64, f64) {
         let (g, n, d) = self.hours.iter().fold((0.0, 0.0, 0.0), |a, h| {
@@ -256,6 +298,45 @@ fn format_error(name: &str, line: u64, message: impl Into<String>) -> WeatherErr
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_year_is_each_hour_once() {
+        let site = WeatherSite {
+            name: "x".into(),
+            latitude: 0.0,
+            longitude: 0.0,
+            utc_offset_hours: 1.0,
+            elevation_m: 0.0,
+        };
+        let year = |n: i64| {
+            let start = chrono::TimeZone::with_ymd_and_hms(&Utc, 2021, 1, 1, 0, 30, 0).unwrap();
+            let hours = (0..n)
+                .map(|k| WeatherHour {
+                    mid_utc: start + Duration::hours(k) - Duration::hours(1),
+                    ghi: 0.0,
+                    dni: 0.0,
+                    dhi: 0.0,
+                })
+                .collect();
+            Weather {
+                format: WeatherFormat::Epw,
+                site: site.clone(),
+                hours,
+            }
+        };
+        assert!(year(8760).check_year("w.epw").is_ok());
+        let e = year(8759).check_year("w.epw").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "w.epw:8767: 8759 hours: an annual figure needs one year, 8760 hours (8784 in a leap year)"
+        );
+        // a second year's first hour is the first hour again
+        let e = year(8761).check_year("w.epw").unwrap_err().to_string();
+        assert!(
+            e.starts_with("w.epw:8769: 01-01 00:30 is given twice"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn station_distance() {

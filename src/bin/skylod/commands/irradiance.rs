@@ -91,6 +91,10 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     args.attributes.check(region, args.overwrite)?;
     let t = Instant::now();
     let weather = read_weather(&args.weather)?;
+    if !surfaces.is_empty() {
+        // a cadastre's figures are annual
+        weather.check_year(&args.weather.display().to_string())?;
+    }
     let weather_ms = ms_since(t);
     let bundles = SkyBundles::new(args.rays, args.seed)?;
     let Some(s) = args.tracing.study("irradiance", |_| Ok(()))? else {
