@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use relay::{message, run, SkylodError};
 use setup::{load, ms, Setup};
 use skylod::export::report::{surface_rows, SunSetting};
-use skylod::lod::poi::{cadastre_surfaces, surface_of_poi, SurfaceClass};
+use skylod::lod::poi::{cadastre_surfaces, surface_of_poi};
 use skylod::model::Progress;
 use skylod::pipeline::session::weather_site;
 use skylod::pipeline::session::{EvaluateRequest, IrradianceRequest, IrradianceRun};
@@ -209,13 +209,7 @@ fn irradiance_surfaces(
     }
     run(py, progress, move |p| {
         let (l, run) = irradiance_run(&setup, &weather, site, (sky, albedo), (rays, seed), p)?;
-        let classes: Vec<SurfaceClass> = (setup.surfaces.iter())
-            .filter_map(|c| match c.as_str() {
-                "roof" => Some(SurfaceClass::Roof),
-                "wall" => Some(SurfaceClass::Wall),
-                _ => None,
-            })
-            .collect();
+        let classes = setup.surface_classes()?;
         let list = cadastre_surfaces(&l.study.framed().model, &classes);
         let annual = run.annual();
         let rows = surface_rows(&list, &run.ids, &annual, threshold, false);

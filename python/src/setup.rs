@@ -49,7 +49,7 @@ pub struct Setup {
 
 impl Setup {
     /// The classes of [`Setup::surfaces`].
-    fn surface_classes(&self) -> Result<Vec<SurfaceClass>, String> {
+    pub fn surface_classes(&self) -> Result<Vec<SurfaceClass>, String> {
         (self.surfaces.iter())
             .map(|c| match c.as_str() {
                 "roof" => Ok(SurfaceClass::Roof),

@@ -87,10 +87,11 @@ impl RegionArgs {
         shard: Option<Shard>,
         cmd: &str,
     ) -> Vec<Poi> {
-        let (Some(s), Some(range)) = (shard, self.surface_shard(model, shard)) else {
+        let Some(s) = shard.filter(|_| !self.surfaces.is_empty()) else {
             return crate::args::shard::pois(shard, pois, cmd);
         };
         let list = cadastre_surfaces(model, &self.surfaces);
+        let range = shard_range(&list, s.index(), s.count());
         let mine: HashSet<&str> = list[range.clone()]
             .iter()
             .map(|c| c.name.as_str())

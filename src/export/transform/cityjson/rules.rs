@@ -1,7 +1,7 @@
 //! The rules of [`crate::export::transform::citygml::edit`]'s `subset` and `filter-lods` on CityJSON trees.
 
 use super::{run, Ctx, Decision, TreeRule};
-use crate::export::transform::citygml::edit::subset::{drawn, Matcher, Sample};
+use crate::export::transform::citygml::edit::subset::{with_draw, Matcher};
 use crate::export::transform::citygml::edit::{EditSummary, Lods, Subset};
 use crate::io::citygml::error::WriteError;
 use crate::io::citygml::write::WriteOptions;
@@ -170,14 +170,10 @@ pub fn subset(
     rule: &Subset,
     opts: &WriteOptions,
 ) -> Result<EditSummary, WriteError> {
-    let drawn = drawn(rule, |sample| {
-        run(input, None, opts, &|| {
+    with_draw(rule, out, |sample, out| {
+        run(input, out, opts, &|| {
             Box::new(SubsetRule(Matcher::new(rule, sample)))
         })
-    })?;
-    let sample = drawn.as_ref().map_or(Sample::All, Sample::Drawn);
-    run(input, Some(out), opts, &|| {
-        Box::new(SubsetRule(Matcher::new(rule, sample)))
     })
 }
 

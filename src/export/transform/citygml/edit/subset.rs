@@ -252,21 +252,29 @@ pub fn subset(
     rule: &Subset,
     opts: &WriteOptions,
 ) -> Result<EditSummary, WriteError> {
-    let drawn = drawn(rule, |sample| {
-        run(input, None, opts, &|| {
+    with_draw(rule, out, |sample, out| {
+        run(input, out, opts, &|| {
             Box::new(SubsetRule(Matcher::new(rule, sample)))
         })
-    })?;
-    let sample = drawn.as_ref().map_or(Sample::All, Sample::Drawn);
-    run(input, Some(out), opts, &|| {
-        Box::new(SubsetRule(Matcher::new(rule, sample)))
     })
+}
+
+/// A subset in either format, `edit(sample, out)` running the format's edit: with
+/// [`Subset::random`], first a survey (no output) that lists the candidates, then the edit
+/// of the drawn ones into `out`; else the edit alone.
+pub(crate) fn with_draw<E>(
+    rule: &Subset,
+    out: &Path,
+    edit: impl Fn(Sample<'_>, Option<&Path>) -> Result<EditSummary, E>,
+) -> Result<EditSummary, E> {
+    let drawn = drawn(rule, |sample| edit(sample, None))?;
+    edit(drawn.as_ref().map_or(Sample::All, Sample::Drawn), Some(out))
 }
 
 /// The keys [`Subset::random`] draws, `None` without it: `survey` runs the rule over the
 /// document with the [`Sample`] it is given, which lists the keys of the members that match;
 /// the `n` with the lowest rank under the seed are drawn.
-pub(crate) fn drawn<E>(
+fn drawn<E>(
     rule: &Subset,
     survey: impl FnOnce(Sample<'_>) -> Result<EditSummary, E>,
 ) -> Result<Option<foldhash::HashSet<String>>, E> {
