@@ -11,7 +11,7 @@
 //!   WGS 84 (G1762 and later) agree to well under a metre (ETRS89 drifts ~2.5 cm a year from
 //!   WGS 84; NAD83 differs by 1-2 m);
 //! * those and the UTM CRSs of [`utm_zone`] (WGS 84, ETRS89, JGD2000/2011, NAD83, GDA; the
-//!   `utm` crate's series, centimetres within a zone).
+//!   `proj4rs` crate's extended transverse Mercator, sub-millimetre across a zone).
 //!
 //! * every other EPSG projected CRS in metres that the pure-Rust `proj4rs` crate covers with the
 //!   proj4 definition of `crs-definitions` (national grids: MGI Austria GK 31254-31259, DHDN
@@ -160,44 +160,88 @@ fn geographic_grs80(c: &Crs) -> Option<bool> {
 
 /// Latitude, longitude (degrees) of `p` in `c`, when `c` is one of [`Builtin`]'s CRSs.
 fn to_lat_lon(c: &Crs, p: DVec3) -> Result<(f64, f64), CrsError> {
-    if let Some(lat_first) = geographic_grs80(c) {
-        let (lat, lon) = if lat_first { (p.x, p.y) } else { (p.y, p.x) };
-        if lat.abs() > 90.0 || lon.abs() > 360.0 {
-            return Err(CrsError::OutOfRange {
-                crs: c.to_string(),
-                x: p.x,
-                y: p.y,
+    LatLon::new(c)?.of(p)
+}
+
+/// The conversion of one CRS's points to latitude and longitude, prepared once for many
+/// points (a `proj4rs` definition is parsed once, not per point): [`Builtin`]'s CRSs.
+#[derive(Debug)]
+pub struct LatLon {
+    crs: String,
+    how: LatLonBy,
+}
+
+#[derive(Debug)]
+enum LatLonBy {
+    /// Geographic on GRS 1980 / WGS 84: axes reordered.
+    Geographic { lat_first: bool },
+    /// A projected CRS of `proj4rs` (a UTM zone of [`utm_zone`] among them) and WGS 84
+    /// longitude/latitude; `prefix`: the zone number written before the easting.
+    Proj4 {
+        pair: Box<(proj4rs::Proj, proj4rs::Proj)>,
+        prefix: f64,
+    },
+}
+
+impl LatLon {
+    /// The conversion of `c`'s points.
+    ///
+    /// # Errors
+    /// [`CrsError::NotConvertible`] when `c` is not one of [`Builtin`]'s CRSs.
+    pub fn new(c: &Crs) -> Result<LatLon, CrsError> {
+        let how = if let Some(lat_first) = geographic_grs80(c) {
+            LatLonBy::Geographic { lat_first }
+        } else if let Some((pair, prefix)) = proj4_utm(c) {
+            LatLonBy::Proj4 {
+                pair: Box::new(pair),
+                prefix,
+            }
+        } else if let Some(pair) = proj4_projected(c) {
+            LatLonBy::Proj4 {
+                pair: Box::new(pair),
+                prefix: 0.0,
+            }
+        } else {
+            return Err(CrsError::NotConvertible {
+                from: c.to_string(),
+                to: "latitude/longitude".into(),
             });
-        }
-        return Ok((lat, lon));
-    }
-    if let Some((zone, north, prefix)) = c.epsg.and_then(utm_zone) {
-        let letter = if north { 'N' } else { 'M' };
-        return utm::wsg84_utm_to_lat_lon(p.x - prefix, p.y, zone, letter).map_err(|_| {
-            CrsError::OutOfRange {
-                crs: c.to_string(),
-                x: p.x,
-                y: p.y,
-            }
-        });
-    }
-    if let Some((proj, wgs84)) = proj4_projected(c) {
-        let mut q = (p.x, p.y, 0.0);
-        return match proj4rs::transform::transform(&proj, &wgs84, &mut q) {
-            Ok(()) if q.0.is_finite() && q.1.is_finite() => {
-                Ok((q.1.to_degrees(), q.0.to_degrees()))
-            }
-            _ => Err(CrsError::OutOfRange {
-                crs: c.to_string(),
-                x: p.x,
-                y: p.y,
-            }),
         };
+        Ok(LatLon {
+            crs: c.to_string(),
+            how,
+        })
     }
-    Err(CrsError::NotConvertible {
-        from: c.to_string(),
-        to: "latitude/longitude".into(),
-    })
+
+    /// Latitude and longitude (degrees) of `p`.
+    ///
+    /// # Errors
+    /// [`CrsError::OutOfRange`] for a point the conversion does not cover.
+    pub fn of(&self, p: DVec3) -> Result<(f64, f64), CrsError> {
+        let out = || CrsError::OutOfRange {
+            crs: self.crs.clone(),
+            x: p.x,
+            y: p.y,
+        };
+        match &self.how {
+            LatLonBy::Geographic { lat_first } => {
+                let (lat, lon) = if *lat_first { (p.x, p.y) } else { (p.y, p.x) };
+                if lat.abs() > 90.0 || lon.abs() > 360.0 {
+                    return Err(out());
+                }
+                Ok((lat, lon))
+            }
+            LatLonBy::Proj4 { pair, prefix } => {
+                let mut q = (p.x - prefix, p.y, 0.0);
+                match proj4rs::transform::transform(&pair.0, &pair.1, &mut q) {
+                    Ok(()) if q.0.is_finite() && q.1.is_finite() => {
+                        Ok((q.1.to_degrees(), q.0.to_degrees()))
+                    }
+                    _ => Err(out()),
+                }
+            }
+        }
+    }
 }
 
 /// The `proj4rs` projection of a projected CRS in metres with an EPSG code that
@@ -218,6 +262,19 @@ fn proj4_projected(c: &Crs) -> Option<(proj4rs::Proj, proj4rs::Proj)> {
     let def = proj4_definition(code)?;
     let proj = proj4rs::Proj::from_proj_string(def).ok()?;
     (!proj.is_latlong()).then_some((proj, wgs84()?))
+}
+
+/// The `proj4rs` projection of a UTM CRS of [`utm_zone`] (Poder/Engsager's extended
+/// transverse Mercator, sub-millimetre across the zone: the `utm` crate's series drift 5 cm
+/// at 180 km from the central meridian) with WGS 84 longitude/latitude, and the zone prefix of
+/// its eastings. GRS 1980 and WGS 84 differ by 0.1 mm in the semi-minor axis: one ellipsoid
+/// serves both.
+fn proj4_utm(c: &Crs) -> Option<((proj4rs::Proj, proj4rs::Proj), f64)> {
+    let (zone, north, prefix) = c.epsg.and_then(utm_zone)?;
+    let south = if north { "" } else { " +south" };
+    let def = format!("+proj=utm +zone={zone}{south} +datum=WGS84 +units=m +no_defs");
+    let proj = proj4rs::Proj::from_proj_string(&def).ok()?;
+    Some(((proj, wgs84()?), prefix))
 }
 
 /// The proj4 definition `crs-definitions` gives an EPSG code (metres only: a definition in
@@ -242,14 +299,12 @@ fn from_lat_lon(c: &Crs, lat: f64, lon: f64, z: f64) -> Result<DVec3, CrsError> 
             DVec3::new(lon, lat, z)
         });
     }
-    if let Some((zone, _north, prefix)) = c.epsg.and_then(utm_zone) {
-        let (northing, easting, _) = utm::to_utm_wgs84(lat, lon, zone);
-        return Ok(DVec3::new(easting + prefix, northing, z));
-    }
-    if let Some((proj, wgs84)) = proj4_projected(c) {
+    let utm = proj4_utm(c);
+    let prefix = utm.as_ref().map_or(0.0, |u| u.1);
+    if let Some((proj, wgs84)) = utm.map(|u| u.0).or_else(|| proj4_projected(c)) {
         let mut q = (lon.to_radians(), lat.to_radians(), 0.0);
         return match proj4rs::transform::transform(&wgs84, &proj, &mut q) {
-            Ok(()) if q.0.is_finite() && q.1.is_finite() => Ok(DVec3::new(q.0, q.1, z)),
+            Ok(()) if q.0.is_finite() && q.1.is_finite() => Ok(DVec3::new(q.0 + prefix, q.1, z)),
             _ => Err(CrsError::OutOfRange {
                 crs: c.to_string(),
                 x: lon,

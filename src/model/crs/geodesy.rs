@@ -92,6 +92,28 @@ impl Enu {
     pub fn to_geodetic(&self, p: DVec3) -> (f64, f64, f64) {
         ecef_to_geodetic(self.ellipsoid, self.origin + self.rot.transpose() * p)
     }
+
+    /// Local east, north, up (m) of an ECEF point.
+    pub fn from_ecef(&self, p: DVec3) -> DVec3 {
+        self.rot * (p - self.origin)
+    }
+
+    /// ECEF coordinates of a local point.
+    pub fn to_ecef(&self, p: DVec3) -> DVec3 {
+        self.origin + self.rot.transpose() * p
+    }
+
+    /// The frame as a matrix from local coordinates to ECEF (columns east, north, up and the
+    /// origin): a 3D Tiles tile's `transform`.
+    pub fn to_ecef_matrix(&self) -> glam::DMat4 {
+        let r = self.rot.transpose();
+        glam::DMat4::from_cols(
+            r.x_axis.extend(0.0),
+            r.y_axis.extend(0.0),
+            r.z_axis.extend(0.0),
+            self.origin.extend(1.0),
+        )
+    }
 }
 
 #[cfg(test)]

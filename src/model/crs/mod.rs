@@ -5,6 +5,7 @@
 //! * `frame`: [`LocalFrame`], source coordinates ⇄ a local east-north-up metric frame
 //!   (identity for projected metres, a scale for feet, ellipsoidal ENU for degrees).
 //! * `geodesy`: geodetic ⇄ ECEF ⇄ ENU on an ellipsoid (pure Rust, no PROJ).
+//! * `ecef`: [`ToEcef`], a model's points in ECEF (EPSG:4978), for 3D Tiles.
 //! * `convert`: [`PointTransform`], points between CRSs (POIs in `--poi-crs`, the sun's
 //!   site); [`Builtin`] is the default build's, [`build_transform`] the build's best.
 //! * `name`: [`CrsName`], a CRS by its EPSG codes (read by [`Crs::parse`]), for PROJ and
@@ -30,6 +31,7 @@
 //! ```
 
 pub(crate) mod convert;
+pub(crate) mod ecef;
 pub(crate) mod feet;
 pub(crate) mod frame;
 pub(crate) mod geodesy;
@@ -42,12 +44,13 @@ pub(crate) mod proj_transform;
 pub(crate) mod site;
 pub use convert::proj4_definition;
 pub use feet::{foot_codes, US_SURVEY_FOOT};
-pub use geodesy::Enu;
+pub use geodesy::{ecef_to_geodetic, geodetic_to_ecef, Enu};
 pub use parse::{GEOGRAPHIC, PROJECTED_METRES};
 #[cfg(feature = "proj")]
 pub use proj::crs_info;
 
-pub use convert::{build_transform, site_lat_lon, Builtin, CrsError, PointTransform};
+pub use convert::{build_transform, site_lat_lon, Builtin, CrsError, LatLon, PointTransform};
+pub use ecef::ToEcef;
 pub use frame::{FrameWarning, LocalFrame};
 pub use name::CrsName;
 pub use parse::{same_crs, srs_key, Crs, CrsKind, Ellipsoid};

@@ -1,7 +1,7 @@
 //! Site latitude/longitude from a model's CRS for the sun position (see [`super::convert`]
 //! for what converts; with feature `proj`, any CRS PROJ converts to WGS 84 as well). Without
 //! PROJ: geographic CRSs on GRS 1980/WGS 84 directly,
-//! the UTM CRSs of WGS 84, ETRS89, JGD2000/2011, NAD83 and GDA through the `utm` crate
+//! the UTM CRSs of WGS 84, ETRS89, JGD2000/2011, NAD83 and GDA through `proj4rs`
 //! (the datums differ by a metre or two at most, far below what a sun position needs), and
 //! the other EPSG projected CRSs in metres through `proj4rs` (national grids: see
 //! [`super::convert`]).
