@@ -1,7 +1,8 @@
 //! Output format from the output's name (DESIGN.md "Batch, streams and scale"): `.gml`/`.xml`
 //! (+`.gz`; also `.citygml`, as some datasets are named) CityGML, `.obj` OBJ, `.city.json`
-//! CityJSON 2.0, `.city.jsonl` CityJSONSeq. Any other name is refused unless the format is
-//! named explicitly (`--format`).
+//! CityJSON 2.0, `.city.jsonl` CityJSONSeq, `tileset.json` 3D Tiles 1.1 (the folder holding
+//! it is the tileset). Any other name is refused unless the format is named explicitly
+//! (`--format`).
 //!
 //! # Example
 //! ```
@@ -10,6 +11,7 @@
 //! assert_eq!(Format::from_path(Path::new("a/b.city.jsonl")), Some(Format::CityJsonSeq));
 //! assert_eq!(Format::from_path(Path::new("model.OBJ")), Some(Format::Obj));
 //! assert_eq!(Format::from_path(Path::new("x.json")), None);
+//! assert_eq!(Format::from_path(Path::new("web/tileset.json")), Some(Format::Tiles));
 //! assert_eq!(Format::resolve(Path::new("x.json"), Some(Format::CityJson)).unwrap(), Format::CityJson);
 //! assert!(Format::resolve(Path::new("x.json"), None).is_err());
 //! assert_eq!("cityjsonseq".parse::<Format>().unwrap(), Format::CityJsonSeq);
@@ -31,37 +33,42 @@ pub enum Format {
     /// CityJSON Text Sequences (`.city.jsonl`): a CityJSON header line, then one
     /// CityJSONFeature per line.
     CityJsonSeq,
+    /// 3D Tiles 1.1 (`DIR/tileset.json`, the tiles as glTF binary beside it).
+    Tiles,
 }
 
 /// The output name does not tell the format.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
     "{}: unknown output format; name it .gml/.xml (+.gz) for CityGML, .obj, .city.json or \
-     .city.jsonl, or give the format",
+     .city.jsonl, DIR/tileset.json for 3D Tiles, or give the format",
     .0.display()
 )]
 pub struct UnknownFormat(pub PathBuf);
 
 /// `--format` names, in the order of [`Format::ALL`].
-const NAMES: [&str; 4] = ["citygml", "obj", "cityjson", "cityjsonseq"];
+const NAMES: [&str; 5] = ["citygml", "obj", "cityjson", "cityjsonseq", "3dtiles"];
 
 impl Format {
     /// Every format.
-    pub const ALL: [Format; 4] = [
+    pub const ALL: [Format; 5] = [
         Format::CityGml,
         Format::Obj,
         Format::CityJson,
         Format::CityJsonSeq,
+        Format::Tiles,
     ];
 
-    /// The `--format` name: `citygml`, `obj`, `cityjson`, `cityjsonseq`.
+    /// The `--format` name: `citygml`, `obj`, `cityjson`, `cityjsonseq`, `3dtiles`.
     pub fn name(self) -> &'static str {
         NAMES[self as usize]
     }
 
-    /// The file name ending written for this format (`.gml`, `.obj`, `.city.json`, `.city.jsonl`).
+    /// The file name ending written for this format (`.gml`, `.obj`, `.city.json`,
+    /// `.city.jsonl`; a tileset: `/tileset.json`, a folder of its own).
     pub fn extension(self) -> &'static str {
         match self {
+            Format::Tiles => "/tileset.json",
             Format::CityGml => ".gml",
             Format::Obj => ".obj",
             Format::CityJson => ".city.json",
@@ -89,6 +96,8 @@ impl Format {
             Some(Format::CityJson)
         } else if name.ends_with(".city.jsonl") {
             Some(Format::CityJsonSeq)
+        } else if name == "tileset.json" {
+            Some(Format::Tiles)
         } else {
             None
         }
@@ -172,6 +181,8 @@ mod tests {
             ("a.city.json", Some(Format::CityJson)),
             ("a.City.JSONL", Some(Format::CityJsonSeq)),
             ("a.json", None),
+            ("out/TileSet.json", Some(Format::Tiles)),
+            ("mytileset.json", None),
             ("a.jsonl", None),
             ("a.citygml", Some(Format::CityGml)),
             ("a.gz", None),
@@ -202,6 +213,7 @@ mod tests {
         assert_eq!(Format::CityJsonSeq.output_name("a.GML"), "a.city.jsonl");
         assert_eq!(Format::CityJson.output_name("noext"), "noext.city.json");
         assert_eq!(Format::CityGml.output_name("a.xml.gz"), "a.xml.gz");
+        assert_eq!(Format::Tiles.output_name("a.gml"), "a/tileset.json");
     }
 
     #[test]

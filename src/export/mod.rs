@@ -40,6 +40,8 @@ mod cityjson_vertices;
 pub(crate) mod format;
 pub(crate) mod merge;
 pub(crate) mod obj;
+// 3D Tiles 1.1: a folder with tileset.json and glTF binary tiles.
+pub(crate) mod tiles;
 // What the commands report (typed JSON with schemas): the `lod` report, model counts.
 #[allow(clippy::module_inception)] // `report::report` is the `lod` report
 pub mod report;
@@ -113,6 +115,12 @@ pub struct ExportSummary {
     pub vertices: usize,
     /// CityJSONSeq features (lines after the header).
     pub features: usize,
+    /// 3D Tiles: tiles with content.
+    pub tiles: usize,
+    /// 3D Tiles: bytes of the largest tile.
+    pub largest_tile: u64,
+    /// 3D Tiles: degenerate polygons skipped (no area, or fewer than three points).
+    pub skipped: usize,
 }
 
 impl ExportSummary {
@@ -127,6 +135,17 @@ impl ExportSummary {
             Format::CityJsonSeq => format!(
                 "{} city objects in {} features, {} surfaces, {} vertices",
                 self.objects, self.features, self.polygons, self.vertices
+            ),
+            Format::Tiles => format!(
+                "{} city objects in {} tiles (largest {} bytes), {} triangles at full detail{}",
+                self.objects,
+                self.tiles,
+                self.largest_tile,
+                self.triangles,
+                match self.skipped {
+                    0 => String::new(),
+                    n => format!(", {n} degenerate polygon(s) skipped"),
+                }
             ),
             _ => format!(
                 "{} city objects, {} surfaces, {} vertices",
@@ -166,6 +185,9 @@ pub fn write(
     out: &Path,
     opts: &WriteOptions,
 ) -> Result<(ExportSummary, StreamSummary), WriteError> {
+    if format == Format::Tiles {
+        return tiles::write(chunks, out, opts);
+    }
     let input = chunks.check()?;
     crate::io::citygml::write::check_target(out, opts, input)?;
     let mut done: (ExportSummary, StreamSummary) = Default::default();
@@ -206,6 +228,11 @@ fn export(
         Format::CityGml => {
             return Err(WriteError::Invalid(
                 "CityGML is written by citygml::write / lod::mixed".into(),
+            ))
+        }
+        Format::Tiles => {
+            return Err(WriteError::Invalid(
+                "a 3D Tiles tileset is a folder of files; write it to DIR/tileset.json".into(),
             ))
         }
     };

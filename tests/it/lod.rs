@@ -224,7 +224,7 @@ fn same_seed_same_bytes_any_thread_count() {
 
 /// Facade POIs on the Ingolstadt street: the centres of the largest wall polygons of
 /// the first three buildings, 0.2 m in front of the wall.
-fn ingolstadt_pois(model: &CityModel) -> Vec<String> {
+pub(crate) fn ingolstadt_pois(model: &CityModel) -> Vec<String> {
     let mut out = Vec::new();
     let mut seen = std::collections::HashSet::new();
     for a in &model.assets {

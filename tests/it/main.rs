@@ -110,6 +110,8 @@ mod stream;
 mod sun_pvlib;
 // The synthetic district generator: schema-valid, deterministic, counts and envelope right.
 mod synth;
+// 3D Tiles 1.1 from real files: the tileset's rules, pyproj, glTF Validator, CesiumJS.
+mod tiles;
 // Inputs that would give a confidently wrong answer are refused or flagged.
 mod trust;
 // Issue 21 item 3: inside a building judged on the full geometry, far below, normal into

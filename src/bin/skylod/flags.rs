@@ -71,7 +71,7 @@ const TEXTS: [Text; 14] = [
     },
     |e| {
         let text = e.downcast_ref::<UnknownFormat>()?.to_string();
-        let named = "give --format citygml|obj|cityjson|cityjsonseq";
+        let named = "give --format citygml|obj|cityjson|cityjsonseq|3dtiles";
         Some(text.replace("give the format", named))
     },
     |e| match e.downcast_ref() {
@@ -174,6 +174,9 @@ fn trust(t: &TrustError) -> String {
 fn write(w: &WriteError) -> String {
     match w {
         WriteError::Exists(p) => format!("{}: output exists (use --overwrite)", p.display()),
+        WriteError::NotOnGlobe { crs, .. } if crs.is_empty() => {
+            format!("{w} (give it with --source-crs EPSG:n)")
+        }
         w => w.to_string(),
     }
 }

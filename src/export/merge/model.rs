@@ -142,10 +142,14 @@ pub fn write_merged(
     }
     let renames = renames(model, files)?;
     let v = view(model, files, &renames);
+    let chunks = crate::export::Chunks::model(&v, 0, content);
+    if format == Format::Tiles {
+        // a folder of files, staged and moved into place by its writer
+        return crate::export::write(format, &chunks, out, opts).map(|(s, _)| s);
+    }
     let mut summary = ExportSummary::default();
     let bytes = crate::io::citygml::write::atomic_write(out, |w| {
-        summary =
-            crate::export::write_to(format, &crate::export::Chunks::model(&v, 0, content), w)?.0;
+        summary = crate::export::write_to(format, &chunks, w)?.0;
         Ok(summary.bytes)
     })?;
     summary.bytes = bytes;

@@ -183,6 +183,36 @@ pub enum WriteError {
     /// read it whole and write the model instead.
     #[error("{}: the stream declined (read it whole)", crate::model::shown(.0))]
     Declined(PathBuf),
+    /// The output places the model on the globe (3D Tiles), and its CRS cannot be placed:
+    /// none is named (`crs` empty) or this build does not convert it.
+    #[error("{}: {}", crate::model::shown(.file), no_globe(.crs))]
+    NotOnGlobe {
+        /// The source.
+        file: PathBuf,
+        /// The CRS named, empty when none.
+        crs: String,
+    },
+    /// A point of the source could not be converted to the output's CRS.
+    #[error("{}:{line}: {id}: {source}", crate::model::shown(.file))]
+    Crs {
+        /// The source.
+        file: PathBuf,
+        /// Line of the object's start tag (0 when unknown).
+        line: u64,
+        /// The object's gml:id or name.
+        id: String,
+        /// Why.
+        source: Box<crate::model::crs::CrsError>,
+    },
+}
+
+/// Why a model cannot be placed on the globe.
+fn no_globe(crs: &str) -> String {
+    if crs.is_empty() {
+        "the model names no CRS; placing it on the globe needs one".into()
+    } else {
+        format!("cannot place {crs} on the globe in this build (UTM, geographic on GRS 1980/WGS 84 and the projected CRSs in metres of proj4rs only; others need the `proj` feature)")
+    }
 }
 
 impl From<crate::io::files::FileError> for WriteError {

@@ -52,6 +52,10 @@ pub struct WriteOptions {
     pub protect: crate::io::files::Protected,
     /// Keep the source's envelopes instead of recomputing them.
     pub keep_envelopes: bool,
+    /// The CRS of sources that name none, for outputs placed on the globe (3D Tiles).
+    pub source_crs: Option<crate::model::crs::Crs>,
+    /// A 3D Tiles output also gets its viewer page (`index.html` beside `tileset.json`).
+    pub viewer: bool,
 }
 
 /// What was written.

@@ -376,7 +376,8 @@ impl Staging {
         b.prefix(".skylod-merge-");
         let dir = match target.parent().filter(|d| !d.as_os_str().is_empty()) {
             _ if is_stdout(target) => b.tempdir(),
-            Some(parent) => b.tempdir_in(parent),
+            // the target's folder is made first (a tileset's, `-o new/tileset.json`)
+            Some(parent) => std::fs::create_dir_all(parent).and_then(|()| b.tempdir_in(parent)),
             None => b.tempdir_in("."),
         }
         .map_err(|source| PlanError::Staging {

@@ -123,6 +123,7 @@ impl Batch {
             overwrite,
             protect: Protected::new(&paths),
             keep_envelopes,
+            ..WriteOptions::default()
         };
         let targets = plan.targets(&paths, &wopts, shard, (true, edits))?;
         Ok(Batch {

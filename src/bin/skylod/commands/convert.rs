@@ -19,18 +19,27 @@ pub struct Args {
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// Output: a file for one input (`-` for standard output; .gml/.xml (.gz to compress)
-    /// CityGML, .obj OBJ, .city.json CityJSON 2.0, .city.jsonl CityJSONSeq); a directory
+    /// CityGML, .obj OBJ, .city.json CityJSON 2.0, .city.jsonl CityJSONSeq, DIR/tileset.json
+    /// a 3D Tiles 1.1 tileset in DIR); a directory
     /// that mirrors the input tree; or, for several inputs, one file (or `-`) that merges
     /// them (CityGML: one CityModel; OBJ, CityJSON: that merge converted, one origin;
     /// colliding gml:ids of later inputs renamed `<id>__<k>`).
     #[arg(short, long)]
     output: PathBuf,
     /// Output format when the output's name does not tell it.
-    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq", value_parser = crate::args::output::parse_format)]
+    #[arg(long, value_name = "citygml|obj|cityjson|cityjsonseq|3dtiles", value_parser = crate::args::output::parse_format)]
     format: Option<Format>,
     /// Replace existing output files.
     #[arg(long)]
     overwrite: bool,
+    /// CRS of inputs that name none (a 3D Tiles output places the model on the globe):
+    /// EPSG:n or any srsName form.
+    #[arg(long, value_name = "CRS", value_parser = crate::args::crs::parse_crs)]
+    source_crs: Option<skylod::model::crs::Crs>,
+    /// With a 3D Tiles output, also write DIR/index.html: the tileset in CesiumJS (loaded
+    /// from its CDN by the browser), coloured by class, a click showing an object's data.
+    #[arg(long)]
+    viewer: bool,
     /// CityGML version written for CityJSON inputs (CityGML inputs keep theirs).
     #[arg(long, value_name = "2.0|3.0", default_value = "2.0")]
     citygml_version: TargetVersion,
@@ -48,7 +57,10 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let (inputs, _spool) = crate::inputs::expand_inputs_relative(&args.inputs)?;
     let shard = args.shard.resolve()?;
     let out = (args.output.as_path(), args.format, args.overwrite);
-    let batch = outputs::batch("convert", &inputs, out, false, shard)?;
+    let mut batch = outputs::batch("convert", &inputs, out, false, shard)?;
+    for w in [&mut batch.wopts, &mut batch.targets.write_opts] {
+        (w.source_crs, w.viewer) = (args.source_crs.clone(), args.viewer);
+    }
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
     // Files in parallel; messages in input order whatever finished first (an OBJ or
     // CityJSON file's line as soon as it is written).
