@@ -450,16 +450,27 @@ def convert(
     *,
     format: Optional[str] = None,
     overwrite: bool = False,
+    source_crs: Optional[str] = None,
+    viewer: bool = False,
     progress: Progress = None,
 ) -> List[str]:
-    """Read CityGML and write it back (envelopes recomputed) or as OBJ, CityJSON or
-    CityJSONSeq (``skylod convert``); several inputs go to a mirrored directory or are merged
-    into one CityGML file. Returns the paths written.
+    """Read CityGML and write it back (envelopes recomputed) or as OBJ, CityJSON,
+    CityJSONSeq or a 3D Tiles 1.1 tileset (``DIR/tileset.json``; ``viewer`` adds a CesiumJS
+    page, ``source_crs`` places a model that names no CRS) (``skylod convert``); several
+    inputs go to a mirrored directory or are merged into one file. Returns the paths written.
 
     >>> skylod.convert("fzk_haus_lod2_v2.gml", "haus.city.json")           # doctest: +SKIP
     ['haus.city.json']
+    >>> skylod.convert("fzk_haus_lod2_v2.gml", "web/tileset.json", viewer=True)  # doctest: +SKIP
+    ['web/tileset.json']
     """
     out = _skylod.convert(
-        _paths(paths), os.fspath(output), format=format, overwrite=overwrite, progress=progress
+        _paths(paths),
+        os.fspath(output),
+        format=format,
+        overwrite=overwrite,
+        source_crs=source_crs,
+        viewer=viewer,
+        progress=progress,
     )
     return [os.fspath(p) for p in out]

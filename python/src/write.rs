@@ -19,6 +19,7 @@ use skylod::model::Stage;
 use skylod::pipeline::batch::{convert_file, file_stats, ConvertOptions};
 use skylod::pipeline::batch::{create_parent, plan, Plan, Targets};
 use skylod::pipeline::batch::{expand, Input};
+use skylod::pipeline::batch::{merge_parts, Said, Staging};
 use skylod::pipeline::session::BoundRequest;
 use skylod::pipeline::session::RunMs;
 use skylod::pipeline::session::SiteError;
@@ -135,17 +136,33 @@ fn layout(
     Ok((plan, format, targets, wopts))
 }
 
-/// Merge the staged parts of a merge plan into its target.
+/// Merge the staged parts of a merge plan into its target: CityGML parts into CityGML, or
+/// (with `staging`) through a staged CityGML merge converted to `format`, as the CLI merges.
 fn merge(
     plan: &Plan,
     parts: &[PathBuf],
     names: &[PathBuf],
+    (format, staging): (Format, Option<&Staging>),
     w: &WriteOptions,
 ) -> Result<(), String> {
-    if let Plan::Merge(target) = plan {
+    let Plan::Merge(target) = plan else {
+        return Ok(());
+    };
+    let Some(staging) = staging else {
         merge_named(parts, names, target, w).map_err(|e| message(&e))?;
+        return Ok(());
+    };
+    let (merged, said) = merge_parts(parts, names, (target, format), staging, w, parts.len());
+    if merged {
+        return Ok(());
     }
-    Ok(())
+    let errors: Vec<String> = (said.into_iter())
+        .filter_map(|s| match s {
+            Said::Error(e) => Some(e),
+            _ => None,
+        })
+        .collect();
+    Err(errors.join("; "))
 }
 
 /// `skylod stats --json`.
@@ -251,7 +268,7 @@ pub fn lod(
             .map(|f| f.path.clone())
             .collect();
         let parts: Vec<PathBuf> = targets.todo.iter().map(|(_, o)| o.clone()).collect();
-        merge(&plan, &parts, &names, &wopts)?;
+        merge(&plan, &parts, &names, (format, None), &wopts)?;
         let (read, write, total) = (l.read_ms, ms(t_write), ms(t_all));
         let run = RunMs { read, write, total };
         let report = study.lod_report(&lv, &lod_opts, run, guarantee, written);
@@ -261,19 +278,30 @@ pub fn lod(
 
 /// `skylod convert -o OUTPUT`: the outputs written, in input order (the merged file once).
 #[pyfunction]
-#[pyo3(signature = (paths, output, format=None, overwrite=false, progress=None))]
+#[pyo3(signature = (paths, output, format=None, overwrite=false, source_crs=None, viewer=false, progress=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn convert(
     py: Python<'_>,
     paths: Vec<PathBuf>,
     output: PathBuf,
     format: Option<String>,
     overwrite: bool,
+    source_crs: Option<String>,
+    viewer: bool,
     progress: Option<PyObject>,
 ) -> PyResult<Vec<PathBuf>> {
     run(py, progress, move |p| {
         let inputs = expand(&paths).map_err(|e| message(&e))?;
-        let (plan, format, targets, wopts) =
+        let (plan, format, mut targets, mut wopts) =
             layout(&inputs, &output, format.as_deref(), overwrite)?;
+        let crs = source_crs
+            .map(|c| {
+                skylod::model::crs::Crs::parse_named(&c).map_err(|e| format!("source_crs: {e}"))
+            })
+            .transpose()?;
+        for w in [&mut wopts, &mut targets.write_opts] {
+            (w.source_crs, w.viewer) = (crs.clone(), viewer);
+        }
         let fmt = match targets.staging {
             Some(_) => Format::CityGml,
             None => format,
@@ -302,7 +330,13 @@ pub fn convert(
             p.advance(Stage::Read, 1, 0, None);
         }
         p.finish(Stage::Read);
-        merge(&plan, &parts, &names, &wopts)?;
+        merge(
+            &plan,
+            &parts,
+            &names,
+            (format, targets.staging.as_ref()),
+            &wopts,
+        )?;
         Ok(match &plan {
             Plan::Merge(t) => vec![t.clone()],
             _ => parts,

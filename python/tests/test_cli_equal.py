@@ -206,13 +206,18 @@ def test_convert_writes_the_cli_s_bytes(cli, synth, shared_data, tmp_path):
         ("one.obj", [synth]),
         ("merged.gml", tiles),
         ("mirror/", tiles),
+        ("web/tileset.json", [synth]),
+        ("street/tileset.json", tiles),
     ):
         a, b = tmp_path / "cli" / name, tmp_path / "py" / name
-        a.parent.mkdir(exist_ok=True)
-        b.parent.mkdir(exist_ok=True)
+        a.parent.mkdir(parents=True, exist_ok=True)
+        b.parent.mkdir(parents=True, exist_ok=True)
         cli.run("convert", *inputs, "-o", f"{a}/" if name.endswith("/") else a)
         written = skylod.convert(inputs, f"{b}/" if name.endswith("/") else b)
-        if name.endswith("/"):
+        if name.endswith("tileset.json"):
+            assert tree(a.parent) == tree(b.parent) and len(tree(b.parent)) > 1, name
+            assert written == [str(b)]
+        elif name.endswith("/"):
             assert tree(a) == tree(b) and len(tree(b)) == len(tiles)
             assert sorted(written) == sorted(str(p) for p in b.rglob("*") if p.is_file())
         else:

@@ -55,6 +55,8 @@ def view_bytes(doc, binary, v):
 
 
 def strings(doc, binary, prop, count):
+    if prop is None:  # a property left out of a table: empty in every row
+        return [""] * count
     values = view_bytes(doc, binary, prop["values"])
     offs = np.frombuffer(view_bytes(doc, binary, prop["stringOffsets"]), dtype=np.uint32)
     if len(offs) != count + 1:
@@ -175,6 +177,8 @@ def main():
             else:
                 doc, binary, p = read_glb(path)
                 problems.extend(p)
+                if any(v["byteLength"] < 1 for v in doc["bufferViews"]):
+                    problems.append(f"{content['uri']}: a buffer view of 0 bytes")
                 pts, fids = positions(doc, binary)
                 full_detail = pts
                 if len(pts) and not inside_box(box, pts, 0.01):
@@ -188,7 +192,7 @@ def main():
                     count = table["count"]
                     ids = strings(doc, binary, table["properties"]["gml_id"], count)
                     cls = strings(doc, binary, table["properties"]["class"], count)
-                    bld = strings(doc, binary, table["properties"]["building"], count)
+                    bld = strings(doc, binary, table["properties"].get("building"), count)
                     lv = view_bytes(doc, binary, table["properties"]["level"]["values"])
                     classes.update(cls)
                     seen = 0

@@ -237,30 +237,40 @@ fn schema() -> Value {
     })
 }
 
-/// The property table of the tile's features, in row order; its JSON.
+/// The property table of the tile's features, in row order; its JSON. A string property
+/// empty in every row is left out of the table (glTF allows no empty buffer view; the
+/// properties are optional).
 fn property_table(b: &mut Builder, shown: &[&Shown<'_>]) -> Value {
-    let mut strings = |get: &dyn for<'s> Fn(&'s Shown<'_>) -> &'s str| -> Value {
+    let mut properties = serde_json::Map::new();
+    type Column<'c> = &'c dyn for<'s> Fn(&'s Shown<'_>) -> &'s str;
+    let columns: [(&str, Column<'_>); 3] = [
+        ("gml_id", &|s| &s.feature.name),
+        ("building", &|s| &s.feature.building),
+        ("class", &|s| &s.feature.class),
+    ];
+    for (name, get) in columns {
         let (mut values, mut offsets) = (Vec::new(), vec![0u32]);
         for s in shown {
             values.extend_from_slice(get(s).as_bytes());
             offsets.push(values.len() as u32);
         }
+        if values.is_empty() {
+            continue;
+        }
         let v = b.view(&values, None);
         let o = b.view(bytemuck::cast_slice(&offsets), None);
-        json!({"values": v, "stringOffsets": o, "stringOffsetType": "UINT32"})
-    };
-    let gml_id = strings(&|s| &s.feature.name);
-    let building = strings(&|s| &s.feature.building);
-    let class = strings(&|s| &s.feature.class);
+        let p = json!({"values": v, "stringOffsets": o, "stringOffsetType": "UINT32"});
+        properties.insert(name.into(), p);
+    }
     let lods: Vec<u8> = shown.iter().map(|s| s.lod).collect();
     let levels: Vec<u8> = shown.iter().map(|s| s.level).collect();
-    let lod = json!({"values": b.view(&lods, None)});
-    let level = json!({"values": b.view(&levels, None)});
+    properties.insert("lod".into(), json!({"values": b.view(&lods, None)}));
+    properties.insert("level".into(), json!({"values": b.view(&levels, None)}));
     json!({
         "name": "city objects",
         "class": "cityObject",
         "count": shown.len(),
-        "properties": {"gml_id": gml_id, "building": building, "class": class, "lod": lod, "level": level}
+        "properties": properties
     })
 }
 
@@ -323,6 +333,22 @@ mod tests {
         }
         let table = &doc["extensions"]["EXT_structural_metadata"]["propertyTables"][0];
         assert_eq!(table["count"], 1);
+        assert!(table["properties"]["building"].is_object());
+        f.building.clear();
+        let shown = [Shown {
+            feature: &f,
+            mesh: &f.leaf,
+            level: 2,
+            lod: 2,
+        }];
+        let g = glb(&shown, &DMat4::IDENTITY, "test").unwrap();
+        let jlen = u32::from_le_bytes(g.bytes[12..16].try_into().unwrap()) as usize;
+        let doc: Value = serde_json::from_slice(&g.bytes[20..20 + jlen]).unwrap();
+        let table = &doc["extensions"]["EXT_structural_metadata"]["propertyTables"][0];
+        assert!(table["properties"]["building"].is_null());
+        for v in doc["bufferViews"].as_array().unwrap() {
+            assert!(v["byteLength"].as_u64().unwrap() > 0);
+        }
         assert_eq!((g.triangles, g.features), (1, 1));
         let empty = Mesh::default();
         let none = [Shown {

@@ -35,7 +35,7 @@ pub use convert::{chunk_for, convert_file, file_stats, ConvertError, ConvertOpti
 pub use convert_all::convert_all;
 pub use edit::Transform;
 pub use inputs::{expand, expand_spooled, is_citygml_name, is_cityjson_name, Input, Spool};
-pub use outputs::{create_parent, per_poi, plan, Plan, PlanError, Targets};
+pub use outputs::{create_parent, per_poi, plan, Plan, PlanError, Staging, Targets};
 pub use reduce::{lod_result, Reduce};
 pub use rough::{rough_file, RoughFile};
 pub use run::{merge_parts, Batch, Done, Said};
