@@ -11,7 +11,7 @@
 //! Features go to a spill file between the pass that makes them and the one that writes
 //! the tiles ([`Feature::encode`], [`Feature::decode`]): memory follows the chunk.
 
-use super::georef::Georef;
+use super::georef::{Georef, AFFINE_EXTENT};
 use crate::export::Content;
 use crate::io::citygml::WriteError;
 use crate::lod::level::traced;
@@ -126,13 +126,27 @@ pub(super) fn feature(
         return Ok(None);
     };
     let at = |e| georef.error(model, a, e);
+    let b = a.bbox();
+    if b.is_empty() {
+        return Ok(None);
+    }
+    // small objects through the affine fit at their centre, large ones point by point
+    let affine = georef.affine(b.center()).map_err(at)?;
+    let fits = (affine.apply(b.max) - affine.apply(b.min)).length() <= AFFINE_EXTENT;
     let enu = |polys: &[Polygon]| -> Result<Vec<Polygon>, WriteError> {
         polys
             .iter()
-            .map(|p| georef.polygon(p).map_err(at))
+            .map(|p| match fits {
+                true => Ok(affine.polygon(p)),
+                false => georef.polygon(p).map_err(at),
+            })
             .collect()
     };
-    let full = enu(&traced(a, None, 2))?;
+    let mut local = a.clone();
+    for g in &mut local.geometries {
+        g.polygons = enu(&g.polygons)?;
+    }
+    let full = traced(&local, None, 2).into_owned();
     if full.is_empty() {
         return Ok(None);
     }
@@ -163,10 +177,6 @@ pub(super) fn feature(
             Cow::Owned(enu(&r.polygons())?)
         }
         None => {
-            let mut local = a.clone();
-            for g in &mut local.geometries {
-                g.polygons = enu(&g.polygons)?;
-            }
             let r = rough_asset(&local, &RoughOptions::default());
             f.rough_lod = r.lod;
             Cow::Owned(r.polygons().into_owned())

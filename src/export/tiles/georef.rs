@@ -1,25 +1,58 @@
 //! Where a tileset stands on the globe: the model's points in an east-north-up frame at the
-//! model's centre (metres, what the features are made in), and each tile's own frame.
+//! model's first object (metres, what the features are made in), and each tile's own frame.
+//!
+//! An object up to [`AFFINE_EXTENT`] across goes through the affine fit of the conversion at
+//! its centre ([`Georef::affine`]: exact there, central differences): what is left out is
+//! second order, the Earth's curvature and the projection's change of scale across the
+//! object, under a millimetre at 100 m from the centre. Larger objects go point by point.
 
 use crate::io::citygml::WriteError;
 use crate::model::crs::{Crs, CrsError, Ellipsoid, Enu, ToEcef};
 use crate::model::{Asset, CityModel, Polygon};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use std::path::{Path, PathBuf};
+
+/// The largest extent (m) of an object converted through an affine fit.
+pub(super) const AFFINE_EXTENT: f64 = 200.0;
+
+/// The conversion near a point, as an affine map.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Affine {
+    at: DVec3,
+    to: DVec3,
+    m: DMat3,
+}
+
+impl Affine {
+    /// `p` (in the CRS) in the model's frame.
+    pub fn apply(&self, p: DVec3) -> DVec3 {
+        self.to + self.m * (p - self.at)
+    }
+
+    /// `p` with every point in the model's frame.
+    pub fn polygon(&self, p: &Polygon) -> Polygon {
+        let mut q = p.clone();
+        for v in q.points_mut() {
+            *v = self.apply(*v);
+        }
+        q
+    }
+}
 
 /// The model's CRS to its east-north-up frame.
 #[derive(Debug)]
 pub(super) struct Georef {
     to: ToEcef,
-    /// The frame at the model's centre.
+    /// The frame at the model's first object.
     pub frame: Enu,
+    /// The CRS is geographic (degrees).
+    geographic: bool,
     /// The source, for errors.
     file: PathBuf,
 }
 
 impl Georef {
-    /// The frame of a model in `crs` centred at `centre` (a point in `crs`), read from
-    /// `file`.
+    /// The frame of a model in `crs` at `centre` (a point in `crs`), read from `file`.
     ///
     /// # Errors
     /// [`WriteError::NotOnGlobe`] for a CRS that cannot be placed; [`WriteError::Crs`] for a
@@ -39,6 +72,7 @@ impl Georef {
         Ok(Georef {
             to,
             frame,
+            geographic: matches!(crs.kind, crate::model::crs::CrsKind::Geographic { .. }),
             file: file.to_path_buf(),
         })
     }
@@ -55,6 +89,26 @@ impl Georef {
             *v = self.enu(*v)?;
         }
         Ok(q)
+    }
+
+    /// The affine fit of the conversion at `at` (a point in the CRS): the value and the
+    /// central differences over 1 m (1e-5 degrees on a geographic CRS) along each axis.
+    ///
+    /// # Errors
+    /// A point the conversion does not cover.
+    pub fn affine(&self, at: DVec3) -> Result<Affine, CrsError> {
+        let h = if self.geographic { 1e-5 } else { 1.0 };
+        let step = [DVec3::X * h, DVec3::Y * h, DVec3::Z];
+        let mut cols = [DVec3::ZERO; 3];
+        for (k, d) in step.into_iter().enumerate() {
+            let len = d.length();
+            cols[k] = (self.enu(at + d)? - self.enu(at - d)?) / (2.0 * len);
+        }
+        Ok(Affine {
+            at,
+            to: self.enu(at)?,
+            m: DMat3::from_cols(cols[0], cols[1], cols[2]),
+        })
     }
 
     /// A conversion error at asset `a` of `model`.

@@ -18,9 +18,10 @@
 //! * **Content** ([`glb`]): one feature per object with `EXT_mesh_features` ids and an
 //!   `EXT_structural_metadata` property table (`gml_id`, `building`, `class`, `lod`,
 //!   `level`); materials by class.
-//! * **Memory**: the source is read in passes a chunk at a time (a plan of the units, then
-//!   the features); the features go to a temporary spill file by leaf, and the tiles are
-//!   written from it: memory follows the chunk and the largest tile, not the model.
+//! * **Memory**: the source is read once, a chunk at a time; each building's (or other
+//!   object's) meshes go to a temporary spill file with its box, the tree is planned from
+//!   the boxes, and the tiles are written from the spill: memory follows the chunk and the
+//!   largest tile, not the model.
 //! * **Atomic**: the tiles and `tileset.json` are written into a temporary folder inside
 //!   `DIR` and moved into place at the end (`tileset.json` last); a failed or cancelled run
 //!   leaves `DIR` as it was.
@@ -84,42 +85,36 @@ pub(crate) fn write(
         move |source| WriteError::Io { file, source }
     };
     std::fs::create_dir_all(dir).map_err(io(dir))?;
-    // pass 0: the units and the model's box
-    let Some(survey) = survey(chunks)? else {
-        return Err(WriteError::Declined(chunks.label().into()));
-    };
-    let crs = match &opts.source_crs {
-        Some(c) => c.clone(),
-        None => Crs::parse(survey.summary.srs_name.as_deref().unwrap_or("")),
-    };
-    let label = PathBuf::from(chunks.label());
-    let centre = if survey.bbox.is_empty() {
-        DVec3::ZERO
-    } else {
-        survey.bbox.center()
-    };
-    let georef = Georef::new(&crs, centre, &label)?;
-    let units: Vec<Unit> = (survey.units.iter())
-        .map(|(b, w)| {
-            let at = georef.enu(b.center()).map_err(|source| WriteError::Crs {
-                file: label.clone(),
-                line: 0,
-                id: format!("an object at {}", b.center()),
-                source: Box::new(source),
-            })?;
-            Ok(Unit {
-                at: at.truncate(),
-                weight: *w,
-            })
-        })
-        .collect::<Result<_, WriteError>>()?;
-    let tree = plan::plan(&units, plan::LEAF_VERTICES);
-    // pass 1: the features, spilled by leaf
     let stage = tempfile::Builder::new()
         .prefix(".skylod-tileset-")
         .tempdir_in(dir)
         .map_err(io(dir))?;
-    let spill = spill_features(chunks, &survey, &tree, &georef, survey.summary.assets)?;
+    // one pass: every object's meshes spilled by building, the buildings' boxes kept
+    let label = PathBuf::from(chunks.label());
+    let (spill, summary) = spill_features(chunks, opts, &label)?;
+    let Some(georef) = spill.georef.as_ref() else {
+        let crs = opts.source_crs.as_ref().map(|c| c.name.clone());
+        let crs = crs.or(summary.srs_name.clone()).unwrap_or_default();
+        let file = label.clone();
+        return Err(match crs.is_empty() {
+            true => WriteError::NotOnGlobe { file, crs },
+            false => WriteError::Invalid(format!(
+                "{}: no geometry to write as a tileset",
+                crate::model::shown(&file)
+            )),
+        });
+    };
+    let units: Vec<Unit> = (spill.units.iter())
+        .map(|u| Unit {
+            at: u.bbox.center().truncate(),
+            weight: u.weight,
+        })
+        .collect();
+    let tree = plan::plan(&units, plan::LEAF_VERTICES);
+    let mut units_of_leaf = vec![Vec::new(); tree.nodes.len()];
+    for (u, &leaf) in tree.leaf_of_unit.iter().enumerate() {
+        units_of_leaf[leaf as usize].push(u as u32);
+    }
     // the tiles, leaves first, then each level of parents from the deepest
     let generator = format!("skylod {}", env!("CARGO_PKG_VERSION"));
     let model_to_ecef = georef.frame.to_ecef_matrix();
@@ -127,7 +122,9 @@ pub(crate) fn write(
         .map(|n| {
             let mut b = Bbox::EMPTY;
             for l in tree.leaves_below(n) {
-                b.union(&spill.leaf_boxes[l]);
+                for &u in &units_of_leaf[l] {
+                    b.union(&spill.units[u as usize].bbox);
+                }
             }
             let at = if b.is_empty() {
                 DVec3::ZERO
@@ -144,6 +141,7 @@ pub(crate) fn write(
     let ctx = Ctx {
         tree: &tree,
         spill: &spill,
+        units_of_leaf: &units_of_leaf,
         frames: &frames,
         stage: stage.path(),
         generator: &generator,
@@ -160,14 +158,12 @@ pub(crate) fn write(
     }
     let tiles: Vec<Tile> = done.into_iter().map(Option::unwrap_or_default).collect();
     // tileset.json, the viewer, and everything moved into place
-    let extent = if survey.bbox.is_empty() {
+    let mut all = Bbox::EMPTY;
+    spill.units.iter().for_each(|u| all.union(&u.bbox));
+    let extent = if all.is_empty() {
         0.0
     } else {
-        let (lo, hi) = (georef.enu(survey.bbox.min), georef.enu(survey.bbox.max));
-        match (lo, hi) {
-            (Ok(lo), Ok(hi)) => (hi - lo).length(),
-            _ => 0.0,
-        }
+        (all.max - all.min).length()
     };
     let root = tile_json(&tree, &tiles, &frames, 0, None);
     let tileset = json!({
@@ -181,6 +177,7 @@ pub(crate) fn write(
     let mut s = ExportSummary {
         tiles: tiles.iter().filter(|t| t.bytes > 0).count(),
         largest_tile: tiles.iter().map(|t| t.bytes).max().unwrap_or(0),
+        skipped: spill.degenerate,
         ..ExportSummary::default()
     };
     s.bytes = json.len() as u64 + tiles.iter().map(|t| t.bytes).sum::<u64>();
@@ -189,7 +186,6 @@ pub(crate) fn write(
         s.triangles += tiles[n].triangles;
         s.vertices += tiles[n].vertices;
     }
-    s.skipped = spill.degenerate;
     if opts.viewer {
         let page = viewer::page(&chunks.label());
         let staged = stage.path().join("index.html");
@@ -197,173 +193,148 @@ pub(crate) fn write(
         s.bytes += page.len() as u64;
     }
     move_into_place(stage.path(), dir, opts.viewer)?;
-    Ok((s, survey.summary))
+    Ok((s, summary))
 }
 
-/// What pass 0 found: units (a box and full-detail vertices each), each asset's unit in
-/// pass order, the model's box and the source's summary.
-struct Survey {
-    units: Vec<(Bbox, u64)>,
-    unit_of_asset: Vec<u32>,
+/// The assets of a part in document order, each with its index in the part's model and in
+/// the whole document (a streamed chunk's bodies, which come apart, after the others).
+fn part_assets<'p>(p: &'p Part<'_>) -> impl Iterator<Item = (usize, usize)> + 'p {
+    (p.in_order(false, 0).chain(p.in_order(true, 0))).map(|(i, _, g)| (i, g))
+}
+
+/// A unit of the tree (a building with its parts, or an object outside buildings) as spilled.
+#[derive(Debug, Clone)]
+struct SpilledUnit {
+    /// The box of its meshes in the model's frame.
     bbox: Bbox,
-    summary: StreamSummary,
+    /// Vertices of its leaf meshes.
+    weight: u64,
+    /// Its features' bytes in the spill file.
+    at: u64,
+    len: usize,
 }
 
-/// The assets of a part in the order of both passes, each with its index in the part's
-/// model and in the whole document (`assets`: the document's assets other than bodies).
-fn part_assets<'p>(p: &'p Part<'_>, assets: usize) -> impl Iterator<Item = (usize, usize)> + 'p {
-    (p.in_order(false, assets).chain(p.in_order(true, assets))).map(|(i, _, g)| (i, g))
-}
-
-/// Pass 0: the units; `None` where the stream declines.
-fn survey(chunks: &Chunks<'_>) -> Result<Option<Survey>, WriteError> {
-    let mut units: Vec<(Bbox, u64)> = Vec::new();
-    let mut unit_of_asset = Vec::new();
-    let mut bbox = Bbox::EMPTY;
-    let sum = chunks.pass(0, |p: &Part<'_>| -> Result<(), WriteError> {
-        let m = p.model;
-        let mut unit_of_building = foldhash::HashMap::<usize, u32>::default();
-        for (i, _) in part_assets(p, 0) {
-            let a = &m.assets[i];
-            let polys = crate::lod::level::traced(a, p.content.rough(i), 2);
-            let b = Bbox::of_points(polys.iter().flat_map(|q| q.points()));
-            let weight: u64 = polys.iter().map(|q| q.points().count() as u64).sum();
-            let u = match a.building.map(|b| m.root_building(b)) {
-                Some(root) => *unit_of_building.entry(root).or_insert_with(|| {
-                    units.push((Bbox::EMPTY, 0));
-                    (units.len() - 1) as u32
-                }),
-                None => {
-                    units.push((Bbox::EMPTY, 0));
-                    (units.len() - 1) as u32
-                }
-            };
-            let unit = &mut units[u as usize];
-            unit.0.union(&b);
-            unit.1 += weight;
-            bbox.union(&b);
-            unit_of_asset.push(u);
-        }
-        Ok(())
-    })?;
-    // a unit without geometry sits at the model's centre
-    let centre = if bbox.is_empty() {
-        DVec3::ZERO
-    } else {
-        bbox.center()
-    };
-    for u in &mut units {
-        if u.0.is_empty() {
-            u.0 = Bbox {
-                min: centre,
-                max: centre,
-            };
-        }
-    }
-    Ok(sum.map(|summary| Survey {
-        units,
-        unit_of_asset,
-        bbox,
-        summary,
-    }))
-}
-
-/// The features in a temporary file, by leaf.
+/// The features in a temporary file, by unit.
 struct Spill {
     file: File,
-    /// Per leaf (node index): the byte ranges of its features, in document order.
-    segments: Vec<Vec<(u64, usize)>>,
-    /// Per node: the box (model frame) of its leaves' features (leaf and rough meshes).
-    leaf_boxes: Vec<Bbox>,
+    units: Vec<SpilledUnit>,
     /// Polygons skipped as degenerate.
     degenerate: usize,
+    /// The model's frame, set at the first object (none: the model has no geometry).
+    georef: Option<Georef>,
 }
 
 impl Spill {
-    /// The features of leaf `n`, with their leaf meshes (`leaf`) and rough meshes (`rough`).
-    fn features(&self, n: usize, leaf: bool, rough: bool) -> Result<Vec<Feature>, WriteError> {
-        let mut all = Vec::new();
-        for &(at, len) in &self.segments[n] {
-            let mut bytes = vec![0u8; len];
-            self.file
-                .read_exact_at(&mut bytes, at)
-                .map_err(|source| WriteError::Io {
-                    file: std::env::temp_dir(),
-                    source,
-                })?;
-            let more = Feature::decode_all(&bytes, leaf, rough)
-                .ok_or_else(|| WriteError::Invalid("the tileset's spill file is damaged".into()))?;
-            all.extend(more);
-        }
-        Ok(all)
+    /// The features of unit `u`, with their leaf meshes (`leaf`) and rough meshes (`rough`).
+    fn features(&self, u: u32, leaf: bool, rough: bool) -> Result<Vec<Feature>, WriteError> {
+        let Some(unit) = self.units.get(u as usize) else {
+            return Ok(Vec::new());
+        };
+        let mut bytes = vec![0u8; unit.len];
+        let io = |source| WriteError::Io {
+            file: std::env::temp_dir(),
+            source,
+        };
+        self.file.read_exact_at(&mut bytes, unit.at).map_err(io)?;
+        Feature::decode_all(&bytes, leaf, rough)
+            .ok_or_else(|| WriteError::Invalid("the tileset's spill file is damaged".into()))
     }
 }
 
-/// Pass 1: every asset as a feature, appended to its leaf's segments.
+/// The one pass: every asset as a feature, spilled by unit; the model's frame is set at the
+/// first chunk with geometry, in `opts.source_crs` or the CRS the source names. `None` for
+/// the spill where the stream declines ([`WriteError::Declined`]).
 fn spill_features(
     chunks: &Chunks<'_>,
-    survey: &Survey,
-    tree: &Tree,
-    georef: &Georef,
-    assets: usize,
-) -> Result<Spill, WriteError> {
+    opts: &WriteOptions,
+    label: &Path,
+) -> Result<(Spill, StreamSummary), WriteError> {
     let tmp = std::env::temp_dir();
-    let mut file = tempfile::tempfile().map_err(|source| WriteError::Io {
+    let io = |source| WriteError::Io {
         file: tmp.clone(),
         source,
-    })?;
-    let n = tree.nodes.len();
+    };
+    let mut spill = Spill {
+        file: tempfile::tempfile().map_err(io)?,
+        units: Vec::new(),
+        degenerate: 0,
+        georef: None,
+    };
     let mut spill_at = 0u64;
-    let mut segments = vec![Vec::new(); n];
-    let mut leaf_boxes = vec![Bbox::EMPTY; n];
-    let mut degenerate = 0;
-    let mut next = 0usize;
-    let done = chunks.pass(1, |p: &Part<'_>| -> Result<(), WriteError> {
-        let order: Vec<(usize, usize)> = part_assets(p, assets).collect();
+    let done = chunks.pass(0, |p: &Part<'_>| -> Result<(), WriteError> {
+        let m = p.model;
+        let order: Vec<(usize, usize)> = part_assets(p).collect();
+        if spill.georef.is_none() {
+            let mut b = Bbox::EMPTY;
+            order
+                .iter()
+                .for_each(|&(i, _)| b.union(&m.assets[i].bbox()));
+            if b.is_empty() {
+                return Ok(());
+            }
+            let named = m.files.get(p.file).and_then(|f| f.srs_name.as_deref());
+            let crs = match &opts.source_crs {
+                Some(c) => c.clone(),
+                None => Crs::parse(named.unwrap_or("")),
+            };
+            spill.georef = Some(Georef::new(&crs, b.center(), label)?);
+        }
+        let Some(georef) = spill.georef.as_ref() else {
+            return Ok(());
+        };
         let made: Vec<Result<Option<Feature>, WriteError>> = order
             .par_iter()
-            .map(|&(i, g)| feature::feature(p.model, (i, g), &p.content, georef))
+            .map(|&(i, g)| feature::feature(m, (i, g), &p.content, georef))
             .collect();
         let mut features = Vec::with_capacity(made.len());
         for f in made {
             features.push(f?);
         }
-        fix_openings(p.model, &order, &mut features);
+        fix_openings(m, &order, &mut features);
+        // each building (with its parts) or object outside buildings is a unit
+        let mut unit_of_building = foldhash::HashMap::<usize, usize>::default();
         let mut buffers: Vec<(usize, Vec<u8>)> = Vec::new();
-        let mut buffer_of = foldhash::HashMap::<usize, usize>::default();
-        for f in features {
-            let unit = survey.unit_of_asset.get(next).copied().unwrap_or(0);
-            next += 1;
+        for (&(i, _), f) in order.iter().zip(features) {
             let Some(f) = f else { continue };
-            let leaf = tree.leaf_of_unit.get(unit as usize).copied().unwrap_or(0) as usize;
-            leaf_boxes[leaf].union(&f.leaf.bbox());
-            leaf_boxes[leaf].union(&f.rough.bbox());
-            degenerate += f.degenerate;
-            let k = *buffer_of.entry(leaf).or_insert_with(|| {
-                buffers.push((leaf, Vec::new()));
+            let new = |units: &mut Vec<SpilledUnit>, buffers: &mut Vec<(usize, Vec<u8>)>| {
+                units.push(SpilledUnit {
+                    bbox: Bbox::EMPTY,
+                    weight: 0,
+                    at: 0,
+                    len: 0,
+                });
+                buffers.push((units.len() - 1, Vec::new()));
                 buffers.len() - 1
-            });
+            };
+            let k = match m.assets[i].building.map(|b| m.root_building(b)) {
+                Some(root) => match unit_of_building.get(&root) {
+                    Some(&k) => k,
+                    None => {
+                        let k = new(&mut spill.units, &mut buffers);
+                        unit_of_building.insert(root, k);
+                        k
+                    }
+                },
+                None => new(&mut spill.units, &mut buffers),
+            };
+            let unit = &mut spill.units[buffers[k].0];
+            unit.bbox.union(&f.leaf.bbox());
+            unit.bbox.union(&f.rough.bbox());
+            unit.weight += f.leaf.positions.len() as u64;
+            spill.degenerate += f.degenerate;
             f.encode(&mut buffers[k].1);
         }
-        for (leaf, bytes) in buffers {
-            file.write_all(&bytes).map_err(|source| WriteError::Io {
-                file: tmp.clone(),
-                source,
-            })?;
-            segments[leaf].push((spill_at, bytes.len()));
+        for (u, bytes) in buffers {
+            spill.file.write_all(&bytes).map_err(io)?;
+            (spill.units[u].at, spill.units[u].len) = (spill_at, bytes.len());
             spill_at += bytes.len() as u64;
         }
         Ok(())
     })?;
-    if done.is_none() {
-        return Err(WriteError::Declined(chunks.label().into()));
+    match done {
+        Some(summary) => Ok((spill, summary)),
+        None => Err(WriteError::Declined(chunks.label().into())),
     }
-    Ok(Spill {
-        file,
-        segments,
-        leaf_boxes,
-        degenerate,
-    })
 }
 
 /// Each opening's deviation where the parents show its wall's rough form (its wall in the
@@ -415,6 +386,7 @@ struct Tile {
 struct Ctx<'a> {
     tree: &'a Tree,
     spill: &'a Spill,
+    units_of_leaf: &'a [Vec<u32>],
     frames: &'a [(Enu, DMat4)],
     stage: &'a Path,
     generator: &'a str,
@@ -428,8 +400,10 @@ impl Ctx<'_> {
         let mut error = 0.0f64;
         let mut shown_features = Vec::new();
         let threshold = node.side / PARENT_DETAIL;
-        for l in self.tree.leaves_below(n) {
-            for f in self.spill.features(l, leaf, !leaf)? {
+        let units = (self.tree.leaves_below(n).into_iter())
+            .flat_map(|l| self.units_of_leaf[l].iter().copied());
+        for u in units {
+            for f in self.spill.features(u, leaf, !leaf)? {
                 let show = if leaf {
                     error = error.max(f.leaf_error);
                     f.level >= 1

@@ -98,16 +98,39 @@ pub(super) fn plan(units: &[Unit], leaf_vertices: u64) -> Tree {
 }
 
 /// Add the node of square (`level`, `x`, `y`) at `origin` with `side`, holding `members`,
-/// and its subtree; its index.
+/// and its subtree; its index. A square whose members all lie in one quarter becomes that
+/// quarter (no tile holds exactly what its only child holds).
 fn split(
     tree: &mut Tree,
     units: &[Unit],
     members: Vec<u32>,
-    (level, x, y): (u32, u32, u32),
-    origin: DVec2,
-    side: f64,
+    (mut level, mut x, mut y): (u32, u32, u32),
+    mut origin: DVec2,
+    mut side: f64,
     leaf_vertices: u64,
 ) -> usize {
+    let weight: u64 = members.iter().map(|&u| units[u as usize].weight).sum();
+    let mut quarters: [Vec<u32>; 4] = Default::default();
+    let divide = loop {
+        if members.len() <= 1 || weight <= leaf_vertices || level >= MAX_LEVEL {
+            break false;
+        }
+        let half = side / 2.0;
+        quarters = Default::default();
+        for &u in &members {
+            let d = units[u as usize].at - origin;
+            let q = usize::from(d.x >= half) + 2 * usize::from(d.y >= half);
+            quarters[q].push(u);
+        }
+        let full: Vec<usize> = (0..4).filter(|&q| !quarters[q].is_empty()).collect();
+        if full.len() > 1 {
+            break true;
+        }
+        let q = full[0];
+        let (dx, dy) = ((q % 2) as u32, (q / 2) as u32);
+        origin += DVec2::new(f64::from(dx), f64::from(dy)) * half;
+        (level, x, y, side) = (level + 1, 2 * x + dx, 2 * y + dy, half);
+    };
     let me = tree.nodes.len();
     tree.nodes.push(Node {
         level,
@@ -116,20 +139,13 @@ fn split(
         side,
         children: Vec::new(),
     });
-    let weight: u64 = members.iter().map(|&u| units[u as usize].weight).sum();
-    if members.len() <= 1 || weight <= leaf_vertices || level >= MAX_LEVEL {
+    if !divide {
         for &u in &members {
             tree.leaf_of_unit[u as usize] = me as u32;
         }
         return me;
     }
     let half = side / 2.0;
-    let mut quarters: [Vec<u32>; 4] = Default::default();
-    for u in members {
-        let d = units[u as usize].at - origin;
-        let q = usize::from(d.x >= half) + 2 * usize::from(d.y >= half);
-        quarters[q].push(u);
-    }
     for (q, part) in quarters.into_iter().enumerate() {
         if part.is_empty() {
             continue;
@@ -177,10 +193,15 @@ mod tests {
         let t = plan(&units, 100);
         let root = &t.nodes[0];
         assert_eq!(root.children.len(), 4);
-        // the two units of the lower-left quarter share it, so it is split again
+        // the two units of the lower-left quarter share it, so it is split again, at the
+        // square where they part (a square whose units share one quarter is that quarter)
         let ll = &t.nodes[root.children[0]];
-        assert_eq!((ll.level, ll.x, ll.y), (1, 0, 0));
-        assert!(!ll.children.is_empty());
+        assert_eq!((ll.x, ll.y), (0, 0));
+        assert!(ll.level > 1 && ll.children.len() == 2, "{ll:?}");
+        // units at one point: one leaf, however heavy
+        let same = [unit(3.0, 3.0, 60), unit(3.0, 3.0, 60), unit(3.0, 3.0, 60)];
+        let t1 = plan(&same, 100);
+        assert_eq!(t1.nodes.len(), 1);
         // every unit in a leaf, every leaf under the root, no leaf over the limit but singles
         for (u, &leaf) in t.leaf_of_unit.iter().enumerate() {
             assert!(t.nodes[leaf as usize].children.is_empty(), "unit {u}");

@@ -215,12 +215,14 @@ pub fn convert_file(
     // where `chunk` says so)
     let cityjson_to_citygml = o.format == Format::CityGml && is_json_file(input);
     if let Some(chunk) = o.chunk.filter(|_| !cityjson_to_citygml) {
-        // the bar's share of each pass: OBJ origin 1/2, objects 1/2; CityJSONSeq plan 1/2,
+        // the bar's share of each pass: a tileset's one pass all; OBJ origin 1/2, objects 1/2; CityJSONSeq plan 1/2,
         // buildings 1/2; CityJSON plan, vertex uses and objects 1/3 each (the passes over
         // the objects outside buildings, when a file has them, are not counted)
         let thirds = o.format == Format::CityJson;
+        let once = o.format == Format::Tiles;
         let pass = |pass, n: u64| {
             let share = match (thirds, pass) {
+                _ if once => n,
                 (false, 0) => n.div_ceil(2),
                 (false, 1) => n / 2,
                 (true, 0) => n.div_ceil(3),
