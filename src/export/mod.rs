@@ -54,6 +54,10 @@ pub use merge::{merge_cityjson, merge_named, rename_ids, renamed_id};
 pub use obj::write_obj;
 
 pub use chunks::Chunks;
+
+/// The attribute that carries a surface's annual irradiation (kWh/m²) in the outputs of
+/// `irradiance --output-attributes` (a 3D Tiles feature's `irradiance`).
+pub const IRRADIATION_ATTRIBUTE: &str = "skylodAnnualIrradiation";
 pub use format::{Format, UnknownFormat};
 
 use crate::io::citygml::read::StreamSummary;

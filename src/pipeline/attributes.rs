@@ -33,8 +33,7 @@ use std::path::{Path, PathBuf};
 /// lie, in metres: facade POIs sit 5 cm out.
 pub const HOLD_DISTANCE_M: f64 = 0.25;
 
-/// The name of the generic attribute of `irradiance --output-attributes`.
-pub const IRRADIATION_ATTRIBUTE: &str = "skylodAnnualIrradiation";
+pub use crate::export::IRRADIATION_ATTRIBUTE;
 
 /// Per POI of `framed`, the thematic surface (an asset that is a shell surface: wall, roof,
 /// ground, …) that holds it: the surface hit from the POI backwards along its normal (down
@@ -242,8 +241,9 @@ pub enum AttributesError {
 /// Write the model of `framed` (file 0: its one input) to `out` with the mean of `values`
 /// (one per POI) over the POIs of each surface that holds POIs (`holding_surfaces`,
 /// `surface_means`) as `IRRADIATION_ATTRIBUTE`: CityJSON for a `.city.json` name (an
-/// attribute of the surface's semantic object), else CityGML by span edits
-/// (`write_attributes`). Never over an input, nor over an existing file without
+/// attribute of the surface's semantic object), a 3D Tiles tileset for `DIR/tileset.json`
+/// (each surface's `irradiance`; with `viewer`, its CesiumJS page), else CityGML by span
+/// edits (`write_attributes`). Never over an input, nor over an existing file without
 /// `overwrite`. The number of surfaces given it.
 ///
 /// # Errors
@@ -252,14 +252,15 @@ pub fn write_surface_means(
     framed: &Framed<'_>,
     values: &[f64],
     out: &Path,
-    overwrite: bool,
+    (overwrite, viewer): (bool, bool),
 ) -> Result<usize, AttributesError> {
     let model = framed.source;
     let means = surface_means(&holding_surfaces(framed), values);
     let means: BTreeMap<usize, f64> = means.into_iter().map(|(i, (m, _))| (i, m)).collect();
     let inputs = model.files.iter().map(|f| f.path.as_path());
     check_target(out, inputs, overwrite)?;
-    if Format::from_path(out) == Some(Format::CityJson) {
+    let format = Format::from_path(out);
+    if matches!(format, Some(Format::CityJson | Format::Tiles)) {
         let attrs: BTreeMap<usize, Map<String, Value>> = (means.iter())
             .map(|(&i, &m)| {
                 (
@@ -268,13 +269,22 @@ pub fn write_surface_means(
                 )
             })
             .collect();
-        atomic_write(out, |w| {
-            let chunks = Chunks::Model {
-                model,
-                file: 0,
-                content: Content::Full,
-                surface_attributes: Some(&attrs),
+        let chunks = Chunks::Model {
+            model,
+            file: 0,
+            content: Content::Full,
+            surface_attributes: Some(&attrs),
+        };
+        if format == Some(Format::Tiles) {
+            let opts = WriteOptions {
+                overwrite,
+                viewer,
+                ..Default::default()
             };
+            crate::export::write(Format::Tiles, &chunks, out, &opts)?;
+            return Ok(means.len());
+        }
+        atomic_write(out, |w| {
             let written = write_cityjson(Kind::CityJson, &chunks, w);
             written.map(|_| 0).map_err(|e| FileError::new(out, e))
         })

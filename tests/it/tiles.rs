@@ -266,3 +266,77 @@ fn cesium_loads_renders_and_picks() {
     assert!(ids.contains(&picked), "picked {picked:?}: {v}");
     assert!(shot.is_file());
 }
+
+/// A solar cadastre as a tileset (`irradiance --surfaces --output-attributes -o
+/// DIR/tileset.json`): every surface of the table carries its mean as `irradiance`, the
+/// tiles stay valid.
+#[test]
+fn cadastre_carries_irradiance() {
+    let Some(data) = shared_data() else { return };
+    if !python_has("numpy, pyproj", "pip install numpy pyproj") {
+        return;
+    }
+    let Some(weather) = crate::irradiance::tmy3() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let input = data.join("ingolstadt-lod3/4018106.xml.gz");
+    let dir = tmp.path().join("cadastre");
+    let table = tmp.path().join("surfaces.csv");
+    let out = dir.join("tileset.json");
+    let o = run(&[
+        os("irradiance"),
+        input.as_os_str(),
+        os("--surfaces"),
+        os("roof,wall"),
+        os("--weather"),
+        weather.as_os_str(),
+        os("--lat"),
+        os("36.1"),
+        os("--lon"),
+        os("-79.95"),
+        os("--rays"),
+        os("500"),
+        os("--table"),
+        table.as_os_str(),
+        os("--output-attributes"),
+        os("-o"),
+        out.as_os_str(),
+        os("--viewer"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.join("index.html").is_file());
+    let r = check(&dir, &[input], Some(32632));
+    assert_eq!(r["problems"], Value::Array(vec![]));
+    let kwh = r["irradiance"].as_object().unwrap();
+    let text = std::fs::read_to_string(&table).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let (id, mean, points) = (col("surface_id"), col("mean_kwh_m2"), col("points"));
+    let mut checked = 0;
+    for l in lines {
+        let f: Vec<&str> = l.split(',').collect();
+        if f[points] == "0" || f[id].contains(':') {
+            continue;
+        }
+        let want: f64 = f[mean].parse().unwrap();
+        let got = kwh[f[id]]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{} has none", f[id]));
+        assert!(
+            (got - want).abs() <= 1e-3 * want.max(1.0),
+            "{}: {got} vs {want}",
+            f[id]
+        );
+        checked += 1;
+    }
+    assert!(checked >= 10, "{checked} surfaces");
+    if let Some(m) = node_modules() {
+        let v = node_oracle(&m, "gltf_validate.cjs", &[dir.as_os_str()]);
+        assert_eq!(
+            (v["errors"].as_u64(), v["warnings"].as_u64()),
+            (Some(0), Some(0))
+        );
+    }
+}

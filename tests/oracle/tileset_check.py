@@ -14,6 +14,7 @@ prints one JSON object:
     (every building value in the leaves), classes, max_error, leaf_rows and leaf_levels (rows
     of the leaves' tables, and per level);
   source_buildings: with --source, the gml:id of every Building element of the sources;
+  irradiance: gml_id -> the leaves' irradiance property, where one is given;
   position_error_m: with --source/--epsg, the largest distance (m) from a sample of leaf
     vertices of full detail (level 2), placed on the globe by the tile transforms (EPSG:4978), to the nearest vertex
     of the source files placed by pyproj (the source CRS's horizontal part to EPSG:4979 with
@@ -134,7 +135,7 @@ def main():
         problems.append("tileset geometricError")
     out = {"tiles": 0, "leaves": 0, "depth": 0, "leaf_ids": [], "buildings": [],
            "classes": [], "max_error": 0.0, "leaf_rows": 0, "leaf_levels": {},
-           "source_buildings": []}
+           "source_buildings": [], "irradiance": {}}
     samples = []
     classes = set()
 
@@ -210,6 +211,13 @@ def main():
                         problems.append(f"{content['uri']}: {count} rows, {seen} features")
                     level_of = np.frombuffer(lv, dtype=np.uint8)
                     full_detail = pts[level_of[fids.astype(int)] == 2]
+                    kwh = table["properties"].get("irradiance")
+                    if kwh is not None and not children:
+                        vals = np.frombuffer(view_bytes(doc, binary, kwh["values"]),
+                                             dtype=np.float32)
+                        for k in range(count):
+                            if vals[k] != -1.0:
+                                out["irradiance"][ids[k]] = float(vals[k])
                     if not children:
                         out["leaf_rows"] += count
                         for v in lv:

@@ -106,6 +106,8 @@ pub(super) struct Feature {
     pub rough: Mesh,
     /// Polygons that gave no triangle (skipped).
     pub degenerate: usize,
+    /// Annual irradiation (kWh/m²) where the caller gives it (the cadastre's surfaces).
+    pub irradiance: Option<f32>,
     /// An opening's full-detail vertices, until its deviation from its wall is known (not
     /// spilled).
     pub opening_points: Vec<DVec3>,
@@ -347,6 +349,7 @@ impl Feature {
             out.extend_from_slice(&x.to_le_bytes());
         }
         out.extend_from_slice(&(self.degenerate as u32).to_le_bytes());
+        out.extend_from_slice(&self.irradiance.unwrap_or(f32::NAN).to_le_bytes());
         put_mesh(out, &self.leaf);
         put_mesh(out, &self.rough);
     }
@@ -362,6 +365,7 @@ impl Feature {
             let (level, lod, rough_lod) = (r.u8()?, r.u8()?, r.u8()?);
             let (leaf_error, rough_error, extent) = (r.f64()?, r.f64()?, r.f64()?);
             let degenerate = r.u32()? as usize;
+            let irradiance = Some(f32::from_bits(r.u32()?)).filter(|v| !v.is_nan());
             all.push(Feature {
                 name,
                 building,
@@ -374,6 +378,7 @@ impl Feature {
                 rough_error,
                 extent,
                 degenerate,
+                irradiance,
                 leaf: r.mesh(leaf)?,
                 rough: r.mesh(rough)?,
                 opening_points: Vec::new(),
@@ -429,6 +434,7 @@ mod tests {
             leaf_error: 0.0,
             rough_error: 0.25,
             extent: 5.0,
+            irradiance: Some(1012.5),
             ..Feature::default()
         };
         f.leaf.add_polygons(&[square(1.0)], &mut tris);

@@ -9,8 +9,9 @@
 //! * `EXT_mesh_features`: the vertex attribute `_FEATURE_ID_0` (float, exact to 2^24 features)
 //!   numbers each vertex's feature, the row of the tile's property table.
 //! * `EXT_structural_metadata`: the class `cityObject` with `gml_id`, `building`, `class`
-//!   (strings), `lod` and `level` (`UINT8`), one property table per tile; every buffer view
-//!   starts at a multiple of 8 bytes.
+//!   (strings), `lod` and `level` (`UINT8`), and `irradiance` (`FLOAT32`, kWh/m², −1 where
+//!   not computed) in a tile where some object has it; one property table per tile; every
+//!   buffer view starts at a multiple of 8 bytes.
 
 use super::feature::{Feature, Mesh};
 use crate::model::AssetKind;
@@ -172,7 +173,8 @@ pub(super) fn glb(shown: &[Shown<'_>], to_tile: &DMat4, generator: &str) -> Opti
             ]}}
         }));
     }
-    let table = property_table(&mut b, &shown);
+    let irradiance = shown.iter().any(|s| s.feature.irradiance.is_some());
+    let table = property_table(&mut b, &shown, irradiance);
     let materials: Vec<Value> = MATERIALS
         .iter()
         .map(|(name, [r, g, bl])| {
@@ -189,7 +191,7 @@ pub(super) fn glb(shown: &[Shown<'_>], to_tile: &DMat4, generator: &str) -> Opti
     let doc = json!({
         "asset": {"version": "2.0", "generator": generator},
         "extensionsUsed": ["EXT_mesh_features", "EXT_structural_metadata"],
-        "extensions": {"EXT_structural_metadata": {"schema": schema(), "propertyTables": [table]}},
+        "extensions": {"EXT_structural_metadata": {"schema": schema(irradiance), "propertyTables": [table]}},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [{"mesh": 0}],
@@ -219,9 +221,9 @@ fn bounds(xyz: &[f32]) -> ([f32; 3], [f32; 3]) {
     (lo.to_array(), hi.to_array())
 }
 
-/// The metadata schema: one class, `cityObject`.
-fn schema() -> Value {
-    json!({
+/// The metadata schema: one class, `cityObject` (with `irradiance` when asked).
+fn schema(irradiance: bool) -> Value {
+    let mut s = json!({
         "id": "skylod",
         "classes": {"cityObject": {
             "name": "City object",
@@ -234,13 +236,23 @@ fn schema() -> Value {
                 "level": {"type": "SCALAR", "componentType": "UINT8", "description": "2 full detail, 1 skylod's rough form"}
             }
         }}
-    })
+    });
+    if irradiance {
+        s["classes"]["cityObject"]["properties"]["irradiance"] = json!({
+            "type": "SCALAR", "componentType": "FLOAT32", "noData": NO_IRRADIANCE,
+            "description": "annual irradiation, kWh/m² (the mean of the surface's points)"
+        });
+    }
+    s
 }
+
+/// `irradiance` of an object without one.
+const NO_IRRADIANCE: f32 = -1.0;
 
 /// The property table of the tile's features, in row order; its JSON. A string property
 /// empty in every row is left out of the table (glTF allows no empty buffer view; the
 /// properties are optional).
-fn property_table(b: &mut Builder, shown: &[&Shown<'_>]) -> Value {
+fn property_table(b: &mut Builder, shown: &[&Shown<'_>], irradiance: bool) -> Value {
     let mut properties = serde_json::Map::new();
     type Column<'c> = &'c dyn for<'s> Fn(&'s Shown<'_>) -> &'s str;
     let columns: [(&str, Column<'_>); 3] = [
@@ -266,6 +278,13 @@ fn property_table(b: &mut Builder, shown: &[&Shown<'_>]) -> Value {
     let levels: Vec<u8> = shown.iter().map(|s| s.level).collect();
     properties.insert("lod".into(), json!({"values": b.view(&lods, None)}));
     properties.insert("level".into(), json!({"values": b.view(&levels, None)}));
+    if irradiance {
+        let kwh: Vec<f32> = (shown.iter())
+            .map(|s| s.feature.irradiance.unwrap_or(NO_IRRADIANCE))
+            .collect();
+        let v = b.view(bytemuck::cast_slice(&kwh), None);
+        properties.insert("irradiance".into(), json!({ "values": v }));
+    }
     json!({
         "name": "city objects",
         "class": "cityObject",

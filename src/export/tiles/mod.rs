@@ -17,7 +17,8 @@
 //!   children's boxes in that frame.
 //! * **Content** ([`glb`]): one feature per object with `EXT_mesh_features` ids and an
 //!   `EXT_structural_metadata` property table (`gml_id`, `building`, `class`, `lod`,
-//!   `level`); materials by class.
+//!   `level`, and `irradiance` where a model comes with `skylodAnnualIrradiation` per
+//!   surface); materials by class.
 //! * **Memory**: the source is read once, a chunk at a time; each building's (or other
 //!   object's) meshes go to a temporary spill file with its box, the tree is planned from
 //!   the boxes, and the tiles are written from the spill: memory follows the chunk and the
@@ -261,6 +262,13 @@ fn spill_features(
         georef: None,
     };
     let mut spill_at = 0u64;
+    // per-surface results given with a model (the cadastre's `skylodAnnualIrradiation`)
+    let attributes = match *chunks {
+        Chunks::Model {
+            surface_attributes, ..
+        } => surface_attributes,
+        Chunks::Stream { .. } => None,
+    };
     let done = chunks.pass(0, |p: &Part<'_>| -> Result<(), WriteError> {
         let m = p.model;
         let order: Vec<(usize, usize)> = part_assets(p).collect();
@@ -284,7 +292,16 @@ fn spill_features(
         };
         let made: Vec<Result<Option<Feature>, WriteError>> = order
             .par_iter()
-            .map(|&(i, g)| feature::feature(m, (i, g), &p.content, georef))
+            .map(|&(i, g)| {
+                let mut f = feature::feature(m, (i, g), &p.content, georef)?;
+                if let (Some(f), Some(a)) = (&mut f, attributes.and_then(|a| a.get(&i))) {
+                    f.irradiance = a
+                        .get(super::IRRADIATION_ATTRIBUTE)
+                        .and_then(Value::as_f64)
+                        .map(|v| v as f32);
+                }
+                Ok(f)
+            })
             .collect();
         let mut features = Vec::with_capacity(made.len());
         for f in made {

@@ -15,12 +15,18 @@ pub struct AttributeArgs {
     /// With --facade or --region: write the model (one input) to -o with the mean annual
     /// irradiation (kWh/m²) of the POIs of each wall, roof or other thematic surface that
     /// holds POIs, as its attribute skylodAnnualIrradiation (CityGML: a generic attribute
-    /// added in place; CityJSON: on the surface's semantic object).
+    /// added in place; CityJSON: on the surface's semantic object; 3D Tiles: the property
+    /// `irradiance`).
     #[arg(long, requires = "output")]
     pub output_attributes: bool,
-    /// The model written by --output-attributes: .gml, .xml (.gz) or .city.json.
+    /// The model written by --output-attributes: .gml, .xml (.gz), .city.json, or
+    /// DIR/tileset.json (3D Tiles, the value as each surface's `irradiance`).
     #[arg(short = 'o', long, value_name = "OUT", requires = "output_attributes")]
     pub output: Option<PathBuf>,
+    /// With a 3D Tiles output, also write DIR/index.html: the tileset in CesiumJS, coloured
+    /// by irradiance.
+    #[arg(long, requires = "output")]
+    pub viewer: bool,
 }
 
 impl AttributeArgs {
@@ -34,9 +40,9 @@ impl AttributeArgs {
             bail!("--output-attributes needs --facade or --region: the POIs of surfaces");
         }
         match Format::from_path(out) {
-            Some(Format::CityGml | Format::CityJson) | None => {}
+            Some(Format::CityGml | Format::CityJson | Format::Tiles) | None => {}
             Some(f) => bail!(
-                "--output-attributes writes CityGML or CityJSON (.city.json), not {f:?}: {}",
+                "--output-attributes writes CityGML, CityJSON (.city.json) or 3D Tiles (DIR/tileset.json), not {f:?}: {}",
                 out.display()
             ),
         }
@@ -62,7 +68,7 @@ impl AttributeArgs {
                 model.files.len()
             );
         }
-        let n = write_surface_means(framed, values, out, overwrite)?;
+        let n = write_surface_means(framed, values, out, (overwrite, self.viewer))?;
         Ok(Some(n))
     }
 }
