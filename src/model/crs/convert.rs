@@ -177,9 +177,12 @@ enum LatLonBy {
     Geographic { lat_first: bool },
     /// A projected CRS of `proj4rs` (a UTM zone of [`utm_zone`] among them) and WGS 84
     /// longitude/latitude; `prefix`: the zone number written before the easting.
+    /// `utm`: a UTM zone, whose eastings outside 100 km to 1,000 km and northings outside
+    /// 0 to 10,000 km are out of its range (as the `utm` crate held them).
     Proj4 {
         pair: Box<(proj4rs::Proj, proj4rs::Proj)>,
         prefix: f64,
+        utm: bool,
     },
 }
 
@@ -195,11 +198,13 @@ impl LatLon {
             LatLonBy::Proj4 {
                 pair: Box::new(pair),
                 prefix,
+                utm: true,
             }
         } else if let Some(pair) = proj4_projected(c) {
             LatLonBy::Proj4 {
                 pair: Box::new(pair),
                 prefix: 0.0,
+                utm: false,
             }
         } else {
             return Err(CrsError::NotConvertible {
@@ -231,8 +236,13 @@ impl LatLon {
                 }
                 Ok((lat, lon))
             }
-            LatLonBy::Proj4 { pair, prefix } => {
+            LatLonBy::Proj4 { pair, prefix, utm } => {
                 let mut q = (p.x - prefix, p.y, 0.0);
+                let in_zone =
+                    (100_000.0..1_000_000.0).contains(&q.0) && (0.0..=10_000_000.0).contains(&q.1);
+                if *utm && !in_zone {
+                    return Err(out());
+                }
                 match proj4rs::transform::transform(&pair.0, &pair.1, &mut q) {
                     Ok(()) if q.0.is_finite() && q.1.is_finite() => {
                         Ok((q.1.to_degrees(), q.0.to_degrees()))
