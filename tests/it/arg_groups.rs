@@ -54,10 +54,15 @@ const GROUPS: &[(&str, &[&str], &[&str])] = &[
         &["lod", "evaluate", "sun-hours"],
     ),
     (
+        "source CRS",
+        &["--source-crs <CRS>"],
+        &["lod", "evaluate", "svf", "convert", "irradiance"],
+    ),
+    (
         "output",
         &[
             "-o, --output <OUTPUT>",
-            "--format <citygml|obj|cityjson|cityjsonseq>",
+            "--format <citygml|obj|cityjson|cityjsonseq|3dtiles>",
             "--overwrite",
         ],
         &["lod", "rough"],

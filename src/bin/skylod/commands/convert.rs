@@ -32,10 +32,8 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     overwrite: bool,
-    /// CRS of inputs that name none (a 3D Tiles output places the model on the globe):
-    /// EPSG:n or any srsName form.
-    #[arg(long, value_name = "CRS", value_parser = crate::args::crs::parse_crs)]
-    source_crs: Option<skylod::model::crs::Crs>,
+    #[command(flatten)]
+    crs: crate::args::crs::SourceCrsArgs,
     /// With a 3D Tiles output, also write DIR/index.html: the tileset in CesiumJS (loaded
     /// from its CDN by the browser), coloured by class, a click showing an object's data.
     #[arg(long)]
@@ -59,7 +57,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let out = (args.output.as_path(), args.format, args.overwrite);
     let mut batch = outputs::batch("convert", &inputs, out, false, shard)?;
     for w in [&mut batch.wopts, &mut batch.targets.write_opts] {
-        (w.source_crs, w.viewer) = (args.source_crs.clone(), args.viewer);
+        (w.source_crs, w.viewer) = (args.crs.source_crs.clone(), args.viewer);
     }
     let paths: Vec<PathBuf> = inputs.iter().map(|i| i.path.clone()).collect();
     // Files in parallel; messages in input order whatever finished first (an OBJ or
