@@ -294,6 +294,7 @@ def irradiance_surfaces(
     seed: int = 1,
     threshold: Optional[float] = None,
     points: bool = False,
+    monthly: bool = False,
     source_crs: Optional[str] = None,
     allow_mixed_crs: bool = False,
     progress: Progress = None,
@@ -307,7 +308,8 @@ def irradiance_surfaces(
     ``min_kwh_m2``, ``max_kwh_m2``, ``area_above_m2`` with ``threshold``,
     ``building_roof_kwh``), or with ``points=True`` one row per sample point
     (``surface_id``, ``x``, ``y``, ``z``, ``nx``, ``ny``, ``nz``, ``global_kwh_m2``,
-    ``direct_kwh_m2``, ``diffuse_kwh_m2``, ``reflected_kwh_m2``). A DataFrame in one line:
+    ``direct_kwh_m2``, ``diffuse_kwh_m2``, ``reflected_kwh_m2``); ``monthly=True`` adds
+    ``jan_kwh_m2`` … ``dec_kwh_m2`` to either (``--monthly``). A DataFrame in one line:
     ``pandas.DataFrame(skylod.irradiance_surfaces(...))``.
 
     >>> skylod.irradiance_surfaces("tiles/", "berlin.epw", ("roof", "wall"))  # doctest: +SKIP
@@ -320,7 +322,7 @@ def irradiance_surfaces(
     doc = json.loads(
         _skylod.irradiance_surfaces(
             setup, os.fspath(weather), site, sky, albedo, rays, seed, threshold,
-            progress=progress,
+            monthly=monthly, progress=progress,
         )
     )
     table = doc["points" if points else "surfaces"]

@@ -11,7 +11,7 @@ mod write;
 use pyo3::prelude::*;
 use relay::{message, run, SkylodError};
 use setup::{load, ms, Setup};
-use skylod::export::report::{surface_rows, SunSetting};
+use skylod::export::report::{surface_rows, SunSetting, MONTH_COLUMNS};
 use skylod::lod::poi::{cadastre_surfaces, surface_of_poi};
 use skylod::model::Progress;
 use skylod::pipeline::session::weather_site;
@@ -186,7 +186,7 @@ fn irradiance(
 /// `skylod irradiance --surfaces … --table --points`: `{"surfaces": [rows], "points":
 /// [rows]}` as JSON, rows as the CSV files' (numbers unrounded).
 #[pyfunction]
-#[pyo3(signature = (setup, weather, site=None, sky="all-weather", albedo=0.2, rays=10_000, seed=1, threshold=None, progress=None))]
+#[pyo3(signature = (setup, weather, site=None, sky="all-weather", albedo=0.2, rays=10_000, seed=1, threshold=None, monthly=false, progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn irradiance_surfaces(
     py: Python<'_>,
@@ -198,6 +198,7 @@ fn irradiance_surfaces(
     rays: usize,
     seed: u64,
     threshold: Option<f64>,
+    monthly: bool,
     progress: Option<PyObject>,
 ) -> PyResult<String> {
     let sky = sky_model(sky)?;
@@ -212,28 +213,42 @@ fn irradiance_surfaces(
         let classes = setup.surface_classes()?;
         let list = cadastre_surfaces(&l.study.framed().model, &classes);
         let annual = run.annual();
-        let rows = surface_rows(&list, &run.ids, &annual, threshold, false);
+        let rows = surface_rows(&list, &run.ids, &annual, threshold, monthly);
+        // twelve columns `jan_kwh_m2` … `dec_kwh_m2` after the others, as the CLI's tables
+        let months = |row: &mut serde_json::Value, m: &[f64; 12]| {
+            for (name, v) in MONTH_COLUMNS.iter().zip(m) {
+                row[*name] = serde_json::json!(v);
+            }
+        };
         let surfaces: Vec<serde_json::Value> = rows
             .iter()
             .map(|r| {
-                serde_json::json!({
+                let mut row = serde_json::json!({
                     "surface_id": r.surface_id, "building_id": r.building_id,
                     "kind": r.kind.as_str(), "area_m2": r.area_m2, "points": r.points,
                     "mean_kwh_m2": r.mean_kwh_m2, "min_kwh_m2": r.min_kwh_m2,
                     "max_kwh_m2": r.max_kwh_m2, "area_above_m2": r.area_above_m2,
-                    "building_roof_kwh": r.building_roof_kwh,
-                })
+                });
+                if let Some(m) = &r.monthly_mean_kwh_m2 {
+                    months(&mut row, m);
+                }
+                row["building_roof_kwh"] = serde_json::json!(r.building_roof_kwh);
+                row
             })
             .collect();
         let points: Vec<serde_json::Value> = (l.study.pois().iter().zip(&annual))
             .map(|(p, r)| {
                 let (nx, ny, nz) = p.normal.map_or((0.0, 0.0, 1.0), |n| (n.x, n.y, n.z));
-                serde_json::json!({
+                let mut row = serde_json::json!({
                     "surface_id": surface_of_poi(&p.id), "x": p.position.x,
                     "y": p.position.y, "z": p.position.z, "nx": nx, "ny": ny, "nz": nz,
                     "global_kwh_m2": r.global_kwh_m2, "direct_kwh_m2": r.direct_kwh_m2,
                     "diffuse_kwh_m2": r.diffuse_kwh_m2, "reflected_kwh_m2": r.reflected_kwh_m2,
-                })
+                });
+                if monthly {
+                    months(&mut row, &r.monthly_global_kwh_m2);
+                }
+                row
             })
             .collect();
         json(&serde_json::json!({"surfaces": surfaces, "points": points}))

@@ -153,6 +153,22 @@ def test_irradiance_surfaces_equals_the_cli_s_tables(cli, shared_data, tmp_path)
     want = list(csv.DictReader(open(points)))
     assert p["surface_id"].tolist() == [r["surface_id"] for r in want]
     assert np.allclose(p["global_kwh_m2"], [float(r["global_kwh_m2"]) for r in want], atol=6e-4)
+    # the twelve months, as --monthly writes them
+    monthly_table = tmp_path / "m.csv"
+    cli.run(
+        "irradiance", house, "--surfaces", "roof,wall", "--weather", tmy, "--lat", 36.1,
+        "--lon", -79.9, "--rays", 1000, "--monthly", "--table", monthly_table,
+    )
+    m = skylod.irradiance_surfaces(house, tmy, ("roof", "wall"), monthly=True, **kw)
+    want = list(csv.DictReader(open(monthly_table)))
+    assert list(m) == list(want[0])  # the CLI's columns, in its order
+    names = list(want[0])[8:20]
+    assert names[0] == "jan_kwh_m2" and names[-1] == "dec_kwh_m2"
+    for k in names:
+        assert np.allclose(m[k], [float(r[k]) for r in want], atol=6e-4), k
+    mp = skylod.irradiance_surfaces(house, tmy, ("roof",), points=True, monthly=True, **kw)
+    months = np.stack([mp[k] for k in names])
+    assert np.allclose(months.sum(axis=0), mp["global_kwh_m2"], rtol=1e-6)
     # a DataFrame in one line; roofs only by default, no threshold column without one
     roofs = pd.DataFrame(skylod.irradiance_surfaces(house, tmy, **kw))
     assert set(roofs["kind"]) == {"roof"} and "area_above_m2" not in roofs

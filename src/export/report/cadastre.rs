@@ -78,8 +78,8 @@ pub struct TableLayout {
     pub header: bool,
 }
 
-/// The months' column names.
-const MONTHS: [&str; 12] = [
+/// The months' column names, January first.
+pub const MONTH_COLUMNS: [&str; 12] = [
     "jan_kwh_m2",
     "feb_kwh_m2",
     "mar_kwh_m2",
@@ -188,7 +188,7 @@ pub fn write_surface_table(
         head.push("area_above_m2");
     }
     if layout.monthly {
-        head.extend(MONTHS);
+        head.extend(MONTH_COLUMNS);
     }
     head.push("building_roof_kwh");
     if layout.header {
@@ -248,7 +248,7 @@ pub fn write_point_table(
         "reflected_kwh_m2",
     ];
     if layout.monthly {
-        head.extend(MONTHS);
+        head.extend(MONTH_COLUMNS);
     }
     if layout.header {
         w.write_record(head)?;

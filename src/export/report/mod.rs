@@ -13,7 +13,9 @@ pub(crate) mod stats;
 pub(crate) mod sun_hours;
 pub(crate) mod svf;
 pub(crate) mod text;
-pub use cadastre::{surface_rows, write_point_table, write_surface_table, SurfaceRow, TableLayout};
+pub use cadastre::{
+    surface_rows, write_point_table, write_surface_table, SurfaceRow, TableLayout, MONTH_COLUMNS,
+};
 pub use evaluate::write_table;
 pub use irradiance::write_csv;
 pub use report::{Guarantee, Parameters, Report, Timings};
