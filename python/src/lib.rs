@@ -133,6 +133,7 @@ fn irradiance_run(
         bundles: &bundles,
         rays,
         hourly: false,
+        cadastre: !setup.surfaces.is_empty(),
     };
     let run = (l.study.irradiance_output(&req, p)).map_err(|e| message(&e))?;
     Ok((l, run))
@@ -211,9 +212,9 @@ fn irradiance_surfaces(
     run(py, progress, move |p| {
         let (l, run) = irradiance_run(&setup, &weather, site, (sky, albedo), (rays, seed), p)?;
         let classes = setup.surface_classes()?;
-        let list = cadastre_surfaces(&l.study.framed().model, &classes);
-        let annual = run.annual();
-        let rows = surface_rows(&list, &run.ids, &annual, threshold, monthly);
+        let list = cadastre_surfaces(l.study.local_model(), &classes);
+        let annual = &run.traced.results;
+        let rows = surface_rows(&list, l.study.pois(), annual, threshold, monthly);
         // twelve columns `jan_kwh_m2` … `dec_kwh_m2` after the others, as the CLI's tables
         let months = |row: &mut serde_json::Value, m: &[f64; 12]| {
             for (name, v) in MONTH_COLUMNS.iter().zip(m) {
@@ -236,8 +237,9 @@ fn irradiance_surfaces(
                 row
             })
             .collect();
-        let points: Vec<serde_json::Value> = (l.study.pois().iter().zip(&annual))
+        let points: Vec<serde_json::Value> = (l.study.pois().iter().zip(annual))
             .map(|(p, r)| {
+                let r = &r.annual;
                 let (nx, ny, nz) = p.normal.map_or((0.0, 0.0, 1.0), |n| (n.x, n.y, n.z));
                 let mut row = serde_json::json!({
                     "surface_id": surface_of_poi(&p.id), "x": p.position.x,

@@ -21,11 +21,13 @@ pub(crate) mod poi;
 // Progress, cancellation, memory given back between stages.
 pub(crate) mod runtime;
 mod shown;
+mod squares;
 // Deterministic synthetic districts (the paper's Eixample) and box scenes.
 pub mod synth;
 pub(crate) mod triangulate;
 
 pub use shown::{made_line, shown, Shown, STDIN_NAME, STDIN_SHOWN};
+pub use squares::squares;
 
 pub use poi::{Poi, POI_OFFSET};
 pub use runtime::available::available_bytes;

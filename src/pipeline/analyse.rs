@@ -5,10 +5,11 @@ use super::session::Error;
 use super::Framed;
 use crate::lod::evaluation::{evaluate_irradiance, EvalOptions, Evaluation};
 use crate::lod::poi::checks::{self, PoiFlag};
-use crate::lod::scene::full_scene;
+use crate::lod::rough::{rough_model, RoughOptions};
+use crate::lod::scene::{detail_boxes, full_scene, mixed_scene};
 use crate::model::runtime::progress::{check, Cancelled, Progress, Stage};
-use crate::model::CityModel;
 use crate::model::Poi;
+use crate::model::{Bbox, CityModel};
 use crate::solar::trace::TraceScene;
 use crate::solar::{poi_horizon, HorizonOptions, HorizonProfile, SunTable};
 use rayon::prelude::*;
@@ -41,6 +42,37 @@ impl<T> Traced<T> {
     }
 }
 
+/// How [`trace_with`] builds the scene its POIs are traced against: the one decision
+/// between a few POIs and every surface of a city.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Scenes {
+    /// One scene: the whole model at full detail.
+    #[default]
+    Whole,
+    /// The POIs in squares of `size` metres (x, y) on a grid anchored at the corner of the
+    /// model's box, so that a POI's square never depends on the other POIs (a shard's
+    /// answers are the serial run's); each square traced against its own scene: full detail
+    /// for the assets whose box comes within `margin` metres of the square, skylod's rough
+    /// forms (level 1) beyond. The largest scene follows a square's surroundings, not the
+    /// city's size.
+    Tiled {
+        /// Side of a square (m).
+        size: f64,
+        /// Reach of full detail around a square (m).
+        margin: f64,
+    },
+}
+
+impl Scenes {
+    /// A city's solar cadastre: 250 m squares with full detail 150 m around them. Beyond
+    /// 150 m, a rough form differs from its detail by under a degree as seen from the
+    /// square (a metre's overhang or recess subtends 0.4°).
+    pub const CADASTRE: Scenes = Scenes::Tiled {
+        size: 250.0,
+        margin: 150.0,
+    };
+}
+
 /// `f` for every POI of `framed` (local frame, in parallel) against the full-detail scene of
 /// its model ([`Stage::Bvh`], then [`Stage::Trace`]: one item per POI, cancellable before
 /// each POI), with each POI's flags; `sky_rays` of a result, when it knows them, adds the
@@ -66,6 +98,118 @@ pub fn trace<T: Send>(
     Ok(traced)
 }
 
+/// [`trace`] with the scene built as `scenes` says: [`Scenes::Whole`] is [`trace`];
+/// [`Scenes::Tiled`] reports the boxes and rough forms as one [`Stage::Bvh`] item, then the
+/// POIs as [`Stage::Trace`] items, square after square (each square's scene built in that
+/// stage), `bvh_s` the time of every scene together. The results are made in place
+/// (`T::default()` until its POI is traced), so that a city's millions of points are held
+/// once.
+///
+/// # Errors
+/// [`Cancelled`] when `progress` asks to stop.
+pub fn trace_with<T: Send + Default>(
+    framed: &Framed<'_>,
+    scenes: Scenes,
+    f: impl Fn(&TraceScene, &Poi) -> T + Sync,
+    sky_rays: impl Fn(&T) -> Option<usize> + Sync,
+    progress: &dyn Progress,
+) -> Result<Traced<T>, Cancelled> {
+    let Scenes::Tiled { size, margin } = scenes else {
+        return trace(framed, f, sky_rays, progress);
+    };
+    let model: &CityModel = &framed.model;
+    let pois = &framed.local_pois;
+    let t = Instant::now();
+    check(progress, Stage::Bvh)?;
+    let (boxes, rough, squares) =
+        crate::model::runtime::progress::stage(progress, Stage::Bvh, 1, 0, || {
+            let (boxes, all) = detail_boxes(model);
+            let rough = rough_model(model, &RoughOptions::default());
+            progress.advance(Stage::Bvh, 1, 0, None);
+            (boxes, rough, squares_of(pois, all, size))
+        });
+    let around = checks::Surroundings::new(model);
+    let mut bvh_s = t.elapsed().as_secs_f64();
+    let mut results: Vec<T> = std::iter::repeat_with(T::default)
+        .take(pois.len())
+        .collect();
+    let mut flags: Vec<Vec<PoiFlag>> = vec![Vec::new(); pois.len()];
+    progress.start(Stage::Trace, pois.len() as u64, 0);
+    for (square, members) in squares {
+        check(progress, Stage::Trace)?;
+        let t = Instant::now();
+        let levels = square_levels(&boxes, &square, margin);
+        let scene = mixed_scene(model, &rough, &levels);
+        drop(levels);
+        bvh_s += t.elapsed().as_secs_f64();
+        let done: Result<Vec<(T, Vec<PoiFlag>)>, Cancelled> = members
+            .par_iter()
+            .map(|&i| one_poi(&scene, model, &around, &pois[i], &f, &sky_rays, progress))
+            .collect();
+        for (i, (r, f)) in members.into_iter().zip(done?) {
+            (results[i], flags[i]) = (r, f);
+        }
+    }
+    progress.finish(Stage::Trace);
+    let total = t.elapsed().as_secs_f64();
+    Ok(Traced {
+        results,
+        flags,
+        bvh_s,
+        trace_s: total - bvh_s,
+    })
+}
+
+/// The POIs (indices into `pois`) of each square of side `size` of the grid anchored at
+/// `all`'s lower corner ([`crate::model::squares`]).
+fn squares_of(pois: &[Poi], all: Bbox, size: f64) -> Vec<(Bbox, Vec<usize>)> {
+    let origin = if all.is_empty() {
+        glam::DVec3::ZERO
+    } else {
+        all.min
+    };
+    let points: Vec<glam::DVec3> = pois.iter().map(|p| p.position).collect();
+    crate::model::squares(&points, origin, size)
+}
+
+/// Each asset's level in the scene of `square`: 2 (full detail) where its box `boxes[i]`
+/// comes within `margin` of the square in x and y, else 1 (its rough form).
+fn square_levels(boxes: &[Bbox], square: &Bbox, margin: f64) -> Vec<u8> {
+    boxes
+        .iter()
+        .map(|b| {
+            let near = !b.is_empty()
+                && b.min.x <= square.max.x + margin
+                && b.max.x >= square.min.x - margin
+                && b.min.y <= square.max.y + margin
+                && b.max.y >= square.min.y - margin;
+            if near {
+                2
+            } else {
+                1
+            }
+        })
+        .collect()
+}
+
+/// One POI traced against `scene` (see [`trace_in`]).
+fn one_poi<T>(
+    scene: &TraceScene,
+    model: &CityModel,
+    around: &checks::Surroundings,
+    p: &Poi,
+    f: &(impl Fn(&TraceScene, &Poi) -> T + Sync),
+    sky_rays: &(impl Fn(&T) -> Option<usize> + Sync),
+    progress: &dyn Progress,
+) -> Result<(T, Vec<PoiFlag>), Cancelled> {
+    check(progress, Stage::Trace)?;
+    let r = f(scene, p);
+    let flags = checks::poi_flags_around(scene, model, around, p, sky_rays(&r));
+    // No name: many cheap POIs in parallel (a log line each would drown the log).
+    progress.advance(Stage::Trace, 1, 0, None);
+    Ok((r, flags))
+}
+
 /// [`trace`] against a full-detail `scene` already built (of `framed.model`): no
 /// [`Stage::Bvh`], `bvh_s` 0.
 ///
@@ -89,14 +233,7 @@ pub(crate) fn trace_in<T: Send>(
         0,
         || {
             pois.par_iter()
-                .map(|p| {
-                    check(progress, Stage::Trace)?;
-                    let r = f(scene, p);
-                    let flags = checks::poi_flags_around(scene, model, &around, p, sky_rays(&r));
-                    // No name: many cheap POIs in parallel (a log line each would drown the log).
-                    progress.advance(Stage::Trace, 1, 0, None);
-                    Ok((r, flags))
-                })
+                .map(|p| one_poi(scene, model, &around, p, &f, &sky_rays, progress))
                 .collect()
         },
     );
@@ -167,6 +304,7 @@ pub fn evaluate(
 mod tests {
     use super::*;
     use crate::lod::LodOptions;
+    use crate::model::runtime::progress::Silent;
     use crate::pipeline::test_support::*;
     use crate::solar::{poi_sky_view, poi_sun_hours, SkyBundles};
     use std::sync::atomic::Ordering;
@@ -225,6 +363,53 @@ mod tests {
         ));
         assert_eq!(tally.sum(Stage::Bvh, "start").0, 0);
     }
+    #[test]
+    fn tiled_scenes_keep_the_pois_order_and_the_whole_scenes_answers() {
+        let mut inputs = fixture_inputs();
+        let framed = framed_with(&mut inputs, 24);
+        let bundles = SkyBundles::new(400, 3).unwrap();
+        let f = |s: &TraceScene, p: &Poi| (p.id.clone(), poi_sky_view(s, p, &bundles));
+        let whole = trace(&framed, f, |_| None, &Silent).unwrap();
+        // one square holding the model, full detail everywhere: the whole scene's answers
+        let wide = Scenes::Tiled {
+            size: 1e6,
+            margin: 1e6,
+        };
+        let one = trace_with(&framed, wide, f, |_| None, &Silent).unwrap();
+        assert_eq!((&one.results, &one.flags), (&whole.results, &whole.flags));
+        // squares of 6 m with 2 m of full detail: several scenes, the POIs in their order, rough
+        // forms beyond 2 m changing some answers a little
+        let tally = Tally::default();
+        let small = Scenes::Tiled {
+            size: 6.0,
+            margin: 2.0,
+        };
+        let t = trace_with(&framed, small, f, |_| None, &tally).unwrap();
+        assert_eq!(tally.sum(Stage::Trace, "advance").0, 24);
+        assert_eq!(tally.sum(Stage::Bvh, "advance").0, 1);
+        let (boxes, all) = detail_boxes(&framed.model);
+        let squares = squares_of(&framed.local_pois, all, 6.0);
+        assert!(squares.len() > 2, "{} squares", squares.len());
+        // some squares' scenes have assets at full detail and others rough
+        let mixed = squares.iter().filter(|(square, _)| {
+            let levels = square_levels(&boxes, square, 2.0);
+            levels.contains(&1) && levels.contains(&2)
+        });
+        assert!(mixed.count() > 1);
+        for ((a, b), p) in t
+            .results
+            .iter()
+            .zip(&whole.results)
+            .zip(framed.local_pois.iter())
+        {
+            assert_eq!((&a.0, &b.0), (&p.id, &p.id));
+            assert!((a.1.svf - b.1.svf).abs() < 0.05, "{}: {a:?} {b:?}", p.id);
+        }
+        // cancelled in the second square
+        let stop = Stopper::new(Stage::Trace, squares[0].1.len() as u64 + 1);
+        assert!(trace_with(&framed, small, f, |_| None, &stop).is_err());
+    }
+
     #[test]
     fn evaluate_reports_each_poi_and_stops_when_cancelled() {
         let mut inputs = fixture_inputs();

@@ -44,10 +44,11 @@ pub struct Framed<'a> {
     pub crs: Crs,
     /// The frame.
     pub frame: LocalFrame,
-    /// POIs in the model's CRS (for reports).
-    pub pois: Vec<Poi>,
+    /// POIs in the model's CRS (for reports); borrowed from a [`crate::pipeline::session::Study`]
+    /// (a city's cadastre has millions).
+    pub pois: Cow<'a, [Poi]>,
     /// POIs in the local frame (for tracing).
-    pub local_pois: Vec<Poi>,
+    pub local_pois: Cow<'a, [Poi]>,
     /// What the caller should tell the user (other CRSs named by the inputs, the frame
     /// chosen, its accuracy).
     pub warnings: Vec<String>,
@@ -149,8 +150,8 @@ pub(crate) fn frame_in<'a>(
         model: local,
         crs,
         frame,
-        pois,
-        local_pois,
+        pois: Cow::Owned(pois),
+        local_pois: Cow::Owned(local_pois),
         warnings,
         note,
         frame_warning: warning,

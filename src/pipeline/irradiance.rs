@@ -1,6 +1,6 @@
 //! Step 5 for irradiance: every POI's annual irradiation against the full-detail scene.
 
-use super::analyse::{trace, Traced};
+use super::analyse::{trace_with, Scenes, Traced};
 use super::Framed;
 use crate::model::runtime::progress::{Cancelled, Progress};
 use crate::solar::irradiance::{Irradiance, IrradianceOptions, IrradianceTable};
@@ -8,7 +8,7 @@ use crate::solar::{poi_irradiance, SkyBundles};
 
 /// One POI's [`Irradiance`], with its hourly global irradiation (Wh/m², in the weather's
 /// order) when asked for.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 #[non_exhaustive]
 pub struct PoiIrradiance {
     /// Annual sums.
@@ -17,9 +17,15 @@ pub struct PoiIrradiance {
     pub hourly: Vec<f64>,
 }
 
-/// Annual irradiation of every POI ([`poi_irradiance`]), through [`trace`]: `table` holds the
-/// weather's hours with the sun placed, `bundles` the sky rays; `hourly` keeps each hour's
-/// value.
+impl AsRef<Irradiance> for PoiIrradiance {
+    fn as_ref(&self) -> &Irradiance {
+        &self.annual
+    }
+}
+
+/// Annual irradiation of every POI ([`poi_irradiance`]), through [`trace_with`] in `scenes`:
+/// `table` holds the weather's hours with the sun placed, `bundles` the sky rays; `hourly`
+/// keeps each hour's value.
 ///
 /// # Errors
 /// [`Cancelled`] when `progress` asks to stop.
@@ -29,10 +35,12 @@ pub fn irradiance(
     table: &IrradianceTable,
     opts: &IrradianceOptions,
     hourly: bool,
+    scenes: Scenes,
     progress: &dyn Progress,
 ) -> Result<Traced<PoiIrradiance>, Cancelled> {
-    trace(
+    trace_with(
         framed,
+        scenes,
         |s, p| {
             let mut values = Vec::new();
             let h = hourly.then_some(&mut values);

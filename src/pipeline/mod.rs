@@ -54,7 +54,7 @@ mod write;
 pub use attributes::{insertion_point, write_surface_means, AttributesError};
 
 pub(crate) use analyse::{evaluate, horizon, trace_in};
-pub use analyse::{EvaluateOptions, Traced};
+pub use analyse::{EvaluateOptions, Scenes, Traced};
 pub use error::PoiCrsError;
 pub(crate) use fisheye::sky_pictures;
 pub use fisheye::{SkyPicture, SkyPictureOptions};

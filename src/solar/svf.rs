@@ -144,7 +144,7 @@ impl SkyBundles {
 }
 
 /// Result of [`sky_view`].
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct SkyView {
     /// Sky view factor, cosine-weighted to the normal, in `[0, 1]`.
     pub svf: f64,

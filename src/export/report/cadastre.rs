@@ -21,13 +21,14 @@
 //! let point = |g: f64| Irradiance { global_kwh_m2: g, direct_kwh_m2: 0.0, diffuse_kwh_m2: 0.0,
 //!     reflected_kwh_m2: 0.0, svf: 1.0, sun_hours_possible: 0, sun_hours: 0,
 //!     monthly_global_kwh_m2: [g / 12.0; 12] };
-//! let rows = surface_rows(&[roof], &["r:0", "r:1"], &[point(1000.0), point(1200.0)],
+//! let at = |id: &str| skylod::model::Poi::at(id, [0.0; 3]);
+//! let rows = surface_rows(&[roof], &[at("r:0"), at("r:1")], &[point(1000.0), point(1200.0)],
 //!     Some(1100.0), true);
 //! assert_eq!((rows[0].mean_kwh_m2, rows[0].area_above_m2), (Some(1100.0), Some(10.0)));
 //! assert_eq!(rows[0].building_roof_kwh, Some(22_000.0));
 //! assert!((rows[0].monthly_mean_kwh_m2.unwrap()[0] - 1100.0 / 12.0).abs() < 1e-9);
 //! let mut csv = Vec::new();
-//! let layout = TableLayout { threshold: Some(1100.0), monthly: true, header: true };
+//! let layout = TableLayout { threshold: Some(1100.0), monthly: true, header: true, degrees: false };
 //! write_surface_table(&mut csv, &rows, layout).unwrap();
 //! assert!(String::from_utf8(csv).unwrap().starts_with("surface_id,building_id,kind,area_m2"));
 //! ```
@@ -76,6 +77,9 @@ pub struct TableLayout {
     pub monthly: bool,
     /// The header line.
     pub header: bool,
+    /// The model's CRS is in degrees (latitude and longitude): the point table's positions are
+    /// written with 9 decimals in x and y (about 0.1 mm) rather than 3 (1 mm).
+    pub degrees: bool,
 }
 
 /// The months' column names, January first.
@@ -94,14 +98,14 @@ pub const MONTH_COLUMNS: [&str; 12] = [
     "dec_kwh_m2",
 ];
 
-/// The rows of `surfaces` from the annual figures `annual[k]` of each point `ids[k]` (named
+/// The rows of `surfaces` from the annual figures `annual[k]` of each point `pois[k]` (named
 /// `<surface>:<k>`, as [`crate::lod::poi::surface_pois`] names them); points of other
 /// surfaces are left out. With `threshold`, each row's area above it; with `monthly`, its
 /// monthly means.
-pub fn surface_rows<S: AsRef<str>>(
+pub fn surface_rows<A: AsRef<Irradiance>>(
     surfaces: &[CadastreSurface],
-    ids: &[S],
-    annual: &[Irradiance],
+    pois: &[Poi],
+    annual: &[A],
     threshold: Option<f64>,
     monthly: bool,
 ) -> Vec<SurfaceRow> {
@@ -110,8 +114,9 @@ pub fn surface_rows<S: AsRef<str>>(
         .collect();
     let mut values: Vec<Vec<f64>> = vec![Vec::new(); surfaces.len()];
     let mut months: Vec<[f64; 12]> = vec![[0.0; 12]; surfaces.len()];
-    for (id, r) in ids.iter().zip(annual) {
-        if let Some(&i) = index.get(surface_of_poi(id.as_ref())) {
+    for (p, r) in pois.iter().zip(annual) {
+        let r = r.as_ref();
+        if let Some(&i) = index.get(surface_of_poi(&p.id)) {
             values[i].push(r.global_kwh_m2);
             for (m, v) in months[i].iter_mut().zip(r.monthly_global_kwh_m2) {
                 *m += v;
@@ -230,7 +235,7 @@ pub fn write_surface_table(
 pub fn write_point_table(
     out: impl Write,
     pois: &[Poi],
-    annual: &[Irradiance],
+    annual: &[impl AsRef<Irradiance>],
     layout: TableLayout,
 ) -> csv::Result<()> {
     let mut w = csv::Writer::from_writer(out);
@@ -253,12 +258,14 @@ pub fn write_point_table(
     if layout.header {
         w.write_record(head)?;
     }
+    let xy = if layout.degrees { 9 } else { 3 };
     for (p, r) in pois.iter().zip(annual) {
+        let r = r.as_ref();
         let n = p.normal.unwrap_or(glam::DVec3::Z);
         let mut rec = vec![
             surface_of_poi(&p.id).to_string(),
-            format!("{:.3}", p.position.x),
-            format!("{:.3}", p.position.y),
+            format!("{:.*}", xy, p.position.x),
+            format!("{:.*}", xy, p.position.y),
             format!("{:.3}", p.position.z),
             format!("{:.4}", n.x),
             format!("{:.4}", n.y),

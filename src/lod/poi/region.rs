@@ -44,6 +44,7 @@ use crate::model::Poi;
 use crate::model::{AssetKind, Bbox, CityModel, Polygon};
 use crate::solar::trace::scene_of;
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 use std::collections::HashSet;
 
 /// Errors of the region samplers.
@@ -262,40 +263,62 @@ pub fn facade_pois(
     Ok(out)
 }
 
-/// `pois` without those inside a closed solid of the buildings near them (every building
-/// with an asset within 2 m of the points' box, whole).
+/// `pois` without those inside a closed solid of the buildings near them: a square of
+/// [`SOLIDS_SQUARE`] at a time, every building with an asset within [`SOLIDS_MARGIN`] of the
+/// box of the square's points, whole; the square's points tested in parallel.
 pub(crate) fn outside_solids(model: &CityModel, pois: Vec<Poi>) -> Vec<Poi> {
-    let mut bb = Bbox::of_points(pois.iter().map(|p| &p.position));
+    let bb = Bbox::of_points(pois.iter().map(|p| &p.position));
     if bb.is_empty() {
         return pois;
     }
-    bb.min -= DVec3::splat(2.0);
-    bb.max += DVec3::splat(2.0);
-    let overlaps =
-        |a: &Bbox| !a.is_empty() && a.min.cmple(bb.max).all() && a.max.cmpge(bb.min).all();
+    let boxes: Vec<Bbox> = model.assets.par_iter().map(|a| a.bbox()).collect();
     let root = |a: &crate::model::Asset| a.building.map(|b| model.root_building(b));
-    let near: HashSet<usize> = model
-        .assets
-        .iter()
-        .filter(|a| overlaps(&a.bbox()))
-        .filter_map(root)
-        .collect();
-    let scene = scene_of(
-        model
-            .assets
-            .iter()
-            .enumerate()
-            .filter(|(_, a)| root(a).is_some_and(|b| near.contains(&b)))
-            .flat_map(|(i, a)| a.detail_polygons().iter().map(move |p| (i as u32, p))),
-    );
-    pois.into_iter()
-        .filter(|p| {
-            !poi_flags(&scene, model, p, None)
+    let points: Vec<DVec3> = pois.iter().map(|p| p.position).collect();
+    let mut keep = vec![true; pois.len()];
+    // a neighbourhood at a time: one scene of the buildings near its points
+    for (_, members) in crate::model::squares(&points, bb.min, SOLIDS_SQUARE) {
+        let mut near_box = Bbox::of_points(members.iter().map(|&i| &points[i]));
+        near_box.min -= DVec3::splat(SOLIDS_MARGIN);
+        near_box.max += DVec3::splat(SOLIDS_MARGIN);
+        let overlaps = |a: &Bbox| {
+            !a.is_empty() && a.min.cmple(near_box.max).all() && a.max.cmpge(near_box.min).all()
+        };
+        let near: HashSet<usize> = (model.assets.iter().zip(&boxes))
+            .filter(|(_, b)| overlaps(b))
+            .filter_map(|(a, _)| root(a))
+            .collect();
+        let scene = scene_of(
+            model
+                .assets
                 .iter()
-                .any(|f| matches!(f, PoiFlag::InsideBuilding { .. }))
-        })
+                .enumerate()
+                .filter(|(_, a)| root(a).is_some_and(|b| near.contains(&b)))
+                .flat_map(|(i, a)| a.detail_polygons().iter().map(move |p| (i as u32, p))),
+        );
+        let inside: Vec<bool> = members
+            .par_iter()
+            .map(|&i| {
+                poi_flags(&scene, model, &pois[i], None)
+                    .iter()
+                    .any(|f| matches!(f, PoiFlag::InsideBuilding { .. }))
+            })
+            .collect();
+        for (&i, inside) in members.iter().zip(inside) {
+            keep[i] = !inside;
+        }
+    }
+    pois.into_iter()
+        .zip(keep)
+        .filter_map(|(p, k)| k.then_some(p))
         .collect()
 }
+
+/// Side (m) of the squares [`outside_solids`] tests at a time.
+const SOLIDS_SQUARE: f64 = 250.0;
+
+/// Reach (m) of the buildings that enclose a point in [`outside_solids`]: a point is inside
+/// when every probe ray meets something, and a gap between buildings may be closed far off.
+const SOLIDS_MARGIN: f64 = 100.0;
 
 /// Parse `POLYGON((x y, ...), (x y, ...))` (extra coordinates ignored): exterior and holes.
 fn parse_wkt_polygon(wkt: &str) -> Result<(Vec<DVec2>, Vec<Vec<DVec2>>), RegionError> {

@@ -18,7 +18,7 @@ use crate::lod::poi::checks::PoiFlag;
 use crate::lod::LodOptions;
 use crate::model::runtime::progress::Progress;
 use crate::pipeline::{EvaluateOptions, PoiIrradiance, Traced};
-use crate::solar::irradiance::{Irradiance, IrradianceOptions, IrradianceTable, SkyModel};
+use crate::solar::irradiance::{IrradianceOptions, IrradianceTable, SkyModel};
 use crate::solar::weather::Weather;
 use crate::solar::{HorizonOptions, Site, SkyBundles, SunTable};
 use std::time::Instant;
@@ -166,7 +166,11 @@ impl Study {
         let table = IrradianceTable::new(req.weather, &Site::new(req.site[0], req.site[1]), sky)?;
         let sun_ms = req.weather_ms + ms_since(t0);
         let opts = IrradianceOptions { sky, albedo };
-        let t = self.irradiance(req.bundles, &table, &opts, req.hourly, progress)?;
+        let scenes = match req.cadastre {
+            true => crate::pipeline::Scenes::CADASTRE,
+            false => crate::pipeline::Scenes::Whole,
+        };
+        let t = self.irradiance(req.bundles, &table, &opts, req.hourly, scenes, progress)?;
         let rows = t.rows(self.pois(), |p, r, f| IrradiancePoi::new(p, &r.annual, f));
         let summary = super::weather::weather_summary(req.path, req.weather);
         let timings = SunHoursTimings::new(self.trace_timings(&t), sun_ms);
@@ -183,7 +187,6 @@ impl Study {
         );
         Ok(IrradianceRun {
             doc: analysed(doc, t.flags.clone()),
-            ids: self.pois().iter().map(|p| p.id.clone()).collect(),
             traced: t,
         })
     }
@@ -341,6 +344,10 @@ pub struct IrradianceRequest<'a> {
     pub rays: usize,
     /// Keep every hour's value (`IrradianceRun::write_hourly`).
     pub hourly: bool,
+    /// The POIs are a cadastre's, every roof or wall of a city: they are traced square by
+    /// square ([`crate::pipeline::Scenes::CADASTRE`]), not against one scene of the whole
+    /// model.
+    pub cadastre: bool,
 }
 
 /// What [`Study::irradiance_output`] gives: the document and what was traced.
@@ -348,18 +355,11 @@ pub struct IrradianceRequest<'a> {
 pub struct IrradianceRun {
     /// The document, with each POI's flags.
     pub doc: Analysed<IrradianceOutput>,
-    /// The POIs' ids, in order.
-    pub ids: Vec<String>,
     /// Per POI: annual sums, and the hourly series when asked for.
     pub traced: Traced<PoiIrradiance>,
 }
 
 impl IrradianceRun {
-    /// Each POI's annual figures, in order.
-    pub fn annual(&self) -> Vec<Irradiance> {
-        self.traced.results.iter().map(|r| r.annual).collect()
-    }
-
     /// Each POI's annual global irradiation (kWh/m²), in order.
     pub fn annual_global(&self) -> Vec<f64> {
         let r = self.traced.results.iter();
@@ -372,7 +372,7 @@ impl IrradianceRun {
     /// # Errors
     /// The CSV writer's.
     pub fn write_hourly(&self, out: impl std::io::Write, weather: &Weather) -> csv::Result<()> {
-        let ids: Vec<&str> = self.ids.iter().map(String::as_str).collect();
+        let ids: Vec<&str> = self.doc.doc.pois.iter().map(|p| p.id.as_str()).collect();
         let series: Vec<&[f64]> = self
             .traced
             .results
@@ -489,6 +489,7 @@ mod tests {
             bundles: &bundles,
             rays: 300,
             hourly: true,
+            cadastre: false,
         };
         let run = s.irradiance_output(&req, &Silent).unwrap();
         let d = &run.doc.doc;

@@ -329,8 +329,8 @@ impl From<Framed<'_>> for Frame {
             },
             crs: f.crs,
             frame: f.frame,
-            pois: f.pois,
-            local_pois: f.local_pois,
+            pois: f.pois.into_owned(),
+            local_pois: f.local_pois.into_owned(),
             warnings: f.warnings,
             note: f.note,
             frame_warning: f.frame_warning,
@@ -394,8 +394,8 @@ impl Study {
             model: Cow::Borrowed(self.local_model()),
             crs: self.framed.crs.clone(),
             frame: self.framed.frame,
-            pois: self.framed.pois.clone(),
-            local_pois: self.framed.local_pois.clone(),
+            pois: Cow::Borrowed(&self.framed.pois),
+            local_pois: Cow::Borrowed(&self.framed.local_pois),
             warnings: self.framed.warnings.clone(),
             note: self.framed.note.clone(),
             frame_warning: self.framed.frame_warning.clone(),
@@ -636,7 +636,8 @@ impl Study {
     }
 
     /// Annual irradiation of every POI under `table`'s weather
-    /// (`crate::pipeline::irradiance`); `hourly` keeps each hour's value.
+    /// (`crate::pipeline::irradiance`) against the scenes `scenes`; `hourly` keeps each
+    /// hour's value.
     ///
     /// # Errors
     /// [`Error::Cancelled`].
@@ -646,12 +647,13 @@ impl Study {
         table: &IrradianceTable,
         opts: &IrradianceOptions,
         hourly: bool,
+        scenes: crate::pipeline::Scenes,
         progress: &dyn Progress,
     ) -> Result<Traced<PoiIrradiance>> {
         self.whole()?;
         let f = self.framed();
         Ok(crate::pipeline::irradiance(
-            &f, bundles, table, opts, hourly, progress,
+            &f, bundles, table, opts, hourly, scenes, progress,
         )?)
     }
 

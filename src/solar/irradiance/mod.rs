@@ -374,7 +374,7 @@ fn patch_index(patches: &Patches, d: DVec3) -> u32 {
 }
 
 /// Annual irradiation of a plane (kWh/m²), see the module docs.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct Irradiance {
     /// Direct + diffuse + reflected.
     pub global_kwh_m2: f64,
@@ -394,6 +394,12 @@ pub struct Irradiance {
     /// they sum to [`Irradiance::global_kwh_m2`].
     #[serde(skip)]
     pub monthly_global_kwh_m2: [f64; 12],
+}
+
+impl AsRef<Irradiance> for Irradiance {
+    fn as_ref(&self) -> &Irradiance {
+        self
+    }
 }
 
 /// The irradiation of a plane with `normal` over `table`, given its [`PlaneView`] and

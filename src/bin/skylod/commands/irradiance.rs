@@ -9,6 +9,7 @@ use skylod::export::report::{
     surface_rows, write_csv, write_point_table, write_surface_table, Document, TableLayout,
 };
 use skylod::lod::poi::cadastre_surfaces;
+use skylod::model::crs::CrsKind;
 use skylod::pipeline::session::ms_since;
 use skylod::pipeline::session::IrradianceRequest;
 use skylod::solar::irradiance::SkyModel;
@@ -111,6 +112,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         bundles: &bundles,
         rays: args.rays,
         hourly: args.hourly.is_some(),
+        cadastre: !surfaces.is_empty(),
     };
     let run = s.study.irradiance_output(&req, &crate::log::reporter())?;
     s.warn_flags(&run.doc.flags);
@@ -118,19 +120,21 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     if let Some(n) = (args.attributes).write(&s.study.framed(), &values, args.overwrite)? {
         crate::log::summary!("irradiance: {n} surface(s) given skylodAnnualIrradiation");
     }
-    let annual = run.annual();
+    let annual = &run.traced.results;
+    let degrees = matches!(s.study.crs().kind, CrsKind::Geographic { .. });
     let layout = TableLayout {
+        degrees,
         threshold: args.threshold,
         monthly: args.monthly,
         header: s.header(),
     };
     if let Some(path) = &args.table {
         // areas in metres: the model in its tracing frame (same surfaces as the source's)
-        let mut list = cadastre_surfaces(&s.study.framed().model, &surfaces);
+        let mut list = cadastre_surfaces(s.study.local_model(), &surfaces);
         if let Some(r) = (args.tracing.region).surface_shard(s.study.source(), s.shard) {
             list = list.get(r).map(<[_]>::to_vec).unwrap_or_default();
         }
-        let rows = surface_rows(&list, &run.ids, &annual, args.threshold, args.monthly);
+        let rows = surface_rows(&list, s.study.pois(), annual, args.threshold, args.monthly);
         skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
             write_surface_table(w, &rows, layout)?;
             Ok(0)
@@ -145,7 +149,7 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     if let Some(path) = &args.points {
         skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
-            write_point_table(w, s.study.pois(), &annual, layout)?;
+            write_point_table(w, s.study.pois(), annual, layout)?;
             Ok(0)
         })
         .with_context(|| format!("writing {}", path.display()))?;
