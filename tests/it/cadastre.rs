@@ -295,3 +295,99 @@ fn shards_concatenated_are_the_serial_tables() {
         "the parts' points differ from the serial points"
     );
 }
+
+/// Cadastre points of PLATEAU Yokosuka (28 buildings, latitude and longitude) and Rotterdam
+/// (two buildings, RD New) against Radiance's daylight coefficients on geometry the oracle
+/// reads and writes itself (tests/oracle/cadastre_radiance.py: Python's XML parser, every
+/// building at its most detailed LoD as Radiance polygons, pyproj for latitude and
+/// longitude; the sun a ray per hour placed by pvlib, the sky by daylight coefficients),
+/// Greensboro's year with no reflection (`--albedo 0`). Per file and class, the points at
+/// seven quantiles of skylod's annual global (least to greatest, so the most shaded ones
+/// too): global within 2 % (or 1 kWh/m² under 50), direct and diffuse each within 3 % (or
+/// 1 kWh/m² for a part under 33).
+#[test]
+fn cadastre_matches_radiance_on_geometry_the_test_reads() {
+    if !python_has("pyradiance", "pip install pyradiance")
+        || !python_has("pyproj", "pip install pyproj")
+    {
+        return;
+    }
+    let Some(tmy) = tmy3() else { return };
+    let Some(data) = shared_data() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (points, chosen) = (dir.path().join("p.csv"), dir.path().join("chosen.csv"));
+    let mut compared = 0;
+    for (file, epsg) in [
+        ("plateau/yokosuka/52397519_bldg_6697_op.gml", Some("6697")),
+        ("rotterdam/Source.gml", None),
+    ] {
+        let src = data.join(file);
+        let mut a = irradiance_args(&src, &tmy);
+        a.extend(["--surfaces", "roof,wall", "--albedo", "0", "--points"].map(OsString::from));
+        a.extend([points.clone().into_os_string(), "--overwrite".into()]);
+        let args: Vec<&OsStr> = a.iter().map(OsString::as_os_str).collect();
+        let o = run(&args);
+        assert!(o.status.success(), "{file}: {}", stderr(&o));
+        let all = rows(&points);
+        let mut csv = String::from("id,x,y,z,nx,ny,nz\n");
+        let mut picked = Vec::new();
+        for kind in ["roof", "wall"] {
+            // a body's faces are `<id>:roof` / `<id>:wall`; thematic surfaces by their id
+            let is_roof = |r: &&HashMap<String, String>| num(r, "nz") > 0.25;
+            let mut of: Vec<&HashMap<String, String>> = all
+                .iter()
+                .filter(|r| is_roof(r) == (kind == "roof"))
+                .collect();
+            of.sort_by(|a, b| num(a, "global_kwh_m2").total_cmp(&num(b, "global_kwh_m2")));
+            assert!(!of.is_empty(), "{file}: no {kind} point");
+            let mut at: Vec<usize> = [0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 1.0]
+                .iter()
+                .map(|q| ((of.len() - 1) as f64 * q).round() as usize)
+                .collect();
+            at.dedup();
+            for k in at {
+                let r = of[k];
+                let id = format!("{kind}{k}");
+                csv += &format!(
+                    "{id},{},{},{},{},{},{}\n",
+                    r["x"], r["y"], r["z"], r["nx"], r["ny"], r["nz"]
+                );
+                picked.push((id, r));
+            }
+        }
+        std::fs::write(&chosen, csv).unwrap();
+        let mut cmd = Command::new("python3");
+        cmd.arg(manifest_dir().join("tests/oracle/cadastre_radiance.py"))
+            .args([tmy.as_os_str(), src.as_os_str(), chosen.as_os_str()]);
+        if let Some(e) = epsg {
+            cmd.arg(e);
+        }
+        let o = cmd.output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        let rad: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        for (id, r) in picked {
+            let want = |k: &str| rad[&id][format!("{k}_kwh_m2")].as_f64().unwrap();
+            let got = |k: &str| num(r, &format!("{k}_kwh_m2"));
+            eprintln!(
+                "{file} {id} ({}): skylod global {:.1} direct {:.1} diffuse {:.1}; Radiance {:.1} {:.1} {:.1}",
+                r["surface_id"],
+                got("global"),
+                got("direct"),
+                got("diffuse"),
+                want("global"),
+                want("direct"),
+                want("diffuse")
+            );
+            let (g, w) = (got("global"), want("global"));
+            let tol = if w < 50.0 { 1.0 } else { 0.02 * w };
+            assert!((g - w).abs() <= tol, "{file} {id}: global {g} vs {w}");
+            for part in ["direct", "diffuse"] {
+                let (g, w) = (got(part), want(part));
+                let tol = if w < 33.0 { 1.0 } else { 0.03 * w };
+                assert!((g - w).abs() <= tol, "{file} {id}: {part} {g} vs {w}");
+            }
+            compared += 1;
+        }
+    }
+    assert!(compared >= 20, "{compared}");
+}

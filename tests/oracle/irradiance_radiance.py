@@ -35,7 +35,7 @@ import numpy as np
 from radiance_svf import BIN, LIB, POI_OFFSET, materials, origin_of, read_pois, tool
 
 MF = "4"
-AMBIENT = ["-ab", "1", "-ad", "65536", "-lw", "1e-8"]
+AMBIENT = ["-ab", "1", "-ad", "65536", "-as", "0", "-aa", "0", "-lw", "1e-8"]
 
 
 def epw_from_tmy3(src, dst):
@@ -78,24 +78,57 @@ def read_matrix(text):
     return v.reshape(nrows, ncols, 3)
 
 
+def annual(tmy3, tmp, scene, mats, rays):
+    """Global, direct and diffuse Wh/m2 of each of `rays` ("x y z dx dy dz" lines, the scene's
+    frame) over the TMY3 year, the scene the Radiance files `scene` whose materials `mats` are
+    made black, in the temporary folder `tmp`: [{"global_kwh_m2": ..}, ..] in ray order."""
+    env = dict(os.environ, RAYPATH=os.pathsep.join([".", LIB]))
+    run = lambda args, **kw: subprocess.run(args, check=True, capture_output=True, env=env, **kw)
+    epw = os.path.join(tmp, "w.epw")
+    epw_from_tmy3(tmy3, epw)
+    wea = os.path.join(tmp, "w.wea")
+    run([tool("epw2wea"), epw, wea])
+    # the whole sky, the sun alone (-d), the sky without the sun (-s)
+    skies = {}
+    for part, flag in (("global", []), ("direct", ["-d"]), ("diffuse", ["-s"])):
+        sky = run([tool("gendaymtx"), "-m", MF, "-O1", "-c", "1", "1", "1", *flag, "-g", "0",
+                   "0", "0", "-r", "0", wea]).stdout
+        skies[part] = os.path.join(tmp, f"{part}.smx")
+        with open(skies[part], "wb") as f:
+            f.write(sky)
+    glow = os.path.join(tmp, "glow.rad")
+    with open(glow, "w", encoding="utf-8") as f:
+        f.write("void glow sky_glow 0 0 4 1 1 1 0\n")
+        f.write("sky_glow source sky 0 0 4 0 0 1 360\n")
+        for m in sorted(mats):
+            f.write(f"void plastic {m} 0 0 5 0 0 0 0 0\n")
+    octree = os.path.join(tmp, "scene.oct")
+    with open(octree, "wb") as f:
+        f.write(run([tool("oconv"), glow, *scene]).stdout)
+    dc = run(
+        [tool("rcontrib"), "-I+", *AMBIENT, "-fo", "-e", f"MF:{MF}", "-f", "reinhart.cal",
+         "-b", "rbin", "-bn", "Nrbins", "-m", "sky_glow", "-faa", octree],
+        input=("\n".join(rays) + "\n").encode(),
+    ).stdout
+    dcm = os.path.join(tmp, "dc.mtx")
+    with open(dcm, "wb") as f:
+        f.write(dc)
+    result = [{} for _ in rays]
+    for part, smx in skies.items():
+        m = read_matrix(run([tool("dctimestep"), "-oa", dcm, smx]).stdout.decode())
+        # rows: points, columns: hours; R = G = B for the solar (-O1) sky
+        wh = m.mean(axis=2).sum(axis=1)
+        for k in range(len(rays)):
+            result[k][f"{part}_kwh_m2"] = float(wh[k]) / 1000.0
+    return result
+
+
 def main():
     tmy3, pois_csv, objs = sys.argv[1], sys.argv[2], sys.argv[3:]
     env = dict(os.environ, RAYPATH=os.pathsep.join([".", LIB]))
     run = lambda args, **kw: subprocess.run(args, check=True, capture_output=True, env=env, **kw)
     frame = origin_of(objs[0])
     with tempfile.TemporaryDirectory() as tmp:
-        epw = os.path.join(tmp, "w.epw")
-        epw_from_tmy3(tmy3, epw)
-        wea = os.path.join(tmp, "w.wea")
-        run([tool("epw2wea"), epw, wea])
-        # the whole sky, the sun alone (-d), the sky without the sun (-s)
-        skies = {}
-        for part, flag in (("global", []), ("direct", ["-d"]), ("diffuse", ["-s"])):
-            sky = run([tool("gendaymtx"), "-m", MF, "-O1", "-c", "1", "1", "1", *flag, "-g", "0",
-                       "0", "0", "-r", "0", wea]).stdout
-            skies[part] = os.path.join(tmp, f"{part}.smx")
-            with open(skies[part], "wb") as f:
-                f.write(sky)
         scene, mats = [], set()
         for k, obj in enumerate(objs):
             mats |= materials(obj)
@@ -109,36 +142,13 @@ def main():
                 with open(path, "wb") as f:
                     f.write(moved)
             scene.append(path)
-        glow = os.path.join(tmp, "glow.rad")
-        with open(glow, "w", encoding="utf-8") as f:
-            f.write("void glow sky_glow 0 0 4 1 1 1 0\n")
-            f.write("sky_glow source sky 0 0 4 0 0 1 360\n")
-            for m in sorted(mats):
-                f.write(f"void plastic {m} 0 0 5 0 0 0 0 0\n")
-        octree = os.path.join(tmp, "scene.oct")
-        with open(octree, "wb") as f:
-            f.write(run([tool("oconv"), glow, *scene]).stdout)
         pois = read_pois(pois_csv)
         lines = []
         for _, p, n in pois:
             o = [p[i] - frame[i] + POI_OFFSET * n[i] for i in range(3)]
             lines.append(" ".join(repr(v) for v in (*o, *n)))
-        dc = run(
-            [tool("rcontrib"), "-I+", *AMBIENT, "-fo", "-e", f"MF:{MF}", "-f", "reinhart.cal",
-             "-b", "rbin", "-bn", "Nrbins", "-m", "sky_glow", "-faa", octree],
-            input=("\n".join(lines) + "\n").encode(),
-        ).stdout
-        dcm = os.path.join(tmp, "dc.mtx")
-        with open(dcm, "wb") as f:
-            f.write(dc)
-        result = {pid: {} for pid, _, _ in pois}
-        for part, smx in skies.items():
-            m = read_matrix(run([tool("dctimestep"), "-oa", dcm, smx]).stdout.decode())
-            # rows: points, columns: hours; R = G = B for the solar (-O1) sky
-            wh = m.mean(axis=2).sum(axis=1)
-            for k, (pid, _, _) in enumerate(pois):
-                result[pid][f"{part}_kwh_m2"] = float(wh[k]) / 1000.0
-    print(json.dumps(result))
+        values = annual(tmy3, tmp, scene, mats, lines)
+    print(json.dumps({pid: v for (pid, _, _), v in zip(pois, values)}))
 
 
 if __name__ == "__main__":
