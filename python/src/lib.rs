@@ -134,6 +134,7 @@ fn irradiance_run(
         rays,
         hourly: false,
         cadastre: !setup.surfaces.is_empty(),
+        rows: setup.surfaces.is_empty(),
     };
     let run = (l.study.irradiance_output(&req, p)).map_err(|e| message(&e))?;
     Ok((l, run))

@@ -36,6 +36,10 @@ pub struct IrradianceOutput {
     pub polygons: usize,
     /// Wall-clock milliseconds per stage.
     pub timings_ms: IrradianceTimings,
+    /// The POIs computed, also where their rows are left out of [`IrradianceOutput::pois`].
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub(crate) points: usize,
 }
 
 impl IrradianceOutput {
@@ -53,6 +57,7 @@ impl IrradianceOutput {
         timings_ms: IrradianceTimings,
     ) -> Self {
         IrradianceOutput {
+            points: pois.len(),
             pois,
             weather,
             site,
@@ -298,7 +303,7 @@ impl super::text::Document for IrradianceOutput {
         let (w, t) = (&self.weather, self.timings_ms.stages("weather and sun"));
         vec![format!(
             "{} POI(s); {} hours of {} ({}, GHI {:.0} kWh/m²) at ({:.4}, {:.4}), {} sky, albedo {}; {}",
-            self.pois.len(),
+            self.points,
             w.hours,
             w.station,
             w.format,

@@ -171,10 +171,13 @@ impl Study {
             false => crate::pipeline::Scenes::Whole,
         };
         let t = self.irradiance(req.bundles, &table, &opts, req.hourly, scenes, progress)?;
-        let rows = t.rows(self.pois(), |p, r, f| IrradiancePoi::new(p, &r.annual, f));
+        let rows = match req.rows {
+            true => t.rows(self.pois(), |p, r, f| IrradiancePoi::new(p, &r.annual, f)),
+            false => Vec::new(),
+        };
         let summary = super::weather::weather_summary(req.path, req.weather);
         let timings = SunHoursTimings::new(self.trace_timings(&t), sun_ms);
-        let doc = IrradianceOutput::new(
+        let mut doc = IrradianceOutput::new(
             rows,
             summary,
             req.site,
@@ -185,6 +188,7 @@ impl Study {
             self.source().polygon_count(),
             timings,
         );
+        doc.points = t.results.len();
         Ok(IrradianceRun {
             doc: analysed(doc, t.flags.clone()),
             traced: t,
@@ -348,6 +352,10 @@ pub struct IrradianceRequest<'a> {
     /// square ([`crate::pipeline::Scenes::CADASTRE`]), not against one scene of the whole
     /// model.
     pub cadastre: bool,
+    /// Every POI's row in the document ([`IrradianceOutput::pois`]). Without them (a
+    /// cadastre whose answer is its tables: millions of rows) the summary still counts the
+    /// POIs.
+    pub rows: bool,
 }
 
 /// What [`Study::irradiance_output`] gives: the document and what was traced.
@@ -367,12 +375,17 @@ impl IrradianceRun {
     }
 
     /// Every hour's global irradiation (Wh/m²) per POI as CSV (a `time_utc` column of
-    /// `weather`'s hours, one column per POI).
+    /// `weather`'s hours, one column per POI of `pois`, the study's).
     ///
     /// # Errors
     /// The CSV writer's.
-    pub fn write_hourly(&self, out: impl std::io::Write, weather: &Weather) -> csv::Result<()> {
-        let ids: Vec<&str> = self.doc.doc.pois.iter().map(|p| p.id.as_str()).collect();
+    pub fn write_hourly(
+        &self,
+        out: impl std::io::Write,
+        weather: &Weather,
+        pois: &[crate::model::Poi],
+    ) -> csv::Result<()> {
+        let ids: Vec<&str> = pois.iter().map(|p| p.id.as_str()).collect();
         let series: Vec<&[f64]> = self
             .traced
             .results
@@ -490,6 +503,7 @@ mod tests {
             rays: 300,
             hourly: true,
             cadastre: false,
+            rows: true,
         };
         let run = s.irradiance_output(&req, &Silent).unwrap();
         let d = &run.doc.doc;
@@ -502,10 +516,18 @@ mod tests {
             assert_eq!(row.values.global_kwh_m2, *a);
         }
         let mut csv = Vec::new();
-        run.write_hourly(&mut csv, &w).unwrap();
+        run.write_hourly(&mut csv, &w, s.pois()).unwrap();
         let csv = String::from_utf8(csv).unwrap();
         let mut lines = csv.lines();
         assert_eq!(lines.next(), Some("time_utc,p0,p1"));
         assert_eq!(lines.count(), w.hours.len());
+        // without rows: the same values, the summary still counting the POIs
+        let bare = IrradianceRequest { rows: false, ..req };
+        let run2 = s.irradiance_output(&bare, &Silent).unwrap();
+        assert!(run2.doc.doc.pois.is_empty());
+        assert_eq!(run2.annual_global(), annual);
+        let cx = s.text_context(true);
+        let line = &run2.doc.doc.summary(&cx)[0];
+        assert!(line.starts_with("2 POI(s); "), "{line}");
     }
 }

@@ -314,7 +314,9 @@ struct Frame {
     crs: Crs,
     frame: LocalFrame,
     pois: Vec<Poi>,
-    local_pois: Vec<Poi>,
+    /// The POIs in the local frame; `None` where the frame is the identity (they are
+    /// [`Frame::pois`]: a city's millions of points held once).
+    local_pois: Option<Vec<Poi>>,
     warnings: Vec<String>,
     note: Option<String>,
     frame_warning: Option<crate::model::crs::FrameWarning>,
@@ -330,7 +332,7 @@ impl From<Framed<'_>> for Frame {
             crs: f.crs,
             frame: f.frame,
             pois: f.pois.into_owned(),
-            local_pois: f.local_pois.into_owned(),
+            local_pois: (!f.frame.is_identity()).then(|| f.local_pois.into_owned()),
             warnings: f.warnings,
             note: f.note,
             frame_warning: f.frame_warning,
@@ -395,7 +397,12 @@ impl Study {
             crs: self.framed.crs.clone(),
             frame: self.framed.frame,
             pois: Cow::Borrowed(&self.framed.pois),
-            local_pois: Cow::Borrowed(&self.framed.local_pois),
+            local_pois: Cow::Borrowed(
+                self.framed
+                    .local_pois
+                    .as_deref()
+                    .unwrap_or(&self.framed.pois),
+            ),
             warnings: self.framed.warnings.clone(),
             note: self.framed.note.clone(),
             frame_warning: self.framed.frame_warning.clone(),

@@ -113,6 +113,8 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
         rays: args.rays,
         hourly: args.hourly.is_some(),
         cadastre: !surfaces.is_empty(),
+        // a cadastre's tables are its answer: the POI rows only when printed
+        rows: args.csv || args.json || (args.table.is_none() && args.points.is_none()),
     };
     let run = s.study.irradiance_output(&req, &crate::log::reporter())?;
     s.warn_flags(&run.doc.flags);
@@ -156,12 +158,11 @@ pub fn run(mut args: Args) -> anyhow::Result<Outcome> {
     }
     if let Some(path) = &args.hourly {
         skylod::io::atomic_write(path, |w: &mut dyn Write| -> anyhow::Result<u64> {
-            run.write_hourly(w, &weather)?;
+            run.write_hourly(w, &weather, s.study.pois())?;
             Ok(0)
         })
         .with_context(|| format!("writing {}", path.display()))?;
     }
-    // a cadastre's tables are its answer: the POI table only when asked for
     let tables = args.table.is_some() || args.points.is_some();
     if args.csv {
         write_csv(std::io::stdout().lock(), &run.doc.doc.pois).context("writing to stdout")?;
