@@ -42,8 +42,8 @@ impl<T> Traced<T> {
     }
 }
 
-/// How [`trace_with`] builds the scene its POIs are traced against: the one decision
-/// between a few POIs and every surface of a city.
+/// How the POIs' scene is built for tracing: the one decision between a few POIs and every
+/// surface of a city.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Scenes {
     /// One scene: the whole model at full detail.

@@ -352,7 +352,7 @@ pub struct IrradianceRequest<'a> {
     /// square ([`crate::pipeline::Scenes::CADASTRE`]), not against one scene of the whole
     /// model.
     pub cadastre: bool,
-    /// Every POI's row in the document ([`IrradianceOutput::pois`]). Without them (a
+    /// Every POI's row in the document (its `pois`). Without them (a
     /// cadastre whose answer is its tables: millions of rows) the summary still counts the
     /// POIs.
     pub rows: bool,
